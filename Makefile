@@ -1,0 +1,38 @@
+# DroneWrapper on Zenoh. `make demo` flies the simulated follow mission; `make test` runs the suite.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: setup demo test test-unit test-fast bench lint format clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml sdk/pyproject.toml
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e ./sdk -e '.[dev]'
+	@touch $(STAMP)
+
+demo: setup
+	$(BIN)/python -m dronewrapper_compose.demo $(ARGS)
+
+test: setup lint
+	$(BIN)/python -m pytest -q $(ARGS)
+
+test-unit: setup
+	$(BIN)/python -m pytest -q tests/unit $(ARGS)
+
+bench: setup
+	$(BIN)/python -m bench $(ARGS)
+
+lint: setup
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+
+format: setup
+	$(BIN)/ruff check --fix .
+	$(BIN)/ruff format .
+
+clean:
+	rm -rf $(VENV) .pytest_cache .ruff_cache bench/results/*.json

@@ -1,0 +1,5 @@
+"""``python -m dronewrapper`` is the ``dronewrapper`` command."""
+
+from dronewrapper.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,46 @@
+"""Encoding at the boundary: MessagePack maps via msgspec, one cached decoder per type.
+
+>>> from dronewrapper.msgs import PoseStamped
+>>> decode(PoseStamped, encode(PoseStamped())).pose.orientation.w
+1.0
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any, TypeVar
+
+import msgspec
+
+T = TypeVar("T")
+
+_encoder = msgspec.msgpack.Encoder()
+
+DecodeError = msgspec.DecodeError
+"""Raised when bytes are not a valid message of the expected type."""
+
+
+def encode(msg: Any) -> bytes:
+    """Serialise a message Struct to MessagePack (a self-describing map)."""
+    return _encoder.encode(msg)
+
+
+@cache
+def decoder(msg_type: type[T]) -> msgspec.msgpack.Decoder[T]:
+    """The cached decoder for ``msg_type``."""
+    return msgspec.msgpack.Decoder(msg_type)
+
+
+def decode(msg_type: type[T], data: bytes | bytearray | memoryview) -> T:
+    """Deserialise ``data`` as ``msg_type``; raises DecodeError/ValidationError if it is not."""
+    return decoder(msg_type).decode(data)
+
+
+def schema_name(msg_type: type) -> str:
+    """The schema id carried in the Zenoh encoding, e.g. ``dronewrapper/PoseStamped``."""
+    return f"dronewrapper/{msg_type.__name__}"
+
+
+def to_builtins(msg: Any) -> Any:
+    """A message as plain dicts/lists (for printing and JSON)."""
+    return msgspec.to_builtins(msg, builtin_types=(bytes,))

@@ -1,0 +1,64 @@
+"""Geometry messages shaped like ROS geometry_msgs (SI units, radians, right-handed frames).
+
+Local frame: ENU fixed at the take-off point (x east, y north, z up), ``frame_id="map"``.
+Body frame: FLU (x forward, y left, z up), ``frame_id="base_link"``.
+"""
+
+from __future__ import annotations
+
+import msgspec
+
+from dronewrapper.msgs.std import Header
+
+
+class Point(msgspec.Struct, kw_only=True):
+    """A position in metres."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+
+class Vector3(msgspec.Struct, kw_only=True):
+    """A free vector (velocity in m/s, angular rate in rad/s, ...)."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+
+class Quaternion(msgspec.Struct, kw_only=True):
+    """A unit quaternion (Hamilton convention, x y z w as in ROS); identity by default."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    w: float = 1.0
+
+
+class Pose(msgspec.Struct, kw_only=True):
+    """Position (m) and orientation of a body in a frame."""
+
+    position: Point = msgspec.field(default_factory=Point)
+    orientation: Quaternion = msgspec.field(default_factory=Quaternion)
+
+
+class PoseStamped(msgspec.Struct, kw_only=True):
+    """A stamped pose: vehicle pose in local ENU (``map``) for MAVROS-equivalent keys."""
+
+    header: Header = msgspec.field(default_factory=Header)
+    pose: Pose = msgspec.field(default_factory=Pose)
+
+
+class Twist(msgspec.Struct, kw_only=True):
+    """Linear velocity (m/s) and angular velocity (rad/s)."""
+
+    linear: Vector3 = msgspec.field(default_factory=Vector3)
+    angular: Vector3 = msgspec.field(default_factory=Vector3)
+
+
+class TwistStamped(msgspec.Struct, kw_only=True):
+    """A stamped twist; ``header.frame_id`` says the frame (``base_link`` FLU or ``map`` ENU)."""
+
+    header: Header = msgspec.field(default_factory=Header)
+    twist: Twist = msgspec.field(default_factory=Twist)

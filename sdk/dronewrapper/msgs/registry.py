@@ -1,0 +1,235 @@
+"""The one registry of key expressions and message types. Nothing else spells a key.
+
+Every Zenoh key the system uses is a template here, with the message type carried on it, the
+nominal rate and who publishes it. ``{ns}`` is the vehicle namespace (``drone``, ``drone1`` ...).
+
+    >>> LOCAL_POSE.key("drone1")
+    'drone1/mavros/local_position/pose'
+    >>> IMAGE_RAW.key("drone", camera="cam_frontal")
+    'drone/cam_frontal/image_raw'
+"""
+
+from __future__ import annotations
+
+import re
+import string
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, Generic, TypeVar
+
+from dronewrapper.msgs.control import ControllerStatus
+from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
+from dronewrapper.msgs.mavros import (
+    CommandBool,
+    CommandBoolResult,
+    CommandTOL,
+    CommandTOLResult,
+    ExtendedState,
+    ParamGet,
+    ParamGetResult,
+    ParamSet,
+    ParamSetResult,
+    PositionTarget,
+    SetMode,
+    SetModeResult,
+    State,
+    StatusText,
+)
+from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix
+from dronewrapper.msgs.vision import Detections
+
+T = TypeVar("T")
+Req = TypeVar("Req")
+Rep = TypeVar("Rep")
+
+DEFAULT_NAMESPACE = "drone"
+CAMERAS = ("cam_frontal", "cam_ventral")
+
+_FIELD_VALUE = r"[A-Za-z0-9_\-.]+"  # one chunk: no '/', no wildcard
+
+
+def _fields(template: str) -> tuple[str, ...]:
+    return tuple(name for _, name, _, _ in string.Formatter().parse(template) if name)
+
+
+def _check_chunk(name: str, value: str) -> str:
+    if not isinstance(value, str) or not re.fullmatch(_FIELD_VALUE, value):
+        raise ValueError(f"key field {name}={value!r} must be one chunk of [A-Za-z0-9_-.]")
+    return value
+
+
+@dataclass(frozen=True)
+class _Template:
+    template: str
+
+    @cached_property
+    def fields(self) -> tuple[str, ...]:
+        """Names of the placeholders in the template, in order."""
+        return _fields(self.template)
+
+    def key(self, ns: str = DEFAULT_NAMESPACE, **parts: str) -> str:
+        """The concrete key for namespace ``ns`` and the other placeholders in ``parts``."""
+        values = {"ns": ns, **parts}
+        missing = [f for f in self.fields if f not in values]
+        if missing:
+            raise ValueError(f"{self.template}: missing key field(s) {', '.join(missing)}")
+        return self.template.format(**{f: _check_chunk(f, values[f]) for f in self.fields})
+
+    def wildcard(self, ns: str = "*", **parts: str) -> str:
+        """A key expression matching every instance (unset placeholders become ``*``)."""
+        values = {"ns": ns, **parts}
+        return self.template.format(**{f: values.get(f, "*") for f in self.fields})
+
+    @cached_property
+    def regex(self) -> re.Pattern[str]:
+        """Regex matching concrete keys of this template, capturing each placeholder."""
+        out = ""
+        for literal, name, _, _ in string.Formatter().parse(self.template):
+            out += re.escape(literal)
+            if name:
+                out += f"(?P<{name}>{_FIELD_VALUE})"
+        return re.compile(out + r"\Z")
+
+    def match(self, key: str) -> dict[str, str] | None:
+        """The placeholder values if ``key`` is an instance of this template, else None."""
+        m = self.regex.match(key)
+        return m.groupdict() if m else None
+
+
+@dataclass(frozen=True)
+class Topic(_Template, Generic[T]):
+    """A pub/sub key: template, message type, nominal rate (Hz, 0 = event-driven), publishers."""
+
+    type: type[T] = field(default=object)  # type: ignore[assignment]
+    rate_hz: float = 0.0
+    publishers: tuple[str, ...] = ()
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Service(_Template, Generic[Req, Rep]):
+    """A request/reply key served by a Zenoh queryable."""
+
+    request: type[Req] = field(default=object)  # type: ignore[assignment]
+    reply: type[Rep] = field(default=object)  # type: ignore[assignment]
+    server: str = ""
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Liveliness(_Template):
+    """A liveliness token key: present while the process holding it is alive."""
+
+    doc: str = ""
+
+
+# ---- telemetry (bridge -> everyone) ----
+STATE = Topic("{ns}/mavros/state", State, 1.0, ("bridge",), "autopilot state, on change too")
+EXTENDED_STATE = Topic(
+    "{ns}/mavros/extended_state", ExtendedState, 2.0, ("bridge",), "landed state, on change too"
+)
+LOCAL_POSE = Topic(
+    "{ns}/mavros/local_position/pose", PoseStamped, 30.0, ("bridge",), "pose, local ENU"
+)
+VELOCITY_BODY = Topic(
+    "{ns}/mavros/local_position/velocity_body",
+    TwistStamped,
+    30.0,
+    ("bridge",),
+    "velocity and angular rates, body FLU",
+)
+VELOCITY_LOCAL = Topic(
+    "{ns}/mavros/local_position/velocity_local",
+    TwistStamped,
+    30.0,
+    ("bridge",),
+    "velocity, local ENU",
+)
+GLOBAL_POSITION = Topic(
+    "{ns}/mavros/global_position/global", NavSatFix, 5.0, ("bridge",), "WGS-84 fix"
+)
+BATTERY = Topic("{ns}/mavros/battery", BatteryState, 1.0, ("bridge",), "battery, 0..1")
+STATUSTEXT = Topic(
+    "{ns}/mavros/statustext/recv", StatusText, 0.0, ("bridge",), "autopilot text messages"
+)
+
+# ---- commands (SDK, controller -> bridge) ----
+SETPOINT_RAW_LOCAL = Topic(
+    "{ns}/mavros/setpoint_raw/local",
+    PositionTarget,
+    20.0,
+    ("sdk", "controller"),
+    "setpoint, ENU/FLU; re-published at >= 20 Hz while commanding",
+)
+
+# ---- cameras and perception ----
+IMAGE_RAW = Topic(
+    "{ns}/{camera}/image_raw", Image, 30.0, ("sim", "camera_victure", "bridge_tello"), "bgr8"
+)
+IMAGE_COMPRESSED = Topic(
+    "{ns}/{camera}/image_raw/compressed",
+    CompressedImage,
+    30.0,
+    ("sim", "camera_victure", "bridge_tello"),
+    "JPEG, on request/config",
+)
+DETECTIONS = Topic(
+    "{ns}/perception/detections", Detections, 0.0, ("perception",), "per processed frame"
+)
+DETECTIONS_DEBUG_IMAGE = Topic(
+    "{ns}/perception/debug_image/compressed",
+    CompressedImage,
+    0.0,
+    ("perception",),
+    "annotated frame for people to watch (optional)",
+)
+CONTROLLER_STATUS = Topic(
+    "{ns}/controller/status", ControllerStatus, 5.0, ("controller",), "controller state"
+)
+
+# ---- simulator ground truth and world control ----
+SIM_GROUND_TRUTH = Topic(
+    "{ns}/sim/ground_truth", PoseStamped, 30.0, ("sim",), "true vehicle pose, local ENU"
+)
+SIM_OBJECT_POSE = Topic(
+    "sim/objects/{name}/pose", PoseStamped, 10.0, ("sim",), "true pose of a world object, ENU"
+)
+SIM_OBJECT_CMD_VEL = Topic(
+    "sim/objects/{name}/cmd_vel", Twist, 0.0, ("tests", "teleop"), "teleoperates an object"
+)
+
+# ---- services ----
+ARMING = Service("{ns}/mavros/cmd/arming", CommandBool, CommandBoolResult, "bridge", "arm/disarm")
+TAKEOFF = Service("{ns}/mavros/cmd/takeoff", CommandTOL, CommandTOLResult, "bridge", "take off")
+LAND = Service("{ns}/mavros/cmd/land", CommandTOL, CommandTOLResult, "bridge", "land here")
+SET_MODE = Service("{ns}/mavros/set_mode", SetMode, SetModeResult, "bridge", "change mode")
+PARAM_GET = Service("{ns}/mavros/param/get", ParamGet, ParamGetResult, "bridge", "read param")
+PARAM_SET = Service("{ns}/mavros/param/set", ParamSet, ParamSetResult, "bridge", "write param")
+
+# ---- liveliness ----
+ALIVE = Liveliness("{ns}/alive/{service}", "held by every running service")
+
+
+def _collect(kind: type) -> dict[str, Any]:
+    return {name: obj for name, obj in globals().items() if isinstance(obj, kind)}
+
+
+TOPICS: dict[str, Topic[Any]] = _collect(Topic)
+SERVICES: dict[str, Service[Any, Any]] = _collect(Service)
+LIVELINESS: dict[str, Liveliness] = _collect(Liveliness)
+
+
+def topic_for_key(key: str) -> Topic[Any] | None:
+    """The registered topic a concrete key belongs to, or None if the key is unknown."""
+    for topic in TOPICS.values():
+        if topic.match(key) is not None:
+            return topic
+    return None
+
+
+def service_for_key(key: str) -> Service[Any, Any] | None:
+    """The registered service a concrete key belongs to, or None."""
+    for service in SERVICES.values():
+        if service.match(key) is not None:
+            return service
+    return None

@@ -1,0 +1,80 @@
+"""Sensor messages shaped like ROS sensor_msgs: GNSS fix, battery, images."""
+
+from __future__ import annotations
+
+import msgspec
+
+from dronewrapper.msgs.std import Header
+
+# sensor_msgs/NavSatStatus.status
+NAVSAT_STATUS_NO_FIX = -1
+NAVSAT_STATUS_FIX = 0
+NAVSAT_STATUS_SBAS_FIX = 1
+NAVSAT_STATUS_GBAS_FIX = 2
+
+# sensor_msgs/NavSatFix.position_covariance_type
+COVARIANCE_TYPE_UNKNOWN = 0
+COVARIANCE_TYPE_APPROXIMATED = 1
+COVARIANCE_TYPE_DIAGONAL_KNOWN = 2
+COVARIANCE_TYPE_KNOWN = 3
+
+# sensor_msgs/BatteryState.power_supply_status
+POWER_SUPPLY_STATUS_UNKNOWN = 0
+POWER_SUPPLY_STATUS_CHARGING = 1
+POWER_SUPPLY_STATUS_DISCHARGING = 2
+
+
+class NavSatStatus(msgspec.Struct, kw_only=True):
+    """GNSS fix status (``status`` is one of the NAVSAT_STATUS_* constants)."""
+
+    status: int = NAVSAT_STATUS_NO_FIX
+    service: int = 1  # SERVICE_GPS
+
+
+class NavSatFix(msgspec.Struct, kw_only=True):
+    """Global position: WGS-84 latitude/longitude in degrees, altitude in metres (AMSL)."""
+
+    header: Header = msgspec.field(default_factory=Header)
+    status: NavSatStatus = msgspec.field(default_factory=NavSatStatus)
+    latitude: float = 0.0
+    longitude: float = 0.0
+    altitude: float = 0.0
+    position_covariance: list[float] = msgspec.field(default_factory=lambda: [0.0] * 9)
+    position_covariance_type: int = COVARIANCE_TYPE_UNKNOWN
+
+
+class BatteryState(msgspec.Struct, kw_only=True):
+    """Battery state. ``percentage`` is a fraction 0..1 on every aircraft (NaN if unknown)."""
+
+    header: Header = msgspec.field(default_factory=Header)
+    voltage: float = float("nan")
+    current: float = float("nan")
+    charge: float = float("nan")
+    capacity: float = float("nan")
+    percentage: float = float("nan")
+    power_supply_status: int = POWER_SUPPLY_STATUS_UNKNOWN
+    present: bool = True
+
+
+class Image(msgspec.Struct, kw_only=True):
+    """An uncompressed image (sensor_msgs/Image).
+
+    ``encoding`` is ``bgr8`` (OpenCV channel order) unless it says otherwise; ``step`` is the row
+    length in bytes; ``header.stamp`` is the capture time and ``header.frame_id`` the camera name.
+    """
+
+    header: Header = msgspec.field(default_factory=Header)
+    height: int = 0
+    width: int = 0
+    encoding: str = "bgr8"
+    is_bigendian: int = 0
+    step: int = 0
+    data: bytes = b""
+
+
+class CompressedImage(msgspec.Struct, kw_only=True):
+    """A compressed image (sensor_msgs/CompressedImage); ``format`` is ``jpeg`` or ``png``."""
+
+    header: Header = msgspec.field(default_factory=Header)
+    format: str = "jpeg"
+    data: bytes = b""

@@ -1,0 +1,355 @@
+"""Node: a process's Zenoh session with typed publishers, inputs, services and a clean exit.
+
+    with Node("perception", options) as node:
+        detections = node.publisher(registry.DETECTIONS)
+        frames = node.latest(registry.IMAGE_RAW, camera="cam_frontal")
+        node.announce()                     # liveliness token: "ready"
+        rate = Ratekeeper(30, stop=node.stop_event)
+        while rate.sleep():
+            ...
+
+Every subscriber decodes at the boundary with the registry's type; bytes that do not decode are
+counted (``node.decode_errors``) and logged, and the subscriber keeps working. Services are
+Zenoh queryables whose handlers run on a worker pool; a bad request gets an error reply that says
+what is wrong, never silence. SIGINT and SIGTERM set ``stop_event``; the session is always
+closed on exit (an unclosed session can hang the interpreter).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import signal
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, Generic, TypeVar
+
+import msgspec
+import zenoh
+
+from dronewrapper.msgs import codec
+from dronewrapper.msgs.registry import ALIVE, Service, Topic
+from dronewrapper.msgs.std import ErrorReply
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.options import ZenohOptions, zenoh_config
+
+T = TypeVar("T")
+Req = TypeVar("Req")
+Rep = TypeVar("Rep")
+
+log = logging.getLogger("dronewrapper.runtime")
+
+_ERROR_ENCODING = zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(ErrorReply))
+
+
+def encoding_for(msg_type: type) -> zenoh.Encoding:
+    """The Zenoh encoding of a message type: ``application/msgpack;dronewrapper/<Type>``."""
+    return zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(msg_type))
+
+
+def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Session:
+    """Open a Zenoh session, retrying while the router is not up yet.
+
+    Raises:
+        ConnectionError: no session could be opened within ``timeout`` seconds.
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            return zenoh.open(zenoh_config(options))
+        except zenoh.ZError as exc:
+            if time.monotonic() >= deadline:
+                where = ", ".join(options.connect or options.listen)
+                raise ConnectionError(
+                    f"cannot open a zenoh {options.mode} session on {where}: {exc}"
+                ) from exc
+            time.sleep(0.2)
+
+
+class Publisher(Generic[T]):
+    """A typed publisher on one concrete key."""
+
+    def __init__(self, session: zenoh.Session, key: str, msg_type: type[T], **qos: Any) -> None:
+        self.key = key
+        self.type = msg_type
+        self.count = 0
+        self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type), **qos)
+
+    def put(self, msg: T) -> None:
+        """Publish ``msg`` (must be of this publisher's type)."""
+        if type(msg) is not self.type:
+            raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
+        self._pub.put(codec.encode(msg))
+        self.count += 1
+
+    def undeclare(self) -> None:
+        self._pub.undeclare()
+
+
+class Node:
+    """One process's presence on the Zenoh network (use as a context manager).
+
+    Args:
+        name: default process name (the liveliness token is ``{ns}/alive/{name}``);
+            ``options.name`` overrides it.
+        options: session options (mode, endpoints, namespace).
+        handle_signals: turn SIGINT/SIGTERM into ``stop_event`` (main thread only).
+        linger: seconds to wait before closing so the last messages leave (Zenoh drops
+            messages still queued when a session closes).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        options: ZenohOptions | None = None,
+        *,
+        handle_signals: bool = True,
+        linger: float = 0.05,
+        open_timeout: float = 10.0,
+    ) -> None:
+        self.options = options or ZenohOptions()
+        self.name = self.options.name or name
+        self.ns = self.options.namespace
+        self.log = logging.getLogger(self.name)
+        self.stop_event = threading.Event()
+        self.decode_errors: Counter[str] = Counter()
+        self.callback_errors: Counter[str] = Counter()
+        self._linger = linger
+        self._last_error_log: dict[str, float] = {}
+        self._declared: list[Any] = []
+        self._token: Any = None
+        self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
+        self._closed = False
+        self._old_handlers: dict[int, Any] = {}
+        if handle_signals and threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old_handlers[sig] = signal.signal(sig, self._on_signal)
+        self.session = open_session(self.options, timeout=open_timeout)
+
+    # ---- lifecycle ----
+
+    def __enter__(self) -> Node:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def stopping(self) -> bool:
+        """True once a stop was requested (signal or :meth:`stop`)."""
+        return self.stop_event.is_set()
+
+    def stop(self) -> None:
+        """Ask the process's loops to end."""
+        self.stop_event.set()
+
+    def _on_signal(self, signum: int, _frame: object) -> None:
+        if self.stop_event.is_set():
+            self.log.warning("second %s: exiting now", signal.Signals(signum).name)
+            raise SystemExit(128 + signum)
+        self.log.info("%s received, stopping", signal.Signals(signum).name)
+        self.stop_event.set()
+
+    def sleep(self, seconds: float) -> bool:
+        """Sleep unless stopped; False if a stop was requested."""
+        return not self.stop_event.wait(seconds)
+
+    def spin(self) -> None:
+        """Block until a stop is requested."""
+        while not self.stop_event.wait(0.5):
+            pass
+
+    def announce(self) -> None:
+        """Declare the liveliness token ``{ns}/alive/{name}``: this process is ready."""
+        if self._token is None:
+            self._token = self.session.liveliness().declare_token(
+                ALIVE.key(self.ns, service=self.name)
+            )
+
+    def close(self) -> None:
+        """Withdraw the token, undeclare everything and close the session (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        self.stop_event.set()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        if self._linger > 0:
+            time.sleep(self._linger)
+        try:
+            if self._token is not None:
+                self._token.undeclare()
+            for entity in reversed(self._declared):
+                with contextlib.suppress(Exception):  # already gone with the session
+                    entity.undeclare()
+        finally:
+            self.session.close()
+            for sig, handler in self._old_handlers.items():
+                signal.signal(sig, handler)
+
+    # ---- publish / subscribe ----
+
+    def publisher(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Publisher[T]:
+        """A typed publisher for ``topic`` in this node's namespace (``parts`` fill the key)."""
+        pub = Publisher(self.session, key or topic.key(self.ns, **parts), topic.type)
+        self._declared.append(pub)
+        return pub
+
+    def _note_error(self, counter: Counter[str], key: str, what: str, exc: BaseException) -> None:
+        counter[key] += 1
+        now = time.monotonic()
+        if now - self._last_error_log.get(key + what, -1e9) >= 5.0:
+            self._last_error_log[key + what] = now
+            self.log.warning("%s on %s (%d so far): %s", what, key, counter[key], exc)
+
+    def subscribe(
+        self,
+        topic: Topic[T],
+        callback: Callable[[T], None],
+        *,
+        key: str | None = None,
+        **parts: str,
+    ) -> zenoh.Subscriber:
+        """Call ``callback(msg)`` for every decodable sample on ``topic``.
+
+        ``key`` may be a key expression with wildcards instead of this node's namespace.
+        Undecodable samples are counted in ``decode_errors`` and logged; exceptions in the
+        callback are counted in ``callback_errors`` and logged; neither ends the subscription.
+        """
+        keyexpr = key or topic.key(self.ns, **parts)
+        dec = codec.decoder(topic.type)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            where = str(sample.key_expr)
+            try:
+                msg = dec.decode(sample.payload.to_bytes())
+            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+                self._note_error(self.decode_errors, where, "undecodable sample", exc)
+                return
+            try:
+                callback(msg)
+            except Exception as exc:
+                self._note_error(self.callback_errors, where, "callback error", exc)
+
+        sub = self.session.declare_subscriber(keyexpr, on_sample)
+        self._declared.append(sub)
+        return sub
+
+    def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
+        """Subscribe to ``topic`` and keep only its newest value and its age."""
+        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts))
+        self.subscribe(topic, holder.update, key=key, **parts)
+        return holder
+
+    # ---- services ----
+
+    def serve(
+        self,
+        service: Service[Req, Rep],
+        handler: Callable[[Req], Rep],
+        **parts: str,
+    ) -> zenoh.Queryable:
+        """Answer ``service`` requests with ``handler(request) -> reply`` on a worker thread.
+
+        A request that does not decode, or a handler raising ValueError or ServiceError, gets an
+        error reply (ErrorReply) saying what is wrong; the queryable keeps serving.
+        """
+        key = service.key(self.ns, **parts)
+        dec = codec.decoder(service.request)
+        reply_encoding = encoding_for(service.reply)
+
+        def answer(query: zenoh.Query) -> None:
+            try:
+                if query.payload is None:
+                    raise ServiceError(
+                        f"{key}: empty request, expected a {service.request.__name__}",
+                        "bad_request",
+                    )
+                try:
+                    request = dec.decode(query.payload.to_bytes())
+                except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+                    self.decode_errors[key] += 1
+                    raise ServiceError(
+                        f"{key}: bad {service.request.__name__} request: {exc}", "bad_request"
+                    ) from exc
+                reply = handler(request)
+                query.reply(key, codec.encode(reply), encoding=reply_encoding)
+            except ServiceError as exc:
+                err = ErrorReply(message=exc.message, code=exc.code)
+                query.reply_err(codec.encode(err), encoding=_ERROR_ENCODING)
+            except ValueError as exc:
+                err = ErrorReply(message=f"{key}: {exc}", code="bad_request")
+                query.reply_err(codec.encode(err), encoding=_ERROR_ENCODING)
+            except Exception as exc:
+                self.log.exception("service %s failed", key)
+                err = ErrorReply(message=f"{key}: internal error: {exc}", code="internal")
+                query.reply_err(codec.encode(err), encoding=_ERROR_ENCODING)
+            finally:
+                query.drop()
+
+        def on_query(query: zenoh.Query) -> None:
+            try:
+                self._pool.submit(answer, query)
+            except RuntimeError:  # pool shut down: the node is closing
+                query.drop()
+
+        queryable = self.session.declare_queryable(key, on_query)
+        self._declared.append(queryable)
+        return queryable
+
+    def call(
+        self,
+        service: Service[Req, Rep],
+        request: Req,
+        *,
+        timeout: float = 5.0,
+        ns: str | None = None,
+        **parts: str,
+    ) -> Rep:
+        """Send ``request`` to ``service`` and return the reply.
+
+        Raises:
+            ServiceError: the server answered with an error reply (its message says why).
+            ServiceUnavailable: nobody answered within ``timeout`` seconds.
+        """
+        return call_service(
+            self.session, service, request, ns=ns or self.ns, timeout=timeout, **parts
+        )
+
+
+def call_service(
+    session: zenoh.Session,
+    service: Service[Req, Rep],
+    request: Req,
+    *,
+    ns: str,
+    timeout: float = 5.0,
+    **parts: str,
+) -> Rep:
+    """Request/reply on a plain session (see :meth:`Node.call`)."""
+    if type(request) is not service.request:
+        raise TypeError(
+            f"{service.template} takes {service.request.__name__}, got {type(request).__name__}"
+        )
+    key = service.key(ns, **parts)
+    replies = session.get(
+        key,
+        payload=codec.encode(request),
+        encoding=encoding_for(service.request),
+        timeout=timeout,
+    )
+    for reply in replies:
+        if reply.ok is not None:
+            return codec.decode(service.reply, reply.ok.payload.to_bytes())
+        raw = reply.err.payload.to_bytes()
+        try:
+            err = codec.decode(ErrorReply, raw)
+        except (msgspec.DecodeError, msgspec.ValidationError):
+            err = ErrorReply(message=raw.decode("utf-8", "replace"), code="internal")
+        raise ServiceError(err.message, err.code)
+    raise ServiceUnavailable(
+        f"no reply from {key} within {timeout:g} s: is the {service.server or 'server'} running?"
+    )

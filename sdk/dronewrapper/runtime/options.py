@@ -1,0 +1,127 @@
+"""Zenoh session options: the one place where every process's session is configured.
+
+Every process takes the same flags (``--connect``, ``--listen``, ``--mode``, ``--namespace``,
+``--name``) with the same environment fallbacks (``DRONEWRAPPER_CONNECT``, ``..._LISTEN``,
+``..._MODE``, ``..._NAMESPACE``). Multicast scouting is always off: processes find each other
+through a router on explicit endpoints, and local peers then link directly (gossip through the
+router), so images between processes on one machine go peer to peer over shared memory.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from dataclasses import dataclass, field
+
+import zenoh
+
+from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
+
+DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
+MODES = ("peer", "client", "router")
+ENV_PREFIX = "DRONEWRAPPER_"
+
+
+@dataclass
+class ZenohOptions:
+    """How a process joins the Zenoh network.
+
+    Attributes:
+        mode: ``peer`` (services on the drone: direct links to local peers), ``client`` (a
+            laptop or a light tool: everything through the router) or ``router``.
+        connect: endpoints to connect to, e.g. ``["tcp/127.0.0.1:7447"]``.
+        listen: endpoints to listen on; peers default to an ephemeral loopback port.
+        namespace: the vehicle namespace that prefixes every key (``drone``, ``drone2`` ...).
+        name: the process's name for its liveliness token ``{ns}/alive/{name}``.
+        shared_memory: use Zenoh shared memory for large payloads between local processes.
+    """
+
+    mode: str = "peer"
+    connect: list[str] = field(default_factory=lambda: [DEFAULT_ROUTER])
+    listen: list[str] = field(default_factory=list)
+    namespace: str = DEFAULT_NAMESPACE
+    name: str = ""
+    shared_memory: bool = True
+
+    def __post_init__(self) -> None:
+        if self.mode not in MODES:
+            raise ValueError(f"zenoh mode must be one of {', '.join(MODES)}, got {self.mode!r}")
+        if not self.namespace or "/" in self.namespace or "*" in self.namespace:
+            raise ValueError(f"namespace must be one key chunk, got {self.namespace!r}")
+        for endpoint in [*self.connect, *self.listen]:
+            if "/" not in endpoint:
+                raise ValueError(f"endpoint {endpoint!r} is not PROTO/ADDRESS (tcp/127.0.0.1:7447)")
+
+
+def _split(value: str | None) -> list[str] | None:
+    if value is None:
+        return None
+    return [part.strip() for part in value.split(",") if part.strip()]
+
+
+def add_zenoh_args(parser: argparse.ArgumentParser, *, default_mode: str = "peer") -> None:
+    """Add the common Zenoh flags to ``parser`` (defaults come from the environment)."""
+    env = os.environ
+    group = parser.add_argument_group("zenoh")
+    group.add_argument(
+        "--connect",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"endpoint to connect to, repeatable (env {ENV_PREFIX}CONNECT, "
+        f"default {DEFAULT_ROUTER})",
+    )
+    group.add_argument(
+        "--listen",
+        action="append",
+        metavar="ENDPOINT",
+        help=f"endpoint to listen on, repeatable (env {ENV_PREFIX}LISTEN)",
+    )
+    group.add_argument(
+        "--mode",
+        choices=MODES,
+        default=env.get(f"{ENV_PREFIX}MODE", default_mode),
+        help=f"zenoh session mode (env {ENV_PREFIX}MODE, default {default_mode})",
+    )
+    group.add_argument(
+        "--namespace",
+        "--ns",
+        default=env.get(f"{ENV_PREFIX}NAMESPACE", DEFAULT_NAMESPACE),
+        help=f"vehicle namespace (env {ENV_PREFIX}NAMESPACE, default {DEFAULT_NAMESPACE})",
+    )
+    group.add_argument("--name", default="", help="process name for the liveliness token")
+    group.add_argument(
+        "--no-shm", action="store_true", help="disable Zenoh shared memory for large payloads"
+    )
+
+
+def options_from_args(args: argparse.Namespace, *, name: str = "") -> ZenohOptions:
+    """Build ZenohOptions from parsed flags, falling back to the environment."""
+    connect = args.connect or _split(os.environ.get(f"{ENV_PREFIX}CONNECT")) or [DEFAULT_ROUTER]
+    listen = args.listen or _split(os.environ.get(f"{ENV_PREFIX}LISTEN")) or []
+    return ZenohOptions(
+        mode=args.mode,
+        connect=connect,
+        listen=listen,
+        namespace=args.namespace,
+        name=args.name or name,
+        shared_memory=not args.no_shm,
+    )
+
+
+def zenoh_config(options: ZenohOptions) -> zenoh.Config:
+    """The zenoh.Config for ``options`` (multicast scouting off, explicit endpoints)."""
+    conf = zenoh.Config()
+    conf.insert_json5("mode", json.dumps(options.mode))
+    listen = list(options.listen)
+    if options.mode == "peer" and not listen:
+        listen = ["tcp/127.0.0.1:0"]  # loopback only; never every interface by default
+    conf.insert_json5("listen/endpoints", json.dumps(listen))
+    connect = [] if options.mode == "router" and not options.connect else options.connect
+    conf.insert_json5("connect/endpoints", json.dumps(connect))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    if options.mode != "router":
+        # keep trying the router in the background instead of failing the process
+        conf.insert_json5("connect/exit_on_failure", "false")
+    conf.insert_json5("transport/shared_memory/enabled", json.dumps(options.shared_memory))
+    return conf

@@ -1,0 +1,102 @@
+"""The common entry point of every service process.
+
+A service's ``__main__`` is three lines::
+
+    from dronewrapper.runtime.service import run_service
+    from dronewrapper_perception.node import Config, run
+    raise SystemExit(run_service("perception", __doc__, Config, run))
+
+``run_service`` parses the common flags (Zenoh flags, ``--config FILE``, ``--set KEY=VALUE``,
+``--log-level``), loads the config strictly, opens the Node (SIGINT/SIGTERM -> stop), calls
+``run(node, config)`` and closes the session whatever happens. Exit status: 0 after a clean
+stop, 2 for a bad config or bad flags, 1 when ``run`` raised.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Callable, Sequence
+from typing import TypeVar
+
+from dronewrapper.runtime.config import ConfigError, load_config
+from dronewrapper.runtime.node import Node
+from dronewrapper.runtime.options import add_zenoh_args, options_from_args
+
+C = TypeVar("C")
+
+LOG_FORMAT = "%(asctime)s.%(msecs)03d %(levelname)-7s %(name)s: %(message)s"
+
+
+def setup_logging(level: str = "INFO") -> None:
+    """Log to stderr with timestamps (the launcher prefixes each line with the process name)."""
+    logging.basicConfig(level=level.upper(), format=LOG_FORMAT, datefmt="%H:%M:%S", force=True)
+
+
+def service_parser(name: str, description: str | None, *, default_mode: str = "peer"):
+    """An ArgumentParser with the flags every service takes."""
+    parser = argparse.ArgumentParser(
+        prog=name, description=(description or "").strip().splitlines()[0] if description else None
+    )
+    parser.add_argument("--config", metavar="FILE", help="YAML or JSON config file")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one config key (dotted path), repeatable",
+    )
+    parser.add_argument("--log-level", default="INFO", help="DEBUG, INFO, WARNING, ERROR")
+    add_zenoh_args(parser, default_mode=default_mode)
+    return parser
+
+
+def run_service(
+    name: str,
+    description: str | None,
+    config_type: type[C],
+    run: Callable[[Node, C], int | None],
+    argv: Sequence[str] | None = None,
+    *,
+    add_args: Callable[[argparse.ArgumentParser], None] | None = None,
+    configure: Callable[[argparse.Namespace, list[str]], None] | None = None,
+) -> int:
+    """Parse flags, load the config, run the service on a Node and exit cleanly.
+
+    ``add_args`` may add service-specific flags; ``configure(args, overrides)`` may turn them
+    into config overrides (appended to ``--set``) before the config is loaded.
+    """
+    parser = service_parser(name, description)
+    if add_args:
+        add_args(parser)
+    args = parser.parse_args(argv)
+    setup_logging(args.log_level)
+    log = logging.getLogger(name)
+    overrides = list(args.set)
+    if configure:
+        configure(args, overrides)
+    try:
+        config = load_config(config_type, args.config, overrides)
+    except ConfigError as exc:
+        print(f"{name}: {exc}", file=sys.stderr)
+        return 2
+    try:
+        options = options_from_args(args, name=name)
+    except ValueError as exc:
+        print(f"{name}: {exc}", file=sys.stderr)
+        return 2
+    try:
+        with Node(name, options) as node:
+            code = run(node, config)
+    except ConnectionError as exc:
+        log.error("%s", exc)
+        return 1
+    except KeyboardInterrupt:
+        return 0
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    except Exception:
+        log.exception("%s failed", name)
+        return 1
+    return int(code or 0)

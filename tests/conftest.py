@@ -1,0 +1,30 @@
+"""Shared fixtures: a real Zenoh router on a free loopback port, and process spawning."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import pytest
+from support import Process, zenoh_router
+
+
+@pytest.fixture
+def router() -> Iterator[str]:
+    """The endpoint of a fresh Zenoh router on 127.0.0.1 (a real router-mode session)."""
+    with zenoh_router() as endpoint:
+        yield endpoint
+
+
+@pytest.fixture
+def spawn(tmp_path) -> Iterator:
+    """Start child processes (``spawn(argv, name)``); all are stopped at teardown."""
+    procs: list[Process] = []
+
+    def start(argv, name: str = "proc", env=None) -> Process:
+        proc = Process(argv, tmp_path / f"{name}-{len(procs)}.log", env=env)
+        procs.append(proc)
+        return proc
+
+    yield start
+    for proc in reversed(procs):
+        proc.stop()

@@ -1,0 +1,114 @@
+"""Test helpers: free loopback ports, a real Zenoh router, service processes, bounded waits."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import TypeVar
+
+from dronewrapper.router import router_options, run_router
+from dronewrapper.runtime import Node, ZenohOptions
+
+T = TypeVar("T")
+
+REPO = Path(__file__).resolve().parents[1]
+ASSETS = Path(os.environ.get("DRONEWRAPPER_ASSETS", REPO.parent / "shared" / "assets"))
+YOLOX_NANO = ASSETS / "models" / "yolox_nano.onnx"
+SPRITES = ASSETS / "sprites"
+
+
+def free_port(kind: int = socket.SOCK_STREAM) -> int:
+    """A port that is free on 127.0.0.1 right now (TCP by default, UDP with SOCK_DGRAM)."""
+    with socket.socket(socket.AF_INET, kind) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def free_endpoint() -> str:
+    """A free ``tcp/127.0.0.1:PORT`` Zenoh endpoint."""
+    return f"tcp/127.0.0.1:{free_port()}"
+
+
+@contextlib.contextmanager
+def zenoh_router(endpoint: str | None = None) -> Iterator[str]:
+    """Run a real Zenoh router (a router-mode session) on a loopback endpoint."""
+    endpoint = endpoint or free_endpoint()
+    stop, ready = threading.Event(), threading.Event()
+    thread = threading.Thread(
+        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
+    )
+    thread.start()
+    if not ready.wait(10):
+        raise RuntimeError(f"router on {endpoint} did not start")
+    try:
+        yield endpoint
+    finally:
+        stop.set()
+        thread.join(10)
+
+
+def client_node(endpoint: str, name: str = "test", namespace: str = "drone", **kw) -> Node:
+    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers)."""
+    options = ZenohOptions(mode="peer", connect=[endpoint], namespace=namespace, name=name)
+    return Node(name, options, handle_signals=False, **kw)
+
+
+def wait_for(
+    predicate: Callable[[], T], timeout: float, *, interval: float = 0.05, what: str = ""
+) -> T:
+    """Poll ``predicate`` until it returns a truthy value; raise AssertionError on timeout."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() >= deadline:
+            raise AssertionError(f"timed out after {timeout:g} s waiting for {what or predicate}")
+        time.sleep(interval)
+
+
+class Process:
+    """A child process with its output captured to a file; stopped with SIGINT, then killed."""
+
+    def __init__(self, argv: Sequence[str], log_path: Path, env: dict[str, str] | None = None):
+        self.argv = list(argv)
+        self.log_path = log_path
+        self._log = open(log_path, "wb")  # noqa: SIM115 - closed in stop()
+        self.proc = subprocess.Popen(
+            self.argv,
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
+            cwd=REPO,
+        )
+
+    def output(self) -> str:
+        return self.log_path.read_text(errors="replace")
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self, timeout: float = 10.0) -> int:
+        """SIGINT, wait up to ``timeout``, then SIGKILL; returns the exit status."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(5)
+        self._log.close()
+        return self.proc.returncode
+
+
+def python_module(module: str, *args: str) -> list[str]:
+    """argv running ``python -m module args`` with this interpreter."""
+    return [sys.executable, "-m", module, *args]
