@@ -1,1 +1,1 @@
-"""placeholder"""
+"""Process graphs (``compose/*.yaml``) and the launcher that runs them: ``dronewrapper up``."""

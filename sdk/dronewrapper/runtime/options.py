@@ -62,7 +62,6 @@ def _split(value: str | None) -> list[str] | None:
 
 def add_zenoh_args(parser: argparse.ArgumentParser, *, default_mode: str = "peer") -> None:
     """Add the common Zenoh flags to ``parser`` (defaults come from the environment)."""
-    env = os.environ
     group = parser.add_argument_group("zenoh")
     group.add_argument(
         "--connect",
@@ -80,16 +79,17 @@ def add_zenoh_args(parser: argparse.ArgumentParser, *, default_mode: str = "peer
     group.add_argument(
         "--mode",
         choices=MODES,
-        default=env.get(f"{ENV_PREFIX}MODE", default_mode),
+        default=None,
         help=f"zenoh session mode (env {ENV_PREFIX}MODE, default {default_mode})",
     )
     group.add_argument(
         "--namespace",
         "--ns",
-        default=env.get(f"{ENV_PREFIX}NAMESPACE", DEFAULT_NAMESPACE),
+        default=None,
         help=f"vehicle namespace (env {ENV_PREFIX}NAMESPACE, default {DEFAULT_NAMESPACE})",
     )
     group.add_argument("--name", default="", help="process name for the liveliness token")
+    parser.set_defaults(zenoh_default_mode=default_mode)
     group.add_argument(
         "--no-shm", action="store_true", help="disable Zenoh shared memory for large payloads"
     )
@@ -99,11 +99,13 @@ def options_from_args(args: argparse.Namespace, *, name: str = "") -> ZenohOptio
     """Build ZenohOptions from parsed flags, falling back to the environment."""
     connect = args.connect or _split(os.environ.get(f"{ENV_PREFIX}CONNECT")) or [DEFAULT_ROUTER]
     listen = args.listen or _split(os.environ.get(f"{ENV_PREFIX}LISTEN")) or []
+    env = os.environ
+    default_mode = getattr(args, "zenoh_default_mode", "peer")
     return ZenohOptions(
-        mode=args.mode,
+        mode=args.mode or env.get(f"{ENV_PREFIX}MODE", default_mode),
         connect=connect,
         listen=listen,
-        namespace=args.namespace,
+        namespace=args.namespace or env.get(f"{ENV_PREFIX}NAMESPACE", DEFAULT_NAMESPACE),
         name=args.name or name,
         shared_memory=not args.no_shm,
     )

@@ -1,0 +1,154 @@
+"""Process-graph files: a strict schema, variable substitution and validation.
+
+A graph lists the processes that run together (in start order) and their config::
+
+    version: 1
+    description: Simulated Iris and its MAVLink bridge
+    namespace: drone
+    vars: {scenario: empty, onboard_port: "14540"}
+    processes:
+      - name: sim
+        module: dronewrapper_sim
+        args: ["--scenario", "${scenario}", "--udp-onboard", "${onboard_port}:0"]
+      - name: bridge_mavlink
+        module: dronewrapper_bridge_mavlink
+        set: {connection: "udpin:127.0.0.1:${onboard_port}"}
+
+``${name}`` takes a var (``--scenario``/``--var`` on the command line override the graph's
+defaults) or a built-in (``ns``, ``router``, ``repo``, ``graph_dir``, ``assets``, ``python``);
+``${name:-default}`` falls back to ``default``. Errors name the file and the key.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import msgspec
+
+REPO = Path(__file__).resolve().parents[1]
+GRAPH_DIR = Path(__file__).resolve().parent
+_VAR = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)(?::-([^}]*))?\}")
+_NAME = re.compile(r"[A-Za-z0-9_\-]+")
+
+
+class GraphError(ValueError):
+    """A graph file is malformed; the message names the file and the key."""
+
+
+class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    """One process of a graph.
+
+    Attributes:
+        name: unique in the graph; its liveliness name (ready = token ``{ns}/alive/{name}``).
+        module: run as ``python -m MODULE`` (exclusive with ``command``).
+        command: argv of another program (exclusive with ``module``).
+        config: config file path, relative to the graph file; passed as ``--config``.
+        set: config overrides, passed as ``--set KEY=VALUE``.
+        args: more arguments.
+        env: extra environment variables.
+        ready: ``alive`` (wait for the liveliness token) or ``none`` (started is ready).
+        ready_timeout_s: how long to wait for readiness, seconds.
+        zenoh_args: append the common Zenoh flags (``--connect --namespace --name --mode``).
+    """
+
+    name: str
+    module: str | None = None
+    command: list[str] | None = None
+    config: str | None = None
+    set: dict[str, Any] = msgspec.field(default_factory=dict)
+    args: list[str] = msgspec.field(default_factory=list)
+    env: dict[str, str] = msgspec.field(default_factory=dict)
+    ready: str = "alive"
+    ready_timeout_s: float = 30.0
+    zenoh_args: bool = True
+
+
+class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    """A process graph file (``compose/NAME.yaml``)."""
+
+    version: int
+    description: str = ""
+    namespace: str = "drone"
+    vars: dict[str, str] = msgspec.field(default_factory=dict)
+    processes: list[ProcessSpec]
+
+
+def assets_dir() -> Path:
+    """The shared assets folder: ``$DRONEWRAPPER_ASSETS``, else ``REPO/../shared/assets``."""
+    return Path(os.environ.get("DRONEWRAPPER_ASSETS", REPO.parent / "shared" / "assets"))
+
+
+def substitute(text: str, values: Mapping[str, str], where: str) -> str:
+    """Replace ``${name}`` / ``${name:-default}`` in ``text``; unknown names are errors."""
+
+    def repl(m: re.Match[str]) -> str:
+        name, default = m.group(1), m.group(2)
+        if name in values:
+            return str(values[name])
+        if default is not None:
+            return default
+        known = ", ".join(sorted(values))
+        raise GraphError(f"{where}: unknown variable ${{{name}}} (known: {known})")
+
+    return _VAR.sub(repl, text)
+
+
+def resolve_graph_path(name_or_path: str) -> Path:
+    """A graph file from a path, or a bare name in compose/ (``sim_iris``)."""
+    path = Path(name_or_path)
+    if path.exists():
+        return path
+    candidate = GRAPH_DIR / f"{name_or_path.removesuffix('.yaml')}.yaml"
+    if candidate.exists():
+        return candidate
+    raise GraphError(f"{name_or_path}: no such graph file (looked in . and {GRAPH_DIR})")
+
+
+def load_graph(path: str | Path) -> Graph:
+    """Read and validate a graph file.
+
+    Raises:
+        GraphError: the file is missing, not YAML, or has an unknown/missing/mistyped key, a
+            duplicate process name, or a process with neither or both of module/command.
+    """
+    import yaml
+
+    path = Path(path)
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise GraphError(f"{path}: cannot read graph: {exc.strerror}") from exc
+    except yaml.YAMLError as exc:
+        raise GraphError(f"{path}: not valid YAML: {exc}") from exc
+    if not isinstance(raw, dict):
+        raise GraphError(f"{path}: top level must be a mapping")
+    raw["vars"] = {k: str(v) for k, v in (raw.get("vars") or {}).items()}
+    try:
+        graph = msgspec.convert(raw, Graph)
+    except msgspec.ValidationError as exc:
+        raise GraphError(f"{path}: {exc}") from exc
+    if graph.version != 1:
+        raise GraphError(
+            f"{path}: unsupported version {graph.version} (expected 1) - at `$.version`"
+        )
+    if not graph.processes:
+        raise GraphError(f"{path}: no processes - at `$.processes`")
+    seen: set[str] = set()
+    for i, proc in enumerate(graph.processes):
+        at = f"at `$.processes[{i}]`"
+        if not _NAME.fullmatch(proc.name):
+            raise GraphError(f"{path}: process name {proc.name!r} must be [A-Za-z0-9_-] - {at}")
+        if proc.name in seen:
+            raise GraphError(f"{path}: duplicate process name {proc.name!r} - {at}")
+        seen.add(proc.name)
+        if (proc.module is None) == (proc.command is None):
+            raise GraphError(
+                f"{path}: process {proc.name!r} needs exactly one of module/command - {at}"
+            )
+        if proc.ready not in ("alive", "none"):
+            raise GraphError(f"{path}: process {proc.name!r}: ready must be alive or none - {at}")
+    return graph

@@ -1,0 +1,397 @@
+"""The launcher: ``dronewrapper up compose/GRAPH.yaml`` runs a process graph on this machine.
+
+It starts a Zenoh router (a router-mode session in this process) on ``--router``, then each
+process in order, waiting for its liveliness token ``{ns}/alive/{name}`` before starting the next.
+Every line a process prints is prefixed with its name. On Ctrl-C, SIGTERM or after
+``--duration`` it stops the processes in reverse order (SIGINT, then SIGKILL after a grace
+period) and closes the router. Exit status: 0 when every process started and stopped cleanly,
+1 when a process died or failed to become ready, 2 for a bad graph file or bad flags.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import ctypes
+import logging
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TextIO
+
+import zenoh
+
+from dronewrapper.msgs.registry import ALIVE
+from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
+from dronewrapper.runtime.service import setup_logging
+from dronewrapper_compose.graph import (
+    REPO,
+    Graph,
+    GraphError,
+    ProcessSpec,
+    assets_dir,
+    load_graph,
+    resolve_graph_path,
+    substitute,
+)
+
+log = logging.getLogger("launcher")
+
+STOP_GRACE_S = 10.0
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    """Ask Linux to send SIGTERM to the child if the launcher dies, so nothing is orphaned."""
+    with contextlib.suppress(OSError):
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+class LaunchError(RuntimeError):
+    """A process failed to start or become ready."""
+
+
+def build_argv(
+    spec: ProcessSpec, values: Mapping[str, str], graph_path: Path, ns: str, router: str
+) -> tuple[list[str], dict[str, str]]:
+    """The argv and extra environment of one process, with variables substituted."""
+    where = f"{graph_path}: process {spec.name!r}"
+    if spec.module is not None:
+        argv = [sys.executable, "-m", substitute(spec.module, values, where)]
+    else:
+        argv = [substitute(part, values, where) for part in spec.command or []]
+    if spec.config is not None:
+        config = Path(substitute(spec.config, values, where))
+        if not config.is_absolute():
+            config = (graph_path.parent / config).resolve()
+        if not config.exists():
+            raise GraphError(f"{where}: config file {config} does not exist")
+        argv += ["--config", str(config)]
+    for key, value in spec.set.items():
+        argv += ["--set", f"{key}={substitute(str(value), values, where)}"]
+    argv += [substitute(arg, values, where) for arg in spec.args]
+    if spec.zenoh_args:
+        argv += ["--connect", router, "--namespace", ns, "--name", spec.name, "--mode", "peer"]
+    env = {key: substitute(value, values, where) for key, value in spec.env.items()}
+    return argv, env
+
+
+class _Child:
+    """A running process of the graph, with its output forwarded line by line."""
+
+    def __init__(
+        self,
+        spec: ProcessSpec,
+        argv: list[str],
+        env: dict[str, str],
+        out: TextIO,
+        out_lock: threading.Lock,
+        width: int,
+    ) -> None:
+        self.spec = spec
+        self.name = spec.name
+        self.argv = argv
+        self.stopping = False
+        self.proc = subprocess.Popen(
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", **env},
+            cwd=REPO,
+            start_new_session=True,  # the launcher, not the terminal, decides the stop order
+            preexec_fn=_die_with_parent,
+        )
+        prefix = f"{spec.name:>{width}} | "
+        self._reader = threading.Thread(
+            target=self._forward, args=(prefix, out, out_lock), daemon=True
+        )
+        self._reader.start()
+
+    def _forward(self, prefix: str, out: TextIO, lock: threading.Lock) -> None:
+        assert self.proc.stdout is not None
+        for raw in iter(self.proc.stdout.readline, b""):
+            line = raw.decode("utf-8", "replace").rstrip("\n")
+            with lock:
+                out.write(prefix + line + "\n")
+                out.flush()
+
+    def poll(self) -> int | None:
+        return self.proc.poll()
+
+    def interrupt(self) -> None:
+        self.stopping = True
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+
+    def wait(self, timeout: float) -> int | None:
+        try:
+            return self.proc.wait(max(timeout, 0.0))
+        except subprocess.TimeoutExpired:
+            return None
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(5)
+
+    def join_output(self) -> None:
+        self._reader.join(2)
+
+
+class Launcher:
+    """Runs one graph: ``start()`` brings it up, ``wait()`` supervises, ``stop()`` tears down.
+
+    Use as a context manager from Python (the demo and the scenario tests do)::
+
+        with Launcher.from_file("compose/sim_iris.yaml", router=endpoint) as graph:
+            graph.wait(duration=30)
+        assert graph.exit_code == 0
+    """
+
+    def __init__(
+        self,
+        graph: Graph,
+        graph_path: Path,
+        *,
+        router: str = DEFAULT_ROUTER,
+        start_router: bool = True,
+        variables: Mapping[str, str] | None = None,
+        namespace: str | None = None,
+        out: TextIO | None = None,
+    ) -> None:
+        self.graph = graph
+        self.graph_path = graph_path
+        self.router = router
+        self.start_router = start_router
+        self.ns = namespace or graph.namespace
+        self.out = out or sys.stdout
+        self.values = {
+            **graph.vars,
+            **(variables or {}),
+            "ns": self.ns,
+            "router": router,
+            "repo": str(REPO),
+            "graph_dir": str(graph_path.parent.resolve()),
+            "assets": str(assets_dir()),
+            "python": sys.executable,
+        }
+        self.children: list[_Child] = []
+        self.failures: list[str] = []
+        self.exit_code: int | None = None
+        self._alive: set[str] = set()
+        self._alive_cond = threading.Condition()
+        self._out_lock = threading.Lock()
+        self._session: zenoh.Session | None = None
+        self._token_sub = None
+        self._width = max(len(p.name) for p in graph.processes)
+
+    @classmethod
+    def from_file(cls, path: str | Path, **kwargs) -> Launcher:
+        """A launcher for the graph at ``path`` (or a bare name in compose/)."""
+        resolved = resolve_graph_path(str(path))
+        return cls(load_graph(resolved), resolved, **kwargs)
+
+    # ---- bring-up ----
+
+    def __enter__(self) -> Launcher:
+        try:
+            self.start()
+        except BaseException:
+            self.stop()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _say(self, text: str) -> None:
+        with self._out_lock:
+            self.out.write(f"{'launcher':>{self._width}} | {text}\n")
+            self.out.flush()
+
+    def _on_token(self, sample: zenoh.Sample) -> None:
+        match = ALIVE.match(str(sample.key_expr))
+        if match is None or match["ns"] != self.ns:
+            return
+        with self._alive_cond:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._alive.add(match["service"])
+            else:
+                self._alive.discard(match["service"])
+            self._alive_cond.notify_all()
+
+    def start(self) -> None:
+        """Start the router and every process in order, each ready before the next.
+
+        Raises:
+            LaunchError: a process exited or did not become ready in time.
+            GraphError: a variable or config path in the graph is wrong.
+        """
+        mode = "router" if self.start_router else "client"
+        options = ZenohOptions(
+            mode=mode,
+            listen=[self.router] if self.start_router else [],
+            connect=[] if self.start_router else [self.router],
+            namespace=self.ns,
+        )
+        self._session = open_session(options)
+        self._say(f"{'router listening on' if self.start_router else 'using router'} {self.router}")
+        self._token_sub = self._session.liveliness().declare_subscriber(
+            ALIVE.wildcard(self.ns), self._on_token, history=True
+        )
+        plans = [
+            (spec, *build_argv(spec, self.values, self.graph_path, self.ns, self.router))
+            for spec in self.graph.processes
+        ]
+        for spec, argv, env in plans:
+            self._say(f"starting {spec.name}: {' '.join(argv[1:] if spec.module else argv)}")
+            child = _Child(spec, argv, env, self.out, self._out_lock, self._width)
+            self.children.append(child)
+            self._wait_ready(child)
+
+    def _wait_ready(self, child: _Child) -> None:
+        if child.spec.ready == "none":
+            return
+        deadline = time.monotonic() + child.spec.ready_timeout_s
+        started = time.monotonic()
+        with self._alive_cond:
+            while child.name not in self._alive:
+                code = child.poll()
+                if code is not None:
+                    raise LaunchError(f"{child.name} exited with code {code} before it was ready")
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    raise LaunchError(
+                        f"{child.name} not ready after {child.spec.ready_timeout_s:g} s "
+                        f"(no liveliness token {ALIVE.key(self.ns, service=child.name)})"
+                    )
+                self._alive_cond.wait(min(remaining, 0.2))
+        self._say(f"{child.name} ready in {time.monotonic() - started:.1f} s")
+
+    # ---- supervision and shutdown ----
+
+    def wait(self, duration: float | None = None, stop: threading.Event | None = None) -> int:
+        """Supervise until ``stop`` is set, ``duration`` seconds pass, or a process dies."""
+        stop = stop or threading.Event()
+        deadline = time.monotonic() + duration if duration else None
+        while not stop.wait(0.2):
+            for child in self.children:
+                code = child.poll()
+                if code is not None and not child.stopping:
+                    self.failures.append(f"{child.name} exited unexpectedly with code {code}")
+                    self._say(self.failures[-1])
+                    return self.stop()
+            if deadline is not None and time.monotonic() >= deadline:
+                self._say(f"duration of {duration:g} s reached")
+                break
+        return self.stop()
+
+    def stop(self) -> int:
+        """Stop every process in reverse order, close the router; the graph's exit status."""
+        if self.exit_code is not None:
+            return self.exit_code
+        for child in reversed(self.children):
+            if child.poll() is None:
+                child.interrupt()
+                code = child.wait(STOP_GRACE_S)
+                if code is None:
+                    self.failures.append(f"{child.name} ignored SIGINT for {STOP_GRACE_S:g} s")
+                    self._say(self.failures[-1] + "; killing it")
+                    child.kill()
+                    code = child.proc.returncode
+            else:
+                code = child.proc.returncode
+            if child.stopping and code not in (0, -signal.SIGINT):
+                self.failures.append(f"{child.name} exited with code {code} when stopped")
+            child.join_output()
+        if self._token_sub is not None:
+            self._token_sub.undeclare()
+        if self._session is not None:
+            self._session.close()
+        self.exit_code = 1 if self.failures else 0
+        self._say(
+            "stopped" if not self.failures else "stopped with failures: " + "; ".join(self.failures)
+        )
+        return self.exit_code
+
+
+def _parse_vars(pairs: Sequence[str]) -> dict[str, str]:
+    out = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise GraphError(f"--var {pair!r} is not KEY=VALUE")
+        out[key] = value
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``dronewrapper up GRAPH [--router EP] [--scenario NAME] [--duration S] [--var K=V]``."""
+    parser = argparse.ArgumentParser(prog="dronewrapper up", description="run a process graph")
+    parser.add_argument("graph", help="compose/NAME.yaml, or a bare graph name")
+    parser.add_argument("--router", default=DEFAULT_ROUTER, help="router endpoint to start")
+    parser.add_argument(
+        "--use-router", action="store_true", help="connect to a running router instead"
+    )
+    parser.add_argument("--scenario", help="sets the graph variable 'scenario'")
+    parser.add_argument("--duration", type=float, default=0.0, help="stop after S seconds")
+    parser.add_argument("--namespace", "--ns", help="vehicle namespace (default: the graph's)")
+    parser.add_argument("--var", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--check", action="store_true", help="validate the graph and print argv")
+    args = parser.parse_args(argv)
+    setup_logging()
+    try:
+        variables = _parse_vars(args.var)
+        if args.scenario:
+            variables["scenario"] = args.scenario
+        launcher = Launcher.from_file(
+            args.graph,
+            router=args.router,
+            start_router=not args.use_router,
+            variables=variables,
+            namespace=args.namespace,
+        )
+        if args.check:
+            for spec in launcher.graph.processes:
+                argv_, _ = build_argv(
+                    spec, launcher.values, launcher.graph_path, launcher.ns, launcher.router
+                )
+                print(f"{spec.name}: {' '.join(argv_)}")
+            return 0
+    except GraphError as exc:
+        print(f"dronewrapper up: {exc}", file=sys.stderr)
+        return 2
+
+    stop = threading.Event()
+
+    def on_signal(signum: int, _frame: object) -> None:
+        if stop.is_set():
+            return
+        launcher._say(f"{signal.Signals(signum).name} received, stopping")
+        stop.set()
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+    try:
+        launcher.start()
+    except (LaunchError, GraphError, ConnectionError) as exc:
+        launcher.failures.append(str(exc))
+        launcher._say(f"start failed: {exc}")
+        launcher.stop()
+        return 1
+    launcher._say(
+        "all processes ready"
+        + (f"; running for {args.duration:g} s" if args.duration else "; Ctrl-C to stop")
+    )
+    return launcher.wait(duration=args.duration or None, stop=stop)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,91 @@
+"""Strict config schemas: errors name the file and the key; overrides and zenoh options."""
+
+from __future__ import annotations
+
+import argparse
+
+import msgspec
+import pytest
+
+from dronewrapper.runtime import ZenohOptions, add_zenoh_args, options_from_args, zenoh_config
+from dronewrapper.runtime.config import ConfigError, load_config
+
+
+class Pid(msgspec.Struct, forbid_unknown_fields=True):
+    kp: float = 0.0
+    ki: float = 0.0
+
+
+class Cfg(msgspec.Struct, forbid_unknown_fields=True):
+    rate_hz: float = 30.0
+    detector: str = "color"
+    pid: Pid = msgspec.field(default_factory=Pid)
+
+
+def test_defaults_file_and_overrides(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text("rate_hz: 15\npid:\n  kp: 0.5\n")
+    cfg = load_config(Cfg, path, ["pid.ki=0.25", "detector=yolox"])
+    assert cfg == Cfg(rate_hz=15.0, detector="yolox", pid=Pid(kp=0.5, ki=0.25))
+    assert load_config(Cfg) == Cfg()
+
+
+def test_unknown_key_names_file_and_key(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text("pid:\n  kpp: 1\n")
+    with pytest.raises(ConfigError, match=r"bad\.yaml.*unknown field `kpp`.*\$\.pid"):
+        load_config(Cfg, path)
+
+
+def test_wrong_type_names_the_key(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text("rate_hz: fast\n")
+    with pytest.raises(ConfigError, match=r"bad\.yaml.*\$\.rate_hz"):
+        load_config(Cfg, path)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [("- a\n- b\n", "mapping"), ("a: [\n", "YAML")],
+)
+def test_malformed_files(tmp_path, text, message):
+    path = tmp_path / "c.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config(Cfg, path)
+
+
+def test_missing_file_and_bad_override(tmp_path):
+    with pytest.raises(ConfigError, match="cannot read"):
+        load_config(Cfg, tmp_path / "nope.yaml")
+    with pytest.raises(ConfigError, match="KEY=VALUE"):
+        load_config(Cfg, None, ["rate_hz"])
+
+
+def test_zenoh_flags_and_environment(monkeypatch):
+    parser = argparse.ArgumentParser()
+    add_zenoh_args(parser)
+    monkeypatch.setenv("DRONEWRAPPER_CONNECT", "tcp/10.0.0.2:7447, tcp/127.0.0.1:7448")
+    monkeypatch.setenv("DRONEWRAPPER_NAMESPACE", "drone3")
+    args = parser.parse_args([])
+    opts = options_from_args(args, name="perception")
+    assert opts.connect == ["tcp/10.0.0.2:7447", "tcp/127.0.0.1:7448"]
+    assert opts.namespace == "drone3" and opts.name == "perception" and opts.mode == "peer"
+    args = parser.parse_args(["--connect", "tcp/127.0.0.1:9", "--mode", "client", "--ns", "d1"])
+    opts = options_from_args(args)
+    assert (opts.connect, opts.mode, opts.namespace) == (["tcp/127.0.0.1:9"], "client", "d1")
+
+
+def test_session_config_is_explicit_and_loopback():
+    conf = zenoh_config(ZenohOptions(mode="peer", connect=["tcp/127.0.0.1:7447"]))
+    assert conf.get_json("scouting/multicast/enabled") == "false"
+    assert conf.get_json("listen/endpoints") == '["tcp/127.0.0.1:0"]'
+    assert conf.get_json("connect/endpoints") == '["tcp/127.0.0.1:7447"]'
+
+
+@pytest.mark.parametrize(
+    "kwargs", [{"mode": "mesh"}, {"namespace": "a/b"}, {"connect": ["localhost"]}]
+)
+def test_bad_zenoh_options(kwargs):
+    with pytest.raises(ValueError):
+        ZenohOptions(**kwargs)
