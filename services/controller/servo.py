@@ -1,0 +1,150 @@
+"""The visual-servoing state machine: detections in, a body-frame velocity command out.
+
+Pure: no I/O and no clock. Each :meth:`Servo.step` gets ``now`` (seconds on a monotonic clock,
+used for the target-lost timings), the newest :class:`Detections` (or None) and its age (s).
+The PIDs use the detections' own ``header.stamp`` (the camera frame's capture time) for their
+time steps, so dt is the real interval between the frames that were measured.
+
+States (``dronewrapper.msgs.control``):
+- ``tracking``: fresh detections contain the target; vx, vz, yaw rate from the three PIDs,
+  vy is always 0. A tick without a new frame repeats the last command.
+- ``hover``: detections are stale (older than ``detection_timeout``: perception stopped or
+  lags), or the target was lost less than ``search_delay`` ago; all-zero command, PIDs reset.
+- ``search``: detections are fresh but the target has been missing for ``search_delay`` s or
+  more: turn in place at ``search_yaw_rate`` towards the side where it was last seen. Search
+  needs live perception: with stale detections the aircraft hovers rather than spinning blind.
+"""
+
+from __future__ import annotations
+
+import math
+
+import msgspec
+
+from dronewrapper.msgs.control import (
+    CONTROLLER_HOVER,
+    CONTROLLER_SEARCH,
+    CONTROLLER_TRACKING,
+)
+from dronewrapper.msgs.vision import Detection2D, Detections
+from dronewrapper_controller.config import ServoConfig
+from dronewrapper_controller.errors import (
+    ServoErrors,
+    finite,
+    follow_color_errors,
+    follow_person_errors,
+)
+from dronewrapper_controller.pid import Pid
+
+
+class Command(msgspec.Struct, kw_only=True, frozen=True):
+    """One decision of the servo.
+
+    Attributes:
+        state: ``tracking``, ``hover`` or ``search``.
+        vx, vz, yaw_rate: body FLU forward and vertical speed (m/s) and yaw rate (rad/s,
+            counter-clockwise positive); vy is always 0.
+        source_stamp: capture stamp of the frame behind this command (0 when none).
+        target_visible: the fresh detections contain the target.
+        target_id: the followed detection's id ("" when none or untracked).
+        errors: the error terms of the frame behind the command (None when not tracking).
+    """
+
+    state: str
+    vx: float = 0.0
+    vz: float = 0.0
+    yaw_rate: float = 0.0
+    source_stamp: float = 0.0
+    target_visible: bool = False
+    target_id: str = ""
+    errors: ServoErrors | None = None
+
+
+def pick_target(detections: Detections) -> Detection2D | None:
+    """The followed detection: the tracker's target if named, else the best (first) one."""
+    if detections.target_id:
+        return detections.target()
+    return detections.detections[0] if detections.detections else None
+
+
+class Servo:
+    """Three PIDs and the tracking / hover / search logic for one follow mode."""
+
+    def __init__(self, config: ServoConfig) -> None:
+        self.config = config
+        vx_gains = (
+            config.follow_color.vx if config.mode == "follow_color" else config.follow_person.vx
+        )
+        self.pid_vx = Pid(vx_gains)
+        self.pid_vz = Pid(config.vz)
+        self.pid_yaw = Pid(config.yaw_rate)
+        self._last_seen: float | None = None  # `now` when the target was last in a frame
+        self._last_stamp: float | None = None  # stamp of the last frame used
+        self._last_yaw_error = 0.0
+        self._last: Command = Command(state=CONTROLLER_HOVER)
+
+    @property
+    def last(self) -> Command:
+        """The last command returned by :meth:`step`."""
+        return self._last
+
+    def reset(self) -> None:
+        """Reset the three PIDs (called whenever the servo stops tracking)."""
+        for pid in (self.pid_vx, self.pid_vz, self.pid_yaw):
+            pid.reset()
+
+    def errors_for(self, det: Detection2D, detections: Detections) -> ServoErrors:
+        """The mode's error terms for ``det`` in a frame of ``detections``' size."""
+        c = self.config
+        w, h = detections.image_width, detections.image_height
+        if c.mode == "follow_color":
+            return follow_color_errors(det, w, h, c.follow_color.target_radius, c.ref_width)
+        fp = c.follow_person
+        return follow_person_errors(det, w, h, fp.area_ratio, fp.max_forward_error, c.ref_width)
+
+    def step(self, now: float, detections: Detections | None, age: float) -> Command:
+        """Decide the command at time ``now`` (s) from the newest detections, ``age`` s old."""
+        cfg = self.config
+        fresh = detections is not None and age <= cfg.detection_timeout
+        target = pick_target(detections) if fresh and detections is not None else None
+        errors = None
+        if target is not None and detections is not None:
+            try:
+                errors = self.errors_for(target, detections)
+            except ValueError:  # malformed frame size: treat as no target
+                errors = None
+            if errors is not None and not finite(errors):
+                errors = None
+        if errors is None or detections is None or target is None:
+            return self._not_tracking(now, fresh)
+
+        self._last_seen = now
+        self._last_yaw_error = errors.yaw
+        stamp = detections.header.stamp
+        if self._last.state == CONTROLLER_TRACKING and stamp == self._last_stamp:
+            return self._last  # same frame: repeat the command
+        self._last_stamp = stamp
+        self._last = Command(
+            state=CONTROLLER_TRACKING,
+            vx=self.pid_vx.update(errors.x, stamp),
+            vz=self.pid_vz.update(errors.z, stamp),
+            yaw_rate=self.pid_yaw.update(errors.yaw, stamp),
+            source_stamp=stamp,
+            target_visible=True,
+            target_id=target.id,
+            errors=errors,
+        )
+        return self._last
+
+    def _not_tracking(self, now: float, fresh: bool) -> Command:
+        self.reset()
+        self._last_stamp = None
+        lost_for = math.inf if self._last_seen is None else now - self._last_seen
+        if fresh and lost_for >= self.config.search_delay:
+            direction = 1.0 if self._last_yaw_error >= 0 else -1.0
+            self._last = Command(
+                state=CONTROLLER_SEARCH, yaw_rate=direction * self.config.search_yaw_rate
+            )
+        else:
+            self._last = Command(state=CONTROLLER_HOVER)
+        return self._last
