@@ -52,6 +52,7 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         env: extra environment variables.
         ready: ``alive`` (wait for the liveliness token) or ``none`` (started is ready).
         ready_timeout_s: how long to wait for readiness, seconds.
+        stop_timeout_s: how long a stop (SIGINT) may take before SIGKILL, seconds.
         zenoh_args: append the common Zenoh flags (``--connect --namespace --name --mode``).
     """
 
@@ -64,6 +65,7 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     env: dict[str, str] = msgspec.field(default_factory=dict)
     ready: str = "alive"
     ready_timeout_s: float = 30.0
+    stop_timeout_s: float = 10.0
     zenoh_args: bool = True
 
 

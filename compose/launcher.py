@@ -43,7 +43,6 @@ from dronewrapper_compose.graph import (
 
 log = logging.getLogger("launcher")
 
-STOP_GRACE_S = 10.0
 _PR_SET_PDEATHSIG = 1
 
 
@@ -300,9 +299,10 @@ class Launcher:
         for child in reversed(self.children):
             if child.poll() is None:
                 child.interrupt()
-                code = child.wait(STOP_GRACE_S)
+                grace = child.spec.stop_timeout_s
+                code = child.wait(grace)
                 if code is None:
-                    self.failures.append(f"{child.name} ignored SIGINT for {STOP_GRACE_S:g} s")
+                    self.failures.append(f"{child.name} ignored SIGINT for {grace:g} s")
                     self._say(self.failures[-1] + "; killing it")
                     child.kill()
                     code = child.proc.returncode
