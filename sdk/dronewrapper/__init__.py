@@ -7,6 +7,56 @@
     drone.land()
 
 The SDK talks to the aircraft's bridge over Zenoh (see DESIGN.md for keys, frames and units).
+Heavy parts load on first use, so ``import dronewrapper`` stays light for the runtime's tools.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 __version__ = "0.1.0"
+
+__all__ = [
+    "CommandRefused",
+    "DroneError",
+    "DroneWrapper",
+    "InvalidArgument",
+    "NoData",
+    "NotConnected",
+    "Timeout",
+    "list_drones",
+]
+
+_LAZY = {
+    "DroneWrapper": "dronewrapper.drone",
+    "list_drones": "dronewrapper.discovery",
+    "CommandRefused": "dronewrapper.errors",
+    "DroneError": "dronewrapper.errors",
+    "InvalidArgument": "dronewrapper.errors",
+    "NoData": "dronewrapper.errors",
+    "NotConnected": "dronewrapper.errors",
+    "Timeout": "dronewrapper.errors",
+}
+
+if TYPE_CHECKING:
+    from dronewrapper.discovery import list_drones
+    from dronewrapper.drone import DroneWrapper
+    from dronewrapper.errors import (
+        CommandRefused,
+        DroneError,
+        InvalidArgument,
+        NoData,
+        NotConnected,
+        Timeout,
+    )
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'dronewrapper' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value

@@ -1,0 +1,811 @@
+"""DroneWrapper: the paper's drone API over Zenoh, for real and simulated aircraft.
+
+    from dronewrapper import DroneWrapper
+    from time import sleep
+
+    drone = DroneWrapper()              # namespace "drone", router tcp/127.0.0.1:7447
+    drone.takeoff(h=2.5)                # arms, enters OFFBOARD/GUIDED, returns at 2.5 m
+    drone.set_cmd_vel(az=1)             # spin at 1 rad/s, re-published at 30 Hz until changed
+    sleep(5)
+    drone.land()                        # returns on the ground
+
+Frames and units (DESIGN.md): local ENU fixed at the take-off point (x east, y north, z up, m);
+body FLU (forward, left, up, m/s); angles in radians, yaw counter-clockwise positive.
+
+Getters read the newest message already received (no network round trip) and raise
+:class:`~dronewrapper.errors.NoData` if none has arrived yet. Blocking calls take timeouts and
+raise :class:`~dronewrapper.errors.Timeout`, :class:`~dronewrapper.errors.CommandRefused` (with the
+autopilot's reason) or :class:`~dronewrapper.errors.NotConnected`.
+"""
+
+from __future__ import annotations
+
+import atexit
+import collections
+import contextlib
+import logging
+import os
+import time
+import weakref
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
+
+import msgspec
+import numpy as np
+import zenoh
+
+from dronewrapper import images, setpoints, telemetry
+from dronewrapper.discovery import BRIDGE_PREFIX, alive_services, default_connect, open_client
+from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper.msgs import codec, registry
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    LANDED_STATE_ON_GROUND,
+    LANDED_STATE_TAKEOFF,
+    CommandBool,
+    CommandTOL,
+    ParamGet,
+    ParamSet,
+    ParamValue,
+    PositionTarget,
+    SetMode,
+    State,
+    StatusText,
+)
+from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.node import call_service, encoding_for
+from dronewrapper.streamer import SetpointStreamer
+
+T = TypeVar("T")
+
+log = logging.getLogger("dronewrapper")
+
+CAMERAS = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
+"""Camera short names accepted by the image methods, and their key names."""
+
+ARDUPILOT = ("ardupilotmega", "ardupilot")
+TELLO = ("tello",)
+STATE_FRESH_S = 3.0
+"""The bridge publishes State at >= 1 Hz; older than this means the bridge is gone."""
+
+_open_wrappers: weakref.WeakSet[DroneWrapper] = weakref.WeakSet()
+
+
+@atexit.register
+def _close_all() -> None:
+    """Close every wrapper still open at interpreter exit (an open Zenoh session can hang it)."""
+    for wrapper in list(_open_wrappers):
+        wrapper.close()
+
+
+def _camera_key_name(camera: str) -> str:
+    if camera in CAMERAS:
+        return CAMERAS[camera]
+    if camera in CAMERAS.values():
+        return camera
+    raise InvalidArgument(f"unknown camera {camera!r}: use 'frontal' or 'ventral'")
+
+
+class DroneWrapper:
+    """One drone, reached through a Zenoh router. Several objects fly several drones.
+
+    Args:
+        name: the vehicle namespace (``drone``, ``drone1`` ...); default env
+            ``DRONEWRAPPER_NAMESPACE`` or ``drone``.
+        connect: the router endpoint, e.g. ``tcp/192.168.1.10:7447`` from a laptop; default env
+            ``DRONEWRAPPER_CONNECT`` or ``tcp/127.0.0.1:7447``.
+        timeout: seconds to reach the router and find a bridge whose autopilot is connected.
+        mode: Zenoh session mode (``client``: everything through the router; ``peer``).
+        session: an open ``zenoh.Session`` to reuse (a service embedding the SDK); it is not
+            closed by :meth:`close`. ``connect`` and ``mode`` are then ignored.
+        cameras: the cameras to receive (``frontal``, ``ventral``); ``()`` receives none.
+        compressed_images: receive JPEG images (``.../image_raw/compressed``, for Wi-Fi links;
+            needs OpenCV to decode) instead of raw ones.
+        land_on_exit: when used as a context manager, land on exit if flying (also after an
+            exception); without it, exiting only stops commanding (the bridge hovers).
+        setpoint_rate_hz: rate of the setpoint stream (>= 20 Hz).
+        command_timeout: if not None, stop streaming a setpoint that was not renewed for this
+            many seconds (a deadman for apps that may hang; the bridge then hovers). None keeps
+            the paper's behaviour: stream until changed.
+        service_timeout: seconds to wait for the bridge's reply to a service call.
+        wait: wait for the bridge (True) or return at once after reaching the router.
+
+    Raises:
+        NotConnected: no router at ``connect``, no bridge in namespace ``name``, or the bridge
+            is up but its autopilot is not connected; the message says which.
+    """
+
+    def __init__(
+        self,
+        name: str | None = None,
+        connect: str | None = None,
+        timeout: float = 10.0,
+        *,
+        mode: str = "client",
+        session: zenoh.Session | None = None,
+        cameras: Sequence[str] = ("frontal", "ventral"),
+        compressed_images: bool = False,
+        land_on_exit: bool = False,
+        setpoint_rate_hz: float = 30.0,
+        command_timeout: float | None = None,
+        service_timeout: float = 10.0,
+        wait: bool = True,
+    ) -> None:
+        self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
+        registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
+        self.connect = connect or default_connect()
+        self.land_on_exit = land_on_exit
+        self.compressed_images = compressed_images
+        self.service_timeout = service_timeout
+        self.decode_errors: collections.Counter[str] = collections.Counter()
+        self._closed = False
+        self._subscribers: list[Any] = []
+        self._own_session = session is None
+        deadline = time.monotonic() + timeout
+        if session is None:
+            if mode != "client":
+                from dronewrapper.runtime.node import open_session
+                from dronewrapper.runtime.options import ZenohOptions
+
+                options = ZenohOptions(mode=mode, connect=[self.connect])
+                try:
+                    session = open_session(options, timeout=timeout)
+                except ConnectionError as exc:
+                    raise NotConnected(f"cannot reach the Zenoh router at {self.connect}") from exc
+            else:
+                session = open_client(self.connect, timeout)
+        self.session: zenoh.Session = session
+        _open_wrappers.add(self)
+        try:
+            self._declare_inputs(cameras)
+            self._setpoints = session.declare_publisher(
+                registry.SETPOINT_RAW_LOCAL.key(self.ns),
+                encoding=encoding_for(PositionTarget),
+            )
+            self._streamer = SetpointStreamer(
+                self._publish_setpoint,
+                rate_hz=setpoint_rate_hz,
+                idle_timeout=command_timeout,
+                name=f"{self.ns}-setpoints",
+            )
+            if wait:
+                self.wait_for_connection(max(0.0, deadline - time.monotonic()))
+                self._soft_wait(self._pose, min(2.0, max(0.0, deadline - time.monotonic())))
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _declare_inputs(self, cameras: Sequence[str]) -> None:
+        self._state: Latest[State] = self._latest(registry.STATE)
+        self._extended = self._latest(registry.EXTENDED_STATE)
+        self._pose = self._latest(registry.LOCAL_POSE)
+        self._velocity_body = self._latest(registry.VELOCITY_BODY)
+        self._velocity_local = self._latest(registry.VELOCITY_LOCAL)
+        self._global = self._latest(registry.GLOBAL_POSITION)
+        self._battery = self._latest(registry.BATTERY)
+        self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
+        """The autopilot's last 20 text messages (newest last)."""
+        self._subscribe(registry.STATUSTEXT, self.status_texts.append)
+        image_topic = registry.IMAGE_COMPRESSED if self.compressed_images else registry.IMAGE_RAW
+        self._images: dict[str, Latest[Any]] = {}
+        self._decoded: dict[str, tuple[Any, np.ndarray]] = {}
+        for camera in cameras:
+            key_name = _camera_key_name(camera)
+            self._images[key_name] = self._latest(image_topic, camera=key_name)
+
+    def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> None:
+        key = topic.key(self.ns, **parts)
+        decoder = codec.decoder(topic.type)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                msg = decoder.decode(sample.payload.to_bytes())
+            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+                self.decode_errors[key] += 1
+                if self.decode_errors[key] == 1:
+                    log.warning("undecodable %s on %s: %s", topic.type.__name__, key, exc)
+                return
+            callback(msg)
+
+        self._subscribers.append(self.session.declare_subscriber(key, on_sample))
+
+    def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
+        holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))
+        self._subscribe(topic, holder.update, **parts)
+        return holder
+
+    def _publish_setpoint(self, target: PositionTarget) -> None:
+        self._setpoints.put(codec.encode(target))
+
+    @staticmethod
+    def _soft_wait(latest: Latest[Any], timeout: float) -> None:
+        with contextlib.suppress(TimeoutError):
+            latest.wait(timeout)
+
+    def _need(self, latest: Latest[T], what: str) -> T:
+        value = latest.value
+        if value is None:
+            raise NoData(
+                f"no {what} received yet on {latest.name}: is the bridge running and publishing? "
+                "(wait_for_connection() waits for it)"
+            )
+        return value
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def __enter__(self) -> DroneWrapper:
+        return self
+
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
+        try:
+            self.stop_commanding()
+            if self.land_on_exit and self.is_flying():
+                try:
+                    self.land()
+                except Exception:
+                    if exc is None:
+                        raise
+                    log.exception("land on exit failed")
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Stop commanding, drop the subscriptions and close the session if it is ours.
+
+        Idempotent; also done at interpreter exit. Does not land: the bridge hovers, then lands
+        after its ``commander_lost_timeout``.
+        """
+        if self._closed:
+            return
+        self._closed = True
+        _open_wrappers.discard(self)
+        streamer = getattr(self, "_streamer", None)
+        if streamer is not None:
+            streamer.close()
+        try:
+            if self._own_session:
+                time.sleep(0.05)  # let the last messages leave before the session closes
+                self.session.close()
+            else:
+                for entity in [*self._subscribers, getattr(self, "_setpoints", None)]:
+                    if entity is not None:
+                        entity.undeclare()
+        except Exception as exc:  # a session already closed by its owner
+            log.debug("close: %s", exc)
+
+    def __repr__(self) -> str:
+        state = self._state.value
+        link = "closed" if self._closed else ("connected" if self.is_connected() else "waiting")
+        mode = f" mode={state.mode} armed={state.armed}" if state else ""
+        return f"DroneWrapper(name={self.ns!r}, connect={self.connect!r}, {link}{mode})"
+
+    # ------------------------------------------------------------------ connection
+
+    def is_connected(self) -> bool:
+        """True if a fresh State (< 3 s old) says the bridge's autopilot is connected."""
+        state = self._state.fresh(STATE_FRESH_S)
+        return bool(state is not None and state.connected)
+
+    def wait_for_connection(self, timeout: float = 10.0) -> State:
+        """Block until the bridge reports its autopilot connected; returns that State.
+
+        Raises:
+            NotConnected: no bridge, or a bridge without an autopilot, within ``timeout`` s.
+        """
+        deadline = time.monotonic() + timeout
+        seen = -1
+        while True:
+            state = self._state.fresh(STATE_FRESH_S)
+            if state is not None and state.connected:
+                return state
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise NotConnected(self._diagnose(timeout))
+            seen = self._state.count
+            with contextlib.suppress(TimeoutError):
+                self._state.wait(min(remaining, 0.5), newer_than=seen)
+
+    def _diagnose(self, timeout: float) -> str:
+        state_key = registry.STATE.key(self.ns)
+        try:
+            keys = alive_services(self.session, "*", timeout=1.0)
+        except Exception:
+            keys = set()
+        here = sorted(
+            parts["service"]
+            for key in keys
+            if (parts := registry.ALIVE.match(key)) and parts["ns"] == self.ns
+        )
+        elsewhere = sorted(
+            {
+                parts["ns"]
+                for key in keys
+                if (parts := registry.ALIVE.match(key))
+                and parts["ns"] != self.ns
+                and parts["service"].startswith(BRIDGE_PREFIX)
+            }
+        )
+        alive = ", ".join(here) or "nothing"
+        hint = f"; drones online: {', '.join(elsewhere)}" if elsewhere else ""
+        state = self._state.value
+        if state is None:
+            bridges = [s for s in here if s.startswith(BRIDGE_PREFIX)]
+            if bridges:
+                return (
+                    f"bridge {', '.join(bridges)} is alive in namespace {self.ns!r} but published "
+                    f"no State on {state_key} within {timeout:g} s"
+                )
+            return (
+                f"no bridge for drone {self.ns!r} on the router at {self.connect}: nothing "
+                f"published {state_key} within {timeout:g} s (alive in {self.ns!r}: {alive}{hint})."
+                " Start one, e.g. `dronewrapper up compose/sim_iris.yaml`"
+            )
+        if self._state.age() > STATE_FRESH_S:
+            return (
+                f"the bridge of drone {self.ns!r} stopped publishing {state_key} "
+                f"{self._state.age():.1f} s ago (alive in {self.ns!r}: {alive})"
+            )
+        return (
+            f"the bridge of drone {self.ns!r} is up but its autopilot is not connected "
+            f"(no heartbeat; autopilot {state.autopilot or 'unknown'}) after {timeout:g} s"
+        )
+
+    def _require_connected(self, what: str) -> State:
+        state = self._state.fresh(STATE_FRESH_S)
+        if state is None or not state.connected:
+            raise NotConnected(f"{what}: {self._diagnose(0.0)}")
+        return state
+
+    # ------------------------------------------------------------------ getters (no I/O)
+
+    def get_state(self) -> State:
+        """The newest autopilot State (connected, armed, mode, autopilot, failsafe ...)."""
+        return self._need(self._state, "state")
+
+    def get_position(self) -> np.ndarray:
+        """``np.array([x, y, z])``: position in local ENU metres (origin: the take-off point)."""
+        return telemetry.position_of(self._need(self._pose, "local position"))
+
+    def get_velocity(self) -> np.ndarray:
+        """``np.array([vx, vy, vz])``: velocity in body FLU m/s (forward, left, up)."""
+        return telemetry.linear_of(self._need(self._velocity_body, "body velocity"))
+
+    def get_velocity_local(self) -> np.ndarray:
+        """``np.array([vx, vy, vz])``: velocity in local ENU m/s (east, north, up)."""
+        return telemetry.linear_of(self._need(self._velocity_local, "local velocity"))
+
+    def get_yaw_rate(self) -> float:
+        """Yaw rate in rad/s, counter-clockwise positive."""
+        return telemetry.yaw_rate_of(self._need(self._velocity_body, "body velocity"))
+
+    def get_orientation(self) -> np.ndarray:
+        """``np.array([roll, pitch, yaw])`` in radians, ENU (yaw 0 = east, CCW positive)."""
+        return telemetry.orientation_of(self._need(self._pose, "local position"))
+
+    def get_roll(self) -> float:
+        """Roll angle in radians."""
+        return float(self.get_orientation()[0])
+
+    def get_pitch(self) -> float:
+        """Pitch angle in radians."""
+        return float(self.get_orientation()[1])
+
+    def get_yaw(self) -> float:
+        """Yaw angle in radians, ENU: 0 facing east, counter-clockwise positive."""
+        return float(self.get_orientation()[2])
+
+    def get_landed_state(self) -> int:
+        """MAVROS landed state: 0 undefined, 1 on ground, 2 in air, 3 taking off, 4 landing."""
+        return int(self._need(self._extended, "extended state").landed_state)
+
+    def get_battery(self) -> float:
+        """Battery charge as a fraction 0..1 (NaN if the aircraft does not report it)."""
+        return float(self._need(self._battery, "battery state").percentage)
+
+    def get_global_position(self) -> np.ndarray:
+        """``np.array([latitude, longitude, altitude])``: degrees, degrees, metres AMSL.
+
+        Raises NoData when the aircraft has no GPS (nothing published).
+        """
+        return telemetry.global_of(self._need(self._global, "global position (GPS)"))
+
+    def is_flying(self) -> bool:
+        """True if the landed state is in the air or taking off."""
+        extended = self._extended.value
+        return extended is not None and extended.landed_state in (
+            LANDED_STATE_IN_AIR,
+            LANDED_STATE_TAKEOFF,
+        )
+
+    def get_image(self, camera: str = "frontal", *, with_stamp: bool = False) -> Any:
+        """The newest frame of ``camera`` as a BGR ``uint8`` array (height, width, 3).
+
+        Args:
+            camera: ``frontal`` or ``ventral``.
+            with_stamp: return ``(image, stamp)``, the stamp being the capture time in seconds
+                since the Unix epoch (for latency measurements).
+
+        Raises:
+            NoData: no frame received yet (no camera running, or the camera was not
+                requested in ``cameras=``).
+        """
+        key_name = _camera_key_name(camera)
+        holder = self._images.get(key_name)
+        if holder is None:
+            raise NoData(
+                f"camera {camera!r} was not requested: DroneWrapper(cameras=[..., {camera!r}])"
+            )
+        msg = holder.value
+        if msg is None:
+            raise NoData(
+                f"no image received yet on {holder.name}: is a camera running? "
+                "(wait_for_image() waits for the first frame)"
+            )
+        cached = self._decoded.get(key_name)
+        if cached is None or cached[0] is not msg:
+            if self.compressed_images:
+                array = images.compressed_to_bgr(msg)
+            else:
+                array = images.image_to_bgr(msg)
+            self._decoded[key_name] = cached = (msg, array)
+        image = cached[1].copy()
+        return (image, float(msg.header.stamp)) if with_stamp else image
+
+    def get_frontal_image(self) -> np.ndarray:
+        """The newest frontal camera frame, BGR ``uint8`` (height, width, 3)."""
+        return self.get_image("frontal")
+
+    def get_ventral_image(self) -> np.ndarray:
+        """The newest ventral (downward) camera frame, BGR ``uint8`` (height, width, 3)."""
+        return self.get_image("ventral")
+
+    # ------------------------------------------------------------------ waiting
+
+    def wait_for(
+        self,
+        predicate: Callable[[], T],
+        timeout: float,
+        what: str = "condition",
+        *,
+        interval: float = 0.02,
+    ) -> T:
+        """Poll ``predicate()`` until it returns a truthy value, which is returned.
+
+        ``NoData`` raised by the predicate counts as "not yet".
+
+        Raises:
+            Timeout: still false after ``timeout`` seconds (the message names ``what``).
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                value = predicate()
+            except NoData:
+                value = None
+            if value:
+                return value
+            if time.monotonic() >= deadline:
+                raise Timeout(f"timed out after {timeout:g} s waiting for {what}")
+            time.sleep(interval)
+
+    def wait_for_altitude(
+        self, z: float, timeout: float = 30.0, *, tolerance: float = 0.1
+    ) -> np.ndarray:
+        """Block until the local ENU altitude is within ``tolerance`` m of ``z``; the position.
+
+        Raises:
+            Timeout: not there within ``timeout`` seconds (the message gives the altitude).
+        """
+        z = setpoints.finite("z", z)
+        try:
+            return self.wait_for(
+                lambda: (p := self.get_position()) is not None and abs(p[2] - z) <= tolerance and p,
+                timeout,
+                f"altitude {z:.2f} m",
+            )
+        except Timeout as exc:
+            raise Timeout(f"{exc} (now {self._altitude_text()})") from None
+
+    def wait_for_landed_state(self, landed_state: int, timeout: float = 30.0) -> int:
+        """Block until :meth:`get_landed_state` equals ``landed_state``; returns it."""
+        self.wait_for(
+            lambda: self.get_landed_state() == landed_state,
+            timeout,
+            f"landed state {landed_state}",
+        )
+        return landed_state
+
+    def wait_for_image(self, camera: str = "frontal", timeout: float = 10.0) -> np.ndarray:
+        """Block until ``camera`` delivered a frame; returns the newest one (BGR).
+
+        Raises:
+            Timeout: no frame within ``timeout`` s (no camera publishing on the key).
+        """
+        key_name = _camera_key_name(camera)
+        holder = self._images.get(key_name)
+        if holder is None:
+            return self.get_image(camera)  # raises NoData naming the cameras= argument
+        try:
+            holder.wait(timeout)
+        except TimeoutError:
+            raise Timeout(
+                f"no image on {holder.name} within {timeout:g} s: is a camera running "
+                f"in namespace {self.ns!r}?"
+            ) from None
+        return self.get_image(camera)
+
+    def _altitude_text(self) -> str:
+        pose = self._pose.value
+        return "no position" if pose is None else f"z={pose.pose.position.z:.2f} m"
+
+    # ------------------------------------------------------------------ setpoints
+
+    def set_cmd_pos(
+        self,
+        x: float = 0.0,
+        y: float = 0.0,
+        z: float = 0.0,
+        az: float = 0.0,
+        *,
+        stamp: float | None = None,
+    ) -> None:
+        """Position control: fly to (x, y, z) local ENU metres facing yaw ``az`` (rad, ENU).
+
+        Re-published at the stream rate until another command or :meth:`stop_commanding`.
+        ``stamp`` (seconds since the Unix epoch) is carried in ``header.stamp`` (default now).
+
+        Raises:
+            InvalidArgument: an argument is not a finite number (nothing is sent).
+        """
+        stamp = setpoints.check_stamp(stamp, time.time())
+        self._command_setpoint(setpoints.position_target(x, y, z, az, stamp=stamp))
+
+    def set_cmd_vel(
+        self,
+        vx: float = 0.0,
+        vy: float = 0.0,
+        vz: float = 0.0,
+        az: float = 0.0,
+        *,
+        stamp: float | None = None,
+    ) -> None:
+        """Velocity control: body FLU velocity (m/s) and yaw rate ``az`` (rad/s, CCW +).
+
+        ``vx`` is forward, ``vy`` left, ``vz`` up on every aircraft. Re-published at the
+        stream rate until changed: ``set_cmd_vel(az=1); sleep(5)`` spins for 5 s.
+
+        Raises:
+            InvalidArgument: an argument is not a finite number (nothing is sent).
+        """
+        stamp = setpoints.check_stamp(stamp, time.time())
+        self._command_setpoint(setpoints.velocity_target(vx, vy, vz, az, stamp=stamp))
+
+    def set_cmd_mix(
+        self,
+        vx: float = 0.0,
+        vy: float = 0.0,
+        z: float = 0.0,
+        az: float = 0.0,
+        *,
+        stamp: float | None = None,
+    ) -> None:
+        """Mixed control: body FLU vx, vy (m/s), altitude ``z`` (local ENU m), yaw rate (rad/s).
+
+        Raises:
+            InvalidArgument: an argument is not a finite number (nothing is sent).
+        """
+        stamp = setpoints.check_stamp(stamp, time.time())
+        self._command_setpoint(setpoints.mixed_target(vx, vy, z, az, stamp=stamp))
+
+    def _command_setpoint(self, target: PositionTarget) -> None:
+        if self._closed:
+            raise NotConnected(f"DroneWrapper {self.ns!r} is closed")
+        self._streamer.set(target)
+
+    def stop_commanding(self) -> None:
+        """Stop the setpoint stream. The bridge hovers after its ``setpoint_timeout``."""
+        self._streamer.stop()
+
+    @property
+    def commanding(self) -> PositionTarget | None:
+        """The setpoint being streamed, or None."""
+        return self._streamer.target
+
+    @property
+    def setpoints_sent(self) -> int:
+        """How many setpoint messages were published so far."""
+        return self._streamer.published
+
+    # ------------------------------------------------------------------ services
+
+    def _call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
+        timeout = self.service_timeout if timeout is None else timeout
+        try:
+            return call_service(self.session, service, request, ns=self.ns, timeout=timeout)
+        except ServiceUnavailable:
+            key = service.key(self.ns)
+            try:
+                names = sorted(alive_services(self.session, self.ns, timeout=1.0))
+            except Exception:
+                names = []
+            if any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names):
+                raise Timeout(f"{what}: no reply from {key} within {timeout:g} s") from None
+            raise NotConnected(
+                f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
+                f"drone {self.ns!r} on {self.connect}"
+            ) from None
+        except ServiceError as exc:
+            raise CommandRefused(what, exc.message) from None
+
+    def _command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
+        reply = self._call(service, request, what, timeout)
+        ok = reply.mode_sent if hasattr(reply, "mode_sent") else reply.success
+        if not ok:
+            raise CommandRefused(what, reply.message, getattr(reply, "result", None))
+        return reply
+
+    def arm(self, *, timeout: float | None = None) -> None:
+        """Arm the motors. Raises CommandRefused with the autopilot's reason on refusal."""
+        self._command(registry.ARMING, CommandBool(value=True), "arming", timeout)
+
+    def disarm(self, *, timeout: float | None = None) -> None:
+        """Disarm the motors (the autopilot refuses in flight). Raises CommandRefused."""
+        self._command(registry.ARMING, CommandBool(value=False), "disarming", timeout)
+
+    def set_mode(self, mode: str, *, timeout: float | None = None) -> None:
+        """Ask for a flight mode by name (``OFFBOARD``, ``AUTO.LOITER``, ``GUIDED`` ...).
+
+        Returns when the autopilot acknowledged it. Raises CommandRefused otherwise.
+        """
+        if not isinstance(mode, str) or not mode.strip():
+            raise InvalidArgument(f"mode must be a mode name, got {mode!r}")
+        self._command(registry.SET_MODE, SetMode(custom_mode=mode), f"set_mode {mode}", timeout)
+
+    def param_get(self, param: str, *, timeout: float | None = None) -> int | float:
+        """Read an autopilot parameter; an int or a float."""
+        if not isinstance(param, str) or not param:
+            raise InvalidArgument(f"param must be a parameter name, got {param!r}")
+        reply = self._command(
+            registry.PARAM_GET, ParamGet(param_id=param), f"param_get {param}", timeout
+        )
+        return reply.value.as_number()
+
+    def param_set(
+        self, param: str, value: int | float, *, timeout: float | None = None
+    ) -> int | float:
+        """Write an autopilot parameter (ints as integer, floats as real); returns the value
+        the autopilot reports after the write."""
+        if not isinstance(param, str) or not param:
+            raise InvalidArgument(f"param must be a parameter name, got {param!r}")
+        if isinstance(value, int | np.integer) and not isinstance(value, bool):
+            wrapped = ParamValue(integer=int(value))
+        else:
+            wrapped = ParamValue(real=setpoints.finite(param, value))
+        reply = self._command(
+            registry.PARAM_SET,
+            ParamSet(param_id=param, value=wrapped),
+            f"param_set {param}",
+            timeout,
+        )
+        return reply.value.as_number()
+
+    # ------------------------------------------------------------------ take-off and landing
+
+    def takeoff(self, h: float = 3.0, *, timeout: float = 30.0, tolerance: float = 0.1) -> None:
+        """Take off to ``h`` metres above the take-off point and return there.
+
+        Idempotent: returns at once when already flying. PX4: streams a hold setpoint, enters
+        OFFBOARD, arms, then streams a position setpoint ``h`` m above the start point (which
+        keeps being streamed after the return). ArduPilot: GUIDED, arm, TAKEOFF command.
+        Tello: TAKEOFF command.
+
+        Raises:
+            CommandRefused: a step was refused (the autopilot's reason is in the message), or
+                the autopilot disarmed or left the mode during the climb.
+            Timeout: the altitude was not reached within ``timeout`` seconds.
+            NotConnected: no bridge / autopilot.
+        """
+        h = setpoints.finite("h", h)
+        if h <= 0:
+            raise InvalidArgument(f"h must be > 0 m, got {h}")
+        deadline = time.monotonic() + timeout
+        state = self._require_connected("takeoff")
+        if self.is_flying():
+            log.info("takeoff: already flying")
+            return
+        start = self._pose.value
+        if start is None:
+            raise NoData(f"takeoff: no local position on {self._pose.name}: cannot take off")
+        x, y, z0 = (float(v) for v in telemetry.position_of(start))
+        yaw = float(telemetry.orientation_of(start)[2])
+        target_z = z0 + h
+        autopilot = state.autopilot.lower()
+        expected_mode = ""
+        if autopilot in ARDUPILOT:
+            self.set_mode("GUIDED")
+            self.arm()
+            self._command(registry.TAKEOFF, CommandTOL(altitude=h, yaw=yaw), "takeoff")
+            expected_mode = "GUIDED"
+        elif autopilot in TELLO:
+            self._command(registry.TAKEOFF, CommandTOL(altitude=h), "takeoff")
+        else:  # PX4 and the PX4-like simulator: OFFBOARD with a setpoint stream
+            self.set_cmd_pos(x, y, z0, yaw)
+            try:
+                self.set_mode("OFFBOARD")
+                self.arm()
+            except BaseException:
+                self.stop_commanding()
+                raise
+            self.set_cmd_pos(x, y, target_z, yaw)
+            expected_mode = "OFFBOARD"
+        self._wait_climb(target_z, deadline, timeout, tolerance, expected_mode)
+
+    def _wait_climb(
+        self, target_z: float, deadline: float, timeout: float, tolerance: float, mode: str
+    ) -> None:
+        seen_armed = seen_mode = False
+        while True:
+            state = self._state.value
+            if state is not None:
+                seen_armed |= state.armed
+                seen_mode |= not mode or state.mode == mode
+                if seen_armed and not state.armed:
+                    raise CommandRefused("takeoff", f"the autopilot disarmed{self._last_text()}")
+                if seen_mode and mode and state.mode != mode:
+                    raise CommandRefused(
+                        "takeoff", f"the autopilot left {mode} for {state.mode}{self._last_text()}"
+                    )
+            pose = self._pose.value
+            if pose is not None and pose.pose.position.z >= target_z - tolerance:
+                return
+            if time.monotonic() >= deadline:
+                raise Timeout(
+                    f"takeoff: altitude {target_z:.2f} m not reached within {timeout:g} s "
+                    f"(now {self._altitude_text()}, mode {state.mode if state else '?'}, "
+                    f"armed {state.armed if state else '?'})"
+                )
+            time.sleep(0.02)
+
+    def _last_text(self) -> str:
+        return f" ({self.status_texts[-1].text})" if self.status_texts else ""
+
+    def land(self, *, timeout: float = 60.0) -> None:
+        """Land where the drone is and return when it is on the ground and disarmed.
+
+        Stops the setpoint stream, then calls the bridge's LAND service (no GPS needed).
+
+        Raises:
+            CommandRefused: the autopilot refused to land (its reason is in the message).
+            Timeout: not on the ground and disarmed within ``timeout`` seconds.
+        """
+        deadline = time.monotonic() + timeout
+        state = self._require_connected("land")
+        extended = self._extended.value
+        on_ground = extended is not None and extended.landed_state == LANDED_STATE_ON_GROUND
+        self.stop_commanding()
+        if on_ground and not state.armed:
+            return
+        self._command(registry.LAND, CommandTOL(), "land")
+
+        def landed() -> bool:
+            ext, st = self._extended.value, self._state.value
+            return bool(
+                ext is not None
+                and ext.landed_state == LANDED_STATE_ON_GROUND
+                and st is not None
+                and not st.armed
+            )
+
+        try:
+            self.wait_for(landed, max(0.0, deadline - time.monotonic()), "landing")
+        except Timeout:
+            ext, st = self._extended.value, self._state.value
+            raise Timeout(
+                f"land: not on the ground and disarmed within {timeout:g} s (now "
+                f"{self._altitude_text()}, landed_state {ext.landed_state if ext else '?'}, "
+                f"armed {st.armed if st else '?'})"
+            ) from None

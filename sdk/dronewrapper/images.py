@@ -1,0 +1,62 @@
+"""Camera messages as BGR numpy arrays (OpenCV channel order), the newest frame only.
+
+Raw images (``sensor_msgs/Image``) are converted with numpy alone. JPEG/PNG compressed images
+(for Wi-Fi links) are decoded with OpenCV, imported only when needed, so the SDK itself depends
+on numpy alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dronewrapper.errors import DroneError
+from dronewrapper.msgs.sensor import CompressedImage, Image
+
+_CHANNELS = {"bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4, "mono8": 1, "8UC3": 3, "8UC1": 1}
+
+
+def image_to_bgr(msg: Image) -> np.ndarray:
+    """A writable ``uint8`` array of shape (height, width, 3) in BGR order (mono8: (h, w)).
+
+    Handles row padding (``step`` > width * channels) and converts rgb8/rgba8/bgra8 to BGR.
+
+    Raises:
+        DroneError: unknown encoding, or ``data`` shorter than ``height * step``.
+    """
+    channels = _CHANNELS.get(msg.encoding)
+    if channels is None:
+        raise DroneError(f"unsupported image encoding {msg.encoding!r} (expected bgr8)")
+    row = msg.width * channels
+    step = msg.step or row
+    if msg.height <= 0 or msg.width <= 0 or step < row or len(msg.data) < msg.height * step:
+        raise DroneError(
+            f"malformed image: {msg.width}x{msg.height} {msg.encoding} step {msg.step}, "
+            f"{len(msg.data)} bytes"
+        )
+    flat = np.frombuffer(msg.data, dtype=np.uint8, count=msg.height * step)
+    pixels = flat.reshape(msg.height, step)[:, :row]
+    if channels == 1:
+        return pixels.reshape(msg.height, msg.width).copy()
+    pixels = pixels.reshape(msg.height, msg.width, channels)
+    if msg.encoding in ("rgb8", "rgba8"):
+        return np.ascontiguousarray(pixels[:, :, 2::-1])
+    return np.ascontiguousarray(pixels[:, :, :3])
+
+
+def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
+    """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` array (needs OpenCV).
+
+    Raises:
+        DroneError: OpenCV is not installed, or the bytes do not decode.
+    """
+    try:
+        import cv2
+    except ImportError as exc:
+        raise DroneError(
+            "compressed images need OpenCV to decode JPEG: pip install opencv-python-headless "
+            "(or use DroneWrapper(compressed_images=False) for raw images)"
+        ) from exc
+    image = cv2.imdecode(np.frombuffer(msg.data, dtype=np.uint8), cv2.IMREAD_COLOR)
+    if image is None:
+        raise DroneError(f"cannot decode a {len(msg.data)}-byte {msg.format!r} image")
+    return image

@@ -1,0 +1,96 @@
+"""Setpoint building: the paper's three controls as PositionTarget messages (pure functions).
+
+Exactly DESIGN.md's table ("PositionTarget semantics"):
+
+=================  =========  =======================  =========================================
+SDK call           type_mask  coordinate_frame         fields used
+=================  =========  =======================  =========================================
+``set_cmd_pos``    3064       FRAME_LOCAL_NED (1)      x, y, z (local ENU m), yaw (rad, ENU)
+``set_cmd_vel``    1991       FRAME_BODY_NED (8)       vx, vy, vz (body FLU m/s), yaw_rate (rad/s)
+``set_cmd_mix``    1987       FRAME_BODY_NED (8)       vx, vy (body FLU m/s), z (local ENU m),
+                                                       yaw_rate (rad/s)
+=================  =========  =======================  =========================================
+
+The frame ids are MAVROS's names; the values are ENU/FLU as on MAVROS's topic side. Every
+argument must be a finite real number: NaN, inf, bools, strings and None raise
+:class:`~dronewrapper.errors.InvalidArgument` before anything is published.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+from dronewrapper.errors import InvalidArgument
+from dronewrapper.msgs.geometry import Point, Vector3
+from dronewrapper.msgs.mavros import (
+    FRAME_BODY_NED,
+    FRAME_LOCAL_NED,
+    MASK_MIXED,
+    MASK_POSITION,
+    MASK_VELOCITY,
+    PositionTarget,
+)
+from dronewrapper.msgs.std import Header
+
+
+def finite(name: str, value: object) -> float:
+    """``value`` as a float if it is a finite real number (not a bool), else InvalidArgument."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InvalidArgument(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise InvalidArgument(f"{name} must be finite, got {number!r}")
+    return number
+
+
+def check_stamp(stamp: object, now: float) -> float:
+    """The header stamp to use: ``now`` when ``stamp`` is None, else ``stamp`` if valid.
+
+    A stamp is float seconds since the Unix epoch (a camera frame's ``header.stamp``); it must be
+    finite and positive.
+    """
+    if stamp is None:
+        return now
+    value = finite("stamp", stamp)
+    if value <= 0.0:
+        raise InvalidArgument(f"stamp must be seconds since the Unix epoch (> 0), got {value!r}")
+    return value
+
+
+def position_target(x: float, y: float, z: float, yaw: float, *, stamp: float) -> PositionTarget:
+    """Position control: go to (x, y, z) in local ENU metres facing ``yaw`` (rad, ENU)."""
+    return PositionTarget(
+        header=Header(stamp=stamp, frame_id="map"),
+        coordinate_frame=FRAME_LOCAL_NED,
+        type_mask=MASK_POSITION,
+        position=Point(x=finite("x", x), y=finite("y", y), z=finite("z", z)),
+        yaw=finite("yaw", yaw),
+    )
+
+
+def velocity_target(
+    vx: float, vy: float, vz: float, yaw_rate: float, *, stamp: float
+) -> PositionTarget:
+    """Velocity control: body FLU velocity (m/s) and yaw rate (rad/s, counter-clockwise +)."""
+    return PositionTarget(
+        header=Header(stamp=stamp, frame_id="base_link"),
+        coordinate_frame=FRAME_BODY_NED,
+        type_mask=MASK_VELOCITY,
+        velocity=Vector3(x=finite("vx", vx), y=finite("vy", vy), z=finite("vz", vz)),
+        yaw_rate=finite("az", yaw_rate),
+    )
+
+
+def mixed_target(
+    vx: float, vy: float, z: float, yaw_rate: float, *, stamp: float
+) -> PositionTarget:
+    """Mixed control: body FLU vx, vy (m/s), local ENU altitude z (m), yaw rate (rad/s)."""
+    return PositionTarget(
+        header=Header(stamp=stamp, frame_id="base_link"),
+        coordinate_frame=FRAME_BODY_NED,
+        type_mask=MASK_MIXED,
+        position=Point(z=finite("z", z)),
+        velocity=Vector3(x=finite("vx", vx), y=finite("vy", vy)),
+        yaw_rate=finite("az", yaw_rate),
+    )
