@@ -64,7 +64,9 @@ class StatusPublisher:
 def _open_drone(node: Node):
     from dronewrapper import DroneWrapper  # the SDK, embedded on this node's session
 
-    return DroneWrapper(name=node.ns, session=node.session)
+    # no cameras (the controller reads detections), no connection wait here (done below, so
+    # a stop request can interrupt it), no idle deadman: hover/search commands stay valid.
+    return DroneWrapper(name=node.ns, session=node.session, cameras=(), wait=False)
 
 
 def _run_with_stop(node: Node, what: str, func, timeout: float) -> bool:
@@ -126,7 +128,8 @@ def shutdown(config: Config, drone, status: StatusPublisher) -> None:
         log.info("stopping commands (the bridge holds, then lands after its timeout)")
         try:
             drone.set_cmd_vel(0.0, 0.0, 0.0, 0.0)
-            drone.stop()
+            time.sleep(0.2)  # a few zero setpoints go out before the stream stops
+            drone.stop_commanding()
         except Exception as exc:
             log.error("stop failed: %s", exc)
 
@@ -142,7 +145,7 @@ def run(node: Node, config: Config) -> int:
         if not _run_with_stop(
             node,
             "wait for the bridge",
-            lambda: drone.wait_ready(config.ready_timeout),
+            lambda: drone.wait_for_connection(config.ready_timeout),
             config.ready_timeout + 1,
         ):
             return 0 if node.stopping else 1
