@@ -1,0 +1,330 @@
+"""Identification of the followed object across frames: the paper's method and a stronger one.
+
+Both trackers are pure: ``update(detections, t, features)`` takes one frame's detections (source
+px), its time ``t`` in seconds (the frame stamp) and optional appearance descriptors (one per
+detection, see :mod:`appearance`), and returns a :class:`TrackingResult`: a track id per
+detection (same order) and the followed target's id.
+
+- :class:`PaperTracker`, the DroneWrapper paper's method with the seed code's bugs fixed: a FIFO
+  of the target's last 5 centroids (the code had 3), the detection nearest to their mean in x
+  *and* y (the code's typo dropped y), the first pick by the highest *numeric* score (the code
+  compared strings), the identity checked even when only one detection is present (the code took
+  any single detection), and no (0, 0) pushed into the FIFO on a miss (the code dragged the mean
+  to the image corner).
+- :class:`KalmanTracker`: one constant-velocity Kalman filter per track plus a colour-histogram
+  appearance model, Mahalanobis and appearance gating, Hungarian association; tracks coast
+  through occlusions up to ``max_coast_s``; the target keeps its track id while its track lives.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from dronewrapper_perception.appearance import bhattacharyya
+from dronewrapper_perception.assignment import INFEASIBLE, assign
+from dronewrapper_perception.detection import Detection
+from dronewrapper_perception.kalman_filter import BoxKalmanFilter
+
+CHI2_4DOF_99 = 13.277
+"""99 % quantile of the chi-square distribution with 4 degrees of freedom (the motion gate)."""
+
+TRACKERS = ("paper", "kalman", "none")
+
+
+@dataclass(frozen=True)
+class TrackingResult:
+    """Track ids for one frame's detections (same order as given) and the followed target.
+
+    Attributes:
+        track_ids: one id per input detection ("" = not tracked).
+        target_id: id of the target when it is visible in this frame, else "".
+        target_index: index of the target among the input detections, or None.
+    """
+
+    track_ids: tuple[str, ...]
+    target_id: str = ""
+    target_index: int | None = None
+
+
+class Tracker(Protocol):
+    """What the node needs from a tracker."""
+
+    needs_appearance: bool
+
+    def update(
+        self,
+        detections: Sequence[Detection],
+        t: float,
+        features: Sequence[np.ndarray | None] | None = None,
+    ) -> TrackingResult: ...
+
+    def reset(self) -> None: ...
+
+
+def _centre(det: Detection) -> np.ndarray:
+    return np.array(det.center_xy, dtype=np.float64)
+
+
+class NoTracker:
+    """No identity: the target is the first detection (highest score, or the largest blob).
+
+    The target gets the fixed id ``target``; other detections get no id.
+    """
+
+    needs_appearance = False
+    target_label = "target"
+
+    def update(self, detections, t, features=None) -> TrackingResult:
+        if not detections:
+            return TrackingResult(())
+        ids = (self.target_label,) + ("",) * (len(detections) - 1)
+        return TrackingResult(ids, self.target_label, 0)
+
+    def reset(self) -> None:
+        pass
+
+
+class PaperTracker:
+    """The paper's follow-person identification, with the seed code's bugs fixed.
+
+    Args:
+        fifo_length: centroids remembered (the paper's 5).
+        gate_px: a detection farther than this from the FIFO mean is not the target (px);
+            this also applies when only one detection is present.
+        lost_after_s: after this long without the target, forget it and pick again by score.
+    """
+
+    needs_appearance = False
+
+    def __init__(
+        self, fifo_length: int = 5, gate_px: float = 120.0, lost_after_s: float = 1.0
+    ) -> None:
+        if fifo_length < 1:
+            raise ValueError("fifo_length must be >= 1")
+        self.fifo: deque[tuple[float, float]] = deque(maxlen=fifo_length)
+        self.gate_px = gate_px
+        self.lost_after_s = lost_after_s
+        self._last_seen = -np.inf
+        self._picks = itertools.count(1)
+        self._target_id = ""
+
+    def reset(self) -> None:
+        """Forget the target."""
+        self.fifo.clear()
+        self._target_id = ""
+
+    def fifo_mean(self) -> tuple[float, float] | None:
+        """Mean of the remembered centroids (px), None before the first pick."""
+        if not self.fifo:
+            return None
+        xs, ys = zip(*self.fifo, strict=True)
+        return (float(np.mean(xs)), float(np.mean(ys)))
+
+    def update(self, detections, t, features=None) -> TrackingResult:
+        if self.fifo and t - self._last_seen > self.lost_after_s:
+            self.reset()
+        chosen: int | None = None
+        if detections:
+            mean = self.fifo_mean()
+            if mean is None:
+                chosen = max(range(len(detections)), key=lambda i: float(detections[i].score))
+                self._target_id = f"p{next(self._picks)}"
+            else:
+                dists = [float(np.hypot(*(_centre(d) - mean))) for d in detections]
+                nearest = int(np.argmin(dists))
+                if dists[nearest] <= self.gate_px:
+                    chosen = nearest
+        ids = ["" for _ in detections]
+        if chosen is None:
+            return TrackingResult(tuple(ids))
+        self.fifo.append(detections[chosen].center_xy)
+        self._last_seen = t
+        ids[chosen] = self._target_id
+        return TrackingResult(tuple(ids), self._target_id, chosen)
+
+
+def _cxcywh(det: Detection) -> np.ndarray:
+    x1, y1, x2, y2 = det.box_xyxy
+    return np.array([(x1 + x2) / 2, (y1 + y2) / 2, x2 - x1, y2 - y1], dtype=np.float64)
+
+
+def _overlap_fraction(box: Sequence[float], other: Sequence[float]) -> float:
+    """Fraction of ``box``'s area covered by ``other``."""
+    ix = max(0.0, min(box[2], other[2]) - max(box[0], other[0]))
+    iy = max(0.0, min(box[3], other[3]) - max(box[1], other[1]))
+    area = max(1e-9, (box[2] - box[0]) * (box[3] - box[1]))
+    return ix * iy / area
+
+
+@dataclass
+class Track:
+    """One tracked object: its filter, appearance and bookkeeping (times in s)."""
+
+    track_id: str
+    kf: BoxKalmanFilter
+    appearance: np.ndarray | None
+    class_id: int
+    last_seen: float
+    hits: int = 1
+    history: list[tuple[float, float]] = field(default_factory=list)
+
+
+class KalmanTracker:
+    """Multi-object tracker: Kalman motion + colour appearance, Hungarian association.
+
+    Args:
+        max_coast_s: a track not seen for longer is deleted (occlusions shorter survive).
+        motion_gate: squared Mahalanobis distance beyond which a detection cannot match.
+        appearance_gate: Bhattacharyya distance beyond which a detection cannot match.
+        appearance_weight: 0..1 share of appearance in the matching cost (rest is motion).
+        appearance_rate: how fast a track's histogram follows new, unoccluded views (0..1).
+        occlusion_overlap: a detection covered more than this fraction by another detection
+            does not update its track's appearance (it is mixed with the other person).
+        min_hits: detections a new track needs before its misses are tolerated.
+    """
+
+    needs_appearance = True
+
+    def __init__(
+        self,
+        *,
+        max_coast_s: float = 2.0,
+        motion_gate: float = CHI2_4DOF_99,
+        appearance_gate: float = 0.6,
+        appearance_weight: float = 0.5,
+        appearance_rate: float = 0.1,
+        occlusion_overlap: float = 0.15,
+        min_hits: int = 2,
+    ) -> None:
+        self.max_coast_s = max_coast_s
+        self.motion_gate = motion_gate
+        self.appearance_gate = appearance_gate
+        self.appearance_weight = appearance_weight
+        self.appearance_rate = appearance_rate
+        self.occlusion_overlap = occlusion_overlap
+        self.min_hits = min_hits
+        self.tracks: list[Track] = []
+        self.target_id = ""
+        self._ids = itertools.count(1)
+
+    def reset(self) -> None:
+        """Drop every track and the target."""
+        self.tracks.clear()
+        self.target_id = ""
+
+    def _cost(self, track: Track, boxes: np.ndarray, dets, features) -> np.ndarray:
+        d2 = track.kf.mahalanobis_sq(boxes)
+        motion = d2 / self.motion_gate
+        cost = np.empty(len(dets))
+        for j, det in enumerate(dets):
+            if d2[j] > self.motion_gate or det.class_id != track.class_id:
+                cost[j] = INFEASIBLE
+                continue
+            feature = features[j] if features is not None else None
+            if track.appearance is None or feature is None:
+                cost[j] = motion[j]
+                continue
+            app = bhattacharyya(track.appearance, feature)
+            if app > self.appearance_gate:
+                cost[j] = INFEASIBLE
+                continue
+            w = self.appearance_weight
+            cost[j] = (1 - w) * motion[j] + w * app / self.appearance_gate
+        return cost
+
+    def _occluded(self, j: int, dets: Sequence[Detection]) -> bool:
+        box = dets[j].box_xyxy
+        return any(
+            _overlap_fraction(box, other.box_xyxy) > self.occlusion_overlap
+            for k, other in enumerate(dets)
+            if k != j
+        )
+
+    def update(self, detections, t, features=None) -> TrackingResult:
+        dets = list(detections)
+        if features is not None and len(features) != len(dets):
+            raise ValueError("features must have one entry per detection")
+        self.tracks = [tr for tr in self.tracks if t - tr.last_seen <= self.max_coast_s]
+        for track in self.tracks:
+            track.kf.predict(t)
+        boxes = np.array([_cxcywh(d) for d in dets]).reshape(-1, 4)
+        # two passes: tracks seen recently first (less uncertain), then coasting ones
+        ids = ["" for _ in dets]
+        unmatched = set(range(len(dets)))
+        fresh = [tr for tr in self.tracks if t - tr.last_seen <= 0.25]
+        coasting = [tr for tr in self.tracks if t - tr.last_seen > 0.25]
+        for group in (fresh, coasting):
+            cols = sorted(unmatched)
+            if not group or not cols:
+                continue
+            sub_dets = [dets[j] for j in cols]
+            sub_feats = [features[j] for j in cols] if features is not None else None
+            cost = np.vstack([self._cost(tr, boxes[cols], sub_dets, sub_feats) for tr in group])
+            for row, col in assign(cost):
+                track, j = group[row], cols[col]
+                self._apply(track, j, dets, boxes, features, t)
+                ids[j] = track.track_id
+                unmatched.discard(j)
+        for j in sorted(unmatched):
+            feature = features[j] if features is not None else None
+            track = Track(
+                track_id=f"t{next(self._ids)}",
+                kf=BoxKalmanFilter(boxes[j], t),
+                appearance=None if self._occluded(j, dets) else feature,
+                class_id=dets[j].class_id,
+                last_seen=t,
+            )
+            track.history.append(dets[j].center_xy)
+            self.tracks.append(track)
+            ids[j] = track.track_id
+        self.tracks = [
+            tr
+            for tr in self.tracks
+            if (t - tr.last_seen <= self.max_coast_s)
+            and (tr.hits >= self.min_hits or tr.last_seen == t)
+        ]
+        return self._select_target(dets, ids)
+
+    def _apply(self, track: Track, j: int, dets, boxes, features, t: float) -> None:
+        track.kf.update(boxes[j])
+        track.last_seen = t
+        track.hits += 1
+        track.history.append(dets[j].center_xy)
+        del track.history[:-50]
+        feature = features[j] if features is not None else None
+        if feature is not None and not self._occluded(j, dets):
+            if track.appearance is None:
+                track.appearance = feature
+            else:
+                mixed = (
+                    1 - self.appearance_rate
+                ) * track.appearance + self.appearance_rate * feature
+                track.appearance = mixed / max(float(mixed.sum()), 1e-12)
+
+    def _select_target(self, dets: Sequence[Detection], ids: list[str]) -> TrackingResult:
+        alive = {tr.track_id for tr in self.tracks}
+        if self.target_id not in alive:
+            self.target_id = ""
+            if dets:
+                best = max(range(len(dets)), key=lambda i: float(dets[i].score))
+                self.target_id = ids[best]
+        index = ids.index(self.target_id) if self.target_id in ids else None
+        visible = self.target_id if index is not None else ""
+        return TrackingResult(tuple(ids), visible, index)
+
+
+def make_tracker(name: str, **options) -> Tracker:
+    """A tracker by config name: ``paper``, ``kalman`` or ``none``."""
+    if name == "paper":
+        return PaperTracker(**options)
+    if name == "kalman":
+        return KalmanTracker(**options)
+    if name == "none":
+        return NoTracker()
+    raise ValueError(f"unknown tracker {name!r} (known: {', '.join(TRACKERS)})")
