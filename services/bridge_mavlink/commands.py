@@ -1,0 +1,184 @@
+"""COMMAND_LONG / COMMAND_ACK logic: retries, confirmation counter, ack matching, de-duplication.
+
+Pure: time is passed in (monotonic seconds). The node sends what :meth:`PendingCommand.due`
+returns and feeds every COMMAND_ACK to :meth:`AckRouter.on_ack`.
+
+* A command is re-sent every ``ack_timeout`` seconds, up to ``attempts`` times, with the
+  ``confirmation`` field incremented on each re-send (as MAVLink asks).
+* IN_PROGRESS (5) is not final: it extends the wait by ``in_progress_timeout``.
+* PX4 acknowledges DO_SET_MODE twice. An ack for a command id with nothing pending is a
+  duplicate (if that id completed within ``dedup_window`` s) or unsolicited; either way it is
+  counted and ignored. To keep a late duplicate from being taken for the ack of the next command
+  with the same id, the next one is not sent before :meth:`AckRouter.quiet_until`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+MAV_CMD_NAV_LAND = 21
+MAV_CMD_NAV_TAKEOFF = 22
+MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
+MAV_CMD_DO_SET_MODE = 176
+MAV_CMD_COMPONENT_ARM_DISARM = 400
+MAV_CMD_SET_MESSAGE_INTERVAL = 511
+MAV_CMD_REQUEST_MESSAGE = 512
+
+MAV_RESULT_ACCEPTED = 0
+MAV_RESULT_IN_PROGRESS = 5
+RESULT_NO_ACK = -1
+
+RESULT_NAMES = {
+    0: "ACCEPTED",
+    1: "TEMPORARILY_REJECTED",
+    2: "DENIED",
+    3: "UNSUPPORTED",
+    4: "FAILED",
+    5: "IN_PROGRESS",
+    6: "CANCELLED",
+    RESULT_NO_ACK: "NO_ACK",
+}
+COMMAND_NAMES = {
+    MAV_CMD_NAV_LAND: "NAV_LAND",
+    MAV_CMD_NAV_TAKEOFF: "NAV_TAKEOFF",
+    MAV_CMD_NAV_RETURN_TO_LAUNCH: "NAV_RETURN_TO_LAUNCH",
+    MAV_CMD_DO_SET_MODE: "DO_SET_MODE",
+    MAV_CMD_COMPONENT_ARM_DISARM: "COMPONENT_ARM_DISARM",
+    MAV_CMD_SET_MESSAGE_INTERVAL: "SET_MESSAGE_INTERVAL",
+    MAV_CMD_REQUEST_MESSAGE: "REQUEST_MESSAGE",
+}
+
+
+def result_name(result: int) -> str:
+    """MAV_RESULT as text (``ACCEPTED``, ``DENIED`` ..., ``NO_ACK`` when none arrived)."""
+    return RESULT_NAMES.get(result, f"RESULT_{result}")
+
+
+def command_name(command: int) -> str:
+    """MAV_CMD as text."""
+    return COMMAND_NAMES.get(command, f"MAV_CMD_{command}")
+
+
+@dataclass(frozen=True)
+class CommandLong:
+    """One COMMAND_LONG to send (target ids are added by the sender)."""
+
+    command: int
+    params: tuple[float, float, float, float, float, float, float]
+    confirmation: int = 0
+
+
+def command_long(command: int, *params: float) -> CommandLong:
+    """A COMMAND_LONG with up to 7 params (missing ones are 0)."""
+    if len(params) > 7:
+        raise ValueError("COMMAND_LONG takes at most 7 params")
+    padded = tuple(float(p) for p in params) + (0.0,) * (7 - len(params))
+    return CommandLong(command, padded)  # type: ignore[arg-type]
+
+
+@dataclass
+class PendingCommand:
+    """One command waiting for its COMMAND_ACK, with its retry schedule.
+
+    Attributes:
+        result: MAV_RESULT once final, else RESULT_NO_ACK.
+        sent: how many times it was sent.
+    """
+
+    cmd: CommandLong
+    attempts: int = 3
+    ack_timeout: float = 1.0
+    in_progress_timeout: float = 5.0
+    result: int = RESULT_NO_ACK
+    sent: int = 0
+    done: bool = False
+    acked_at: float | None = None
+    _next_send: float = -math.inf
+    _deadline: float = math.inf
+
+    def due(self, now: float) -> CommandLong | None:
+        """The COMMAND_LONG to send now (first send or a retry), or None."""
+        if self.done or self.sent >= self.attempts or now < self._next_send:
+            return None
+        msg = CommandLong(self.cmd.command, self.cmd.params, confirmation=self.sent)
+        self.sent += 1
+        self._next_send = now + self.ack_timeout
+        self._deadline = now + self.ack_timeout
+        return msg
+
+    def on_ack(self, result: int, now: float) -> None:
+        """Feed the ack's MAV_RESULT (IN_PROGRESS extends the wait; others are final)."""
+        self.acked_at = now
+        self.result = result
+        if result == MAV_RESULT_IN_PROGRESS:
+            self._next_send = math.inf  # the autopilot is working on it: do not re-send
+            self._deadline = now + self.in_progress_timeout
+            return
+        self.done = True
+
+    def finished(self, now: float) -> bool:
+        """True once acked with a final result or out of attempts and time."""
+        if self.done:
+            return True
+        if self.sent >= self.attempts and now >= self._deadline:
+            self.done = True
+            if self.result == MAV_RESULT_IN_PROGRESS:
+                self.result = RESULT_NO_ACK
+        elif self.result == MAV_RESULT_IN_PROGRESS and now >= self._deadline:
+            self.done = True
+            self.result = RESULT_NO_ACK
+        return self.done
+
+    def wake_at(self, now: float) -> float:
+        """When the sender should look again (next retry or deadline)."""
+        return max(now, min(self._next_send, self._deadline))
+
+
+@dataclass
+class AckRouter:
+    """Routes COMMAND_ACKs to pending commands by command id; drops duplicates.
+
+    Attributes:
+        duplicates: acks for a command id that completed within ``dedup_window`` s.
+        unsolicited: acks nobody was waiting for.
+    """
+
+    dedup_window: float = 0.3
+    duplicates: int = 0
+    unsolicited: int = 0
+    _pending: dict[int, PendingCommand] = field(default_factory=dict)
+    _completed_at: dict[int, float] = field(default_factory=dict)
+
+    def quiet_until(self, command: int) -> float:
+        """Earliest time a new command with this id may be sent (duplicates have passed)."""
+        return self._completed_at.get(command, -math.inf) + self.dedup_window
+
+    def register(self, pending: PendingCommand) -> None:
+        """Start waiting for ``pending``'s ack (one pending command per id)."""
+        command = pending.cmd.command
+        if command in self._pending:
+            raise RuntimeError(f"{command_name(command)} is already pending")
+        self._pending[command] = pending
+
+    def release(self, pending: PendingCommand, now: float) -> None:
+        """Stop waiting for ``pending`` (finished): later acks for its id are duplicates."""
+        command = pending.cmd.command
+        if self._pending.get(command) is pending:
+            del self._pending[command]
+        if pending.acked_at is not None or pending.sent:
+            self._completed_at[command] = now
+
+    def on_ack(self, command: int, result: int, now: float) -> str:
+        """Feed one COMMAND_ACK: returns ``matched``, ``duplicate`` or ``unsolicited``."""
+        pending = self._pending.get(command)
+        if pending is not None and not pending.done:
+            pending.on_ack(result, now)
+            return "matched"
+        if now - self._completed_at.get(command, -math.inf) <= self.dedup_window or (
+            pending is not None and pending.done
+        ):
+            self.duplicates += 1
+            return "duplicate"
+        self.unsolicited += 1
+        return "unsolicited"

@@ -1,0 +1,107 @@
+"""The MAVLink connection: open by pymavlink URL, thread-safe sends, reopen after errors.
+
+URLs as pymavlink takes them: ``udpin:0.0.0.0:14540`` (listen; replies go to whoever sent),
+``udpout:HOST:PORT``, ``tcp:HOST:PORT`` (client, reconnects), ``tcpin:0.0.0.0:PORT``, or a
+serial device (``/dev/ttyACM0``) with ``baud``. MAVLink 2 is used for everything we send.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import threading
+import time
+from typing import Any
+
+os.environ.setdefault("MAVLINK20", "1")
+
+import contextlib
+
+from pymavlink import mavutil
+
+log = logging.getLogger("bridge_mavlink.link")
+
+UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
+
+
+class MavLink:
+    """One MAVLink connection with a send lock (sends come from several threads).
+
+    Args:
+        url: pymavlink connection string.
+        baud: serial baud rate (ignored for network URLs).
+        source_system, source_component: our MAVLink ids.
+    """
+
+    def __init__(
+        self, url: str, *, baud: int = 57600, source_system: int = 255, source_component: int = 190
+    ) -> None:
+        self.url = url
+        self.baud = baud
+        self.source_system = source_system
+        self.source_component = source_component
+        self._send_lock = threading.Lock()
+        self._conn: Any = None
+        self._t0 = time.monotonic()
+        self.sent = 0
+        self.send_errors = 0
+
+    @property
+    def mav(self) -> Any:
+        """The pymavlink MAVLink encoder (only use it under :meth:`send`)."""
+        return self._conn.mav
+
+    def open(self) -> None:
+        """Open the connection (raises OSError/ValueError when it cannot be opened)."""
+        kwargs: dict[str, Any] = {
+            "source_system": self.source_system,
+            "source_component": self.source_component,
+            "autoreconnect": True,
+            "robust_parsing": True,
+        }
+        if self.url.startswith("udpin:") or self.url.startswith("udp:"):
+            kwargs["udp_timeout"] = UDP_CLIENT_TIMEOUT_S
+        if not any(self.url.startswith(p) for p in ("udp", "tcp")):
+            kwargs["baud"] = self.baud
+        conn = mavutil.mavlink_connection(self.url, **kwargs)
+        if hasattr(conn, "mav"):
+            conn.mav.robust_parsing = True
+        self._conn = conn
+
+    def close(self) -> None:
+        """Close the connection (idempotent)."""
+        conn, self._conn = self._conn, None
+        if conn is not None:
+            with contextlib.suppress(OSError):
+                conn.close()
+
+    @property
+    def is_open(self) -> bool:
+        return self._conn is not None
+
+    def recv(self, timeout: float) -> Any:
+        """The next message, or None after ``timeout`` s (raises OSError on a link error)."""
+        conn = self._conn
+        if conn is None:
+            time.sleep(timeout)
+            return None
+        return conn.recv_match(blocking=True, timeout=timeout)
+
+    def time_boot_ms(self) -> int:
+        """Milliseconds since this link was created (our ``time_boot_ms``)."""
+        return int((time.monotonic() - self._t0) * 1000) & 0xFFFFFFFF
+
+    def send(self, name: str, *args: Any, **kwargs: Any) -> bool:
+        """Send message ``name`` (e.g. ``heartbeat``) with its fields; False if not sent."""
+        conn = self._conn
+        if conn is None:
+            return False
+        with self._send_lock:
+            try:
+                getattr(conn.mav, f"{name}_send")(*args, **kwargs)
+            except OSError as exc:
+                self.send_errors += 1
+                log.debug("send %s failed: %s", name, exc)
+                return False
+        self.sent += 1
+        return True
