@@ -1,0 +1,73 @@
+"""The follow-app graphs resolve; every --config/--set they pass loads in the process schema."""
+
+from __future__ import annotations
+
+import importlib
+import itertools
+
+import pytest
+
+from dronewrapper.runtime.config import load_config
+from dronewrapper_compose.graph import REPO, load_graph
+from dronewrapper_compose.launcher import Launcher, build_argv
+
+GRAPHS = ["sim_follow_color", "sim_follow_person", "px4_real_follow_person"]
+
+# module run by the graph -> "module:ConfigClass" of its strict config schema
+SCHEMAS = {
+    "dronewrapper_controller": "dronewrapper_controller.config:Config",
+    "dronewrapper_compose.usb_camera": "dronewrapper_compose.usb_camera:Config",
+}
+
+
+def schema_for(module: str):
+    path = SCHEMAS.get(module)
+    if path is None:
+        return None
+    mod, _, cls = path.partition(":")
+    return getattr(importlib.import_module(mod), cls)
+
+
+def split_config_args(argv: list[str]) -> tuple[str | None, list[str]]:
+    config, sets = None, []
+    for flag, value in itertools.pairwise(argv):
+        if flag == "--config":
+            config = value
+        elif flag == "--set":
+            sets.append(value)
+    return config, sets
+
+
+@pytest.mark.parametrize("name", GRAPHS)
+def test_graph_resolves_and_configs_load(name):
+    path = REPO / "compose" / f"{name}.yaml"
+    launcher = Launcher(load_graph(path), path, router="tcp/127.0.0.1:1")
+    checked = 0
+    for spec in launcher.graph.processes:
+        argv, _ = build_argv(spec, launcher.values, path, launcher.ns, launcher.router)
+        assert "--connect" in argv and "tcp/127.0.0.1:1" in argv
+        schema = schema_for(spec.module or "")
+        if schema is not None:
+            config, sets = split_config_args(argv)
+            load_config(schema, config, sets)
+            checked += 1
+    assert checked >= 1
+
+
+@pytest.mark.parametrize(
+    ("name", "mode"), [("sim_follow_color", "follow_color"), ("sim_follow_person", "follow_person")]
+)
+def test_sim_graphs_pick_the_mode_and_take_a_scenario(name, mode):
+    from dronewrapper_controller.config import Config
+
+    path = REPO / "compose" / f"{name}.yaml"
+    launcher = Launcher(
+        load_graph(path), path, variables={"scenario": "beacon_abrupt", "on_exit": "stop"}
+    )
+    argvs = {
+        spec.name: build_argv(spec, launcher.values, path, launcher.ns, launcher.router)[0]
+        for spec in launcher.graph.processes
+    }
+    assert argvs["sim"][argvs["sim"].index("--scenario") + 1] == "beacon_abrupt"
+    config = load_config(Config, *split_config_args(argvs["controller"]))
+    assert config.mode == mode and config.on_exit == "stop"
