@@ -39,8 +39,8 @@ def image_to_bgr(msg: Image) -> np.ndarray:
         return pixels.reshape(msg.height, msg.width).copy()
     pixels = pixels.reshape(msg.height, msg.width, channels)
     if msg.encoding in ("rgb8", "rgba8"):
-        return np.ascontiguousarray(pixels[:, :, 2::-1])
-    return np.ascontiguousarray(pixels[:, :, :3])
+        return np.array(pixels[:, :, 2::-1], order="C")
+    return np.array(pixels[:, :, :3], order="C")
 
 
 def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:

@@ -1,0 +1,389 @@
+"""DroneWrapper against a small fake bridge built from the runtime, on a real Zenoh router.
+
+The fake answers the bridge's services and publishes its telemetry like the real one; a
+"physics" thread moves the altitude toward a position setpoint when armed in OFFBOARD. It lets
+these tests check the SDK's side of the contract precisely (order of calls, keys, masks,
+rates, error messages) in a fraction of a second per test.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from dronewrapper import (
+    CommandRefused,
+    DroneWrapper,
+    InvalidArgument,
+    NoData,
+    NotConnected,
+    Timeout,
+    list_drones,
+)
+from dronewrapper.msgs import (
+    CommandBoolResult,
+    CommandTOLResult,
+    ExtendedState,
+    Image,
+    ParamGetResult,
+    ParamSetResult,
+    ParamValue,
+    PoseStamped,
+    PositionTarget,
+    SetModeResult,
+    State,
+    StatusText,
+    TwistStamped,
+    registry,
+)
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    LANDED_STATE_ON_GROUND,
+    MASK_POSITION,
+    MAV_RESULT_DENIED,
+)
+from dronewrapper.runtime import Ratekeeper, ServiceError
+from support import client_node, free_endpoint, wait_for
+
+
+class FakeBridge:
+    """A PX4-like bridge in one thread: services, telemetry at 20 Hz, a toy climb/descent."""
+
+    def __init__(self, endpoint: str, ns: str = "drone", *, connected: bool = True) -> None:
+        self.node = client_node(endpoint, name="bridge_fake", namespace=ns)
+        self.connected = connected
+        self.armed = False
+        self.mode = "POSCTL"
+        self.z = 0.0
+        self.landing = False
+        self.refuse_arming = ""
+        self.calls: list[str] = []
+        self.params: dict[str, ParamValue] = {"MPC_XY_VEL_MAX": ParamValue(real=12.0)}
+        self.setpoints: list[tuple[float, PositionTarget]] = []
+        self.lock = threading.Lock()
+        n = self.node
+        self.pub_state = n.publisher(registry.STATE)
+        self.pub_ext = n.publisher(registry.EXTENDED_STATE)
+        self.pub_pose = n.publisher(registry.LOCAL_POSE)
+        self.pub_vel = n.publisher(registry.VELOCITY_BODY)
+        self.pub_text = n.publisher(registry.STATUSTEXT)
+        self.pub_image = n.publisher(registry.IMAGE_RAW, camera="cam_frontal")
+        n.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
+        n.serve(registry.ARMING, self._arming)
+        n.serve(registry.SET_MODE, self._set_mode)
+        n.serve(registry.LAND, self._land)
+        n.serve(registry.PARAM_GET, self._param_get)
+        n.serve(registry.PARAM_SET, self._param_set)
+        n.announce()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    # services
+    def _arming(self, req):
+        self.calls.append(f"arming {req.value}")
+        if req.value and self.refuse_arming:
+            self.pub_text.put(StatusText(text=self.refuse_arming, severity=2))
+            return CommandBoolResult(
+                success=False, result=MAV_RESULT_DENIED, message=self.refuse_arming
+            )
+        self.armed = req.value
+        return CommandBoolResult(success=True, result=0)
+
+    def _set_mode(self, req):
+        self.calls.append(f"set_mode {req.custom_mode}")
+        if req.custom_mode not in ("OFFBOARD", "POSCTL", "AUTO.LAND"):
+            raise ServiceError(f"unknown mode {req.custom_mode!r}", "bad_request")
+        if req.custom_mode == "OFFBOARD" and not self.setpoints:
+            return SetModeResult(mode_sent=False, result=4, message="no setpoint stream")
+        self.mode = req.custom_mode
+        return SetModeResult(mode_sent=True, result=0)
+
+    def _land(self, req):
+        self.calls.append("land")
+        self.mode, self.landing = "AUTO.LAND", True
+        return CommandTOLResult(success=True, result=0)
+
+    def _param_get(self, req):
+        if req.param_id not in self.params:
+            return ParamGetResult(success=False, message=f"no parameter {req.param_id}")
+        return ParamGetResult(success=True, value=self.params[req.param_id])
+
+    def _param_set(self, req):
+        self.params[req.param_id] = req.value
+        return ParamSetResult(success=True, value=req.value)
+
+    def _on_setpoint(self, msg: PositionTarget) -> None:
+        with self.lock:
+            self.setpoints.append((time.monotonic(), msg))
+
+    def setpoints_since(self, t0: float) -> list[PositionTarget]:
+        with self.lock:
+            return [msg for t, msg in self.setpoints if t >= t0]
+
+    def _run(self) -> None:
+        rate = Ratekeeper(20, stop=self.node.stop_event)
+        while rate.sleep():
+            target = self.setpoints[-1][1] if self.setpoints else None
+            if self.landing:
+                self.z = max(0.0, self.z - 0.2)
+                if self.z == 0.0:
+                    self.armed, self.landing = False, False
+            elif (
+                self.armed
+                and self.mode == "OFFBOARD"
+                and target is not None
+                and target.type_mask == MASK_POSITION
+            ):
+                self.z += max(-0.2, min(0.2, target.position.z - self.z))
+            in_air = self.armed and self.z > 0.05
+            try:
+                self.pub_state.put(
+                    State(
+                        connected=self.connected, armed=self.armed, mode=self.mode, autopilot="px4"
+                    )
+                )
+                landed = LANDED_STATE_IN_AIR if in_air else LANDED_STATE_ON_GROUND
+                self.pub_ext.put(ExtendedState(landed_state=landed))
+                pose = PoseStamped()
+                pose.pose.position.x, pose.pose.position.z = 1.0, self.z
+                self.pub_pose.put(pose)
+                twist = TwistStamped()
+                twist.twist.angular.z = 0.25
+                self.pub_vel.put(twist)
+            except Exception:
+                return
+
+    def publish_image(self, image: np.ndarray, stamp: float) -> None:
+        h, w, _ = image.shape
+        msg = Image(height=h, width=w, step=w * 3, data=image.tobytes())
+        msg.header.stamp = stamp
+        self.pub_image.put(msg)
+
+    def close(self) -> None:
+        self.node.close()
+        self.thread.join(5)
+
+
+@pytest.fixture
+def bridge(router) -> Iterator[FakeBridge]:
+    fake = FakeBridge(router)
+    yield fake
+    fake.close()
+
+
+@pytest.fixture
+def drone(router, bridge) -> Iterator[DroneWrapper]:
+    with DroneWrapper("drone", router, timeout=10, mode="peer") as wrapper:
+        yield wrapper
+
+
+def test_getters_return_latest_values_at_once(drone, bridge):
+    wait_for(lambda: drone.get_position()[0] == 1.0, 5, what="pose")
+    assert isinstance(drone.get_position(), np.ndarray)
+    assert drone.get_position().shape == (3,)
+    assert drone.get_orientation().tolist() == [0.0, 0.0, 0.0]
+    assert drone.get_yaw_rate() == 0.25
+    assert drone.get_velocity().tolist() == [0.0, 0.0, 0.0]
+    assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
+    state = drone.get_state()
+    assert state.connected and state.autopilot == "px4"
+    assert drone.is_connected()
+    with pytest.raises(NoData, match="battery"):
+        drone.get_battery()  # the fake publishes no battery
+    with pytest.raises(NoData, match="GPS"):
+        drone.get_global_position()
+
+
+def test_set_cmd_vel_is_streamed_at_20_hz_or_more_until_changed(drone, bridge):
+    drone.set_cmd_vel(az=1)
+    t0 = time.monotonic()
+    time.sleep(1.5)
+    got = bridge.setpoints_since(t0 + 0.25)
+    assert len(got) >= 20, len(got)  # 30 Hz nominal over 1.25 s; >= 20 Hz on a loaded box
+    assert all(m.type_mask == 1991 and m.coordinate_frame == 8 and m.yaw_rate == 1 for m in got)
+    drone.set_cmd_mix(vx=0.5, z=2.0, az=0.1, stamp=1.7e9)
+    t1 = time.monotonic()
+    wait_for(lambda: bridge.setpoints_since(t1), 5, what="mixed setpoint")
+    latest = bridge.setpoints_since(t1)[-1]
+    assert latest.type_mask == 1987 and latest.position.z == 2.0 and latest.velocity.x == 0.5
+    assert latest.header.stamp == 1.7e9
+    drone.stop_commanding()
+    time.sleep(0.2)
+    t2 = time.monotonic()
+    time.sleep(0.4)
+    assert bridge.setpoints_since(t2) == []
+
+
+def test_bad_commands_raise_and_send_nothing(drone, bridge):
+    t0 = time.monotonic()
+    for call in (
+        lambda: drone.set_cmd_vel(vx=float("nan")),
+        lambda: drone.set_cmd_pos(z=float("inf")),
+        lambda: drone.set_cmd_mix(vx="1"),
+        lambda: drone.set_cmd_vel(az=True),
+        lambda: drone.set_cmd_vel(stamp=float("nan")),
+    ):
+        with pytest.raises(InvalidArgument):
+            call()
+    with pytest.raises(ValueError):
+        drone.set_cmd_pos(x=None)
+    with pytest.raises(TypeError):
+        drone.set_cmd_pos(y=[1])
+    time.sleep(0.3)
+    assert bridge.setpoints_since(t0) == []
+    assert drone.setpoints_sent == 0
+
+
+def test_takeoff_streams_then_offboard_then_arms_and_returns_at_altitude(drone, bridge):
+    drone.takeoff(h=1.0, timeout=20)
+    assert drone.get_position()[2] >= 0.9
+    assert bridge.calls[:2] == ["set_mode OFFBOARD", "arming True"]
+    first = bridge.setpoints[0][1]
+    assert first.type_mask == MASK_POSITION and first.position.z == 0.0  # hold on the ground
+    assert drone.commanding is not None and drone.commanding.position.z == pytest.approx(1.0)
+    wait_for(drone.is_flying, 5, what="in air")
+    calls = len(bridge.calls)
+    drone.takeoff(h=1.0)  # idempotent: flying -> returns at once, no service call
+    assert len(bridge.calls) == calls
+    drone.land(timeout=20)
+    assert bridge.calls[-1] == "land"
+    assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
+    assert not drone.get_state().armed
+    assert drone.commanding is None  # land stops the stream
+
+
+def test_takeoff_refusal_carries_the_autopilot_reason(drone, bridge):
+    bridge.refuse_arming = "Arming denied: preflight checks failed"
+    with pytest.raises(CommandRefused) as info:
+        drone.takeoff(h=1.0, timeout=10)
+    assert "preflight checks failed" in str(info.value)
+    assert info.value.result == MAV_RESULT_DENIED
+    assert drone.commanding is None  # no stream left behind after a refusal
+    wait_for(lambda: drone.status_texts, 5, what="status text")
+    assert drone.status_texts[-1].text == bridge.refuse_arming
+
+
+def test_takeoff_timeout_names_the_altitude(drone, bridge):
+    with pytest.raises(Timeout, match=r"altitude 5\.00 m not reached"):
+        drone.takeoff(h=5.0, timeout=0.5)
+
+
+def test_services_arm_mode_params(drone, bridge):
+    drone.arm()
+    wait_for(lambda: drone.get_state().armed, 5, what="armed")
+    drone.disarm()
+    with pytest.raises(CommandRefused, match="unknown mode 'WHATEVER'"):
+        drone.set_mode("WHATEVER")
+    with pytest.raises(InvalidArgument):
+        drone.set_mode("")
+    assert drone.param_get("MPC_XY_VEL_MAX") == 12.0
+    assert drone.param_set("MPC_XY_VEL_MAX", 3) == 3
+    assert bridge.params["MPC_XY_VEL_MAX"].integer == 3
+    assert drone.param_set("MPC_XY_VEL_MAX", 2.5) == 2.5
+    with pytest.raises(CommandRefused, match="no parameter NOPE"):
+        drone.param_get("NOPE")
+    with pytest.raises(InvalidArgument):
+        drone.param_set("MPC_XY_VEL_MAX", float("nan"))
+
+
+def test_images_are_bgr_arrays_of_the_newest_frame(drone, bridge):
+    with pytest.raises(NoData, match="cam_frontal/image_raw"):
+        drone.get_frontal_image()
+    with pytest.raises(Timeout, match="cam_ventral"):
+        drone.wait_for_image("ventral", timeout=0.3)
+    frame = np.zeros((6, 8, 3), np.uint8)
+    frame[..., 2] = 255  # red in BGR
+    bridge.publish_image(frame, stamp=1.7e9)
+    img = drone.wait_for_image("frontal", timeout=5)
+    assert img.shape == (6, 8, 3) and img[0, 0].tolist() == [0, 0, 255]
+    img[:] = 0  # writable, and a copy: the next get is unchanged
+    again, stamp = drone.get_image("frontal", with_stamp=True)
+    assert again[0, 0].tolist() == [0, 0, 255] and stamp == 1.7e9
+    with pytest.raises(InvalidArgument):
+        drone.get_image("rear")
+
+
+def test_context_manager_stops_commanding_on_exception(router, bridge):
+    with (
+        pytest.raises(RuntimeError, match="app bug"),
+        DroneWrapper("drone", router, timeout=10, mode="peer") as drone,
+    ):
+        drone.set_cmd_vel(vx=0.5)
+        raise RuntimeError("app bug")
+    time.sleep(0.2)
+    t0 = time.monotonic()
+    time.sleep(0.4)
+    assert bridge.setpoints_since(t0) == []
+
+
+def test_land_on_exit_lands_when_flying(router, bridge):
+    with DroneWrapper("drone", router, timeout=10, mode="peer", land_on_exit=True) as drone:
+        drone.takeoff(h=0.6, timeout=20)
+        wait_for(drone.is_flying, 5, what="in air")
+    assert bridge.calls[-1] == "land"
+    assert not bridge.armed
+
+
+def test_two_drones_by_namespace_do_not_cross_talk(router):
+    one, two = FakeBridge(router, "drone1"), FakeBridge(router, "drone2")
+    try:
+        with (
+            DroneWrapper("drone1", router, mode="peer") as d1,
+            DroneWrapper("drone2", router, mode="peer") as d2,
+        ):
+            assert list_drones(router) == ["drone1", "drone2"]
+            d1.set_cmd_vel(vx=1.0)
+            d2.set_cmd_pos(z=2.0)
+            wait_for(lambda: one.setpoints and two.setpoints, 5, what="setpoints")
+            time.sleep(0.3)
+            assert all(m.type_mask == 1991 for _, m in one.setpoints)
+            assert all(m.type_mask == MASK_POSITION for _, m in two.setpoints)
+    finally:
+        one.close()
+        two.close()
+
+
+def test_no_router_is_a_clear_error():
+    endpoint = free_endpoint()
+    t0 = time.monotonic()
+    with pytest.raises(NotConnected, match=f"cannot reach the Zenoh router at {endpoint}"):
+        DroneWrapper("drone", endpoint, timeout=1.0)
+    assert time.monotonic() - t0 < 10
+    with pytest.raises(NotConnected, match="cannot reach"):
+        list_drones(endpoint, timeout=0.5)
+
+
+def test_no_bridge_is_a_clear_error(router):
+    with pytest.raises(NotConnected, match=r"no bridge for drone 'drone'.*nothing published"):
+        DroneWrapper("drone", router, timeout=1.0)
+
+
+def test_bridge_without_autopilot_is_a_clear_error(router):
+    fake = FakeBridge(router, connected=False)
+    try:
+        with pytest.raises(NotConnected, match="bridge of drone 'drone' is up but its autopilot"):
+            DroneWrapper("drone", router, timeout=1.5)
+    finally:
+        fake.close()
+
+
+def test_wrong_namespace_hints_at_the_drones_online(router, bridge):
+    with pytest.raises(NotConnected, match="drones online: drone"):
+        DroneWrapper("drone7", router, timeout=1.0)
+
+
+def test_embedding_on_an_existing_session(router, bridge):
+    node = client_node(router, name="embedder")
+    try:
+        drone = DroneWrapper(name="drone", session=node.session, cameras=(), wait=False)
+        drone.wait_for_connection(10)
+        drone.set_cmd_vel(vz=0.1)
+        wait_for(lambda: bridge.setpoints, 5, what="setpoint from the embedded SDK")
+        drone.close()
+        assert not node.session.is_closed()  # the owner's session stays open
+    finally:
+        node.close()
