@@ -17,6 +17,8 @@ GRAPHS = ["sim_follow_color", "sim_follow_person", "px4_real_follow_person"]
 SCHEMAS = {
     "dronewrapper_controller": "dronewrapper_controller.config:Config",
     "dronewrapper_compose.usb_camera": "dronewrapper_compose.usb_camera:Config",
+    "dronewrapper_bridge_mavlink": "dronewrapper_bridge_mavlink.node:Config",
+    "dronewrapper_perception": "dronewrapper_perception.config:Config",
 }
 
 
@@ -51,7 +53,7 @@ def test_graph_resolves_and_configs_load(name):
             config, sets = split_config_args(argv)
             load_config(schema, config, sets)
             checked += 1
-    assert checked >= 1
+    assert checked >= 3
 
 
 @pytest.mark.parametrize(
