@@ -1,0 +1,137 @@
+"""The perception service's configuration (strict: unknown keys are errors).
+
+Every field can be set in a YAML/JSON file (``--config``) or on the command line
+(``--set detector=yolox --set model_path=/models/yolox_nano.onnx``).
+"""
+
+from __future__ import annotations
+
+import msgspec
+
+from dronewrapper_perception.color_filter import PRESETS, ColorRange
+from dronewrapper_perception.tracking import TRACKERS
+from dronewrapper_perception.yolox import class_ids_for
+
+DETECTORS = ("color", "yolox", "hog", "person")
+
+
+class ColorRangeConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    """One HSV range. Hue in OpenCV units 0..179 (``hue_unit: opencv``) or degrees 0..360
+    (``hue_unit: degrees``, as the paper's tables); ``h_min > h_max`` wraps through 0."""
+
+    h_min: float
+    h_max: float
+    s_min: int = 70
+    s_max: int = 255
+    v_min: int = 50
+    v_max: int = 255
+    hue_unit: str = "opencv"
+
+    def to_range(self) -> ColorRange:
+        if self.hue_unit == "degrees":
+            return ColorRange.from_degrees(
+                self.h_min, self.h_max, self.s_min, self.s_max, self.v_min, self.v_max
+            )
+        if self.hue_unit != "opencv":
+            raise ValueError(f"hue_unit must be 'opencv' or 'degrees', not {self.hue_unit!r}")
+        return ColorRange(
+            int(self.h_min), int(self.h_max), self.s_min, self.s_max, self.v_min, self.v_max
+        )
+
+
+class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    """Perception settings.
+
+    Attributes:
+        camera: camera name in the image key (``cam_frontal`` or ``cam_ventral``).
+        compressed: subscribe to the JPEG key instead of the raw bgr8 one.
+        detector: ``color`` | ``yolox`` | ``hog`` | ``person`` (= yolox when ``model_path`` is
+            set, else the zero-download HOG).
+        color_preset: named colour (``red``, ``green``, ``blue``, ``yellow``).
+        color_ranges: custom HSV ranges; when given they replace the preset.
+        blur_px: Gaussian blur kernel of the colour filter (odd px, 0 = none).
+        min_area_px: smallest colour blob kept (px²).
+        model_path: the YOLOX ``.onnx`` file (no default: obtain it, see README).
+        checksum: expected sha256 of ``model_path``, verified at start when set.
+        input_size: YOLOX network input side (px), if the model does not fix it.
+        score_threshold: minimum detection score 0..1 (YOLOX obj*cls; HOG mapped margin).
+        nms_threshold: IoU for non-maximum suppression 0..1.
+        classes: COCO class names kept by YOLOX (``person``, ``car``, ``horse``...).
+        threads: CPU threads for one YOLOX inference.
+        providers: onnxruntime execution providers in order (``tensorrt``, ``cuda``, ``auto``);
+            empty = CPU.
+        tracker: ``kalman`` (motion + appearance) | ``paper`` (the paper's FIFO) | ``none``.
+        max_coast_s: seconds a Kalman track survives without detections.
+        paper_fifo_length: centroids in the paper tracker's FIFO.
+        paper_gate_px: the paper tracker ignores detections farther than this from its mean.
+        max_detections: detections kept per frame (best first).
+        debug_image: publish an annotated JPEG for people to watch.
+        debug_jpeg_quality: JPEG quality 1..100 of the debug image.
+        stats_period_s: how often counters are logged (s; 0 = never).
+    """
+
+    camera: str = "cam_frontal"
+    compressed: bool = False
+    detector: str = "color"
+    color_preset: str = "red"
+    color_ranges: list[ColorRangeConfig] = msgspec.field(default_factory=list)
+    blur_px: int = 11
+    min_area_px: float = 20.0
+    model_path: str = ""
+    checksum: str = ""
+    input_size: int = 416
+    score_threshold: float = 0.3
+    nms_threshold: float = 0.45
+    classes: list[str] = msgspec.field(default_factory=lambda: ["person"])
+    threads: int = 2
+    providers: list[str] = msgspec.field(default_factory=list)
+    tracker: str = "kalman"
+    max_coast_s: float = 2.0
+    paper_fifo_length: int = 5
+    paper_gate_px: float = 120.0
+    max_detections: int = 50
+    debug_image: bool = False
+    debug_jpeg_quality: int = 80
+    stats_period_s: float = 10.0
+
+    def __post_init__(self) -> None:
+        if self.detector not in DETECTORS:
+            raise ValueError(
+                f"detector must be one of {', '.join(DETECTORS)}, not {self.detector!r}"
+            )
+        if self.tracker not in TRACKERS:
+            raise ValueError(f"tracker must be one of {', '.join(TRACKERS)}, not {self.tracker!r}")
+        if not self.color_ranges and self.color_preset not in PRESETS:
+            raise ValueError(
+                f"color_preset {self.color_preset!r} unknown (known: {', '.join(sorted(PRESETS))})"
+            )
+        for colour_range in self.color_ranges:
+            colour_range.to_range()  # raises ValueError with the bad field named
+        if self.blur_px < 0 or (self.blur_px > 1 and self.blur_px % 2 == 0):
+            raise ValueError(f"blur_px={self.blur_px} must be 0 or an odd number of px")
+        for name in ("score_threshold", "nms_threshold"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"{name} must be in 0..1")
+        if self.input_size < 32 or self.input_size % 32:
+            raise ValueError("input_size must be a positive multiple of 32")
+        if self.threads < 1 or self.max_detections < 1 or self.paper_fifo_length < 1:
+            raise ValueError("threads, max_detections and paper_fifo_length must be >= 1")
+        if not 1 <= self.debug_jpeg_quality <= 100:
+            raise ValueError("debug_jpeg_quality must be in 1..100")
+        class_ids_for(self.classes)  # unknown class names fail here
+
+    def color_ranges_resolved(self) -> tuple[ColorRange, ...]:
+        """The HSV ranges to use: the custom ones, else the preset's."""
+        if self.color_ranges:
+            return tuple(r.to_range() for r in self.color_ranges)
+        return PRESETS[self.color_preset]
+
+    def color_label(self) -> str:
+        """The class name reported for colour blobs."""
+        return "custom" if self.color_ranges else self.color_preset
+
+    def detector_kind(self) -> str:
+        """The concrete detector: ``person`` resolves to yolox (model set) or hog."""
+        if self.detector == "person":
+            return "yolox" if self.model_path else "hog"
+        return self.detector
