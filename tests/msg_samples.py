@@ -28,6 +28,8 @@ def _value(tp, rng: random.Random):
         return "".join(rng.choice("abcXYZ_./ é") for _ in range(rng.randint(1, 12)))
     if tp is bytes:
         return rng.randbytes(rng.randint(1, 64))
+    if tp is memoryview:
+        return memoryview(rng.randbytes(rng.randint(1, 64)))
     raise TypeError(f"no sample for {tp!r}")
 
 

@@ -25,7 +25,7 @@ def _summarise(value: Any) -> Any:
         return {k: _summarise(v) for k, v in value.items()}
     if isinstance(value, list):
         return [_summarise(v) for v in value]
-    if isinstance(value, bytes):
+    if isinstance(value, bytes | memoryview):
         return f"<{len(value)} bytes>"
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)
@@ -41,7 +41,7 @@ def format_sample(key: str, payload: bytes) -> str:
         msg = codec.decode(topic.type, payload)
     except (msgspec.DecodeError, msgspec.ValidationError) as exc:
         return f"{key}: <undecodable {topic.type.__name__}: {exc}>"
-    body = _summarise(msgspec.to_builtins(msg, builtin_types=(bytes,)))
+    body = _summarise(msgspec.to_builtins(msg, builtin_types=(bytes, memoryview)))
     return f"{key} [{topic.type.__name__}] {json.dumps(body, separators=(',', ':'))}"
 
 

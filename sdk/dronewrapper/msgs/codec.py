@@ -43,4 +43,4 @@ def schema_name(msg_type: type) -> str:
 
 def to_builtins(msg: Any) -> Any:
     """A message as plain dicts/lists (for printing and JSON)."""
-    return msgspec.to_builtins(msg, builtin_types=(bytes,))
+    return msgspec.to_builtins(msg, builtin_types=(bytes, memoryview))

@@ -61,6 +61,10 @@ class Image(msgspec.Struct, kw_only=True):
 
     ``encoding`` is ``bgr8`` (OpenCV channel order) unless it says otherwise; ``step`` is the row
     length in bytes; ``header.stamp`` is the capture time and ``header.frame_id`` the camera name.
+
+    ``data`` decodes as a zero-copy, read-only ``memoryview`` of the received buffer (publishers
+    may pass ``bytes``); ``np.frombuffer(msg.data, np.uint8).reshape(h, w, 3)`` views it without a
+    copy, and ``.copy()`` gives a writable frame to draw on.
     """
 
     header: Header = msgspec.field(default_factory=Header)
@@ -69,12 +73,15 @@ class Image(msgspec.Struct, kw_only=True):
     encoding: str = "bgr8"
     is_bigendian: int = 0
     step: int = 0
-    data: bytes = b""
+    data: memoryview = msgspec.field(default_factory=lambda: memoryview(b""))
 
 
 class CompressedImage(msgspec.Struct, kw_only=True):
-    """A compressed image (sensor_msgs/CompressedImage); ``format`` is ``jpeg`` or ``png``."""
+    """A compressed image (sensor_msgs/CompressedImage); ``format`` is ``jpeg`` or ``png``.
+
+    ``data`` decodes as a zero-copy, read-only ``memoryview`` (publishers may pass ``bytes``).
+    """
 
     header: Header = msgspec.field(default_factory=Header)
     format: str = "jpeg"
-    data: bytes = b""
+    data: memoryview = msgspec.field(default_factory=lambda: memoryview(b""))

@@ -192,9 +192,20 @@ class Node:
 
     # ---- publish / subscribe ----
 
-    def publisher(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Publisher[T]:
-        """A typed publisher for ``topic`` in this node's namespace (``parts`` fill the key)."""
-        pub = Publisher(self.session, key or topic.key(self.ns, **parts), topic.type)
+    def publisher(
+        self,
+        topic: Topic[T],
+        *,
+        key: str | None = None,
+        qos: dict[str, Any] | None = None,
+        **parts: str,
+    ) -> Publisher[T]:
+        """A typed publisher for ``topic`` in this node's namespace (``parts`` fill the key).
+
+        ``qos`` passes Zenoh publisher options (``congestion_control``, ``priority``,
+        ``express``); the default drops samples under congestion, right for live data.
+        """
+        pub = Publisher(self.session, key or topic.key(self.ns, **parts), topic.type, **(qos or {}))
         self._declared.append(pub)
         return pub
 

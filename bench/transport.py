@@ -1,0 +1,252 @@
+"""Transport benchmark: round-trip latency and throughput between two processes over Zenoh.
+
+Measures the whole middleware path (typed publisher -> msgspec MessagePack -> Zenoh -> decode at
+the boundary -> callback) for a PoseStamped (~170 B) and a 640x480 bgr8 Image (921,600 B of
+pixels), through the loopback router (client -> router -> client) and peer to peer (two peers,
+direct link), with Zenoh shared memory on (the default for local processes).
+
+Reference on this machine kind (shared/reading/stack_facts.md): rospy 0.13 ms (64 B) and 3.2 ms
+(image) round trips, 740 images/s. Targets: images <= 0.65 ms and >= 3,700 images/s between local
+processes; small messages <= 0.3 ms.
+
+    python -m bench.transport [--samples-small 2000] [--samples-image 400] [--seconds 4]
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import zenoh
+
+from bench.common import percentiles, print_table, write_results
+from dronewrapper.msgs import Header, Image, PoseStamped, registry
+from dronewrapper.router import router_options, run_router
+from dronewrapper.runtime import Node, ZenohOptions
+
+PING_NS, PONG_NS = "bench_ping", "bench_pong"
+BLOCK = {"congestion_control": zenoh.CongestionControl.BLOCK}
+
+
+def _free_endpoint() -> str:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return f"tcp/127.0.0.1:{s.getsockname()[1]}"
+
+
+_FRAME = np.random.default_rng(0).integers(0, 255, (480, 640, 3), dtype=np.uint8).tobytes()
+
+
+def make_message(kind: str) -> Image | PoseStamped:
+    """A fresh message stamped now (the pixels are shared, not copied)."""
+    if kind == "pose":
+        return PoseStamped(header=Header.now("map"))
+    return Image(header=Header.now("cam_frontal"), height=480, width=640, encoding="bgr8",
+                 step=640 * 3, data=_FRAME)  # fmt: skip
+
+
+def _topic(kind: str):
+    return registry.LOCAL_POSE if kind == "pose" else registry.IMAGE_RAW
+
+
+def _key(kind: str, ns: str) -> str:
+    topic = _topic(kind)
+    return topic.key(ns, camera="cam_frontal") if kind == "image" else topic.key(ns)
+
+
+# ---- the peer process (pong / sink) ----
+
+
+def serve(role: str, options: ZenohOptions) -> None:
+    """Run in the child: echo pings back (pong) or count messages (sink) until stdin closes."""
+    with Node(f"bench_{role}", options, handle_signals=False, linger=0.0) as node:
+        counts = {"pose": 0, "image": 0}
+        first_last = {"pose": [0.0, 0.0], "image": [0.0, 0.0]}
+        one_way: dict[str, list[float]] = {"pose": [], "image": []}
+        for kind in ("pose", "image"):
+            if role == "pong":
+                pub = node.publisher(_topic(kind), key=_key(kind, PONG_NS), qos=BLOCK)
+
+                def echo(msg, pub=pub, kind=kind):
+                    one_way[kind].append(time.time() - msg.header.stamp)
+                    pub.put(msg)
+
+                node.subscribe(_topic(kind), echo, key=_key(kind, PING_NS))
+            else:
+
+                def count(_msg, kind=kind):
+                    now = time.perf_counter()
+                    if counts[kind] == 0:
+                        first_last[kind][0] = now
+                    first_last[kind][1] = now
+                    counts[kind] += 1
+
+                node.subscribe(_topic(kind), count, key=_key(kind, PING_NS))
+        print("ready", flush=True)
+        for line in sys.stdin:  # the parent asks for counts, then closes stdin
+            kind, _, what = line.strip().partition(" ")
+            if what == "one_way":
+                lat = np.asarray(one_way[kind][50:]) * 1e3
+                print(f"{np.percentile(lat, 50):.6f} {np.percentile(lat, 99):.6f}", flush=True)
+                continue
+            n = counts[kind]
+            span = first_last[kind][1] - first_last[kind][0]
+            print(f"{n} {span:.6f}", flush=True)
+            counts[kind] = 0
+
+
+# ---- the measuring process ----
+
+
+class Peer:
+    """The child process (pong or sink) over a pipe."""
+
+    def __init__(self, role: str, mode: str, connect: list[str], listen: list[str]) -> None:
+        args = [sys.executable, "-m", "bench.transport", "--serve", role, "--mode", mode]
+        for ep in connect:
+            args += ["--connect", ep]
+        for ep in listen:
+            args += ["--listen", ep]
+        self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        assert self.proc.stdout.readline().strip() == "ready"
+
+    def ask(self, kind: str) -> tuple[int, float]:
+        self.proc.stdin.write(kind + "\n")
+        self.proc.stdin.flush()
+        n, span = self.proc.stdout.readline().split()
+        return int(n), float(span)
+
+    def one_way(self, kind: str) -> dict[str, float]:
+        self.proc.stdin.write(f"{kind} one_way\n")
+        self.proc.stdin.flush()
+        p50, p99 = self.proc.stdout.readline().split()
+        return {"p50_ms": float(p50), "p99_ms": float(p99)}
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait(20)
+
+
+def round_trips(node: Node, kind: str, samples: int, warmup: int = 50) -> list[float]:
+    got = threading.Event()
+    node.subscribe(_topic(kind), lambda _m: got.set(), key=_key(kind, PONG_NS))
+    pub = node.publisher(_topic(kind), key=_key(kind, PING_NS), qos=BLOCK)
+    rtts = []
+    deadline = time.monotonic() + 120
+    for i in range(warmup + samples):
+        got.clear()
+        msg = make_message(kind)
+        t0 = time.perf_counter()
+        pub.put(msg)
+        if not got.wait(2.0):
+            raise RuntimeError(f"{kind} ping {i} got no pong within 2 s")
+        if i >= warmup:
+            rtts.append(time.perf_counter() - t0)
+        if time.monotonic() > deadline:
+            break
+    return rtts
+
+
+def throughput(node: Node, sink: Peer, kind: str, seconds: float) -> dict[str, float]:
+    pub = node.publisher(_topic(kind), key=_key(kind, PING_NS), qos=BLOCK)
+    msg = make_message(kind)
+    sent = 0
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        pub.put(msg)
+        sent += 1
+    time.sleep(1.0)  # let the last messages arrive before counting
+    received, span = sink.ask(kind)
+    rate = (received - 1) / span if span > 0 else 0.0
+    return {"sent": sent, "received": received, "msgs_per_s": rate}
+
+
+def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
+    stop, ready = threading.Event(), threading.Event()
+    router_thread = None
+    if name == "router":
+        endpoint = _free_endpoint()
+        router_thread = threading.Thread(
+            target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
+        )
+        router_thread.start()
+        ready.wait(10)
+        peer_mode, peer_connect, peer_listen = "client", [endpoint], []
+        mine = ZenohOptions(mode="client", connect=[endpoint])
+    else:  # peer to peer: the child listens, this process connects to it directly
+        endpoint = _free_endpoint()
+        peer_mode, peer_connect, peer_listen = "peer", [], [endpoint]
+        mine = ZenohOptions(mode="peer", connect=[endpoint])
+    result: dict[str, object] = {}
+    pong = Peer("pong", peer_mode, peer_connect, peer_listen)
+    with Node("bench_ping", mine, handle_signals=False, linger=0.0) as node:
+        time.sleep(1.0)
+        result["pose_rtt"] = percentiles(round_trips(node, "pose", args.samples_small))
+        result["image_rtt"] = percentiles(round_trips(node, "image", args.samples_image))
+    result["pose_one_way"] = pong.one_way("pose")
+    result["image_one_way"] = pong.one_way("image")
+    pong.close()
+    sink = Peer("sink", peer_mode, peer_connect, peer_listen)
+    with Node("bench_source", mine, handle_signals=False, linger=0.0) as node:
+        time.sleep(1.0)
+        result["image_throughput"] = throughput(node, sink, "image", args.seconds)
+        result["pose_throughput"] = throughput(node, sink, "pose", args.seconds)
+    sink.close()
+    stop.set()
+    if router_thread:
+        router_thread.join(10)
+    return result
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples-small", type=int, default=2000)
+    parser.add_argument("--samples-image", type=int, default=400)
+    parser.add_argument("--seconds", type=float, default=4.0)
+    parser.add_argument("--serve", choices=("pong", "sink"), help=argparse.SUPPRESS)
+    parser.add_argument("--mode", default="client", help=argparse.SUPPRESS)
+    parser.add_argument("--connect", action="append", default=[], help=argparse.SUPPRESS)
+    parser.add_argument("--listen", action="append", default=[], help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.serve:
+        serve(args.serve, ZenohOptions(mode=args.mode, connect=args.connect, listen=args.listen))
+        return 0
+
+    results = {name: run_topology(name, args) for name in ("router", "p2p")}
+    rows = []
+    for name, res in results.items():
+        for kind, label in (("pose", "PoseStamped"), ("image", "Image 640x480")):
+            rtt, one = res[f"{kind}_rtt"], res[f"{kind}_one_way"]
+            rate = res[f"{kind}_throughput"]["msgs_per_s"]
+            rows.append([name, label, rtt["p50_ms"], rtt["p99_ms"], one["p50_ms"], one["p99_ms"],
+                         rate])  # fmt: skip
+    print_table(
+        "Zenoh through our runtime: typed publish -> MessagePack -> Zenoh -> decode (2 processes)",
+        ["path", "message", "RTT p50", "RTT p99", "1-way p50", "1-way p99", "msgs/s"],
+        rows,
+    )
+    print("  (ms; RTT = ping -> typed echo that decodes and re-publishes -> ping; SHM on)")
+    best_image_rtt = min(r["image_rtt"]["p50_ms"] for r in results.values())
+    best_image_rate = max(r["image_throughput"]["msgs_per_s"] for r in results.values())
+    best_pose_rtt = min(r["pose_rtt"]["p50_ms"] for r in results.values())
+    targets = {
+        "image_rtt_p50_ms<=0.65": best_image_rtt <= 0.65,
+        "images_per_s>=3700": best_image_rate >= 3700,
+        "pose_rtt_p50_ms<=0.3": best_pose_rtt <= 0.3,
+    }
+    print_table(
+        "targets (best local path)", ["target", "met"], [[k, v] for k, v in targets.items()]
+    )
+    print("\nreference rospy (stack_facts.md): 0.13 ms small, 3.2 ms image, 740 images/s")
+    write_results("transport", {"results": results, "targets": targets})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
