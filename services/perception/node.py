@@ -1,8 +1,8 @@
 """The perception process: camera frames in, Detections out, always on the newest frame.
 
 A Zenoh subscriber stores each decoded camera message in a one-slot holder (``Latest``); the
-main loop takes the newest one, skips any that arrived meanwhile (counted as dropped), so a slow
-detector never builds a queue and latency never grows. Each processed frame gives one
+main loop takes the newest one and skips any that arrived meanwhile (counted as dropped), so a
+slow detector never builds a queue and latency never grows. Each processed frame gives one
 Detections message carrying the frame's own stamp. Bad frames are counted by reason, logged
 (rate-limited) and skipped.
 """
@@ -14,7 +14,7 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 
-from dronewrapper.msgs import CompressedImage, Header, registry
+from dronewrapper.msgs import CompressedImage, Header, Image, registry
 from dronewrapper.runtime import Node
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.frames import BadFrame, compressed_to_bgr, image_to_bgr
@@ -23,7 +23,10 @@ from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to
 
 log = logging.getLogger("perception")
 
-WAIT_S = 0.5  # bounded wait for a frame, so a stop request is seen promptly
+WAIT_S = 0.5
+"""Longest wait for a frame (s), so a stop request is seen promptly."""
+
+BAD_LOG_PERIOD_S = 5.0
 
 
 @dataclass
@@ -43,82 +46,108 @@ class Stats:
         )
 
 
+class PerceptionService:
+    """Subscribes to the camera, runs the pipeline on the newest frame, publishes Detections.
+
+    Raises (at construction):
+        ModelFileError: the configured model file is missing or fails its checksum.
+    """
+
+    def __init__(self, node: Node, config: Config, pipeline: Pipeline | None = None) -> None:
+        self.node = node
+        self.config = config
+        self.pipeline = pipeline or Pipeline(config)
+        self.stats = Stats()
+        self.topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
+        self.frames = node.latest(self.topic, camera=config.camera)
+        self.publisher = node.publisher(registry.DETECTIONS)
+        self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
+        self._seen = 0
+        self._last_bad_log: dict[str, float] = {}
+
+    def spin(self) -> None:
+        """Process frames until the node is asked to stop."""
+        last_stats = time.monotonic()
+        while not self.node.stopping:
+            self.spin_once(WAIT_S)
+            now = time.monotonic()
+            if self.config.stats_period_s > 0 and now - last_stats >= self.config.stats_period_s:
+                last_stats = now
+                log.info("%s", self.stats.line())
+
+    def spin_once(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for a frame newer than the last one; process the newest.
+
+        Returns True if a frame was taken (processed or rejected as bad).
+        """
+        try:
+            msg = self.frames.wait(timeout, newer_than=self._seen)
+        except TimeoutError:
+            return False
+        count = self.frames.count
+        self.stats.received = count
+        self.stats.dropped += max(0, count - self._seen - 1)
+        self._seen = count
+        self.handle(msg)
+        return True
+
+    def handle(self, msg: Image | CompressedImage) -> None:
+        """Decode, process and publish one frame (bad frames are counted and skipped)."""
+        start = time.perf_counter()
+        try:
+            bgr = compressed_to_bgr(msg) if isinstance(msg, CompressedImage) else image_to_bgr(msg)
+        except BadFrame as exc:
+            self._bad(exc)
+            return
+        decode_time = time.perf_counter() - start
+        header = msg.header
+        frame_id = header.frame_id or self.config.camera
+        result = self.pipeline.process(bgr, header.stamp)
+        self.stats.processed += 1
+        self.publisher.put(
+            to_message(
+                result,
+                stamp=header.stamp,
+                frame_id=frame_id,
+                detector=self.pipeline.detector_name,
+                seq=self.stats.processed,
+                extra_time=decode_time,
+            )
+        )
+        if self.debug is not None:
+            jpeg = encode_jpeg(annotate(bgr, result), self.config.debug_jpeg_quality)
+            self.debug.put(
+                CompressedImage(
+                    header=Header(stamp=header.stamp, frame_id=frame_id), format="jpeg", data=jpeg
+                )
+            )
+
+    def _bad(self, exc: BadFrame) -> None:
+        self.stats.bad[exc.reason] += 1
+        now = time.monotonic()
+        if now - self._last_bad_log.get(exc.reason, -1e9) >= BAD_LOG_PERIOD_S:
+            self._last_bad_log[exc.reason] = now
+            log.warning(
+                "bad frame skipped (%d %s so far): %s", self.stats.bad[exc.reason], exc.reason, exc
+            )
+
+
 def run(node: Node, config: Config) -> int:
     """Serve perception until stopped. Returns 2 when the detector cannot be built."""
     try:
-        pipeline = Pipeline(config)
+        service = PerceptionService(node, config)
     except (ModelFileError, ValueError) as exc:
         log.error("cannot start the %s detector: %s", config.detector_kind(), exc)
         return 2
-    pipeline.warm_up()
-    topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
-    frames = node.latest(topic, camera=config.camera)
-    publisher = node.publisher(registry.DETECTIONS)
-    debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
+    service.pipeline.warm_up()
     log.info(
         "perception ready: %s detector, %s tracker, on %s -> %s",
-        pipeline.detector_name,
+        service.pipeline.detector_name,
         config.tracker,
-        topic.key(node.ns, camera=config.camera),
-        publisher.key,
+        service.topic.key(node.ns, camera=config.camera),
+        service.publisher.key,
     )
     node.announce()
-    stats = Stats()
-    seen = 0
-    last_stats = time.monotonic()
-    last_bad_log: dict[str, float] = {}
-    while not node.stopping:
-        try:
-            msg = frames.wait(WAIT_S, newer_than=seen)
-        except TimeoutError:
-            msg = None
-        if msg is not None:
-            count = frames.count
-            stats.received = count
-            stats.dropped += max(0, count - seen - 1)
-            seen = count
-            _process(node, config, pipeline, msg, publisher, debug, stats, last_bad_log)
-        now = time.monotonic()
-        if config.stats_period_s > 0 and now - last_stats >= config.stats_period_s:
-            last_stats = now
-            log.info("%s", stats.line())
-    log.info("stopping: %s", stats.line())
+    service.spin()
+    log.info("stopping: %s", service.stats.line())
     return 0
-
-
-def _process(node, config, pipeline, msg, publisher, debug, stats, last_bad_log) -> None:
-    start = time.perf_counter()
-    try:
-        bgr = compressed_to_bgr(msg) if isinstance(msg, CompressedImage) else image_to_bgr(msg)
-    except BadFrame as exc:
-        stats.bad[exc.reason] += 1
-        now = time.monotonic()
-        if now - last_bad_log.get(exc.reason, -1e9) >= 5.0:
-            last_bad_log[exc.reason] = now
-            log.warning(
-                "bad frame skipped (%d %s so far): %s", stats.bad[exc.reason], exc.reason, exc
-            )
-        return
-    decode_time = time.perf_counter() - start
-    header: Header = msg.header
-    result = pipeline.process(bgr, header.stamp)
-    stats.processed += 1
-    publisher.put(
-        to_message(
-            result,
-            stamp=header.stamp,
-            frame_id=header.frame_id or config.camera,
-            detector=pipeline.detector_name,
-            seq=stats.processed,
-            extra_time=decode_time,
-        )
-    )
-    if debug is not None:
-        jpeg = encode_jpeg(annotate(bgr, result), config.debug_jpeg_quality)
-        debug.put(
-            CompressedImage(
-                header=Header(stamp=header.stamp, frame_id=header.frame_id or config.camera),
-                format="jpeg",
-                data=jpeg,
-            )
-        )
