@@ -45,6 +45,7 @@ PX4_ALIASES = {
     "MISSION": "AUTO.MISSION",
     "POSITION": "POSCTL",
     "ALTITUDE": "ALTCTL",
+    "FOLLOWME": "AUTO.FOLLOW_TARGET",
 }
 
 # ArduCopter flight modes (ArduCopter/mode.h), names as MAVROS spells them.
@@ -132,6 +133,8 @@ def canonical_mode(autopilot: str, name: str) -> str:
     else:
         table, aliases = PX4_MODES, PX4_ALIASES
     wanted = aliases.get(wanted, wanted)
+    if wanted not in table and f"AUTO.{wanted}" in table:  # pymavlink's short PX4 names
+        wanted = f"AUTO.{wanted}"
     if wanted not in table:
         kind = autopilot or AUTOPILOT_PX4
         raise ValueError(

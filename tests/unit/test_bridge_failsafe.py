@@ -1,0 +1,158 @@
+"""The failsafe contract as a state machine with injected time."""
+
+from __future__ import annotations
+
+import pytest
+
+from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.mavros import (
+    FRAME_BODY_NED,
+    LANDED_STATE_IN_AIR,
+    LANDED_STATE_ON_GROUND,
+    MASK_POSITION,
+    MASK_VELOCITY,
+    PositionTarget,
+)
+from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, is_airborne
+from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
+
+POSE = ((1.0, 2.0, 5.0), 0.3)
+
+
+def velocity(vx=1.0):
+    return PositionTarget(
+        coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=vx)
+    )
+
+
+def flying(fs: Failsafe, now=0.0, mode="OFFBOARD"):
+    fs.on_vehicle(mode=mode, armed=True, airborne=True, now=now)
+    return fs
+
+
+def test_fresh_velocity_forwarded_then_hold_at_current_pose_after_timeout():
+    fs = flying(Failsafe())
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 1.0)
+    tick = fs.tick(1.4, POSE)
+    assert tick.send.type_mask == MASK_VELOCITY and fs.state == ""
+    tick = fs.tick(1.51, POSE)
+    assert tick.send.type_mask == MASK_POSITION
+    p = tick.send.position
+    assert (p.x, p.y, p.z, tick.send.yaw) == (1.0, 2.0, 5.0, 0.3)
+    assert fs.state == "hold"
+    assert [(t.old, t.new) for t in tick.transitions] == [("", "hold")]
+    # the hold point is latched: later pose changes do not drag it
+    later = fs.tick(2.0, ((9.0, 9.0, 9.0), 0.0))
+    assert later.send.position.x == 1.0 and later.transitions == []
+
+
+def test_fresh_setpoint_leaves_hold():
+    fs = flying(Failsafe())
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    fs.tick(1.0, POSE)
+    fs.on_setpoint(velocity(0.5), Kind.VELOCITY, 1.2)
+    tick = fs.tick(1.25, POSE)
+    assert fs.state == "" and tick.send.velocity.x == 0.5
+    assert [(t.old, t.new) for t in tick.transitions] == [("hold", "")]
+
+
+def test_stale_position_target_holds_the_target_not_the_pose():
+    fs = flying(Failsafe())
+    target = hold_target((10.0, 0.0, 3.0), 0.0)
+    fs.on_setpoint(target, Kind.POSITION, 0.0)
+    tick = fs.tick(1.0, POSE)
+    assert tick.send.position.x == 10.0 and fs.state == "hold"
+
+
+def test_commander_lost_lands_once_while_airborne():
+    fs = flying(Failsafe())
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.tick(4.9, POSE).request is None
+    tick = fs.tick(5.1, POSE)
+    assert tick.request == "land" and fs.state == "land"
+    assert [(t.old, t.new) for t in tick.transitions] == [("hold", "land")]
+    assert fs.tick(5.2, POSE).request is None  # asked once
+    # the autopilot switches to AUTO.LAND as asked: expected, no event, bridge stops streaming
+    fs.on_mode_requested("AUTO.LAND", 5.15)
+    fs.on_vehicle(mode="AUTO.LAND", armed=True, airborne=True, now=5.5)
+    tick = fs.tick(5.6, POSE)
+    assert tick.send is None and tick.events == [] and fs.state == "land"
+    fs.on_vehicle(mode="AUTO.LAND", armed=False, airborne=False, now=20.0)
+    assert fs.state == ""  # landed and disarmed: failsafe over
+
+
+@pytest.mark.parametrize("action", ["return", "hold"])
+def test_commander_lost_action_configurable(action):
+    fs = flying(Failsafe(FailsafeConfig(commander_lost_action=action)))
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    tick = fs.tick(6.0, POSE)
+    if action == "hold":
+        assert tick.request is None and fs.state == "hold" and tick.send is not None
+    else:
+        assert tick.request == "return" and fs.state == "return"
+
+
+def test_no_land_on_the_ground():
+    fs = Failsafe()
+    fs.on_vehicle(mode="OFFBOARD", armed=True, airborne=False, now=0.0)
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.tick(10.0, POSE).request is None
+
+
+def test_pilot_takeover_is_reported_and_not_fought():
+    fs = flying(Failsafe())
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    fs.tick(1.0, POSE)  # hold
+    fs.on_vehicle(mode="POSCTL", armed=True, airborne=True, now=1.5)
+    tick = fs.tick(1.6, POSE)
+    assert len(tick.events) == 1 and "OFFBOARD" in tick.events[0] and "POSCTL" in tick.events[0]
+    assert tick.send is None and fs.state == ""  # stops its own hold stream
+    assert fs.pilot_override
+    # commander silence long after: still no land request, no stream, no mode request
+    for t in (6.0, 10.0, 30.0):
+        tick = fs.tick(t, POSE)
+        assert tick.request is None and tick.send is None
+
+
+def test_pilot_override_cleared_when_guided_mode_requested_again():
+    fs = flying(Failsafe())
+    fs.on_vehicle(mode="POSCTL", armed=True, airborne=True, now=1.0)
+    fs.on_mode_requested("OFFBOARD", 2.0)
+    assert not fs.pilot_override
+
+
+def test_fresh_commands_still_forwarded_after_takeover():
+    """Forwarding is harmless outside OFFBOARD and keeps a later OFFBOARD request primed."""
+    fs = flying(Failsafe(), mode="POSCTL")
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.tick(0.1, POSE).send is not None
+
+
+def test_priming_streams_a_hold_without_setpoints():
+    fs = Failsafe()
+    fs.on_vehicle(mode="AUTO.LOITER", armed=False, airborne=False, now=0.0)
+    assert fs.tick(0.0, POSE).send is None
+    fs.start_priming(0.0, 1.5)
+    tick = fs.tick(0.5, POSE)
+    assert tick.send.type_mask == MASK_POSITION and tick.send.position.z == 5.0
+    assert fs.tick(1.6, POSE).send is None
+
+
+def test_mode_requested_by_bridge_is_not_a_takeover():
+    fs = flying(Failsafe())
+    fs.on_mode_requested("AUTO.LAND", 1.0)
+    fs.on_vehicle(mode="AUTO.LAND", armed=True, airborne=True, now=1.5)
+    assert fs.tick(1.6, POSE).events == [] and not fs.pilot_override
+
+
+def test_is_airborne():
+    assert is_airborne(LANDED_STATE_IN_AIR, False)
+    assert not is_airborne(LANDED_STATE_ON_GROUND, True)
+    assert is_airborne(0, True) and not is_airborne(0, False)
+
+
+def test_bad_config_refused():
+    with pytest.raises(ValueError, match="commander_lost_action"):
+        FailsafeConfig(commander_lost_action="panic")
+    with pytest.raises(ValueError):
+        FailsafeConfig(setpoint_timeout=6.0, commander_lost_timeout=5.0)
