@@ -163,6 +163,8 @@ class DroneWrapper:
             self._setpoints = session.declare_publisher(
                 registry.SETPOINT_RAW_LOCAL.key(self.ns),
                 encoding=encoding_for(PositionTarget),
+                express=True,  # no batching: a setpoint leaves at once
+                priority=zenoh.Priority.INTERACTIVE_HIGH,
             )
             self._streamer = SetpointStreamer(
                 self._publish_setpoint,
