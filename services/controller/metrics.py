@@ -158,3 +158,32 @@ def summarize(
         intended_distance=intended_distance,
         samples=len(after),
     )
+
+
+def focal_px(width: float, hfov_rad: float) -> float:
+    """Pinhole focal length in px of a camera ``width`` px wide with horizontal FOV ``hfov_rad``."""
+    return width / 2.0 / math.tan(hfov_rad / 2.0)
+
+
+def colour_intended_distance(
+    target_radius: float, ref_width: float, width: float, hfov_rad: float, radius_m: float
+) -> float:
+    """The distance (m) at which a sphere of ``radius_m`` shows ``target_radius`` reference px.
+
+    ``target_radius`` is in px of a ``ref_width`` image (see dronewrapper_controller.errors).
+    """
+    radius_px = target_radius * width / ref_width
+    return focal_px(width, hfov_rad) * radius_m / radius_px
+
+
+def person_intended_distance(
+    area_ratio: float,
+    width: float,
+    height: float,
+    hfov_rad: float,
+    person_h: float,
+    person_w: float,
+) -> float:
+    """The distance (m) at which a person's box fills ``1 / area_ratio`` of the image."""
+    f = focal_px(width, hfov_rad)
+    return math.sqrt(area_ratio * f * f * person_h * person_w / (width * height))

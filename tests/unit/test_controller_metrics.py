@@ -71,3 +71,18 @@ def test_closest_to_axis_names_the_object_in_view():
     assert s.closest_to_axis() == "person1"
     s = sample(0.0, 0.0, target=(5.0, 0.1, 2.0), others={"person1": (5.0, -2.0, 2.0)})
     assert s.closest_to_axis() == "target"
+
+
+def test_intended_distances_from_the_camera_model():
+    from dronewrapper_controller.metrics import (
+        colour_intended_distance,
+        focal_px,
+        person_intended_distance,
+    )
+
+    assert focal_px(640, math.radians(90)) == pytest.approx(320)
+    # 0.3 m sphere, 90 deg camera (f 320 px at 640 px): 16 px radius at 6 m; 8 ref px of 320
+    assert colour_intended_distance(8, 320, 640, math.radians(90), 0.3) == pytest.approx(6.0)
+    # a 2 m x 0.5 m person filling 1/20 of 640x480: area 15360 px^2 = f^2 * 1 / d^2
+    d = person_intended_distance(20, 640, 480, math.radians(90), 2.0, 0.5)
+    assert (320 * 2.0 / d) * (320 * 0.5 / d) == pytest.approx(640 * 480 / 20)

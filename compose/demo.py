@@ -1,0 +1,225 @@
+"""``make demo``: the simulated Iris follows the red beacon, with live status and a summary.
+
+Runs the ``sim_follow_color`` graph (simulator, MAVLink bridge, colour perception, controller)
+through the launcher's Python API on a free loopback router and free UDP ports, watches the
+simulator's ground truth and the controller's status, prints one live status line, and at the
+end prints a summary (time to acquire, share of time the target was centred, distance error)
+and saves a plot of the trajectories (top view) and the errors over time to ``out/demo/``.
+
+    python -m dronewrapper_compose.demo [--duration 60] [--scenario beacon_smooth] [--out DIR]
+
+The processes' own logs go to ``out/demo/graph.log``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import socket
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from dronewrapper.runtime.config import load_config
+from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper_compose.graph import REPO
+from dronewrapper_compose.launcher import Launcher, LaunchError
+from dronewrapper_controller.config import Config as ControllerConfig
+from dronewrapper_controller.metrics import (
+    FollowSample,
+    FollowSummary,
+    colour_intended_distance,
+    summarize,
+)
+from dronewrapper_controller.monitor import FollowMonitor
+
+GRAPH = REPO / "compose" / "sim_follow_color.yaml"
+CONTROLLER_CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
+CENTRED_TOLERANCE = math.radians(10.0)
+DISTANCE_TOLERANCE = 1.5
+
+
+def free_port(kind: int = socket.SOCK_STREAM) -> int:
+    """A port free on 127.0.0.1 now (TCP by default)."""
+    with socket.socket(socket.AF_INET, kind) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def intended_distance(scenario_name: str) -> float:
+    """Where the controller's config wants the drone: from the target radius and the camera."""
+    from dronewrapper_sim.world.scenario import load_scenario
+
+    scenario = load_scenario(scenario_name)
+    target = next(o for o in scenario.objects if o.name == "target")
+    cfg = load_config(ControllerConfig, CONTROLLER_CONFIG)
+    cam = scenario.camera
+    return colour_intended_distance(
+        cfg.follow_color.target_radius,
+        cfg.ref_width,
+        cam.width,
+        math.radians(cam.hfov_deg),
+        target.radius_m,
+    )
+
+
+def status_line(t: float, sample: FollowSample | None, goal: float) -> str:
+    """The live one-line status."""
+    if sample is None:
+        return f"t={t:5.1f}s  waiting for the simulator..."
+    visible = "yes" if sample.target_visible else "no "
+    return (
+        f"t={t:5.1f}s  state={sample.state or '-':<8} target visible={visible}  "
+        f"distance={sample.distance:5.2f} m (goal {goal:.1f})  "
+        f"bearing={math.degrees(sample.bearing):+6.1f} deg  "
+        f"elevation={math.degrees(sample.elevation):+6.1f} deg  alt={sample.vehicle[2]:4.1f} m"
+    )
+
+
+def print_summary(summary: FollowSummary, out=sys.stdout) -> None:
+    """The end-of-run summary table."""
+    rows = [
+        ("servoing time", f"{summary.duration:.1f} s"),
+        ("time to acquire", f"{summary.time_to_acquire:.1f} s"),
+        (
+            f"target centred (within {math.degrees(CENTRED_TOLERANCE):.0f} deg)",
+            f"{100 * summary.centred_share:.0f} % of the time",
+        ),
+        ("target seen by the controller", f"{100 * summary.visible_share:.0f} % of the time"),
+        ("intended distance", f"{summary.intended_distance:.2f} m"),
+        (
+            "distance error mean / p95",
+            f"{summary.distance_mean:.2f} / {summary.distance_p95:.2f} m",
+        ),
+        (
+            f"within {DISTANCE_TOLERANCE:g} m of the intended distance",
+            f"{100 * summary.distance_share:.0f} % of the time",
+        ),
+        ("bearing error p95", f"{math.degrees(summary.bearing_p95):.1f} deg"),
+    ]
+    width = max(len(name) for name, _ in rows)
+    print("\nsummary (from the simulator's ground truth, after take-off):", file=out)
+    for name, value in rows:
+        print(f"  {name:<{width}}  {value}", file=out)
+
+
+def save_plot(samples: Sequence[FollowSample], goal: float, path: Path) -> None:
+    """Top view of the trajectories and the errors over time (PNG, matplotlib Agg)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (top, err) = plt.subplots(1, 2, figsize=(13, 5.5))
+    vx = [s.vehicle[0] for s in samples]
+    vy = [s.vehicle[1] for s in samples]
+    top.plot([s.target[0] for s in samples], [s.target[1] for s in samples], "r-", label="beacon")
+    top.plot(vx, vy, "b-", label="drone")
+    for s in samples[:: max(1, len(samples) // 25)]:  # heading arrows
+        top.arrow(
+            s.vehicle[0], s.vehicle[1], 0.6 * math.cos(s.yaw), 0.6 * math.sin(s.yaw),
+            head_width=0.12, color="tab:blue", alpha=0.5,
+        )  # fmt: skip
+    top.plot(vx[:1], vy[:1], "bo", label="start")
+    top.set(xlabel="east (m)", ylabel="north (m)", title="top view (ENU)", aspect="equal")
+    top.legend(loc="best")
+    top.grid(True, alpha=0.3)
+    t = [s.t for s in samples]
+    err.plot(t, [s.distance - goal for s in samples], label="distance - intended (m)")
+    err.plot(t, [math.degrees(s.bearing) / 10 for s in samples], label="bearing error (10 deg)")
+    err.plot(t, [math.degrees(s.elevation) / 10 for s in samples], label="elevation error (10 deg)")
+    seen = [0.0 if s.target_visible else math.nan for s in samples]
+    err.plot(t, seen, "g|", label="target seen")
+    err.axhline(0.0, color="k", lw=0.5)
+    err.set(xlabel="time (s)", title="errors over time")
+    err.legend(loc="best")
+    err.grid(True, alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def run_demo(
+    duration: float, scenario: str, out_dir: Path, *, live: bool = True
+) -> tuple[int, FollowSummary | None]:
+    """Fly the demo; returns (exit status, summary)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    router = f"tcp/127.0.0.1:{free_port()}"
+    variables = {
+        "scenario": scenario,
+        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
+        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        "on_exit": "land",
+    }
+    goal = intended_distance(scenario)
+    log_path = out_dir / "graph.log"
+    print(f"starting sim_follow_color ({scenario}); process logs in {log_path}")
+    with open(log_path, "w") as log_file:
+        launcher = Launcher.from_file(GRAPH, router=router, variables=variables, out=log_file)
+        try:
+            launcher.start()
+        except LaunchError as exc:
+            launcher.stop()
+            print(f"demo: the graph did not start: {exc} (see {log_path})", file=sys.stderr)
+            return 1, None
+        session = open_session(ZenohOptions(mode="client", connect=[router]))
+        monitor = FollowMonitor(session, launcher.ns, aim_height=0.0).start()
+        print(f"flying for {duration:g} s (Ctrl-C stops early)")
+        t0 = time.monotonic()
+        tty = sys.stdout.isatty()
+        last_print = 0.0
+        try:
+            while time.monotonic() - t0 < duration:
+                dead = [c.name for c in launcher.children if c.poll() is not None]
+                if dead:
+                    print(f"\ndemo: {', '.join(dead)} stopped unexpectedly", file=sys.stderr)
+                    break
+                time.sleep(0.25)
+                now = time.monotonic() - t0
+                if live and (tty or now - last_print >= 5.0):
+                    line = status_line(now, monitor.sample(), goal)
+                    print(f"\r{line}\033[K" if tty else line, end="" if tty else "\n", flush=True)
+                    last_print = now
+        except KeyboardInterrupt:
+            print("\ninterrupted")
+        finally:
+            if tty:
+                print()
+            monitor.close()
+            session.close()
+            print("stopping the graph (the drone lands first)...")
+            code = launcher.stop()
+        samples = list(monitor.samples)
+    summary = summarize(
+        samples,
+        intended_distance=goal,
+        centred_tolerance=CENTRED_TOLERANCE,
+        distance_tolerance=DISTANCE_TOLERANCE,
+    )
+    print_summary(summary)
+    if samples:
+        plot = out_dir / "follow.png"
+        save_plot(samples, goal, plot)
+        print(f"\nplot saved to {plot}")
+    if code != 0:
+        print(f"demo: the graph reported failures: {launcher.failures}", file=sys.stderr)
+    return code, summary
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="make demo", description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=60.0, help="seconds of flight")
+    parser.add_argument("--scenario", default="beacon_smooth", help="a beacon_* scenario")
+    parser.add_argument("--out", type=Path, default=REPO / "out" / "demo", help="output folder")
+    args = parser.parse_args(argv)
+    if not args.duration > 0:
+        parser.error("--duration must be > 0")
+    code, _ = run_demo(args.duration, args.scenario, args.out)
+    return code
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
