@@ -30,6 +30,7 @@ from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
+from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper_compose.graph import (
     REPO,
     Graph,
@@ -315,6 +316,7 @@ class Launcher:
             self._token_sub.undeclare()
         if self._session is not None:
             self._session.close()
+        remove_stale_segments()
         self.exit_code = 1 if self.failures else 0
         self._say(
             "stopped" if not self.failures else "stopped with failures: " + "; ".join(self.failures)

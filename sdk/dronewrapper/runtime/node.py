@@ -36,6 +36,7 @@ from dronewrapper.msgs.std import ErrorReply
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
+from dronewrapper.runtime.shm import remove_stale_segments
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -189,6 +190,7 @@ class Node:
             self.session.close()
             for sig, handler in self._old_handlers.items():
                 signal.signal(sig, handler)
+            remove_stale_segments()
 
     # ---- publish / subscribe ----
 
