@@ -1,0 +1,172 @@
+"""The background of every frame: a textured ground plane fading into haze, and a sky gradient.
+
+The ground is a seamless grass texture (an 8 m tile with a faint 2 m mowing checker, so motion
+and heading are visible) mapped onto the plane z = 0 with one homography
+(``cv2.warpPerspective``). The texture image covers +-24 m around the camera (the tile is
+periodic, so it is re-anchored on the tile grid under the camera) and is pre-blurred with distance
+(a poor man's mip-map against shimmering); farther ground is its mean colour. Distance haze and the
+sky are computed on a coarse grid and up-sampled.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from dronewrapper_sim.render.camera import CameraPose, PinholeCamera
+
+__all__ = ["GROUND_TILE_M", "Background", "make_grass_tile"]
+
+GROUND_TILE_M = 8.0
+"""Period of the ground texture, m."""
+TEXTURE_RES_M = 0.025  # m per texture pixel
+TEXTURE_REACH_TILES = 3  # the texture covers this many tiles on each side of the camera's tile
+FOG_DISTANCE_M = 70.0  # haze: alpha = 1 - exp(-distance / FOG_DISTANCE_M)
+GRID_STEP_PX = 8  # haze and sky are computed every GRID_STEP_PX pixels and up-sampled
+
+SKY_HORIZON_BGR = np.array([228.0, 212.0, 196.0])
+SKY_ZENITH_BGR = np.array([205.0, 140.0, 75.0])
+
+
+def _periodic_noise(rng: np.random.Generator, size: int, sigma_px: float) -> np.ndarray:
+    """Seamless (periodic) smooth noise, zero mean, unit std."""
+    white = rng.standard_normal((size, size))
+    f = np.fft.fftfreq(size)
+    fx, fy = np.meshgrid(f, f)
+    kernel = np.exp(-2.0 * (math.pi * sigma_px) ** 2 * (fx**2 + fy**2))
+    noise = np.real(np.fft.ifft2(np.fft.fft2(white) * kernel))
+    return (noise - noise.mean()) / (noise.std() + 1e-12)
+
+
+def make_grass_tile(seed: int = 0, tile_m: float = GROUND_TILE_M, res_m: float = TEXTURE_RES_M):
+    """A seamless grass tile (BGR uint8) of ``tile_m`` metres at ``res_m`` m/px."""
+    size = round(tile_m / res_m)
+    rng = np.random.default_rng(seed)
+    base = np.array([52.0, 128.0, 78.0])  # BGR grass
+    patches = _periodic_noise(rng, size, 40.0)  # ~1 m patches
+    blotches = _periodic_noise(rng, size, 10.0)
+    blades = _periodic_noise(rng, size, 0.8)
+    dry = np.clip(_periodic_noise(rng, size, 25.0) - 0.8, 0.0, None)  # sparse dry spots
+    shade = 1.0 + 0.10 * patches + 0.06 * blotches + 0.10 * blades
+    # faint 2 m checker (mowing pattern) so motion is visible even far away
+    idx = (np.arange(size) * res_m // 2.0).astype(int)
+    checker = ((idx[None, :] + idx[:, None]) % 2) * 2.0 - 1.0
+    shade += 0.06 * checker
+    tile = base[None, None, :] * shade[:, :, None]
+    dry_color = np.array([70.0, 150.0, 160.0])
+    mix = np.clip(dry * 0.9, 0.0, 0.7)[:, :, None]
+    tile = tile * (1.0 - mix) + dry_color * mix
+    return np.clip(tile, 0, 255).astype(np.uint8)
+
+
+@lru_cache(maxsize=4)
+def ground_texture(seed: int) -> tuple[np.ndarray, tuple[float, float, float]]:
+    """The ground texture image for a seed (built once per process; read-only) and its mean
+    colour (BGR)."""
+    tile = make_grass_tile(seed)
+    texture = _ground_texture(tile, TEXTURE_REACH_TILES)
+    texture.setflags(write=False)
+    mean = tuple(float(v) for v in tile.reshape(-1, 3).mean(axis=0))
+    return texture, mean  # type: ignore[return-value]
+
+
+def _ground_texture(tile: np.ndarray, reach: int) -> np.ndarray:
+    """The tile repeated (2 * reach + 1) times per side, blurred more the farther from the
+    centre tile (where the camera is)."""
+    n = 2 * reach + 1
+    big = np.tile(tile, (n, n, 1))
+    size = big.shape[0]
+    blur1 = cv2.GaussianBlur(big, (0, 0), 1.5)
+    blur2 = cv2.GaussianBlur(big, (0, 0), 4.0)
+    blur3 = cv2.blur(big, (31, 31))
+    c = (size - 1) / 2.0
+    yy, xx = np.mgrid[0:size, 0:size]
+    r = np.hypot(xx - c, yy - c) / size * (n * GROUND_TILE_M)  # m from the centre
+    w1 = np.clip((r - 6.0) / 4.0, 0.0, 1.0)[:, :, None]
+    w2 = np.clip((r - 12.0) / 6.0, 0.0, 1.0)[:, :, None]
+    w3 = np.clip((r - 20.0) / 6.0, 0.0, 1.0)[:, :, None]
+    out = big.astype(np.float32)
+    out = out * (1 - w1) + blur1 * w1
+    out = out * (1 - w2) + blur2 * w2
+    out = out * (1 - w3) + blur3 * w3
+    return np.clip(out, 0, 255).astype(np.uint8)
+
+
+class Background:
+    """Renders sky and ground for one camera model (intrinsics fixed at construction)."""
+
+    def __init__(self, camera: PinholeCamera, seed: int = 0) -> None:
+        self.camera = camera
+        self.texture, self.far_bgr = ground_texture(seed)
+        s = GRID_STEP_PX
+        self.grid_w = math.ceil(camera.width / s)
+        self.grid_h = math.ceil(camera.height / s)
+        us = (np.arange(self.grid_w) + 0.5) * s - 0.5
+        vs = (np.arange(self.grid_h) + 0.5) * s - 0.5
+        uu, vv = np.meshgrid(us, vs)
+        # rays in the camera frame, one per grid point (x right, y down, z forward)
+        self.rays_cam = np.stack(
+            ((uu - camera.cx) / camera.fx, (vv - camera.cy) / camera.fy, np.ones_like(uu)), -1
+        ).reshape(-1, 3)
+
+    def _haze_and_sky(self, pose: CameraPose) -> tuple[np.ndarray, np.ndarray]:
+        """(alpha HxW float32: 1 = sky/haze only, colour HxWx3 uint8) at full resolution."""
+        rays = self.rays_cam @ pose.camera_to_world.T  # ENU directions
+        norm = np.linalg.norm(rays, axis=1)
+        up = rays[:, 2] / norm  # sin(elevation)
+        height = max(float(pose.position_enu[2]), 0.02)
+        down = up < -1e-6
+        dist = np.full(up.shape, np.inf)
+        # horizontal distance to where the ray meets the ground
+        horiz = np.sqrt(np.maximum(1.0 - up**2, 0.0))
+        dist[down] = height * horiz[down] / -up[down]
+        alpha = 1.0 - np.exp(-dist / FOG_DISTANCE_M)
+        t = 1.0 - np.exp(-np.clip(up, 0.0, None) / 0.3)
+        color = SKY_HORIZON_BGR + (SKY_ZENITH_BGR - SKY_HORIZON_BGR) * t[:, None]
+        shape = (self.grid_h, self.grid_w)
+        s = GRID_STEP_PX
+        full = (self.grid_w * s, self.grid_h * s)
+        w, h = self.camera.width, self.camera.height
+        alpha_img = cv2.resize(alpha.reshape(shape).astype(np.float32), full)[:h, :w]
+        color_img = cv2.resize(color.reshape(*shape, 3).astype(np.uint8), full)[:h, :w]
+        return alpha_img, color_img
+
+    def ground_homography(self, pose: CameraPose) -> tuple[np.ndarray, tuple[float, float]]:
+        """Homography texture px -> image px, and the ground origin (m) of texture px (0, 0)."""
+        cam = self.camera
+        r = pose.world_to_camera
+        position = pose.position_enu.copy()
+        position[2] = max(position[2], 0.02)
+        t = -r @ position
+        ground_to_image = cam.matrix @ np.column_stack((r[:, 0], r[:, 1], t))
+        reach = TEXTURE_REACH_TILES * GROUND_TILE_M
+        ox = math.floor(position[0] / GROUND_TILE_M) * GROUND_TILE_M - reach
+        oy = math.floor(position[1] / GROUND_TILE_M) * GROUND_TILE_M + GROUND_TILE_M + reach
+        res = TEXTURE_RES_M
+        texture_to_ground = np.array([[res, 0.0, ox], [0.0, -res, oy], [0.0, 0.0, 1.0]])
+        return ground_to_image @ texture_to_ground, (ox, oy)
+
+    def render(self, pose: CameraPose) -> np.ndarray:
+        """The background image (H x W x 3 BGR uint8) seen from ``pose``."""
+        w = self.camera.width
+        alpha, over = self._haze_and_sky(pose)
+        ground_rows = np.nonzero(alpha.min(axis=1) < 0.995)[0]
+        if ground_rows.size == 0:
+            return over
+        y0, y1 = int(ground_rows[0]), int(ground_rows[-1]) + 1
+        homography, _ = self.ground_homography(pose)
+        shift = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
+        ground = cv2.warpPerspective(
+            self.texture,
+            shift @ homography,
+            (w, y1 - y0),
+            flags=cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=self.far_bgr,
+        )
+        a = alpha[y0:y1]
+        over[y0:y1] = cv2.blendLinear(ground, over[y0:y1], 1.0 - a, a)
+        return over

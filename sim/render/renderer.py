@@ -1,0 +1,117 @@
+"""The camera renderer: background, then every visible object far to near (painter's algorithm).
+
+Pure: the image depends only on the world state and the camera pose. Objects behind the camera,
+too far, or wholly outside the view are culled; those cut by the image border are drawn partly.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from dronewrapper_sim.render.background import Background
+from dronewrapper_sim.render.beacon import draw_beacon, sphere_radius_px
+from dronewrapper_sim.render.camera import (
+    NEAR_PLANE_M,
+    CameraMount,
+    CameraPose,
+    PinholeCamera,
+    camera_pose,
+    project_camera_points,
+)
+from dronewrapper_sim.render.person import draw_person
+from dronewrapper_sim.render.shadow import draw_shadow
+from dronewrapper_sim.render.sprites import SpriteBank, draw_billboard
+from dronewrapper_sim.world.world import World, WorldObject
+
+__all__ = ["MAX_DRAW_DISTANCE_M", "Renderer"]
+
+MAX_DRAW_DISTANCE_M = 150.0
+"""Objects farther than this from the camera are not drawn (they would be < 2 px)."""
+
+
+class Renderer:
+    """Renders the world's cameras.
+
+    Args:
+        world: the world whose objects are drawn (read at every :meth:`render`).
+        camera: the intrinsics of the images produced.
+        sprites_dir: a sprite folder (with ``sprites.json``) to draw people as photo billboards;
+            None draws them procedurally.
+    """
+
+    def __init__(
+        self, world: World, camera: PinholeCamera, sprites_dir: Path | None = None
+    ) -> None:
+        self.world = world
+        self.camera = camera
+        self.background = Background(camera, seed=world.seed)
+        self.sprites = SpriteBank(Path(sprites_dir)) if sprites_dir is not None else None
+
+    def render(
+        self, mount: CameraMount, vehicle_pos_enu: np.ndarray, vehicle_quat_xyzw: np.ndarray
+    ) -> np.ndarray:
+        """The image (H x W x 3 uint8 BGR) of ``mount``'s camera for the vehicle pose (ENU m,
+        quaternion x, y, z, w body FLU -> ENU)."""
+        pose = camera_pose(vehicle_pos_enu, vehicle_quat_xyzw, mount)
+        image = self.background.render(pose)
+        visible = []
+        for obj in self.world.objects:
+            depth = self._depth_if_visible(obj, pose)
+            if depth is not None:
+                visible.append((depth, obj))
+        visible.sort(key=lambda item: -item[0])
+        for _, obj in visible:
+            draw_shadow(image, pose, self.camera, obj)
+        for _, obj in visible:
+            self._draw(image, pose, obj)
+        return image
+
+    def _depth_if_visible(self, obj: WorldObject, pose: CameraPose) -> float | None:
+        """Depth (m) of the object's centre, or None if it cannot appear in the image."""
+        centre = obj.center_enu
+        extent = obj.height_m / 2.0 + 0.3 if obj.kind == "person" else obj.radius_m
+        cam = pose.to_camera(centre)[0]
+        dist = float(np.linalg.norm(cam))
+        if dist > MAX_DRAW_DISTANCE_M or cam[2] < NEAR_PLANE_M - extent:
+            return None
+        if cam[2] > extent:  # wholly in front: cull by the view cone
+            c = self.camera
+            half_w = (c.width / 2.0) / c.fx
+            half_h = (c.height / 2.0) / c.fy
+            margin = extent / cam[2]
+            if (
+                abs(cam[0] / cam[2]) > half_w + margin * 1.5
+                or abs(cam[1] / cam[2]) > half_h + margin * 1.5
+            ):
+                return None
+        return float(cam[2])
+
+    def _draw(self, image: np.ndarray, pose: CameraPose, obj: WorldObject) -> None:
+        if obj.kind == "beacon":
+            cam = pose.to_camera(obj.position)
+            pixels, _ = project_camera_points(cam, self.camera)
+            if not math.isfinite(pixels[0, 0]):
+                return
+            radius = sphere_radius_px(self.camera.fx, obj.radius_m, float(np.linalg.norm(cam)))
+            draw_beacon(image, (pixels[0, 0], pixels[0, 1]), radius, obj.color_bgr)
+        elif self.sprites is not None:
+            pts = pose.to_camera(np.array([obj.position, obj.top_enu]))
+            pixels, _ = project_camera_points(pts, self.camera)
+            if np.all(np.isfinite(pixels)):
+                sprite = self.sprites.choose(obj.sprite, obj.sprite_index)
+                draw_billboard(image, sprite, pixels[0], pixels[1])
+        elif obj.look is not None:
+            draw_person(
+                image,
+                pose,
+                self.camera,
+                obj.position,
+                obj.yaw,
+                obj.height_m,
+                obj.walk_phase,
+                obj.gait,
+                obj.look,
+            )

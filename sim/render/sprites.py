@@ -1,0 +1,117 @@
+"""Photo billboards of people: sprites cut from real photos, scaled to the person's true height.
+
+A sprite folder holds PNG crops and ``sprites.json`` giving, for each file, the full-body person
+box inside the crop (``person_box_xyxy_in_sprite``). At load the person is separated from the
+crop's background once (GrabCut inside the box, feathered), so the billboard shows the person, not
+a rectangle of someone else's street.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+__all__ = ["Sprite", "SpriteBank", "draw_billboard"]
+
+
+@dataclass(frozen=True)
+class Sprite:
+    """A person image with its alpha (0..1) and the person box inside it (px)."""
+
+    name: str
+    bgr: np.ndarray
+    alpha: np.ndarray
+    person_box_xyxy: tuple[int, int, int, int]
+
+
+def _cut_out(bgr: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
+    """Soft alpha of the person inside ``box`` (GrabCut; the whole box if that fails)."""
+    h, w = bgr.shape[:2]
+    x0, y0, x1, y1 = box
+    rect = (max(0, x0), max(0, y0), max(1, min(w, x1) - max(0, x0)), max(1, min(h, y1) - y0))
+    mask = np.zeros((h, w), np.uint8)
+    try:
+        bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
+        cv2.setRNGSeed(0)
+        cv2.grabCut(bgr, mask, rect, bgd, fgd, 4, cv2.GC_INIT_WITH_RECT)
+        fg = np.isin(mask, (cv2.GC_FGD, cv2.GC_PR_FGD)).astype(np.float32)
+    except cv2.error:
+        fg = np.zeros((h, w), np.float32)
+    if fg.sum() < 0.25 * rect[2] * rect[3]:  # GrabCut lost the person: keep the whole box
+        fg = np.zeros((h, w), np.float32)
+        fg[y0:y1, x0:x1] = 1.0
+    fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    return cv2.GaussianBlur(fg, (0, 0), 1.0)
+
+
+class SpriteBank:
+    """All sprites of a folder, loaded once."""
+
+    def __init__(self, folder: Path) -> None:
+        folder = Path(folder)
+        index = folder / "sprites.json"
+        try:
+            entries = json.loads(index.read_text())["sprites"]
+        except (OSError, ValueError, KeyError) as exc:
+            raise ValueError(f"{index}: cannot read the sprite index: {exc}") from exc
+        sprites = []
+        for entry in entries:
+            path = folder / entry["file"]
+            bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
+            if bgr is None:
+                raise ValueError(f"{path}: cannot read the sprite image")
+            box = tuple(int(v) for v in entry["person_box_xyxy_in_sprite"])
+            sprites.append(Sprite(entry["file"], bgr, _cut_out(bgr, box), box))  # type: ignore[arg-type]
+        if not sprites:
+            raise ValueError(f"{index}: no sprites listed")
+        self.sprites = sprites
+        self._by_name = {s.name: s for s in sprites}
+
+    def choose(self, name: str | None, index: int) -> Sprite:
+        """The sprite called ``name``, or the ``index``-th (mod the count) when None."""
+        if name is not None:
+            try:
+                return self._by_name[name]
+            except KeyError:
+                raise KeyError(f"no sprite {name!r} (have {', '.join(self._by_name)})") from None
+        return self.sprites[index % len(self.sprites)]
+
+
+def draw_billboard(
+    image: np.ndarray, sprite: Sprite, foot_px: np.ndarray, head_px: np.ndarray
+) -> None:
+    """Paste ``sprite`` so its person box runs from ``foot_px`` (bottom centre) to ``head_px``
+    (top centre), image px: scaled and turned along the projected body axis (upright in a level
+    frontal view, lying radially in a downward view), alpha-blended, clipped at the borders."""
+    foot = np.asarray(foot_px, dtype=float)
+    axis = np.asarray(head_px, dtype=float) - foot  # image vector foot -> head
+    height_px = float(np.hypot(*axis))
+    x0, y0, x1, y1 = sprite.person_box_xyxy
+    scale = height_px / max(1, y1 - y0)
+    if not math.isfinite(scale) or scale * max(sprite.bgr.shape[:2]) < 2:
+        return
+    up = axis / height_px  # image direction of the sprite's "up" (-y)
+    right = np.array([-up[1], up[0]])  # sprite +x, 90 deg clockwise from up in the image
+    # sprite px (x, y) -> image px: foot + scale * ((x - xc) * right - (y - y1) * up)
+    xc = (x0 + x1) / 2.0
+    lin = scale * np.column_stack((right, -up))
+    offset = foot - lin @ np.array([xc, y1])
+    sh, sw = sprite.bgr.shape[:2]
+    corners = np.array([[0, 0], [sw, 0], [0, sh], [sw, sh]], dtype=float) @ lin.T + offset
+    h, w = image.shape[:2]
+    left, top = max(0, math.floor(corners[:, 0].min())), max(0, math.floor(corners[:, 1].min()))
+    right_px = min(w, math.ceil(corners[:, 0].max()))
+    bottom = min(h, math.ceil(corners[:, 1].max()))
+    if right_px <= left or bottom <= top:
+        return
+    m = np.column_stack((lin, offset - np.array([left, top])))
+    size = (right_px - left, bottom - top)
+    patch = cv2.warpAffine(sprite.bgr, m, size, flags=cv2.INTER_LINEAR)
+    alpha = cv2.warpAffine(sprite.alpha, m, size, flags=cv2.INTER_LINEAR)
+    roi = image[top:bottom, left:right_px]
+    roi[...] = cv2.blendLinear(patch, roi, alpha, 1.0 - alpha)
