@@ -1,0 +1,127 @@
+"""Fly a follow graph in the simulator and record it from ground truth (helper for the tests).
+
+Each flight runs a compose graph through the launcher's Python API on a free loopback router
+with free UDP ports, records vehicle, objects and controller status with FollowMonitor, then
+stops everything. The controller uses ``on_exit: stop`` so a flight ends quickly.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from dronewrapper.runtime.config import load_config
+from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper_compose.launcher import Launcher
+from dronewrapper_controller.config import Config as ControllerConfig
+from dronewrapper_controller.metrics import (
+    FollowSample,
+    FollowSummary,
+    colour_intended_distance,
+    person_intended_distance,
+    summarize,
+)
+from dronewrapper_controller.monitor import FollowMonitor
+from dronewrapper_sim.world.scenario import load_scenario
+from support import REPO, free_port
+
+CONTROLLER_CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
+CENTRED_TOLERANCE = math.radians(10.0)
+DISTANCE_TOLERANCE = 1.5  # m
+PERSON_WIDTH_RATIO = 0.3  # a standing person's box is about 0.3 x their height wide
+
+
+@dataclass
+class Flight:
+    scenario: str
+    samples: list[FollowSample]
+    summary: FollowSummary
+    exit_code: int
+    log: str
+    failures: list[str] = field(default_factory=list)
+
+    def describe(self) -> str:
+        s = self.summary
+        return (
+            f"{self.scenario}: acquire {s.time_to_acquire:.1f} s, centred {s.centred_share:.0%}, "
+            f"seen {s.visible_share:.0%}, distance err mean {s.distance_mean:.2f} m "
+            f"p95 {s.distance_p95:.2f} m (intended {s.intended_distance:.2f} m), within "
+            f"{DISTANCE_TOLERANCE} m {s.distance_share:.0%}, bearing p95 "
+            f"{math.degrees(s.bearing_p95):.1f} deg, {s.samples} samples"
+        )
+
+
+def intended_distance(scenario_name: str) -> tuple[float, float]:
+    """(intended distance m, aim height m) of the controller config for this scenario."""
+    scenario = load_scenario(scenario_name)
+    target = next(o for o in scenario.objects if o.name == "target")
+    cfg = load_config(ControllerConfig, CONTROLLER_CONFIG)
+    cam = scenario.camera
+    hfov = math.radians(cam.hfov_deg)
+    if target.kind == "beacon":
+        d = colour_intended_distance(
+            cfg.follow_color.target_radius, cfg.ref_width, cam.width, hfov, target.radius_m
+        )
+        return d, 0.0
+    height = target.height_m or 1.75
+    d = person_intended_distance(
+        cfg.follow_person.area_ratio,
+        cam.width,
+        cam.height,
+        hfov,
+        height,
+        PERSON_WIDTH_RATIO * height,
+    )
+    return d, height / 2.0
+
+
+def fly(
+    graph: str,
+    scenario: str,
+    seconds: float,
+    tmp_path: Path,
+    variables: dict[str, str] | None = None,
+) -> Flight:
+    """Run ``compose/<graph>.yaml`` on ``scenario`` and record ``seconds`` of flight."""
+    goal, aim = intended_distance(scenario)
+    router = f"tcp/127.0.0.1:{free_port()}"
+    values = {
+        "scenario": scenario,
+        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
+        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        "on_exit": "stop",
+        **(variables or {}),
+    }
+    log_path = tmp_path / f"{graph}-{scenario}.log"
+    with open(log_path, "w") as log_file:
+        launcher = Launcher.from_file(
+            REPO / "compose" / f"{graph}.yaml", router=router, variables=values, out=log_file
+        )
+        monitor = session = None
+        try:
+            launcher.start()
+            session = open_session(ZenohOptions(mode="client", connect=[router]))
+            monitor = FollowMonitor(session, launcher.ns, aim_height=aim).start()
+            deadline = time.monotonic() + seconds
+            while time.monotonic() < deadline:
+                dead = [c.name for c in launcher.children if c.poll() is not None]
+                assert not dead, f"{dead} died; log {log_path}:\n{log_path.read_text()[-4000:]}"
+                time.sleep(0.2)
+        finally:
+            if monitor is not None:
+                monitor.close()
+            if session is not None:
+                session.close()
+            code = launcher.stop()
+    samples = list(monitor.samples) if monitor is not None else []
+    summary = summarize(
+        samples,
+        intended_distance=goal,
+        centred_tolerance=CENTRED_TOLERANCE,
+        distance_tolerance=DISTANCE_TOLERANCE,
+    )
+    return Flight(scenario, samples, summary, code, log_path.read_text(), list(launcher.failures))
