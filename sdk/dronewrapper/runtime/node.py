@@ -63,7 +63,8 @@ def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Sessi
         try:
             return zenoh.open(zenoh_config(options))
         except zenoh.ZError as exc:
-            if time.monotonic() >= deadline:
+            # a router that cannot listen fails at once; a client/peer waits for its router
+            if options.mode == "router" or time.monotonic() >= deadline:
                 where = ", ".join(options.connect or options.listen)
                 raise ConnectionError(
                     f"cannot open a zenoh {options.mode} session on {where}: {exc}"
