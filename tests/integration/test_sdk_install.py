@@ -1,0 +1,78 @@
+"""The SDK installs alone in a fresh virtual environment and pulls only its light dependencies."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from support import REPO, free_endpoint
+
+pytestmark = pytest.mark.integration
+
+LIGHT = {"dronewrapper", "eclipse-zenoh", "msgspec", "numpy"}
+BASE = {"pip", "setuptools", "wheel"}
+
+PROBE = textwrap.dedent(
+    """
+    import json, sys, importlib.metadata as md
+    from dronewrapper import DroneWrapper, NotConnected, list_drones
+    from drone_wrapper import DroneWrapper as PaperName
+    assert PaperName is DroneWrapper
+    try:
+        DroneWrapper("drone", sys.argv[1], timeout=0.5)
+    except NotConnected as exc:
+        error = str(exc)
+    heavy = [m for m in ("cv2", "pymavlink", "onnxruntime", "yaml", "matplotlib")
+             if m in sys.modules]
+    dists = sorted(d.metadata["Name"].lower() for d in md.distributions())
+    print(json.dumps({"error": error, "heavy_imported": heavy, "dists": dists}))
+    """
+)
+
+
+def test_sdk_installs_alone_with_light_dependencies(tmp_path):
+    source = tmp_path / "sdk"
+    shutil.copytree(
+        REPO / "sdk",
+        source,
+        ignore=shutil.ignore_patterns("__pycache__", "build", "*.egg-info", "dist"),
+    )
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=120)
+    python = venv / "bin" / "python"
+    install = subprocess.run(
+        [str(python), "-m", "pip", "install", "-q", "--disable-pip-version-check", str(source)],
+        capture_output=True,
+        text=True,
+        timeout=240,
+    )
+    assert install.returncode == 0, install.stdout + install.stderr
+
+    probe = subprocess.run(
+        [str(python), "-c", PROBE, free_endpoint()],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,  # not the repository: import the installed copy
+    )
+    assert probe.returncode == 0, probe.stderr
+    report = json.loads(probe.stdout.strip().splitlines()[-1])
+    assert set(report["dists"]) - BASE == LIGHT, report["dists"]
+    for heavy in ("opencv-python-headless", "opencv-python", "pymavlink", "onnxruntime"):
+        assert heavy not in report["dists"]
+    assert report["heavy_imported"] == []
+    assert "cannot reach the Zenoh router" in report["error"]
+
+    cli = subprocess.run(
+        [str(venv / "bin" / "dronewrapper"), "up", "compose/sim_iris.yaml"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
+    )
+    assert cli.returncode == 2 and "needs the on-board stack" in cli.stderr
