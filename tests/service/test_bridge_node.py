@@ -1,0 +1,342 @@
+"""The bridge's logic in-process, over real UDP MAVLink and a real Zenoh router.
+
+The autopilot is a small pymavlink peer in this file (a scripted PX4: double DO_SET_MODE acks,
+arming refusals with STATUSTEXT, int32 params as raw bits), so each rule of the contract can be
+checked exactly on the wire. Flights against the simulator are in tests/integration.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+
+os.environ.setdefault("MAVLINK20", "1")
+
+from pymavlink import mavutil
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.mavros import (
+    FRAME_BODY_NED,
+    MASK_POSITION,
+    MASK_VELOCITY,
+    CommandBool,
+    CommandTOL,
+    ParamGet,
+    ParamSet,
+    ParamValue,
+    PositionTarget,
+    SetMode,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_mavlink.node import Bridge, Config
+from support import client_node, free_port, wait_for
+
+OFFBOARD = 6 << 16
+POSCTL = 3 << 16
+AUTO_LAND = (4 << 16) | (6 << 24)
+AUTO_LOITER = (4 << 16) | (3 << 24)
+ARMED = 128
+
+
+class FakePX4:
+    """A scripted PX4 on a real UDP socket: sends telemetry, answers commands, logs traffic."""
+
+    def __init__(self, bridge_port: int) -> None:
+        self.conn = mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{bridge_port}", source_system=1, source_component=1
+        )
+        self.custom_mode = AUTO_LOITER
+        self.armed = False
+        self.landed_state = 1
+        self.position_ned = (0.0, 0.0, 0.0)
+        self.yaw_ned = math.pi / 2  # facing east
+        self.refuse_arm = False
+        self.heartbeats = True
+        self.setpoints: list[tuple[float, object]] = []
+        self.commands: list[tuple[float, object]] = []
+        self.gcs_heartbeats = 0
+        self.params = {"COM_OF_LOSS_T": (1.0, 9), "COM_RC_IN_MODE": (1, 6)}
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._threads = [
+            threading.Thread(target=self._send_loop, daemon=True),
+            threading.Thread(target=self._recv_loop, daemon=True),
+        ]
+        for t in self._threads:
+            t.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        for t in self._threads:
+            t.join(2)
+        self.conn.close()
+
+    def send(self, name: str, *args, **kw) -> None:
+        with self._lock:
+            getattr(self.conn.mav, f"{name}_send")(*args, **kw)
+
+    def _send_loop(self) -> None:
+        tick = 0
+        while not self._stop.wait(0.02):  # 50 Hz
+            tick += 1
+            n, e, d = self.position_ned
+            self.send("local_position_ned", tick * 20, n, e, d, 0.0, 0.0, 0.0)
+            self.send("attitude", tick * 20, 0.0, 0.0, self.yaw_ned, 0.0, 0.0, 0.0)
+            if tick % 10 == 0:
+                self.send("extended_sys_state", 0, self.landed_state)
+                self.send("sys_status", 0, 0, 0, 0, 12100, 500, 80, 0, 0, 0, 0, 0, 0)
+            if tick % 10 == 0 and self.heartbeats:  # 5 Hz keeps tests short
+                base = 29 | (ARMED if self.armed else 0)
+                self.send("heartbeat", 2, 12, base, self.custom_mode, 4)
+
+    def _recv_loop(self) -> None:
+        while not self._stop.is_set():
+            msg = self.conn.recv_match(blocking=True, timeout=0.1)
+            if msg is None:
+                continue
+            now = time.monotonic()
+            kind = msg.get_type()
+            if kind == "HEARTBEAT" and msg.type == 6:
+                self.gcs_heartbeats += 1
+            elif kind == "SET_POSITION_TARGET_LOCAL_NED":
+                self.setpoints.append((now, msg))
+            elif kind == "COMMAND_LONG":
+                self.commands.append((now, msg))
+                self._on_command(msg)
+            elif kind == "PARAM_REQUEST_READ":
+                self._param_value(msg.param_id)
+            elif kind == "PARAM_SET":
+                _value, ptype = self.params[msg.param_id]
+                self.params[msg.param_id] = (
+                    _bits_to_int(msg.param_value) if ptype == 6 else msg.param_value,
+                    ptype,
+                )
+                self._param_value(msg.param_id)
+
+    def _param_value(self, name: str) -> None:
+        value, ptype = self.params[name]
+        wire = _int_to_bits(int(value)) if ptype == 6 else float(value)
+        self.send("param_value", name.encode(), wire, ptype, len(self.params), 0)
+
+    def _on_command(self, msg) -> None:
+        if msg.command == 176:  # DO_SET_MODE, acknowledged twice like PX4
+            self.custom_mode = (int(msg.param2) << 16) | (int(msg.param3) << 24)
+            self.send("command_ack", 176, 0)
+            self.send("command_ack", 176, 0)
+        elif msg.command == 400:
+            if self.refuse_arm:
+                self.send("command_ack", 400, 1)
+                self.send("statustext", 2, b"Arming denied: Resolve system health failures first\t")
+            else:
+                self.armed = msg.param1 == 1
+                self.send("command_ack", 400, 0)
+        elif msg.command == 21:
+            self.custom_mode = AUTO_LAND
+            self.send("command_ack", 21, 0)
+        elif msg.command == 511:
+            self.send("command_ack", 511, 0)
+        else:
+            self.send("command_ack", msg.command, 3)
+
+    def commands_named(self, command: int) -> list:
+        return [m for _, m in list(self.commands) if m.command == command]
+
+
+def _int_to_bits(value: int) -> float:
+    import struct
+
+    return struct.unpack("<f", struct.pack("<i", value))[0]
+
+
+def _bits_to_int(value: float) -> int:
+    import struct
+
+    return struct.unpack("<i", struct.pack("<f", value))[0]
+
+
+@pytest.fixture
+def rig(router) -> Iterator[tuple[Bridge, FakePX4, object]]:
+    port = free_port(2)
+    config = Config(
+        connection=f"udpin:127.0.0.1:{port}",
+        commander_lost_timeout=2.0,
+        command_ack_timeout=0.3,
+    )
+    bridge_node = client_node(router, name="bridge_mavlink")
+    bridge = Bridge(bridge_node, config)
+    threads = bridge.start()
+    fake = FakePX4(port)
+    user = client_node(router, name="user")
+    try:
+        wait_for(lambda: bridge.connected, 10, what="bridge connected to the fake PX4")
+        yield bridge, fake, user
+    finally:
+        user.close()
+        bridge_node.stop()
+        for t in threads:
+            t.join(3)
+        bridge.link.close()
+        bridge_node.close()
+        fake.close()
+
+
+def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float = 0.0):
+    return PositionTarget(
+        coordinate_frame=FRAME_BODY_NED,
+        type_mask=MASK_VELOCITY,
+        velocity=Vector3(x=vx, y=vy, z=vz),
+        yaw_rate=yaw_rate,
+    )
+
+
+def stream(pub, target, seconds: float, hz: float = 20.0) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        pub.put(target)
+        time.sleep(1.0 / hz)
+
+
+def test_telemetry_in_enu_and_state(rig):
+    _bridge, fake, user = rig
+    fake.position_ned = (5.0, 2.0, -3.0)
+    pose = user.latest(registry.LOCAL_POSE)
+    state = user.latest(registry.STATE)
+    battery = user.latest(registry.BATTERY)
+    texts = user.latest(registry.STATUSTEXT)
+    p = wait_for(lambda: pose.value if pose.value and pose.value.pose.position.z > 2 else None, 10)
+    assert (p.pose.position.x, p.pose.position.y, p.pose.position.z) == (2.0, 5.0, 3.0)
+    s = state.wait(5)
+    assert s.connected and s.autopilot == "px4" and s.mode == "AUTO.LOITER"
+    assert math.isclose(battery.wait(5).percentage, 0.8)
+    fake.send("statustext", 6, b"Takeoff detected\t")
+    assert wait_for(lambda: texts.value and texts.value.text == "Takeoff detected", 5)
+    assert wait_for(lambda: fake.gcs_heartbeats >= 1, 3)  # so PX4 sends STATUSTEXT at all
+    rates = wait_for(lambda: fake.commands_named(511), 5, what="SET_MESSAGE_INTERVAL")
+    assert {int(m.param1) for m in rates} >= {32, 31}  # LOCAL_POSITION_NED, ATTITUDE_QUATERNION
+
+
+def test_set_mode_double_ack_and_unknown_mode(rig):
+    bridge, _fake, user = rig
+    for mode in ("OFFBOARD", "AUTO.LOITER", "OFFBOARD"):
+        reply = user.call(registry.SET_MODE, SetMode(custom_mode=mode), timeout=10)
+        assert reply.mode_sent and reply.result == 0, reply
+    assert bridge.acks.duplicates >= 2  # PX4's second acks were recognised and dropped
+    with pytest.raises(ServiceError, match="valid modes"):
+        user.call(registry.SET_MODE, SetMode(custom_mode="WARP9"), timeout=5)
+
+
+def test_offboard_request_primes_the_stream_first(rig):
+    _bridge, fake, user = rig
+    reply = user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), timeout=10)
+    assert reply.mode_sent
+    (sent_at, _), *_ = [(t, m) for t, m in fake.commands if m.command == 176]
+    before = [t for t, _ in fake.setpoints if t < sent_at]
+    assert before and sent_at - before[0] > 1.0, "must stream > 1 s before OFFBOARD"
+    assert len(before) >= 20  # >= 20 Hz during that second
+    assert all(m.type_mask == MASK_POSITION for _, m in fake.setpoints[:5])  # a hold
+
+
+def test_arming_refusal_carries_the_reason(rig):
+    _bridge, fake, user = rig
+    fake.refuse_arm = True
+    reply = user.call(registry.ARMING, CommandBool(value=True), timeout=10)
+    assert not reply.success and reply.result == 1
+    assert "TEMPORARILY_REJECTED" in reply.message and "Arming denied" in reply.message
+    fake.refuse_arm = False
+    assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
+
+
+def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
+    bridge, fake, user = rig
+    fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
+    fake.position_ned = (1.0, 1.0, -5.0)
+    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD" and bridge.failsafe.airborne, 5)
+    pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
+    stream(pub, velocity(vx=1.0), 1.5)
+    stopped = time.monotonic()
+    fwd = [m for t, m in fake.setpoints if stopped - 1.0 < t < stopped]
+    assert len(fwd) >= 20, f"only {len(fwd)} setpoints in the last second"
+    last = fwd[-1]
+    assert last.coordinate_frame == 1 and last.type_mask == MASK_VELOCITY
+    assert math.isclose(last.vy, 1.0, abs_tol=1e-3) and abs(last.vx) < 1e-3  # east = forward
+    # within 0.6 s of the last setpoint the bridge holds position where it is
+    wait_for(lambda: bridge.failsafe.state == "hold", 2)
+    held = [(t, m) for t, m in fake.setpoints if m.type_mask == MASK_POSITION and t > stopped]
+    assert held and held[0][0] - stopped < 0.6
+    m = held[0][1]
+    assert (m.x, m.y, m.z) == (1.0, 1.0, -5.0)
+    # commander lost (2 s in this config) while airborne -> NAV_LAND, exactly once
+    wait_for(lambda: fake.commands_named(21), 5, what="NAV_LAND")
+    assert bridge.failsafe.state == "land"
+    state = user.latest(registry.STATE)
+    assert wait_for(lambda: state.value and state.value.failsafe == "land", 3)
+    time.sleep(1.0)
+    assert len(fake.commands_named(21)) == 1
+    assert not fake.commands_named(176)  # never re-requested OFFBOARD
+
+
+def test_bad_setpoints_and_bytes_change_nothing(rig):
+    bridge, fake, user = rig
+    pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
+    before = len(fake.setpoints)
+    for bad in (velocity(vx=math.nan), velocity(vz=math.inf), velocity(vx=99.0)):
+        pub.put(bad)
+    user.session.put(registry.SETPOINT_RAW_LOCAL.key("drone"), b"\x00garbage")
+    wait_for(lambda: bridge.rejected_setpoints == 3, 5)
+    wait_for(lambda: sum(bridge.node.decode_errors.values()) >= 1, 5)
+    time.sleep(0.3)
+    assert len(fake.setpoints) == before  # not in OFFBOARD, nothing fresh: nothing sent
+    with pytest.raises(ServiceError, match="altitude"):
+        user.call(registry.TAKEOFF, CommandTOL(altitude=math.inf), timeout=5)
+    replies = list(user.session.get(registry.ARMING.key("drone"), payload=b"\xc1", timeout=5))
+    assert len(replies) == 1 and replies[0].err is not None
+    assert b"bad CommandBool request" in replies[0].err.payload.to_bytes()
+    assert not fake.commands_named(400)  # nothing was sent to the autopilot
+
+
+def test_pilot_takeover_not_fought(rig):
+    bridge, fake, user = rig
+    fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
+    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD", 5)
+    texts = user.latest(registry.STATUSTEXT)
+    pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
+    stream(pub, velocity(vx=0.5), 0.5)
+    fake.custom_mode = POSCTL  # the pilot switched modes on the RC
+    wait_for(lambda: texts.value and "not switching back" in texts.value.text, 5)
+    time.sleep(3.0)  # longer than commander_lost_timeout
+    assert not fake.commands_named(176) and not fake.commands_named(21)
+    assert fake.custom_mode == POSCTL
+
+
+def test_heartbeat_loss_reports_disconnected_then_recovers(rig):
+    _bridge, fake, user = rig
+    state = user.latest(registry.STATE)
+    fake.heartbeats = False
+    s = wait_for(lambda: state.value if state.value and not state.value.connected else None, 6)
+    assert not s.connected
+    with pytest.raises(ServiceError, match="not connected"):
+        user.call(registry.ARMING, CommandBool(value=True), timeout=5)
+    fake.heartbeats = True
+    wait_for(lambda: state.value and state.value.connected, 5)
+
+
+def test_params_int32_bits_and_real(rig):
+    _bridge, fake, user = rig
+    got = user.call(registry.PARAM_GET, ParamGet(param_id="COM_RC_IN_MODE"), timeout=10)
+    assert got.success and got.value.integer == 1
+    got = user.call(registry.PARAM_GET, ParamGet(param_id="COM_OF_LOSS_T"), timeout=10)
+    assert got.success and math.isclose(got.value.real, 1.0)
+    put = user.call(
+        registry.PARAM_SET,
+        ParamSet(param_id="COM_RC_IN_MODE", value=ParamValue(integer=4)),
+        timeout=10,
+    )
+    assert put.success and put.value.integer == 4 and fake.params["COM_RC_IN_MODE"][0] == 4
+    with pytest.raises(ServiceError, match="param_id"):
+        user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=5)
