@@ -1,0 +1,5 @@
+"""``python -m dronewrapper_sim``: the simulated aircraft (see dronewrapper_sim.cli)."""
+
+from dronewrapper_sim.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,100 @@
+"""``dronewrapper sim``: the simulated PX4-like aircraft and its world.
+
+A PX4-like autopilot speaking MAVLink 2 on UDP like PX4 SITL (onboard link to 14540+N from
+14580+N, GCS link to 14550 from 18570+N, system id 1+N), over quadrotor physics, with the
+scenario's world and the frontal and ventral cameras published on Zenoh.
+
+    dronewrapper sim --scenario beacon_static
+    dronewrapper sim --instance 1 --no-cameras          # a second drone: drone1, sysid 2
+    dronewrapper sim --udp-onboard 15000:0 --udp-gcs off  # test ports (LOCAL 0 = ephemeral)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+from collections.abc import Sequence
+
+from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
+from dronewrapper.runtime import Node
+from dronewrapper.runtime.config import ConfigError
+from dronewrapper.runtime.service import run_service
+from dronewrapper_sim.config import SimConfig
+
+log = logging.getLogger("sim")
+
+
+def add_args(parser: argparse.ArgumentParser) -> None:
+    """The simulator's own flags (each one sets a SimConfig field)."""
+    group = parser.add_argument_group("simulator")
+    group.add_argument("--scenario", help="scenario name or YAML file (default beacon_static)")
+    group.add_argument("--instance", type=int, help="vehicle instance N (ports, sysid, ns)")
+    group.add_argument("--seed", type=int, help="random seed (default: the scenario's)")
+    group.add_argument("--no-cameras", action="store_true", help="do not render cameras")
+    group.add_argument("--camera-rate", type=float, metavar="HZ", help="camera rate")
+    group.add_argument("--width", type=int, help="image width, px")
+    group.add_argument("--height", type=int, help="image height, px")
+    group.add_argument("--sprites", metavar="DIR", help="person sprite folder (billboards)")
+    group.add_argument(
+        "--udp-onboard", metavar="[HOST:]PORT[:LOCAL]", help="onboard link, or 'off'"
+    )
+    group.add_argument("--udp-gcs", metavar="[HOST:]PORT[:LOCAL]", help="GCS link, or 'off'")
+    group.add_argument("--realtime-factor", type=float, help="sim seconds per wall second")
+    group.add_argument("--compressed", action="store_true", help="always publish JPEG too")
+
+
+def configure(args: argparse.Namespace, overrides: list[str]) -> None:
+    """Turn the simulator flags into config overrides; set the namespace of an instance."""
+    flags = {
+        "scenario": args.scenario,
+        "instance": args.instance,
+        "seed": args.seed,
+        "camera_rate_hz": args.camera_rate,
+        "width": args.width,
+        "height": args.height,
+        "sprites": args.sprites,
+        "udp_onboard": args.udp_onboard,
+        "udp_gcs": args.udp_gcs,
+        "realtime_factor": args.realtime_factor,
+    }
+    for key, value in flags.items():
+        if value is not None:
+            overrides.append(f"{key}={json.dumps(value)}")  # JSON is valid YAML: no surprises
+    if args.no_cameras:
+        overrides.append("cameras=false")
+    if args.compressed:
+        overrides.append("compressed=true")
+    if args.instance and args.namespace == DEFAULT_NAMESPACE:
+        args.namespace = f"drone{args.instance}"
+
+
+def run(node: Node, config: SimConfig) -> int:
+    """Run the simulator on ``node`` until SIGINT/SIGTERM."""
+    from dronewrapper_sim.runner import SimRunner
+    from dronewrapper_sim.world.scenario import load_scenario
+
+    try:
+        scenario = load_scenario(config.scenario)
+    except ConfigError as exc:
+        log.error("%s", exc)
+        return 2
+    try:
+        runner = SimRunner(config, scenario, node)
+    except OSError as exc:
+        log.error("%s", exc)
+        return 1
+    try:
+        log.info("ready: %s", runner.describe())
+        node.announce()
+        runner.run(node.stop_event)
+    finally:
+        node.stop()
+        runner.close()
+    log.info("stopped after %.1f s simulated", runner.autopilot.time_s)
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``dronewrapper sim`` and ``python -m dronewrapper_sim``."""
+    return run_service("sim", __doc__, SimConfig, run, argv, add_args=add_args, configure=configure)

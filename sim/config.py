@@ -1,0 +1,68 @@
+"""The simulator's configuration: a strict schema (YAML/JSON file, ``--set``, CLI flags)."""
+
+from __future__ import annotations
+
+import msgspec
+
+
+class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
+    """Settings of ``dronewrapper sim`` (CLI flags in brackets).
+
+    Attributes:
+        scenario: scenario name or YAML path [--scenario].
+        instance: vehicle instance N like PX4's ``-i``: ports + N, system id 1 + N,
+            namespace ``drone{N}`` when N > 0 [--instance].
+        seed: random seed; None = the scenario's [--seed].
+        cameras: render and publish the cameras [--no-cameras turns off].
+        camera_rate_hz: camera rate (Hz); None = the scenario's (30) [--camera-rate].
+        width, height: image size (px); None = the scenario's (640x480) [--width, --height].
+        sprites: folder of person sprites (photo billboards); None = procedural people
+            [--sprites].
+        udp_onboard: onboard/API link ``[HOST:]PORT[:LOCAL]`` or ``off``; "" = PX4's
+            127.0.0.1:14540+N from 14580+N [--udp-onboard].
+        udp_gcs: GCS link, same form; "" = 127.0.0.1:14550 from 18570+N [--udp-gcs].
+        realtime_factor: simulated seconds per wall-clock second [--realtime-factor].
+        physics_rate_hz: physics and autopilot step rate (Hz).
+        ground_truth_rate_hz: rate of ``{ns}/sim/ground_truth`` (Hz).
+        object_pose_rate_hz: rate of ``sim/objects/{name}/pose`` (Hz).
+        compressed: always publish JPEG images too (else only while someone subscribes).
+        jpeg_quality: JPEG quality 1..100.
+        render_unwatched: render and publish raw images even when nobody subscribes.
+        params: PX4 parameter overrides at boot (name: value).
+    """
+
+    scenario: str = "beacon_static"
+    instance: int = 0
+    seed: int | None = None
+    cameras: bool = True
+    camera_rate_hz: float | None = None
+    width: int | None = None
+    height: int | None = None
+    sprites: str | None = None
+    udp_onboard: str = ""
+    udp_gcs: str = ""
+    realtime_factor: float = 1.0
+    physics_rate_hz: float = 250.0
+    ground_truth_rate_hz: float = 50.0
+    object_pose_rate_hz: float = 20.0
+    compressed: bool = False
+    jpeg_quality: int = 80
+    render_unwatched: bool = False
+    params: dict[str, float] = {}
+
+    def __post_init__(self) -> None:
+        if self.instance < 0:
+            raise ValueError(f"instance must be >= 0, got {self.instance}")
+        for name in ("realtime_factor", "physics_rate_hz", "ground_truth_rate_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if not self.object_pose_rate_hz > 0:
+            raise ValueError(f"object_pose_rate_hz must be > 0, got {self.object_pose_rate_hz}")
+        if self.camera_rate_hz is not None and not self.camera_rate_hz > 0:
+            raise ValueError(f"camera_rate_hz must be > 0, got {self.camera_rate_hz}")
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if value is not None and value < 16:
+                raise ValueError(f"{name} must be >= 16 px, got {value}")
+        if not 1 <= self.jpeg_quality <= 100:
+            raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")

@@ -1,0 +1,462 @@
+"""PX4's commander and navigator, as seen from MAVLink: modes, arming, take-off, landing,
+auto-disarm and the offboard-loss failsafe. A pure state machine: time comes in as ``now``
+(seconds, any monotonic origin) and the true vehicle state as a :class:`QuadState`.
+
+Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
+- a mode change while disarmed is always accepted; while armed the mode must be able to run
+  (OFFBOARD needs a fresh setpoint stream, manual modes need RC, which this vehicle lacks);
+- arming is refused (TEMPORARILY_REJECTED, "Arming denied: Resolve system health failures
+  first") when the intended mode cannot run: OFFBOARD with no setpoint stream, manual modes,
+  MISSION (no mission), LAND and RTL;
+- auto-disarm COM_DISARM_PRFLT s after arming without take-off, COM_DISARM_LAND s after
+  "Landing detected" (LNDMC_TRIG_TIME s of ground contact);
+- NAV_TAKEOFF -> AUTO.TAKEOFF to MIS_TAKEOFF_ALT above home (or an AMSL altitude), climbing at
+  MPC_TKO_SPEED, then AUTO.LOITER; NAV_LAND -> AUTO.LAND with PX4's descent-speed schedule;
+- OFFBOARD: the signal is lost COM_OF_LOSS_T s after the last setpoint -> "Failsafe
+  activated" and the fallback (COM_OBL_RC_ACT, and NAV_RCL_ACT when that needs RC): RTL by
+  default; not latched: the vehicle is back in OFFBOARD as soon as setpoints resume;
+- after a disarm, a LAND or RTL intention reverts to the mode intended before it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+
+from dronewrapper_sim.dynamics import QuadState
+from dronewrapper_sim.px4.flight_control import NAN, Target
+from dronewrapper_sim.px4.modes import Mode
+from dronewrapper_sim.px4.offboard import OffboardSetpoint
+from dronewrapper_sim.px4.params import ParamStore
+
+# MAV_RESULT
+ACCEPTED = 0
+TEMPORARILY_REJECTED = 1
+DENIED = 2
+UNSUPPORTED = 3
+FAILED = 4
+
+# MAV_SEVERITY
+CRITICAL = 2
+WARNING = 4
+INFO = 6
+
+ARM_DENIED = "Arming denied: Resolve system health failures first"
+FORCE_MAGIC = 21196  # COMPONENT_ARM_DISARM param2 that forces arm/disarm
+
+
+class LandedState(IntEnum):
+    """MAV_LANDED_STATE."""
+
+    UNDEFINED = 0
+    ON_GROUND = 1
+    IN_AIR = 2
+    TAKEOFF = 3
+    LANDING = 4
+
+
+# PX4's human names of the navigation states (used in its messages)
+_NAV_NAMES = {
+    Mode.MANUAL: "Manual",
+    Mode.ALTCTL: "Altitude",
+    Mode.POSCTL: "Position",
+    Mode.ACRO: "Acro",
+    Mode.STABILIZED: "Stabilized",
+    Mode.OFFBOARD: "Offboard",
+    Mode.TAKEOFF: "Takeoff",
+    Mode.LOITER: "Hold",
+    Mode.MISSION: "Mission",
+    Mode.RTL: "Return",
+    Mode.LAND: "Land",
+    Mode.FOLLOWME: "Follow Target",
+    Mode.PRECLAND: "Precision Land",
+}
+
+# COM_OBL_RC_ACT -> mode (None: needs RC -> fall back to NAV_RCL_ACT); NAV_RCL_ACT -> mode
+_OBL_ACTIONS = {0: None, 1: None, 2: None, 3: Mode.RTL, 4: Mode.LAND, 5: Mode.LOITER}
+_RCL_ACTIONS = {0: Mode.LOITER, 1: Mode.LOITER, 2: Mode.RTL, 3: Mode.LAND}
+
+
+@dataclass(frozen=True)
+class StatusText:
+    """A message for the ground station (MAV_SEVERITY, text as PX4 writes it)."""
+
+    severity: int
+    text: str
+
+
+class Commander:
+    """Modes, arming, navigation and failsafes of one vehicle.
+
+    Args:
+        params: the vehicle's parameters (read live, so PARAM_SET takes effect).
+        start: the vehicle's state at boot (home and the initial hold point).
+    """
+
+    def __init__(self, params: ParamStore, start: QuadState) -> None:
+        self.params = params
+        self.armed = False
+        self.armed_at = -math.inf
+        self.user_mode = Mode.LOITER
+        self.nav_mode = Mode.LOITER
+        self._mode_before_auto: Mode | None = None
+        self.failsafe = False
+        self.landed = True
+        self.landed_at = -math.inf
+        self._contact_since: float | None = None
+        self.taken_off_since_arming = False
+        self.takeoff_started_at: float | None = None
+        self.setpoint: OffboardSetpoint | None = None
+        self.setpoint_at = -math.inf
+        self.home = (start.x, start.y, start.z)
+        self.home_yaw = start.yaw
+        self.texts: list[StatusText] = []
+        self.target = Target(idle=True)
+        self._last_reject_text = -math.inf
+        # navigator
+        self._hold = (start.x, start.y, start.z, start.yaw)
+        self._takeoff_z = start.z
+        self._rtl_phase = ""
+        self._rtl_z = 0.0
+        self._rtl_wait_since = 0.0
+
+    # ---- helpers ----
+
+    def _say(self, severity: int, text: str) -> None:
+        self.texts.append(StatusText(severity, text))
+
+    def drain_texts(self) -> list[StatusText]:
+        """The status texts produced since the last call."""
+        out, self.texts = self.texts, []
+        return out
+
+    def offboard_available(self, now: float) -> bool:
+        """A setpoint arrived within COM_OF_LOSS_T seconds."""
+        return now - self.setpoint_at <= self.params["COM_OF_LOSS_T"]
+
+    def _can_run(self, mode: Mode, now: float) -> bool:
+        if mode.needs_rc or mode in (Mode.MISSION, Mode.FOLLOWME, Mode.PRECLAND):
+            return False
+        return mode is not Mode.OFFBOARD or self.offboard_available(now)
+
+    def _reject_mode_text(self, mode: Mode, now: float) -> None:
+        if now - self._last_reject_text > 1.0:
+            self._last_reject_text = now
+            self._say(CRITICAL, f"Switching to {_NAV_NAMES[mode]} is currently not available")
+
+    @property
+    def landed_state(self) -> LandedState:
+        """MAV_LANDED_STATE for EXTENDED_SYS_STATE."""
+        if self.landed:
+            return LandedState.ON_GROUND
+        if self.nav_mode is Mode.TAKEOFF:
+            return LandedState.TAKEOFF
+        if self.nav_mode is Mode.LAND or (self.nav_mode is Mode.RTL and self._rtl_phase == "land"):
+            return LandedState.LANDING
+        return LandedState.IN_AIR
+
+    # ---- commands (return a MAV_RESULT) ----
+
+    def arm(self, now: float, state: QuadState, force: bool = False) -> int:
+        """COMPONENT_ARM_DISARM param1 = 1."""
+        if self.armed:
+            return ACCEPTED
+        if not force and not self._can_run(self.user_mode, now):
+            self._say(CRITICAL, ARM_DENIED)
+            return TEMPORARILY_REJECTED
+        if not force and self.user_mode in (Mode.LAND, Mode.RTL):
+            self._say(CRITICAL, ARM_DENIED)
+            return TEMPORARILY_REJECTED
+        self.armed = True
+        self.armed_at = now
+        self.landed_at = now
+        self.taken_off_since_arming = False
+        self.takeoff_started_at = None
+        self.home = (state.x, state.y, state.z)
+        self.home_yaw = state.yaw
+        self._say(INFO, "Armed by external command")
+        self._enter(self.nav_mode, state, now)
+        return ACCEPTED
+
+    def disarm(self, now: float, state: QuadState, force: bool = False, reason: str = "") -> int:
+        """COMPONENT_ARM_DISARM param1 = 0 (refused in the air unless forced)."""
+        if not self.armed:
+            return ACCEPTED
+        if not self.landed and not force:
+            self._say(CRITICAL, "Disarming denied: not landed")
+            return TEMPORARILY_REJECTED
+        self.armed = False
+        self.failsafe = False
+        self._say(INFO, reason or "Disarmed by external command")
+        if self.user_mode in (Mode.LAND, Mode.RTL) and self._mode_before_auto is not None:
+            self.user_mode = self._mode_before_auto
+        self._mode_before_auto = None
+        self._enter(self.user_mode, state, now)
+        return ACCEPTED
+
+    def set_mode(self, mode: Mode, now: float, state: QuadState) -> int:
+        """DO_SET_MODE / SET_MODE: change the user-intended mode."""
+        if self.armed and not self._can_run(mode, now):
+            self._reject_mode_text(mode, now)
+            return TEMPORARILY_REJECTED
+        if mode in (Mode.LAND, Mode.RTL) and self.user_mode not in (Mode.LAND, Mode.RTL):
+            self._mode_before_auto = self.user_mode
+        elif mode not in (Mode.LAND, Mode.RTL):
+            self._mode_before_auto = None
+        self.user_mode = mode
+        self.failsafe = False
+        if mode is Mode.TAKEOFF:
+            self._takeoff_z = self.home[2] + self.params["MIS_TAKEOFF_ALT"]
+        self._enter(mode, state, now)
+        return ACCEPTED
+
+    def takeoff(self, now: float, state: QuadState, altitude_above_home: float = NAN) -> int:
+        """NAV_TAKEOFF: AUTO.TAKEOFF to ``altitude_above_home`` (m) or MIS_TAKEOFF_ALT."""
+        result = self.set_mode(Mode.TAKEOFF, now, state)
+        if result == ACCEPTED and math.isfinite(altitude_above_home):
+            self._takeoff_z = self.home[2] + altitude_above_home
+        if result == ACCEPTED and self._takeoff_z < state.z:
+            self._takeoff_z = state.z
+        return result
+
+    def on_setpoint(self, setpoint: OffboardSetpoint, now: float) -> None:
+        """An accepted offboard setpoint arrived."""
+        self.setpoint = setpoint
+        self.setpoint_at = now
+
+    # ---- time passes ----
+
+    def update(self, now: float, state: QuadState) -> None:
+        """Land detector, auto-disarm, failsafes and navigator progress at time ``now``."""
+        self._land_detector(now, state)
+        if self.armed and self.landed:
+            if self.taken_off_since_arming:
+                timeout, reason = self.params["COM_DISARM_LAND"], "Disarmed by landing"
+            else:
+                timeout, reason = (
+                    self.params["COM_DISARM_PRFLT"],
+                    "Disarmed by auto preflight disarming",
+                )
+            if timeout > 0 and now - self.landed_at >= timeout:
+                self.disarm(now, state, force=True, reason=reason)
+        self._offboard_failsafe(now, state)
+        self._navigate(now, state)
+
+    def _land_detector(self, now: float, state: QuadState) -> None:
+        if not self.armed:
+            if state.on_ground and not self.landed:
+                self.landed, self.landed_at = True, now
+            self._contact_since = None
+            return
+        if self.landed:
+            if not state.on_ground and state.z > 0.05:
+                self.landed = False
+                self.taken_off_since_arming = True
+                self._contact_since = None
+                self._say(INFO, "Takeoff detected")
+            return
+        resting = state.on_ground or (state.z < 0.03 and abs(state.vz) < 0.1)
+        if resting:
+            if self._contact_since is None:
+                self._contact_since = now
+            if now - self._contact_since >= self.params["LNDMC_TRIG_TIME"]:
+                self.landed, self.landed_at = True, now
+                self.takeoff_started_at = None
+                self._say(INFO, "Landing detected")
+        else:
+            self._contact_since = None
+
+    def _fallback_mode(self) -> Mode:
+        action = _OBL_ACTIONS.get(int(self.params["COM_OBL_RC_ACT"]))
+        if action is None:  # needs RC, which this vehicle has not got
+            action = _RCL_ACTIONS.get(int(self.params["NAV_RCL_ACT"]), Mode.RTL)
+        return action
+
+    def _offboard_failsafe(self, now: float, state: QuadState) -> None:
+        in_offboard = self.armed and self.user_mode is Mode.OFFBOARD
+        if not in_offboard:
+            self.failsafe = False
+            if self.nav_mode is not self.user_mode:
+                self._enter(self.user_mode, state, now)
+            return
+        available = self.offboard_available(now)
+        if not available and not self.failsafe:
+            self.failsafe = True
+            self._say(CRITICAL, "Failsafe activated")
+            self._enter(self._fallback_mode(), state, now)
+        elif available and self.failsafe:
+            self.failsafe = False  # not latched: OFFBOARD is still what the user wants
+            self._enter(Mode.OFFBOARD, state, now)
+
+    # ---- navigator ----
+
+    def _enter(self, mode: Mode, state: QuadState, now: float) -> None:
+        self.nav_mode = mode
+        self._hold = (state.x, state.y, state.z, state.yaw)
+        if mode is Mode.RTL:
+            self._start_rtl(state)
+
+    def _start_rtl(self, state: QuadState) -> None:
+        hx, hy, hz = self.home
+        dist = math.hypot(state.x - hx, state.y - hy)
+        if self.landed:
+            self._rtl_phase = "done"
+        elif dist <= self.params["RTL_MIN_DIST"]:
+            self._rtl_phase = "land"
+            self._say(INFO, "RTL: land at destination")
+        else:
+            self._rtl_z = max(state.z, hz + self.params["RTL_RETURN_ALT"])
+            self._rtl_phase = "climb"
+            alt = self._rtl_z - hz
+            self._say(INFO, f"RTL: start return at {alt:.0f} m above destination")
+
+    def _land_speed(self, height: float) -> float:
+        p = self.params
+        alt1, alt2 = p["MPC_LAND_ALT1"], p["MPC_LAND_ALT2"]
+        fast, slow = p["MPC_Z_V_AUTO_DN"], p["MPC_LAND_SPEED"]
+        if height >= alt1:
+            return fast
+        if height <= alt2 or alt1 <= alt2:
+            return slow
+        return slow + (fast - slow) * (height - alt2) / (alt1 - alt2)
+
+    def _navigate(self, now: float, state: QuadState) -> None:
+        p = self.params
+        auto_yaw_rate = math.radians(p["MPC_YAWRAUTO_MAX"])
+        _hx, _hy, _hz = self.home
+        x0, y0, z0, yaw0 = self._hold
+        mode = self.nav_mode
+        target: Target
+        if mode is Mode.OFFBOARD:
+            sp = self.setpoint
+            if sp is None:
+                target = Target(position=(x0, y0, z0), yaw=yaw0)
+            else:
+                target = Target(
+                    position=sp.position,
+                    velocity=sp.velocity,
+                    acceleration=sp.acceleration,
+                    yaw=sp.yaw,
+                    yaw_rate=sp.yaw_rate,
+                    max_xy=p["MPC_XY_VEL_MAX"],
+                    max_up=p["MPC_Z_VEL_MAX_UP"],
+                    max_down=p["MPC_Z_VEL_MAX_DN"],
+                    max_yaw_rate=math.radians(p["MC_YAWRATE_MAX"]),
+                )
+        elif mode is Mode.TAKEOFF:
+            target = Target(
+                position=(x0, y0, self._takeoff_z),
+                yaw=yaw0,
+                max_xy=p["MPC_XY_CRUISE"],
+                max_up=p["MPC_TKO_SPEED"],
+                max_down=p["MPC_Z_V_AUTO_DN"],
+                max_yaw_rate=auto_yaw_rate,
+            )
+            if self.armed and not self.landed and abs(state.z - self._takeoff_z) < 0.3:
+                self.user_mode = Mode.LOITER
+                self._enter(Mode.LOITER, state, now)
+                self._hold = (x0, y0, self._takeoff_z, yaw0)
+        elif mode is Mode.LAND:
+            target = self._land_target(x0, y0, yaw0, state)
+        elif mode is Mode.RTL:
+            target = self._rtl_target(state, now)
+        else:  # LOITER and anything that cannot fly: hold where the mode started
+            target = Target(
+                position=(x0, y0, z0),
+                yaw=yaw0,
+                max_xy=p["MPC_XY_CRUISE"],
+                max_up=p["MPC_Z_V_AUTO_UP"],
+                max_down=p["MPC_Z_V_AUTO_DN"],
+                max_yaw_rate=auto_yaw_rate,
+            )
+        self.target = self._ground_handling(target, now, state)
+
+    def _land_target(self, x: float, y: float, yaw: float, state: QuadState) -> Target:
+        p = self.params
+        speed = self._land_speed(state.z - self.home[2])
+        return Target(
+            position=(x, y, NAN),
+            velocity=(0.0, 0.0, -speed),
+            yaw=yaw,
+            max_xy=p["MPC_XY_CRUISE"],
+            max_down=max(speed, p["MPC_Z_V_AUTO_DN"]),
+            max_yaw_rate=math.radians(p["MPC_YAWRAUTO_MAX"]),
+        )
+
+    def _rtl_target(self, state: QuadState, now: float) -> Target:
+        p = self.params
+        hx, hy, hz = self.home
+        x0, y0, _, yaw0 = self._hold
+        limits = {
+            "max_xy": p["MPC_XY_CRUISE"],
+            "max_up": p["MPC_Z_V_AUTO_UP"],
+            "max_down": p["MPC_Z_V_AUTO_DN"],
+            "max_yaw_rate": math.radians(p["MPC_YAWRAUTO_MAX"]),
+        }
+        phase = self._rtl_phase
+        if phase == "climb":
+            if state.z >= self._rtl_z - 0.5:
+                self._rtl_phase = phase = "return"
+            else:
+                return Target(position=(x0, y0, self._rtl_z), yaw=yaw0, **limits)
+        if phase == "return":
+            dist = math.hypot(hx - state.x, hy - state.y)
+            if dist < p["NAV_ACC_RAD"]:
+                self._rtl_phase = phase = "descend"
+                self._rtl_wait_since = now
+            else:
+                heading = math.atan2(hy - state.y, hx - state.x) if dist > 3.0 else state.yaw
+                return Target(position=(hx, hy, self._rtl_z), yaw=heading, **limits)
+        if phase == "descend":
+            descend_z = max(hz + p["RTL_DESCEND_ALT"], min(self._rtl_z, state.z))
+            if state.z > descend_z + 0.5:
+                self._rtl_wait_since = now
+                return Target(position=(hx, hy, descend_z), yaw=state.yaw, **limits)
+            if now - self._rtl_wait_since < p["RTL_LAND_DELAY"]:
+                return Target(position=(hx, hy, descend_z), yaw=state.yaw, **limits)
+            self._rtl_phase = phase = "land"
+            self._say(INFO, "RTL: land at destination")
+        if phase == "land":
+            return self._land_target(hx, hy, self._hold[3], state)
+        return Target(idle=True)
+
+    def _ground_handling(self, target: Target, now: float, state: QuadState) -> Target:
+        """Motors off when disarmed; idle during spool-up and while landed unless the target
+        asks to climb; PX4's take-off ramp limits the climb speed right after lift-off."""
+        if not self.armed:
+            return Target(idle=True)
+        if now - self.armed_at < self.params["COM_SPOOLUP_TIME"]:
+            return Target(idle=True)
+        if self.landed:
+            wants_up = (
+                math.isfinite(target.position[2]) and target.position[2] > state.z + 0.2
+            ) or (
+                not math.isfinite(target.position[2])
+                and math.isfinite(target.velocity[2])
+                and target.velocity[2] > 0.3
+            )
+            if not wants_up:
+                self.takeoff_started_at = None
+                return Target(idle=True)
+            if self.takeoff_started_at is None:
+                self.takeoff_started_at = now
+        if self.takeoff_started_at is not None:
+            ramp_t = self.params["MPC_TKO_RAMP_T"]
+            frac = 1.0 if ramp_t <= 0 else min(1.0, (now - self.takeoff_started_at) / ramp_t)
+            if frac >= 1.0 and not self.landed:
+                self.takeoff_started_at = None
+            else:
+                max_up = max(0.3, frac * target.max_up)
+                return Target(
+                    position=target.position,
+                    velocity=target.velocity,
+                    acceleration=target.acceleration,
+                    yaw=target.yaw,
+                    yaw_rate=target.yaw_rate,
+                    max_xy=target.max_xy,
+                    max_up=max_up,
+                    max_down=target.max_down,
+                    max_yaw_rate=target.max_yaw_rate,
+                )
+        return target
