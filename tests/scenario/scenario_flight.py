@@ -32,7 +32,7 @@ from support import REPO, free_port
 CONTROLLER_CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
 CENTRED_TOLERANCE = math.radians(10.0)
 DISTANCE_TOLERANCE = 1.5  # m
-PERSON_WIDTH_RATIO = 0.3  # a standing person's box is about 0.3 x their height wide
+PERSON_WIDTH_RATIO = 0.5  # a person box (sprite, arms, loose fit) is about 0.5 x their height wide
 
 
 @dataclass
