@@ -80,6 +80,13 @@ def _close_all() -> None:
         wrapper.close()
 
 
+def _satisfied(value: object) -> bool:
+    """Truthiness for wait_for: any numpy array counts as a result (not "ambiguous")."""
+    if isinstance(value, np.ndarray):
+        return True
+    return bool(value)
+
+
 def _camera_key_name(camera: str) -> str:
     if camera in CAMERAS:
         return CAMERAS[camera]
@@ -477,7 +484,8 @@ class DroneWrapper:
     ) -> T:
         """Poll ``predicate()`` until it returns a truthy value, which is returned.
 
-        ``NoData`` raised by the predicate counts as "not yet".
+        A numpy array counts as truthy (``wait_for(drone.get_global_position, 5)`` returns the
+        first fix); ``NoData`` raised by the predicate counts as "not yet".
 
         Raises:
             Timeout: still false after ``timeout`` seconds (the message names ``what``).
@@ -488,7 +496,7 @@ class DroneWrapper:
                 value = predicate()
             except NoData:
                 value = None
-            if value:
+            if _satisfied(value):
                 return value
             if time.monotonic() >= deadline:
                 raise Timeout(f"timed out after {timeout:g} s waiting for {what}")
@@ -505,7 +513,7 @@ class DroneWrapper:
         z = setpoints.finite("z", z)
         try:
             return self.wait_for(
-                lambda: (p := self.get_position()) is not None and abs(p[2] - z) <= tolerance and p,
+                lambda: p if abs((p := self.get_position())[2] - z) <= tolerance else None,
                 timeout,
                 f"altitude {z:.2f} m",
             )

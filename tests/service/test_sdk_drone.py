@@ -185,6 +185,10 @@ def test_getters_return_latest_values_at_once(drone, bridge):
     wait_for(lambda: drone.get_position()[0] == 1.0, 5, what="pose")
     assert isinstance(drone.get_position(), np.ndarray)
     assert drone.get_position().shape == (3,)
+    assert drone.wait_for(drone.get_position, 1, "position").shape == (3,)  # arrays count
+    assert drone.wait_for_altitude(0.0, timeout=1)[0] == 1.0
+    with pytest.raises(Timeout, match=r"altitude 3\.00 m .*now z=0\.00 m"):
+        drone.wait_for_altitude(3.0, timeout=0.2)
     assert drone.get_orientation().tolist() == [0.0, 0.0, 0.0]
     assert drone.get_yaw_rate() == 0.25
     assert drone.get_velocity().tolist() == [0.0, 0.0, 0.0]
