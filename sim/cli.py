@@ -14,11 +14,13 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 from collections.abc import Sequence
 
 from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.config import ConfigError
+from dronewrapper.runtime.options import ENV_PREFIX
 from dronewrapper.runtime.service import run_service
 from dronewrapper_sim.config import SimConfig
 
@@ -65,8 +67,9 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         overrides.append("cameras=false")
     if args.compressed:
         overrides.append("compressed=true")
-    if args.instance and args.namespace == DEFAULT_NAMESPACE:
-        args.namespace = f"drone{args.instance}"
+    explicit_ns = args.namespace or os.environ.get(f"{ENV_PREFIX}NAMESPACE")
+    if args.instance and not explicit_ns:
+        args.namespace = f"{DEFAULT_NAMESPACE}{args.instance}"
 
 
 def run(node: Node, config: SimConfig) -> int:

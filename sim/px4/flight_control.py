@@ -146,8 +146,8 @@ class PositionController:
         saturated_xy = math.hypot(acc[0], acc[1]) > max_h
         # integrate (anti-windup: not while saturated, and bounded)
         if not saturated_xy:
-            self.integral[0] = _clip(self.integral[0] + g.vel_xy_i * err[0] * dt, 5.0)
-            self.integral[1] = _clip(self.integral[1] + g.vel_xy_i * err[1] * dt, 5.0)
+            self.integral[0] = _clip(self.integral[0] + g.vel_xy_i * err[0] * dt, GRAVITY)
+            self.integral[1] = _clip(self.integral[1] + g.vel_xy_i * err[1] * dt, GRAVITY)
         if g.hover_thrust + acc[2] == thrust_z:
             self.integral[2] = _clip(self.integral[2] + g.vel_z_i * err[2] * dt, 5.0)
 
