@@ -23,7 +23,8 @@ from dronewrapper.msgs.control import (
     CONTROLLER_LANDING,
     CONTROLLER_TAKEOFF,
 )
-from dronewrapper.runtime import Node, Ratekeeper
+from dronewrapper.msgs.vision import Detections
+from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.loop import ControlLoop
 
@@ -95,9 +96,41 @@ def _run_with_stop(node: Node, what: str, func, timeout: float) -> bool:
     return True
 
 
-def servo_until_stopped(node: Node, config: Config, loop: ControlLoop, drone) -> None:
-    """Wake on each new detections message (or every control period) and command the drone."""
-    detections = node.latest(registry.DETECTIONS)
+class Takeoff:
+    """The SDK's blocking take-off on a worker thread, so the loop can watch meanwhile."""
+
+    def __init__(self, drone, height: float, timeout: float) -> None:
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(
+            target=self._run, args=(drone, height, timeout), name="controller-takeoff", daemon=True
+        )
+        self._thread.start()
+
+    def _run(self, drone, height: float, timeout: float) -> None:
+        try:
+            drone.takeoff(h=height, timeout=timeout)
+        except BaseException as exc:
+            self.error = exc
+
+    @property
+    def running(self) -> bool:
+        return self._thread.is_alive()
+
+
+def servo_until_stopped(
+    node: Node,
+    config: Config,
+    loop: ControlLoop,
+    drone,
+    detections: Latest[Detections],
+    takeoff: Takeoff | None,
+    status: StatusPublisher,
+) -> bool:
+    """Wake on each new detections message (or every control period) and command the drone.
+
+    While ``takeoff`` runs the loop only watches (where the target was last seen); False if
+    the take-off failed.
+    """
     period = 1.0 / config.rate_hz
     seen = detections.count
     logged_state = ""
@@ -105,7 +138,18 @@ def servo_until_stopped(node: Node, config: Config, loop: ControlLoop, drone) ->
         with contextlib.suppress(TimeoutError):
             detections.wait(period, newer_than=seen)
         seen = detections.count
-        cmd = loop.tick(time.monotonic(), detections.value, detections.age())
+        now = time.monotonic()
+        if takeoff is not None:
+            if takeoff.running:
+                loop.servo.observe(now, detections.value, detections.age())
+                continue
+            if takeoff.error is not None:
+                log.error("takeoff failed: %s", takeoff.error)
+                return False
+            log.info("take-off done")
+            takeoff = None
+            status.phase = None
+        cmd = loop.tick(now, detections.value, detections.age())
         if cmd is None:
             continue
         stamp = cmd.source_stamp if cmd.source_stamp > 0 else None
@@ -113,6 +157,7 @@ def servo_until_stopped(node: Node, config: Config, loop: ControlLoop, drone) ->
         if cmd.state != logged_state:
             log.info("state %s", cmd.state)
             logged_state = cmd.state
+    return True
 
 
 def shutdown(config: Config, drone, status: StatusPublisher) -> None:
@@ -150,22 +195,17 @@ def run(node: Node, config: Config) -> int:
         ):
             return 0 if node.stopping else 1
         node.announce()
+        detections = node.latest(registry.DETECTIONS)
+        takeoff = None
         if config.takeoff.on_start:
             status.phase = CONTROLLER_TAKEOFF
             log.info("taking off to %.1f m", config.takeoff.height)
-            ok = _run_with_stop(
-                node,
-                "takeoff",
-                lambda: drone.takeoff(h=config.takeoff.height, timeout=config.takeoff.timeout),
-                config.takeoff.timeout + 5,
-            )
-            if not ok:
-                shutdown(config, drone, status)
-                return 0 if node.stopping else 1
-        status.phase = None
-        servo_until_stopped(node, config, loop, drone)
+            takeoff = Takeoff(drone, config.takeoff.height, config.takeoff.timeout)
+        else:
+            status.phase = None
+        ok = servo_until_stopped(node, config, loop, drone, detections, takeoff, status)
         shutdown(config, drone, status)
-        return 0
+        return 0 if ok else 1
     finally:
         status.close()
         drone.close()

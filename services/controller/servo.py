@@ -102,19 +102,35 @@ class Servo:
         fp = c.follow_person
         return follow_person_errors(det, w, h, fp.area_ratio, fp.max_forward_error, c.ref_width)
 
+    def _find(
+        self, detections: Detections | None, age: float
+    ) -> tuple[bool, Detection2D | None, ServoErrors | None]:
+        """(fresh, target, errors): target and errors are None when it is not usable."""
+        fresh = detections is not None and age <= self.config.detection_timeout
+        target = pick_target(detections) if fresh and detections is not None else None
+        if target is None or detections is None:
+            return fresh, None, None
+        try:
+            errors = self.errors_for(target, detections)
+        except ValueError:  # malformed frame size: treat as no target
+            return fresh, None, None
+        if not finite(errors):
+            return fresh, None, None
+        return fresh, target, errors
+
+    def observe(self, now: float, detections: Detections | None, age: float) -> bool:
+        """Watch without commanding (e.g. during take-off): remember when and on which side the
+        target was last seen, so a later search turns the right way. True if it is in view."""
+        _, _, errors = self._find(detections, age)
+        if errors is None:
+            return False
+        self._last_seen = now
+        self._last_yaw_error = errors.yaw
+        return True
+
     def step(self, now: float, detections: Detections | None, age: float) -> Command:
         """Decide the command at time ``now`` (s) from the newest detections, ``age`` s old."""
-        cfg = self.config
-        fresh = detections is not None and age <= cfg.detection_timeout
-        target = pick_target(detections) if fresh and detections is not None else None
-        errors = None
-        if target is not None and detections is not None:
-            try:
-                errors = self.errors_for(target, detections)
-            except ValueError:  # malformed frame size: treat as no target
-                errors = None
-            if errors is not None and not finite(errors):
-                errors = None
+        fresh, target, errors = self._find(detections, age)
         if errors is None or detections is None or target is None:
             return self._not_tracking(now, fresh)
 

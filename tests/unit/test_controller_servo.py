@@ -183,3 +183,14 @@ def test_vx_derivative_uses_frame_stamps():
 def test_bad_mode_is_refused():
     with pytest.raises(ValueError, match="mode"):
         ServoConfig(mode="follow_dog")
+
+
+def test_observing_during_takeoff_sets_the_search_side_without_commanding():
+    servo = Servo(colour_config(search_delay=1.0))
+    assert servo.observe(0.0, frame(1.0, box(300, 120, 10, 10, radius=8)), age=0.0)  # right
+    assert servo.pid_yaw.output == 0.0 and servo.last.state == CONTROLLER_HOVER
+    assert not servo.observe(0.5, frame(1.5), age=0.0)
+    cmd = servo.step(0.6, frame(1.6), age=0.0)
+    assert cmd.state == CONTROLLER_HOVER  # seen 0.6 s ago: hover first
+    cmd = servo.step(1.2, frame(2.2), age=0.0)
+    assert cmd.state == CONTROLLER_SEARCH and cmd.yaw_rate == pytest.approx(-0.3)
