@@ -73,26 +73,28 @@ def ground_texture(seed: int) -> tuple[np.ndarray, tuple[float, float, float]]:
     return texture, mean  # type: ignore[return-value]
 
 
+def _periodic_blur(tile: np.ndarray, sigma_px: float) -> np.ndarray:
+    """Gaussian blur of a seamless tile that stays seamless (wrap-around borders)."""
+    pad = min(tile.shape[0], math.ceil(3.0 * sigma_px) + 1)
+    padded = cv2.copyMakeBorder(tile, pad, pad, pad, pad, cv2.BORDER_WRAP)
+    blurred = cv2.GaussianBlur(padded, (0, 0), sigma_px)
+    return blurred[pad:-pad, pad:-pad]
+
+
 def _ground_texture(tile: np.ndarray, reach: int) -> np.ndarray:
     """The tile repeated (2 * reach + 1) times per side, blurred more the farther from the
     centre tile (where the camera is)."""
     n = 2 * reach + 1
-    big = np.tile(tile, (n, n, 1))
-    size = big.shape[0]
-    blur1 = cv2.GaussianBlur(big, (0, 0), 1.5)
-    blur2 = cv2.GaussianBlur(big, (0, 0), 4.0)
-    blur3 = cv2.blur(big, (31, 31))
+    out = np.tile(tile, (n, n, 1))
+    size = out.shape[0]
     c = (size - 1) / 2.0
-    yy, xx = np.mgrid[0:size, 0:size]
-    r = np.hypot(xx - c, yy - c) / size * (n * GROUND_TILE_M)  # m from the centre
-    w1 = np.clip((r - 6.0) / 4.0, 0.0, 1.0)[:, :, None]
-    w2 = np.clip((r - 12.0) / 6.0, 0.0, 1.0)[:, :, None]
-    w3 = np.clip((r - 20.0) / 6.0, 0.0, 1.0)[:, :, None]
-    out = big.astype(np.float32)
-    out = out * (1 - w1) + blur1 * w1
-    out = out * (1 - w2) + blur2 * w2
-    out = out * (1 - w3) + blur3 * w3
-    return np.clip(out, 0, 255).astype(np.uint8)
+    coords = (np.arange(size, dtype=np.float32) - c) * np.float32(n * GROUND_TILE_M / size)
+    r = np.sqrt(coords[None, :] ** 2 + coords[:, None] ** 2)  # m from the centre
+    for sigma, r0, ramp in ((1.5, 6.0, 4.0), (4.0, 12.0, 6.0), (10.0, 20.0, 6.0)):
+        blurred = np.tile(_periodic_blur(tile, sigma), (n, n, 1))
+        w = np.clip((r - r0) / ramp, 0.0, 1.0)
+        out = cv2.blendLinear(out, blurred, 1.0 - w, w)
+    return out
 
 
 class Background:

@@ -79,25 +79,32 @@ def skeleton(height_m: float, phase_rad: float, gait: float) -> dict[str, np.nda
     j["neck_base"] = np.array([0.0, 0.0, top - 0.01 * h])
     j["neck_top"] = np.array([0.0, 0.0, top + 0.05 * h])
     j["head"] = np.array([0.0, 0.0, h - 0.065 * h + lift])
-    j["hair"] = j["head"] + np.array([-0.012 * h, 0.0, 0.012 * h])
-    j["face"] = j["head"] + np.array([0.014 * h, 0.0, -0.01 * h])
+    j["hair"] = j["head"] + np.array([-0.008 * h, 0.0, 0.010 * h])
+    j["face"] = j["head"] + np.array([0.007 * h, 0.0, -0.006 * h])
     return j
 
 
-def _torso_box(h: float, lift: float) -> tuple[np.ndarray, np.ndarray]:
-    """Corners of the shirt box and of the pelvis box (8 x 3 each), person frame."""
+def _ring(z: float, half_w: float, half_d: float, lift: float, n: int = 10) -> list:
+    """Points of an elliptical cross-section of the body at height ``z`` (person frame)."""
+    return [
+        (half_d * math.cos(a), half_w * math.sin(a), z + lift)
+        for a in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    ]
 
-    def box(z0: float, z1: float, half_w0: float, half_w1: float, half_d: float) -> np.ndarray:
-        pts = []
-        for z, hw in ((z0, half_w0), (z1, half_w1)):
-            for x in (-half_d, half_d):
-                for y in (-hw, hw):
-                    pts.append((x, y, z + lift))
-        return np.array(pts)
 
-    shirt = box(0.50 * h, 0.835 * h, 0.095 * h, 0.125 * h, 0.06 * h)
-    pelvis = box(0.45 * h, 0.55 * h, 0.097 * h, 0.097 * h, 0.058 * h)
-    return shirt, pelvis
+def _torso_hulls(h: float, lift: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points whose convex hulls are the shirt (chest to hips) and the pelvis, person frame."""
+    shirt = (
+        _ring(0.835 * h, 0.075 * h, 0.045 * h, lift)  # sloping shoulder tops
+        + _ring(0.80 * h, 0.118 * h, 0.062 * h, lift)  # shoulders
+        + _ring(0.72 * h, 0.112 * h, 0.072 * h, lift)  # chest
+        + _ring(0.60 * h, 0.098 * h, 0.064 * h, lift)  # waist
+        + _ring(0.53 * h, 0.102 * h, 0.066 * h, lift)  # hips (shirt hem)
+    )
+    pelvis = _ring(0.55 * h, 0.100 * h, 0.066 * h, lift) + _ring(
+        0.46 * h, 0.095 * h, 0.07 * h, lift
+    )
+    return np.array(shirt), np.array(pelvis)
 
 
 @dataclass(frozen=True)
@@ -116,14 +123,14 @@ def body_parts(height_m: float, phase_rad: float, gait: float, look: PersonLook)
     h = height_m
     j = skeleton(h, phase_rad, gait)
     lift = j["neck_base"][2] - (0.83 * h - 0.01 * h)
-    shirt, pelvis = _torso_box(h, lift)
+    shirt, pelvis = _torso_hulls(h, lift)
     sleeve = look.shirt_bgr if look.long_sleeves else look.skin_bgr
     parts = [
         Part("hull", shirt, 0.0, look.shirt_bgr, 0.04 * h),
         Part("hull", pelvis, 0.0, look.pants_bgr, 0.045 * h),
-        Part("capsule", np.array([j["neck_base"], j["neck_top"]]), 0.032 * h, look.skin_bgr),
-        Part("sphere", j["hair"][None], 0.056 * h, look.hair_bgr),
-        Part("sphere", j["face"][None], 0.05 * h, look.skin_bgr),
+        Part("capsule", np.array([j["neck_base"], j["neck_top"]]), 0.028 * h, look.skin_bgr),
+        Part("sphere", j["hair"][None], 0.054 * h, look.hair_bgr),
+        Part("sphere", j["face"][None], 0.051 * h, look.skin_bgr),
     ]
     for s in ("l", "r"):
         parts += [
