@@ -1,0 +1,379 @@
+"""The simulator process as a MAVLink client sees it: real UDP on free loopback ports, real
+MAVLink 2 bytes (pymavlink), the full PX4 offboard sequence, the offboard-loss failsafe, the
+parameter protocol, message intervals and bad input."""
+
+from __future__ import annotations
+
+import math
+import socket
+import threading
+import time
+
+import pytest
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper_sim.px4 import params
+from dronewrapper_sim.px4.modes import Mode
+from support import python_module, wait_for
+
+pytestmark = pytest.mark.integration
+
+MASK_VELOCITY = 1991
+MASK_POSITION = 3064
+FRAME_LOCAL_NED = 1
+FRAME_BODY_NED = 8
+
+
+class MavClient:
+    """A MAVLink endpoint on a free UDP port (like a bridge's ``udpin``), with a background
+    reader that keeps every message and a setpoint streamer that can be started and stopped."""
+
+    def __init__(self, mav_type: int, sysid: int = 245) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.settimeout(0.1)
+        self.port = self.sock.getsockname()[1]
+        self.mav_type = mav_type
+        self.out = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=191)
+        self.parser = mavlink.MAVLink(None)
+        self.parser.robust_parsing = True
+        self.peer: tuple[str, int] | None = None
+        self.log: list[tuple[float, object]] = []
+        self.lock = threading.Lock()
+        self._send_lock = threading.Lock()
+        self._stop = threading.Event()
+        self.setpoint: object | None = None
+        self.setpoint_period = 0.05
+        self.last_setpoint_sent = 0.0
+        self._threads = [
+            threading.Thread(target=self._read, daemon=True),
+            threading.Thread(target=self._stream, daemon=True),
+        ]
+        for thread in self._threads:
+            thread.start()
+
+    def _read(self) -> None:
+        last_hb = 0.0
+        while not self._stop.is_set():
+            if self.peer and time.monotonic() - last_hb > 0.5:
+                last_hb = time.monotonic()
+                self.send(mavlink.MAVLink_heartbeat_message(self.mav_type, 8, 0, 0, 4, 3))
+            try:
+                data, addr = self.sock.recvfrom(65535)
+            except (TimeoutError, OSError):
+                continue
+            self.peer = addr
+            now = time.monotonic()
+            for msg in self.parser.parse_buffer(data) or []:
+                with self.lock:
+                    self.log.append((now, msg))
+
+    def _stream(self) -> None:
+        while not self._stop.wait(self.setpoint_period):
+            sp = self.setpoint
+            if sp is not None and self.peer:
+                self.send(sp)
+                self.last_setpoint_sent = time.monotonic()
+
+    def send(self, msg) -> None:
+        assert self.peer, "no datagram from the vehicle yet"
+        with self._send_lock:
+            buf = msg.pack(self.out)
+            self.out.seq = (self.out.seq + 1) % 256
+            self.sock.sendto(buf, self.peer)
+
+    def send_raw(self, data: bytes) -> None:
+        self.sock.sendto(data, self.peer)
+
+    def close(self) -> None:
+        self._stop.set()
+        for thread in self._threads:
+            thread.join(2)
+        self.sock.close()
+
+    # ---- reading ----
+
+    def since(self, t0: float, kind: str | None = None) -> list:
+        with self.lock:
+            return [m for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)]
+
+    def latest(self, kind: str):
+        with self.lock:
+            for _, msg in reversed(self.log):
+                if msg.get_type() == kind:
+                    return msg
+        return None
+
+    def wait_msg(self, kind: str, pred=lambda m: True, timeout: float = 10.0, t0: float = 0.0):
+        def found():
+            for msg in self.since(t0, kind):
+                if pred(msg):
+                    return msg
+            return None
+
+        return wait_for(found, timeout, what=f"{kind} matching {pred}")
+
+    def texts(self, t0: float = 0.0) -> list[str]:
+        return [m.text for m in self.since(t0, "STATUSTEXT")]
+
+    # ---- commands ----
+
+    def command(self, command: int, *p: float, target: int = 1, timeout: float = 5.0) -> list:
+        """COMMAND_LONG; returns every ACK for it within 0.3 s of the first one."""
+        t0 = time.monotonic()
+        p7 = [*p, *[0.0] * (7 - len(p))]
+        self.send(mavlink.MAVLink_command_long_message(target, 1, command, 0, *p7))
+        self.wait_msg("COMMAND_ACK", lambda m: m.command == command, timeout, t0)
+        time.sleep(0.3)
+        return [m for m in self.since(t0, "COMMAND_ACK") if m.command == command]
+
+    def set_mode(self, mode: Mode) -> list:
+        return self.command(176, 1, mode.main, mode.sub)
+
+    def mode(self) -> Mode | None:
+        hb = self.latest("HEARTBEAT")
+        return None if hb is None else Mode(divmod_mode(hb.custom_mode))
+
+    def armed(self) -> bool:
+        hb = self.latest("HEARTBEAT")
+        return bool(hb and hb.base_mode & 128)
+
+    def wait_heartbeat(self, pred, timeout: float, t0: float | None = None):
+        t0 = time.monotonic() if t0 is None else t0
+        return self.wait_msg("HEARTBEAT", pred, timeout, t0)
+
+    def stream(self, vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED, **pos) -> None:
+        if pos:
+            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
+                0, 1, 1, FRAME_LOCAL_NED, MASK_POSITION,
+                pos["x"], pos["y"], pos["z"], 0, 0, 0, 0, 0, 0, pos.get("yaw", 0.0), 0,
+            )  # fmt: skip
+        else:
+            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
+                0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
+            )
+
+
+def divmod_mode(custom_mode: int) -> tuple[int, int]:
+    main, sub = (custom_mode >> 16) & 0xFF, (custom_mode >> 24) & 0xFF
+    return (main, sub if main == 4 else 0)
+
+
+@pytest.fixture
+def clients():
+    made: list[MavClient] = []
+
+    def make(mav_type: int) -> MavClient:
+        client = MavClient(mav_type)
+        made.append(client)
+        return client
+
+    yield make
+    for client in made:
+        client.close()
+
+
+def start_sim(spawn, router, onboard: MavClient, gcs: MavClient | None = None, *extra: str):
+    gcs_spec = f"{gcs.port}:0" if gcs else "off"
+    argv = python_module(
+        "dronewrapper_sim", "--scenario", "empty", "--no-cameras", "--connect", router,
+        "--udp-onboard", f"{onboard.port}:0", "--udp-gcs", gcs_spec, *extra,
+    )  # fmt: skip
+    proc = spawn(argv, "sim")
+    wait_for(lambda: onboard.latest("HEARTBEAT"), 30, what="first HEARTBEAT from the sim")
+    if gcs:
+        wait_for(lambda: gcs.latest("HEARTBEAT"), 10, what="HEARTBEAT on the GCS link")
+    return proc
+
+
+def acks(replies: list) -> list[int]:
+    return [m.result for m in replies]
+
+
+def yaw_of(client: MavClient) -> float:
+    return client.latest("ATTITUDE").yaw
+
+
+def test_full_px4_offboard_sequence(spawn, router, clients):
+    onboard = clients(mavlink.MAV_TYPE_ONBOARD_CONTROLLER)
+    gcs = clients(mavlink.MAV_TYPE_GCS)
+    proc = start_sim(spawn, router, onboard, gcs)
+    hb = onboard.latest("HEARTBEAT")
+    assert (hb.type, hb.autopilot, hb.base_mode) == (2, 12, 29)
+    assert hb.get_srcSystem() == 1 and hb.get_srcComponent() == 1
+    time.sleep(1.0)  # let the sim see the GCS heartbeat
+
+    # OFFBOARD while disarmed with no stream: accepted (acked twice), arming then refused
+    mode_acks = onboard.set_mode(Mode.OFFBOARD)
+    assert acks(mode_acks) == [mavlink.MAV_RESULT_ACCEPTED] * 2
+    assert mode_acks[0].get_seq() != mode_acks[1].get_seq()
+    t_deny = time.monotonic()
+    assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_TEMPORARILY_REJECTED]
+    gcs.wait_msg("STATUSTEXT", lambda m: "Arming denied" in m.text, 5, t_deny)
+    assert onboard.texts() == []  # a companion (non-GCS) link gets no STATUSTEXT
+
+    # stream > 1 s, then OFFBOARD and arm are accepted; climb in body frame (vz up = -1.5)
+    onboard.stream(vz=-1.5)
+    time.sleep(1.2)
+    assert acks(onboard.set_mode(Mode.OFFBOARD)) == [mavlink.MAV_RESULT_ACCEPTED] * 2
+    assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_ACCEPTED]
+    onboard.wait_heartbeat(lambda m: m.base_mode & 128, 3)
+    wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -4.0, 20, what="climb to 4 m")
+    assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_IN_AIR
+
+    # turn with a yaw rate (NED yaw rate > 0 = clockwise), about 97 degrees like the PX4 trial
+    start_yaw = yaw_of(onboard)
+    onboard.stream(yaw_rate=0.5)
+    time.sleep(3.4)
+    onboard.stream()
+    time.sleep(1.0)
+    turned = math.remainder(yaw_of(onboard) - start_yaw, math.tau)
+    assert math.radians(75) < turned < math.radians(120)
+    yaw = yaw_of(onboard)
+
+    # body velocity: forward goes along the heading, right goes 90 degrees clockwise from it
+    for body, heading in (((2.0, 0.0), yaw), ((0.0, 1.5), yaw + math.pi / 2)):
+        onboard.stream(vx=body[0], vy=body[1])
+        time.sleep(2.5)
+        lpn = onboard.latest("LOCAL_POSITION_NED")
+        assert math.hypot(lpn.vx, lpn.vy) > 0.8 * math.hypot(*body)
+        direction = math.atan2(lpn.vy, lpn.vx)  # NED: atan2(east, north) = heading
+        assert abs(math.remainder(direction - heading, math.tau)) < math.radians(15)
+
+    # local NED velocity: north whatever the heading
+    onboard.stream(vx=1.5, frame=FRAME_LOCAL_NED)
+    time.sleep(2.5)
+    lpn = onboard.latest("LOCAL_POSITION_NED")
+    assert lpn.vx > 1.0 and abs(math.atan2(lpn.vy, lpn.vx)) < math.radians(15)
+
+    # local position and yaw
+    onboard.stream(x=2.0, y=-3.0, z=-3.0, yaw=0.0)
+
+    def at_position():
+        p = onboard.latest("LOCAL_POSITION_NED")
+        return math.dist((p.x, p.y, p.z), (2.0, -3.0, -3.0)) < 0.4
+
+    wait_for(at_position, 20, what="reach the position setpoint")
+    assert abs(yaw_of(onboard)) < 0.15
+    target = onboard.latest("POSITION_TARGET_LOCAL_NED")
+    assert (target.x, target.y, target.z) == pytest.approx((2.0, -3.0, -3.0))
+
+    # land: AUTO.LAND, "Landing detected", auto-disarm, then the intended mode (OFFBOARD) again
+    t_land = time.monotonic()
+    assert acks(onboard.command(21, *[math.nan] * 7)) == [mavlink.MAV_RESULT_ACCEPTED]
+    onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.LAND.value, 3, t_land)
+    onboard.setpoint = None
+    disarmed = onboard.wait_heartbeat(lambda m: not m.base_mode & 128, 25, t_land)
+    assert divmod_mode(disarmed.custom_mode) == Mode.OFFBOARD.value
+    texts = gcs.texts(t_land)
+    assert any("Landing detected" in t for t in texts)
+    assert any("Disarmed by landing" in t for t in texts)
+    assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_ON_GROUND
+    assert onboard.latest("LOCAL_POSITION_NED").z == pytest.approx(0.0, abs=0.05)
+    assert proc.stop() == 0  # SIGINT: clean exit
+
+
+def test_offboard_loss_failsafe_and_unlatched_return(spawn, router, clients):
+    onboard = clients(mavlink.MAV_TYPE_ONBOARD_CONTROLLER)
+    gcs = clients(mavlink.MAV_TYPE_GCS)
+    start_sim(spawn, router, onboard, gcs)
+    onboard.stream(vz=-1.5)
+    time.sleep(1.2)
+    onboard.set_mode(Mode.OFFBOARD)
+    assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_ACCEPTED]
+    wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -2.5, 20, what="climb")
+    onboard.stream()
+    time.sleep(0.5)
+
+    onboard.setpoint = None  # stop the stream
+    time.sleep(0.1)
+    last = onboard.last_setpoint_sent
+    text = gcs.wait_msg("STATUSTEXT", lambda m: "Failsafe activated" in m.text, 5, last)
+    t_text = next(t for t, m in gcs.log if m is text)
+    assert 0.9 < t_text - last < 1.6  # COM_OF_LOSS_T = 1 s (PX4: 1.04-1.12 s)
+    rtl = onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.RTL.value, 3, last)
+    assert rtl.system_status == mavlink.MAV_STATE_CRITICAL
+
+    # resume: back in OFFBOARD with no mode command (not latched)
+    t_resume = time.monotonic()
+    onboard.stream()
+    back = onboard.wait_heartbeat(
+        lambda m: divmod_mode(m.custom_mode) == Mode.OFFBOARD.value, 2.5, t_resume
+    )
+    assert back.base_mode & 128
+    assert not [m for m in onboard.since(t_resume, "COMMAND_ACK")]
+
+
+def test_params_intervals_and_bad_input(spawn, router, clients):
+    onboard = clients(mavlink.MAV_TYPE_GCS)  # a GCS-type peer: it gets STATUSTEXT
+    proc = start_sim(spawn, router, onboard)
+    time.sleep(0.8)
+
+    # parameters: read by name and index, int32 bits, set with echo, list
+    t0 = time.monotonic()
+    onboard.send(mavlink.MAVLink_param_request_read_message(1, 1, b"COM_OF_LOSS_T", -1))
+    value = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_OF_LOSS_T", 5, t0)
+    assert value.param_value == 1.0 and value.param_type == mavlink.MAV_PARAM_TYPE_REAL32
+    onboard.send(mavlink.MAVLink_param_request_read_message(1, 1, b"COM_RC_IN_MODE", -1))
+    raw = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_RC_IN_MODE", 5, t0)
+    assert raw.param_type == mavlink.MAV_PARAM_TYPE_INT32
+    assert params.float_bits_to_int32(raw.param_value) == 1 and raw.param_value != 1.0
+    bits = params.int32_to_float_bits(1)
+    onboard.send(mavlink.MAVLink_param_set_message(1, 1, b"NAV_RCL_ACT", bits, 6))
+    echo = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "NAV_RCL_ACT", 5, t0)
+    assert params.float_bits_to_int32(echo.param_value) == 1
+    t_list = time.monotonic()
+    onboard.send(mavlink.MAVLink_param_request_list_message(1, 1))
+    wait_for(
+        lambda: len({m.param_id for m in onboard.since(t_list, "PARAM_VALUE")}) == raw.param_count,
+        5,
+        what="the whole parameter list",
+    )
+
+    # SET_MESSAGE_INTERVAL: LOCAL_POSITION_NED 30 -> 50 Hz; refused for HEARTBEAT
+    def rate(kind: str, seconds: float = 2.0) -> float:
+        t = time.monotonic()
+        time.sleep(seconds)
+        return len(onboard.since(t, kind)) / seconds
+
+    assert 24 < rate("LOCAL_POSITION_NED") < 34
+    lpn_id = mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED
+    assert acks(onboard.command(511, lpn_id, 20_000)) == [mavlink.MAV_RESULT_ACCEPTED]
+    assert 42 < rate("LOCAL_POSITION_NED") < 55
+    assert acks(onboard.command(511, 0, 100_000)) == [mavlink.MAV_RESULT_FAILED]
+    t = time.monotonic()
+    onboard.command(510, lpn_id)
+    assert onboard.wait_msg("MESSAGE_INTERVAL", timeout=3, t0=t).interval_us == 20_000
+
+    # bad MAVLink: unknown command, wrong target, frame 9, NaN fields, garbage bytes
+    assert acks(onboard.command(4242)) == [mavlink.MAV_RESULT_UNSUPPORTED]
+    t = time.monotonic()
+    onboard.send(mavlink.MAVLink_command_long_message(9, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0))
+    time.sleep(0.5)
+    assert onboard.since(t, "COMMAND_ACK") == []
+    assert not onboard.armed()
+    t = time.monotonic()
+    onboard.send(
+        mavlink.MAVLink_set_position_target_local_ned_message(
+            0, 1, 1, 9, MASK_VELOCITY, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0
+        )
+    )
+    onboard.wait_msg("STATUSTEXT", lambda m: "coordinate frame 9" in m.text, 3, t)
+    nan = math.nan
+    for _ in range(5):
+        onboard.send(
+            mavlink.MAVLink_set_position_target_local_ned_message(
+                0, 1, 1, 1, 0, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan
+            )
+        )
+    onboard.send_raw(b"\xfd\x09garbage that is not MAVLink" * 3)
+    onboard.send_raw(b"")
+    time.sleep(0.5)
+    assert proc.alive()
+    t = time.monotonic()
+    onboard.send(mavlink.MAVLink_param_request_read_message(1, 1, b"MIS_TAKEOFF_ALT", -1))
+    alive = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "MIS_TAKEOFF_ALT", 3, t)
+    assert alive.param_value == 2.5
+    lpn = onboard.latest("LOCAL_POSITION_NED")
+    assert all(math.isfinite(v) for v in (lpn.x, lpn.y, lpn.z))
+    assert proc.stop() == 0
