@@ -22,7 +22,7 @@ class BoxKalmanFilter:
         t: float,
         *,
         accel_std: tuple[float, float] = (2.0, 0.5),
-        meas_std: tuple[float, float] = (0.05, 0.05),
+        meas_std: tuple[float, float] = (0.05, 0.1),
         init_vel_std: tuple[float, float] = (1.0, 0.2),
     ) -> None:
         """Args: accel_std/meas_std/init_vel_std as (position, size) in box heights."""
