@@ -20,7 +20,7 @@ os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     MASK_POSITION,
@@ -47,7 +47,8 @@ ARMED = 128
 class FakePX4:
     """A scripted PX4 on a real UDP socket: sends telemetry, answers commands, logs traffic."""
 
-    def __init__(self, bridge_port: int) -> None:
+    def __init__(self, bridge_port: int, autopilot: int = 12) -> None:
+        self.autopilot = autopilot  # MAV_AUTOPILOT: 12 PX4, 3 ArduPilot
         self.conn = mavutil.mavlink_connection(
             f"udpout:127.0.0.1:{bridge_port}", source_system=1, source_component=1
         )
@@ -93,7 +94,7 @@ class FakePX4:
                 self.send("sys_status", 0, 0, 0, 0, 12100, 500, 80, 0, 0, 0, 0, 0, 0)
             if tick % 10 == 0 and self.heartbeats:  # 5 Hz keeps tests short
                 base = 29 | (ARMED if self.armed else 0)
-                self.send("heartbeat", 2, 12, base, self.custom_mode, 4)
+                self.send("heartbeat", 2, self.autopilot, base, self.custom_mode, 4)
 
     def _recv_loop(self) -> None:
         while not self._stop.is_set():
@@ -114,19 +115,26 @@ class FakePX4:
             elif kind == "PARAM_SET":
                 _value, ptype = self.params[msg.param_id]
                 self.params[msg.param_id] = (
-                    _bits_to_int(msg.param_value) if ptype == 6 else msg.param_value,
+                    _bits_to_int(msg.param_value)
+                    if ptype == 6 and self.autopilot != 3
+                    else msg.param_value,
                     ptype,
                 )
                 self._param_value(msg.param_id)
 
     def _param_value(self, name: str) -> None:
         value, ptype = self.params[name]
-        wire = _int_to_bits(int(value)) if ptype == 6 else float(value)
+        # PX4 carries int32 bits in the float; ArduPilot casts the value to float
+        bits = ptype == 6 and self.autopilot != 3
+        wire = _int_to_bits(int(value)) if bits else float(value)
         self.send("param_value", name.encode(), wire, ptype, len(self.params), 0)
 
     def _on_command(self, msg) -> None:
         if msg.command == 176:  # DO_SET_MODE, acknowledged twice like PX4
-            self.custom_mode = (int(msg.param2) << 16) | (int(msg.param3) << 24)
+            if self.autopilot == 3:  # ArduCopter: plain mode number
+                self.custom_mode = int(msg.param2)
+            else:
+                self.custom_mode = (int(msg.param2) << 16) | (int(msg.param3) << 24)
             self.send("command_ack", 176, 0)
             self.send("command_ack", 176, 0)
         elif msg.command == 400:
@@ -139,8 +147,8 @@ class FakePX4:
         elif msg.command == 21:
             self.custom_mode = AUTO_LAND
             self.send("command_ack", 21, 0)
-        elif msg.command == 511:
-            self.send("command_ack", 511, 0)
+        elif msg.command in (22, 511):
+            self.send("command_ack", msg.command, 0)
         else:
             self.send("command_ack", msg.command, 3)
 
@@ -162,6 +170,15 @@ def _bits_to_int(value: float) -> int:
 
 @pytest.fixture
 def rig(router) -> Iterator[tuple[Bridge, FakePX4, object]]:
+    yield from make_rig(router, autopilot=12)
+
+
+@pytest.fixture
+def ardu_rig(router) -> Iterator[tuple[Bridge, FakePX4, object]]:
+    yield from make_rig(router, autopilot=3)
+
+
+def make_rig(router, autopilot: int) -> Iterator[tuple[Bridge, FakePX4, object]]:
     port = free_port(2)
     config = Config(
         connection=f"udpin:127.0.0.1:{port}",
@@ -171,7 +188,9 @@ def rig(router) -> Iterator[tuple[Bridge, FakePX4, object]]:
     bridge_node = client_node(router, name="bridge_mavlink")
     bridge = Bridge(bridge_node, config)
     threads = bridge.start()
-    fake = FakePX4(port)
+    fake = FakePX4(port, autopilot)
+    if autopilot == 3:
+        fake.custom_mode = 5  # LOITER
     user = client_node(router, name="user")
     try:
         wait_for(lambda: bridge.connected, 10, what="bridge connected to the fake PX4")
@@ -340,3 +359,41 @@ def test_params_int32_bits_and_real(rig):
     assert put.success and put.value.integer == 4 and fake.params["COM_RC_IN_MODE"][0] == 4
     with pytest.raises(ServiceError, match="param_id"):
         user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=5)
+
+
+def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
+    """ArduCopter: GUIDED by number, no OFFBOARD priming, frame 1 (never 9), relative take-off
+    altitude, mixed control emulated with vz, integer params cast (not bit-reinterpreted)."""
+    _bridge, fake, user = ardu_rig
+    state = user.latest(registry.STATE)
+    assert wait_for(lambda: state.value and state.value.mode == "LOITER", 5)
+    assert state.value.autopilot == "ardupilotmega"
+    with pytest.raises(ServiceError, match="GUIDED"):
+        user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), timeout=5)
+    before = len(fake.setpoints)
+    assert user.call(registry.SET_MODE, SetMode(custom_mode="GUIDED"), timeout=10).mode_sent
+    assert len(fake.setpoints) == before  # no priming stream for GUIDED
+    (mode_cmd,) = fake.commands_named(176)
+    assert (mode_cmd.param1, mode_cmd.param2) == (1.0, 4.0)
+    wait_for(lambda: state.value.mode == "GUIDED" and state.value.guided, 5)
+    assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
+    assert user.call(registry.TAKEOFF, CommandTOL(altitude=4.0), timeout=10).success
+    (takeoff,) = fake.commands_named(22)
+    assert takeoff.param7 == 4.0  # ArduPilot: metres above home, not AMSL
+    fake.landed_state, fake.position_ned = 2, (0.0, 0.0, -3.0)
+    pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
+    mixed = PositionTarget(
+        coordinate_frame=FRAME_BODY_NED,
+        type_mask=1987,
+        velocity=Vector3(x=1.0),
+        position=Point(z=4.0),
+    )
+    stream(pub, mixed, 0.5)
+    wait_for(lambda: fake.setpoints, 3)
+    frames = {m.coordinate_frame for _, m in fake.setpoints}
+    assert frames == {1}  # never BODY_OFFSET_NED (9) nor BODY_NED (8)
+    last = fake.setpoints[-1][1]
+    assert last.type_mask == MASK_VELOCITY and math.isclose(last.vz, -1.0, abs_tol=1e-3)
+    assert math.isclose(last.vy, 1.0, abs_tol=1e-3)  # facing east: forward = NED y
+    got = user.call(registry.PARAM_GET, ParamGet(param_id="COM_RC_IN_MODE"), timeout=10)
+    assert got.success and got.value.integer == 1
