@@ -23,7 +23,7 @@ from dronewrapper_sim.render.camera import (
 )
 from dronewrapper_sim.render.person import draw_person
 from dronewrapper_sim.render.shadow import draw_shadow
-from dronewrapper_sim.render.sprites import SpriteBank, draw_billboard
+from dronewrapper_sim.render.sprites import draw_billboard, sprite_bank
 from dronewrapper_sim.world.world import World, WorldObject
 
 __all__ = ["MAX_DRAW_DISTANCE_M", "Renderer"]
@@ -48,7 +48,7 @@ class Renderer:
         self.world = world
         self.camera = camera
         self.background = Background(camera, seed=world.seed)
-        self.sprites = SpriteBank(Path(sprites_dir)) if sprites_dir is not None else None
+        self.sprites = sprite_bank(Path(sprites_dir)) if sprites_dir is not None else None
 
     def render(
         self, mount: CameraMount, vehicle_pos_enu: np.ndarray, vehicle_quat_xyzw: np.ndarray

@@ -10,23 +10,36 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-__all__ = ["Sprite", "SpriteBank", "draw_billboard"]
+__all__ = ["Sprite", "SpriteBank", "draw_billboard", "sprite_bank"]
 
 
-@dataclass(frozen=True)
 class Sprite:
-    """A person image with its alpha (0..1) and the person box inside it (px)."""
+    """A person image, the person box inside it (px) and its alpha (0..1, cut out on first use).
 
-    name: str
-    bgr: np.ndarray
-    alpha: np.ndarray
-    person_box_xyxy: tuple[int, int, int, int]
+    Attributes:
+        name: the file name.
+        bgr: the image (H x W x 3 uint8).
+        person_box_xyxy: the full-body box inside the image, px.
+    """
+
+    def __init__(self, name: str, bgr: np.ndarray, person_box_xyxy: tuple[int, ...]) -> None:
+        self.name = name
+        self.bgr = bgr
+        self.person_box_xyxy = tuple(int(v) for v in person_box_xyxy)
+        self._alpha: np.ndarray | None = None
+
+    @property
+    def alpha(self) -> np.ndarray:
+        """Soft mask of the person (H x W float32, 1 = person)."""
+        if self._alpha is None:
+            self._alpha = _cut_out(self.bgr, self.person_box_xyxy)  # type: ignore[arg-type]
+        return self._alpha
 
 
 def _cut_out(bgr: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
@@ -50,7 +63,7 @@ def _cut_out(bgr: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
 
 
 class SpriteBank:
-    """All sprites of a folder, loaded once."""
+    """All sprites of a folder (use :func:`sprite_bank` to share one per folder)."""
 
     def __init__(self, folder: Path) -> None:
         folder = Path(folder)
@@ -65,8 +78,7 @@ class SpriteBank:
             bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
             if bgr is None:
                 raise ValueError(f"{path}: cannot read the sprite image")
-            box = tuple(int(v) for v in entry["person_box_xyxy_in_sprite"])
-            sprites.append(Sprite(entry["file"], bgr, _cut_out(bgr, box), box))  # type: ignore[arg-type]
+            sprites.append(Sprite(entry["file"], bgr, entry["person_box_xyxy_in_sprite"]))
         if not sprites:
             raise ValueError(f"{index}: no sprites listed")
         self.sprites = sprites
@@ -80,6 +92,16 @@ class SpriteBank:
             except KeyError:
                 raise KeyError(f"no sprite {name!r} (have {', '.join(self._by_name)})") from None
         return self.sprites[index % len(self.sprites)]
+
+
+@lru_cache(maxsize=8)
+def _bank(folder: Path) -> SpriteBank:
+    return SpriteBank(folder)
+
+
+def sprite_bank(folder: Path) -> SpriteBank:
+    """The sprites of ``folder``, loaded once per process (cut-outs made on first use)."""
+    return _bank(Path(folder).resolve())
 
 
 def draw_billboard(

@@ -169,9 +169,9 @@ class ZigZagModel:
             pos[2] = s.z_min_m
             self._turn(1.0)
         lateral = float(np.dot(pos - self.origin, self.axis))
-        if abs(lateral) >= s.half_width_m and lateral * self.horizontal_sign > 0:
+        if abs(lateral) >= s.half_width_m:  # at the side limit: clamp and head back inwards
             pos -= self.axis * (lateral - math.copysign(s.half_width_m, lateral))
-            self.horizontal_sign = -self.horizontal_sign
+            self.horizontal_sign = -math.copysign(1.0, lateral)
         return pos, velocity
 
 
