@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import astuple, dataclass, field
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -161,6 +161,7 @@ class Autopilot:
         self.steps = 0
         self.rejected_setpoints = 0
         self.nonfinite_setpoints = 0
+        self.crashes = 0
         rates = link_rates or {"onboard": telemetry.ONBOARD_RATES, "gcs": telemetry.GCS_RATES}
         self.links = {
             name: LinkState(name, telemetry.StreamScheduler(r)) for name, r in rates.items()
@@ -196,8 +197,22 @@ class Autopilot:
         self.controller.gains = _gains(self.params, hover, self.quad.max_thrust_accel)
         control = self.controller.update(cmd.target, self.state, dt)
         self.wind_enu = self.wind.step(dt)
-        self.state = step(self.state, control, self.quad, dt, self.wind_enu)
+        state = step(self.state, control, self.quad, dt, self.wind_enu)
+        if not all(math.isfinite(v) for v in astuple(state)):
+            state = self._crash(state)
+        self.state = state
         self.battery.step(motor_current(cmd.armed, self.state.thrust), dt)
+
+    def _crash(self, state: QuadState) -> QuadState:
+        """The physics diverged (absurd parameters): the vehicle falls to the ground where it
+        last was, and the motors stop, instead of NaN reaching the telemetry."""
+        self.crashes += 1
+        log.error("physics diverged (check the MPC_* parameters): vehicle crashed")
+        last = self.state
+        self.commander.texts.append(StatusText(0, "Vehicle crashed: physics diverged"))
+        self.commander.disarm(self.time_s, last, force=True, reason="Disarmed: crash")
+        self.controller.reset()
+        return QuadState(x=last.x, y=last.y, yaw=last.yaw)
 
     @property
     def armed(self) -> bool:

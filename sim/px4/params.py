@@ -126,11 +126,13 @@ class ParamStore:
 
         Raises:
             KeyError: unknown parameter.
-            ValueError: a non-finite value.
+            ValueError: a non-finite value, or an INT32 value out of range.
         """
         pdef = _BY_NAME[name]
         if not math.isfinite(value):
             raise ValueError(f"{name}: value must be finite, got {value}")
+        if pdef.type == INT32 and not -(2**31) <= value < 2**31:
+            raise ValueError(f"{name}: {value} does not fit an int32")
         stored: float = int(value) if pdef.type == INT32 else float(value)
         self._values[name] = stored
         return stored

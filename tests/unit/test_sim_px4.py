@@ -9,7 +9,7 @@ import math
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper_sim.dynamics import QuadState
+from dronewrapper_sim.dynamics import QuadParams, QuadState
 from dronewrapper_sim.px4 import modes, offboard, params, telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot
 from dronewrapper_sim.px4.commander import (
@@ -521,3 +521,22 @@ def test_takeoff_command_to_mis_takeoff_alt_then_loiter_and_land():
     assert not ap.armed
     assert 5.0 < t < 12.0  # "Disarmed by landing" 10-12 s from 2-5 m on PX4 SITL
     assert ap.commander.landed_state is LandedState.ON_GROUND
+
+
+def test_absurd_params_are_refused_or_survived():
+    ap = Autopilot()
+    client = Client(ap)
+    huge = client.send(mavlink.MAVLink_param_set_message(1, 1, b"NAV_RCL_ACT", 1e30, 9))
+    assert huge == [] and ap.params["NAV_RCL_ACT"] == 2  # does not fit an int32: ignored
+    client.send(mavlink.MAVLink_param_request_list_message(1, 1))
+    assert len([m for m in run(ap, 0.1) if m.get_type() == "PARAM_VALUE"]) == len(ap.params)
+    # bounded commands keep even absurd gains finite; if the physics ever diverged, the
+    # vehicle "crashes" (disarmed, on the ground) instead of NaN reaching the telemetry
+    bad = Autopilot(quad=QuadParams(drag_z=-1e308))
+    bad.commander.arm(0.0, bad.state, force=True)
+    bad.state = QuadState(z=5.0, vz=10.0, on_ground=False)
+    out = run(bad, 0.5)
+    assert bad.crashes == 1 and not bad.armed
+    assert bad.state.z == 0.0
+    lpn = [m for m in out if m.get_type() == "LOCAL_POSITION_NED"]
+    assert lpn and all(math.isfinite(m.z) for m in lpn)
