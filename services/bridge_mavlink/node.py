@@ -120,7 +120,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     command_ack_timeout: float = 0.6  # s to wait for each COMMAND_ACK
     param_attempts: int = 5
     param_timeout: float = 0.6  # s per PARAM_REQUEST_READ / PARAM_SET attempt
-    reason_wait: float = 0.3  # s to wait for a STATUSTEXT explaining a refusal
+    reason_wait: float = 0.5  # s to wait for a STATUSTEXT explaining a refusal
     state_rate_hz: float = 2.0  # periodic State (also on change)
     extended_state_rate_hz: float = 4.0  # periodic ExtendedState (also on change)
     battery_rate_hz: float = 2.0
