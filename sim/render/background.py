@@ -98,24 +98,44 @@ def _ground_texture(tile: np.ndarray, reach: int) -> np.ndarray:
 
 
 class Background:
-    """Renders sky and ground for one camera model (intrinsics fixed at construction)."""
+    """Renders sky and ground for one camera model (intrinsics fixed at construction).
 
-    def __init__(self, camera: PinholeCamera, seed: int = 0) -> None:
+    The background is smooth (haze, sky, a ground texture that is blurred with distance), so it
+    is rendered at 1/``scale`` of the resolution and up-sampled once; objects are then drawn
+    on top at full resolution.
+    """
+
+    def __init__(self, camera: PinholeCamera, seed: int = 0, scale: int = 2) -> None:
+        if scale < 1:
+            raise ValueError(f"scale must be >= 1, got {scale}")
         self.camera = camera
+        self.scale = scale
         self.texture, self.far_bgr = ground_texture(seed)
-        s = GRID_STEP_PX
-        self.grid_w = math.ceil(camera.width / s)
-        self.grid_h = math.ceil(camera.height / s)
-        us = (np.arange(self.grid_w) + 0.5) * s - 0.5
-        vs = (np.arange(self.grid_h) + 0.5) * s - 0.5
+        self.work_w = math.ceil(camera.width / scale)
+        self.work_h = math.ceil(camera.height / scale)
+        # working-resolution intrinsics: u_work = (u + 0.5) / scale - 0.5 (cv2.resize's mapping)
+        self.work_matrix = np.array(
+            [
+                [camera.fx / scale, 0.0, (camera.cx + 0.5) / scale - 0.5],
+                [0.0, camera.fy / scale, (camera.cy + 0.5) / scale - 0.5],
+                [0.0, 0.0, 1.0],
+            ]
+        )
+        step = max(1, GRID_STEP_PX // scale)
+        self.grid_step = step
+        self.grid_w = math.ceil(self.work_w / step)
+        self.grid_h = math.ceil(self.work_h / step)
+        us = (np.arange(self.grid_w) + 0.5) * step - 0.5
+        vs = (np.arange(self.grid_h) + 0.5) * step - 0.5
         uu, vv = np.meshgrid(us, vs)
+        k = self.work_matrix
         # rays in the camera frame, one per grid point (x right, y down, z forward)
         self.rays_cam = np.stack(
-            ((uu - camera.cx) / camera.fx, (vv - camera.cy) / camera.fy, np.ones_like(uu)), -1
+            ((uu - k[0, 2]) / k[0, 0], (vv - k[1, 2]) / k[1, 1], np.ones_like(uu)), -1
         ).reshape(-1, 3)
 
     def _haze_and_sky(self, pose: CameraPose) -> tuple[np.ndarray, np.ndarray]:
-        """(alpha HxW float32: 1 = sky/haze only, colour HxWx3 uint8) at full resolution."""
+        """(alpha float32: 1 = sky/haze only, colour BGR uint8), at the working resolution."""
         rays = self.rays_cam @ pose.camera_to_world.T  # ENU directions
         norm = np.linalg.norm(rays, axis=1)
         up = rays[:, 2] / norm  # sin(elevation)
@@ -129,46 +149,46 @@ class Background:
         t = 1.0 - np.exp(-np.clip(up, 0.0, None) / 0.3)
         color = SKY_HORIZON_BGR + (SKY_ZENITH_BGR - SKY_HORIZON_BGR) * t[:, None]
         shape = (self.grid_h, self.grid_w)
-        s = GRID_STEP_PX
-        full = (self.grid_w * s, self.grid_h * s)
-        w, h = self.camera.width, self.camera.height
-        alpha_img = cv2.resize(alpha.reshape(shape).astype(np.float32), full)[:h, :w]
-        color_img = cv2.resize(color.reshape(*shape, 3).astype(np.uint8), full)[:h, :w]
+        step = self.grid_step
+        size = (self.grid_w * step, self.grid_h * step)
+        w, h = self.work_w, self.work_h
+        alpha_img = cv2.resize(alpha.reshape(shape).astype(np.float32), size)[:h, :w]
+        color_img = cv2.resize(color.reshape(*shape, 3).astype(np.uint8), size)[:h, :w]
         return alpha_img, color_img
 
-    def ground_homography(self, pose: CameraPose) -> tuple[np.ndarray, tuple[float, float]]:
-        """Homography texture px -> image px, and the ground origin (m) of texture px (0, 0)."""
-        cam = self.camera
+    def ground_homography(self, pose: CameraPose) -> np.ndarray:
+        """Homography from texture px to working-resolution image px."""
         r = pose.world_to_camera
         position = pose.position_enu.copy()
         position[2] = max(position[2], 0.02)
         t = -r @ position
-        ground_to_image = cam.matrix @ np.column_stack((r[:, 0], r[:, 1], t))
+        ground_to_image = self.work_matrix @ np.column_stack((r[:, 0], r[:, 1], t))
         reach = TEXTURE_REACH_TILES * GROUND_TILE_M
         ox = math.floor(position[0] / GROUND_TILE_M) * GROUND_TILE_M - reach
         oy = math.floor(position[1] / GROUND_TILE_M) * GROUND_TILE_M + GROUND_TILE_M + reach
         res = TEXTURE_RES_M
         texture_to_ground = np.array([[res, 0.0, ox], [0.0, -res, oy], [0.0, 0.0, 1.0]])
-        return ground_to_image @ texture_to_ground, (ox, oy)
+        return ground_to_image @ texture_to_ground
 
     def render(self, pose: CameraPose) -> np.ndarray:
         """The background image (H x W x 3 BGR uint8) seen from ``pose``."""
-        w = self.camera.width
-        alpha, over = self._haze_and_sky(pose)
+        alpha, image = self._haze_and_sky(pose)
         ground_rows = np.nonzero(alpha.min(axis=1) < 0.995)[0]
-        if ground_rows.size == 0:
-            return over
-        y0, y1 = int(ground_rows[0]), int(ground_rows[-1]) + 1
-        homography, _ = self.ground_homography(pose)
-        shift = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
-        ground = cv2.warpPerspective(
-            self.texture,
-            shift @ homography,
-            (w, y1 - y0),
-            flags=cv2.INTER_LINEAR,
-            borderMode=cv2.BORDER_CONSTANT,
-            borderValue=self.far_bgr,
-        )
-        a = alpha[y0:y1]
-        over[y0:y1] = cv2.blendLinear(ground, over[y0:y1], 1.0 - a, a)
-        return over
+        if ground_rows.size:
+            y0, y1 = int(ground_rows[0]), int(ground_rows[-1]) + 1
+            shift = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
+            ground = cv2.warpPerspective(
+                self.texture,
+                shift @ self.ground_homography(pose),
+                (self.work_w, y1 - y0),
+                flags=cv2.INTER_LINEAR,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=self.far_bgr,
+            )
+            a = alpha[y0:y1]
+            image[y0:y1] = cv2.blendLinear(ground, image[y0:y1], 1.0 - a, a)
+        if self.scale == 1:
+            return image
+        s = self.scale
+        full = cv2.resize(image, (self.work_w * s, self.work_h * s), interpolation=cv2.INTER_LINEAR)
+        return full[: self.camera.height, : self.camera.width]
