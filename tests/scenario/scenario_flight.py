@@ -32,7 +32,11 @@ from support import REPO, free_port
 CONTROLLER_CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
 CENTRED_TOLERANCE = math.radians(10.0)
 DISTANCE_TOLERANCE = 1.5  # m
-PERSON_WIDTH_RATIO = 0.5  # a person box (sprite, arms, loose fit) is about 0.5 x their height wide
+# A person's box, as a multiple of their height (tall, wide). YOLOX: the box fits the person
+# (rendered sprites with arms: about 0.5 x as wide as tall). HOG (OpenCV's people detector):
+# a 64x128 window in which a person is about 96 px tall, so the box is 128/96 x their height
+# and half as wide as tall.
+PERSON_BOX = {"yolox": (1.0, 0.5), "hog": (128 / 96, 64 / 96)}
 
 
 @dataclass
@@ -55,7 +59,7 @@ class Flight:
         )
 
 
-def intended_distance(scenario_name: str) -> tuple[float, float]:
+def intended_distance(scenario_name: str, detector: str = "yolox") -> tuple[float, float]:
     """(intended distance m, aim height m) of the controller config for this scenario."""
     scenario = load_scenario(scenario_name)
     target = next(o for o in scenario.objects if o.name == "target")
@@ -73,8 +77,8 @@ def intended_distance(scenario_name: str) -> tuple[float, float]:
         cam.width,
         cam.height,
         hfov,
-        height,
-        PERSON_WIDTH_RATIO * height,
+        PERSON_BOX[detector][0] * height,
+        PERSON_BOX[detector][1] * height,
     )
     return d, height / 2.0
 
@@ -87,7 +91,7 @@ def fly(
     variables: dict[str, str] | None = None,
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record ``seconds`` of flight."""
-    goal, aim = intended_distance(scenario)
+    goal, aim = intended_distance(scenario, (variables or {}).get("detector", "yolox"))
     router = f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
