@@ -15,6 +15,10 @@ What the bridge streams to the autopilot each tick, and when it acts on its own:
   bridge neither switches back nor acts on commander loss until someone requests the guided mode.
 * Priming: before the bridge asks for OFFBOARD it must have streamed for > 1 s; while priming it
   streams the fresh setpoint or, without one, a hold at the current pose.
+* Engagement: the hold stream and the commander-lost action apply once a commander has steered
+  in the guided mode (a setpoint arrived while in it, or it was entered with a fresh setpoint).
+  So an autopilot's own take-off in GUIDED (ArduPilot's NAV_TAKEOFF) is never overridden by a
+  hold at the ground, and a vehicle nobody commanded is left to the autopilot.
 
 Every state change is returned as a :class:`Transition` so the node publishes and logs it.
 """
@@ -100,6 +104,7 @@ class Failsafe:
         self.armed = False
         self.airborne = False
         self.pilot_override = False
+        self.engaged = False
         self._target: PositionTarget | None = None
         self._kind: Kind | None = None
         self._last_setpoint = -math.inf
@@ -115,6 +120,8 @@ class Failsafe:
     def on_setpoint(self, target: PositionTarget, kind: Kind, now: float) -> None:
         """A valid setpoint arrived from a commander."""
         self._target, self._kind, self._last_setpoint = target, kind, now
+        if is_guided(self.mode) and not self.pilot_override:
+            self.engaged = True
         if self.state == HOLD:
             self._set(NONE, "fresh setpoint")
 
@@ -136,6 +143,11 @@ class Failsafe:
             if self.state in (LAND, RETURN):
                 self._set(NONE, f"{mode} requested")
 
+    def on_takeoff_requested(self) -> None:
+        """The autopilot flies its own take-off now: the bridge stays out until commanded."""
+        self.engaged = False
+        self._hold = None
+
     def start_priming(self, now: float, duration: float) -> None:
         """Stream for ``duration`` s from now (fresh setpoint, else a hold) before OFFBOARD."""
         self._prime_until = now + duration
@@ -151,7 +163,10 @@ class Failsafe:
         if mode != old_mode:
             if is_guided(mode):
                 self._guided_since = now
-            elif is_guided(old_mode) and not self._expected(mode, now):
+                self.engaged = self.fresh_target(now) is not None
+            else:
+                self.engaged = False
+            if not is_guided(mode) and is_guided(old_mode) and not self._expected(mode, now):
                 self.pilot_override = True
                 self._events.append(
                     f"autopilot left {old_mode} for {mode} without a request from the bridge: "
@@ -187,7 +202,7 @@ class Failsafe:
         """Decide this tick. ``pose`` is the current (position ENU m, yaw ENU rad) or None."""
         out = Tick()
         fresh = self.fresh_target(now)
-        in_control = is_guided(self.mode) and not self.pilot_override
+        in_control = is_guided(self.mode) and not self.pilot_override and self.engaged
         if fresh is not None:
             self._hold = None
             out.send = fresh

@@ -721,6 +721,7 @@ class Bridge:
         with self._lock:
             self.failsafe.on_mode_requested("AUTO.TAKEOFF", time.monotonic())
             self.failsafe.on_mode_requested(HOLD_MODE[autopilot], time.monotonic())
+            self.failsafe.on_takeoff_requested()
         result, message = self.command(
             cmds.MAV_CMD_NAV_TAKEOFF, request.min_pitch, 0, 0, yaw_deg, math.nan, math.nan, altitude
         )

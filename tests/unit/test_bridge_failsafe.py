@@ -156,3 +156,29 @@ def test_bad_config_refused():
         FailsafeConfig(commander_lost_action="panic")
     with pytest.raises(ValueError):
         FailsafeConfig(setpoint_timeout=6.0, commander_lost_timeout=5.0)
+
+
+def test_not_engaged_before_anyone_commands_in_guided_mode():
+    """ArduPilot: GUIDED + NAV_TAKEOFF, nobody streaming: no hold at the ground, no land."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="GUIDED", armed=True, airborne=True, now=0.0)
+    fs.on_takeoff_requested()
+    for t in (1.0, 6.0, 20.0):
+        tick = fs.tick(t, POSE)
+        assert tick.send is None and tick.request is None and fs.state == ""
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 21.0)  # a commander steers: engaged from now
+    assert fs.engaged
+    assert fs.tick(21.6, POSE).send.type_mask == MASK_POSITION and fs.state == "hold"
+    assert fs.tick(26.1, POSE).request == "land"
+
+
+def test_entering_guided_with_a_fresh_stream_engages():
+    """PX4: the SDK streams, then OFFBOARD is entered: the bridge is responsible from then."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="AUTO.LOITER", armed=True, airborne=True, now=0.0)
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.9)
+    assert not fs.engaged
+    fs.on_vehicle(mode="OFFBOARD", armed=True, airborne=True, now=1.0)
+    assert fs.engaged
+    fs.on_vehicle(mode="AUTO.LAND", armed=True, airborne=True, now=2.0)
+    assert not fs.engaged
