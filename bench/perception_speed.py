@@ -18,6 +18,7 @@ Writes bench/results/perception.json.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import socket
 import statistics
@@ -30,7 +31,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import RESULTS, percentiles, print_table, write_results
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO.parent / "shared" / "assets"
@@ -307,6 +308,17 @@ def bench_crossings(seconds: float, fps: float) -> list[dict[str, object]]:
     return rows
 
 
+def previous_results() -> dict[str, object]:
+    """The sections of the last results file (without its machine facts), or {}."""
+    path = RESULTS / "perception.json"
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    data.pop("machine", None)
+    return data if isinstance(data, dict) else {}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="bench.perception_speed", description=__doc__)
     parser.add_argument("--duration", type=float, default=60.0, help="latency run, s")
@@ -320,7 +332,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.role == "publisher":
         return publisher_main(args.endpoint, args.fps, args.duration)
-    results: dict[str, object] = {}
+    results = previous_results()  # sections skipped this time keep their last figures
     if "compute" not in args.skip:
         results["compute"] = bench_compute(args.runs)
     if "latency" not in args.skip:

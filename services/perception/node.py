@@ -139,6 +139,8 @@ def run(node: Node, config: Config) -> int:
     except (ModelFileError, ValueError) as exc:
         log.error("cannot start the %s detector: %s", config.detector_kind(), exc)
         return 2
+    if config.detector == "person" and not config.model_path:
+        log.info("detector=person without model_path: using OpenCV's HOG people detector")
     service.pipeline.warm_up()
     log.info(
         "perception ready: %s detector, %s tracker, on %s -> %s",
