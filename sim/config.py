@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import msgspec
 
+from dronewrapper_sim.mavlink_io import parse_udp_spec
+
 
 class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     """Settings of ``dronewrapper sim`` (CLI flags in brackets).
@@ -64,5 +66,12 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             value = getattr(self, name)
             if value is not None and value < 16:
                 raise ValueError(f"{name} must be >= 16 px, got {value}")
+        for name in ("udp_onboard", "udp_gcs"):
+            spec = getattr(self, name)
+            if spec:
+                try:
+                    parse_udp_spec(spec, 0)
+                except ValueError as exc:
+                    raise ValueError(f"{name}: {exc}") from None
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")

@@ -79,3 +79,12 @@ def test_runner_real_time_factor_and_reply_to_last_sender():
         first.close()
         second.close()
     assert not thread.is_alive()
+
+
+def test_unknown_scenario_exits_2_naming_the_known_ones(router, capsys):
+    from dronewrapper_sim.cli import main
+
+    argv = ["--scenario", "no_such_world", "--connect", router]
+    assert main([*argv, "--udp-onboard", "off", "--udp-gcs", "off"]) == 2
+    err = capsys.readouterr().err
+    assert "no_such_world" in err and "beacon_static" in err

@@ -70,9 +70,24 @@ def test_flags_become_config_and_port_strings_stay_strings():
 
 @pytest.mark.parametrize(
     "override",
-    ["instance=-1", "realtime_factor=0", "jpeg_quality=0", "width=4", "nonsense=1"],
+    [
+        "instance=-1",
+        "realtime_factor=0",
+        "jpeg_quality=0",
+        "width=4",
+        "nonsense=1",
+        'udp_onboard="14540:x"',
+        'udp_gcs="a:b:c:d"',
+    ],
 )
 def test_bad_config_is_refused_with_the_key_named(override):
     key = override.split("=")[0]
     with pytest.raises(ConfigError, match=key):
         load_config(SimConfig, None, [override])
+
+
+def test_cli_exit_code_2_for_bad_flags():
+    from dronewrapper_sim.cli import main
+
+    assert main(["--udp-onboard", "not-a-port", "--no-cameras"]) == 2
+    assert main(["--realtime-factor", "-1"]) == 2
