@@ -1,4 +1,5 @@
-"""The background of every frame: a textured ground plane fading into haze, and a sky gradient.
+"""The background of every frame: a textured ground plane fading into haze, a sky gradient and
+distant trees (``scenery.py``).
 
 The ground is a seamless grass texture (an 8 m tile with a faint 2 m mowing checker, so motion
 and heading are visible) mapped onto the plane z = 0 with one homography
@@ -17,6 +18,7 @@ import cv2
 import numpy as np
 
 from dronewrapper_sim.render.camera import CameraPose, PinholeCamera
+from dronewrapper_sim.render.scenery import draw_trees, make_trees
 
 __all__ = ["GROUND_TILE_M", "Background", "make_grass_tile"]
 
@@ -105,12 +107,15 @@ class Background:
     on top at full resolution.
     """
 
-    def __init__(self, camera: PinholeCamera, seed: int = 0, scale: int = 2) -> None:
+    def __init__(
+        self, camera: PinholeCamera, seed: int = 0, scale: int = 2, scenery: bool = True
+    ) -> None:
         if scale < 1:
             raise ValueError(f"scale must be >= 1, got {scale}")
         self.camera = camera
         self.scale = scale
         self.texture, self.far_bgr = ground_texture(seed)
+        self.trees = make_trees(seed) if scenery else None
         self.work_w = math.ceil(camera.width / scale)
         self.work_h = math.ceil(camera.height / scale)
         # working-resolution intrinsics: u_work = (u + 0.5) / scale - 0.5 (cv2.resize's mapping)
@@ -187,6 +192,8 @@ class Background:
             )
             a = alpha[y0:y1]
             image[y0:y1] = cv2.blendLinear(ground, image[y0:y1], 1.0 - a, a)
+        if self.trees is not None:
+            draw_trees(image, self.trees, pose, self.work_matrix, SKY_HORIZON_BGR, FOG_DISTANCE_M)
         if self.scale == 1:
             return image
         s = self.scale

@@ -41,8 +41,9 @@ _RIM = 0.68  # brightness of the shadowed rim of every part
 
 # (height, half width, half depth) of the torso's cross-sections, as fractions of the height
 _SHIRT_RINGS = (
-    (0.835, 0.075, 0.045),  # sloping shoulder tops
-    (0.80, 0.118, 0.062),  # shoulders
+    (0.845, 0.055, 0.040),  # collar
+    (0.825, 0.105, 0.055),  # sloping shoulder tops
+    (0.795, 0.120, 0.062),  # shoulders
     (0.72, 0.112, 0.072),  # chest
     (0.60, 0.098, 0.064),  # waist
     (0.53, 0.102, 0.066),  # hips (shirt hem)
@@ -52,9 +53,9 @@ _RING_ANGLES = np.linspace(0.0, 2.0 * math.pi, 10, endpoint=False)
 
 # (kind, joints, radius as a fraction of the height, colour) of every capsule and sphere
 _LIMBS: tuple[tuple[str, tuple[str, ...], float, str], ...] = (
-    ("capsule", ("neck_base", "neck_top"), 0.028, "skin"),
-    ("sphere", ("hair",), 0.054, "hair"),
-    ("sphere", ("face",), 0.051, "skin"),
+    ("capsule", ("neck_base", "neck_top"), 0.03, "skin"),
+    ("sphere", ("hair",), 0.058, "hair"),
+    ("sphere", ("face",), 0.055, "skin"),
     *(
         part
         for s in ("l", "r")
@@ -113,12 +114,12 @@ def skeleton(height_m: float, phase_rad: float, gait: float) -> np.ndarray:
             (wx, wy, wz),
             (wx + hand * dx, wy + hand * dy, wz + hand * dz),
         ]
-    head_z = 0.935 * h
+    head_z = 0.93 * h
     rows += [
         (0.0, 0.0, 0.82 * h),  # neck base
-        (0.0, 0.0, 0.88 * h),  # neck top
+        (0.004 * h, 0.0, 0.875 * h),  # neck top
         (-0.008 * h, 0.0, head_z + 0.010 * h),  # hair (back and top of the head)
-        (0.007 * h, 0.0, head_z - 0.006 * h),  # face
+        (0.008 * h, 0.0, head_z - 0.008 * h),  # face
     ]
     joints = np.array(rows)
     # keep the lower foot on the ground (the body bobs as it walks)

@@ -55,11 +55,19 @@ def _cut_out(bgr: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
         fg = np.isin(mask, (cv2.GC_FGD, cv2.GC_PR_FGD)).astype(np.float32)
     except cv2.error:
         fg = np.zeros((h, w), np.float32)
-    if fg.sum() < 0.25 * rect[2] * rect[3]:  # GrabCut lost the person: keep the whole box
+    if fg.sum() < 0.25 * rect[2] * rect[3]:  # GrabCut lost the person: an ellipse in the box
         fg = np.zeros((h, w), np.float32)
-        fg[y0:y1, x0:x1] = 1.0
+        centre = ((x0 + x1) // 2, (y0 + y1) // 2)
+        cv2.ellipse(
+            fg, centre, (max(1, (x1 - x0) // 2), max(1, (y1 - y0) // 2)), 0, 0, 360, 1.0, -1
+        )
     fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
     return cv2.GaussianBlur(fg, (0, 0), 1.0)
+
+
+def _is_grey(bgr: np.ndarray) -> bool:
+    spread = bgr.max(axis=2).astype(int) - bgr.min(axis=2)
+    return float(np.mean(spread)) < 4.0
 
 
 class SpriteBank:
@@ -83,15 +91,17 @@ class SpriteBank:
             raise ValueError(f"{index}: no sprites listed")
         self.sprites = sprites
         self._by_name = {s.name: s for s in sprites}
+        # chosen by default: colour photos (a grey one is hardly a person to a COCO detector)
+        self.default = [s for s in sprites if not _is_grey(s.bgr)] or sprites
 
     def choose(self, name: str | None, index: int) -> Sprite:
-        """The sprite called ``name``, or the ``index``-th (mod the count) when None."""
+        """The sprite called ``name``, or the ``index``-th colour sprite (mod their count)."""
         if name is not None:
             try:
                 return self._by_name[name]
             except KeyError:
                 raise KeyError(f"no sprite {name!r} (have {', '.join(self._by_name)})") from None
-        return self.sprites[index % len(self.sprites)]
+        return self.default[index % len(self.default)]
 
 
 @lru_cache(maxsize=8)

@@ -149,3 +149,14 @@ def test_sky_above_the_horizon_and_ground_below():
     sky, ground = image[:150].reshape(-1, 3).mean(0), image[330:].reshape(-1, 3).mean(0)
     assert sky[0] > sky[2] + 40  # blue
     assert ground[1] > ground[0] + 30 and ground[1] > ground[2] + 20  # green
+
+
+def test_the_skyline_shows_the_heading():
+    """Distant trees above the horizon change as the vehicle turns in place."""
+    renderer = Renderer(World(load_scenario("empty")), CAM)
+    pos = np.array([0.0, 0.0, 2.0])
+    band = slice(150, 236)  # just above the horizon (v = 239.5 for a level camera at 2 m)
+    views = [renderer.render(FRONTAL, pos, yaw_to_quat(math.radians(a)))[band] for a in (0, 20)]
+    diff = np.abs(views[0].astype(int) - views[1].astype(int)).mean()
+    assert diff > 2.0
+    assert not red_mask(renderer.render(FRONTAL, pos, LEVEL)).any()
