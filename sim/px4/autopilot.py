@@ -13,7 +13,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
-from dataclasses import astuple, dataclass, field
+from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -162,6 +162,7 @@ class Autopilot:
         self.rejected_setpoints = 0
         self.nonfinite_setpoints = 0
         self.crashes = 0
+        self._gains_version = -1
         rates = link_rates or {"onboard": telemetry.ONBOARD_RATES, "gcs": telemetry.GCS_RATES}
         self.links = {
             name: LinkState(name, telemetry.StreamScheduler(r)) for name, r in rates.items()
@@ -193,12 +194,14 @@ class Autopilot:
         self.steps += 1
         cmd = self.commander
         cmd.update(now, self.state)
-        hover = GRAVITY
-        self.controller.gains = _gains(self.params, hover, self.quad.max_thrust_accel)
+        if self._gains_version != self.params.version:  # PARAM_SET takes effect at once
+            self._gains_version = self.params.version
+            self.controller.gains = _gains(self.params, GRAVITY, self.quad.max_thrust_accel)
         control = self.controller.update(cmd.target, self.state, dt)
         self.wind_enu = self.wind.step(dt)
         state = step(self.state, control, self.quad, dt, self.wind_enu)
-        if not all(math.isfinite(v) for v in astuple(state)):
+        total = state.x + state.y + state.z + state.vx + state.vy + state.vz
+        if not math.isfinite(total + state.roll + state.pitch + state.yaw + state.thrust):
             state = self._crash(state)
         self.state = state
         self.battery.step(motor_current(cmd.armed, self.state.thrust), dt)

@@ -353,7 +353,7 @@ class Commander:
                 max_down=p["MPC_Z_V_AUTO_DN"],
                 max_yaw_rate=auto_yaw_rate,
             )
-            if self.armed and not self.landed and abs(state.z - self._takeoff_z) < 0.3:
+            if self.armed and not self.landed and abs(state.z - self._takeoff_z) < 0.1:
                 self.user_mode = Mode.LOITER
                 self._enter(Mode.LOITER, state, now)
                 self._hold = (x0, y0, self._takeoff_z, yaw0)
@@ -409,7 +409,7 @@ class Commander:
                 heading = math.atan2(hy - state.y, hx - state.x) if dist > 3.0 else state.yaw
                 return Target(position=(hx, hy, self._rtl_z), yaw=heading, **limits)
         if phase == "descend":
-            descend_z = max(hz + p["RTL_DESCEND_ALT"], min(self._rtl_z, state.z))
+            descend_z = hz + p["RTL_DESCEND_ALT"]
             if state.z > descend_z + 0.5:
                 self._rtl_wait_since = now
                 return Target(position=(hx, hy, descend_z), yaw=state.yaw, **limits)

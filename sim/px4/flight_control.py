@@ -18,8 +18,8 @@ from dronewrapper_sim.frames import wrap_pi
 NAN = float("nan")
 
 
-def _finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
+def _finite(a: float, b: float) -> bool:
+    return math.isfinite(a) and math.isfinite(b)
 
 
 @dataclass(frozen=True)
@@ -48,13 +48,9 @@ class Target:
 
     def is_valid(self) -> bool:
         """Every axis has a finite position, velocity or acceleration (x and y together)."""
-        for axes in ((0, 1), (2,)):
-            if not any(
-                _finite(*(vec[i] for i in axes))
-                for vec in (self.position, self.velocity, self.acceleration)
-            ):
-                return False
-        return True
+        p, v, a = self.position, self.velocity, self.acceleration
+        xy = _finite(p[0], p[1]) or _finite(v[0], v[1]) or _finite(a[0], a[1])
+        return xy and (math.isfinite(p[2]) or math.isfinite(v[2]) or math.isfinite(a[2]))
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,7 @@ DEFAULTS: tuple[ParamDef, ...] = (
     ParamDef("MPC_Z_VEL_MAX_UP", FLOAT, 3.0, "m/s", "climb speed limit"),
     ParamDef("MPC_Z_VEL_MAX_DN", FLOAT, 1.5, "m/s", "descent speed limit"),
     ParamDef("MPC_Z_V_AUTO_UP", FLOAT, 3.0, "m/s", "climb speed of automatic modes"),
-    ParamDef("MPC_Z_V_AUTO_DN", FLOAT, 1.5, "m/s", "descent speed of automatic modes"),
+    ParamDef("MPC_Z_V_AUTO_DN", FLOAT, 1.0, "m/s", "descent speed of automatic modes"),
     ParamDef("MPC_TILTMAX_AIR", FLOAT, 45.0, "deg", "tilt limit in flight"),
     ParamDef("MPC_TKO_SPEED", FLOAT, 1.5, "m/s", "take-off climb speed"),
     ParamDef("MPC_TKO_RAMP_T", FLOAT, 3.0, "s", "take-off speed ramp time"),
@@ -105,6 +105,7 @@ class ParamStore:
     def __init__(self, overrides: dict[str, float] | None = None) -> None:
         self.defs: tuple[ParamDef, ...] = DEFAULTS
         self._values: dict[str, float] = {p.name: p.default for p in DEFAULTS}
+        self.version = 0  # incremented by every set(): lets users cache derived values
         for name, value in (overrides or {}).items():
             self.set(name, value)
 
@@ -135,6 +136,7 @@ class ParamStore:
             raise ValueError(f"{name}: {value} does not fit an int32")
         stored: float = int(value) if pdef.type == INT32 else float(value)
         self._values[name] = stored
+        self.version += 1
         return stored
 
     def index(self, name: str) -> int:

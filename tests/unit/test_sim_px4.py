@@ -540,3 +540,60 @@ def test_absurd_params_are_refused_or_survived():
     assert bad.state.z == 0.0
     lpn = [m for m in out if m.get_type() == "LOCAL_POSITION_NED"]
     assert lpn and all(math.isfinite(m.z) for m in lpn)
+
+
+def takeoff_to(ap: Autopilot, client: Client, height: float) -> None:
+    client.command(400, 1)
+    client.command(22, *[math.nan] * 6, ap.config.home_alt_m + height)
+    for _ in range(600):
+        if ap.mode is not Mode.TAKEOFF:
+            break
+        fly_for(ap, 0.1)
+    assert ap.mode is Mode.LOITER
+    fly_for(ap, 1.0)
+    assert ap.state.z == pytest.approx(height, abs=0.15)
+
+
+@pytest.mark.parametrize(("height", "low", "high"), [(5.0, 8.0, 13.0), (30.0, 32.0, 42.0)])
+def test_nav_land_to_disarm_times_match_px4_sitl(height, low, high):
+    """PX4 SITL: "Disarmed by landing" ~10-12 s after NAV_LAND from 2-5 m, 37.6 s from 30 m."""
+    ap = Autopilot()
+    client = Client(ap)
+    takeoff_to(ap, client, height)
+    client.command(21, *[math.nan] * 7)
+    t = 0.0
+    while ap.armed and t < 60:
+        fly_for(ap, 0.1)
+        t += 0.1
+    assert low < t < high
+
+
+def test_rtl_far_from_home_climbs_returns_lands_and_disarms():
+    ap = Autopilot()
+    client = Client(ap)
+    takeoff_to(ap, client, 5.0)
+    client.setpoint()
+    client.command(176, 1, 6, 0)
+    for _ in range(160):  # 20 m north in OFFBOARD, streaming position setpoints
+        client.send(
+            mavlink.MAVLink_set_position_target_local_ned_message(
+                0, 1, 1, 1, 3064, 20.0, 0, -5.0, 0, 0, 0, 0, 0, 0, 0, 0
+            )
+        )
+        fly_for(ap, 0.05)
+    assert ap.state.y == pytest.approx(20.0, abs=0.5)
+    top, t = 0.0, 0.0
+    while ap.armed and t < 120:  # the stream stopped: failsafe RTL
+        fly_for(ap, 0.2)
+        t += 0.2
+        top = max(top, ap.state.z)
+    assert not ap.armed
+    assert top == pytest.approx(30.0, abs=0.6)  # RTL_RETURN_ALT
+    assert math.hypot(ap.state.x, ap.state.y) < 1.0  # home
+    assert ap.mode is Mode.OFFBOARD  # the user-intended mode, disarmed
+
+
+def fly_for(ap: Autopilot, seconds: float) -> None:
+    """Advance physics and autopilot only (no telemetry): for long flights."""
+    for _ in range(round(seconds / DT)):
+        ap.step(DT)
