@@ -166,14 +166,15 @@ class Failsafe:
                 self.engaged = self.fresh_target(now) is not None
             else:
                 self.engaged = False
-            if not is_guided(mode) and is_guided(old_mode) and not self._expected(mode, now):
+            left_guided = is_guided(old_mode) and not is_guided(mode)
+            if left_guided and not self._expected(mode, now):
                 self.pilot_override = True
                 self._events.append(
                     f"autopilot left {old_mode} for {mode} without a request from the bridge: "
                     "not switching back"
                 )
-                if self.state == HOLD:
-                    self._set(NONE, f"pilot took over ({mode})")
+            if left_guided and self.state == HOLD:
+                self._set(NONE, f"the autopilot is in {mode}")
         self.mode, self.airborne = mode, airborne
         if self.armed and not armed and self.state != NONE:
             self._set(NONE, "disarmed")

@@ -182,3 +182,15 @@ def test_entering_guided_with_a_fresh_stream_engages():
     assert fs.engaged
     fs.on_vehicle(mode="AUTO.LAND", armed=True, airborne=True, now=2.0)
     assert not fs.engaged
+
+
+def test_hold_ends_when_a_requested_landing_starts():
+    fs = flying(Failsafe())
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    fs.tick(0.6, POSE)
+    assert fs.state == "hold"
+    fs.on_mode_requested("AUTO.LAND", 0.7)
+    fs.on_vehicle(mode="AUTO.LAND", armed=True, airborne=True, now=1.0)
+    tick = fs.tick(1.1, POSE)
+    assert fs.state == "" and tick.send is None and tick.events == []
+    assert [(t.old, t.new) for t in tick.transitions] == [("hold", "")]
