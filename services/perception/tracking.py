@@ -21,7 +21,7 @@ from __future__ import annotations
 import itertools
 from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -172,7 +172,6 @@ class Track:
     class_id: int
     last_seen: float
     hits: int = 1
-    history: list[tuple[float, float]] = field(default_factory=list)
 
 
 class KalmanTracker:
@@ -187,6 +186,8 @@ class KalmanTracker:
         occlusion_overlap: a detection covered more than this fraction by another detection
             does not update its track's appearance (it is mixed with the other person).
         min_hits: detections a new track needs before its misses are tolerated.
+        recent_s: tracks seen within this time are matched first (their prediction is sharper
+            than a coasting track's, so a coasting track cannot steal their detection).
     """
 
     needs_appearance = True
@@ -201,6 +202,7 @@ class KalmanTracker:
         appearance_rate: float = 0.1,
         occlusion_overlap: float = 0.15,
         min_hits: int = 2,
+        recent_s: float = 0.25,
     ) -> None:
         self.max_coast_s = max_coast_s
         self.motion_gate = motion_gate
@@ -209,6 +211,7 @@ class KalmanTracker:
         self.appearance_rate = appearance_rate
         self.occlusion_overlap = occlusion_overlap
         self.min_hits = min_hits
+        self.recent_s = recent_s
         self.tracks: list[Track] = []
         self.target_id = ""
         self._ids = itertools.count(1)
@@ -257,8 +260,8 @@ class KalmanTracker:
         # two passes: tracks seen recently first (less uncertain), then coasting ones
         ids = ["" for _ in dets]
         unmatched = set(range(len(dets)))
-        fresh = [tr for tr in self.tracks if t - tr.last_seen <= 0.25]
-        coasting = [tr for tr in self.tracks if t - tr.last_seen > 0.25]
+        fresh = [tr for tr in self.tracks if t - tr.last_seen <= self.recent_s]
+        coasting = [tr for tr in self.tracks if t - tr.last_seen > self.recent_s]
         for group in (fresh, coasting):
             cols = sorted(unmatched)
             if not group or not cols:
@@ -280,7 +283,6 @@ class KalmanTracker:
                 class_id=dets[j].class_id,
                 last_seen=t,
             )
-            track.history.append(dets[j].center_xy)
             self.tracks.append(track)
             ids[j] = track.track_id
         self.tracks = [
@@ -295,8 +297,6 @@ class KalmanTracker:
         track.kf.update(boxes[j])
         track.last_seen = t
         track.hits += 1
-        track.history.append(dets[j].center_xy)
-        del track.history[:-50]
         feature = features[j] if features is not None else None
         if feature is not None and not self._occluded(j, dets):
             if track.appearance is None:
