@@ -218,9 +218,16 @@ class DroneWrapper:
                 if self.decode_errors[key] == 1:
                     log.warning("undecodable %s on %s: %s", topic.type.__name__, key, exc)
                 return
-            callback(msg)
+            try:
+                callback(msg)
+            except Exception:  # never let an exception reach Zenoh's receive thread
+                log.exception("handling %s failed", key)
 
-        self._subscribers.append(self.session.declare_subscriber(key, on_sample))
+        # Direct callbacks (no Python thread per subscriber): the handler is tiny (decode and
+        # store), and no non-daemon thread is left to block interpreter exit before our atexit
+        # hook closes the session (the paper's listing never calls close()).
+        handler = zenoh.handlers.Callback(on_sample, indirect=False)
+        self._subscribers.append(self.session.declare_subscriber(key, handler))
 
     def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))

@@ -8,6 +8,8 @@ rates, error messages) in a fraction of a second per test.
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -391,3 +393,24 @@ def test_embedding_on_an_existing_session(router, bridge):
         assert not node.session.is_closed()  # the owner's session stays open
     finally:
         node.close()
+
+
+def test_a_script_that_never_closes_exits_and_stops_commanding(router, bridge):
+    """The paper's listing never calls close(): the interpreter must still exit promptly."""
+    script = (
+        "import sys\n"
+        "from dronewrapper import DroneWrapper\n"
+        "drone = DroneWrapper('drone', sys.argv[1], mode='peer')\n"
+        "drone.set_cmd_vel(az=1)\n"
+    )
+    t0 = time.monotonic()
+    proc = subprocess.run(
+        [sys.executable, "-c", script, router], capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert time.monotonic() - t0 < 30
+    assert bridge.setpoints, "the script's setpoint should have arrived"
+    time.sleep(0.2)
+    t1 = time.monotonic()
+    time.sleep(0.4)
+    assert bridge.setpoints_since(t1) == []  # nobody streams after the app is gone

@@ -1,0 +1,135 @@
+"""Every example in examples/ runs against the simulator (compose/sim_iris.yaml) and does its job.
+
+The examples take the router from ``DRONEWRAPPER_CONNECT`` (the paper's listing has no
+arguments), so each runs unchanged as a child process, while the test watches the aircraft
+through its own DroneWrapper (which only reads, never commands).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+from collections.abc import Iterator
+
+import cv2
+import pytest
+from sdk_sim_graph import sim_graph
+
+from dronewrapper import DroneWrapper
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from support import REPO
+
+pytestmark = pytest.mark.integration
+
+EXAMPLES = REPO / "examples"
+
+
+def run_example(name: str, router: str, *args: str, timeout: float = 120) -> str:
+    proc = subprocess.run(
+        [sys.executable, str(EXAMPLES / name), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**_env(), "DRONEWRAPPER_CONNECT": router},
+        cwd=REPO,
+    )
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, f"{name} exited {proc.returncode}:\n{out[-4000:]}"
+    return out
+
+
+def _env() -> dict[str, str]:
+    import os
+
+    return {k: v for k, v in os.environ.items() if not k.startswith("DRONEWRAPPER_")}
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory) -> Iterator[str]:
+    with sim_graph(tmp_path_factory.mktemp("examples")) as (endpoint, _):
+        yield endpoint
+
+
+@pytest.fixture(scope="module")
+def watcher(sim) -> Iterator[DroneWrapper]:
+    with DroneWrapper("drone", sim, timeout=30, cameras=()) as drone:
+        yield drone
+
+
+class Recorder(threading.Thread):
+    """Samples the watched drone at 20 Hz while an example runs."""
+
+    def __init__(self, drone: DroneWrapper) -> None:
+        super().__init__(daemon=True)
+        self.drone = drone
+        self.stop = threading.Event()
+        self.yaw_rates: list[float] = []
+        self.altitudes: list[float] = []
+
+    def run(self) -> None:
+        while not self.stop.wait(0.05):
+            self.yaw_rates.append(self.drone.get_yaw_rate())
+            self.altitudes.append(float(self.drone.get_position()[2]))
+
+    def __enter__(self) -> Recorder:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop.set()
+        self.join(2)
+
+
+def test_paper_listing(sim, watcher):
+    source = (EXAMPLES / "paper_listing.py").read_text()
+    assert "drone = DroneWrapper()" in source and "drone.set_cmd_vel(az=1)" in source
+    with Recorder(watcher) as rec:
+        run_example("paper_listing.py", sim)
+    assert max(rec.altitudes) == pytest.approx(2.5, abs=0.3)
+    spinning = [r for r in rec.yaw_rates if r > 0.8]
+    assert len(spinning) * 0.05 > 3.0, "the drone should spin at ~1 rad/s for most of 5 s"
+    assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
+    assert not watcher.get_state().armed
+
+
+def test_square(sim, watcher):
+    out = run_example("square.py", sim, "--side", "1.5", "--height", "1.5")
+    assert out.count("corner reached") == 4
+    assert "landed" in out
+    assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
+
+
+def test_save_frames(sim, tmp_path):
+    out_dir = tmp_path / "frames"
+    out = run_example(
+        "save_frames.py", sim, "--count", "3", "--rate", "10", "--ventral", "--out", str(out_dir)
+    )
+    files = sorted(p.name for p in out_dir.iterdir())
+    assert files == [f"{cam}_{i:04d}.png" for cam in ("frontal", "ventral") for i in range(3)]
+    for path in out_dir.iterdir():
+        image = cv2.imread(str(path))
+        assert image is not None and image.ndim == 3 and image.std() > 1.0
+    assert "captured" in out
+
+
+def test_two_drones(router, tmp_path):
+    with (
+        sim_graph(tmp_path, "drone1", router=router, use_router=True),
+        sim_graph(tmp_path, "drone2", router=router, use_router=True),
+    ):
+        out = run_example(
+            "two_drones.py",
+            router,
+            "--names",
+            "drone1",
+            "drone2",
+            "--connect",
+            router,
+            "--height",
+            "1.5",
+            "--seconds",
+            "1.5",
+        )
+    assert "drones online: drone1, drone2" in out
+    assert "drone1: landed" in out and "drone2: landed" in out
