@@ -61,9 +61,13 @@ class Command(msgspec.Struct, kw_only=True, frozen=True):
 
 
 def pick_target(detections: Detections) -> Detection2D | None:
-    """The followed detection: the tracker's target if named, else the best (first) one."""
+    """The followed detection: the tracker's target if it names one; when the detections are
+    tracked (they carry ids) but no target is named, none (the target is hidden or lost: never
+    jump to a passer-by); when they are not tracked at all, the best (first) one."""
     if detections.target_id:
         return detections.target()
+    if any(det.id for det in detections.detections):
+        return None
     return detections.detections[0] if detections.detections else None
 
 

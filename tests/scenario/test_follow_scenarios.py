@@ -9,8 +9,12 @@ the person named ``target`` (not at a passer-by) at the end.
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from scenario_flight import fly
+
+from dronewrapper_controller.metrics import bearing_error, wrap_angle
 
 pytestmark = [pytest.mark.scenario, pytest.mark.timeout(150)]
 
@@ -25,6 +29,15 @@ CASES = {
     "people_crossing_front": ("sim_follow_person", "yolox", 32, 12, 0.5, 0.5),
 }
 CROSSING = ("people_crossing_behind", "people_crossing_front")
+
+
+def crossed(sample) -> bool:
+    """A passer-by is within 5 deg of the target's bearing (in front of or behind it)."""
+    target = sample.bearing
+    return any(
+        abs(wrap_angle(bearing_error(sample.vehicle, sample.yaw, pos) - target)) < math.radians(5)
+        for pos in sample.others.values()
+    )
 
 
 def check_flight(flight, max_acquire, min_centred, min_distance):
@@ -44,6 +57,8 @@ def test_follow(scenario, tmp_path):
     flight = fly(graph, scenario, seconds, tmp_path, variables)
     check_flight(flight, max_acquire, min_centred, min_distance)
     if scenario in CROSSING:
+        crossings = sum(crossed(s) for s in flight.samples)
+        assert crossings > 0, "no passer-by crossed the line of sight: the test proves nothing"
         tail = flight.samples[-int(len(flight.samples) * 0.25) :]
         on_target = sum(s.closest_to_axis() == "target" for s in tail) / len(tail)
         assert on_target >= 0.8, f"pointing at the target only {on_target:.0%} of the last part"

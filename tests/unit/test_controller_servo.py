@@ -194,3 +194,11 @@ def test_observing_during_takeoff_sets_the_search_side_without_commanding():
     assert cmd.state == CONTROLLER_HOVER  # seen 0.6 s ago: hover first
     cmd = servo.step(1.2, frame(2.2), age=0.0)
     assert cmd.state == CONTROLLER_SEARCH and cmd.yaw_rate == pytest.approx(-0.3)
+
+
+def test_tracked_detections_without_a_target_are_not_followed():
+    """The tracker lost the target (occluded): do not jump to the passer-by it still sees."""
+    msg = frame(1.0, box(40, 120, 60, 120, id_="7"), target_id="", detector="yolox")
+    assert pick_target(msg) is None
+    cmd = Servo(colour_config(mode="follow_person")).step(0.0, msg, age=0.0)
+    assert cmd.state != CONTROLLER_TRACKING and cmd.yaw_rate >= 0 and cmd.vx == 0
