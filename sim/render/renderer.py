@@ -23,7 +23,7 @@ from dronewrapper_sim.render.camera import (
 )
 from dronewrapper_sim.render.person import draw_person
 from dronewrapper_sim.render.shadow import draw_shadow
-from dronewrapper_sim.render.sprites import Sprite, draw_billboard, sprite_bank
+from dronewrapper_sim.render.sprites import draw_billboard, sprite_bank
 from dronewrapper_sim.world.world import World, WorldObject
 
 __all__ = ["MAX_DRAW_DISTANCE_M", "Renderer"]
@@ -49,13 +49,6 @@ class Renderer:
         self.camera = camera
         self.background = Background(camera, seed=world.seed)
         self.sprites = sprite_bank(Path(sprites_dir)) if sprites_dir is not None else None
-        self._sprite_of: dict[str, Sprite] = {}
-        if self.sprites is not None:
-            # different people get different photos (in turn from a seeded start)
-            people = [o for o in world.objects if o.kind == "person"]
-            start = people[0].sprite_index if people else 0
-            for k, obj in enumerate(people):
-                self._sprite_of[obj.name] = self.sprites.choose(obj.sprite, start + k)
 
     def render(
         self, mount: CameraMount, vehicle_pos_enu: np.ndarray, vehicle_quat_xyzw: np.ndarray
@@ -108,9 +101,7 @@ class Renderer:
             pts = pose.to_camera(np.array([obj.position, obj.top_enu]))
             pixels, _ = project_camera_points(pts, self.camera)
             if np.all(np.isfinite(pixels)):
-                sprite = self._sprite_of.get(obj.name) or self.sprites.choose(
-                    obj.sprite, obj.sprite_index
-                )
+                sprite = self.sprites.choose(obj.sprite, obj.sprite_index)
                 draw_billboard(image, sprite, pixels[0], pixels[1])
         elif obj.look is not None:
             draw_person(
