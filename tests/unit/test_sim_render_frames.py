@@ -160,3 +160,19 @@ def test_the_skyline_shows_the_heading():
     diff = np.abs(views[0].astype(int) - views[1].astype(int)).mean()
     assert diff > 2.0
     assert not red_mask(renderer.render(FRONTAL, pos, LEVEL)).any()
+
+
+def test_any_pose_renders_without_error():
+    """Random attitudes (upside down included), altitudes from below ground to 300 m, positions
+    far from the origin and right inside the objects: always a full frame, never an exception."""
+    world = World(load_scenario("people_crossing_front"))
+    world.objects.append(World(load_scenario("beacon_static")).objects[0])
+    renderer = Renderer(world, PinholeCamera(160, 120, math.radians(60.0)))
+    rng = np.random.default_rng(0)
+    poses = [np.array([6.0, 0.0, 1.0]), np.array([6.0, 0.0, 2.0]), np.array([3.5, -5.0, 0.5])]
+    poses += [rng.uniform([-500, -500, -1], [500, 500, 300]) for _ in range(30)]
+    for pos in poses:
+        quat = rng.normal(size=4)
+        for mount in (FRONTAL, VENTRAL):
+            image = renderer.render(mount, pos, quat)
+            assert image.shape == (120, 160, 3) and image.dtype == np.uint8
