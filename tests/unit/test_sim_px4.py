@@ -11,7 +11,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_sim.dynamics import QuadParams, QuadState
 from dronewrapper_sim.px4 import modes, offboard, params, telemetry
-from dronewrapper_sim.px4.autopilot import Autopilot
+from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 from dronewrapper_sim.px4.commander import (
     ACCEPTED,
     ARM_DENIED,
@@ -597,3 +597,17 @@ def fly_for(ap: Autopilot, seconds: float) -> None:
     """Advance physics and autopilot only (no telemetry): for long flights."""
     for _ in range(round(seconds / DT)):
         ap.step(DT)
+
+
+def test_same_seed_same_flight_through_the_whole_autopilot():
+    def flight(seed: int) -> tuple:
+        ap = Autopilot(AutopilotConfig(seed=seed, wind_east=2.0, wind_gust=1.5))
+        client = Client(ap)
+        client.command(400, 1)
+        client.command(22, *[math.nan] * 7)
+        fly_for(ap, 8.0)
+        s = ap.state
+        return (s.x, s.y, s.z, s.vx, s.vy, s.yaw, ap.battery.consumed_mah)
+
+    assert flight(3) == flight(3)
+    assert flight(3) != flight(4)
