@@ -38,7 +38,7 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
     SetMode,
 )
-from dronewrapper.runtime import Node
+from dronewrapper.runtime import Node, ServiceError
 from support import client_node, free_port, python_module, wait_for
 
 pytestmark = pytest.mark.integration
@@ -408,3 +408,22 @@ def test_sim_restart_reconnects(rig, spawn):
     wait_for(lambda: rig.pose.count > poses_before + 30, 10, what="telemetry resumed")
     reply = rig.call(registry.SET_MODE, SetMode(custom_mode="AUTO.LOITER"))
     assert reply.mode_sent, reply.message
+
+
+def test_bad_input_refused_and_nothing_changes(rig):
+    """NaN / out-of-range setpoints, garbage bytes, unknown modes: refused, the bridge lives on."""
+    wait_for(lambda: rig.pose.value, 10)
+    before = rig.state.value
+    for bad in (velocity(vx=math.nan), velocity(vz=math.inf), velocity(vx=1e3), mixed(0.0, -1e6)):
+        rig.setpoints.put(bad)
+    rig.user.session.put(registry.SETPOINT_RAW_LOCAL.key("drone"), b"\xff\x00not msgpack")
+    with pytest.raises(ServiceError, match="valid modes"):
+        rig.call(registry.SET_MODE, SetMode(custom_mode="FLY_AWAY"))
+    with pytest.raises(ServiceError, match="altitude"):
+        rig.call(registry.TAKEOFF, CommandTOL(altitude=-3.0))
+    wait_for(lambda: "setpoint refused" in rig.bridge.output(), 5, what="refusal logged")
+    time.sleep(1.0)
+    after = rig.state.value
+    assert rig.bridge.alive() and after.connected
+    assert (after.mode, after.armed, after.failsafe) == (before.mode, before.armed, "")
+    assert abs(rig.z()) < 0.3  # nothing moved the vehicle
