@@ -1,8 +1,9 @@
 """Helper for the SDK's simulator tests: run compose/sim_iris.yaml on free loopback ports.
 
-``sim_graph`` starts ``dronewrapper up compose/sim_iris.yaml`` (its own router on a free port, or
-``use_router=True`` to join a running one) with free UDP ports, waits until the namespace's
-bridge is alive, yields the router endpoint, and stops the graph with SIGINT at the end.
+``sim_graph`` starts ``dronewrapper up compose/sim_iris.yaml`` (its own router on a free port)
+with free UDP ports, waits until the namespace's bridge is alive, yields the router endpoint,
+and stops the graph with SIGINT at the end. ``sim_graphs`` starts one graph per namespace on a
+running router, all at once, and waits for all of their bridges.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import contextlib
 import socket
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from dronewrapper import NotConnected, list_drones
@@ -19,17 +20,7 @@ from support import Process, free_endpoint, free_port, python_module
 START_TIMEOUT_S = 60.0
 
 
-@contextlib.contextmanager
-def sim_graph(
-    log_dir: Path,
-    ns: str = "drone",
-    *,
-    router: str | None = None,
-    use_router: bool = False,
-    extra: tuple[str, ...] = (),
-) -> Iterator[tuple[str, Process]]:
-    """Run the simulated Iris + bridge in namespace ``ns``; yields (router endpoint, process)."""
-    router = router or free_endpoint()
+def _start(log_dir: Path, ns: str, router: str, use_router: bool) -> Process:
     argv = python_module(
         "dronewrapper",
         "up",
@@ -43,20 +34,48 @@ def sim_graph(
         "--var",
         f"gcs_port={free_port(socket.SOCK_DGRAM)}",
         *(["--use-router"] if use_router else []),
-        *extra,
     )
-    proc = Process(argv, log_dir / f"sim_iris-{ns}.log")
+    return Process(argv, log_dir / f"sim_iris-{ns}.log")
+
+
+def _wait_for_bridges(router: str, procs: dict[str, Process]) -> None:
+    deadline = time.monotonic() + START_TIMEOUT_S
+    while True:
+        for ns, proc in procs.items():
+            assert proc.alive(), f"graph {ns} exited early:\n{proc.output()[-4000:]}"
+        try:
+            online = list_drones(router, timeout=1.0)
+        except NotConnected:
+            online = []  # the launcher's router is not up yet
+        missing = [ns for ns in procs if ns not in online]
+        if not missing:
+            return
+        logs = "\n".join(procs[ns].output()[-2000:] for ns in missing)
+        assert time.monotonic() < deadline, f"no bridge in {', '.join(missing)}:\n{logs}"
+        time.sleep(0.3)
+
+
+@contextlib.contextmanager
+def sim_graph(log_dir: Path, ns: str = "drone") -> Iterator[tuple[str, Process]]:
+    """Run the simulated Iris + bridge + a router; yields (router endpoint, graph process)."""
+    router = free_endpoint()
+    proc = _start(log_dir, ns, router, use_router=False)
     try:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while True:
-            assert proc.alive(), f"graph exited early:\n{proc.output()[-4000:]}"
-            try:
-                if ns in list_drones(router, timeout=1.0):
-                    break
-            except NotConnected:
-                pass  # the launcher's router is not up yet
-            assert time.monotonic() < deadline, f"no bridge in {ns}:\n{proc.output()[-4000:]}"
-            time.sleep(0.3)
+        _wait_for_bridges(router, {ns: proc})
         yield router, proc
     finally:
         proc.stop(30)
+
+
+@contextlib.contextmanager
+def sim_graphs(log_dir: Path, namespaces: Sequence[str], router: str) -> Iterator[None]:
+    """Run one simulated Iris + bridge per namespace on the running ``router``, in parallel."""
+    procs: dict[str, Process] = {}
+    try:
+        for ns in namespaces:
+            procs[ns] = _start(log_dir, ns, router, use_router=True)
+        _wait_for_bridges(router, procs)
+        yield
+    finally:
+        for proc in reversed(procs.values()):
+            proc.stop(30)

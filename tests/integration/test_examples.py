@@ -14,7 +14,7 @@ from collections.abc import Iterator
 
 import cv2
 import pytest
-from sdk_sim_graph import sim_graph
+from sdk_sim_graph import sim_graph, sim_graphs
 
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
@@ -94,7 +94,7 @@ def test_paper_listing(sim, watcher):
 
 
 def test_square(sim, watcher):
-    out = run_example("square.py", sim, "--side", "1.5", "--height", "1.5")
+    out = run_example("square.py", sim, "--side", "1", "--height", "1")
     assert out.count("corner reached") == 4
     assert "landed" in out
     assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
@@ -114,10 +114,7 @@ def test_save_frames(sim, tmp_path):
 
 
 def test_two_drones(router, tmp_path):
-    with (
-        sim_graph(tmp_path, "drone1", router=router, use_router=True),
-        sim_graph(tmp_path, "drone2", router=router, use_router=True),
-    ):
+    with sim_graphs(tmp_path, ["drone1", "drone2"], router):
         out = run_example(
             "two_drones.py",
             router,
@@ -127,9 +124,9 @@ def test_two_drones(router, tmp_path):
             "--connect",
             router,
             "--height",
-            "1.5",
+            "1",
             "--seconds",
-            "1.5",
+            "1",
         )
     assert "drones online: drone1, drone2" in out
     assert "drone1: landed" in out and "drone2: landed" in out

@@ -207,9 +207,9 @@ def test_getters_return_latest_values_at_once(drone, bridge):
 def test_set_cmd_vel_is_streamed_at_20_hz_or_more_until_changed(drone, bridge):
     drone.set_cmd_vel(az=1)
     t0 = time.monotonic()
-    time.sleep(1.5)
-    got = bridge.setpoints_since(t0 + 0.25)
-    assert len(got) >= 20, len(got)  # 30 Hz nominal over 1.25 s; >= 20 Hz on a loaded box
+    time.sleep(1.2)
+    got = bridge.setpoints_since(t0 + 0.2)
+    assert len(got) >= 20, len(got)  # >= 20 Hz over the last second (30 Hz nominal)
     assert all(m.type_mask == 1991 and m.coordinate_frame == 8 and m.yaw_rate == 1 for m in got)
     drone.set_cmd_mix(vx=0.5, z=2.0, az=0.1, stamp=1.7e9)
     t1 = time.monotonic()
@@ -372,7 +372,7 @@ def test_bridge_without_autopilot_is_a_clear_error(router):
     fake = FakeBridge(router, connected=False)
     try:
         with pytest.raises(NotConnected, match="bridge of drone 'drone' is up but its autopilot"):
-            DroneWrapper("drone", router, timeout=1.5)
+            DroneWrapper("drone", router, timeout=1.0)
     finally:
         fake.close()
 
