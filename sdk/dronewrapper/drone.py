@@ -739,7 +739,11 @@ class DroneWrapper:
             raise NoData(f"takeoff: no local position on {self._pose.name}: cannot take off")
         x, y, z0 = (float(v) for v in telemetry.position_of(start))
         yaw = float(telemetry.orientation_of(start)[2])
-        target_z = z0 + h
+        extended = self._extended.value
+        on_ground = extended is None or extended.landed_state == LANDED_STATE_ON_GROUND
+        # h above the point it takes off from; when caught mid-landing, h above the origin
+        # (the take-off point of the local frame)
+        target_z = (z0 if on_ground else 0.0) + h
         autopilot = state.autopilot.lower()
         expected_mode = ""
         if autopilot in ARDUPILOT:

@@ -8,6 +8,7 @@ rates, error messages) in a fraction of a second per test.
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 import threading
@@ -28,6 +29,7 @@ from dronewrapper import (
 )
 from dronewrapper.msgs import (
     CommandBoolResult,
+    CommandTOL,
     CommandTOLResult,
     ExtendedState,
     Image,
@@ -55,9 +57,14 @@ from support import client_node, free_endpoint, wait_for
 class FakeBridge:
     """A PX4-like bridge in one thread: services, telemetry at 20 Hz, a toy climb/descent."""
 
-    def __init__(self, endpoint: str, ns: str = "drone", *, connected: bool = True) -> None:
+    def __init__(
+        self, endpoint: str, ns: str = "drone", *, connected: bool = True, autopilot: str = "px4"
+    ) -> None:
         self.node = client_node(endpoint, name="bridge_fake", namespace=ns)
         self.connected = connected
+        self.autopilot = autopilot
+        self.climb_to: float | None = None  # a TAKEOFF command's altitude (ArduPilot, Tello)
+        self.land_requests: list[CommandTOL] = []
         self.armed = False
         self.mode = "POSCTL"
         self.z = 0.0
@@ -78,6 +85,7 @@ class FakeBridge:
         n.serve(registry.ARMING, self._arming)
         n.serve(registry.SET_MODE, self._set_mode)
         n.serve(registry.LAND, self._land)
+        n.serve(registry.TAKEOFF, self._takeoff)
         n.serve(registry.PARAM_GET, self._param_get)
         n.serve(registry.PARAM_SET, self._param_set)
         n.announce()
@@ -97,15 +105,26 @@ class FakeBridge:
 
     def _set_mode(self, req):
         self.calls.append(f"set_mode {req.custom_mode}")
-        if req.custom_mode not in ("OFFBOARD", "POSCTL", "AUTO.LAND"):
+        if req.custom_mode not in ("OFFBOARD", "POSCTL", "AUTO.LAND", "GUIDED"):
             raise ServiceError(f"unknown mode {req.custom_mode!r}", "bad_request")
         if req.custom_mode == "OFFBOARD" and not self.setpoints:
             return SetModeResult(mode_sent=False, result=4, message="no setpoint stream")
         self.mode = req.custom_mode
         return SetModeResult(mode_sent=True, result=0)
 
+    def _takeoff(self, req):
+        self.calls.append(f"takeoff {req.altitude:g}")
+        if self.autopilot == "tello":
+            self.armed = True  # a Tello arms and lifts off on "takeoff"
+        if not self.armed:
+            return CommandTOLResult(success=False, result=4, message="not armed")
+        self.climb_to = req.altitude
+        return CommandTOLResult(success=True, result=0)
+
     def _land(self, req):
         self.calls.append("land")
+        self.land_requests.append(req)
+        self.climb_to = None
         self.mode, self.landing = "AUTO.LAND", True
         return CommandTOLResult(success=True, result=0)
 
@@ -141,11 +160,16 @@ class FakeBridge:
                 and target.type_mask == MASK_POSITION
             ):
                 self.z += max(-0.2, min(0.2, target.position.z - self.z))
+            elif self.armed and self.climb_to is not None:
+                self.z += max(-0.2, min(0.2, self.climb_to - self.z))
             in_air = self.armed and self.z > 0.05
             try:
                 self.pub_state.put(
                     State(
-                        connected=self.connected, armed=self.armed, mode=self.mode, autopilot="px4"
+                        connected=self.connected,
+                        armed=self.armed,
+                        mode=self.mode,
+                        autopilot=self.autopilot,
                     )
                 )
                 landed = LANDED_STATE_IN_AIR if in_air else LANDED_STATE_ON_GROUND
@@ -260,6 +284,28 @@ def test_takeoff_streams_then_offboard_then_arms_and_returns_at_altitude(drone, 
     assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
     assert not drone.get_state().armed
     assert drone.commanding is None  # land stops the stream
+    # the fake has no GPS: land asks to land "here" (NaN latitude/longitude)
+    assert math.isnan(bridge.land_requests[-1].latitude)
+    assert math.isnan(bridge.land_requests[-1].longitude)
+
+
+@pytest.mark.parametrize(
+    ("autopilot", "expected"),
+    [
+        ("ardupilotmega", ["set_mode GUIDED", "arming True", "takeoff 1"]),
+        ("tello", ["takeoff 1"]),
+    ],
+)
+def test_takeoff_sequence_follows_the_autopilot(router, autopilot, expected):
+    fake = FakeBridge(router, autopilot=autopilot)
+    try:
+        with DroneWrapper("drone", router, timeout=10, mode="peer") as drone:
+            drone.takeoff(h=1.0, timeout=20)
+            assert fake.calls == expected
+            assert drone.get_position()[2] >= 0.9
+            assert drone.commanding is None  # these autopilots hold by themselves
+    finally:
+        fake.close()
 
 
 def test_takeoff_refusal_carries_the_autopilot_reason(drone, bridge):
