@@ -26,7 +26,8 @@ GROUND_TILE_M = 8.0
 """Period of the ground texture, m."""
 TEXTURE_RES_M = 0.025  # m per texture pixel
 TEXTURE_REACH_TILES = 3  # the texture covers this many tiles on each side of the camera's tile
-FOG_DISTANCE_M = 70.0  # haze: alpha = 1 - exp(-distance / FOG_DISTANCE_M)
+FOG_DISTANCE_M = 70.0  # haze: alpha = 1 - exp(-(distance - HAZE_START_M) / FOG_DISTANCE_M)
+HAZE_START_M = 8.0  # no haze nearer than this (and no blending cost for a downward camera)
 GRID_STEP_PX = 8  # haze and sky are computed every GRID_STEP_PX pixels and up-sampled
 
 SKY_HORIZON_BGR = np.array([228.0, 212.0, 196.0])
@@ -150,7 +151,7 @@ class Background:
         # horizontal distance to where the ray meets the ground
         horiz = np.sqrt(np.maximum(1.0 - up**2, 0.0))
         dist[down] = height * horiz[down] / -up[down]
-        alpha = 1.0 - np.exp(-dist / FOG_DISTANCE_M)
+        alpha = 1.0 - np.exp(-np.maximum(dist - HAZE_START_M, 0.0) / FOG_DISTANCE_M)
         t = 1.0 - np.exp(-np.clip(up, 0.0, None) / 0.3)
         color = SKY_HORIZON_BGR + (SKY_ZENITH_BGR - SKY_HORIZON_BGR) * t[:, None]
         shape = (self.grid_h, self.grid_w)
@@ -190,8 +191,16 @@ class Background:
                 borderMode=cv2.BORDER_CONSTANT,
                 borderValue=self.far_bgr,
             )
-            a = alpha[y0:y1]
-            image[y0:y1] = cv2.blendLinear(ground, image[y0:y1], 1.0 - a, a)
+            # blend only the rows with visible haze; nearer rows are plain ground
+            hazy = np.nonzero(alpha[y0:y1].max(axis=1) >= 0.004)[0]
+            blended = None
+            if hazy.size:
+                h0, h1 = y0 + int(hazy[0]), y0 + int(hazy[-1]) + 1
+                a = alpha[h0:h1]
+                blended = cv2.blendLinear(ground[h0 - y0 : h1 - y0], image[h0:h1], 1.0 - a, a)
+            image[y0:y1] = ground
+            if blended is not None:
+                image[h0:h1] = blended
         if self.trees is not None:
             draw_trees(image, self.trees, pose, self.work_matrix, SKY_HORIZON_BGR, FOG_DISTANCE_M)
         if self.scale == 1:
