@@ -131,6 +131,22 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     )  # Hz asked with SET_MESSAGE_INTERVAL
     limits: LimitsConfig = msgspec.field(default_factory=LimitsConfig)
 
+    def __post_init__(self) -> None:
+        if self.commander_lost_action not in ("hold", "land", "return"):
+            raise ValueError(
+                f"commander_lost_action must be hold, land or return, "
+                f"got {self.commander_lost_action!r}"
+            )
+        if not 0 < self.setpoint_timeout < self.commander_lost_timeout:
+            raise ValueError("need 0 < setpoint_timeout < commander_lost_timeout")
+        if self.stream_rate_hz < 20.0:
+            raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
+        for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0")
+        if self.command_attempts < 1 or self.param_attempts < 1:
+            raise ValueError("command_attempts and param_attempts must be >= 1")
+
 
 def _float_bits_to_int(value: float) -> int:
     return struct.unpack("<i", struct.pack("<f", value))[0]

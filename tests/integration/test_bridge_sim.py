@@ -181,7 +181,7 @@ def start_bridge(spawn, router: str, listen_port: int, *extra: str):
         python_module(
             "dronewrapper_bridge_mavlink",
             "--connect", router,
-            "--set", f"connection=udpin:127.0.0.1:{listen_port}",
+            "--connection", f"udpin:127.0.0.1:{listen_port}",
             *extra,
         ),
         "bridge",
