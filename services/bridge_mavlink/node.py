@@ -742,6 +742,8 @@ class Bridge:
         result, message = self.command(
             cmds.MAV_CMD_NAV_TAKEOFF, request.min_pitch, 0, 0, yaw_deg, math.nan, math.nan, altitude
         )
+        if not math.isnan(height) and math.isnan(altitude):
+            message += " (no home altitude known: the autopilot's default take-off altitude)"
         return CommandTOLResult(success=result == 0, result=result, message=message)
 
     def handle_land(self, request: CommandTOL) -> CommandTOLResult:
