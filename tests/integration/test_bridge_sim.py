@@ -350,9 +350,12 @@ def test_lossy_link_arm_takeoff_land(router, spawn):
         wait_for(lambda: rig.pose.value, 10)
         armed = rig.call(registry.ARMING, CommandBool(value=True), timeout=30)
         assert armed.success, armed.message
-        took_off = rig.call(registry.TAKEOFF, CommandTOL(altitude=2.5), timeout=30)
+        # 3.5 m, not the autopilot's default 2.5 m: proves the AMSL conversion of param7
+        took_off = rig.call(registry.TAKEOFF, CommandTOL(altitude=3.5), timeout=30)
         assert took_off.success, took_off.message
-        wait_for(lambda: rig.z() > 2.0, 25, what="take-off to 2.5 m")
+        wait_for(lambda: rig.z() > 3.2, 25, what="take-off to 3.5 m")
+        time.sleep(1.0)
+        assert 3.2 < rig.z() < 3.9
         landing = rig.call(registry.LAND, CommandTOL(), timeout=30)
         assert landing.success, landing.message
         rig.wait_landed_disarmed(40)
