@@ -336,7 +336,8 @@ def main(argv: list[str] | None = None) -> int:
     if "compute" not in args.skip:
         results["compute"] = bench_compute(args.runs)
     if "latency" not in args.skip:
-        results["latency"] = bench_latency(args.duration, args.fps, args.latency_detector)
+        key = f"latency_{args.latency_detector}"
+        results[key] = bench_latency(args.duration, args.fps, args.latency_detector)
     if "crossing" not in args.skip:
         results["crossings"] = bench_crossings(args.crossing_seconds, 10.0)
     write_results("perception", results)
