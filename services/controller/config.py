@@ -26,9 +26,12 @@ class FollowColorConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True
         target_radius: wanted enclosing-circle radius in reference px (paper: 10 px at 320 px
             wide, about 5 m from the beacon).
         vx: forward-speed PID on e_x (m/s per unit of e_x).
+        best_when_untargeted: follow the best (largest) blob when the tracker names no target
+            (the paper's rule; there is one beacon, identity does not matter).
     """
 
     target_radius: float = 10.0
+    best_when_untargeted: bool = True
     vx: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=-0.5, out_limit=1.0))
 
     def __post_init__(self) -> None:
@@ -42,9 +45,13 @@ class FollowPersonConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=Tru
         area_ratio: total_area / target_area (paper: 20, the person fills 1/20 of the image).
         max_forward_error: bound of e_x (dimensionless) so a far person cannot ask for 8 m/s.
         vx: forward-speed PID on e_x (m/s per unit of e_x).
+        best_when_untargeted: follow the best detection when the tracker names no target.
+            False (default): while the target is hidden the drone hovers/searches rather than
+            jumping to a passer-by (untracked detections still use the best one).
     """
 
     area_ratio: float = 20.0
+    best_when_untargeted: bool = False
     max_forward_error: float = 10.0
     vx: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=0.05, out_limit=1.0))
 

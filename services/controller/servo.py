@@ -60,13 +60,17 @@ class Command(msgspec.Struct, kw_only=True, frozen=True):
     errors: ServoErrors | None = None
 
 
-def pick_target(detections: Detections) -> Detection2D | None:
-    """The followed detection: the tracker's target if it names one; when the detections are
-    tracked (they carry ids) but no target is named, none (the target is hidden or lost: never
-    jump to a passer-by); when they are not tracked at all, the best (first) one."""
+def pick_target(detections: Detections, *, best_when_untargeted: bool) -> Detection2D | None:
+    """The followed detection.
+
+    The tracker's target when it names one. Otherwise: with ``best_when_untargeted`` (colour:
+    the paper follows the largest blob, identity does not matter) the best (first) detection;
+    without it (people: never jump to a passer-by while the target is hidden) none, unless the
+    detections carry no track ids at all (no tracker runs), then the best one.
+    """
     if detections.target_id:
         return detections.target()
-    if any(det.id for det in detections.detections):
+    if not best_when_untargeted and any(det.id for det in detections.detections):
         return None
     return detections.detections[0] if detections.detections else None
 
@@ -76,9 +80,9 @@ class Servo:
 
     def __init__(self, config: ServoConfig) -> None:
         self.config = config
-        vx_gains = (
-            config.follow_color.vx if config.mode == "follow_color" else config.follow_person.vx
-        )
+        mode = config.follow_color if config.mode == "follow_color" else config.follow_person
+        vx_gains = mode.vx
+        self._best_when_untargeted = mode.best_when_untargeted
         self.pid_vx = Pid(vx_gains)
         self.pid_vz = Pid(config.vz)
         self.pid_yaw = Pid(config.yaw_rate)
@@ -111,7 +115,11 @@ class Servo:
     ) -> tuple[bool, Detection2D | None, ServoErrors | None]:
         """(fresh, target, errors): target and errors are None when it is not usable."""
         fresh = detections is not None and age <= self.config.detection_timeout
-        target = pick_target(detections) if fresh and detections is not None else None
+        target = (
+            pick_target(detections, best_when_untargeted=self._best_when_untargeted)
+            if fresh and detections is not None
+            else None
+        )
         if target is None or detections is None:
             return fresh, None, None
         try:

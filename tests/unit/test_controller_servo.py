@@ -144,21 +144,21 @@ def test_uses_tracker_target_not_the_best_detection():
         target_id="3",
         detector="yolox",
     )
-    assert pick_target(msg).id == "3"
+    assert pick_target(msg, best_when_untargeted=False).id == "3"
     cmd = servo.step(0.0, msg, age=0.0)
     assert cmd.target_id == "3" and cmd.yaw_rate < 0  # target is on the right
 
 
 def test_target_id_not_in_frame_means_not_visible():
     msg = frame(1.0, box(40, 120, 60, 120, id_="7"), target_id="3", detector="yolox")
-    assert pick_target(msg) is None
+    assert pick_target(msg, best_when_untargeted=True) is None
     cmd = Servo(colour_config(mode="follow_person")).step(0.0, msg, age=0.0)
     assert not cmd.target_visible and cmd.state != CONTROLLER_TRACKING
 
 
 def test_untracked_detections_use_the_best_first():
     msg = frame(1.0, box(40, 120, 20, 20, radius=9), box(280, 120, 10, 10, radius=5))
-    assert pick_target(msg).bbox.center.position.x == 40
+    assert pick_target(msg, best_when_untargeted=False).bbox.center.position.x == 40
 
 
 def test_malformed_frame_size_is_not_a_target():
@@ -199,6 +199,14 @@ def test_observing_during_takeoff_sets_the_search_side_without_commanding():
 def test_tracked_detections_without_a_target_are_not_followed():
     """The tracker lost the target (occluded): do not jump to the passer-by it still sees."""
     msg = frame(1.0, box(40, 120, 60, 120, id_="7"), target_id="", detector="yolox")
-    assert pick_target(msg) is None
+    assert pick_target(msg, best_when_untargeted=False) is None
     cmd = Servo(colour_config(mode="follow_person")).step(0.0, msg, age=0.0)
     assert cmd.state != CONTROLLER_TRACKING and cmd.yaw_rate >= 0 and cmd.vx == 0
+
+
+def test_colour_follows_the_largest_blob_when_the_tracker_names_none():
+    """One beacon: a new track id without a named target is still the beacon (paper's rule)."""
+    msg = frame(1.0, box(100, 120, 20, 20, radius=9, id_="t2"), box(250, 120, 8, 8, id_="t3"))
+    assert pick_target(msg, best_when_untargeted=True).id == "t2"
+    cmd = Servo(colour_config()).step(0.0, msg, age=0.0)
+    assert cmd.state == CONTROLLER_TRACKING and cmd.yaw_rate > 0
