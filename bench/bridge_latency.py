@@ -137,6 +137,7 @@ class PX4StandIn:
         t0 = time.monotonic()
         nexts = {name: t0 for name, _ in PX4_RATES}
         periods = dict(PX4_RATES)
+        cache: dict[str, bytes] = {}  # packed once: keeps this sender light enough for the rates
         while not self.stop.is_set():
             now = time.monotonic()
             if now - t0 >= duration:
@@ -148,8 +149,12 @@ class PX4StandIn:
                     if name == "LOCAL_POSITION_NED":
                         self._seq += 1
                         marker = self._seq
-                    msg = self._encode(name, int((now - t0) * 1000), marker)
-                    data = msg.pack(self.mav)
+                    data = cache.get(name)
+                    if data is None:  # only the marked LOCAL_POSITION_NED is packed each time
+                        msg = self._encode(name, int((now - t0) * 1000), marker)
+                        data = msg.pack(self.mav)
+                        if not marker:
+                            cache[name] = data
                     if marker:
                         self.lpn_sent[marker] = time.monotonic()
                     self.sock.sendto(data, self.dest)
