@@ -45,13 +45,14 @@ def services_by_namespace(keys: set[str]) -> dict[str, list[str]]:
     return {ns: sorted(names) for ns, names in sorted(out.items())}
 
 
-def open_client(connect: str, timeout: float) -> zenoh.Session:
-    """A client session to the router at ``connect``.
+def open_client(connect: str, timeout: float, *, mode: str = "client") -> zenoh.Session:
+    """A session to the router at ``connect`` (``client`` mode unless told otherwise).
 
     Raises:
         NotConnected: the router cannot be reached within ``timeout`` seconds.
+        ValueError: a malformed endpoint or an unknown mode.
     """
-    options = ZenohOptions(mode="client", connect=[connect])
+    options = ZenohOptions(mode=mode, connect=[connect])
     try:
         return open_session(options, timeout=timeout)
     except ConnectionError as exc:

@@ -152,17 +152,7 @@ class DroneWrapper:
         self._own_session = session is None
         deadline = time.monotonic() + timeout
         if session is None:
-            if mode != "client":
-                from dronewrapper.runtime.node import open_session
-                from dronewrapper.runtime.options import ZenohOptions
-
-                options = ZenohOptions(mode=mode, connect=[self.connect])
-                try:
-                    session = open_session(options, timeout=timeout)
-                except ConnectionError as exc:
-                    raise NotConnected(f"cannot reach the Zenoh router at {self.connect}") from exc
-            else:
-                session = open_client(self.connect, timeout)
+            session = open_client(self.connect, timeout, mode=mode)
         self.session: zenoh.Session = session
         _open_wrappers.add(self)
         try:
@@ -327,6 +317,9 @@ class DroneWrapper:
 
     def _diagnose(self, timeout: float) -> str:
         state_key = registry.STATE.key(self.ns)
+        info = self.session.info
+        if not list(info.routers_zid()) and not list(info.peers_zid()):
+            return f"cannot reach the Zenoh router at {self.connect}: no router or peer linked"
         try:
             keys = alive_services(self.session, "*", timeout=1.0)
         except Exception:

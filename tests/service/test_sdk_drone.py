@@ -407,6 +407,8 @@ def test_no_router_is_a_clear_error():
     assert time.monotonic() - t0 < 10
     with pytest.raises(NotConnected, match="cannot reach"):
         list_drones(endpoint, timeout=0.5)
+    with pytest.raises(NotConnected, match=f"cannot reach the Zenoh router at {endpoint}"):
+        DroneWrapper("drone", endpoint, timeout=1.0, mode="peer")  # a peer opens regardless
 
 
 def test_no_bridge_is_a_clear_error(router):
