@@ -39,8 +39,9 @@ YOLOX_NANO = ASSETS / "models" / "yolox_nano.onnx"
 VTEST = ASSETS / "images" / "vtest_f0550.png"
 
 
-def median_ms(fn, runs: int, warmup: int = 5) -> tuple[float, float]:
-    """Median and p90 of ``fn()`` wall time in ms."""
+def median_ms(fn, runs: int, warmup: int = 5) -> tuple[float, float, float]:
+    """Median, p90 and minimum of ``fn()`` wall time in ms (the minimum is the figure least
+    disturbed by other processes on a shared machine)."""
     for _ in range(warmup):
         fn()
     times = []
@@ -48,7 +49,7 @@ def median_ms(fn, runs: int, warmup: int = 5) -> tuple[float, float]:
         start = time.perf_counter()
         fn()
         times.append((time.perf_counter() - start) * 1e3)
-    return statistics.median(times), float(np.percentile(times, 90))
+    return statistics.median(times), float(np.percentile(times, 90)), min(times)
 
 
 def colour_frame() -> np.ndarray:
@@ -88,13 +89,16 @@ def bench_compute(runs: int) -> dict[str, object]:
     ]
     print_table(
         "Compute per frame (median over runs)",
-        ["what", "median ms", "p90 ms", "target ms", "meets"],
+        ["what", "median ms", "p90 ms", "min ms", "target ms", "median meets"],
         [
-            (n, m, p, t if t else "-", ("yes" if m <= t else "NO") if t else "-")
-            for n, m, p, t in rows
+            (n, m, p, lo, t if t else "-", ("yes" if m <= t else "NO") if t else "-")
+            for n, m, p, lo, t in rows
         ],
     )
-    return {name: {"median_ms": m, "p90_ms": p, "target_ms": t} for name, m, p, t in rows}
+    return {
+        name: {"median_ms": m, "p90_ms": p, "min_ms": lo, "target_ms": t}
+        for name, m, p, lo, t in rows
+    }
 
 
 # ---------------------------------------------------------------- latency through Zenoh

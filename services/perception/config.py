@@ -58,6 +58,7 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         nms_threshold: IoU for non-maximum suppression 0..1.
         classes: COCO class names kept by YOLOX (``person``, ``car``, ``horse``...).
         threads: CPU threads for one YOLOX inference.
+        thread_spinning: let onnxruntime threads busy-wait (faster only on idle, dedicated cores).
         providers: onnxruntime execution providers in order (``tensorrt``, ``cuda``, ``auto``);
             empty = CPU.
         tracker: ``kalman`` (motion + appearance) | ``paper`` (the paper's FIFO) | ``none``.
@@ -84,6 +85,7 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     nms_threshold: float = 0.45
     classes: list[str] = msgspec.field(default_factory=lambda: ["person"])
     threads: int = 2
+    thread_spinning: bool = False
     providers: list[str] = msgspec.field(default_factory=list)
     tracker: str = "kalman"
     max_coast_s: float = 2.0

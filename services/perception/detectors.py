@@ -95,6 +95,7 @@ def build_detector(config: Config) -> Detector:
             providers=config.providers or None,
             threads=config.threads,
             checksum=config.checksum,
+            spinning=config.thread_spinning,
         )
     from dronewrapper_perception.hog import HogDetector
 

@@ -253,6 +253,9 @@ class YoloxDetector:
             None = CPU.
         threads: CPU threads for one inference.
         checksum: expected sha256 of the model file; verified when given.
+        spinning: let onnxruntime's worker threads busy-wait between operators. Off by
+            default: on a few shared cores (the simulator, controller and bridge run beside us)
+            spinning threads steal CPU from each other and inference gets several times slower.
     """
 
     name = "yolox"
@@ -268,6 +271,7 @@ class YoloxDetector:
         providers: Sequence[str] | None = None,
         threads: int = 2,
         checksum: str = "",
+        spinning: bool = False,
     ) -> None:
         import onnxruntime as ort
 
@@ -281,6 +285,9 @@ class YoloxDetector:
         options.intra_op_num_threads = max(1, int(threads))
         options.inter_op_num_threads = 1
         options.log_severity_level = 3
+        options.add_session_config_entry(
+            "session.intra_op.allow_spinning", "1" if spinning else "0"
+        )
         self.providers = resolve_providers(providers, ort.get_available_providers())
         self.session = ort.InferenceSession(str(path), options, providers=self.providers)
         model_input = self.session.get_inputs()[0]
