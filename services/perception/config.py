@@ -59,8 +59,8 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         classes: COCO class names kept by YOLOX (``person``, ``car``, ``horse``...).
         threads: CPU threads for one YOLOX inference.
         thread_spinning: let onnxruntime threads busy-wait (faster only on idle, dedicated cores).
-        providers: onnxruntime execution providers in order (``tensorrt``, ``cuda``, ``auto``);
-            empty = CPU.
+        providers: onnxruntime execution providers in order (``tensorrt``, ``cuda``, ``auto``
+            or full names); a list or one comma-separated string; empty = CPU.
         tracker: ``kalman`` (motion + appearance) | ``paper`` (the paper's FIFO) | ``none``.
         max_coast_s: seconds a Kalman track survives without detections.
         paper_fifo_length: centroids in the paper tracker's FIFO.
@@ -86,7 +86,7 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     classes: list[str] = msgspec.field(default_factory=lambda: ["person"])
     threads: int = 2
     thread_spinning: bool = False
-    providers: list[str] = msgspec.field(default_factory=list)
+    providers: list[str] | str = msgspec.field(default_factory=list)
     tracker: str = "kalman"
     max_coast_s: float = 2.0
     paper_fifo_length: int = 5
@@ -121,6 +121,12 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         if not 1 <= self.debug_jpeg_quality <= 100:
             raise ValueError("debug_jpeg_quality must be in 1..100")
         class_ids_for(self.classes)  # unknown class names fail here
+
+    def provider_list(self) -> list[str]:
+        """``providers`` as a list of names (a string is split at commas)."""
+        if isinstance(self.providers, str):
+            return [p.strip() for p in self.providers.split(",") if p.strip()]
+        return list(self.providers)
 
     def color_ranges_resolved(self) -> tuple[ColorRange, ...]:
         """The HSV ranges to use: the custom ones, else the preset's."""

@@ -92,7 +92,7 @@ def build_detector(config: Config) -> Detector:
             score_threshold=config.score_threshold,
             nms_threshold=config.nms_threshold,
             classes=tuple(config.classes),
-            providers=config.providers or None,
+            providers=config.provider_list() or None,
             threads=config.threads,
             checksum=config.checksum,
             spinning=config.thread_spinning,

@@ -34,6 +34,10 @@ def test_config_defaults_and_errors(tmp_path):
     assert load_config(Config, overrides=["detector=person"]).detector_kind() == "hog"
     person = load_config(Config, overrides=["detector=person", "model_path=/m.onnx"])
     assert person.detector_kind() == "yolox"
+    assert load_config(Config, overrides=["providers=cuda, cpu"]).provider_list() == ["cuda", "cpu"]
+    as_list = load_config(Config, overrides=["providers=[TensorrtExecutionProvider, cuda]"])
+    assert as_list.provider_list() == ["TensorrtExecutionProvider", "cuda"]
+    assert load_config(Config).provider_list() == []
     bad = tmp_path / "perception.yaml"
     bad.write_text("detector: color\nthreshold: 0.5\n")
     with pytest.raises(ConfigError, match="threshold"):
