@@ -150,7 +150,7 @@ def annotate(bgr: np.ndarray, result: FrameResult) -> np.ndarray:
             cx, cy = (round(v) for v in det.centroid_xy)
             cv2.circle(image, (cx, cy), round(det.circle_radius), colour, 1)
             cv2.drawMarker(image, (cx, cy), colour, cv2.MARKER_CROSS, 10)
-        label = f"{track_id or det.class_name} {det.score:.2f}"
+        label = f"{track_id} {det.class_name} {det.score:.2f}".strip()
         cv2.putText(image, label, (x1, max(12, y1 - 4)), cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, 1)
     return image
 
