@@ -33,7 +33,7 @@ class HogDetector:
         score_threshold: float = 0.3,
         nms_threshold: float = 0.45,
         max_width: int = 640,
-        scale: float = 1.05,
+        scale: float = 1.1,
     ) -> None:
         self.hog = cv2.HOGDescriptor()
         self.hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
