@@ -29,7 +29,7 @@ __all__ = ["JOINTS", "draw_person", "hull_points", "skeleton"]
 JOINTS: tuple[str, ...] = (
     "hip_l", "knee_l", "ankle_l", "toe_l", "shoulder_l", "elbow_l", "wrist_l", "hand_l",
     "hip_r", "knee_r", "ankle_r", "toe_r", "shoulder_r", "elbow_r", "wrist_r", "hand_r",
-    "neck_base", "neck_top", "hair", "face",
+    "neck_base", "neck_top", "hair", "face", "hair_end", "heel_l", "heel_r",
 )  # fmt: skip
 """Names of the rows of :func:`skeleton`'s array."""
 _J = {name: i for i, name in enumerate(JOINTS)}
@@ -44,9 +44,9 @@ _SHIRT_RINGS = (
     (0.845, 0.055, 0.040),  # collar
     (0.825, 0.105, 0.055),  # sloping shoulder tops
     (0.795, 0.120, 0.062),  # shoulders
-    (0.72, 0.112, 0.072),  # chest
-    (0.60, 0.098, 0.064),  # waist
-    (0.53, 0.102, 0.066),  # hips (shirt hem)
+    (0.72, 0.112, 0.080),  # chest
+    (0.60, 0.098, 0.070),  # waist
+    (0.53, 0.102, 0.072),  # hips (shirt hem)
 )
 _PELVIS_RINGS = ((0.55, 0.100, 0.066), (0.46, 0.095, 0.070))
 _RING_ANGLES = np.linspace(0.0, 2.0 * math.pi, 10, endpoint=False)
@@ -56,19 +56,21 @@ _LIMBS: tuple[tuple[str, tuple[str, ...], float, str], ...] = (
     ("capsule", ("neck_base", "neck_top"), 0.03, "skin"),
     ("sphere", ("hair",), 0.058, "hair"),
     ("sphere", ("face",), 0.055, "skin"),
+    ("capsule", ("hair", "hair_end"), 0.024, "long_hair"),
     *(
         part
         for s in ("l", "r")
         for part in (
             ("capsule", (f"hip_{s}", f"knee_{s}"), 0.05, "pants"),
-            ("capsule", (f"knee_{s}", f"ankle_{s}"), 0.036, "pants"),
-            ("capsule", (f"ankle_{s}", f"toe_{s}"), 0.028, "shoes"),
+            ("capsule", (f"knee_{s}", f"ankle_{s}"), 0.036, "shins"),
+            ("capsule", (f"heel_{s}", f"toe_{s}"), 0.028, "shoes"),
             ("capsule", (f"shoulder_{s}", f"elbow_{s}"), 0.034, "shirt"),
             ("capsule", (f"elbow_{s}", f"wrist_{s}"), 0.028, "sleeve"),
             ("sphere", (f"hand_{s}",), 0.03, "skin"),
         )
     ),
 )
+_FACE = (_J["face"],)
 _LIMB_INDEX = tuple(tuple(_J[n] for n in joints) for _, joints, _, _ in _LIMBS)
 
 
@@ -87,6 +89,7 @@ def skeleton(height_m: float, phase_rad: float, gait: float) -> np.ndarray:
     hip_z, shoulder_z = 0.52 * h, 0.81 * h
     spread_c, spread_s = math.cos(0.09), math.sin(0.09)  # arms slightly away from the body
     rows: list[tuple[float, float, float]] = []
+    heels: list[tuple[float, float, float]] = []
     for sign, offset in ((1.0, 0.0), (-1.0, math.pi)):
         phi = phase_rad + offset
         swing = 0.45 * g * math.sin(phi)  # thigh angle from vertical, forward +
@@ -114,12 +117,15 @@ def skeleton(height_m: float, phase_rad: float, gait: float) -> np.ndarray:
             (wx, wy, wz),
             (wx + hand * dx, wy + hand * dy, wz + hand * dz),
         ]
+        heels.append((ax - 0.2 * foot, hy, az - 0.025 * h))
     head_z = 0.93 * h
     rows += [
         (0.0, 0.0, 0.82 * h),  # neck base
         (0.004 * h, 0.0, 0.875 * h),  # neck top
         (-0.008 * h, 0.0, head_z + 0.010 * h),  # hair (back and top of the head)
         (0.008 * h, 0.0, head_z - 0.008 * h),  # face
+        (-0.052 * h, 0.0, head_z - 0.075 * h),  # end of a pony tail (behind the neck)
+        *heels,
     ]
     joints = np.array(rows)
     # keep the lower foot on the ground (the body bobs as it walks)
@@ -191,14 +197,20 @@ def draw_person(
         "shoes": look.shoes_bgr,
         "shirt": look.shirt_bgr,
         "sleeve": look.shirt_bgr if look.long_sleeves else look.skin_bgr,
+        "shins": look.skin_bgr if look.shorts else look.pants_bgr,
+        "long_hair": look.hair_bgr if look.long_hair else None,
     }
     drawn: list[tuple[float, int, str, object, float, tuple[int, int, int]]] = []
     for k, ((kind, _, radius, color), idx) in enumerate(zip(_LIMBS, _LIMB_INDEX, strict=True)):
+        if colors[color] is None:
+            continue
         ds = [d[i] for i in idx]
         r_m = radius * h
         if min(ds) < NEAR_PLANE_M + r_m:
             continue
         mean = sum(ds) / len(ds)
+        if idx == _FACE:  # the face is in front of the hair when seen from the side
+            mean -= 0.01 * h
         drawn.append((mean, k, kind, [px[i] for i in idx], f * r_m / mean, colors[color]))
     for k, (start, stop, color, bias) in enumerate(
         ((n_j, n_j + n_s, "shirt", 0.04), (n_j + n_s, len(d), "pants", 0.045))

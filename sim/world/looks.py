@@ -57,7 +57,7 @@ SHOES: tuple[BGR, ...] = ((30, 30, 30), (220, 220, 220), (40, 60, 90), (90, 90, 
 
 @dataclass(frozen=True)
 class PersonLook:
-    """Colours (BGR 0-255) of a drawn person and whether the sleeves are long."""
+    """Colours (BGR 0-255) of a drawn person, sleeves, a pony tail and shorts."""
 
     shirt_bgr: BGR
     pants_bgr: BGR
@@ -65,6 +65,8 @@ class PersonLook:
     hair_bgr: BGR
     shoes_bgr: BGR
     long_sleeves: bool
+    long_hair: bool = False
+    shorts: bool = False
 
 
 def _pick(rng: np.random.Generator, palette: tuple[BGR, ...]) -> BGR:
@@ -81,6 +83,8 @@ def random_look(rng: np.random.Generator, spec: PersonLookSpec | None = None) ->
         hair_bgr=_pick(rng, HAIRS),
         shoes_bgr=_pick(rng, SHOES),
         long_sleeves=bool(rng.uniform() < 0.5),
+        long_hair=bool(rng.uniform() < 0.35),
+        shorts=bool(rng.uniform() < 0.2),
     )
     if spec is None:
         return drawn
@@ -91,4 +95,6 @@ def random_look(rng: np.random.Generator, spec: PersonLookSpec | None = None) ->
         hair_bgr=spec.hair_bgr or drawn.hair_bgr,
         shoes_bgr=spec.shoes_bgr or drawn.shoes_bgr,
         long_sleeves=drawn.long_sleeves if spec.long_sleeves is None else spec.long_sleeves,
+        long_hair=drawn.long_hair if spec.long_hair is None else spec.long_hair,
+        shorts=drawn.shorts if spec.shorts is None else spec.shorts,
     )

@@ -225,6 +225,8 @@ class PersonLookSpec(_Strict):
     hair_bgr: BGR | None = None
     shoes_bgr: BGR | None = None
     long_sleeves: bool | None = None
+    long_hair: bool | None = None
+    shorts: bool | None = None
 
 
 class ObjectSpec(_Strict):
