@@ -40,14 +40,20 @@ class Renderer:
         camera: the intrinsics of the images produced.
         sprites_dir: a sprite folder (with ``sprites.json``) to draw people as photo billboards;
             None draws them procedurally.
+        scenery: draw the distant trees.
     """
 
     def __init__(
-        self, world: World, camera: PinholeCamera, sprites_dir: Path | None = None
+        self,
+        world: World,
+        camera: PinholeCamera,
+        sprites_dir: Path | None = None,
+        *,
+        scenery: bool = True,
     ) -> None:
         self.world = world
         self.camera = camera
-        self.background = Background(camera, seed=world.seed)
+        self.background = Background(camera, seed=world.seed, scenery=scenery)
         self.sprites = sprite_bank(Path(sprites_dir)) if sprites_dir is not None else None
 
     def render(

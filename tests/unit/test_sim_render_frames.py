@@ -159,6 +159,9 @@ def test_the_skyline_shows_the_heading():
     views = [renderer.render(FRONTAL, pos, yaw_to_quat(math.radians(a)))[band] for a in (0, 20)]
     diff = np.abs(views[0].astype(int) - views[1].astype(int)).mean()
     assert diff > 2.0
+    bare = Renderer(World(load_scenario("empty")), CAM, scenery=False)
+    plain = [bare.render(FRONTAL, pos, yaw_to_quat(math.radians(a)))[band] for a in (0, 20)]
+    assert np.abs(plain[0].astype(int) - plain[1].astype(int)).mean() < 0.5  # sky is uniform
     assert not red_mask(renderer.render(FRONTAL, pos, LEVEL)).any()
 
 
