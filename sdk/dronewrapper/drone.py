@@ -141,6 +141,8 @@ class DroneWrapper:
         wait: bool = True,
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
+        if compressed_images and cameras:
+            images.jpeg_decoder()  # fail now, not at the first frame, if OpenCV is missing
         registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
         self.connect = connect or default_connect()
         self.land_on_exit = land_on_exit

@@ -7,6 +7,8 @@ on numpy alone.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from dronewrapper.errors import DroneError
@@ -43,11 +45,11 @@ def image_to_bgr(msg: Image) -> np.ndarray:
     return np.array(pixels[:, :, :3], order="C")
 
 
-def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
-    """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` array (needs OpenCV).
+def jpeg_decoder() -> Any:
+    """The ``cv2`` module, imported on first use.
 
     Raises:
-        DroneError: OpenCV is not installed, or the bytes do not decode.
+        DroneError: OpenCV is not installed (the message says what to install).
     """
     try:
         import cv2
@@ -56,6 +58,16 @@ def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
             "compressed images need OpenCV to decode JPEG: pip install opencv-python-headless "
             "(or use DroneWrapper(compressed_images=False) for raw images)"
         ) from exc
+    return cv2
+
+
+def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
+    """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` array (needs OpenCV).
+
+    Raises:
+        DroneError: OpenCV is not installed, or the bytes do not decode.
+    """
+    cv2 = jpeg_decoder()
     image = cv2.imdecode(np.frombuffer(msg.data, dtype=np.uint8), cv2.IMREAD_COLOR)
     if image is None:
         raise DroneError(f"cannot decode a {len(msg.data)}-byte {msg.format!r} image")

@@ -27,10 +27,18 @@ PROBE = textwrap.dedent(
         DroneWrapper("drone", sys.argv[1], timeout=0.5)
     except NotConnected as exc:
         error = str(exc)
+    from dronewrapper import DroneError
+    try:
+        DroneWrapper("drone", sys.argv[1], timeout=0.5, compressed_images=True)
+    except NotConnected:
+        jpeg_error = "reached the router: OpenCV was not checked first"
+    except DroneError as exc:
+        jpeg_error = str(exc)
     heavy = [m for m in ("cv2", "pymavlink", "onnxruntime", "yaml", "matplotlib")
              if m in sys.modules]
     dists = sorted(d.metadata["Name"].lower() for d in md.distributions())
-    print(json.dumps({"error": error, "heavy_imported": heavy, "dists": dists}))
+    print(json.dumps({"error": error, "jpeg_error": jpeg_error, "heavy_imported": heavy,
+                      "dists": dists}))
     """
 )
 
@@ -70,6 +78,7 @@ def test_sdk_installs_alone_with_light_dependencies(tmp_path):
         assert heavy not in report["dists"]
     assert report["heavy_imported"] == []
     assert "cannot reach the Zenoh router" in report["error"]
+    assert "pip install opencv-python-headless" in report["jpeg_error"]  # cv2 is optional
 
     cli = subprocess.run(
         [str(venv / "bin" / "dronewrapper"), "up", "compose/sim_iris.yaml"],
