@@ -76,23 +76,33 @@ class Renderer:
         return image
 
     def _depth_if_visible(self, obj: WorldObject, pose: CameraPose) -> float | None:
-        """Depth (m) of the object's centre, or None if it cannot appear in the image."""
-        centre = obj.center_enu
-        extent = obj.height_m / 2.0 + 0.3 if obj.kind == "person" else obj.radius_m
-        cam = pose.to_camera(centre)[0]
-        dist = float(np.linalg.norm(cam))
-        if dist > MAX_DRAW_DISTANCE_M or cam[2] < NEAR_PLANE_M - extent:
+        """Depth (m) of the object's centre, or None if its bounding box cannot be in view."""
+        cam = pose.to_camera(obj.center_enu)[0]
+        if float(np.linalg.norm(cam)) > MAX_DRAW_DISTANCE_M:
             return None
-        if cam[2] > extent:  # wholly in front: cull by the view cone
+        if obj.kind == "person":
+            half = 0.45 * obj.height_m / 1.75  # arms and stride reach
+            low, high = obj.position[2], obj.position[2] + obj.height_m
+        else:
+            half = obj.radius_m
+            low, high = obj.position[2] - half, obj.position[2] + half
+        corners = np.array(
+            [
+                (obj.position[0] + dx, obj.position[1] + dy, z)
+                for dx in (-half, half)
+                for dy in (-half, half)
+                for z in (low, high)
+            ]
+        )
+        box = pose.to_camera(corners)
+        if np.all(box[:, 2] < NEAR_PLANE_M):
+            return None  # wholly behind the camera
+        if np.all(box[:, 2] >= NEAR_PLANE_M):
             c = self.camera
-            half_w = (c.width / 2.0) / c.fx
-            half_h = (c.height / 2.0) / c.fy
-            margin = extent / cam[2]
-            if (
-                abs(cam[0] / cam[2]) > half_w + margin * 1.5
-                or abs(cam[1] / cam[2]) > half_h + margin * 1.5
-            ):
-                return None
+            u = c.fx * box[:, 0] / box[:, 2] + c.cx
+            v = c.fy * box[:, 1] / box[:, 2] + c.cy
+            if u.max() < -1 or u.min() > c.width or v.max() < -1 or v.min() > c.height:
+                return None  # wholly outside the image
         return float(cam[2])
 
     def _draw(self, image: np.ndarray, pose: CameraPose, obj: WorldObject) -> None:
