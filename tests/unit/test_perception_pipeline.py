@@ -10,8 +10,10 @@ import pytest
 
 from dronewrapper.msgs import Detections
 from dronewrapper.runtime.config import ConfigError, load_config
+from dronewrapper_perception.color_filter import RED
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.detect_cli import main as detect_main
+from dronewrapper_perception.detectors import ColorDetector
 from dronewrapper_perception.hog import HogDetector
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
 from dronewrapper_perception.yolox import YoloxDetector
@@ -136,3 +138,25 @@ def test_detect_cli_errors(tmp_path, capsys):
     junk.write_bytes(b"nope")
     assert detect_main([str(junk)]) == 2
     assert detect_main([str(IMAGES / "person.jpg"), "--detector", "hog", "--color", "mauve"]) == 2
+
+
+class CountingDetector(ColorDetector):
+    """The real colour detector, counting its calls."""
+
+    calls = 0
+
+    def detect(self, bgr):
+        self.calls += 1
+        return super().detect(bgr)
+
+
+def test_detector_runs_once_per_frame_even_with_the_debug_image():
+    """The seed ran YOLO twice per frame (once to draw, once to steer)."""
+    detector = CountingDetector(RED)
+    pipeline = Pipeline(load_config(Config), detector=detector)
+    img = np.full((240, 320, 3), 90, np.uint8)
+    cv2.circle(img, (100, 100), 20, (0, 0, 230), -1)
+    result = pipeline.process(img, 0.0)
+    to_message(result, stamp=0.0, frame_id="c", detector="color")
+    annotate(img, result)
+    assert detector.calls == 1
