@@ -11,7 +11,7 @@ import os
 import zenoh
 
 from dronewrapper.errors import NotConnected
-from dronewrapper.msgs.registry import ALIVE
+from dronewrapper.msgs.registry import ALIVE, STATE
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ENV_PREFIX, ZenohOptions
 
@@ -43,6 +43,64 @@ def services_by_namespace(keys: set[str]) -> dict[str, list[str]]:
         if parts is not None:
             out.setdefault(parts["ns"], []).append(parts["service"])
     return {ns: sorted(names) for ns, names in sorted(out.items())}
+
+
+def connection_problem(
+    ns: str,
+    connect: str,
+    *,
+    linked: bool,
+    alive_keys: set[str],
+    state_connected: bool | None,
+    state_age: float,
+    fresh_s: float,
+    waited: float,
+) -> str:
+    """Why a drone is not usable, in one sentence naming what is missing (pure).
+
+    Args:
+        ns: the drone's namespace; connect: the router endpoint.
+        linked: the session has a router or a peer.
+        alive_keys: liveliness keys seen (``ns/alive/name``).
+        state_connected: ``State.connected`` of the newest State, None if none arrived.
+        state_age: seconds since the newest State; fresh_s: older is "stopped".
+        waited: seconds waited, for the message.
+    """
+    state_key = STATE.key(ns)
+    if not linked:
+        return f"cannot reach the Zenoh router at {connect}: no router or peer linked"
+    grouped = services_by_namespace(alive_keys)
+    here = grouped.get(ns, [])
+    elsewhere = [
+        other
+        for other, names in grouped.items()
+        if other != ns and any(name.startswith(BRIDGE_PREFIX) for name in names)
+    ]
+    alive = ", ".join(here) or "nothing"
+    hint = f"; drones online: {', '.join(elsewhere)}" if elsewhere else ""
+    if state_connected is None:
+        bridges = [name for name in here if name.startswith(BRIDGE_PREFIX)]
+        if bridges:
+            return (
+                f"bridge {', '.join(bridges)} is alive in namespace {ns!r} but published no "
+                f"State on {state_key} within {waited:g} s"
+            )
+        return (
+            f"no bridge for drone {ns!r} on the router at {connect}: nothing published "
+            f"{state_key} within {waited:g} s (alive in {ns!r}: {alive}{hint}). Start one, "
+            "e.g. `dronewrapper up compose/sim_iris.yaml`"
+        )
+    if state_age > fresh_s:
+        return (
+            f"the bridge of drone {ns!r} stopped publishing {state_key} {state_age:.1f} s ago "
+            f"(alive in {ns!r}: {alive})"
+        )
+    if not state_connected:
+        return (
+            f"the bridge of drone {ns!r} is up but its autopilot is not connected (no "
+            f"heartbeat) after {waited:g} s"
+        )
+    return f"drone {ns!r} is connected"
 
 
 def open_client(connect: str, timeout: float, *, mode: str = "client") -> zenoh.Session:

@@ -35,7 +35,13 @@ import numpy as np
 import zenoh
 
 from dronewrapper import images, setpoints, telemetry
-from dronewrapper.discovery import BRIDGE_PREFIX, alive_services, default_connect, open_client
+from dronewrapper.discovery import (
+    BRIDGE_PREFIX,
+    alive_services,
+    connection_problem,
+    default_connect,
+    open_client,
+)
 from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import (
@@ -318,51 +324,22 @@ class DroneWrapper:
                 self._state.wait(min(remaining, 0.5), newer_than=seen)
 
     def _diagnose(self, timeout: float) -> str:
-        state_key = registry.STATE.key(self.ns)
         info = self.session.info
-        if not list(info.routers_zid()) and not list(info.peers_zid()):
-            return f"cannot reach the Zenoh router at {self.connect}: no router or peer linked"
+        linked = bool(list(info.routers_zid()) or list(info.peers_zid()))
         try:
-            keys = alive_services(self.session, "*", timeout=1.0)
+            keys = alive_services(self.session, "*", timeout=1.0) if linked else set()
         except Exception:
             keys = set()
-        here = sorted(
-            parts["service"]
-            for key in keys
-            if (parts := registry.ALIVE.match(key)) and parts["ns"] == self.ns
-        )
-        elsewhere = sorted(
-            {
-                parts["ns"]
-                for key in keys
-                if (parts := registry.ALIVE.match(key))
-                and parts["ns"] != self.ns
-                and parts["service"].startswith(BRIDGE_PREFIX)
-            }
-        )
-        alive = ", ".join(here) or "nothing"
-        hint = f"; drones online: {', '.join(elsewhere)}" if elsewhere else ""
         state = self._state.value
-        if state is None:
-            bridges = [s for s in here if s.startswith(BRIDGE_PREFIX)]
-            if bridges:
-                return (
-                    f"bridge {', '.join(bridges)} is alive in namespace {self.ns!r} but published "
-                    f"no State on {state_key} within {timeout:g} s"
-                )
-            return (
-                f"no bridge for drone {self.ns!r} on the router at {self.connect}: nothing "
-                f"published {state_key} within {timeout:g} s (alive in {self.ns!r}: {alive}{hint})."
-                " Start one, e.g. `dronewrapper up compose/sim_iris.yaml`"
-            )
-        if self._state.age() > STATE_FRESH_S:
-            return (
-                f"the bridge of drone {self.ns!r} stopped publishing {state_key} "
-                f"{self._state.age():.1f} s ago (alive in {self.ns!r}: {alive})"
-            )
-        return (
-            f"the bridge of drone {self.ns!r} is up but its autopilot is not connected "
-            f"(no heartbeat; autopilot {state.autopilot or 'unknown'}) after {timeout:g} s"
+        return connection_problem(
+            self.ns,
+            self.connect,
+            linked=linked,
+            alive_keys=keys,
+            state_connected=None if state is None else state.connected,
+            state_age=self._state.age(),
+            fresh_s=STATE_FRESH_S,
+            waited=timeout,
         )
 
     def _require_connected(self, what: str) -> State:
