@@ -1,7 +1,7 @@
 """The perception process: camera frames in, Detections out, always on the newest frame.
 
-A Zenoh subscriber stores each decoded camera message in a one-slot holder (``Latest``); the
-main loop takes the newest one and skips any that arrived meanwhile (counted as dropped), so a
+A Zenoh subscriber stores each decoded camera message in a one-slot holder (``NewestSlot``);
+the main loop takes the newest one and skips any that arrived meanwhile (counted as dropped), so a
 slow detector never builds a queue and latency never grows. Each processed frame gives one
 Detections message carrying the frame's own stamp. Bad frames are counted by reason, logged
 (rate-limited) and skipped.
@@ -19,6 +19,7 @@ from dronewrapper.runtime import Node
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.frames import BadFrame, compressed_to_bgr, image_to_bgr
 from dronewrapper_perception.model_file import ModelFileError
+from dronewrapper_perception.newest import NewestSlot
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
 
 log = logging.getLogger("perception")
@@ -59,7 +60,8 @@ class PerceptionService:
         self.pipeline = pipeline or Pipeline(config)
         self.stats = Stats()
         self.topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
-        self.frames = node.latest(self.topic, camera=config.camera)
+        self.frames: NewestSlot[Image | CompressedImage] = NewestSlot()
+        node.subscribe(self.topic, self.frames.put, camera=config.camera)
         self.publisher = node.publisher(registry.DETECTIONS)
         self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
         self._seen = 0
@@ -80,11 +82,10 @@ class PerceptionService:
 
         Returns True if a frame was taken (processed or rejected as bad).
         """
-        try:
-            msg = self.frames.wait(timeout, newer_than=self._seen)
-        except TimeoutError:
+        taken = self.frames.take(timeout, newer_than=self._seen)
+        if taken is None:
             return False
-        count = self.frames.count
+        count, msg = taken
         self.stats.received = count
         self.stats.dropped += max(0, count - self._seen - 1)
         self._seen = count
