@@ -103,7 +103,11 @@ class PerceptionService:
         decode_time = time.perf_counter() - start
         header = msg.header
         frame_id = header.frame_id or self.config.camera
-        result = self.pipeline.process(bgr, header.stamp)
+        try:
+            result = self.pipeline.process(bgr, header.stamp)
+        except Exception as exc:  # a detector failing on one frame must not end the loop
+            self._bad(BadFrame("processing_error", f"{type(exc).__name__}: {exc}"))
+            return
         self.stats.processed += 1
         self.publisher.put(
             to_message(

@@ -161,3 +161,27 @@ def test_newest_frame_policy_keeps_latency_bounded(router):
         # with a queue the last frames would wait seconds; here each waits at most ~2 frames
         assert max(latest) < 1.0, f"latency grew to {max(latest):.2f} s"
         assert latest[-1] < 1.0
+
+
+class FragileDetector(ColorDetector):
+    """The real colour detector, made to fail on an all-white frame."""
+
+    def detect(self, bgr):
+        if bgr.min() == 255:
+            raise RuntimeError("detector failed on this frame")
+        return super().detect(bgr)
+
+
+def test_a_detector_failure_skips_the_frame_not_the_service(router):
+    def fragile(config):
+        return Pipeline(config, detector=FragileDetector(RED))
+
+    with running_service(router, pipeline_factory=fragile) as (service, cam, received):
+        pub = cam.publisher(registry.IMAGE_RAW, camera="cam_frontal")
+        publish_until_received(pub, lambda: disc_msg(1.0), received)
+        white = np.full((240, 320, 3), 255, np.uint8)
+        pub.put(bgr_to_image(white, 2.0, "cam_frontal"))
+        wait_for(lambda: service.stats.bad["processing_error"] == 1, 10, what="counted failure")
+        pub.put(disc_msg(3.0))
+        wait_for(lambda: any(m.header.stamp == 3.0 for _, m in received), 10)
+        assert not any(m.header.stamp == 2.0 for _, m in received)
