@@ -1,5 +1,5 @@
-"""The background of every frame: a textured ground plane fading into haze, a sky gradient and
-distant trees (``scenery.py``).
+"""The background of every frame: a textured ground plane fading into haze, a sky gradient with
+clouds, and distant trees (``scenery.py``).
 
 The ground is a seamless grass texture (an 8 m tile with a faint 2 m mowing checker, so motion
 and heading are visible) mapped onto the plane z = 0 with one homography
@@ -32,6 +32,11 @@ GRID_STEP_PX = 8  # haze and sky are computed every GRID_STEP_PX pixels and up-s
 
 SKY_HORIZON_BGR = np.array([228.0, 212.0, 196.0])
 SKY_ZENITH_BGR = np.array([205.0, 140.0, 75.0])
+CLOUD_BGR = np.array([248.0, 246.0, 244.0])
+CLOUD_SHADE_BGR = np.array([200.0, 192.0, 188.0])
+CLOUD_ALTITUDE_M = 1500.0
+CLOUD_TILE_M = 6000.0  # the cloud pattern repeats every this many metres
+CLOUD_TILE_PX = 256
 
 
 def _periodic_noise(rng: np.random.Generator, size: int, sigma_px: float) -> np.ndarray:
@@ -76,6 +81,19 @@ def ground_texture(seed: int) -> tuple[np.ndarray, tuple[float, float, float]]:
     return texture, mean  # type: ignore[return-value]
 
 
+@lru_cache(maxsize=4)
+def cloud_tile(seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Seamless cloud cover (0..1) and cloud shading (0 lit .. 1 shaded), float32 tiles."""
+    rng = np.random.default_rng([seed, 11])
+    n = CLOUD_TILE_PX
+    big = _periodic_noise(rng, n, 14.0)
+    small = _periodic_noise(rng, n, 3.0)
+    field = big + 0.35 * small
+    cover = np.clip((field - 0.5) * 0.9, 0.0, 0.9).astype(np.float32)
+    shade = np.clip(0.5 - 0.5 * small, 0.0, 1.0).astype(np.float32)
+    return cover, shade
+
+
 def _periodic_blur(tile: np.ndarray, sigma_px: float) -> np.ndarray:
     """Gaussian blur of a seamless tile that stays seamless (wrap-around borders)."""
     pad = min(tile.shape[0], math.ceil(3.0 * sigma_px) + 1)
@@ -117,6 +135,7 @@ class Background:
         self.scale = scale
         self.texture, self.far_bgr = ground_texture(seed)
         self.trees = make_trees(seed) if scenery else None
+        self.clouds = cloud_tile(seed) if scenery else None
         self.work_w = math.ceil(camera.width / scale)
         self.work_h = math.ceil(camera.height / scale)
         # working-resolution intrinsics: u_work = (u + 0.5) / scale - 0.5 (cv2.resize's mapping)
@@ -154,6 +173,8 @@ class Background:
         alpha = 1.0 - np.exp(-np.maximum(dist - HAZE_START_M, 0.0) / FOG_DISTANCE_M)
         t = 1.0 - np.exp(-np.clip(up, 0.0, None) / 0.3)
         color = SKY_HORIZON_BGR + (SKY_ZENITH_BGR - SKY_HORIZON_BGR) * t[:, None]
+        if self.clouds is not None:
+            self._add_clouds(color, rays / norm[:, None], pose.position_enu)
         shape = (self.grid_h, self.grid_w)
         step = self.grid_step
         size = (self.grid_w * step, self.grid_h * step)
@@ -161,6 +182,35 @@ class Background:
         alpha_img = cv2.resize(alpha.reshape(shape).astype(np.float32), size)[:h, :w]
         color_img = cv2.resize(color.reshape(*shape, 3).astype(np.uint8), size)[:h, :w]
         return alpha_img, color_img
+
+    def _add_clouds(self, color: np.ndarray, dirs: np.ndarray, position: np.ndarray) -> None:
+        """Blend clouds on a flat layer at CLOUD_ALTITUDE_M into the sky colours (in place)."""
+        up = dirs[:, 2]
+        sky = np.nonzero(up > 0.02)[0]
+        if sky.size == 0:
+            return
+        d = dirs[sky]
+        reach = (CLOUD_ALTITUDE_M - float(position[2])) / d[:, 2]
+        scale = CLOUD_TILE_PX / CLOUD_TILE_M
+        gx = (float(position[0]) + d[:, 0] * reach) * scale
+        gy = (float(position[1]) + d[:, 1] * reach) * scale
+        x0, y0 = np.floor(gx), np.floor(gy)
+        fx, fy = gx - x0, gy - y0
+        n = CLOUD_TILE_PX
+        ix0, iy0 = x0.astype(np.int64) % n, y0.astype(np.int64) % n
+        ix1, iy1 = (ix0 + 1) % n, (iy0 + 1) % n
+
+        def sample(tile: np.ndarray) -> np.ndarray:
+            top = tile[iy0, ix0] * (1 - fx) + tile[iy0, ix1] * fx
+            bottom = tile[iy1, ix0] * (1 - fx) + tile[iy1, ix1] * fx
+            return top * (1 - fy) + bottom * fy
+
+        assert self.clouds is not None
+        cover_tile, shade_tile = self.clouds
+        cover = sample(cover_tile) * np.clip((up[sky] - 0.02) / 0.2, 0.0, 1.0)
+        shade = sample(shade_tile)[:, None]
+        cloud = CLOUD_BGR * (1.0 - shade) + CLOUD_SHADE_BGR * shade
+        color[sky] = color[sky] * (1.0 - cover[:, None]) + cloud * cover[:, None]
 
     def ground_homography(self, pose: CameraPose) -> np.ndarray:
         """Homography from texture px to working-resolution image px."""

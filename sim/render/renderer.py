@@ -40,7 +40,7 @@ class Renderer:
         camera: the intrinsics of the images produced.
         sprites_dir: a sprite folder (with ``sprites.json``) to draw people as photo billboards;
             None draws them procedurally.
-        scenery: draw the distant trees.
+        scenery: draw the distant trees and the clouds.
     """
 
     def __init__(
