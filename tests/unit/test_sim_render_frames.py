@@ -179,3 +179,28 @@ def test_any_pose_renders_without_error():
         for mount in (FRONTAL, VENTRAL):
             image = renderer.render(mount, pos, quat)
             assert image.shape == (120, 160, 3) and image.dtype == np.uint8
+
+
+@pytest.mark.parametrize("sprites", [False, True])
+@pytest.mark.parametrize("yaw_deg", [180.0, 90.0])
+def test_a_person_is_drawn_at_their_true_size_where_they_stand(sprites, yaw_deg):
+    from support import SPRITES
+
+    person = ObjectSpec(
+        name="target", kind="person", position=(6.0, 1.0, 0.0), yaw=math.radians(yaw_deg)
+    )
+    world = world_of(person)
+    vehicle = np.array([0.0, 0.0, 1.0])
+    renderer = Renderer(world, CAM, SPRITES if sprites else None, scenery=False)
+    image = renderer.render(FRONTAL, vehicle, LEVEL)
+    world.objects.clear()
+    empty = renderer.render(FRONTAL, vehicle, LEVEL)
+    changed = np.abs(image.astype(int) - empty.astype(int)).sum(axis=2) > 40
+    changed = cv2.morphologyEx(changed.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3)))
+    ys, xs = np.nonzero(changed)
+    obj = World(Scenario(name="t", objects=[person])).object("target")
+    (foot, head), _ = project(np.array([obj.position, obj.top_enu]), vehicle, LEVEL, FRONTAL, CAM)
+    height_px = foot[1] - head[1]
+    assert ys.max() - ys.min() == pytest.approx(height_px, rel=0.08)
+    assert ys.max() == pytest.approx(foot[1], abs=0.05 * height_px)
+    assert np.median(xs) == pytest.approx(foot[0], abs=0.1 * height_px)
