@@ -3,11 +3,12 @@
 For the beacon scene (beacon_abrupt, a moving beacon) and the crowd scene
 (people_crossing_front, three procedural people; also with photo sprites), the world steps at
 30 Hz while the vehicle flies a gentle climbing circle (so the ground, horizon and objects move
-in the frame), and each step renders the frontal and the ventral camera. Measured per frame:
-wall time (perf_counter) and CPU time of this process (process_time, all threads). The implied
-CPU share is the CPU of one frontal + one ventral frame times 30 Hz (100 % = one core; target
-< 50 %). OpenCV runs single-threaded here (``cv2.setNumThreads(1)``) so the figure is the cost,
-not a share of a multi-core speed-up.
+in the frame), and each step renders the frontal and the ventral camera. A last scene has the
+vehicle standing still (person_static: the idle sim on the ground before take-off).
+Measured per frame: wall time (perf_counter) and CPU time of this process (process_time, all
+threads). The implied CPU share is the CPU of one frontal + one ventral frame times 30 Hz
+(100 % = one core; target < 50 %). OpenCV runs single-threaded here (``cv2.setNumThreads(1)``)
+so the figure is the cost, not a share of a multi-core speed-up.
 Run: ``.venv/bin/python -m bench.sim_render [--frames 150]``; writes bench/results/sim_render.json.
 """
 
@@ -43,7 +44,9 @@ def vehicle_pose(t: float) -> tuple[np.ndarray, np.ndarray]:
     return pos, quat
 
 
-def run_scene(name: str, frames: int, sprites: Path | None) -> dict[str, object]:
+def run_scene(
+    name: str, frames: int, sprites: Path | None, still: bool = False
+) -> dict[str, object]:
     world = World(load_scenario(name))
     camera = PinholeCamera(640, 480, math.radians(world.scenario.camera.hfov_deg))
     t0 = time.perf_counter()
@@ -55,14 +58,19 @@ def run_scene(name: str, frames: int, sprites: Path | None) -> dict[str, object]
     cpus: dict[str, list[float]] = {"cam_frontal": [], "cam_ventral": []}
     for i in range(frames):
         world.step(1.0 / RATE_HZ)
-        pos, quat = vehicle_pose(i / RATE_HZ)
+        pos, quat = vehicle_pose(0.0 if still else i / RATE_HZ)
         for mount in (FRONTAL, VENTRAL):
             c0, w0 = time.process_time(), time.perf_counter()
             image = renderer.render(mount, pos, quat)
             walls[mount.name].append(time.perf_counter() - w0)
             cpus[mount.name].append(time.process_time() - c0)
             assert image.shape == (480, 640, 3)
-    out: dict[str, object] = {"scenario": name, "sprites": sprites is not None, "setup_s": setup_s}
+    out: dict[str, object] = {
+        "scenario": name,
+        "sprites": sprites is not None,
+        "vehicle_still": still,
+        "setup_s": setup_s,
+    }
     both_cpu_ms = 0.0
     for cam in walls:
         wall = percentiles(walls[cam])
@@ -79,14 +87,16 @@ def main() -> None:
     args = parser.parse_args()
     cv2.setNumThreads(1)
     scenes = [
-        ("beacon_abrupt", None),
-        ("people_crossing_front", None),
-        ("people_crossing_front", SPRITES if SPRITES.is_dir() else None),
+        ("beacon_abrupt", None, False),
+        ("people_crossing_front", None, False),
+        ("people_crossing_front", SPRITES if SPRITES.is_dir() else None, False),
+        ("person_static", None, True),
     ]
-    results = [run_scene(name, args.frames, sprites) for name, sprites in scenes]
+    results = [run_scene(name, args.frames, sprites, still) for name, sprites, still in scenes]
     rows = []
     for r in results:
         label = f"{r['scenario']}{' (sprites)' if r['sprites'] else ''}"
+        label += " (vehicle still)" if r["vehicle_still"] else ""
         for cam in ("cam_frontal", "cam_ventral"):
             s = r[cam]
             rows.append(

@@ -28,6 +28,7 @@ TEXTURE_RES_M = 0.025  # m per texture pixel
 TEXTURE_REACH_TILES = 3  # the texture covers this many tiles on each side of the camera's tile
 FOG_DISTANCE_M = 70.0  # haze: alpha = 1 - exp(-(distance - HAZE_START_M) / FOG_DISTANCE_M)
 HAZE_START_M = 8.0  # no haze nearer than this (and no blending cost for a downward camera)
+CACHED_POSES = 4  # background images kept for repeated poses
 GRID_STEP_PX = 8  # haze and sky are computed every GRID_STEP_PX pixels and up-sampled
 
 SKY_HORIZON_BGR = np.array([228.0, 212.0, 196.0])
@@ -136,6 +137,7 @@ class Background:
         self.texture, self.far_bgr = ground_texture(seed)
         self.trees = make_trees(seed) if scenery else None
         self.clouds = cloud_tile(seed) if scenery else None
+        self._cache: dict[bytes, np.ndarray] = {}
         self.work_w = math.ceil(camera.width / scale)
         self.work_h = math.ceil(camera.height / scale)
         # working-resolution intrinsics: u_work = (u + 0.5) / scale - 0.5 (cv2.resize's mapping)
@@ -227,7 +229,22 @@ class Background:
         return ground_to_image @ texture_to_ground
 
     def render(self, pose: CameraPose) -> np.ndarray:
-        """The background image (H x W x 3 BGR uint8) seen from ``pose``."""
+        """The background image (H x W x 3 BGR uint8, a new array) seen from ``pose``.
+
+        The last few poses' images are kept, so a vehicle standing still (on the ground, or
+        each of its cameras in turn) costs only a copy.
+        """
+        key = pose.position_enu.tobytes() + pose.world_to_camera.tobytes()
+        cached = self._cache.get(key)
+        if cached is None:
+            cached = self._render(pose)
+            cached.setflags(write=False)
+            if len(self._cache) >= CACHED_POSES:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = cached
+        return cached.copy()
+
+    def _render(self, pose: CameraPose) -> np.ndarray:
         alpha, image = self._haze_and_sky(pose)
         ground_rows = np.nonzero(alpha.min(axis=1) < 0.995)[0]
         if ground_rows.size:
