@@ -41,13 +41,14 @@ from support import client_node, wait_for
 
 
 class FakeBridge:
-    """The bridge's keys with a trivially obedient aircraft (position setpoints move it)."""
+    """The bridge's keys with a simple aircraft: position setpoints make it climb at 1 m/s."""
 
     def __init__(self, endpoint: str, *, flying: bool) -> None:
         self.node = client_node(endpoint, name="bridge_fake")
         self.armed = flying
         self.mode = "OFFBOARD" if flying else "AUTO.LOITER"
         self.z = 2.0 if flying else 0.0
+        self.z_goal = self.z
         self.landed = LANDED_STATE_IN_AIR if flying else LANDED_STATE_ON_GROUND
         self.setpoints: list[tuple[float, PositionTarget]] = []
         self.land_calls = 0
@@ -67,8 +68,7 @@ class FakeBridge:
         with self._lock:
             self.setpoints.append((time.monotonic(), sp))
             if sp.type_mask == MASK_POSITION and self.armed:
-                self.z = sp.position.z
-                self.landed = LANDED_STATE_IN_AIR
+                self.z_goal = sp.position.z
 
     def _arming(self, req):
         self.armed = req.value
@@ -80,12 +80,22 @@ class FakeBridge:
 
     def _land(self, _req):
         self.land_calls += 1
-        self.mode, self.z, self.landed, self.armed = "AUTO.LAND", 0.0, LANDED_STATE_ON_GROUND, False
+        self.mode, self.z_goal, self.landed, self.armed = (
+            "AUTO.LAND",
+            0.0,
+            LANDED_STATE_ON_GROUND,
+            False,
+        )
+        self.z = 0.0
         return CommandTOLResult(success=True, result=0)
 
     def _publish_loop(self) -> None:
         while not self.node.stop_event.wait(0.05):
             now = time.time()
+            with self._lock:
+                self.z += max(-0.05, min(0.05, self.z_goal - self.z))  # 1 m/s at 20 Hz
+                if self.z > 0.1 and self.armed:
+                    self.landed = LANDED_STATE_IN_AIR
             self._state.put(
                 State(
                     header=Header(stamp=now),
@@ -252,7 +262,8 @@ def test_takes_off_on_start_and_lands_on_exit(router):
         wait_for(
             lambda: any(s.state == CONTROLLER_TAKEOFF for s in ctl.statuses), 15, what="takeoff"
         )
-        wait_for(lambda: bridge.z >= 1.5 - 1e-6, 15, what="climb setpoint")
+        assert not bridge.velocity_setpoints()  # taking off: the controller only watches
+        wait_for(lambda: bridge.z >= 1.5 - 1e-6, 15, what="climb")
         wait_for(lambda: ctl.state() in (CONTROLLER_HOVER, CONTROLLER_SEARCH), 15, what="servoing")
         assert bridge.armed and bridge.mode == "OFFBOARD"
         assert ctl.stop() == 0
