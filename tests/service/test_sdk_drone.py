@@ -107,6 +107,10 @@ class FakeBridge:
         self.calls.append(f"set_mode {req.custom_mode}")
         if req.custom_mode not in ("OFFBOARD", "POSCTL", "AUTO.LAND", "GUIDED"):
             raise ServiceError(f"unknown mode {req.custom_mode!r}", "bad_request")
+        # like the real bridge, give the stream a moment (it primes for > 1 s before asking)
+        deadline = time.monotonic() + 1.0
+        while req.custom_mode == "OFFBOARD" and not self.setpoints and time.monotonic() < deadline:
+            time.sleep(0.01)
         if req.custom_mode == "OFFBOARD" and not self.setpoints:
             return SetModeResult(mode_sent=False, result=4, message="no setpoint stream")
         self.mode = req.custom_mode
