@@ -4,9 +4,11 @@ Runs the ``sim_follow_color`` graph (simulator, MAVLink bridge, colour perceptio
 through the launcher's Python API on a free loopback router and free UDP ports, watches the
 simulator's ground truth and the controller's status, prints one live status line, and at the
 end prints a summary (time to acquire, share of time the target was centred, distance error)
-and saves a plot of the trajectories (top view) and the errors over time to ``out/demo/``.
+and saves a plot of the trajectories (top view) and the errors over time to ``out/demo/`` (and,
+with ``--video``, perception's annotated frames with the status line as ``follow.mp4``).
 
     python -m dronewrapper_compose.demo [--duration 60] [--scenario beacon_smooth] [--out DIR]
+                                        [--video]
 
 The processes' own logs go to ``out/demo/graph.log``.
 """
@@ -17,9 +19,12 @@ import argparse
 import math
 import socket
 import sys
+import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
+
+import numpy as np
 
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
@@ -142,8 +147,61 @@ def save_plot(samples: Sequence[FollowSample], goal: float, path: Path) -> None:
     plt.close(fig)
 
 
+class VideoRecorder:
+    """Writes perception's annotated frames, with the live status drawn on, to an MP4 file."""
+
+    def __init__(self, session, ns: str, path: Path, status_text, fps: float = 15.0) -> None:
+        import cv2
+
+        from dronewrapper.msgs import codec, registry
+        from dronewrapper.msgs.sensor import CompressedImage
+
+        self._cv2 = cv2
+        self.path = path
+        self.frames = 0
+        self._status_text = status_text
+        self._writer = None
+        self._fps = fps
+        self._last = 0.0
+        self._lock = threading.Lock()
+        decoder = codec.decoder(CompressedImage)
+
+        def on_frame(sample) -> None:
+            now = time.monotonic()
+            if now - self._last < 1.0 / self._fps:
+                return
+            self._last = now
+            msg = decoder.decode(sample.payload.to_bytes())
+            img = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
+            if img is not None:
+                self._write(img)
+
+        self._sub = session.declare_subscriber(registry.DETECTIONS_DEBUG_IMAGE.key(ns), on_frame)
+
+    def _write(self, img) -> None:
+        cv2 = self._cv2
+        text = self._status_text()
+        cv2.rectangle(img, (0, img.shape[0] - 24), (img.shape[1], img.shape[0]), (0, 0, 0), -1)
+        cv2.putText(
+            img, text, (6, img.shape[0] - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (255, 255, 255), 1
+        )
+        with self._lock:
+            if self._writer is None:
+                size = (img.shape[1], img.shape[0])
+                fourcc = cv2.VideoWriter_fourcc(*"mp4v")
+                self._writer = cv2.VideoWriter(str(self.path), fourcc, self._fps, size)
+            self._writer.write(img)
+            self.frames += 1
+
+    def close(self) -> None:
+        self._sub.undeclare()
+        with self._lock:
+            if self._writer is not None:
+                self._writer.release()
+
+
 def run_demo(
-    duration: float, scenario: str, out_dir: Path, *, live: bool = True
+    duration: float, scenario: str, out_dir: Path, *, live: bool = True, video: bool = False
 ) -> tuple[int, FollowSummary | None]:
     """Fly the demo; returns (exit status, summary)."""
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -153,6 +211,7 @@ def run_demo(
         "onboard_port": str(free_port(socket.SOCK_DGRAM)),
         "gcs_port": str(free_port(socket.SOCK_DGRAM)),
         "on_exit": "land",
+        "debug_image": "true" if video else "false",
     }
     goal = intended_distance(scenario)
     log_path = out_dir / "graph.log"
@@ -167,8 +226,23 @@ def run_demo(
             return 1, None
         session = open_session(ZenohOptions(mode="client", connect=[router]))
         monitor = FollowMonitor(session, launcher.ns, aim_height=0.0).start()
-        print(f"flying for {duration:g} s (Ctrl-C stops early)")
         t0 = time.monotonic()
+        recorder = None
+        if video:
+
+            def short() -> str:
+                smp = monitor.sample()
+                if smp is None:
+                    return ""
+                return (
+                    f"t={time.monotonic() - t0:5.1f}s {smp.state:<8} "
+                    f"seen={'yes' if smp.target_visible else 'no'} d={smp.distance:4.1f} m "
+                    f"(goal {goal:.1f}) bearing={math.degrees(smp.bearing):+5.1f} deg "
+                    f"alt={smp.vehicle[2]:3.1f} m"
+                )
+
+            recorder = VideoRecorder(session, launcher.ns, out_dir / "follow.mp4", short)
+        print(f"flying for {duration:g} s (Ctrl-C stops early)")
         tty = sys.stdout.isatty()
         last_print = 0.0
         try:
@@ -189,6 +263,9 @@ def run_demo(
             if tty:
                 print()
             monitor.close()
+            if recorder is not None:
+                recorder.close()
+                print(f"video: {recorder.frames} frames saved to {recorder.path}")
             session.close()
             print("stopping the graph (the drone lands first)...")
             code = launcher.stop()
@@ -214,10 +291,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=60.0, help="seconds of flight")
     parser.add_argument("--scenario", default="beacon_smooth", help="a beacon_* scenario")
     parser.add_argument("--out", type=Path, default=REPO / "out" / "demo", help="output folder")
+    parser.add_argument(
+        "--video", action="store_true", help="also save an annotated video (follow.mp4)"
+    )
     args = parser.parse_args(argv)
     if not args.duration > 0:
         parser.error("--duration must be > 0")
-    code, _ = run_demo(args.duration, args.scenario, args.out)
+    code, _ = run_demo(args.duration, args.scenario, args.out, video=args.video)
     return code
 
 
