@@ -1,0 +1,52 @@
+"""The demo's pure parts: the live status line, the summary and the plot (no flight)."""
+
+from __future__ import annotations
+
+import io
+import math
+
+import pytest
+
+from dronewrapper_compose.demo import intended_distance, print_summary, save_plot, status_line
+from dronewrapper_controller.metrics import FollowSample, summarize
+
+
+def flight(n: int = 60) -> list[FollowSample]:
+    return [
+        FollowSample(
+            t=0.1 * k,
+            vehicle=(0.05 * k, 0.0, 2.0),
+            yaw=0.01 * k,
+            target=(6.0 + 0.05 * k, 0.5, 2.5),
+            state="takeoff" if k < 10 else "tracking",
+            target_visible=k >= 12,
+        )
+        for k in range(n)
+    ]
+
+
+def test_status_line_shows_state_visibility_distance_and_bearing():
+    sample = flight()[30]
+    line = status_line(3.0, sample, 5.0)
+    assert "state=tracking" in line and "visible=yes" in line
+    assert f"distance= {sample.distance:.2f} m" in line and "goal 5.0" in line
+    assert f"{math.degrees(sample.bearing):+6.1f} deg" in line
+    assert "waiting" in status_line(0.5, None, 5.0)
+
+
+def test_summary_printout_and_plot(tmp_path):
+    samples = flight()
+    summary = summarize(samples, intended_distance=5.0)
+    out = io.StringIO()
+    print_summary(summary, out)
+    text = out.getvalue()
+    for words in ("time to acquire", "centred", "distance error mean / p95", "bearing error p95"):
+        assert words in text
+    plot = tmp_path / "follow.png"
+    save_plot(samples, 5.0, plot)
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and plot.stat().st_size > 10_000
+
+
+def test_intended_distance_of_the_beacon_is_about_five_metres():
+    """The paper's follow-colour distance: 'about 5 m' for its reference radius."""
+    assert intended_distance("beacon_smooth") == pytest.approx(5.0, abs=0.3)
