@@ -153,7 +153,7 @@ def through_graph(graph: str, scenario: str, detector: str, seconds: float) -> d
     }
     if graph == "sim_follow_person":
         variables["detector"] = detector
-    log_path = REPO / "bench" / "results" / f"controller_latency_{graph}.log"
+    log_path = REPO / "out" / "bench" / f"controller_latency_{graph}.log"
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "w") as log_file:
         launcher = Launcher.from_file(

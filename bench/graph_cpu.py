@@ -50,7 +50,7 @@ def measure(graph: str, scenario: str, seconds: float, settle: float) -> dict[st
         "gcs_port": str(free_port(socket.SOCK_DGRAM)),
         "on_exit": "stop",
     }
-    log_path = REPO / "bench" / "results" / f"graph_cpu_{graph}.log"
+    log_path = REPO / "out" / "bench" / f"graph_cpu_{graph}.log"
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "w") as log_file:
         launcher = Launcher.from_file(
