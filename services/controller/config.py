@@ -61,12 +61,26 @@ class FollowPersonConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=Tru
 
 
 class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
-    """What the pure servo needs (a subset of :class:`Config`, see there)."""
+    """What the pure servo needs (a subset of :class:`Config`).
+
+    Attributes:
+        mode: ``follow_color`` or ``follow_person``.
+        ref_width: reference image width of the pixel errors (px).
+        detection_timeout: detections older than this are stale -> hover (s).
+        search_delay: the target left the view (last seen within ``edge_margin`` of the left
+            or right border) this long ago -> search (s).
+        occlusion_delay: the target vanished inside the image (hidden) this long ago ->
+            search (s).
+        edge_margin: the outer share of each half of the image counted as its border (0..1).
+        search_yaw_rate: search turn rate (rad/s).
+    """
 
     mode: str = "follow_color"
     ref_width: float = 320.0
     detection_timeout: float = 0.5
     search_delay: float = 2.0
+    occlusion_delay: float = 6.0
+    edge_margin: float = 0.25
     search_yaw_rate: float = 0.3
     follow_color: FollowColorConfig = msgspec.field(default_factory=FollowColorConfig)
     follow_person: FollowPersonConfig = msgspec.field(default_factory=FollowPersonConfig)
@@ -80,6 +94,10 @@ class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         _positive("detection_timeout", self.detection_timeout)
         if not self.search_delay >= 0:
             raise ValueError(f"search_delay must be >= 0, got {self.search_delay}")
+        if not self.occlusion_delay >= 0:
+            raise ValueError(f"occlusion_delay must be >= 0, got {self.occlusion_delay}")
+        if not 0.0 <= self.edge_margin <= 1.0:
+            raise ValueError(f"edge_margin must be in [0, 1], got {self.edge_margin}")
         if not self.search_yaw_rate >= 0:
             raise ValueError(f"search_yaw_rate must be >= 0, got {self.search_yaw_rate}")
 

@@ -9,10 +9,13 @@ States (``dronewrapper.msgs.control``):
 - ``tracking``: fresh detections contain the target; vx, vz, yaw rate from the three PIDs,
   vy is always 0. A tick without a new frame repeats the last command.
 - ``hover``: detections are stale (older than ``detection_timeout``: perception stopped or
-  lags), or the target was lost less than ``search_delay`` ago; all-zero command, PIDs reset.
-- ``search``: detections are fresh but the target has been missing for ``search_delay`` s or
-  more: turn in place at ``search_yaw_rate`` towards the side where it was last seen. Search
-  needs live perception: with stale detections the aircraft hovers rather than spinning blind.
+  lags), or the target was lost only a moment ago; all-zero command, PIDs reset.
+- ``search``: detections are fresh but the target has been missing for ``search_delay`` s
+  (it was last seen near the left or right border, within ``edge_margin`` of it: it left the
+  view) or ``occlusion_delay`` s (it vanished inside the image: most likely hidden behind
+  someone, so turning away would lose it for good): turn in place at ``search_yaw_rate``
+  towards the side where it was last seen. Search needs live perception: with stale
+  detections the aircraft hovers rather than spinning blind.
 """
 
 from __future__ import annotations
@@ -168,7 +171,14 @@ class Servo:
         self.reset()
         self._last_stamp = None
         lost_for = math.inf if self._last_seen is None else now - self._last_seen
-        if fresh and lost_for >= self.config.search_delay:
+        half = self.config.ref_width / 2.0
+        left_the_view = abs(self._last_yaw_error) >= half * (1.0 - self.config.edge_margin)
+        delay = (
+            self.config.search_delay
+            if left_the_view or self._last_seen is None
+            else self.config.occlusion_delay
+        )
+        if fresh and lost_for >= delay:
             direction = 1.0 if self._last_yaw_error >= 0 else -1.0
             self._last = Command(
                 state=CONTROLLER_SEARCH, yaw_rate=direction * self.config.search_yaw_rate

@@ -47,7 +47,7 @@ def test_one_command_per_new_frame_with_its_stamp():
 
 def test_hover_and_search_are_sent_once_on_change():
     loop = ControlLoop(ServoConfig(search_delay=1.0))
-    loop.tick(0.0, frame(1.0, 100), age=0.0)
+    loop.tick(0.0, frame(1.0, 10), age=0.0)  # last seen at the left border: it left the view
     hover = loop.tick(0.1, frame(1.1), age=0.0)
     assert hover is not None and hover.state == CONTROLLER_HOVER
     assert loop.tick(0.2, frame(1.2), age=0.0) is None

@@ -210,3 +210,19 @@ def test_colour_follows_the_largest_blob_when_the_tracker_names_none():
     assert pick_target(msg, best_when_untargeted=True).id == "t2"
     cmd = Servo(colour_config()).step(0.0, msg, age=0.0)
     assert cmd.state == CONTROLLER_TRACKING and cmd.yaw_rate > 0
+
+
+def test_target_hidden_mid_image_waits_longer_before_searching():
+    """Lost near the centre (someone walked in front): turning away would lose it for good."""
+    servo = Servo(colour_config(search_delay=2.0, occlusion_delay=6.0, edge_margin=0.25))
+    servo.step(0.0, frame(1.0, box(200, 120, 10, 10, radius=8)), age=0.0)  # 40 ref px right
+    for t in (1.0, 3.0, 5.9):
+        assert servo.step(t, frame(1.0 + t), age=0.0).state == CONTROLLER_HOVER
+    cmd = servo.step(6.1, frame(7.1), age=0.0)
+    assert cmd.state == CONTROLLER_SEARCH and cmd.yaw_rate < 0
+
+
+def test_target_lost_at_the_border_searches_after_the_short_delay():
+    servo = Servo(colour_config(search_delay=2.0, occlusion_delay=6.0, edge_margin=0.25))
+    servo.step(0.0, frame(1.0, box(290, 120, 10, 10, radius=8)), age=0.0)  # 130 >= 120 ref px
+    assert servo.step(2.1, frame(3.1), age=0.0).state == CONTROLLER_SEARCH
