@@ -28,14 +28,21 @@ class FollowColorConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True
         vx: forward-speed PID on e_x (m/s per unit of e_x).
         best_when_untargeted: follow the best (largest) blob when the tracker names no target
             (the paper's rule; there is one beacon, identity does not matter).
+        id_switch_confirm: a new target track id must stay the target this long before the
+            drone steers on it (s; 0 = at once: one beacon, identity does not matter).
     """
 
     target_radius: float = 10.0
     best_when_untargeted: bool = True
+    id_switch_confirm: float = 0.0
     vx: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=-0.5, out_limit=1.0))
 
     def __post_init__(self) -> None:
         _positive("follow_color.target_radius", self.target_radius)
+        if not self.id_switch_confirm >= 0:
+            raise ValueError(
+                f"follow_color.id_switch_confirm must be >= 0, got {self.id_switch_confirm}"
+            )
 
 
 class FollowPersonConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -48,16 +55,24 @@ class FollowPersonConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=Tru
         best_when_untargeted: follow the best detection when the tracker names no target.
             False (default): while the target is hidden the drone hovers/searches rather than
             jumping to a passer-by (untracked detections still use the best one).
+        id_switch_confirm: a new target track id must stay the target this long before the
+            drone steers on it (s): a tracker that picks a passer-by for a frame or two
+            must not swing the drone towards them.
     """
 
     area_ratio: float = 20.0
     best_when_untargeted: bool = False
+    id_switch_confirm: float = 0.5
     max_forward_error: float = 10.0
     vx: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=0.05, out_limit=1.0))
 
     def __post_init__(self) -> None:
         _positive("follow_person.area_ratio", self.area_ratio)
         _positive("follow_person.max_forward_error", self.max_forward_error)
+        if not self.id_switch_confirm >= 0:
+            raise ValueError(
+                f"follow_person.id_switch_confirm must be >= 0, got {self.id_switch_confirm}"
+            )
 
 
 class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):

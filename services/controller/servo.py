@@ -86,6 +86,9 @@ class Servo:
         mode = config.follow_color if config.mode == "follow_color" else config.follow_person
         vx_gains = mode.vx
         self._best_when_untargeted = mode.best_when_untargeted
+        self._switch_confirm = mode.id_switch_confirm
+        self._followed_id = ""  # track id being followed ("" before the first / untracked)
+        self._candidate: tuple[str, float] = ("", 0.0)  # a new target id and since when
         self.pid_vx = Pid(vx_gains)
         self.pid_vz = Pid(config.vz)
         self.pid_yaw = Pid(config.yaw_rate)
@@ -113,8 +116,26 @@ class Servo:
         fp = c.follow_person
         return follow_person_errors(det, w, h, fp.area_ratio, fp.max_forward_error, c.ref_width)
 
+    def _confirmed(self, now: float, track_id: str) -> bool:
+        """Whether to steer on track ``track_id`` now: the followed track, the first one, an
+        untracked detection, or a new id that has stayed the target for ``id_switch_confirm`` s
+        (a tracker that picks a passer-by for a frame or two must not swing the drone)."""
+        if not track_id or self._followed_id in ("", track_id) or self._switch_confirm <= 0:
+            self._followed_id = track_id
+            self._candidate = ("", 0.0)
+            return True
+        candidate, since = self._candidate
+        if candidate != track_id:
+            self._candidate = (track_id, now)
+            return False
+        if now - since >= self._switch_confirm:
+            self._followed_id = track_id
+            self._candidate = ("", 0.0)
+            return True
+        return False
+
     def _find(
-        self, detections: Detections | None, age: float
+        self, now: float, detections: Detections | None, age: float
     ) -> tuple[bool, Detection2D | None, ServoErrors | None]:
         """(fresh, target, errors): target and errors are None when it is not usable."""
         fresh = detections is not None and age <= self.config.detection_timeout
@@ -123,7 +144,7 @@ class Servo:
             if fresh and detections is not None
             else None
         )
-        if target is None or detections is None:
+        if target is None or detections is None or not self._confirmed(now, target.id):
             return fresh, None, None
         try:
             errors = self.errors_for(target, detections)
@@ -136,7 +157,7 @@ class Servo:
     def observe(self, now: float, detections: Detections | None, age: float) -> bool:
         """Watch without commanding (e.g. during take-off): remember when and on which side the
         target was last seen, so a later search turns the right way. True if it is in view."""
-        _, _, errors = self._find(detections, age)
+        _, _, errors = self._find(now, detections, age)
         if errors is None:
             return False
         self._last_seen = now
@@ -145,7 +166,7 @@ class Servo:
 
     def step(self, now: float, detections: Detections | None, age: float) -> Command:
         """Decide the command at time ``now`` (s) from the newest detections, ``age`` s old."""
-        fresh, target, errors = self._find(detections, age)
+        fresh, target, errors = self._find(now, detections, age)
         if errors is None or detections is None or target is None:
             return self._not_tracking(now, fresh)
 

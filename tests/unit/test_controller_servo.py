@@ -226,3 +226,27 @@ def test_target_lost_at_the_border_searches_after_the_short_delay():
     servo = Servo(colour_config(search_delay=2.0, occlusion_delay=6.0, edge_margin=0.25))
     servo.step(0.0, frame(1.0, box(290, 120, 10, 10, radius=8)), age=0.0)  # 130 >= 120 ref px
     assert servo.step(2.1, frame(3.1), age=0.0).state == CONTROLLER_SEARCH
+
+
+def test_a_new_target_id_must_persist_before_the_drone_turns_to_it():
+    """The tracker names a passer-by for a frame: the drone does not swing towards them."""
+    servo = Servo(colour_config(mode="follow_person"))  # id_switch_confirm 0.5 s by default
+    person = box(160, 120, 40, 96, id_="t1")
+    passer = box(30, 120, 40, 96, id_="t8")
+    assert servo.step(0.0, frame(1.0, person, target_id="t1"), age=0.0).target_id == "t1"
+    cmd = servo.step(0.1, frame(1.1, person, passer, target_id="t8"), age=0.0)
+    assert cmd.state == CONTROLLER_HOVER and cmd.yaw_rate == 0.0
+    cmd = servo.step(0.2, frame(1.2, person, passer, target_id="t1"), age=0.0)
+    assert cmd.state == CONTROLLER_TRACKING and cmd.target_id == "t1"  # back at once
+    for t in (0.3, 0.6):
+        cmd = servo.step(t, frame(1.0 + t, passer, target_id="t8"), age=0.0)
+        assert cmd.state == CONTROLLER_HOVER
+    cmd = servo.step(0.85, frame(1.85, passer, target_id="t8"), age=0.0)  # named 0.55 s
+    assert cmd.state == CONTROLLER_TRACKING and cmd.target_id == "t8" and cmd.yaw_rate > 0
+
+
+def test_colour_steers_on_a_new_blob_id_at_once():
+    servo = Servo(colour_config())
+    servo.step(0.0, frame(1.0, box(100, 120, 20, 20, radius=9, id_="t1"), target_id="t1"), 0.0)
+    msg = frame(1.1, box(110, 120, 20, 20, radius=9, id_="t2"), target_id="t2")
+    assert servo.step(0.1, msg, age=0.0).state == CONTROLLER_TRACKING
