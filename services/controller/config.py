@@ -87,6 +87,8 @@ class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         occlusion_delay: the target vanished inside the image (hidden) this long ago ->
             search (s).
         edge_margin: the outer share of each half of the image counted as its border (0..1).
+        lost_hold: a target missing for at most this long keeps the last command (s): a
+            detector or tracker dropout of a frame or two is not a loss.
         search_yaw_rate: search turn rate (rad/s).
     """
 
@@ -95,6 +97,7 @@ class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     detection_timeout: float = 0.5
     search_delay: float = 2.0
     occlusion_delay: float = 6.0
+    lost_hold: float = 0.3
     edge_margin: float = 0.25
     search_yaw_rate: float = 0.3
     follow_color: FollowColorConfig = msgspec.field(default_factory=FollowColorConfig)
@@ -109,6 +112,8 @@ class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         _positive("detection_timeout", self.detection_timeout)
         if not self.search_delay >= 0:
             raise ValueError(f"search_delay must be >= 0, got {self.search_delay}")
+        if not 0 <= self.lost_hold <= self.detection_timeout:
+            raise ValueError(f"lost_hold must be in [0, detection_timeout], got {self.lost_hold}")
         if not self.occlusion_delay >= 0:
             raise ValueError(f"occlusion_delay must be >= 0, got {self.occlusion_delay}")
         if not 0.0 <= self.edge_margin <= 1.0:

@@ -9,7 +9,8 @@ States (``dronewrapper.msgs.control``):
 - ``tracking``: fresh detections contain the target; vx, vz, yaw rate from the three PIDs,
   vy is always 0. A tick without a new frame repeats the last command.
 - ``hover``: detections are stale (older than ``detection_timeout``: perception stopped or
-  lags), or the target was lost only a moment ago; all-zero command, PIDs reset.
+  lags), or the target was lost only a moment ago; all-zero command, PIDs reset. A dropout
+  shorter than ``lost_hold`` (a frame or two without the target) keeps the last command.
 - ``search``: detections are fresh but the target has been missing for ``search_delay`` s
   (it was last seen near the left or right border, within ``edge_margin`` of it: it left the
   view) or ``occlusion_delay`` s (it vanished inside the image: most likely hidden behind
@@ -189,9 +190,11 @@ class Servo:
         return self._last
 
     def _not_tracking(self, now: float, fresh: bool) -> Command:
+        lost_for = math.inf if self._last_seen is None else now - self._last_seen
+        if fresh and self._last.state == CONTROLLER_TRACKING and lost_for <= self.config.lost_hold:
+            return self._last  # a dropout of a frame or two: keep the last command
         self.reset()
         self._last_stamp = None
-        lost_for = math.inf if self._last_seen is None else now - self._last_seen
         half = self.config.ref_width / 2.0
         left_the_view = abs(self._last_yaw_error) >= half * (1.0 - self.config.edge_margin)
         delay = (

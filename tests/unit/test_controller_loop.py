@@ -46,14 +46,15 @@ def test_one_command_per_new_frame_with_its_stamp():
 
 
 def test_hover_and_search_are_sent_once_on_change():
-    loop = ControlLoop(ServoConfig(search_delay=1.0))
+    loop = ControlLoop(ServoConfig(search_delay=1.5, lost_hold=0.3))
     loop.tick(0.0, frame(1.0, 10), age=0.0)  # last seen at the left border: it left the view
-    hover = loop.tick(0.1, frame(1.1), age=0.0)
+    assert loop.tick(0.1, frame(1.1), age=0.0) is None  # a short dropout: the command holds
+    hover = loop.tick(0.4, frame(1.4), age=0.0)
     assert hover is not None and hover.state == CONTROLLER_HOVER
-    assert loop.tick(0.2, frame(1.2), age=0.0) is None
-    search = loop.tick(1.5, frame(2.5), age=0.0)
+    assert loop.tick(0.5, frame(1.5), age=0.0) is None
+    search = loop.tick(1.6, frame(2.6), age=0.0)
     assert search is not None and search.state == CONTROLLER_SEARCH
-    assert loop.tick(1.6, frame(2.6), age=0.0) is None
+    assert loop.tick(1.7, frame(2.7), age=0.0) is None
 
 
 def test_status_reports_state_errors_and_last_command():

@@ -34,6 +34,7 @@ def colour_config(**kw) -> ServoConfig:
     base = dict(
         mode="follow_color",
         detection_timeout=0.5,
+        lost_hold=0.0,
         search_delay=2.0,
         search_yaw_rate=0.3,
         follow_color=FollowColorConfig(
@@ -230,7 +231,7 @@ def test_target_lost_at_the_border_searches_after_the_short_delay():
 
 def test_a_new_target_id_must_persist_before_the_drone_turns_to_it():
     """The tracker names a passer-by for a frame: the drone does not swing towards them."""
-    servo = Servo(colour_config(mode="follow_person"))  # id_switch_confirm 0.5 s by default
+    servo = Servo(colour_config(mode="follow_person", lost_hold=0.0))  # id_switch_confirm 0.5 s
     person = box(160, 120, 40, 96, id_="t1")
     passer = box(30, 120, 40, 96, id_="t8")
     assert servo.step(0.0, frame(1.0, person, target_id="t1"), age=0.0).target_id == "t1"
@@ -250,3 +251,22 @@ def test_colour_steers_on_a_new_blob_id_at_once():
     servo.step(0.0, frame(1.0, box(100, 120, 20, 20, radius=9, id_="t1"), target_id="t1"), 0.0)
     msg = frame(1.1, box(110, 120, 20, 20, radius=9, id_="t2"), target_id="t2")
     assert servo.step(0.1, msg, age=0.0).state == CONTROLLER_TRACKING
+
+
+def test_a_dropout_shorter_than_lost_hold_keeps_the_command():
+    servo = Servo(colour_config(lost_hold=0.3))
+    first = servo.step(0.0, frame(1.0, box(60, 40, 10, 10, radius=5)), age=0.0)
+    assert first.state == CONTROLLER_TRACKING and first.yaw_rate > 0
+    held = servo.step(0.2, frame(1.2), age=0.0)  # one frame without the blob
+    assert held == first
+    assert servo.pid_yaw.output == first.yaw_rate  # PIDs not reset
+    assert servo.step(0.35, frame(1.35), age=0.0).state == CONTROLLER_HOVER
+    assert servo.step(0.4, None, age=float("inf")).state == CONTROLLER_HOVER
+
+
+def test_stale_detections_never_hold_the_command():
+    servo = Servo(colour_config(lost_hold=0.3))
+    servo.step(0.0, frame(1.0, box(60, 40, 10, 10, radius=5)), age=0.0)
+    assert servo.step(0.1, frame(1.0, box(60, 40, 10, 10, radius=5)), age=0.6).state == (
+        CONTROLLER_HOVER
+    )
