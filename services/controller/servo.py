@@ -120,8 +120,15 @@ class Servo:
     def _confirmed(self, now: float, track_id: str) -> bool:
         """Whether to steer on track ``track_id`` now: the followed track, the first one, an
         untracked detection, or a new id that has stayed the target for ``id_switch_confirm`` s
-        (a tracker that picks a passer-by for a frame or two must not swing the drone)."""
-        if not track_id or self._followed_id in ("", track_id) or self._switch_confirm <= 0:
+        (a tracker that picks a passer-by for a frame or two must not swing the drone). While
+        searching, the target is truly lost: whatever the tracker names is taken at once."""
+        searching = self._last.state == CONTROLLER_SEARCH  # truly lost: take what is named
+        if (
+            not track_id
+            or self._followed_id in ("", track_id)
+            or self._switch_confirm <= 0
+            or searching
+        ):
             self._followed_id = track_id
             self._candidate = ("", 0.0)
             return True

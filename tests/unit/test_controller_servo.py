@@ -270,3 +270,11 @@ def test_stale_detections_never_hold_the_command():
     assert servo.step(0.1, frame(1.0, box(60, 40, 10, 10, radius=5)), age=0.6).state == (
         CONTROLLER_HOVER
     )
+
+
+def test_while_searching_a_newly_named_target_is_taken_at_once():
+    servo = Servo(colour_config(mode="follow_person", search_delay=1.0))
+    servo.step(0.0, frame(1.0, box(300, 120, 40, 96, id_="t1"), target_id="t1"), age=0.0)
+    assert servo.step(1.5, frame(2.5), age=0.0).state == CONTROLLER_SEARCH
+    cmd = servo.step(1.6, frame(2.6, box(250, 120, 40, 96, id_="t9"), target_id="t9"), age=0.0)
+    assert cmd.state == CONTROLLER_TRACKING and cmd.target_id == "t9"
