@@ -1,12 +1,14 @@
 """Fly a follow graph in the simulator and record it from ground truth (helper for the tests).
 
-Each flight runs a compose graph through the launcher's Python API on a free loopback router
+Each flight runs a compose graph (any aircraft: the intended distance comes from the controller
+config the graph starts) through the launcher's Python API on a free loopback router
 with free UDP ports, records vehicle, objects and controller status with FollowMonitor, then
 stops everything. The controller uses ``on_exit: stop`` so a flight ends quickly.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import socket
 import time
@@ -16,7 +18,7 @@ from pathlib import Path
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
-from dronewrapper_compose.launcher import Launcher
+from dronewrapper_compose.launcher import Launcher, build_argv
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_controller.metrics import (
     FollowSample,
@@ -59,11 +61,23 @@ class Flight:
         )
 
 
-def intended_distance(scenario_name: str, detector: str = "yolox") -> tuple[float, float]:
-    """(intended distance m, aim height m) of the controller config for this scenario."""
+def controller_config(launcher: Launcher) -> ControllerConfig:
+    """The controller's config exactly as the graph starts it (its --config and --set)."""
+    spec = next(p for p in launcher.graph.processes if p.module == "dronewrapper_controller")
+    argv, _ = build_argv(spec, launcher.values, launcher.graph_path, launcher.ns, launcher.router)
+    path = argv[argv.index("--config") + 1] if "--config" in argv else None
+    sets = [value for flag, value in itertools.pairwise(argv) if flag == "--set"]
+    return load_config(ControllerConfig, path, sets)
+
+
+def intended_distance(
+    scenario_name: str, detector: str = "yolox", cfg: ControllerConfig | None = None
+) -> tuple[float, float]:
+    """(intended distance m, aim height m) of a controller config (default: the simulated
+    Iris's) in this scenario, from the scenario's camera and target."""
     scenario = load_scenario(scenario_name)
     target = next(o for o in scenario.objects if o.name == "target")
-    cfg = load_config(ControllerConfig, CONTROLLER_CONFIG)
+    cfg = cfg or load_config(ControllerConfig, CONTROLLER_CONFIG)
     cam = scenario.camera
     hfov = math.radians(cam.hfov_deg)
     if target.kind == "beacon":
@@ -91,7 +105,6 @@ def fly(
     variables: dict[str, str] | None = None,
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record ``seconds`` of flight."""
-    goal, aim = intended_distance(scenario, (variables or {}).get("detector", "yolox"))
     router = f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
@@ -104,6 +117,9 @@ def fly(
     with open(log_path, "w") as log_file:
         launcher = Launcher.from_file(
             REPO / "compose" / f"{graph}.yaml", router=router, variables=values, out=log_file
+        )
+        goal, aim = intended_distance(
+            scenario, values.get("detector", "yolox"), controller_config(launcher)
         )
         monitor = session = None
         try:
