@@ -24,7 +24,7 @@ import numpy as np
 import zenoh
 
 from bench.common import percentiles, print_table, write_results
-from dronewrapper.msgs import Header, Image, PoseStamped, registry
+from dronewrapper.msgs import Header, Image, PoseStamped, codec, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 
@@ -65,6 +65,8 @@ def _key(kind: str, ns: str) -> str:
 
 def serve(role: str, options: ZenohOptions) -> None:
     """Run in the child: echo pings back (pong) or count messages (sink) until stdin closes."""
+    if role == "rawpong":
+        return serve_raw(options)
     with Node(f"bench_{role}", options, handle_signals=False, linger=0.0) as node:
         counts = {"pose": 0, "image": 0}
         first_last = {"pose": [0.0, 0.0], "image": [0.0, 0.0]}
@@ -99,6 +101,48 @@ def serve(role: str, options: ZenohOptions) -> None:
             span = first_last[kind][1] - first_last[kind][0]
             print(f"{n} {span:.6f}", flush=True)
             counts[kind] = 0
+
+
+def serve_raw(options: ZenohOptions) -> None:
+    """Baseline echo with plain Zenoh: copy the payload out and put it back, no decoding."""
+    with Node("bench_rawpong", options, handle_signals=False, linger=0.0) as node:
+        pubs = {
+            kind: node.session.declare_publisher(_key(kind, PONG_NS), **BLOCK)
+            for kind in ("pose", "image")
+        }
+        for kind in ("pose", "image"):
+            node.session.declare_subscriber(
+                _key(kind, PING_NS),
+                lambda sample, pub=pubs[kind]: pub.put(sample.payload.to_bytes()),
+            )
+        print("ready", flush=True)
+        for _ in sys.stdin:
+            pass
+
+
+def raw_round_trips(session: zenoh.Session, kind: str, samples: int, warmup: int = 50):
+    """Round trips of plain bytes of the typed message's size (the Zenoh-only floor)."""
+    got = threading.Event()
+
+    def on_pong(sample: zenoh.Sample) -> None:
+        sample.payload.to_bytes()
+        got.set()
+
+    sub = session.declare_subscriber(_key(kind, PONG_NS), on_pong)
+    pub = session.declare_publisher(_key(kind, PING_NS), **BLOCK)
+    payload = bytes(len(codec.encode(make_message(kind))))
+    rtts = []
+    for i in range(warmup + samples):
+        got.clear()
+        t0 = time.perf_counter()
+        pub.put(payload)
+        if not got.wait(2.0):
+            raise RuntimeError(f"raw {kind} ping {i} got no pong within 2 s")
+        if i >= warmup:
+            rtts.append(time.perf_counter() - t0)
+    sub.undeclare()
+    pub.undeclare()
+    return rtts
 
 
 # ---- the measuring process ----
@@ -184,6 +228,16 @@ def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
         peer_mode, peer_connect, peer_listen = "peer", [], [endpoint]
         mine = ZenohOptions(mode="peer", connect=[endpoint])
     result: dict[str, object] = {}
+    raw = Peer("rawpong", peer_mode, peer_connect, peer_listen)
+    with Node("bench_rawping", mine, handle_signals=False, linger=0.0) as node:
+        time.sleep(1.0)
+        result["raw_pose_rtt"] = percentiles(
+            raw_round_trips(node.session, "pose", args.samples_small)
+        )
+        result["raw_image_rtt"] = percentiles(
+            raw_round_trips(node.session, "image", args.samples_image)
+        )
+    raw.close()
     pong = Peer("pong", peer_mode, peer_connect, peer_listen)
     with Node("bench_ping", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
@@ -209,7 +263,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples-small", type=int, default=2000)
     parser.add_argument("--samples-image", type=int, default=400)
     parser.add_argument("--seconds", type=float, default=4.0)
-    parser.add_argument("--serve", choices=("pong", "sink"), help=argparse.SUPPRESS)
+    parser.add_argument("--serve", choices=("pong", "sink", "rawpong"), help=argparse.SUPPRESS)
     parser.add_argument("--mode", default="client", help=argparse.SUPPRESS)
     parser.add_argument("--connect", action="append", default=[], help=argparse.SUPPRESS)
     parser.add_argument("--listen", action="append", default=[], help=argparse.SUPPRESS)
@@ -223,15 +277,20 @@ def main(argv: list[str] | None = None) -> int:
     for name, res in results.items():
         for kind, label in (("pose", "PoseStamped"), ("image", "Image 640x480")):
             rtt, one = res[f"{kind}_rtt"], res[f"{kind}_one_way"]
+            raw = res[f"raw_{kind}_rtt"]
             rate = res[f"{kind}_throughput"]["msgs_per_s"]
-            rows.append([name, label, rtt["p50_ms"], rtt["p99_ms"], one["p50_ms"], one["p99_ms"],
-                         rate])  # fmt: skip
+            rows.append([name, label, raw["p50_ms"], rtt["p50_ms"], rtt["p99_ms"], one["p50_ms"],
+                         one["p99_ms"], rate])  # fmt: skip
     print_table(
         "Zenoh through our runtime: typed publish -> MessagePack -> Zenoh -> decode (2 processes)",
-        ["path", "message", "RTT p50", "RTT p99", "1-way p50", "1-way p99", "msgs/s"],
+        ["path", "message", "raw RTT p50", "RTT p50", "RTT p99", "1-way p50", "1-way p99",
+         "msgs/s"],
         rows,
+    )  # fmt: skip
+    print(
+        "  (ms; RTT = ping -> typed echo that decodes and re-publishes -> ping; raw = the same\n"
+        "   sizes as plain bytes through plain Zenoh, measured in the same run: the floor; SHM on)"
     )
-    print("  (ms; RTT = ping -> typed echo that decodes and re-publishes -> ping; SHM on)")
     best_image_rtt = min(r["image_rtt"]["p50_ms"] for r in results.values())
     best_image_rate = max(r["image_throughput"]["msgs_per_s"] for r in results.values())
     best_pose_rtt = min(r["pose_rtt"]["p50_ms"] for r in results.values())
