@@ -258,9 +258,9 @@ def test_killed_commander_hover_then_land(rig, spawn):
     rig.take_off_offboard(2.0)
     commander = spawn([sys.executable, "-c", COMMANDER, rig.router, "1.5", "2.0"], "commander")
     wait_for(lambda: "commanding" in commander.output(), 20, what="commander up")
+    rig.command(None)  # only the commander process commands now (two would alternate)
     wait_for(lambda: rig.vlocal.value and math.hypot(rig.vlocal.value.twist.linear.x,
              rig.vlocal.value.twist.linear.y) > 0.8, 15, what="commander flies")  # fmt: skip
-    rig.command(None)  # only the commander process commands now
     heard: list[float] = []
     rig.user.subscribe(registry.SETPOINT_RAW_LOCAL, lambda _m: heard.append(time.time()))
     time.sleep(0.5)
