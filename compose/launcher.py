@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import ctypes
-import logging
 import os
 import signal
 import subprocess
@@ -41,8 +40,6 @@ from dronewrapper_compose.graph import (
     resolve_graph_path,
     substitute,
 )
-
-log = logging.getLogger("launcher")
 
 _PR_SET_PDEATHSIG = 1
 
