@@ -62,13 +62,16 @@ def colour_frame() -> np.ndarray:
 
 def bench_compute(runs: int) -> dict[str, object]:
     from dronewrapper_perception.color_filter import RED, detect_color
+    from dronewrapper_perception.config import Config
     from dronewrapper_perception.hog import HogDetector
     from dronewrapper_perception.yolox import YoloxDetector, letterbox
 
     cv2.setNumThreads(1)
     frame = colour_frame()
     assert detect_color(frame, RED), "benchmark frame must contain the red disc"
-    colour = median_ms(lambda: detect_color(frame, RED), runs * 3)
+    scale = Config().color_scale  # the service's default analysis scale
+    colour = median_ms(lambda: detect_color(frame, RED, scale=scale), runs * 3)
+    colour_full = median_ms(lambda: detect_color(frame, RED, scale=1.0), runs * 3)
     cv2.setNumThreads(0)
     people = cv2.imread(str(VTEST))
     detector = YoloxDetector(YOLOX_NANO, threads=2)
@@ -81,7 +84,8 @@ def bench_compute(runs: int) -> dict[str, object]:
     hog_detector = HogDetector()
     hog = median_ms(lambda: hog_detector.detect(people), max(5, runs // 5), warmup=1)
     rows = [
-        ("colour detect_color 640x480, 1 core", *colour, 3.0),
+        (f"colour detect_color 640x480, 1 core (default scale {scale:g})", *colour, 3.0),
+        ("colour detect_color 640x480, 1 core, full resolution", *colour_full, None),
         ("YOLOX-Nano detect() 768x576, 2 threads", *yolox, 20.0),
         ("YOLOX-Nano inference only, 2 threads", *inference, 20.0),
         ("YOLOX-Nano detect(), 1 thread", *yolox_1t, None),

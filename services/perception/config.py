@@ -51,6 +51,8 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         color_ranges: custom HSV ranges; when given they replace the preset.
         blur_px: Gaussian blur kernel of the colour filter (odd px, 0 = none).
         min_area_px: smallest colour blob kept (px²).
+        color_scale: the colour filter works on the frame shrunk by this factor, in (0, 1]
+            (0.5: a quarter of the work, about a pixel of precision; 1: full resolution).
         model_path: the YOLOX ``.onnx`` file (no default: obtain it, see README).
         checksum: expected sha256 of ``model_path``, verified at start when set.
         input_size: YOLOX network input side (px), if the model does not fix it.
@@ -78,6 +80,7 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     color_ranges: list[ColorRangeConfig] = msgspec.field(default_factory=list)
     blur_px: int = 11
     min_area_px: float = 20.0
+    color_scale: float = 0.5
     model_path: str = ""
     checksum: str = ""
     input_size: int = 416
@@ -111,6 +114,8 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             colour_range.to_range()  # raises ValueError with the bad field named
         if self.blur_px < 0 or (self.blur_px > 1 and self.blur_px % 2 == 0):
             raise ValueError(f"blur_px={self.blur_px} must be 0 or an odd number of px")
+        if not 0.0 < self.color_scale <= 1.0:
+            raise ValueError(f"color_scale={self.color_scale} must be in (0, 1]")
         for name in ("score_threshold", "nms_threshold"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name} must be in 0..1")

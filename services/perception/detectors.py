@@ -49,11 +49,13 @@ class ColorDetector:
         label: str = "red",
         blur: int = 11,
         min_area_px: float = 20.0,
+        scale: float = 1.0,
     ) -> None:
         self.ranges = tuple(ranges)
         self.label = label
         self.blur = blur
         self.min_area_px = min_area_px
+        self.scale = scale
 
     def detect(self, bgr: np.ndarray) -> list[Detection]:
         return [
@@ -65,7 +67,9 @@ class ColorDetector:
                 centroid_xy=blob.centroid_xy,
                 circle_radius=blob.radius_px,
             )
-            for blob in detect_color(bgr, self.ranges, blur=self.blur, min_area_px=self.min_area_px)
+            for blob in detect_color(
+                bgr, self.ranges, blur=self.blur, min_area_px=self.min_area_px, scale=self.scale
+            )
         ]
 
 
@@ -82,6 +86,7 @@ def build_detector(config: Config) -> Detector:
             label=config.color_label(),
             blur=config.blur_px,
             min_area_px=config.min_area_px,
+            scale=config.color_scale,
         )
     if kind == "yolox":
         from dronewrapper_perception.yolox import YoloxDetector

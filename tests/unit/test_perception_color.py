@@ -16,6 +16,7 @@ from dronewrapper_perception.color_filter import (
     degrees_to_opencv_hue,
     detect_color,
     preset,
+    scaled_kernel,
 )
 
 
@@ -45,10 +46,12 @@ def test_red_preset_is_the_papers_two_ranges():
     assert degrees_to_opencv_hue(360) == 179
 
 
-def test_red_disc_found_with_centroid_and_radius():
+@pytest.mark.parametrize("scale", [1.0, 0.5, 0.25])
+def test_red_disc_found_with_centroid_and_radius(scale):
+    """The same geometry, in input pixels, at full resolution and on a shrunk image."""
     img = scene()
     cv2.circle(img, (400, 180), 40, (20, 20, 220), -1)
-    blobs = detect_color(img, RED)
+    blobs = detect_color(img, RED, scale=scale)
     assert len(blobs) == 1
     blob = blobs[0]
     assert blob.centroid_xy == pytest.approx((400, 180), abs=1.0)
@@ -109,17 +112,39 @@ def test_no_target_frame_gives_nothing():
         (150, 150, 200),  # pale pink (S 63 < 70)
     ],
 )
-def test_near_colours_rejected(bgr):
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_near_colours_rejected(bgr, scale):
     img = scene()
     cv2.circle(img, (320, 240), 50, bgr, -1)
     hsv = cv2.cvtColor(np.uint8([[bgr]]), cv2.COLOR_BGR2HSV)[0, 0]
-    assert detect_color(img, RED) == [], f"HSV {hsv.tolist()} must not count as red"
+    assert detect_color(img, RED, scale=scale) == [], f"HSV {hsv.tolist()} must not count as red"
 
 
-def test_small_specks_are_noise():
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_small_specks_are_noise(scale):
     img = scene()
     cv2.circle(img, (100, 100), 2, (0, 0, 230), -1)
-    assert detect_color(img, RED, min_area_px=20) == []
+    assert detect_color(img, RED, min_area_px=20, scale=scale) == []
+    cv2.circle(img, (300, 300), 6, (0, 0, 230), -1)  # about 113 px²: kept at either scale
+    (blob,) = detect_color(img, RED, min_area_px=20, scale=scale)
+    assert blob.centroid_xy == pytest.approx((300, 300), abs=1.0)
+
+
+def test_scaled_blob_maps_pixel_centres_back():
+    """A one-pixel-wide feature at small pixel i covers input pixels 2i and 2i+1: centre 2i+0.5."""
+    img = scene()
+    img[100:104, 200:208] = (0, 0, 230)  # 8x4 px box: centre (203.5, 101.5), edges 200..208
+    (blob,) = detect_color(img, RED, blur=0, min_area_px=0, scale=0.5)
+    assert blob.bbox_xyxy == pytest.approx((200, 100, 208, 104))
+    assert blob.centroid_xy == pytest.approx((203.5, 101.5), abs=0.01)
+
+
+def test_scaled_kernel_stays_odd():
+    assert [scaled_kernel(11, s) for s in (1.0, 0.5, 0.25, 0.1)] == [11, 5, 3, 0]
+    assert scaled_kernel(0, 0.5) == 0 and scaled_kernel(1, 0.5) == 1
+    for bad in (0.0, -0.5, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="scale"):
+            detect_color(scene(), RED, scale=bad)
 
 
 def test_presets_and_validation():

@@ -50,6 +50,8 @@ def test_config_defaults_and_errors(tmp_path):
         ("classes=[unicorn]", "unknown class"),
         ("color_preset=mauve", "color_preset"),
         ("blur_px=4", "blur_px"),
+        ("color_scale=0", "color_scale"),
+        ("color_scale=1.5", "color_scale"),
         ("score_threshold=2", "score_threshold"),
     ]:
         with pytest.raises(ConfigError, match=words):
