@@ -46,6 +46,13 @@ log = logging.getLogger("dronewrapper.runtime")
 
 _ERROR_ENCODING = zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(ErrorReply))
 
+ROUTE_WAIT_S = 2.0
+"""How long a service call keeps asking again while its query ends at once, unanswered (s).
+
+Right after a session opens (or a server starts), Zenoh may not have learnt the server's
+queryable yet; a query then finishes immediately with no reply. Asking again for a moment
+(never beyond the call's timeout) covers that, so ``timeout`` means what it says."""
+
 
 def encoding_for(msg_type: type) -> zenoh.Encoding:
     """The Zenoh encoding of a message type: ``application/msgpack;dronewrapper/<Type>``."""
@@ -349,21 +356,31 @@ def call_service(
             f"{service.template} takes {service.request.__name__}, got {type(request).__name__}"
         )
     key = service.key(ns, **parts)
-    replies = session.get(
-        key,
-        payload=codec.encode(request),
-        encoding=encoding_for(service.request),
-        timeout=timeout,
-    )
-    for reply in replies:
-        if reply.ok is not None:
-            return codec.decode(service.reply, reply.ok.payload.to_bytes())
-        raw = reply.err.payload.to_bytes()
-        try:
-            err = codec.decode(ErrorReply, raw)
-        except (msgspec.DecodeError, msgspec.ValidationError):
-            err = ErrorReply(message=raw.decode("utf-8", "replace"), code="internal")
-        raise ServiceError(err.message, err.code)
+    payload = codec.encode(request)
+    start = time.monotonic()
+    deadline = start + timeout
+    ask_until = start + min(timeout, ROUTE_WAIT_S)
+    while True:
+        # A query that reached a server waits for its reply (up to the deadline); one that
+        # reached none ends at once and is asked again until ``ask_until``.
+        replies = session.get(
+            key,
+            payload=payload,
+            encoding=encoding_for(service.request),
+            timeout=max(0.001, deadline - time.monotonic()),
+        )
+        for reply in replies:
+            if reply.ok is not None:
+                return codec.decode(service.reply, reply.ok.payload.to_bytes())
+            raw = reply.err.payload.to_bytes()
+            try:
+                err = codec.decode(ErrorReply, raw)
+            except (msgspec.DecodeError, msgspec.ValidationError):
+                err = ErrorReply(message=raw.decode("utf-8", "replace"), code="internal")
+            raise ServiceError(err.message, err.code)
+        if time.monotonic() + 0.05 >= ask_until:
+            break
+        time.sleep(0.05)
     raise ServiceUnavailable(
         f"no reply from {key} within {timeout:g} s: is the {service.server or 'server'} running?"
     )
