@@ -33,7 +33,8 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
     SetMode,
 )
-from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime import ServiceError, ServiceUnavailable
+from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
 from support import client_node, free_port, wait_for
 
@@ -168,6 +169,36 @@ def _bits_to_int(value: float) -> int:
     return struct.unpack("<i", struct.pack("<f", value))[0]
 
 
+class TappedLink(MavLink):
+    """The bridge's real link, also noting when (monotonic s) each message left and its fields.
+
+    Timing checks use these send times: the fake autopilot's receive times include however long
+    its Python thread waited for the GIL on a busy machine.
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.log: list[tuple[float, str, tuple]] = []
+
+    def send(self, name: str, *args, **kwargs) -> bool:
+        self.log.append((time.monotonic(), name, args))
+        return super().send(name, *args, **kwargs)
+
+    def setpoints(self, type_mask: int) -> list[float]:
+        """Send times of the SET_POSITION_TARGET_LOCAL_NED with this type_mask."""
+        return [
+            t
+            for t, name, args in list(self.log)
+            if name == "set_position_target_local_ned" and args[4] == type_mask
+        ]
+
+    def command_times(self, command: int) -> list[float]:
+        """Send times of the COMMAND_LONGs of this MAV_CMD (retries included)."""
+        return [
+            t for t, name, args in list(self.log) if name == "command_long" and args[2] == command
+        ]
+
+
 @pytest.fixture
 def rig(router) -> Iterator[tuple[Bridge, FakePX4, object]]:
     yield from make_rig(router, autopilot=12)
@@ -180,20 +211,29 @@ def ardu_rig(router) -> Iterator[tuple[Bridge, FakePX4, object]]:
 
 def make_rig(router, autopilot: int) -> Iterator[tuple[Bridge, FakePX4, object]]:
     port = free_port(2)
+    # Generous ack and reason waits: the fake always answers at once, but its thread may wait
+    # for the GIL on a busy machine, and a retry would look like a second command on the wire.
     config = Config(
         connection=f"udpin:127.0.0.1:{port}",
         commander_lost_timeout=2.0,
-        command_ack_timeout=0.3,
+        command_ack_timeout=1.5,
+        reason_wait=2.0,
     )
     bridge_node = client_node(router, name="bridge_mavlink")
-    bridge = Bridge(bridge_node, config)
+    link = TappedLink(
+        config.connection,
+        source_system=config.source_system,
+        source_component=config.source_component,
+    )
+    bridge = Bridge(bridge_node, config, link=link)
     threads = bridge.start()
     fake = FakePX4(port, autopilot)
     if autopilot == 3:
         fake.custom_mode = 5  # LOITER
     user = client_node(router, name="user")
     try:
-        wait_for(lambda: bridge.connected, 10, what="bridge connected to the fake PX4")
+        wait_for(lambda: bridge.connected, 20, what="bridge connected to the fake PX4")
+        wait_for(lambda: reaches_bridge(user), 20, what="the user's session to reach the bridge")
         yield bridge, fake, user
     finally:
         user.close()
@@ -205,6 +245,19 @@ def make_rig(router, autopilot: int) -> Iterator[tuple[Bridge, FakePX4, object]]
         fake.close()
 
 
+def reaches_bridge(user) -> bool:
+    """True once the user's session knows the bridge's queryables (and so its subscriber,
+    declared just before them): a call with an invalid param_id gets an error reply without
+    any MAVLink traffic."""
+    try:
+        user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=5)
+    except ServiceUnavailable:
+        return False
+    except ServiceError:
+        return True
+    return True
+
+
 def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float = 0.0):
     return PositionTarget(
         coordinate_frame=FRAME_BODY_NED,
@@ -214,11 +267,15 @@ def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float 
     )
 
 
-def stream(pub, target, seconds: float, hz: float = 20.0) -> None:
+def stream(pub, target, seconds: float, hz: float = 20.0) -> float:
+    """Publish ``target`` at ``hz`` for ``seconds``; returns the time just before the last put."""
     end = time.monotonic() + seconds
+    last = time.monotonic()
     while time.monotonic() < end:
+        last = time.monotonic()
         pub.put(target)
         time.sleep(1.0 / hz)
+    return last
 
 
 def test_telemetry_in_enu_and_state(rig):
@@ -228,15 +285,15 @@ def test_telemetry_in_enu_and_state(rig):
     state = user.latest(registry.STATE)
     battery = user.latest(registry.BATTERY)
     texts = user.latest(registry.STATUSTEXT)
-    p = wait_for(lambda: pose.value if pose.value and pose.value.pose.position.z > 2 else None, 10)
+    p = wait_for(lambda: pose.value if pose.value and pose.value.pose.position.z > 2 else None, 15)
     assert (p.pose.position.x, p.pose.position.y, p.pose.position.z) == (2.0, 5.0, 3.0)
-    s = state.wait(5)
+    s = state.wait(10)
     assert s.connected and s.autopilot == "px4" and s.mode == "AUTO.LOITER"
-    assert math.isclose(battery.wait(5).percentage, 0.8)
+    assert math.isclose(battery.wait(10).percentage, 0.8)
     fake.send("statustext", 6, b"Takeoff detected\t")
-    assert wait_for(lambda: texts.value and texts.value.text == "Takeoff detected", 5)
-    assert wait_for(lambda: fake.gcs_heartbeats >= 1, 3)  # so PX4 sends STATUSTEXT at all
-    rates = wait_for(lambda: fake.commands_named(511), 5, what="SET_MESSAGE_INTERVAL")
+    assert wait_for(lambda: texts.value and texts.value.text == "Takeoff detected", 10)
+    assert wait_for(lambda: fake.gcs_heartbeats >= 1, 10)  # so PX4 sends STATUSTEXT at all
+    rates = wait_for(lambda: fake.commands_named(511), 10, what="SET_MESSAGE_INTERVAL")
     assert {int(m.param1) for m in rates} >= {32, 31}  # LOCAL_POSITION_NED, ATTITUDE_QUATERNION
 
 
@@ -247,17 +304,18 @@ def test_set_mode_double_ack_and_unknown_mode(rig):
         assert reply.mode_sent and reply.result == 0, reply
     assert bridge.acks.duplicates >= 2  # PX4's second acks were recognised and dropped
     with pytest.raises(ServiceError, match="valid modes"):
-        user.call(registry.SET_MODE, SetMode(custom_mode="WARP9"), timeout=5)
+        user.call(registry.SET_MODE, SetMode(custom_mode="WARP9"), timeout=10)
 
 
 def test_offboard_request_primes_the_stream_first(rig):
-    _bridge, fake, user = rig
+    bridge, fake, user = rig
     reply = user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), timeout=10)
     assert reply.mode_sent
-    (sent_at, _), *_ = [(t, m) for t, m in fake.commands if m.command == 176]
-    before = [t for t, _ in fake.setpoints if t < sent_at]
+    sent_at, *_ = bridge.link.command_times(176)  # when DO_SET_MODE left the bridge
+    before = [t for t in bridge.link.setpoints(MASK_POSITION) if t < sent_at]
     assert before and sent_at - before[0] > 1.0, "must stream > 1 s before OFFBOARD"
     assert len(before) >= 20  # >= 20 Hz during that second
+    assert fake.commands_named(176)
     assert all(m.type_mask == MASK_POSITION for _, m in fake.setpoints[:5])  # a hold
 
 
@@ -275,28 +333,34 @@ def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
     bridge, fake, user = rig
     fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
     fake.position_ned = (1.0, 1.0, -5.0)
-    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD" and bridge.failsafe.airborne, 5)
+    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD" and bridge.failsafe.airborne, 10)
+    failsafe_states: list[str] = []  # State.failsafe as published, in order
+    user.subscribe(registry.STATE, lambda s: failsafe_states.append(s.failsafe))
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
-    stream(pub, velocity(vx=1.0), 1.5)
-    stopped = time.monotonic()
-    fwd = [m for t, m in fake.setpoints if stopped - 1.0 < t < stopped]
+    last_put = stream(pub, velocity(vx=1.0), 1.5)
+    # >= 20 Hz forwarded during the last second of commanding (when the bridge sent them)
+    fwd = [t for t in bridge.link.setpoints(MASK_VELOCITY) if last_put - 1.0 < t <= last_put]
     assert len(fwd) >= 20, f"only {len(fwd)} setpoints in the last second"
-    last = fwd[-1]
-    assert last.coordinate_frame == 1 and last.type_mask == MASK_VELOCITY
+    # velocity commands expire after setpoint_timeout (0.5 s): then it holds where it is
+    held = wait_for(
+        lambda: [t for t in bridge.link.setpoints(MASK_POSITION) if t > last_put], 10, what="hold"
+    )
+    assert 0.4 < held[0] - last_put < 1.5, f"hold {held[0] - last_put:.2f} s after the last"
+    wait_for(lambda: "hold" in failsafe_states, 10, what="failsafe hold published")
+    wait_for(lambda: any(m.type_mask == MASK_POSITION for _, m in fake.setpoints), 10)
+    last = [m for _, m in fake.setpoints if m.type_mask == MASK_VELOCITY][-1]
+    assert last.coordinate_frame == 1
     assert math.isclose(last.vy, 1.0, abs_tol=1e-3) and abs(last.vx) < 1e-3  # east = forward
-    # within 0.6 s of the last setpoint the bridge holds position where it is
-    wait_for(lambda: bridge.failsafe.state == "hold", 2)
-    held = [(t, m) for t, m in fake.setpoints if m.type_mask == MASK_POSITION and t > stopped]
-    assert held and held[0][0] - stopped < 0.6
-    m = held[0][1]
+    m = next(m for _, m in fake.setpoints if m.type_mask == MASK_POSITION)
     assert (m.x, m.y, m.z) == (1.0, 1.0, -5.0)
-    # commander lost (2 s in this config) while airborne -> NAV_LAND, exactly once
-    wait_for(lambda: fake.commands_named(21), 5, what="NAV_LAND")
+    # commander lost (2 s in this config) while airborne -> NAV_LAND, requested exactly once
+    # (a re-send of the same request would carry confirmation > 0)
+    wait_for(lambda: fake.commands_named(21), 10, what="NAV_LAND")
     assert bridge.failsafe.state == "land"
-    state = user.latest(registry.STATE)
-    assert wait_for(lambda: state.value and state.value.failsafe == "land", 3)
+    wait_for(lambda: "land" in failsafe_states, 10, what="failsafe land published")
+    assert failsafe_states.index("hold") < failsafe_states.index("land")
     time.sleep(1.0)
-    assert len(fake.commands_named(21)) == 1
+    assert sum(m.confirmation == 0 for m in fake.commands_named(21)) == 1
     assert not fake.commands_named(176)  # never re-requested OFFBOARD
 
 
@@ -307,13 +371,13 @@ def test_bad_setpoints_and_bytes_change_nothing(rig):
     for bad in (velocity(vx=math.nan), velocity(vz=math.inf), velocity(vx=99.0)):
         pub.put(bad)
     user.session.put(registry.SETPOINT_RAW_LOCAL.key("drone"), b"\x00garbage")
-    wait_for(lambda: bridge.rejected_setpoints == 3, 5)
-    wait_for(lambda: sum(bridge.node.decode_errors.values()) >= 1, 5)
+    wait_for(lambda: bridge.rejected_setpoints == 3, 10)
+    wait_for(lambda: sum(bridge.node.decode_errors.values()) >= 1, 10)
     time.sleep(0.3)
     assert len(fake.setpoints) == before  # not in OFFBOARD, nothing fresh: nothing sent
     with pytest.raises(ServiceError, match="altitude"):
-        user.call(registry.TAKEOFF, CommandTOL(altitude=math.inf), timeout=5)
-    replies = list(user.session.get(registry.ARMING.key("drone"), payload=b"\xc1", timeout=5))
+        user.call(registry.TAKEOFF, CommandTOL(altitude=math.inf), timeout=10)
+    replies = list(user.session.get(registry.ARMING.key("drone"), payload=b"\xc1", timeout=10))
     assert len(replies) == 1 and replies[0].err is not None
     assert b"bad CommandBool request" in replies[0].err.payload.to_bytes()
     assert not fake.commands_named(400)  # nothing was sent to the autopilot
@@ -322,12 +386,13 @@ def test_bad_setpoints_and_bytes_change_nothing(rig):
 def test_pilot_takeover_not_fought(rig):
     bridge, fake, user = rig
     fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
-    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD", 5)
-    texts = user.latest(registry.STATUSTEXT)
+    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD", 10)
+    texts: list[str] = []
+    user.subscribe(registry.STATUSTEXT, lambda t: texts.append(t.text))
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
     stream(pub, velocity(vx=0.5), 0.5)
     fake.custom_mode = POSCTL  # the pilot switched modes on the RC
-    wait_for(lambda: texts.value and "not switching back" in texts.value.text, 5)
+    wait_for(lambda: any("not switching back" in t for t in texts), 10, what="pilot noticed")
     time.sleep(3.0)  # longer than commander_lost_timeout
     assert not fake.commands_named(176) and not fake.commands_named(21)
     assert fake.custom_mode == POSCTL
@@ -337,12 +402,12 @@ def test_heartbeat_loss_reports_disconnected_then_recovers(rig):
     _bridge, fake, user = rig
     state = user.latest(registry.STATE)
     fake.heartbeats = False
-    s = wait_for(lambda: state.value if state.value and not state.value.connected else None, 6)
+    s = wait_for(lambda: state.value if state.value and not state.value.connected else None, 15)
     assert not s.connected
     with pytest.raises(ServiceError, match="not connected"):
-        user.call(registry.ARMING, CommandBool(value=True), timeout=5)
+        user.call(registry.ARMING, CommandBool(value=True), timeout=10)
     fake.heartbeats = True
-    wait_for(lambda: state.value and state.value.connected, 5)
+    wait_for(lambda: state.value and state.value.connected, 10)
 
 
 def test_params_int32_bits_and_real(rig):
@@ -358,7 +423,7 @@ def test_params_int32_bits_and_real(rig):
     )
     assert put.success and put.value.integer == 4 and fake.params["COM_RC_IN_MODE"][0] == 4
     with pytest.raises(ServiceError, match="param_id"):
-        user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=5)
+        user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=10)
 
 
 def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):

@@ -6,8 +6,11 @@ SET_MODE / LAND services) and records every setpoint; the controller embeds the 
 
 from __future__ import annotations
 
+import math
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import pytest
 
@@ -51,6 +54,7 @@ class FakeBridge:
         self.z_goal = self.z
         self.landed = LANDED_STATE_IN_AIR if flying else LANDED_STATE_ON_GROUND
         self.setpoints: list[tuple[float, PositionTarget]] = []
+        self.z_at_first_velocity: float | None = None  # altitude when the first one arrived
         self.land_calls = 0
         self._lock = threading.Lock()
         self._state = self.node.publisher(registry.STATE)
@@ -67,6 +71,8 @@ class FakeBridge:
     def _on_setpoint(self, sp: PositionTarget) -> None:
         with self._lock:
             self.setpoints.append((time.monotonic(), sp))
+            if sp.type_mask == MASK_VELOCITY and self.z_at_first_velocity is None:
+                self.z_at_first_velocity = self.z
             if sp.type_mask == MASK_POSITION and self.armed:
                 self.z_goal = sp.position.z
 
@@ -115,6 +121,24 @@ class FakeBridge:
     def velocity_setpoints(self, since: float = 0.0) -> list[PositionTarget]:
         with self._lock:
             return [sp for t, sp in self.setpoints if t >= since and sp.type_mask == MASK_VELOCITY]
+
+    def last_command(self) -> tuple[float, float, float] | None:
+        """(vx, vz, yaw_rate) of the newest velocity setpoint, None before the first."""
+        sps = self.velocity_setpoints()
+        return (sps[-1].velocity.x, sps[-1].velocity.z, sps[-1].yaw_rate) if sps else None
+
+    def wait_quiet(self, quiet: float = 0.5, timeout: float = 10.0) -> None:
+        """Wait until no setpoint has arrived for ``quiet`` s (fails if a stream goes on).
+
+        Setpoints already in flight when a stream stops still arrive meanwhile.
+        """
+
+        def silent_for() -> float:
+            with self._lock:
+                last = self.setpoints[-1][0] if self.setpoints else -math.inf
+            return time.monotonic() - last
+
+        wait_for(lambda: silent_for() >= quiet, timeout, what="the setpoint stream to stop")
 
     def close(self) -> None:
         self.node.close()
@@ -171,6 +195,26 @@ class Harness:
         self.client.close()
 
 
+@contextmanager
+def feeding(ctl: Harness, *dets: Detection2D, hz: float = 20.0) -> Iterator[list[float]]:
+    """Publish detections (``dets``, maybe none) at ``hz`` on a thread; yields their stamps."""
+    stop = threading.Event()
+    stamps: list[float] = []
+
+    def run() -> None:
+        while not stop.is_set():
+            stamps.append(ctl.publish(*dets))
+            stop.wait(1.0 / hz)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    try:
+        yield stamps
+    finally:
+        stop.set()
+        thread.join(5)
+
+
 @pytest.fixture
 def flying_bridge(router):
     bridge = FakeBridge(router, flying=True)
@@ -184,22 +228,29 @@ def test_tracks_with_the_frames_stamp_and_right_signs(router, flying_bridge):
         wait_for(
             lambda: ctl.state() == "hover" or ctl.state() == "search", 15, what="controller up"
         )
-        stamps = []
-        deadline = time.monotonic() + 3.0
-        while time.monotonic() < deadline:  # blob up-left of centre and small (far): 20 Hz
-            stamps.append(ctl.publish(blob(200, 140, 8)))
-            time.sleep(0.05)
-        sps = flying_bridge.velocity_setpoints()
-        tracked = [sp for sp in sps if sp.header.stamp in stamps]
-        assert len(tracked) > 20, f"{len(tracked)} setpoints carried a frame's stamp"
-        last = tracked[-1]
+        # blob up-left of centre and small (far), at 20 Hz
+        with feeding(ctl, blob(200, 140, 8)) as stamps:
+
+            def tracked() -> list[PositionTarget]:
+                sps = flying_bridge.velocity_setpoints()
+                found = [sp for sp in sps if sp.header.stamp in stamps]
+                return found if len(found) > 20 else []
+
+            tracked_sps = wait_for(tracked, 20, what="20 setpoints carrying a frame's stamp")
+            status = wait_for(
+                lambda: next(
+                    (s for s in reversed(ctl.statuses) if s.state == CONTROLLER_TRACKING), None
+                ),
+                10,
+                what="a tracking status",
+            )
+        last = tracked_sps[-1]
         assert last.velocity.x > 0  # too far: forward
         assert last.velocity.y == 0.0  # vy stays 0
         assert last.velocity.z > 0  # above centre: climb
         assert last.yaw_rate > 0  # left of centre: turn left (CCW)
         assert last.velocity.x <= ctl.config.follow_color.vx.out_limit
-        status = wait_for(lambda: ctl.statuses[-1], 2)
-        assert status.state == CONTROLLER_TRACKING and status.target_visible
+        assert status.target_visible
         assert status.source_stamp in stamps and status.mode == "follow_color"
     finally:
         assert ctl.stop() == 0
@@ -214,24 +265,28 @@ def test_status_rate_stale_hover_then_search(router, flying_bridge):
         time.sleep(2.0)
         rate = (len(ctl.statuses) - n0) / (time.monotonic() - t0)
         assert rate >= 5.0, f"status at {rate:.1f} Hz"
-        for _ in range(10):  # target on the right, then detections stop (perception died)
-            ctl.publish(blob(600, 240, 20))
-            time.sleep(0.05)
-        wait_for(lambda: ctl.state() == CONTROLLER_TRACKING, 5, what="tracking")
-        since = time.monotonic()
-        wait_for(lambda: ctl.state() == CONTROLLER_HOVER, 5, what="hover on stale detections")
+        n1 = len(ctl.statuses)
+        with feeding(ctl, blob(600, 240, 20)):  # target on the right ...
+            wait_for(
+                lambda: any(s.state == CONTROLLER_TRACKING for s in ctl.statuses[n1:]),
+                10,
+                what="tracking",
+            )
+        # ... then detections stop (perception died)
+        wait_for(lambda: ctl.state() == CONTROLLER_HOVER, 10, what="hover on stale detections")
+        n2 = len(ctl.statuses)
         time.sleep(1.5)  # longer than search_delay: still hover, never search blind
+        assert {s.state for s in ctl.statuses[n2:]} <= {CONTROLLER_HOVER}
         assert ctl.state() == CONTROLLER_HOVER
-        last = flying_bridge.velocity_setpoints(since)[-1]
-        assert (last.velocity.x, last.velocity.z, last.yaw_rate) == (0.0, 0.0, 0.0)
-        # fresh detections without the target: hover, then search towards the right (cw)
-        end = time.monotonic() + 2.5
-        while time.monotonic() < end:
-            ctl.publish()
-            time.sleep(0.05)
-        assert ctl.state() == CONTROLLER_SEARCH
-        last = flying_bridge.velocity_setpoints()[-1]
-        assert last.yaw_rate == pytest.approx(-0.4) and last.velocity.x == 0.0
+        wait_for(lambda: flying_bridge.last_command() == (0.0, 0.0, 0.0), 5, what="zero command")
+        # fresh detections without the target: search towards the right (cw)
+        with feeding(ctl):
+            wait_for(lambda: ctl.state() == CONTROLLER_SEARCH, 10, what="search")
+            wait_for(
+                lambda: flying_bridge.last_command() == (0.0, 0.0, pytest.approx(-0.4)),
+                10,
+                what="a clockwise search command",
+            )
     finally:
         ctl.close()
 
@@ -240,16 +295,16 @@ def test_exit_with_on_exit_stop_sends_zero_and_stops_commanding(router, flying_b
     ctl = Harness(router, ["takeoff.on_start=false", "on_exit=stop"])
     try:
         wait_for(lambda: ctl.statuses, 15, what="status")
-        for _ in range(10):
-            ctl.publish(blob(100, 100, 5))
-            time.sleep(0.05)
-        wait_for(lambda: flying_bridge.velocity_setpoints(), 5, what="setpoints")
-        assert ctl.stop() == 0
-        last = flying_bridge.velocity_setpoints()[-1]
-        assert (last.velocity.x, last.velocity.z, last.yaw_rate) == (0.0, 0.0, 0.0)
-        n = len(flying_bridge.setpoints)
-        time.sleep(0.5)
-        assert len(flying_bridge.setpoints) == n  # nothing streamed any more
+        with feeding(ctl, blob(100, 100, 5)):
+            wait_for(
+                lambda: any(s.state == CONTROLLER_TRACKING for s in ctl.statuses),
+                10,
+                what="tracking",
+            )
+            wait_for(lambda: flying_bridge.velocity_setpoints(), 10, what="setpoints")
+            assert ctl.stop() == 0
+        flying_bridge.wait_quiet()  # nothing streamed any more ...
+        assert flying_bridge.last_command() == (0.0, 0.0, 0.0)  # ... after a zero command
         assert flying_bridge.land_calls == 0
     finally:
         ctl.close()
@@ -262,9 +317,13 @@ def test_takes_off_on_start_and_lands_on_exit(router):
         wait_for(
             lambda: any(s.state == CONTROLLER_TAKEOFF for s in ctl.statuses), 15, what="takeoff"
         )
-        assert not bridge.velocity_setpoints()  # taking off: the controller only watches
         wait_for(lambda: bridge.z >= 1.5 - 1e-6, 15, what="climb")
         wait_for(lambda: ctl.state() in (CONTROLLER_HOVER, CONTROLLER_SEARCH), 15, what="servoing")
+        # taking off, the controller only watches: its first velocity command came at the top
+        # (the SDK's take-off returns within 0.1 m of the 1.5 m goal)
+        wait_for(lambda: bridge.z_at_first_velocity is not None, 10, what="a velocity command")
+        first_z = bridge.z_at_first_velocity
+        assert first_z >= 1.4 - 1e-6, f"velocity commanded at z={first_z:.2f} m, mid-climb"
         assert bridge.armed and bridge.mode == "OFFBOARD"
         assert ctl.stop() == 0
         assert bridge.land_calls == 1 and not bridge.armed

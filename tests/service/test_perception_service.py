@@ -96,10 +96,10 @@ def test_bad_frames_are_counted_and_skipped(router):
             Image(header=Header(stamp=3.0), width=4, height=4, encoding="yuv422", data=b"\1" * 32),
             Image(header=Header(stamp=4.0), width=320, height=240, encoding="bgr8", data=b""),
         ]
-        for msg in bad:
-            pub.put(msg)
-            time.sleep(0.3)  # one at a time, so the newest-frame policy keeps each
-        wait_for(lambda: sum(service.stats.bad.values()) == 3, 10, what="3 bad frames")
+        for n, msg in enumerate(bad, start=1):  # one at a time, so the newest-frame policy
+            pub.put(msg)  # keeps each
+            wait_for(lambda n=n: sum(service.stats.bad.values()) >= n, 10, what=f"bad frame {n}")
+        assert sum(service.stats.bad.values()) == 3
         assert dict(service.stats.bad) == {"bad_size": 1, "encoding": 1, "empty": 1}
         # the service keeps working after them
         good_stamp = 5.0
@@ -145,6 +145,8 @@ def test_newest_frame_policy_keeps_latency_bounded(router):
             pub, lambda: bgr_to_image(red_disc_frame(), time.time(), "c"), received
         )
         start_count = len(received)
+        stats = service.stats
+        received0, processed0, dropped0 = stats.received, stats.processed, stats.dropped
         sent = 0
         t_end = time.monotonic() + 3.0
         while time.monotonic() < t_end:  # ~100 frames/s for 3 s against ~10 frames/s processing
@@ -155,12 +157,15 @@ def test_newest_frame_policy_keeps_latency_bounded(router):
         pub.put(bgr_to_image(red_disc_frame(), last_stamp, "cam_frontal"))
         wait_for(lambda: any(m.header.stamp == last_stamp for _, m in received), 10)
         latest = [(rx - m.header.stamp) for rx, m in received[start_count:]]
-        processed = len(latest)
-        assert processed < sent / 3, "frames were queued instead of dropped"
-        assert service.stats.dropped > sent / 2
-        # with a queue the last frames would wait seconds; here each waits at most ~2 frames
-        assert max(latest) < 1.0, f"latency grew to {max(latest):.2f} s"
-        assert latest[-1] < 1.0
+        # counted against the frames that reached the service (Zenoh may drop some on the way)
+        arrived = stats.received - received0
+        processed = stats.processed - processed0
+        assert processed < arrived / 3, f"{processed} of {arrived} processed: queued, not dropped"
+        assert stats.dropped - dropped0 > arrived / 2
+        # with a queue the last frames would wait many seconds (~10 frames/s processed of
+        # ~100/s sent); here each waits at most ~2 frames (0.2 s), 1.5 s on a busy machine
+        assert max(latest) < 1.5, f"latency grew to {max(latest):.2f} s"
+        assert latest[-1] < 1.5
 
 
 class FragileDetector(ColorDetector):

@@ -43,7 +43,7 @@ def test_latest_wait_for_a_newer_value():
     latest.update(1)
     count = latest.count
     threading.Timer(0.05, latest.update, args=(2,)).start()
-    assert latest.wait(2.0, newer_than=count) == 2
+    assert latest.wait(10.0, newer_than=count) == 2
 
 
 def test_ratekeeper_keeps_rate_and_stops_promptly():
@@ -59,7 +59,7 @@ def test_ratekeeper_keeps_rate_and_stops_promptly():
     slow = Ratekeeper(0.1, stop=stop)  # a 10 s period must not delay the stop
     t0 = time.monotonic()
     assert slow.sleep() is False
-    assert time.monotonic() - t0 < 2.0
+    assert time.monotonic() - t0 < 5.0  # far below the 10 s period
 
 
 def test_ratekeeper_counts_lag_and_does_not_burst():
