@@ -3,7 +3,9 @@
 A link binds a local port (0 = ephemeral) and sends to a default remote (127.0.0.1:14540 for
 the onboard/API link, 127.0.0.1:14550 for the GCS link); as soon as a datagram arrives, the
 sender's address becomes the remote. Messages are MAVLink 2 (pymavlink's ``common`` dialect),
-from system ``sysid`` component 1; bytes that do not parse are counted and dropped.
+from system ``sysid`` component 1; bytes that do not parse are counted and dropped. Each
+datagram is parsed on its own (a UDP datagram carries whole frames), so a datagram that ends in
+a partial or bogus frame header cannot swallow the start of the next one.
 """
 
 from __future__ import annotations
@@ -84,6 +86,15 @@ def parse_udp_spec(spec: str, default_local: int) -> UdpEndpoint | None:
     raise ValueError(f"UDP link {spec!r} is not [HOST:]PORT[:LOCAL] or 'off'")
 
 
+def parse_datagram(data: bytes) -> list[mavlink.MAVLink_message]:
+    """The MAVLink messages in one datagram, parsed on their own: bytes left over at its end
+    (a truncated frame, or garbage that looks like a frame header) are dropped with it instead
+    of waiting for the next datagram. Unparsable bytes come back as BAD_DATA messages."""
+    parser = mavlink.MAVLink(None)
+    parser.robust_parsing = True
+    return parser.parse_buffer(data) or []
+
+
 class MavlinkUdpLink:
     """One MAVLink link on a UDP socket (non-blocking; poll it with ``select`` on ``fileno``)."""
 
@@ -103,7 +114,6 @@ class MavlinkUdpLink:
         self.sock.setblocking(False)
         self.local_port: int = self.sock.getsockname()[1]
         self.mav = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=compid)
-        self.mav.robust_parsing = True
         self.received = 0
         self.sent = 0
         self.bad = 0
@@ -125,7 +135,7 @@ class MavlinkUdpLink:
                 break
             self.remote = (addr[0], addr[1])
             try:
-                msgs = self.mav.parse_buffer(data) or []
+                msgs = parse_datagram(data)
             except Exception as exc:  # never let bad bytes end the link
                 self.bad += 1
                 log.debug("%s link: unparsable datagram: %s", self.name, exc)

@@ -4,6 +4,7 @@ parameter protocol, message intervals and bad input."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import socket
 import threading
@@ -41,10 +42,12 @@ class MavClient:
         self.log: list[tuple[float, object]] = []
         self.lock = threading.Lock()
         self._send_lock = threading.Lock()
+        self._stream_lock = threading.Lock()
         self._stop = threading.Event()
         self.setpoint: object | None = None
         self.setpoint_period = 0.05
         self.last_setpoint_sent = 0.0
+        self.heartbeats_sent = 0
         self._threads = [
             threading.Thread(target=self._read, daemon=True),
             threading.Thread(target=self._stream, daemon=True),
@@ -58,6 +61,7 @@ class MavClient:
             if self.peer and time.monotonic() - last_hb > 0.5:
                 last_hb = time.monotonic()
                 self.send(mavlink.MAVLink_heartbeat_message(self.mav_type, 8, 0, 0, 4, 3))
+                self.heartbeats_sent += 1
             try:
                 data, addr = self.sock.recvfrom(65535)
             except (TimeoutError, OSError):
@@ -70,10 +74,21 @@ class MavClient:
 
     def _stream(self) -> None:
         while not self._stop.wait(self.setpoint_period):
-            sp = self.setpoint
-            if sp is not None and self.peer:
-                self.send(sp)
+            with self._stream_lock:
+                sp = self.setpoint
+                if sp is not None and self.peer:
+                    self.send(sp)
+                    self.last_setpoint_sent = time.monotonic()
+
+    def stop_stream(self, last=None) -> float:
+        """Stop the setpoint stream (no streamed setpoint is sent after this returns), then
+        send ``last`` (if given) as the very last setpoint; returns when that was sent."""
+        with self._stream_lock:
+            self.setpoint = None
+            if last is not None:
+                self.send(last)
                 self.last_setpoint_sent = time.monotonic()
+            return self.last_setpoint_sent
 
     def send(self, msg) -> None:
         assert self.peer, "no datagram from the vehicle yet"
@@ -94,8 +109,14 @@ class MavClient:
     # ---- reading ----
 
     def since(self, t0: float, kind: str | None = None) -> list:
+        return [m for _, m in self.timed(t0, kind)]
+
+    def timed(self, t0: float, kind: str | None = None) -> list[tuple[float, object]]:
+        """(receive time, message) pairs received at or after ``t0`` (monotonic s)."""
         with self.lock:
-            return [m for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)]
+            return [
+                (t, m) for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)
+            ]
 
     def latest(self, kind: str):
         with self.lock:
@@ -118,17 +139,38 @@ class MavClient:
 
     # ---- commands ----
 
-    def command(self, command: int, *p: float, target: int = 1, timeout: float = 5.0) -> list:
-        """COMMAND_LONG; returns every ACK for it within 0.3 s of the first one."""
+    def command(
+        self, command: int, *p: float, target: int = 1, timeout: float = 10.0, expect: int = 1
+    ) -> list:
+        """COMMAND_LONG; returns every ACK for it: waits for ``expect`` of them, then 0.3 s
+        more for any surplus one."""
         t0 = time.monotonic()
         p7 = [*p, *[0.0] * (7 - len(p))]
         self.send(mavlink.MAVLink_command_long_message(target, 1, command, 0, *p7))
-        self.wait_msg("COMMAND_ACK", lambda m: m.command == command, timeout, t0)
+
+        def replies() -> list:
+            return [m for m in self.since(t0, "COMMAND_ACK") if m.command == command]
+
+        wait_for(lambda: len(replies()) >= expect, timeout, what=f"{expect} ACK(s) of {command}")
         time.sleep(0.3)
-        return [m for m in self.since(t0, "COMMAND_ACK") if m.command == command]
+        return replies()
 
     def set_mode(self, mode: Mode) -> list:
-        return self.command(176, 1, mode.main, mode.sub)
+        return self.command(176, 1, mode.main, mode.sub, expect=2)  # PX4 acks a mode twice
+
+    def sync(self, timeout: float = 10.0) -> None:
+        """A barrier: the vehicle handles a link's datagrams in order and answers a parameter
+        read at once, so when this read is answered every datagram sent before it was handled
+        (and its immediate replies, like COMMAND_ACK, were received)."""
+        t0 = time.monotonic()
+        self.send(mavlink.MAVLink_param_request_read_message(1, 1, b"COM_OF_LOSS_T", -1))
+        self.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_OF_LOSS_T", timeout, t0)
+
+    def sync_heartbeat(self, timeout: float = 10.0) -> None:
+        """Return once the vehicle has handled one of this client's heartbeats (a GCS peer
+        gets STATUSTEXT only after that)."""
+        wait_for(lambda: self.heartbeats_sent > 0, timeout, what="our first heartbeat sent")
+        self.sync(timeout)
 
     def mode(self) -> Mode | None:
         hb = self.latest("HEARTBEAT")
@@ -149,9 +191,14 @@ class MavClient:
                 pos["x"], pos["y"], pos["z"], 0, 0, 0, 0, 0, 0, pos.get("yaw", 0.0), 0,
             )  # fmt: skip
         else:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
-            )
+            self.setpoint = velocity_target(vx, vy, vz, yaw_rate, frame)
+
+
+def velocity_target(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED):
+    """SET_POSITION_TARGET_LOCAL_NED with velocity (m/s) and yaw rate (rad/s) in ``frame``."""
+    return mavlink.MAVLink_set_position_target_local_ned_message(
+        0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
+    )
 
 
 def divmod_mode(custom_mode: int) -> tuple[int, int]:
@@ -194,6 +241,16 @@ def yaw_of(client: MavClient) -> float:
     return client.latest("ATTITUDE").yaw
 
 
+def turned_from(start_yaw: float, yaw: float) -> float:
+    """The signed turn (rad, NED: clockwise > 0) from ``start_yaw`` to ``yaw``."""
+    return math.remainder(yaw - start_yaw, math.tau)
+
+
+def boot_s(msg) -> float:
+    """The vehicle's simulated time (s since boot) stamped on ``msg``."""
+    return msg.time_boot_ms / 1000.0
+
+
 def test_full_px4_offboard_sequence(spawn, router, clients):
     onboard = clients(mavlink.MAV_TYPE_ONBOARD_CONTROLLER)
     gcs = clients(mavlink.MAV_TYPE_GCS)
@@ -201,7 +258,7 @@ def test_full_px4_offboard_sequence(spawn, router, clients):
     hb = onboard.latest("HEARTBEAT")
     assert (hb.type, hb.autopilot, hb.base_mode) == (2, 12, 29)
     assert hb.get_srcSystem() == 1 and hb.get_srcComponent() == 1
-    time.sleep(1.0)  # let the sim see the GCS heartbeat
+    gcs.sync_heartbeat()  # the sim knows the GCS now: it gets STATUSTEXT
 
     # OFFBOARD while disarmed with no stream: accepted (acked twice), arming then refused
     mode_acks = onboard.set_mode(Mode.OFFBOARD)
@@ -209,65 +266,86 @@ def test_full_px4_offboard_sequence(spawn, router, clients):
     assert mode_acks[0].get_seq() != mode_acks[1].get_seq()
     t_deny = time.monotonic()
     assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_TEMPORARILY_REJECTED]
-    gcs.wait_msg("STATUSTEXT", lambda m: "Arming denied" in m.text, 5, t_deny)
+    gcs.wait_msg("STATUSTEXT", lambda m: "Arming denied" in m.text, 10, t_deny)
     assert onboard.texts() == []  # a companion (non-GCS) link gets no STATUSTEXT
 
     # stream > 1 s, then OFFBOARD and arm are accepted; climb in body frame (vz up = -1.5)
+    t_stream = time.monotonic()
     onboard.stream(vz=-1.5)
+    wait_for(lambda: onboard.last_setpoint_sent > t_stream, 10, what="the setpoint stream")
     time.sleep(1.2)
     assert acks(onboard.set_mode(Mode.OFFBOARD)) == [mavlink.MAV_RESULT_ACCEPTED] * 2
     assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_ACCEPTED]
-    onboard.wait_heartbeat(lambda m: m.base_mode & 128, 3)
+    onboard.wait_heartbeat(lambda m: m.base_mode & 128, 6)
     wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -4.0, 20, what="climb to 4 m")
     assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_IN_AIR
 
-    # turn with a yaw rate (NED yaw rate > 0 = clockwise), about 97 degrees like the PX4 trial
+    # turn with a yaw rate (NED yaw rate > 0 = clockwise) of 0.5 rad/s, as in the PX4 trial
+    # (97 degrees in 3.4 s). The rate is judged in simulated time (ATTITUDE.time_boot_ms), so
+    # a slow machine (a late stop command, a stalled simulator) cannot change the verdict.
     start_yaw = yaw_of(onboard)
+    t_turn = time.monotonic()
     onboard.stream(yaw_rate=0.5)
-    time.sleep(3.4)
+    wait_for(
+        lambda: turned_from(start_yaw, yaw_of(onboard)) > math.radians(90), 20, what="turn 90 deg"
+    )
+    t_stop = time.monotonic()
     onboard.stream()
-    time.sleep(1.0)
-    turned = math.remainder(yaw_of(onboard) - start_yaw, math.tau)
-    assert math.radians(75) < turned < math.radians(120)
+    turning = [
+        m
+        for t, m in onboard.timed(t_turn, "ATTITUDE")
+        if t <= t_stop and math.radians(20) < turned_from(start_yaw, m.yaw) < math.radians(85)
+    ]
+    assert len(turning) > 20, len(turning)
+    first, last = turning[0], turning[-1]
+    rate = turned_from(first.yaw, last.yaw) / (boot_s(last) - boot_s(first))
+    print(f"steady yaw rate {rate:.3f} rad/s over {len(turning)} ATTITUDE messages")
+    assert 0.42 < rate < 0.58, f"steady yaw rate {rate:.3f} rad/s, commanded 0.5"
+    wait_for(lambda: abs(onboard.latest("ATTITUDE").yawspeed) < 0.05, 10, what="turn stopped")
+    turned = turned_from(start_yaw, yaw_of(onboard))
+    assert math.radians(90) < turned < math.radians(150), math.degrees(turned)
     yaw = yaw_of(onboard)
 
     # body velocity: forward goes along the heading, right goes 90 degrees clockwise from it
+    def moving(speed: float, heading: float):
+        def check() -> bool:
+            lpn = onboard.latest("LOCAL_POSITION_NED")
+            direction = math.atan2(lpn.vy, lpn.vx)  # NED: atan2(east, north) = heading
+            along = abs(math.remainder(direction - heading, math.tau)) < math.radians(15)
+            return math.hypot(lpn.vx, lpn.vy) > 0.8 * speed and along
+
+        return check
+
     for body, heading in (((2.0, 0.0), yaw), ((0.0, 1.5), yaw + math.pi / 2)):
         onboard.stream(vx=body[0], vy=body[1])
-        time.sleep(2.5)
-        lpn = onboard.latest("LOCAL_POSITION_NED")
-        assert math.hypot(lpn.vx, lpn.vy) > 0.8 * math.hypot(*body)
-        direction = math.atan2(lpn.vy, lpn.vx)  # NED: atan2(east, north) = heading
-        assert abs(math.remainder(direction - heading, math.tau)) < math.radians(15)
+        wait_for(moving(math.hypot(*body), heading), 15, what=f"body velocity {body}")
 
     # local NED velocity: north whatever the heading
     onboard.stream(vx=1.5, frame=FRAME_LOCAL_NED)
-    time.sleep(2.5)
-    lpn = onboard.latest("LOCAL_POSITION_NED")
-    assert lpn.vx > 1.0 and abs(math.atan2(lpn.vy, lpn.vx)) < math.radians(15)
+    wait_for(moving(1.25, 0.0), 15, what="north in the local frame")  # > 1 m/s north
 
     # local position and yaw
     onboard.stream(x=2.0, y=-3.0, z=-3.0, yaw=0.0)
 
     def at_position():
         p = onboard.latest("LOCAL_POSITION_NED")
-        return math.dist((p.x, p.y, p.z), (2.0, -3.0, -3.0)) < 0.4
+        near = math.dist((p.x, p.y, p.z), (2.0, -3.0, -3.0)) < 0.4
+        return near and abs(yaw_of(onboard)) < 0.15
 
-    wait_for(at_position, 20, what="reach the position setpoint")
-    assert abs(yaw_of(onboard)) < 0.15
-    target = onboard.latest("POSITION_TARGET_LOCAL_NED")
+    wait_for(at_position, 30, what="reach the position and yaw setpoint")
+    t_target = time.monotonic()
+    target = onboard.wait_msg("POSITION_TARGET_LOCAL_NED", timeout=10, t0=t_target)
     assert (target.x, target.y, target.z) == pytest.approx((2.0, -3.0, -3.0))
 
     # land: AUTO.LAND, "Landing detected", auto-disarm, then the intended mode (OFFBOARD) again
     t_land = time.monotonic()
     assert acks(onboard.command(21, *[math.nan] * 7)) == [mavlink.MAV_RESULT_ACCEPTED]
-    onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.LAND.value, 3, t_land)
-    onboard.setpoint = None
-    disarmed = onboard.wait_heartbeat(lambda m: not m.base_mode & 128, 25, t_land)
+    onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.LAND.value, 6, t_land)
+    onboard.stop_stream()
+    disarmed = onboard.wait_heartbeat(lambda m: not m.base_mode & 128, 40, t_land)
     assert divmod_mode(disarmed.custom_mode) == Mode.OFFBOARD.value
-    texts = gcs.texts(t_land)
-    assert any("Landing detected" in t for t in texts)
-    assert any("Disarmed by landing" in t for t in texts)
+    for text in ("Landing detected", "Disarmed by landing"):
+        gcs.wait_msg("STATUSTEXT", lambda m, text=text: text in m.text, 10, t_land)
     assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_ON_GROUND
     assert onboard.latest("LOCAL_POSITION_NED").z == pytest.approx(0.0, abs=0.05)
     assert proc.stop() == 0  # SIGINT: clean exit
@@ -277,79 +355,108 @@ def test_offboard_loss_failsafe_and_unlatched_return(spawn, router, clients):
     onboard = clients(mavlink.MAV_TYPE_ONBOARD_CONTROLLER)
     gcs = clients(mavlink.MAV_TYPE_GCS)
     start_sim(spawn, router, onboard, gcs)
+    gcs.sync_heartbeat()  # the sim knows the GCS now: it gets STATUSTEXT
+    t_stream = time.monotonic()
     onboard.stream(vz=-1.5)
+    wait_for(lambda: onboard.last_setpoint_sent > t_stream, 10, what="the setpoint stream")
     time.sleep(1.2)
-    onboard.set_mode(Mode.OFFBOARD)
+    assert acks(onboard.set_mode(Mode.OFFBOARD)) == [mavlink.MAV_RESULT_ACCEPTED] * 2
     assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_ACCEPTED]
     wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -2.5, 20, what="climb")
     onboard.stream()
     time.sleep(0.5)
 
-    onboard.setpoint = None  # stop the stream
-    time.sleep(0.1)
-    last = onboard.last_setpoint_sent
-    text = gcs.wait_msg("STATUSTEXT", lambda m: "Failsafe activated" in m.text, 5, last)
-    t_text = next(t for t, m in gcs.log if m is text)
-    assert 0.9 < t_text - last < 1.6  # COM_OF_LOSS_T = 1 s (PX4: 1.04-1.12 s)
-    rtl = onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.RTL.value, 3, last)
+    # stop the stream with a last setpoint that differs (a slow yaw rate), so the simulated
+    # time it took effect shows in POSITION_TARGET_LOCAL_NED (50 Hz on the GCS link)
+    marker = 0.02  # rad/s
+    last = onboard.stop_stream(velocity_target(yaw_rate=marker))
+    text = gcs.wait_msg("STATUSTEXT", lambda m: "Failsafe activated" in m.text, 10, last)
+    gcs_log = gcs.timed(last)
+    at = next(i for i, (_, m) in enumerate(gcs_log) if m is text)
+    t_text = gcs_log[at][0]
+    taken = next(
+        m
+        for _, m in gcs_log[:at]
+        if m.get_type() == "POSITION_TARGET_LOCAL_NED" and abs(m.yaw_rate - marker) < 1e-4
+    )
+    stamped = wait_for(
+        lambda: next((m for _, m in gcs.timed(t_text)[1:] if hasattr(m, "time_boot_ms")), None),
+        5,
+        what="telemetry after the failsafe text",
+    )
+    # COM_OF_LOSS_T = 1 s of simulated time (PX4: 1.04-1.12 s); the margins are the report
+    # periods and the simulator's bounded catch-up after a stall (at most 0.2 s)
+    lost_after = boot_s(stamped) - boot_s(taken)
+    print(f"failsafe {lost_after:.3f} s (simulated), {t_text - last:.3f} s (wall) after the last")
+    assert 0.8 < lost_after < 1.35, f"failsafe {lost_after:.3f} s after the last setpoint"
+    assert t_text - last > 0.6  # and not before that in real time either
+    rtl = onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.RTL.value, 6, last)
     assert rtl.system_status == mavlink.MAV_STATE_CRITICAL
 
     # resume: back in OFFBOARD with no mode command (not latched)
     t_resume = time.monotonic()
     onboard.stream()
     back = onboard.wait_heartbeat(
-        lambda m: divmod_mode(m.custom_mode) == Mode.OFFBOARD.value, 2.5, t_resume
+        lambda m: divmod_mode(m.custom_mode) == Mode.OFFBOARD.value, 6, t_resume
     )
     assert back.base_mode & 128
     assert not [m for m in onboard.since(t_resume, "COMMAND_ACK")]
 
 
+def median_interval_ms(client: MavClient, kind: str, count: int = 40) -> float:
+    """The median interval (ms of simulated time, from time_boot_ms) between the next
+    ``count`` ``kind`` messages: the stream's period as the vehicle schedules it, whatever the
+    delays between the vehicle and this test."""
+    t0 = time.monotonic()
+    wait_for(lambda: len(client.since(t0, kind)) >= count, 15, what=f"{count} {kind}")
+    stamps = [m.time_boot_ms for m in client.since(t0, kind)]
+    gaps = sorted(b - a for a, b in itertools.pairwise(stamps))
+    return gaps[len(gaps) // 2]
+
+
 def test_params_intervals_and_bad_input(spawn, router, clients):
     onboard = clients(mavlink.MAV_TYPE_GCS)  # a GCS-type peer: it gets STATUSTEXT
     proc = start_sim(spawn, router, onboard)
-    time.sleep(0.8)
+    onboard.sync_heartbeat()
 
     # parameters: read by name and index, int32 bits, set with echo, list
     t0 = time.monotonic()
     onboard.send(mavlink.MAVLink_param_request_read_message(1, 1, b"COM_OF_LOSS_T", -1))
-    value = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_OF_LOSS_T", 5, t0)
+    value = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_OF_LOSS_T", 10, t0)
     assert value.param_value == 1.0 and value.param_type == mavlink.MAV_PARAM_TYPE_REAL32
     onboard.send(mavlink.MAVLink_param_request_read_message(1, 1, b"COM_RC_IN_MODE", -1))
-    raw = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_RC_IN_MODE", 5, t0)
+    raw = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "COM_RC_IN_MODE", 10, t0)
     assert raw.param_type == mavlink.MAV_PARAM_TYPE_INT32
     assert params.float_bits_to_int32(raw.param_value) == 1 and raw.param_value != 1.0
     bits = params.int32_to_float_bits(1)
     onboard.send(mavlink.MAVLink_param_set_message(1, 1, b"NAV_RCL_ACT", bits, 6))
-    echo = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "NAV_RCL_ACT", 5, t0)
+    echo = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "NAV_RCL_ACT", 10, t0)
     assert params.float_bits_to_int32(echo.param_value) == 1
     t_list = time.monotonic()
     onboard.send(mavlink.MAVLink_param_request_list_message(1, 1))
     wait_for(
         lambda: len({m.param_id for m in onboard.since(t_list, "PARAM_VALUE")}) == raw.param_count,
-        5,
+        15,
         what="the whole parameter list",
     )
 
-    # SET_MESSAGE_INTERVAL: LOCAL_POSITION_NED 30 -> 50 Hz; refused for HEARTBEAT
-    def rate(kind: str, seconds: float = 2.0) -> float:
-        t = time.monotonic()
-        time.sleep(seconds)
-        return len(onboard.since(t, kind)) / seconds
-
-    assert 24 < rate("LOCAL_POSITION_NED") < 34
+    # SET_MESSAGE_INTERVAL: LOCAL_POSITION_NED 30 -> 50 Hz; refused for HEARTBEAT. Periods in
+    # simulated time, in whole 4 ms physics steps: 30 Hz = 32/36 ms, 50 Hz = 20 ms (a starved
+    # simulator that steps in bursts moves them by a step or two, never from one to the other)
+    assert 28 <= median_interval_ms(onboard, "LOCAL_POSITION_NED") <= 44
     lpn_id = mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED
     assert acks(onboard.command(511, lpn_id, 20_000)) == [mavlink.MAV_RESULT_ACCEPTED]
-    assert 42 < rate("LOCAL_POSITION_NED") < 55
+    assert 16 <= median_interval_ms(onboard, "LOCAL_POSITION_NED") <= 26
     assert acks(onboard.command(511, 0, 100_000)) == [mavlink.MAV_RESULT_FAILED]
     t = time.monotonic()
     onboard.command(510, lpn_id)
-    assert onboard.wait_msg("MESSAGE_INTERVAL", timeout=3, t0=t).interval_us == 20_000
+    assert onboard.wait_msg("MESSAGE_INTERVAL", timeout=10, t0=t).interval_us == 20_000
 
     # bad MAVLink: unknown command, wrong target, frame 9, NaN fields, garbage bytes
     assert acks(onboard.command(4242)) == [mavlink.MAV_RESULT_UNSUPPORTED]
     t = time.monotonic()
     onboard.send(mavlink.MAVLink_command_long_message(9, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0))
-    time.sleep(0.5)
+    onboard.sync()  # handled (and any ACK for it received) before the read is answered
     assert onboard.since(t, "COMMAND_ACK") == []
     assert not onboard.armed()
     t = time.monotonic()
@@ -358,7 +465,7 @@ def test_params_intervals_and_bad_input(spawn, router, clients):
             0, 1, 1, 9, MASK_VELOCITY, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0
         )
     )
-    onboard.wait_msg("STATUSTEXT", lambda m: "coordinate frame 9" in m.text, 3, t)
+    onboard.wait_msg("STATUSTEXT", lambda m: "coordinate frame 9" in m.text, 10, t)
     nan = math.nan
     for _ in range(5):
         onboard.send(
@@ -368,12 +475,12 @@ def test_params_intervals_and_bad_input(spawn, router, clients):
         )
     onboard.send_raw(b"\xfd\x09garbage that is not MAVLink" * 3)
     onboard.send_raw(b"")
-    time.sleep(0.5)
-    assert proc.alive()
     t = time.monotonic()
     onboard.send(mavlink.MAVLink_param_request_read_message(1, 1, b"MIS_TAKEOFF_ALT", -1))
-    alive = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "MIS_TAKEOFF_ALT", 3, t)
+    alive = onboard.wait_msg("PARAM_VALUE", lambda m: m.param_id == "MIS_TAKEOFF_ALT", 10, t)
     assert alive.param_value == 2.5
-    lpn = onboard.latest("LOCAL_POSITION_NED")
+    assert proc.alive()
+    t = time.monotonic()
+    lpn = onboard.wait_msg("LOCAL_POSITION_NED", timeout=10, t0=t)  # still streaming
     assert all(math.isfinite(v) for v in (lpn.x, lpn.y, lpn.z))
     assert proc.stop() == 0

@@ -88,3 +88,31 @@ def test_unknown_scenario_exits_2_naming_the_known_ones(router, capsys):
     assert main([*argv, "--udp-onboard", "off", "--udp-gcs", "off"]) == 2
     err = capsys.readouterr().err
     assert "no_such_world" in err and "beacon_static" in err
+
+
+def test_a_garbage_datagram_cannot_swallow_the_next_one():
+    """Garbage ending in what looks like the header of a signed MAVLink 2 frame (0xFD, a
+    length, incompat flags with the signing bit) must not eat the start of the next datagram."""
+    from dronewrapper_sim.mavlink_io import MavlinkUdpLink, UdpEndpoint
+
+    peer = udp_socket()
+    link = MavlinkUdpLink("onboard", UdpEndpoint("127.0.0.1", peer.getsockname()[1], 0), sysid=1)
+    try:
+        target = ("127.0.0.1", link.local_port)
+        client = mavlink.MAVLink(None, srcSystem=250, srcComponent=190)
+        peer.sendto(b"\xfd\x09garbage that is not MAVLink" * 3, target)
+        peer.sendto(b"", target)
+        request = mavlink.MAVLink_param_request_read_message(1, 1, b"COM_OF_LOSS_T", -1)
+        peer.sendto(request.pack(client), target)
+        got: list = []
+
+        def request_arrived() -> bool:
+            got.extend(link.receive())
+            return any(m.get_type() == "PARAM_REQUEST_READ" for m in got)
+
+        wait_for(request_arrived, 10, what="the valid datagram after the garbage")
+        assert link.bad > 0  # the garbage was seen and dropped
+        assert link.remote[1] == peer.getsockname()[1]
+    finally:
+        link.close()
+        peer.close()
