@@ -94,7 +94,11 @@ def run(node: Node, config: SimConfig) -> int:
     finally:
         node.stop()
         runner.close()
-    log.info("stopped after %.1f s simulated", runner.autopilot.time_s)
+    log.info(
+        "stopped after %.1f s simulated (%.1f s of wall time slipped after stalls)",
+        runner.autopilot.time_s,
+        runner.slipped_s,
+    )
     return 0
 
 

@@ -238,6 +238,7 @@ class SimRunner:
         self._gt_pub = None
         self._object_pubs: dict[str, Any] = {}
         self.cmd_vel_errors = 0
+        self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
         if node is not None:
             self._setup_zenoh(node)
 
@@ -337,7 +338,9 @@ class SimRunner:
                 continue
             owed = int((now - t0) * rtf / dt) - steps
             if owed > MAX_CATCH_UP_STEPS:  # a long stall: slip the clock, do not burst
-                t0 += (owed - MAX_CATCH_UP_STEPS) * dt / rtf
+                slip = (owed - MAX_CATCH_UP_STEPS) * dt / rtf
+                t0 += slip
+                self.slipped_s += slip
                 owed = MAX_CATCH_UP_STEPS
             for _ in range(owed):
                 self.autopilot.step(dt)
