@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 import signal
+from pathlib import Path
 
 import pytest
 
@@ -49,8 +50,16 @@ def test_readiness_timeout_fails_the_graph(spawn):
     assert "shy not ready after 3 s (no liveliness token toyns/alive/shy)" in proc.output()
 
 
-def test_a_process_ignoring_sigint_is_killed_and_reported(spawn):
-    proc = spawn(up(STUBBORN, "--duration", "2"), "up")
+def test_a_process_ignoring_sigint_is_killed_and_reported(spawn, tmp_path):
+    # the stubborn graph, with a readiness bound a loaded machine cannot miss (3 s is there for
+    # the readiness-timeout test; starting Python + Zenoh can take longer under load)
+    data = REPO / "tests" / "data"
+    graph = tmp_path / "stubborn.yaml"
+    text = Path(STUBBORN).read_text()
+    assert "ready_timeout_s: 3\n" in text
+    text = text.replace("ready_timeout_s: 3\n", "ready_timeout_s: 60\n")
+    graph.write_text(text.replace("${graph_dir}", str(data)))
+    proc = spawn(up(str(graph), "--duration", "2"), "up")
     assert proc.proc.wait(60) == 1, proc.output()
     assert "stubborn ignored SIGINT for 1 s" in proc.output()
 

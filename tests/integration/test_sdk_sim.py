@@ -49,7 +49,7 @@ def test_getters_on_the_ground(drone, router):
     lat, lon, _alt = drone.wait_for(drone.get_global_position, 10, "GPS fix")
     assert -90 <= lat <= 90 and -180 <= lon <= 180
     for camera in ("frontal", "ventral"):
-        image = drone.wait_for_image(camera, timeout=15)
+        image = drone.wait_for_image(camera, timeout=30)
         assert image.dtype == np.uint8 and image.ndim == 3 and image.shape[2] == 3
         assert image.std() > 1.0  # a rendered scene, not a blank buffer
     _, stamp = drone.get_image("frontal", with_stamp=True)
@@ -72,28 +72,33 @@ def test_flight(drone):
     drone.takeoff(h=1.0, timeout=40)
     assert drone.get_position()[2] == pytest.approx(1.0, abs=0.2)
     assert drone.get_state().mode == "OFFBOARD" and drone.get_state().armed
-    drone.wait_for_landed_state(LANDED_STATE_IN_AIR, timeout=5)
+    drone.wait_for_landed_state(LANDED_STATE_IN_AIR, timeout=10)
     t1 = time.monotonic()
     drone.takeoff(h=1.0)  # idempotent: already flying
-    assert time.monotonic() - t1 < 1.0, "second takeoff should return at once"
+    # at once: no command, no climb (a take-off takes seconds; 3 s covers a loaded machine)
+    assert time.monotonic() - t1 < 3.0, "second takeoff should return at once"
     print(f"takeoff took {t1 - t0:.1f} s")
 
     # body velocity: vx is forward, whatever the heading
     start, yaw = drone.get_position(), drone.get_yaw()
     drone.set_cmd_vel(vx=1.0)
-    time.sleep(1.2)
-    moved = drone.get_position() - start
-    forward = moved[0] * math.cos(yaw) + moved[1] * math.sin(yaw)
-    assert forward > 0.4, (moved, yaw)
+
+    def forward() -> float:
+        moved = drone.get_position() - start
+        return moved[0] * math.cos(yaw) + moved[1] * math.sin(yaw)
+
+    drone.wait_for(lambda: forward() > 0.6, 10, "0.6 m forward")
     assert drone.get_velocity()[0] > 0.3
 
     # yaw rate: positive az turns counter-clockwise
     yaw0 = drone.get_yaw()
     drone.set_cmd_vel(az=1.0)
-    drone.wait_for(lambda: drone.get_yaw_rate() > 0.5, 5, "yaw rate > 0.5 rad/s")
-    time.sleep(0.5)
-    turned = (drone.get_yaw() - yaw0 + math.pi) % (2 * math.pi) - math.pi
-    assert turned > 0.3, turned
+    drone.wait_for(lambda: drone.get_yaw_rate() > 0.5, 10, "yaw rate > 0.5 rad/s")
+
+    def turned() -> float:
+        return (drone.get_yaw() - yaw0 + math.pi) % (2 * math.pi) - math.pi
+
+    drone.wait_for(lambda: turned() > 0.5, 10, "a counter-clockwise turn of 0.5 rad")
 
     # mixed: altitude hold at a commanded z
     drone.set_cmd_mix(z=1.6)
@@ -102,11 +107,13 @@ def test_flight(drone):
     # position: back above the start point
     drone.set_cmd_pos(start[0], start[1], 1.0, 0.0)
     drone.wait_for(
-        lambda: np.linalg.norm(drone.get_position() - [start[0], start[1], 1.0]) < 0.3,
-        20,
-        "back at the start",
+        lambda: (
+            np.linalg.norm(drone.get_position() - [start[0], start[1], 1.0]) < 0.3
+            and abs(drone.get_yaw()) < 0.2
+        ),
+        30,
+        "back at the start, facing yaw 0",
     )
-    assert abs(drone.get_yaw()) < 0.2
 
     drone.land(timeout=40)
     assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
