@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import logging
 import socket
 import threading
 import time
@@ -102,7 +103,14 @@ def test_unknown_scenario_exits_2_naming_the_known_ones(router, capsys):
     from dronewrapper_sim.cli import main
 
     argv = ["--scenario", "no_such_world", "--connect", router]
-    assert main([*argv, "--udp-onboard", "off", "--udp-gcs", "off"]) == 2
+    root = logging.getLogger()
+    handlers = list(root.handlers)
+    try:
+        assert main([*argv, "--udp-onboard", "off", "--udp-gcs", "off"]) == 2
+    finally:  # main's log handler writes to the captured stderr, which closes after this test
+        for handler in root.handlers[:]:
+            if handler not in handlers:
+                root.removeHandler(handler)
     err = capsys.readouterr().err
     assert "no_such_world" in err and "beacon_static" in err
 

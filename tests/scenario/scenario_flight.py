@@ -3,7 +3,9 @@
 Each flight runs a compose graph (any aircraft: the intended distance comes from the controller
 config the graph starts) through the launcher's Python API on a free loopback router
 with free UDP ports, records vehicle, objects and controller status with FollowMonitor, then
-stops everything. The controller uses ``on_exit: stop`` so a flight ends quickly.
+stops everything. The controller uses ``on_exit: stop`` so a flight ends quickly. A flight
+lasts a fixed time of servoing, counted from the end of the take-off, so a slow start on a
+loaded machine (imports, model loading, take-off) does not eat into what is judged.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.launcher import Launcher, build_argv
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_controller.metrics import (
+    TRACKING_STATES,
     FollowSample,
     FollowSummary,
     colour_intended_distance,
@@ -97,6 +100,9 @@ def intended_distance(
     return d, height / 2.0
 
 
+START_TIMEOUT_S = 60.0  # from the graph being up to the controller servoing (after take-off)
+
+
 def fly(
     graph: str,
     scenario: str,
@@ -104,7 +110,8 @@ def fly(
     tmp_path: Path,
     variables: dict[str, str] | None = None,
 ) -> Flight:
-    """Run ``compose/<graph>.yaml`` on ``scenario`` and record ``seconds`` of flight."""
+    """Run ``compose/<graph>.yaml`` on ``scenario`` and record until the controller has been
+    servoing (after its take-off) for ``seconds``, or START_TIMEOUT_S passed without that."""
     router = f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
@@ -126,10 +133,15 @@ def fly(
             launcher.start()
             session = open_session(ZenohOptions(mode="client", connect=[router]))
             monitor = FollowMonitor(session, launcher.ns, aim_height=aim).start()
-            deadline = time.monotonic() + seconds
+            deadline = time.monotonic() + START_TIMEOUT_S  # until servoing starts
+            servoing = False
             while time.monotonic() < deadline:
                 dead = [c.name for c in launcher.children if c.poll() is not None]
                 assert not dead, f"{dead} died; log {log_path}:\n{log_path.read_text()[-4000:]}"
+                status = monitor.status.value
+                if not servoing and status is not None and status.state in TRACKING_STATES:
+                    servoing = True
+                    deadline = time.monotonic() + seconds
                 time.sleep(0.2)
         finally:
             if monitor is not None:
