@@ -162,10 +162,13 @@ def test_newest_frame_policy_keeps_latency_bounded(router):
         processed = stats.processed - processed0
         assert processed < arrived / 3, f"{processed} of {arrived} processed: queued, not dropped"
         assert stats.dropped - dropped0 > arrived / 2
-        # with a queue the last frames would wait many seconds (~10 frames/s processed of
-        # ~100/s sent); here each waits at most ~2 frames (0.2 s), 1.5 s on a busy machine
-        assert max(latest) < 1.5, f"latency grew to {max(latest):.2f} s"
-        assert latest[-1] < 1.5
+        # With a queue the latency would grow with every frame (~10 frames/s processed of
+        # 50-100/s sent: the last one would wait over 10 s). Here each frame waits at most ~2
+        # frames (about 0.15 s); the median ignores a rare stall of a busy machine.
+        median = sorted(latest)[len(latest) // 2]
+        assert median < 0.5, f"median latency {median:.2f} s: {latest}"
+        last = next(rx - m.header.stamp for rx, m in received if m.header.stamp == last_stamp)
+        assert last < 3.0, f"the last frame waited {last:.2f} s"
 
 
 class FragileDetector(ColorDetector):
