@@ -81,7 +81,7 @@ def test_services_answer_and_bad_requests_get_error_replies(router, spawn):
         t0 = time.monotonic()
         with pytest.raises(ServiceUnavailable, match="cmd/takeoff"):
             node.call(registry.TAKEOFF, registry.TAKEOFF.request(), timeout=3)
-        assert time.monotonic() - t0 < 3.5
+        assert time.monotonic() - t0 < 6.0  # bounded by the 3 s timeout (2x for a loaded machine)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

@@ -101,6 +101,15 @@ def intended_distance(
 
 
 START_TIMEOUT_S = 60.0  # from the graph being up to the controller servoing (after take-off)
+MIN_TRACKED_S = 8.0  # a flight goes on at least this long after the target was acquired
+
+
+def _acquired(samples: list[FollowSample]) -> bool:
+    """The controller sees the target and it is centred (as ``summarize`` defines acquisition)."""
+    return any(
+        s.state in TRACKING_STATES and s.target_visible and s.centred(CENTRED_TOLERANCE)
+        for s in samples
+    )
 
 
 def fly(
@@ -111,7 +120,8 @@ def fly(
     variables: dict[str, str] | None = None,
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record until the controller has been
-    servoing (after its take-off) for ``seconds``, or START_TIMEOUT_S passed without that."""
+    servoing (after its take-off) for ``seconds`` and, when it acquired the target late, for
+    MIN_TRACKED_S after that; or until START_TIMEOUT_S passed without servoing."""
     router = f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
@@ -134,7 +144,7 @@ def fly(
             session = open_session(ZenohOptions(mode="client", connect=[router]))
             monitor = FollowMonitor(session, launcher.ns, aim_height=aim).start()
             deadline = time.monotonic() + START_TIMEOUT_S  # until servoing starts
-            servoing = False
+            servoing = acquired = False
             while time.monotonic() < deadline:
                 dead = [c.name for c in launcher.children if c.poll() is not None]
                 assert not dead, f"{dead} died; log {log_path}:\n{log_path.read_text()[-4000:]}"
@@ -142,6 +152,9 @@ def fly(
                 if not servoing and status is not None and status.state in TRACKING_STATES:
                     servoing = True
                     deadline = time.monotonic() + seconds
+                if servoing and not acquired and _acquired(monitor.samples[-3:]):
+                    acquired = True  # judge at least MIN_TRACKED_S after a late acquisition
+                    deadline = max(deadline, time.monotonic() + MIN_TRACKED_S)
                 time.sleep(0.2)
         finally:
             if monitor is not None:
