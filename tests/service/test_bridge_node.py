@@ -431,7 +431,7 @@ def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
     altitude, mixed control emulated with vz, integer params cast (not bit-reinterpreted)."""
     _bridge, fake, user = ardu_rig
     state = user.latest(registry.STATE)
-    assert wait_for(lambda: state.value and state.value.mode == "LOITER", 5)
+    assert wait_for(lambda: state.value and state.value.mode == "LOITER", 10)
     assert state.value.autopilot == "ardupilotmega"
     with pytest.raises(ServiceError, match="GUIDED"):
         user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), timeout=5)
@@ -441,7 +441,7 @@ def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
     # No priming stream before the mode change (a hold stream may follow the ack: that is fine).
     assert len([t for t, _ in list(fake.setpoints) if t < mode_at]) == before
     assert (mode_cmd.param1, mode_cmd.param2) == (1.0, 4.0)
-    wait_for(lambda: state.value.mode == "GUIDED" and state.value.guided, 5)
+    wait_for(lambda: state.value.mode == "GUIDED" and state.value.guided, 10)
     assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
     assert user.call(registry.TAKEOFF, CommandTOL(altitude=4.0), timeout=10).success
     (takeoff,) = fake.commands_named(22)
@@ -455,10 +455,15 @@ def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
         position=Point(z=4.0),
     )
     stream(pub, mixed, 0.5)
-    wait_for(lambda: fake.setpoints, 3)
+    # the mixed commands (not the holds before them or 0.5 s after them)
+    moving = wait_for(
+        lambda: [m for _, m in list(fake.setpoints) if m.type_mask != MASK_POSITION],
+        10,
+        what="the mixed setpoints",
+    )
     frames = {m.coordinate_frame for _, m in fake.setpoints}
     assert frames == {1}  # never BODY_OFFSET_NED (9) nor BODY_NED (8)
-    last = fake.setpoints[-1][1]
+    last = moving[-1]
     assert last.type_mask == MASK_VELOCITY and math.isclose(last.vz, -1.0, abs_tol=1e-3)
     assert math.isclose(last.vy, 1.0, abs_tol=1e-3)  # facing east: forward = NED y
     got = user.call(registry.PARAM_GET, ParamGet(param_id="COM_RC_IN_MODE"), timeout=10)

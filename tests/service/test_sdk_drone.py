@@ -8,6 +8,7 @@ rates, error messages) in a fraction of a second per test.
 
 from __future__ import annotations
 
+import itertools
 import math
 import subprocess
 import sys
@@ -249,11 +250,14 @@ def test_getters_return_latest_values_at_once(drone, bridge):
 def test_set_cmd_vel_is_streamed_at_20_hz_or_more_until_changed(drone, bridge):
     t0 = time.monotonic()
     drone.set_cmd_vel(az=1)
-    n0, t_n0 = drone.setpoints_sent, time.monotonic()
-    time.sleep(1.2)
-    rate = (drone.setpoints_sent - n0) / (time.monotonic() - t_n0)
-    assert rate >= 20.0, f"streamed at {rate:.1f} Hz"  # 30 Hz nominal
-    wait_for(lambda: len(bridge.setpoints_since(t0)) >= 20, 10, what="20 setpoints arrived")
+    wait_for(lambda: len(bridge.setpoints_since(t0)) >= 31, 10, what="31 setpoints arrived")
+    with bridge.lock:
+        times = [t for t, _ in bridge.setpoints if t >= t0]
+    # >= 20 Hz (30 Hz nominal), judged by the median gap between arrivals: a busy machine may
+    # stall the process now and then (a lost tick or two), a slow stream shifts every gap
+    gaps = sorted(b - a for a, b in itertools.pairwise(times))
+    median = gaps[len(gaps) // 2]
+    assert median <= 1.0 / 20.0, f"median gap {median * 1000:.0f} ms"
     got = bridge.setpoints_since(t0)
     assert all(m.type_mask == 1991 and m.coordinate_frame == 8 and m.yaw_rate == 1 for m in got)
     drone.set_cmd_mix(vx=0.5, z=2.0, az=0.1, stamp=1.7e9)
