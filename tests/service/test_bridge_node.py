@@ -7,6 +7,7 @@ checked exactly on the wire. Flights against the simulator are in tests/integrat
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import threading
@@ -245,6 +246,14 @@ def make_rig(router, autopilot: int) -> Iterator[tuple[Bridge, FakePX4, object]]
         fake.close()
 
 
+def median_gap(times: list[float]) -> float:
+    """The median interval between successive times (s): a rate check that a busy machine's
+    occasional stall of the whole process (a lost tick or two) does not fail, while a stream
+    slower than the bound shifts every interval."""
+    gaps = sorted(b - a for a, b in itertools.pairwise(times))
+    return gaps[len(gaps) // 2] if gaps else math.inf
+
+
 def reaches_bridge(user) -> bool:
     """True once the user's session knows the bridge's queryables (and so its subscriber,
     declared just before them): a call with an invalid param_id gets an error reply without
@@ -314,7 +323,7 @@ def test_offboard_request_primes_the_stream_first(rig):
     sent_at, *_ = bridge.link.command_times(176)  # when DO_SET_MODE left the bridge
     before = [t for t in bridge.link.setpoints(MASK_POSITION) if t < sent_at]
     assert before and sent_at - before[0] > 1.0, "must stream > 1 s before OFFBOARD"
-    assert len(before) >= 20  # >= 20 Hz during that second
+    assert median_gap(before) <= 1.0 / 20.0  # >= 20 Hz during that second
     assert fake.commands_named(176)
     assert all(m.type_mask == MASK_POSITION for _, m in fake.setpoints[:5])  # a hold
 
@@ -340,7 +349,7 @@ def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
     last_put = stream(pub, velocity(vx=1.0), 1.5)
     # >= 20 Hz forwarded during the last second of commanding (when the bridge sent them)
     fwd = [t for t in bridge.link.setpoints(MASK_VELOCITY) if last_put - 1.0 < t <= last_put]
-    assert len(fwd) >= 20, f"only {len(fwd)} setpoints in the last second"
+    assert len(fwd) >= 10 and median_gap(fwd) <= 1.0 / 20.0, f"{len(fwd)} in the last second"
     # velocity commands expire after setpoint_timeout (0.5 s): then it holds where it is
     held = wait_for(
         lambda: [t for t in bridge.link.setpoints(MASK_POSITION) if t > last_put], 10, what="hold"

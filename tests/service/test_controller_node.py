@@ -6,6 +6,7 @@ SET_MODE / LAND services) and records every setpoint; the controller embeds the 
 
 from __future__ import annotations
 
+import itertools
 import math
 import threading
 import time
@@ -261,10 +262,13 @@ def test_status_rate_stale_hover_then_search(router, flying_bridge):
     ctl = Harness(router, ["takeoff.on_start=false", "on_exit=stop", "search_yaw_rate=0.4"])
     try:
         wait_for(lambda: len(ctl.statuses) >= 3, 15, what="status")
-        n0, t0 = len(ctl.statuses), time.monotonic()
-        time.sleep(2.0)
-        rate = (len(ctl.statuses) - n0) / (time.monotonic() - t0)
-        assert rate >= 5.0, f"status at {rate:.1f} Hz"
+        n0 = len(ctl.statuses)
+        wait_for(lambda: len(ctl.statuses) >= n0 + 20, 15, what="20 more statuses")
+        # >= 5 Hz (10 Hz nominal) by the median interval of the publication stamps: robust to
+        # a busy machine stalling the process now and then, not to a slow status thread
+        stamps = [s.header.stamp for s in ctl.statuses[n0:]]
+        gaps = sorted(b - a for a, b in itertools.pairwise(stamps))
+        assert gaps[len(gaps) // 2] <= 1.0 / 5.0, f"median status interval {gaps[len(gaps) // 2]}"
         n1 = len(ctl.statuses)
         with feeding(ctl, blob(600, 240, 20)):  # target on the right ...
             wait_for(
