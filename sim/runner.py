@@ -239,6 +239,8 @@ class SimRunner:
         self._object_pubs: dict[str, Any] = {}
         self.cmd_vel_errors = 0
         self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
+        # (monotonic wall s, simulated s, slipped_s) taken together after each stepping
+        self.clock: tuple[float, float, float] = (time.monotonic(), 0.0, 0.0)
         if node is not None:
             self._setup_zenoh(node)
 
@@ -345,6 +347,7 @@ class SimRunner:
             for _ in range(owed):
                 self.autopilot.step(dt)
             steps += owed
+            self.clock = (now, self.autopilot.time_s, self.slipped_s)
             with self.world_lock:
                 self.world.step(owed * dt)
             self._snapshot = self._make_snapshot()

@@ -4,11 +4,9 @@ real-time factor, and a link answers whoever talks to it, over real UDP sockets.
 from __future__ import annotations
 
 import contextlib
-import itertools
 import logging
 import socket
 import threading
-import time
 
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
@@ -43,14 +41,17 @@ def test_runner_real_time_factor_and_reply_to_last_sender():
     try:
         assert list(runner.links) == ["onboard"]
         thread.start()
-        wait_for(lambda: runner.autopilot.time_s > 0, 10, what="the loop running")
-        wall0, sim0, slip0 = time.monotonic(), runner.autopilot.time_s, runner.slipped_s
+        wait_for(lambda: runner.clock[1] > 0, 10, what="the loop running")
+        # the loop's own (wall, simulated, slipped) readings, taken together: a stall of this
+        # loaded process between a reading and its use cannot skew them
+        wall0, sim0, slip0 = runner.clock
         msgs: list = []
         parser = mavlink.MAVLink(None)
 
         def running_time() -> float:
-            """Wall time (s) since wall0 the clock ran (not slipped after a stall)."""
-            return time.monotonic() - wall0 - (runner.slipped_s - slip0)
+            """Wall time (s) the clock ran (not slipped after a stall) since the first reading."""
+            wall, _, slipped = runner.clock
+            return wall - wall0 - (slipped - slip0)
 
         def enough() -> bool:  # 2 s of running time (longer if a loaded machine stalls us)
             with contextlib.suppress(TimeoutError):
@@ -58,23 +59,20 @@ def test_runner_real_time_factor_and_reply_to_last_sender():
             return running_time() >= 2.0
 
         wait_for(enough, 30, interval=0.0, what="2 s of the real-time loop")
-        elapsed_sim = runner.autopilot.time_s - sim0
-        elapsed_run = running_time()
+        wall1, sim1, slip1 = runner.clock
         kinds = {m.get_type() for m in msgs}
         assert {"HEARTBEAT", "ATTITUDE", "LOCAL_POSITION_NED"} <= kinds
         assert all(m.get_srcSystem() == 1 for m in msgs)
-        # simulated time = running wall time x 2 (within the bounded catch-up: 50 steps)
-        assert elapsed_sim / elapsed_run == pytest.approx(2.0, rel=0.15), (
-            elapsed_sim,
-            elapsed_run,
-            runner.slipped_s - slip0,
-        )
+        # simulated time = running wall time x 2 (to a physics step)
+        ratio = (sim1 - sim0) / (wall1 - wall0 - (slip1 - slip0))
+        assert ratio == pytest.approx(2.0, rel=0.05), (ratio, wall1 - wall0, slip1 - slip0)
         # simulated time drives the streams: ATTITUDE is 100 Hz of simulated time (200 per
-        # wall second at this factor), so its median period is 8-12 ms of simulated time (whole
-        # 4 ms steps), not the 20 ms a wall-clock schedule would give
+        # wall second at this factor; a wall-clock schedule would give 50 per simulated
+        # second). Counted on the messages' own stamps; a stalled loop drops a few at most.
         stamps = [m.time_boot_ms for m in msgs if m.get_type() == "ATTITUDE"]
-        gaps = sorted(b - a for a, b in itertools.pairwise(stamps))
-        assert len(gaps) > 50 and 8 <= gaps[len(gaps) // 2] <= 16, gaps[len(gaps) // 2]
+        assert len(stamps) > 50, len(stamps)
+        rate = (len(stamps) - 1) / ((stamps[-1] - stamps[0]) / 1000.0)
+        assert 70.0 < rate <= 105.0, f"ATTITUDE at {rate:.1f} Hz of simulated time"
 
         # another peer talks: replies and telemetry now go to it
         client = mavlink.MAVLink(None, srcSystem=250, srcComponent=190)
