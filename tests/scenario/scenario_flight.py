@@ -63,6 +63,21 @@ class Flight:
             f"{math.degrees(s.bearing_p95):.1f} deg, {s.samples} samples"
         )
 
+    def timeline(self, step_s: float = 1.0) -> str:
+        """One line per ``step_s`` of the recording (for failure messages): time, controller
+        state, target seen, bearing and elevation errors (deg), distance (m), and the object
+        nearest the optical axis."""
+        lines, next_t = [], -math.inf
+        for x in self.samples:
+            if x.t >= next_t:
+                next_t = x.t + step_s
+                lines.append(
+                    f"{x.t:5.1f} s {x.state or '-':9s} seen {int(x.target_visible)} "
+                    f"bearing {math.degrees(x.bearing):6.1f} elev {math.degrees(x.elevation):6.1f} "
+                    f"d {x.distance:4.1f} m nearest {x.closest_to_axis()}"
+                )
+        return "\n".join(lines)
+
 
 def controller_config(launcher: Launcher) -> ControllerConfig:
     """The controller's config exactly as the graph starts it (its --config and --set)."""

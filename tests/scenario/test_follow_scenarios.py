@@ -47,9 +47,10 @@ def check_flight(flight, max_acquire, min_centred, min_distance):
     print(flight.describe())
     assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{flight.log[-3000:]}"
     assert s.samples > 50, f"too few samples: {flight.describe()}\n{flight.log[-3000:]}"
-    assert s.time_to_acquire <= max_acquire, flight.describe()
-    assert s.centred_share >= min_centred, flight.describe()
-    assert s.distance_share >= min_distance, flight.describe()
+    detail = f"{flight.describe()}\n{flight.timeline()}"
+    assert s.time_to_acquire <= max_acquire, detail
+    assert s.centred_share >= min_centred, detail
+    assert s.distance_share >= min_distance, detail
 
 
 @pytest.mark.parametrize("scenario", list(CASES))
@@ -76,7 +77,9 @@ def test_follow(scenario, tmp_path):
             f"median bearing {math.degrees(median_bearing):.1f} deg"
         )
         print(detail)
-        assert centred >= 0.6 and nearest >= 0.5 and median_bearing <= CENTRED, detail
+        assert centred >= 0.6 and nearest >= 0.5 and median_bearing <= CENTRED, (
+            f"{detail}\n{flight.timeline()}"
+        )
 
 
 def test_follow_person_with_hog(tmp_path):
