@@ -14,6 +14,11 @@ detection (same order) and the followed target's id.
 - :class:`KalmanTracker`: one constant-velocity Kalman filter per track plus a colour-histogram
   appearance model, Mahalanobis and appearance gating, Hungarian association; tracks coast
   through occlusions up to ``max_coast_s``; the target keeps its track id while its track lives.
+  The target is also re-identified by appearance: when the camera itself moves (the drone
+  pitches, climbs or turns) a person standing still jumps in the image beyond the motion gate,
+  so a coasting target track may take an unoccluded detection of the same appearance within a
+  loose spatial gate; and once the target's track is gone, the new target is the person who
+  looks like it (never simply the most confident detection, which may be a passer-by).
 """
 
 from __future__ import annotations
@@ -164,13 +169,15 @@ def _overlap_fraction(box: Sequence[float], other: Sequence[float]) -> float:
 
 @dataclass
 class Track:
-    """One tracked object: its filter, appearance and bookkeeping (times in s)."""
+    """One tracked object: its filter, appearance and bookkeeping (times in s, boxes in px)."""
 
     track_id: str
     kf: BoxKalmanFilter
     appearance: np.ndarray | None
     class_id: int
     last_seen: float
+    last_box: np.ndarray
+    """The last detected box (cx, cy, w, h)."""
     hits: int = 1
 
 
@@ -188,6 +195,12 @@ class KalmanTracker:
         min_hits: detections a new track needs before its misses are tolerated.
         recent_s: tracks seen within this time are matched first (their prediction is sharper
             than a coasting track's, so a coasting track cannot steal their detection).
+        reid_distance: how far (in box heights, centre to centre) from its predicted box a
+            detection may be re-identified as the coasting target by appearance alone.
+        reid_size_ratio: the re-identified box's height may differ from the track's by at most
+            this factor.
+        forget_target_s: after this long without the target, its remembered appearance is
+            dropped and the next target is picked by score again (the first pick).
     """
 
     needs_appearance = True
@@ -203,6 +216,9 @@ class KalmanTracker:
         occlusion_overlap: float = 0.15,
         min_hits: int = 2,
         recent_s: float = 0.25,
+        reid_distance: float = 1.5,
+        reid_size_ratio: float = 1.5,
+        forget_target_s: float = 10.0,
     ) -> None:
         self.max_coast_s = max_coast_s
         self.motion_gate = motion_gate
@@ -212,14 +228,21 @@ class KalmanTracker:
         self.occlusion_overlap = occlusion_overlap
         self.min_hits = min_hits
         self.recent_s = recent_s
+        self.reid_distance = reid_distance
+        self.reid_size_ratio = reid_size_ratio
+        self.forget_target_s = forget_target_s
         self.tracks: list[Track] = []
         self.target_id = ""
+        self._target_appearance: np.ndarray | None = None
+        self._target_seen = -np.inf
         self._ids = itertools.count(1)
 
     def reset(self) -> None:
-        """Drop every track and the target."""
+        """Drop every track, the target and its remembered appearance."""
         self.tracks.clear()
         self.target_id = ""
+        self._target_appearance = None
+        self._target_seen = -np.inf
 
     def _cost(self, track: Track, boxes: np.ndarray, dets, features) -> np.ndarray:
         d2 = track.kf.mahalanobis_sq(boxes)
@@ -274,6 +297,10 @@ class KalmanTracker:
                 self._apply(track, j, dets, boxes, features, t)
                 ids[j] = track.track_id
                 unmatched.discard(j)
+        j = self._reidentify_target(unmatched, dets, boxes, features, t)
+        if j is not None:
+            ids[j] = self.target_id
+            unmatched.discard(j)
         for j in sorted(unmatched):
             feature = features[j] if features is not None else None
             track = Track(
@@ -282,6 +309,7 @@ class KalmanTracker:
                 appearance=None if self._occluded(j, dets) else feature,
                 class_id=dets[j].class_id,
                 last_seen=t,
+                last_box=boxes[j],
             )
             self.tracks.append(track)
             ids[j] = track.track_id
@@ -291,11 +319,49 @@ class KalmanTracker:
             if (t - tr.last_seen <= self.max_coast_s)
             and (tr.hits >= self.min_hits or tr.last_seen == t)
         ]
-        return self._select_target(dets, ids)
+        return self._select_target(dets, ids, features, t)
 
-    def _apply(self, track: Track, j: int, dets, boxes, features, t: float) -> None:
-        track.kf.update(boxes[j])
+    def _reidentify_target(self, unmatched: set[int], dets, boxes, features, t) -> int | None:
+        """Give the coasting target track the unoccluded detection that looks most like it.
+
+        Only a detection of the target's class, within ``reid_distance`` box heights of the
+        track's predicted or last seen centre (a coasting prediction drifts on whatever velocity
+        the camera's motion gave it), of a similar height and within the appearance gate, may be
+        taken; its motion filter restarts from that box (the jump was the camera's, not the
+        person's velocity). Returns the detection's index, or None.
+        """
+        track = next((tr for tr in self.tracks if tr.track_id == self.target_id), None)
+        if track is None or track.last_seen == t or track.appearance is None or features is None:
+            return None
+        height = track.last_box[3]
+        centres = np.array([track.kf.box_cxcywh[:2], track.last_box[:2]])
+        best, best_distance = None, self.appearance_gate
+        for j in sorted(unmatched):
+            feature = features[j]
+            if feature is None or dets[j].class_id != track.class_id or self._occluded(j, dets):
+                continue
+            size_ratio = max(boxes[j][3], 1.0) / max(height, 1.0)
+            if not 1 / self.reid_size_ratio <= size_ratio <= self.reid_size_ratio:
+                continue
+            offsets = np.linalg.norm(centres - boxes[j][:2], axis=1)
+            if offsets.min() > self.reid_distance * height:
+                continue
+            distance = bhattacharyya(track.appearance, feature)
+            if distance <= best_distance:
+                best, best_distance = j, distance
+        if best is not None:
+            track.kf = BoxKalmanFilter(boxes[best], t)
+            self._apply(track, best, dets, boxes, features, t, measured=False)
+        return best
+
+    def _apply(
+        self, track: Track, j: int, dets, boxes, features, t: float, *, measured: bool = True
+    ) -> None:
+        """Record detection ``j`` on ``track`` (``measured``: also correct its filter)."""
+        if measured:
+            track.kf.update(boxes[j])
         track.last_seen = t
+        track.last_box = boxes[j]
         track.hits += 1
         feature = features[j] if features is not None else None
         if feature is not None and not self._occluded(j, dets):
@@ -307,16 +373,43 @@ class KalmanTracker:
                 ) * track.appearance + self.appearance_rate * feature
                 track.appearance = mixed / max(float(mixed.sum()), 1e-12)
 
-    def _select_target(self, dets: Sequence[Detection], ids: list[str]) -> TrackingResult:
+    def _select_target(
+        self, dets: Sequence[Detection], ids: list[str], features, t: float
+    ) -> TrackingResult:
         alive = {tr.track_id for tr in self.tracks}
         if self.target_id not in alive:
-            self.target_id = ""
-            if dets:
-                best = max(range(len(dets)), key=lambda i: float(dets[i].score))
-                self.target_id = ids[best]
+            self.target_id = self._pick_target(dets, ids, features, t)
         index = ids.index(self.target_id) if self.target_id in ids else None
+        if index is not None:
+            track = next(tr for tr in self.tracks if tr.track_id == self.target_id)
+            if track.appearance is not None:
+                self._target_appearance = track.appearance.copy()
+            self._target_seen = t
         visible = self.target_id if index is not None else ""
         return TrackingResult(tuple(ids), visible, index)
+
+    def _pick_target(self, dets: Sequence[Detection], ids: list[str], features, t: float) -> str:
+        """A new target's track id ("" = none this frame).
+
+        While the lost target's appearance is remembered (seen within ``forget_target_s``), only
+        an unoccluded detection within the appearance gate of it may become the target, the most
+        alike first. Otherwise (the first pick, no appearance, or forgotten): the most confident.
+        """
+        if not dets:
+            return ""
+        memory = self._target_appearance
+        if memory is not None and t - self._target_seen <= self.forget_target_s:
+            best, best_distance = "", self.appearance_gate
+            for j in range(len(dets)):
+                feature = features[j] if features is not None else None
+                if feature is None or self._occluded(j, dets):
+                    continue
+                distance = bhattacharyya(memory, feature)
+                if distance <= best_distance:
+                    best, best_distance = ids[j], distance
+            return best
+        self._target_appearance = None
+        return ids[max(range(len(dets)), key=lambda i: float(dets[i].score))]
 
 
 def make_tracker(name: str, **options) -> Tracker:

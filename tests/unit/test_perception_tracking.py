@@ -267,3 +267,69 @@ def test_kalman_track_survives_short_occlusion_but_not_long():
     assert gap.target_id == first
     late = tracker.update([det_at(200 + 5 * 50, 240)], 5.0)  # after 3 s: a new track
     assert late.target_id not in ("", first)
+
+
+# ---------------------------------------------------------------- re-identification by appearance
+
+
+def still_people(shift=(0.0, 0.0)) -> list[Walker]:
+    """The target (red shirt) and a bystander (green shirt) standing still, the camera shifted."""
+    dx, dy = shift
+    return [
+        Walker("target", (320 + dx, 250 + dy), (0, 0), (30, 30, 200), (120, 60, 30), depth=5.0),
+        Walker("other", (500 + dx, 250 + dy), (0, 0), (40, 170, 40), (40, 40, 40), depth=5.0),
+    ]
+
+
+def observe(tracker, walkers, t, scores=None):
+    """One frame of exact detections of ``walkers``; {name: track id} and the followed name."""
+    img = render(walkers, t)
+    dets = [Detection(w.box(t), (scores or {}).get(w.name, 0.9), 0, "person") for w in walkers]
+    result = tracker.update(dets, t, [appearance_histogram(img, d.box_xyxy) for d in dets])
+    names = [w.name for w in walkers]
+    followed = names[result.target_index] if result.target_index is not None else None
+    return dict(zip(names, result.track_ids, strict=True)), followed
+
+
+@pytest.mark.parametrize("reid_distance", [1.5, 0.0], ids=["reid", "no_reid"])
+def test_kalman_target_keeps_its_id_when_the_camera_jumps(reid_distance):
+    """The drone pitches: everyone jumps 60 px in one frame, beyond the motion gate. The target
+    is re-identified by appearance (the bystander, as close, does not look like it)."""
+    tracker = KalmanTracker(reid_distance=reid_distance)
+    for k in range(15):
+        ids, followed = observe(tracker, still_people(), k / 15, {"target": 0.95})
+    assert followed == "target"
+    before = ids["target"]
+    ids, followed = observe(tracker, still_people(shift=(30, 60)), 1.0)
+    if reid_distance:
+        assert ids["target"] == before and followed == "target"
+    else:  # proves the jump is beyond the motion gate: without re-identification a new track
+        assert ids["target"] != before and followed is None
+
+
+def test_kalman_lost_target_is_picked_again_by_appearance_not_by_score():
+    """Hidden longer than a track lives, the target comes back beside a more confident passer-by:
+    it is the one followed again, and nobody is followed while it is away."""
+    tracker = KalmanTracker(max_coast_s=1.0, forget_target_s=10.0)
+    target, other = still_people()
+    for k in range(10):
+        _, followed = observe(tracker, [target], k / 10)
+    assert followed == "target"
+    for k in range(30):  # 3 s: only the passer-by, very confident
+        _, followed = observe(tracker, [other], 1.0 + k / 10, {"other": 0.99})
+        assert followed is None
+    for k in range(5):  # back, less confident than the passer-by
+        _, followed = observe(
+            tracker, [target, other], 4.0 + k / 10, {"target": 0.5, "other": 0.99}
+        )
+        assert followed == "target"
+
+
+def test_kalman_forgets_the_target_after_a_long_loss():
+    """After forget_target_s without the target, the first-pick rule (highest score) applies."""
+    tracker = KalmanTracker(max_coast_s=1.0, forget_target_s=3.0)
+    target, other = still_people()
+    for k in range(10):
+        observe(tracker, [target], k / 10)
+    followed = [observe(tracker, [other], 1.0 + k / 10)[1] for k in range(40)]
+    assert followed[0] is None and followed[-1] == "other"
