@@ -195,8 +195,8 @@ class KalmanTracker:
         min_hits: detections a new track needs before its misses are tolerated.
         recent_s: tracks seen within this time are matched first (their prediction is sharper
             than a coasting track's, so a coasting track cannot steal their detection).
-        reid_distance: how far (in box heights, centre to centre) from its predicted box a
-            detection may be re-identified as the coasting target by appearance alone.
+        reid_distance: how far (in box heights, centre to centre) from its predicted or last
+            seen box a detection may be re-identified as the coasting target by appearance.
         reid_size_ratio: the re-identified box's height may differ from the track's by at most
             this factor.
         forget_target_s: after this long without the target, its remembered appearance is
