@@ -81,11 +81,12 @@ class Pipeline:
         features = None
         if self.tracker.needs_appearance:
             features = [appearance_histogram(bgr, d.box_xyxy) for d in detections]
-        tracking = self.tracker.update(detections, t, features)
+        image_wh = (bgr.shape[1], bgr.shape[0])
+        tracking = self.tracker.update(detections, t, features, image_wh)
         return FrameResult(
             detections,
             tracking,
-            (bgr.shape[1], bgr.shape[0]),
+            image_wh,
             time.perf_counter() - start,
         )
 

@@ -1,8 +1,9 @@
 """Identification of the followed object across frames: the paper's method and a stronger one.
 
-Both trackers are pure: ``update(detections, t, features)`` takes one frame's detections (source
-px), its time ``t`` in seconds (the frame stamp) and optional appearance descriptors (one per
-detection, see :mod:`appearance`), and returns a :class:`TrackingResult`: a track id per
+Both trackers are pure: ``update(detections, t, features, image_wh)`` takes one frame's
+detections (source px), its time ``t`` in seconds (the frame stamp), optional appearance
+descriptors (one per detection, see :mod:`appearance`) and the frame's (width, height) in px, and
+returns a :class:`TrackingResult`: a track id per
 detection (same order) and the followed target's id.
 
 - :class:`PaperTracker`, the DroneWrapper paper's method with the seed code's bugs fixed: a FIFO
@@ -18,7 +19,9 @@ detection (same order) and the followed target's id.
   pitches, climbs or turns) a person standing still jumps in the image beyond the motion gate,
   so a coasting target track may take an unoccluded detection of the same appearance within a
   loose spatial gate; and once the target's track is gone, the new target is the person who
-  looks like it (never simply the most confident detection, which may be a passer-by).
+  looks like it (never simply the most confident detection, which may be a passer-by). The first
+  target is the person the drone looks at (score x box height x closeness to the image centre
+  line), not merely the most confident.
 """
 
 from __future__ import annotations
@@ -67,6 +70,7 @@ class Tracker(Protocol):
         detections: Sequence[Detection],
         t: float,
         features: Sequence[np.ndarray | None] | None = None,
+        image_wh: tuple[int, int] | None = None,
     ) -> TrackingResult: ...
 
     def reset(self) -> None: ...
@@ -85,7 +89,7 @@ class NoTracker:
     needs_appearance = False
     target_label = "target"
 
-    def update(self, detections, t, features=None) -> TrackingResult:
+    def update(self, detections, t, features=None, image_wh=None) -> TrackingResult:
         if not detections:
             return TrackingResult(())
         ids = (self.target_label,) + ("",) * (len(detections) - 1)
@@ -131,7 +135,7 @@ class PaperTracker:
         xs, ys = zip(*self.fifo, strict=True)
         return (float(np.mean(xs)), float(np.mean(ys)))
 
-    def update(self, detections, t, features=None) -> TrackingResult:
+    def update(self, detections, t, features=None, image_wh=None) -> TrackingResult:
         if self.fifo and t - self._last_seen > self.lost_after_s:
             self.reset()
         chosen: int | None = None
@@ -152,6 +156,21 @@ class PaperTracker:
         self._last_seen = t
         ids[chosen] = self._target_id
         return TrackingResult(tuple(ids), self._target_id, chosen)
+
+
+def prominence(det: Detection, image_wh: tuple[int, int] | None = None) -> float:
+    """How strongly a detection asks to be followed first: the person the drone looks at.
+
+    Score x box height (px: nearer people are taller) x closeness of the box centre to the
+    image's vertical centre line (1 there, falling linearly to 0.05 at the side edges; 1 when
+    the image size is not known).
+    """
+    x1, top, x2, bottom = det.box_xyxy
+    centrality = 1.0
+    if image_wh is not None and image_wh[0] > 0:
+        half = image_wh[0] / 2
+        centrality = max(0.05, 1.0 - abs((x1 + x2) / 2 - half) / half)
+    return float(det.score) * max(0.0, bottom - top) * centrality
 
 
 def _cxcywh(det: Detection) -> np.ndarray:
@@ -272,7 +291,7 @@ class KalmanTracker:
             if k != j
         )
 
-    def update(self, detections, t, features=None) -> TrackingResult:
+    def update(self, detections, t, features=None, image_wh=None) -> TrackingResult:
         dets = list(detections)
         if features is not None and len(features) != len(dets):
             raise ValueError("features must have one entry per detection")
@@ -319,7 +338,7 @@ class KalmanTracker:
             if (t - tr.last_seen <= self.max_coast_s)
             and (tr.hits >= self.min_hits or tr.last_seen == t)
         ]
-        return self._select_target(dets, ids, features, t)
+        return self._select_target(dets, ids, features, t, image_wh)
 
     def _reidentify_target(self, unmatched: set[int], dets, boxes, features, t) -> int | None:
         """Give the coasting target track the unoccluded detection that looks most like it.
@@ -374,11 +393,11 @@ class KalmanTracker:
                 track.appearance = mixed / max(float(mixed.sum()), 1e-12)
 
     def _select_target(
-        self, dets: Sequence[Detection], ids: list[str], features, t: float
+        self, dets: Sequence[Detection], ids: list[str], features, t: float, image_wh
     ) -> TrackingResult:
         alive = {tr.track_id for tr in self.tracks}
         if self.target_id not in alive:
-            self.target_id = self._pick_target(dets, ids, features, t)
+            self.target_id = self._pick_target(dets, ids, features, t, image_wh)
         index = ids.index(self.target_id) if self.target_id in ids else None
         if index is not None:
             track = next(tr for tr in self.tracks if tr.track_id == self.target_id)
@@ -388,12 +407,16 @@ class KalmanTracker:
         visible = self.target_id if index is not None else ""
         return TrackingResult(tuple(ids), visible, index)
 
-    def _pick_target(self, dets: Sequence[Detection], ids: list[str], features, t: float) -> str:
+    def _pick_target(
+        self, dets: Sequence[Detection], ids: list[str], features, t: float, image_wh
+    ) -> str:
         """A new target's track id ("" = none this frame).
 
         While the lost target's appearance is remembered (seen within ``forget_target_s``), only
         an unoccluded detection within the appearance gate of it may become the target, the most
-        alike first. Otherwise (the first pick, no appearance, or forgotten): the most confident.
+        alike first. Otherwise (the first pick, no appearance, or forgotten): the most prominent
+        person (:func:`prominence`: the one the drone looks at), so a person far behind, or
+        passing at the side, cannot win on a slightly higher confidence.
         """
         if not dets:
             return ""
@@ -409,7 +432,7 @@ class KalmanTracker:
                     best, best_distance = ids[j], distance
             return best
         self._target_appearance = None
-        return ids[max(range(len(dets)), key=lambda i: float(dets[i].score))]
+        return ids[max(range(len(dets)), key=lambda i: prominence(dets[i], image_wh))]
 
 
 def make_tracker(name: str, **options) -> Tracker:

@@ -333,3 +333,16 @@ def test_kalman_forgets_the_target_after_a_long_loss():
         observe(tracker, [target], k / 10)
     followed = [observe(tracker, [other], 1.0 + k / 10)[1] for k in range(40)]
     assert followed[0] is None and followed[-1] == "other"
+
+
+def test_kalman_first_pick_is_the_person_the_drone_looks_at():
+    """A person far behind (half the height) or passing near the side edge (nearer, taller)
+    scoring a little higher is not picked first; the paper's method keeps its pick by confidence."""
+    centre = det_at(320, 240, score=0.80, h=160)
+    far_behind = det_at(420, 200, score=0.86, w=30, h=80)
+    side = det_at(600, 240, score=0.86, w=80, h=200)
+    image_wh = (640, 480)
+    assert KalmanTracker().update([far_behind, centre], 0.0, None, image_wh).target_index == 1
+    assert KalmanTracker().update([side, centre], 0.0, None, image_wh).target_index == 1
+    assert KalmanTracker().update([side, centre], 0.0).target_index == 0  # size unknown: taller
+    assert PaperTracker().update([far_behind, centre], 0.0).target_index == 0
