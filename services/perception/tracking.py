@@ -349,28 +349,43 @@ class KalmanTracker:
         taken; its motion filter restarts from that box (the jump was the camera's, not the
         person's velocity). Returns the detection's index, or None.
         """
-        track = next((tr for tr in self.tracks if tr.track_id == self.target_id), None)
+        track = self._track(self.target_id)
         if track is None or track.last_seen == t or track.appearance is None or features is None:
             return None
         height = track.last_box[3]
         centres = np.array([track.kf.box_cxcywh[:2], track.last_box[:2]])
-        best, best_distance = None, self.appearance_gate
-        for j in sorted(unmatched):
-            feature = features[j]
-            if feature is None or dets[j].class_id != track.class_id or self._occluded(j, dets):
-                continue
+
+        def near_and_alike_in_size(j: int) -> bool:
             size_ratio = max(boxes[j][3], 1.0) / max(height, 1.0)
-            if not 1 / self.reid_size_ratio <= size_ratio <= self.reid_size_ratio:
-                continue
-            offsets = np.linalg.norm(centres - boxes[j][:2], axis=1)
-            if offsets.min() > self.reid_distance * height:
-                continue
-            distance = bhattacharyya(track.appearance, feature)
-            if distance <= best_distance:
-                best, best_distance = j, distance
+            offset = np.linalg.norm(centres - boxes[j][:2], axis=1).min()
+            return (
+                dets[j].class_id == track.class_id
+                and 1 / self.reid_size_ratio <= size_ratio <= self.reid_size_ratio
+                and offset <= self.reid_distance * height
+            )
+
+        candidates = [j for j in sorted(unmatched) if near_and_alike_in_size(j)]
+        best = self._most_alike(track.appearance, candidates, dets, features)
         if best is not None:
             track.kf = BoxKalmanFilter(boxes[best], t)
             self._apply(track, best, dets, boxes, features, t, measured=False)
+        return best
+
+    def _track(self, track_id: str) -> Track | None:
+        return next((tr for tr in self.tracks if tr.track_id == track_id), None)
+
+    def _most_alike(self, appearance: np.ndarray, candidates, dets, features) -> int | None:
+        """Index of the unoccluded candidate detection nearest ``appearance`` (Bhattacharyya)
+        within the appearance gate, or None."""
+        if features is None:
+            return None
+        best, best_distance = None, self.appearance_gate
+        for j in candidates:
+            if features[j] is None or self._occluded(j, dets):
+                continue
+            distance = bhattacharyya(appearance, features[j])
+            if distance <= best_distance:
+                best, best_distance = j, distance
         return best
 
     def _apply(
@@ -400,8 +415,8 @@ class KalmanTracker:
             self.target_id = self._pick_target(dets, ids, features, t, image_wh)
         index = ids.index(self.target_id) if self.target_id in ids else None
         if index is not None:
-            track = next(tr for tr in self.tracks if tr.track_id == self.target_id)
-            if track.appearance is not None:
+            track = self._track(self.target_id)
+            if track is not None and track.appearance is not None:
                 self._target_appearance = track.appearance.copy()
             self._target_seen = t
         visible = self.target_id if index is not None else ""
@@ -422,15 +437,8 @@ class KalmanTracker:
             return ""
         memory = self._target_appearance
         if memory is not None and t - self._target_seen <= self.forget_target_s:
-            best, best_distance = "", self.appearance_gate
-            for j in range(len(dets)):
-                feature = features[j] if features is not None else None
-                if feature is None or self._occluded(j, dets):
-                    continue
-                distance = bhattacharyya(memory, feature)
-                if distance <= best_distance:
-                    best, best_distance = ids[j], distance
-            return best
+            best = self._most_alike(memory, range(len(dets)), dets, features)
+            return ids[best] if best is not None else ""
         self._target_appearance = None
         return ids[max(range(len(dets)), key=lambda i: prominence(dets[i], image_wh))]
 
