@@ -44,8 +44,12 @@ from dronewrapper_compose.graph import (
 _PR_SET_PDEATHSIG = 1
 
 
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
-    """Ask Linux to send SIGTERM to the child if the launcher dies, so nothing is orphaned."""
+def die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    """Ask Linux to send SIGTERM to the child if its parent dies, so nothing is orphaned.
+
+    For ``subprocess.Popen(preexec_fn=...)``, called from the thread that lives as long as the
+    children (Linux signals them when the forking *thread* ends).
+    """
     with contextlib.suppress(OSError):
         ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
@@ -103,7 +107,7 @@ class _Child:
             env={**os.environ, "PYTHONUNBUFFERED": "1", **env},
             cwd=REPO,
             start_new_session=True,  # the launcher, not the terminal, decides the stop order
-            preexec_fn=_die_with_parent,
+            preexec_fn=die_with_parent,
         )
         prefix = f"{spec.name:>{width}} | "
         self._reader = threading.Thread(

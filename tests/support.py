@@ -16,6 +16,7 @@ from typing import TypeVar
 
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper_compose.launcher import die_with_parent
 
 T = TypeVar("T")
 
@@ -88,6 +89,7 @@ class Process:
             stderr=subprocess.STDOUT,
             env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
             cwd=REPO,
+            preexec_fn=die_with_parent,  # a killed test run leaves no sim or bridge behind
         )
 
     def output(self) -> str:

@@ -1,7 +1,8 @@
 """A minimal service built on the common entry point, for launcher and runtime tests.
 
 It publishes a ControllerStatus at 20 Hz, serves ARMING (refusing disarm), and can be told to
-die, to never become ready, or to ignore SIGINT.
+die, to never become ready, to ignore SIGINT, or to take a while to stop (like a controller
+landing on exit).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ class ToyConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     die_after_s: float = 0.0
     exit_code: int = 3
     ignore_sigint: bool = False
+    stop_delay_s: float = 0.0
 
 
 def run(node: Node, config: ToyConfig) -> int:
@@ -45,6 +47,9 @@ def run(node: Node, config: ToyConfig) -> int:
         if config.die_after_s and time.monotonic() - started > config.die_after_s:
             node.log.error("toy dying on purpose")
             return config.exit_code
+    if config.stop_delay_s:
+        node.log.info("toy stopping slowly")
+        time.sleep(config.stop_delay_s)
     node.log.info("toy stopped")
     return 0
 

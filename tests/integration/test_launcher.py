@@ -38,6 +38,37 @@ def test_ctrl_c_stops_every_process(spawn):
     assert proc.output().count("toy stopped") == 2
 
 
+def children_of(pid: int) -> list[int]:
+    """Live (not zombie) processes whose parent is ``pid``."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            found.append(int(stat.parent.name))
+    return found
+
+
+def alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_a_killed_launcher_leaves_no_process_behind(spawn):
+    """SIGKILL gives the launcher no chance to stop its graph: Linux signals the children."""
+    proc = spawn(up(TOYS), "up")
+    wait_for(lambda: "all processes ready" in proc.output(), 60, what="graph ready")
+    children = children_of(proc.proc.pid)
+    assert len(children) == 2, children
+    proc.proc.kill()
+    proc.proc.wait(10)
+    wait_for(lambda: not any(alive(pid) for pid in children), 30, what="children gone")
+
+
 def test_a_process_dying_fails_the_graph(spawn):
     proc = spawn(up(TOYS, "--var", "die_after=1"), "up")
     assert proc.proc.wait(60) == 1, proc.output()

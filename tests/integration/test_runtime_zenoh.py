@@ -113,3 +113,14 @@ def test_namespaces_keep_drones_apart(router, spawn):
         )
         other.wait(20)
         assert got == []
+
+
+def test_a_second_sigint_exits_at_once(router, spawn):
+    """The first Ctrl-C stops cleanly (here slowly); a second one exits now, with 128 + 2."""
+    toy = spawn(toy_argv(router, "--set", "stop_delay_s=60"), "toy")
+    wait_for(lambda: "toy up" in toy.output(), 30, what="toy up")
+    toy.proc.send_signal(signal.SIGINT)
+    wait_for(lambda: "toy stopping slowly" in toy.output(), 10, what="the slow stop")
+    toy.proc.send_signal(signal.SIGINT)
+    assert toy.proc.wait(20) == 130, toy.output()
+    assert "second SIGINT: exiting now" in toy.output()

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import signal
 import threading
 import time
@@ -134,6 +135,7 @@ class Node:
         self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
         self._closed = False
         self._old_handlers: dict[int, Any] = {}
+        self._parent_pid = os.getppid()
         if handle_signals and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
                 self._old_handlers[sig] = signal.signal(sig, self._on_signal)
@@ -157,11 +159,25 @@ class Node:
         self.stop_event.set()
 
     def _on_signal(self, signum: int, _frame: object) -> None:
-        if self.stop_event.is_set():
-            self.log.warning("second %s: exiting now", signal.Signals(signum).name)
-            raise SystemExit(128 + signum)
-        self.log.info("%s received, stopping", signal.Signals(signum).name)
-        self.stop_event.set()
+        """First SIGINT/SIGTERM: stop cleanly. A second one: exit at once (code 128 + signum).
+
+        Except when this process was orphaned: a parent-death signal (``prctl``
+        PR_SET_PDEATHSIG, which the launcher sets) is repeated once for every thread of the
+        dying parent, so repeats then are not a person insisting, and the clean stop (say, a
+        controller landing on exit) goes on. "At once" is ``os._exit``: raising SystemExit in
+        the middle of closing Zenoh can leave its callback threads parked and the interpreter
+        waiting for them forever.
+        """
+        name = signal.Signals(signum).name
+        if not self.stop_event.is_set():
+            self.log.info("%s received, stopping", name)
+            self.stop_event.set()
+        elif os.getppid() != self._parent_pid:
+            self.log.debug("%s repeated after the parent died; still stopping", name)
+        else:
+            self.log.warning("second %s: exiting now", name)
+            logging.shutdown()
+            os._exit(128 + signum)
 
     def sleep(self, seconds: float) -> bool:
         """Sleep unless stopped; False if a stop was requested."""
