@@ -219,7 +219,7 @@ class KalmanTracker:
         reid_size_ratio: the re-identified box's height may differ from the track's by at most
             this factor.
         forget_target_s: after this long without the target, its remembered appearance is
-            dropped and the next target is picked by score again (the first pick).
+            dropped and the next target is picked as the first one was (:func:`prominence`).
     """
 
     needs_appearance = True
@@ -417,7 +417,7 @@ class KalmanTracker:
         if index is not None:
             track = self._track(self.target_id)
             if track is not None and track.appearance is not None:
-                self._target_appearance = track.appearance.copy()
+                self._target_appearance = track.appearance  # replaced on update, never mutated
             self._target_seen = t
         visible = self.target_id if index is not None else ""
         return TrackingResult(tuple(ids), visible, index)
