@@ -34,7 +34,7 @@ from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 
 REPO = Path(__file__).resolve().parents[1]
-ASSETS = REPO.parent / "shared" / "assets"
+ASSETS = REPO / "assets"
 
 CASES = [
     # name, graph, scenario, detector

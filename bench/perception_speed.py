@@ -34,7 +34,7 @@ import numpy as np
 from bench.common import RESULTS, percentiles, print_table, write_results
 
 REPO = Path(__file__).resolve().parents[1]
-ASSETS = REPO.parent / "shared" / "assets"
+ASSETS = REPO / "assets"
 YOLOX_NANO = ASSETS / "models" / "yolox_nano.onnx"
 VTEST = ASSETS / "images" / "vtest_f0550.png"
 

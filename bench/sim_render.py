@@ -29,7 +29,7 @@ from dronewrapper_sim.world.scenario import load_scenario
 from dronewrapper_sim.world.world import World
 
 REPO = Path(__file__).resolve().parents[1]
-SPRITES = REPO.parent / "shared" / "assets" / "sprites"
+SPRITES = REPO / "assets" / "sprites"
 RATE_HZ = 30.0
 
 

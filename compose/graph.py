@@ -80,8 +80,8 @@ class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
 
 
 def assets_dir() -> Path:
-    """The shared assets folder: ``$DRONEWRAPPER_ASSETS``, else ``REPO/../shared/assets``."""
-    return Path(os.environ.get("DRONEWRAPPER_ASSETS", REPO.parent / "shared" / "assets"))
+    """The assets folder: ``$DRONEWRAPPER_ASSETS``, else the repository's own ``assets/``."""
+    return Path(os.environ.get("DRONEWRAPPER_ASSETS", REPO / "assets"))
 
 
 def substitute(text: str, values: Mapping[str, str], where: str) -> str:

@@ -21,7 +21,7 @@ from dronewrapper_compose.launcher import die_with_parent
 T = TypeVar("T")
 
 REPO = Path(__file__).resolve().parents[1]
-ASSETS = Path(os.environ.get("DRONEWRAPPER_ASSETS", REPO.parent / "shared" / "assets"))
+ASSETS = REPO / "assets"
 YOLOX_NANO = ASSETS / "models" / "yolox_nano.onnx"
 SPRITES = ASSETS / "sprites"
 

@@ -11,6 +11,16 @@ OFFICIAL_YOLOX_NANO_URL = (
 OFFICIAL_YOLOX_NANO_SHA256 = "c789161ed43c8269fcd4e67c67eeeb4e80c622da2eb296a20bc6007bd18a0b7d"
 """sha256 of the official release file as recorded by several public projects (3,659,407 B)."""
 
+BUNDLED_YOLOX_NANO_SHA256 = "3bb7c7746256eca568b2d3f4f934c486f6345bc24154a85bc2bb3f3bbabcf1b1"
+"""sha256 of ``assets/models/yolox_nano.onnx``, the export this repository ships (3,659,315 B)."""
+
+KNOWN_MODELS: dict[str, frozenset[str]] = {
+    "yolox_nano.onnx": frozenset({BUNDLED_YOLOX_NANO_SHA256, OFFICIAL_YOLOX_NANO_SHA256}),
+}
+"""File name -> the sha256 digests a file of that name may have. A file named like a known model
+is verified even when the config gives no checksum: a truncated download or a stray Git LFS
+pointer fails at start with its digest, instead of as an opaque ONNX Runtime error."""
+
 
 class ModelFileError(ValueError):
     """A model file is missing, unreadable or does not match its checksum."""
@@ -47,5 +57,14 @@ def check_model_file(path: str | Path | None, checksum: str = "", *, what: str =
         if actual.lower() != checksum.strip().lower():
             raise ModelFileError(
                 f"{what} file {file} has sha256 {actual}, but the config expects {checksum}"
+            )
+    elif file.name in KNOWN_MODELS:
+        actual = sha256_of(file)
+        if actual not in KNOWN_MODELS[file.name]:
+            expected = " or ".join(sorted(KNOWN_MODELS[file.name]))
+            raise ModelFileError(
+                f"{what} file {file} has sha256 {actual}, but a {file.name} should have {expected}:"
+                " the file is damaged or not the model it is named after (a Git LFS pointer or an"
+                " interrupted download?); set checksum to accept another export deliberately"
             )
     return file
