@@ -9,7 +9,7 @@
     sleep(5)
     drone.land()                        # returns on the ground
 
-Frames and units (DESIGN.md): local ENU fixed at the take-off point (x east, y north, z up, m);
+Frames and units (docs/design.md): local ENU fixed at the take-off point (x east, y north, z up, m);
 body FLU (forward, left, up, m/s); angles in radians, yaw counter-clockwise positive.
 
 Getters read the newest message already received (no network round trip) and raise

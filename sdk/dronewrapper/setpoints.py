@@ -1,6 +1,6 @@
 """Setpoint building: the paper's three controls as PositionTarget messages (pure functions).
 
-Exactly DESIGN.md's table ("PositionTarget semantics"):
+Exactly docs/design.md's table ("PositionTarget semantics"):
 
 =================  =========  =======================  =========================================
 SDK call           type_mask  coordinate_frame         fields used
