@@ -2,14 +2,15 @@
 
     dronewrapper router [--listen ENDPOINT]          a Zenoh router (default tcp/127.0.0.1:7447)
     dronewrapper echo KEYEXPR [--count N]            print decoded messages
-    dronewrapper alive [--connect ENDPOINT]          list running processes, by namespace
+    dronewrapper alive [--connect ENDPOINT]          drones and processes online, with health
+    dronewrapper doctor [--connect ENDPOINT]         diagnose a setup and say what to fix
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
     dronewrapper --version                           the installed version
 
 ``up``, ``sim`` and ``detect`` come with the on-board stack (``make setup``); the SDK alone
-(``pip install ./sdk``) has ``router``, ``echo`` and ``alive``.
+(``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``.
 """
 
 from __future__ import annotations
@@ -122,9 +123,16 @@ def _stdout_writable() -> bool:
 
 
 def _alive(argv: Sequence[str]) -> int:
+    from dronewrapper.discovery import services_by_namespace
+    from dronewrapper.doctor import describe_drone, listen, topic_families
     from dronewrapper.runtime.node import open_session
 
-    parser = argparse.ArgumentParser(prog="dronewrapper alive", description="running processes")
+    parser = argparse.ArgumentParser(
+        prog="dronewrapper alive", description="drones and processes online, with health"
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=1.5, metavar="S", help="seconds to hear states (1.5)"
+    )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
     try:
@@ -134,11 +142,44 @@ def _alive(argv: Sequence[str]) -> int:
         return 1
     try:
         keys = sorted(str(r.ok.key_expr) for r in session.liveliness().get("*/alive/*") if r.ok)
+        heard = listen(session, topic_families(images=False), args.seconds) if keys else None
     finally:
         session.close()
-    for key in keys:
-        print(key)
+    for ns, processes in services_by_namespace(set(keys)).items():
+        verdict, sentence = describe_drone(ns, processes, heard.latest if heard else {})
+        print(f"{'' if verdict == 'ok' else verdict.upper() + ' '}{sentence}")
+        for name in processes:
+            print(f"  {ns}/alive/{name}")
+    if not keys:
+        print("nothing alive on this router", file=sys.stderr)
     return 0
+
+
+def _doctor(argv: Sequence[str]) -> int:
+    from dronewrapper.doctor import run_doctor
+
+    parser = argparse.ArgumentParser(
+        prog="dronewrapper doctor", description="diagnose a setup and say what to fix"
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=3.0, metavar="S", help="seconds to listen (3)"
+    )
+    parser.add_argument("--images", action="store_true", help="also measure camera streams")
+    parser.add_argument("--no-bandwidth", action="store_true", help="skip the bandwidth probe")
+    add_zenoh_args(parser, default_mode="client")
+    args = parser.parse_args(argv)
+    labels = {"ok": "ok  ", "warn": "warn", "fail": "FAIL"}
+
+    def report(verdict: str, text: str) -> None:
+        print(f"{labels[verdict]} {text}", flush=True)
+
+    return run_doctor(
+        options_from_args(args),
+        report,
+        listen_s=args.seconds,
+        images=args.images,
+        bandwidth=not args.no_bandwidth,
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -151,7 +192,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"dronewrapper {_version()}")
         return 0
     command, rest = argv[0], argv[1:]
-    local = {"router": _router, "echo": _echo, "alive": _alive}
+    local = {"router": _router, "echo": _echo, "alive": _alive, "doctor": _doctor}
     if command in local:
         return local[command](rest)
     if command in _STACK_COMMANDS:
