@@ -26,6 +26,23 @@ def default_connect() -> str:
     return first or DEFAULT_ROUTER
 
 
+_LOCAL_HOSTS = ("127.", "localhost", "[::1]", "::1")
+
+
+def is_local_endpoint(endpoint: str) -> bool:
+    """True if a Zenoh endpoint (``tcp/127.0.0.1:7447``, ``unixsock-stream/...``) stays on
+    this machine (pure).
+
+    >>> is_local_endpoint("tcp/127.0.0.1:7447"), is_local_endpoint("tls/192.168.1.50:7447")
+    (True, False)
+    """
+    protocol, _, address = endpoint.partition("/")
+    if protocol.startswith("unixsock") or protocol == "unixpipe":
+        return True
+    host = address.split("#", 1)[0].rsplit(":", 1)[0]
+    return host.startswith(_LOCAL_HOSTS)
+
+
 def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:
     """The concrete liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
     keys = set()

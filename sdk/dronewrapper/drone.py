@@ -41,6 +41,7 @@ from dronewrapper.discovery import (
     alive_services,
     connection_problem,
     default_connect,
+    is_local_endpoint,
     open_client,
 )
 from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
@@ -65,6 +66,7 @@ from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
+from dronewrapper.runtime.qos import qos_for
 from dronewrapper.streamer import SetpointStreamer
 
 T = TypeVar("T")
@@ -127,9 +129,13 @@ class DroneWrapper:
         mode: Zenoh session mode (``client``: everything through the router; ``peer``).
         session: an open ``zenoh.Session`` to reuse (a service embedding the SDK); it is not
             closed by :meth:`close`. ``connect`` and ``mode`` are then ignored.
-        cameras: the cameras to receive (``frontal``, ``ventral``); ``()`` receives none.
-        compressed_images: receive JPEG images (``.../image_raw/compressed``, for Wi-Fi links;
-            needs OpenCV to decode) instead of raw ones.
+        cameras: the cameras to receive from the start (``frontal``, ``ventral``); ``()``
+            receives none; None (default) subscribes to a camera the first time it is read, so
+            frames cross the network only for a program that uses them.
+        compressed_images: receive JPEG images (``.../image_raw/compressed``; needs OpenCV:
+            ``pip install 'dronewrapper[images]'``) instead of raw ones. None (default): JPEG
+            when the router is on another machine (raw 640x480 frames need ~220 Mbit/s per
+            camera), raw on this one; without OpenCV it falls back to raw with a warning.
         land_on_exit: when used as a context manager, land on exit if flying (also after an
             exception); without it, exiting only stops commanding (the bridge hovers).
         setpoint_rate_hz: rate of the setpoint stream (>= 20 Hz).
@@ -152,8 +158,8 @@ class DroneWrapper:
         *,
         mode: str = "client",
         session: zenoh.Session | None = None,
-        cameras: Sequence[str] = ("frontal", "ventral"),
-        compressed_images: bool = False,
+        cameras: Sequence[str] | None = None,
+        compressed_images: bool | None = None,
         land_on_exit: bool = False,
         setpoint_rate_hz: float = 30.0,
         command_timeout: float | None = None,
@@ -161,10 +167,19 @@ class DroneWrapper:
         wait: bool = True,
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
-        if compressed_images and cameras:
+        self.connect = connect or default_connect()
+        if compressed_images is None:
+            remote = session is None and not is_local_endpoint(self.connect)
+            compressed_images = remote and images.has_jpeg_decoder()
+            if remote and not compressed_images:
+                log.warning(
+                    "the router %s is on another machine but OpenCV is missing, so camera "
+                    "frames come raw (~220 Mbit/s each): pip install 'dronewrapper[images]'",
+                    self.connect,
+                )
+        elif compressed_images and cameras != ():
             images.jpeg_decoder()  # fail now, not at the first frame, if OpenCV is missing
         registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
-        self.connect = connect or default_connect()
         self.land_on_exit = land_on_exit
         self.compressed_images = compressed_images
         self.service_timeout = service_timeout
@@ -183,8 +198,7 @@ class DroneWrapper:
             self._setpoints = session.declare_publisher(
                 registry.SETPOINT_RAW_LOCAL.key(self.ns),
                 encoding=encoding_for(PositionTarget),
-                express=True,  # no batching: a setpoint leaves at once
-                priority=zenoh.Priority.INTERACTIVE_HIGH,
+                **qos_for(registry.SETPOINT_RAW_LOCAL),
             )
             self._streamer = SetpointStreamer(
                 self._publish_setpoint,
@@ -211,12 +225,23 @@ class DroneWrapper:
         self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
         """The autopilot's last 20 text messages (newest last)."""
         self._subscribe(registry.STATUSTEXT, self.status_texts.append)
-        image_topic = registry.IMAGE_COMPRESSED if self.compressed_images else registry.IMAGE_RAW
         self._images: dict[str, Latest[Any]] = {}
         self._decoded: dict[str, tuple[Any, np.ndarray]] = {}
-        for camera in cameras:
-            key_name = _camera_key_name(camera)
-            self._images[key_name] = self._latest(image_topic, camera=key_name)
+        self._lazy_cameras = cameras is None
+        self._images_declared = False
+        for camera in cameras or ():
+            self._camera_holder(camera)
+        self._images_declared = True
+
+    def _camera_holder(self, camera: str) -> Latest[Any] | None:
+        """The newest-frame holder of ``camera``, subscribing now if cameras are lazy; None if
+        the camera was not requested."""
+        key_name = _camera_key_name(camera)
+        holder = self._images.get(key_name)
+        if holder is None and (self._lazy_cameras or not self._images_declared):
+            topic = registry.IMAGE_COMPRESSED if self.compressed_images else registry.IMAGE_RAW
+            holder = self._images[key_name] = self._latest(topic, camera=key_name)
+        return holder
 
     def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> None:
         key = topic.key(self.ns, **parts)
@@ -448,7 +473,7 @@ class DroneWrapper:
                 requested in ``cameras=``).
         """
         key_name = _camera_key_name(camera)
-        holder = self._images.get(key_name)
+        holder = self._camera_holder(camera)
         if holder is None:
             raise NoData(
                 f"camera {camera!r} was not requested: DroneWrapper(cameras=[..., {camera!r}])"
@@ -540,8 +565,7 @@ class DroneWrapper:
         Raises:
             Timeout: no frame within ``timeout`` s (no camera publishing on the key).
         """
-        key_name = _camera_key_name(camera)
-        holder = self._images.get(key_name)
+        holder = self._camera_holder(camera)
         if holder is None:
             return self.get_image(camera)  # raises NoData naming the cameras= argument
         try:

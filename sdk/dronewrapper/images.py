@@ -62,6 +62,15 @@ def jpeg_decoder() -> Any:
     return cv2
 
 
+def has_jpeg_decoder() -> bool:
+    """True if OpenCV can be imported (JPEG frames can be decoded)."""
+    try:
+        jpeg_decoder()
+    except DroneError:
+        return False
+    return True
+
+
 def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
     """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` array (needs OpenCV).
 

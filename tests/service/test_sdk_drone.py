@@ -575,3 +575,22 @@ def test_arming_refused_in_offboard_without_a_stream_names_the_real_cause(drone,
     with pytest.raises(CommandRefused) as info:
         drone.arm()
     assert "setpoint" not in str(info.value)
+
+
+def test_cameras_are_subscribed_only_when_read(drone, bridge):
+    """A program that never reads a frame never pulls one across the network."""
+    publisher = bridge.pub_image._pub
+    time.sleep(0.5)
+    assert not publisher.matching_status.matching
+    assert not drone.compressed_images  # the router is on this machine: raw frames
+    with pytest.raises(NoData, match="no image received yet"):
+        drone.get_frontal_image()
+    wait_for(lambda: publisher.matching_status.matching, 10, what="a camera subscriber")
+
+
+def test_explicitly_refused_cameras_stay_refused(router, bridge):
+    with (
+        DroneWrapper("drone", router, timeout=10, mode="peer", cameras=()) as drone,
+        pytest.raises(NoData, match="was not requested"),
+    ):
+        drone.get_frontal_image()
