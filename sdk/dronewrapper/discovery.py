@@ -13,7 +13,11 @@ import zenoh
 from dronewrapper.errors import NotConnected
 from dronewrapper.msgs.registry import ALIVE, STATE
 from dronewrapper.runtime.node import open_session
-from dronewrapper.runtime.options import DEFAULT_ROUTER, ENV_PREFIX, ZenohOptions
+from dronewrapper.runtime.options import (
+    DEFAULT_ROUTER,
+    ENV_PREFIX,
+    ZenohOptions,
+)
 
 BRIDGE_PREFIX = "bridge"
 """A process whose name starts with this is a bridge to an aircraft (bridge_mavlink, bridge)."""
@@ -24,23 +28,6 @@ def default_connect() -> str:
     value = os.environ.get(f"{ENV_PREFIX}CONNECT", "")
     first = next((part.strip() for part in value.split(",") if part.strip()), "")
     return first or DEFAULT_ROUTER
-
-
-_LOCAL_HOSTS = ("127.", "localhost", "[::1]", "::1")
-
-
-def is_local_endpoint(endpoint: str) -> bool:
-    """True if a Zenoh endpoint (``tcp/127.0.0.1:7447``, ``unixsock-stream/...``) stays on
-    this machine (pure).
-
-    >>> is_local_endpoint("tcp/127.0.0.1:7447"), is_local_endpoint("tls/192.168.1.50:7447")
-    (True, False)
-    """
-    protocol, _, address = endpoint.partition("/")
-    if protocol.startswith("unixsock") or protocol == "unixpipe":
-        return True
-    host = address.split("#", 1)[0].rsplit(":", 1)[0]
-    return host.startswith(_LOCAL_HOSTS)
 
 
 def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:

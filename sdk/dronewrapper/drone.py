@@ -41,10 +41,10 @@ from dronewrapper.discovery import (
     alive_services,
     connection_problem,
     default_connect,
-    is_local_endpoint,
     open_client,
 )
 from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper.health import stale_after
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -66,6 +66,7 @@ from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
+from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.runtime.qos import qos_for
 from dronewrapper.streamer import SetpointStreamer
 
@@ -186,6 +187,8 @@ class DroneWrapper:
         self.decode_errors: collections.Counter[str] = collections.Counter()
         self._closed = False
         self._warned_grounded = False
+        self._stale_after: dict[str, float] = {}
+        self._stale_warned: set[str] = set()
         self._subscribers: list[Any] = []
         self._own_session = session is None
         deadline = time.monotonic() + timeout
@@ -269,6 +272,7 @@ class DroneWrapper:
     def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))
         self._subscribe(topic, holder.update, **parts)
+        self._stale_after[holder.name] = stale_after(topic.rate_hz)
         return holder
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
@@ -281,7 +285,44 @@ class DroneWrapper:
                 f"no {what} received yet on {latest.name}: is the bridge running and publishing? "
                 "(wait_for_connection() waits for it)"
             )
+        age, limit = latest.age(), self._stale_after.get(latest.name, float("inf"))
+        if age > limit and latest.name not in self._stale_warned:
+            self._stale_warned.add(latest.name)
+            log.warning(
+                "%s is %.1f s old (stale after %.1f s for its rate): the link or the bridge is "
+                "slow; check with `dronewrapper doctor`",
+                latest.name,
+                age,
+                limit,
+            )
+        elif age <= limit:
+            self._stale_warned.discard(latest.name)
         return value
+
+    def age(self, what: str) -> float:
+        """Seconds since the newest value of a getter's stream arrived (inf before the first).
+
+        ``what`` names a getter without ``get_``: ``position``, ``orientation``, ``velocity``,
+        ``velocity_local``, ``yaw_rate``, ``landed_state``, ``battery``, ``global_position``,
+        ``state``, ``frontal_image``, ``ventral_image``.
+        """
+        holders = {
+            "position": self._pose,
+            "orientation": self._pose,
+            "velocity": self._velocity_body,
+            "yaw_rate": self._velocity_body,
+            "velocity_local": self._velocity_local,
+            "landed_state": self._extended,
+            "battery": self._battery,
+            "global_position": self._global,
+            "state": self._state,
+        }
+        if what in ("frontal_image", "ventral_image"):
+            holder = self._camera_holder(what.removesuffix("_image"))
+            return holder.age() if holder is not None else float("inf")
+        if what not in holders:
+            raise InvalidArgument(f"age of {what!r}: use one of {', '.join(sorted(holders))}")
+        return holders[what].age()
 
     # ------------------------------------------------------------------ lifecycle
 

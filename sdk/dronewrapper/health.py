@@ -22,6 +22,12 @@ CLOCK_SKEW_WARN_S = 0.25
 """Stamps further than this from our clock point at unsynchronised clocks (or a slow link)."""
 
 
+def stale_after(rate_hz: float) -> float:
+    """Seconds after which a value of a stream with this nominal rate is stale: five missed
+    periods, but never less than half a second (0 Hz: event streams never go stale -> inf)."""
+    return max(0.5, 5.0 / rate_hz) if rate_hz > 0 else float("inf")
+
+
 @dataclass
 class StreamLog:
     """What arrived on one key while listening: arrival times, stamp skews, payload bytes."""

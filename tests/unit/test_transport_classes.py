@@ -3,8 +3,8 @@
 import pytest
 import zenoh
 
-from dronewrapper.discovery import is_local_endpoint
 from dronewrapper.msgs import registry
+from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
 
 
