@@ -2,8 +2,9 @@
 
 It behaves like a UVC camera behind OpenCV's V4L2 backend: the pixel format is chosen first,
 then the nearest size that format offers, then the nearest rate; ``get`` reads back what was
-granted; frames carry the driver timestamp (``CAP_PROP_POS_MSEC``, monotonic ms). ``busy``
-opens but gives no frames, as a device another program streams from.
+granted; ``read`` blocks for a frame period like a device, and frames carry a driver timestamp
+(``CAP_PROP_POS_MSEC``, monotonic ms) 50 ms before the read. ``busy`` opens but gives no frames,
+as a device another program streams from.
 """
 
 from __future__ import annotations
@@ -13,6 +14,9 @@ import time
 import numpy as np
 
 from dronewrapper_camera_victure import sources
+
+EXPOSURE_AGE_S = 0.05
+"""The driver timestamp of a frame is this much before its read (s)."""
 
 VICTURE_MODES = {
     "MJPG": [(640, 480, 30.0), (1280, 720, 30.0), (1920, 1080, 30.0)],
@@ -30,6 +34,8 @@ class FakeCapture:
         self.requested_width = 0
         self.sets: list[tuple[int, float]] = []
         self.reads = 0
+        self.read_walls: dict[int, float] = {}  # read number -> wall clock of that read
+        self._read_mono = 0.0
         self.released = False
 
     def isOpened(self) -> bool:
@@ -63,13 +69,16 @@ class FakeCapture:
             sources.CAP_PROP_FRAME_HEIGHT: float(self.height),
             sources.CAP_PROP_FPS: self.fps,
             sources.CAP_PROP_FOURCC: float(sources.fourcc_code(self.fmt)),
-            sources.CAP_PROP_POS_MSEC: time.monotonic() * 1000.0 - 5.0,  # exposed 5 ms ago
+            sources.CAP_PROP_POS_MSEC: (self._read_mono - EXPOSURE_AGE_S) * 1000.0,
         }.get(prop, 0.0)
 
     def read(self):
         self.reads += 1
         if self.busy or self.released:
             return False, None
+        time.sleep(1.0 / self.fps)
+        self.read_walls[self.reads] = time.time()
+        self._read_mono = time.monotonic()
         return True, np.full((self.height, self.width, 3), self.reads % 256, np.uint8)
 
     def release(self) -> None:

@@ -63,7 +63,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         status_period: how often the CameraStatus is published and counters logged (s).
     """
 
-    source: str = "0"
+    source: str | int = "0"  # an int from YAML (``source: 0``) is the device index
     kind: str = "auto"
     camera: str = "cam_frontal"
     width: int = 640
@@ -89,6 +89,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     status_period: float = 1.0
 
     def __post_init__(self) -> None:
+        self.source = str(self.source)
         if not self.source.strip():
             raise ValueError("source must not be empty")
         if self.kind not in ("auto", *SOURCE_KINDS):
