@@ -63,10 +63,10 @@ class PatternSource:
         return self.mode
 
     def read(self) -> Grab:
-        stamp = time.time()
-        frame = render_pattern(self.mode.width, self.mode.height, self._counter, stamp)
+        """The next pattern frame, stamped when it is complete (its capture time)."""
+        frame = render_pattern(self.mode.width, self.mode.height, self._counter, time.time())
         self._counter += 1
-        return Grab(frame, stamp)
+        return Grab(frame, time.time())
 
     def rewind(self) -> None:
         pass

@@ -231,3 +231,33 @@ def test_a_missing_device_exits_2_naming_it(router, spawn):
     proc.proc.wait(30)
     assert proc.proc.returncode == 2
     assert "no camera device /dev/video7" in proc.output()
+
+
+def test_webcam_follow_color_graph_dry_run(spawn):
+    """The desk graph with the test pattern as the 'webcam': its red bar is followed, the
+    controller's commands show up in its status, and no aircraft is needed."""
+    from support import free_endpoint
+
+    endpoint = free_endpoint()
+    proc = spawn(
+        python_module(
+            "dronewrapper", "up", "compose/webcam_follow_color.yaml", "--router", endpoint,
+            "--var", "camera=pattern", "--var", "fps=15", "--var", "debug_image=false",
+        ),
+        "up",
+    )  # fmt: skip
+    node = client_node(endpoint, name="watcher")
+    try:
+        status = node.latest(registry.CONTROLLER_STATUS)
+
+        def tracking():
+            assert proc.alive(), proc.output()
+            s = status.value
+            return s is not None and s.state == "tracking" and s.target_visible and s.cmd_yaw_rate
+
+        wait_for(tracking, 45, what="the dry-run controller tracking the red bar")
+        assert status.value.mode == "follow_color" and status.value.source_stamp > 1e9
+    finally:
+        node.close()
+    assert proc.stop(30) == 0
+    assert "dry run" in proc.output()
