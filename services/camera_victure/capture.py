@@ -59,7 +59,10 @@ class PatternSource:
         self._counter = 0
 
     def open(self) -> Mode:
-        render_pattern(self.mode.width, self.mode.height, 0, 0.0)  # raises for a bad size
+        try:
+            render_pattern(self.mode.width, self.mode.height, 0, 0.0)
+        except ValueError as exc:
+            raise SourceError(str(exc)) from exc
         return self.mode
 
     def read(self) -> Grab:

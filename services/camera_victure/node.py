@@ -252,7 +252,7 @@ class CameraService:
 
 def run(node: Node, config: Config, factory: Factory = opencv_factory) -> int:
     """The camera service (see the module doc). Exit 0 on a stop or the end of a file played
-    once, 2 for a source or calibration that cannot be used."""
+    once, 2 for a source or calibration that cannot be used, 1 when reading failed unexpectedly."""
     try:
         service = CameraService(node, config, factory)
         service.start()
@@ -266,4 +266,5 @@ def run(node: Node, config: Config, factory: Factory = opencv_factory) -> int:
         return 2
     finally:
         service.close()
-    return 0
+    reader = service.reader
+    return 1 if reader is not None and reader.failure is not None else 0

@@ -137,6 +137,7 @@ class Reader(threading.Thread):
         self.slot = slot
         self.stop = stop
         self.stats = CaptureStats(state=STREAMING if opened else CONNECTING)
+        self.failure: Exception | None = None
         if opened:
             self.stats.mode = source.mode
         self._opened = opened
@@ -155,6 +156,9 @@ class Reader(threading.Thread):
                     continue
                 if not self._read_one():
                     break
+        except Exception as exc:  # a bug or an OpenCV error: the service exits 1, not silently
+            log.exception("camera reader failed")
+            self.failure = exc
         finally:
             self.source.release()
 

@@ -116,7 +116,7 @@ def test_pattern_counter_flip_rotate_and_status(router):
     )
     assert status.state == "streaming" and status.source == "pattern"
     assert (status.width, status.height) == (320, 240)
-    assert 15 < status.fps_measured < 45 or status.frames_published < 30
+    assert 0 < status.fps_measured < 45  # paced at 30 fps, never in bursts
     assert cam.result == [0]
 
 
@@ -185,6 +185,7 @@ def test_a_corrupt_file_is_survived(router, tmp_path):
             "is for 640x480 frames, the camera gives 320x240",
         ),
         (["source=pattern", "crop=[0,0,700,10]"], None, "crop [0, 0, 700, 10] does not fit"),
+        (["source=pattern", "width=40", "height=30"], None, "test pattern 40x30 too small"),
     ],
 )
 def test_start_up_errors_exit_2_naming_the_cause(router, caplog, overrides, factory, message):
@@ -234,3 +235,92 @@ def test_device_mode_granted_and_driver_stamps(router, monkeypatch):
     read_number = int(image_to_bgr(img)[0, 0, 0])  # the fake fills frame n with n % 256
     read_wall = cap.read_walls[read_number]
     assert img.header.stamp == pytest.approx(read_wall - EXPOSURE_AGE_S, abs=0.005)
+
+
+def test_a_slow_publisher_drops_stale_frames_instead_of_queueing(router, monkeypatch):
+    """Publishing made slower (60 ms a frame) than capture (60 fps): stale frames are dropped,
+    so every published frame is fresh, where a queue would age them by seconds."""
+    from dronewrapper_camera_victure import node as camera_node
+
+    real = camera_node.bgr_to_image
+
+    def slow(frame, header):
+        time.sleep(0.06)
+        return real(frame, header)
+
+    monkeypatch.setattr(camera_node, "bgr_to_image", slow)
+    latencies: list[float] = []
+    overrides = ["source=pattern", "fps=60", "width=320", "height=240"]
+    with Running(router, overrides) as cam:
+        cam.tester.subscribe(
+            registry.IMAGE_RAW,
+            lambda m: latencies.append(time.time() - m.header.stamp),
+            camera="cam_frontal",
+        )
+        status = cam.wait_status(
+            lambda s: s.frames_published >= 30 and s.frames_dropped >= 30, 30, "drops"
+        )
+    # a queue after 30 published frames would hold ~60 frames (1 s) by now and keep growing;
+    # the newest-frame slot keeps each one at most one publishing time (60 ms) plus the load
+    assert max(latencies[5:]) < 0.5, latencies
+    # every captured frame is published or counted as dropped, bar those captured during the
+    # frame being published (60 ms at 60 fps: about 4) when the status was made
+    in_flight = status.frames_captured - status.frames_published - status.frames_dropped
+    assert 0 <= in_flight <= 10
+
+
+class VanishingCaptures:
+    """A fake V4L2 camera unplugged after ``frames`` reads of its first capture, until
+    ``present`` is set again (a new capture each time it is opened)."""
+
+    def __init__(self, frames: int) -> None:
+        self.frames = frames
+        self.present = True
+        self.captures: list[FakeCapture] = []
+
+    def factory(self, *args) -> FakeCapture:
+        cap = FakeCapture()
+        if self.captures:  # plugged in again: this one keeps working
+            self.captures.append(cap)
+            return cap
+        limit = self.frames
+        real_read = cap.read
+
+        def read():
+            if cap.reads >= limit:
+                self.present = False  # unplugged: this capture fails from now on
+                cap.reads += 1
+                return False, None
+            return real_read()
+
+        cap.read = read
+        self.captures.append(cap)
+        return cap
+
+    def check_present(self, path: str) -> None:
+        from dronewrapper_camera_victure.sources import SourceError
+
+        if not self.present:
+            raise SourceError(f"no camera device {path} (devices found: none)")
+
+
+def test_a_vanished_device_is_retried_with_backoff_and_reported(router, monkeypatch):
+    from dronewrapper_camera_victure import sources
+
+    device = VanishingCaptures(frames=20)
+    monkeypatch.setattr(sources, "check_device_present", device.check_present)
+    overrides = ["source=/dev/video0", "read_timeout=5", "max_read_failures=3",
+                 "retry_initial=0.1", "retry_max=0.4"]  # fmt: skip
+    with Running(router, overrides, device.factory) as cam:
+        status = cam.wait_status(
+            lambda s: s.state == "reconnecting" and s.open_failures >= 2, 20, "the loss reported"
+        )
+        assert "no camera device /dev/video0" in status.last_error
+        seen = len(cam.raw)
+        device.present = True  # plugged in again
+        status = cam.wait_status(
+            lambda s: s.reconnects >= 1 and s.state == "streaming", 20, "the reconnection"
+        )
+        wait_for(lambda: len(cam.raw) > seen + 5, 20, what="frames after the reconnection")
+    assert len(device.captures) >= 2 and device.captures[0].released
+    assert cam.result == [0]
