@@ -26,7 +26,7 @@ from pathlib import Path
 
 from bench.common import percentiles, print_table, write_results
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
-from dronewrapper.msgs import Header, registry
+from dronewrapper.msgs import registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_camera_victure.pattern import render_pattern
@@ -120,7 +120,6 @@ def main(argv: list[str] | None = None) -> int:
     try:
         for width, height in SIZES:
             frame = render_pattern(width, height, 1, time.time())
-            header = Header(stamp=time.time(), frame_id="cam_frontal")
             costs.append(
                 {
                     "size": f"{width}x{height}",
@@ -128,9 +127,11 @@ def main(argv: list[str] | None = None) -> int:
                         lambda w=width, h=height: render_pattern(w, h, 7, 0.0)
                     ),
                     "jpeg_encode_q80_ms": median_ms(
-                        lambda f=frame, hd=header: bgr_to_jpeg(f, hd, 80)
+                        lambda f=frame: bgr_to_jpeg(f, 1.0, "cam_frontal", 0, 80)
                     ),
-                    "raw_message_ms": median_ms(lambda f=frame, hd=header: bgr_to_image(f, hd)),
+                    "raw_message_ms": median_ms(
+                        lambda f=frame: bgr_to_image(f, 1.0, "cam_frontal")
+                    ),
                 }
             )
             for jpeg in (False, True):

@@ -77,10 +77,12 @@ def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
     return image
 
 
-def bgr_to_image(bgr: np.ndarray, header: Header) -> Image:
+def bgr_to_image(bgr: np.ndarray, stamp: float, frame_id: str, seq: int = 0) -> Image:
     """A ``bgr8`` Image of a (height, width, 3) ``uint8`` array (``step`` = width * 3).
 
-    ``data`` is a view of the array (no copy): publish the message before changing the array.
+    ``stamp`` is the capture time (epoch s), ``frame_id`` the camera name, ``seq`` the frame
+    number. ``data`` is a view of the array (no copy): publish the message before changing the
+    array.
 
     Raises:
         DroneError: the array is not (h, w, 3) uint8.
@@ -89,7 +91,7 @@ def bgr_to_image(bgr: np.ndarray, header: Header) -> Image:
         raise DroneError(f"expected a (h, w, 3) uint8 BGR array, got {bgr.shape} {bgr.dtype}")
     height, width = bgr.shape[:2]
     return Image(
-        header=header,
+        header=Header(stamp=stamp, frame_id=frame_id, seq=seq),
         height=height,
         width=width,
         encoding="bgr8",
@@ -98,8 +100,11 @@ def bgr_to_image(bgr: np.ndarray, header: Header) -> Image:
     )
 
 
-def bgr_to_jpeg(bgr: np.ndarray, header: Header, quality: int = 80) -> CompressedImage:
-    """A JPEG CompressedImage of a BGR array at ``quality`` 1..100 (needs OpenCV).
+def bgr_to_jpeg(
+    bgr: np.ndarray, stamp: float, frame_id: str, seq: int = 0, quality: int = 80
+) -> CompressedImage:
+    """A JPEG CompressedImage of a BGR array at ``quality`` 1..100 (needs OpenCV); the header
+    as :func:`bgr_to_image`'s.
 
     Raises:
         DroneError: OpenCV is not installed, or the encoder refused the array.
@@ -108,4 +113,5 @@ def bgr_to_jpeg(bgr: np.ndarray, header: Header, quality: int = 80) -> Compresse
     ok, buffer = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
     if not ok:
         raise DroneError(f"cannot JPEG-encode a {bgr.shape} {bgr.dtype} array")
+    header = Header(stamp=stamp, frame_id=frame_id, seq=seq)
     return CompressedImage(header=header, format="jpeg", data=buffer.tobytes())

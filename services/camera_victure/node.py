@@ -157,12 +157,13 @@ class CameraService:
     def publish(self, captured: Captured) -> None:
         """Transform and publish one frame (raw, JPEG, CameraInfo as configured/watched)."""
         frame = self.transform.apply(captured.frame)
-        header = Header(stamp=captured.stamp, frame_id=self.config.camera, seq=captured.number)
+        stamp, camera, seq = captured.stamp, self.config.camera, captured.number
         if self.raw is not None and self.raw.watched():
-            self.raw.put(bgr_to_image(frame, header))
+            self.raw.put(bgr_to_image(frame, stamp, camera, seq))
         if self.config.jpeg or self.jpeg.watched():
-            self.jpeg.put(bgr_to_jpeg(frame, header, self.config.jpeg_quality))
+            self.jpeg.put(bgr_to_jpeg(frame, stamp, camera, seq, self.config.jpeg_quality))
         if self.info is not None:
+            header = Header(stamp=stamp, frame_id=camera, seq=seq)
             self.info.put(self.camera_info(captured.frame, header))
         self.published += 1
         if self.published == 1:

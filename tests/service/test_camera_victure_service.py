@@ -244,9 +244,9 @@ def test_a_slow_publisher_drops_stale_frames_instead_of_queueing(router, monkeyp
 
     real = camera_node.bgr_to_image
 
-    def slow(frame, header):
+    def slow(*args):
         time.sleep(0.06)
-        return real(frame, header)
+        return real(*args)
 
     monkeypatch.setattr(camera_node, "bgr_to_image", slow)
     latencies: list[float] = []

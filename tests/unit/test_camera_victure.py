@@ -156,6 +156,24 @@ def test_to_bgr_converts_grey_and_bgra_and_refuses_the_rest():
     assert to_bgr(np.zeros((4, 5, 2), np.uint8)) is None
 
 
+def test_sdk_encode_helpers_round_trip():
+    """The SDK's publishing helpers the service uses: bgr8 Image and JPEG, through the codec."""
+    from dronewrapper.errors import DroneError
+    from dronewrapper.images import bgr_to_image, bgr_to_jpeg, compressed_to_bgr, image_to_bgr
+    from dronewrapper.msgs import CompressedImage, Image, codec
+
+    frame = render_pattern(320, 240, 77, 1.7e9)
+    msg = codec.decode(Image, codec.encode(bgr_to_image(frame, 1.7e9, "cam_ventral", 77)))
+    assert (msg.width, msg.height, msg.step, msg.encoding) == (320, 240, 960, "bgr8")
+    assert (msg.header.stamp, msg.header.frame_id, msg.header.seq) == (1.7e9, "cam_ventral", 77)
+    np.testing.assert_array_equal(image_to_bgr(msg), frame)
+    jpeg = codec.decode(CompressedImage, codec.encode(bgr_to_jpeg(frame, 2.0, "c", 3, 90)))
+    assert jpeg.format == "jpeg" and jpeg.header.seq == 3
+    assert read_counter(compressed_to_bgr(jpeg)) == 77
+    with pytest.raises(DroneError, match="uint8 BGR"):
+        bgr_to_image(np.zeros((4, 4), np.uint8), 0.0, "c")
+
+
 # ---- geometry ----
 
 TRANSFORMS = [
@@ -277,11 +295,13 @@ def test_missing_calibration_file_is_named(tmp_path):
         load_calibration(tmp_path / "nope.yaml")
 
 
-def test_the_shipped_calibration_loads():
+def test_the_shipped_config_and_calibration_load():
     from support import REPO
 
-    cal = load_calibration(REPO / "services/camera_victure/config/victure_640x480.yaml")
-    assert (cal.width, cal.height) == (640, 480)
+    config = load_config(Config, REPO / "services/camera_victure/config/victure.yaml", [])
+    assert (config.source_kind, config.rotate, config.pixel_format) == ("device", 180, "MJPG")
+    cal = load_calibration(REPO / config.calibration_file)
+    assert (cal.width, cal.height) == (config.width, config.height)
 
 
 # ---- pattern, slot, backoff ----
