@@ -34,13 +34,16 @@ from dronewrapper_camera_victure.calibration import (
 from dronewrapper_camera_victure.capture import Factory, make_source, opencv_factory
 from dronewrapper_camera_victure.config import Config
 from dronewrapper_camera_victure.reader import Captured, FrameSlot, Reader
-from dronewrapper_camera_victure.sources import SourceError, SourceUnavailable
+from dronewrapper_camera_victure.sources import SourceError
 from dronewrapper_camera_victure.transform import Transform
 
 log = logging.getLogger("camera_victure")
 
 WAIT_S = 0.2
 """Longest wait for a frame (s), so a stop request and the status period are seen promptly."""
+
+CLOSE_WAIT_S = 3.0
+"""Longest wait for the reading thread at exit (s)."""
 
 LOG_EVERY = 10
 """Counters are logged every this many status periods."""
@@ -93,37 +96,37 @@ class CameraService:
     def start(self) -> None:
         """Open the source and start reading.
 
+        A stream is opened by the reader (opening may block up to ``open_timeout``, and a stop
+        must not wait for it); a device, a file or the pattern here, so that errors exit 2.
+
         Raises:
-            SourceError: the source cannot be used (names it); a stream that is not up yet
-                is not an error (it is retried).
+            SourceError: the device, file or pattern cannot be used (names it); a stream
+                that is not up yet is not an error (the reader retries it).
         """
-        opened = True
-        try:
+        opened = self.config.source_kind != "url"
+        if opened:
             mode = self.source.open()
             log.info("%s: %s", self.source.description, mode)
-            if mode.width and self.config.source_kind == "device":
-                log.info(
-                    "requested %dx%d %s @%g fps",
-                    self.config.width,
-                    self.config.height,
-                    self.config.pixel_format or "(default format)",
-                    self.config.fps,
-                )
-        except SourceUnavailable as exc:
-            log.warning("%s; retrying", exc)
-            opened = False
+            if self.config.source_kind == "device":
+                c = self.config
+                fmt = c.pixel_format or "(default format)"
+                log.info("requested %dx%d %s @%g fps", c.width, c.height, fmt, c.fps)
         self.reader = Reader(
             self.source, self.config, self.slot, self.node.stop_event, opened=opened
         )
-        if not opened:
-            self.reader.stats.open_failures += 1
-            self.reader.stats.last_error = f"cannot open stream {self.config.source}"
         self.reader.start()
 
     def close(self) -> None:
+        """Stop the reader. One blocked inside OpenCV (a stream being opened, up to
+        ``open_timeout``) is not waited for beyond ``CLOSE_WAIT_S``: it is a daemon thread and
+        the process exits without it."""
         self.node.stop()
         if self.reader is not None:
-            self.reader.join(self.config.read_timeout + self.config.open_timeout + 2)
+            self.reader.join(CLOSE_WAIT_S)
+            if self.reader.is_alive():
+                log.warning(
+                    "the reader is still blocked in %s; exiting without it", self.source.description
+                )
         log.info("%s", self.counters())
 
     # ---- loop ----

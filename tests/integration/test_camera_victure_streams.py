@@ -223,6 +223,46 @@ def test_a_url_nobody_serves_is_retried_not_fatal(router, spawn):
         watch.close()
 
 
+def test_help_and_list(spawn):
+    helped = spawn(python_module("dronewrapper_camera_victure", "--help"), "help")
+    listed = spawn(python_module("dronewrapper_camera_victure", "--list"), "list")
+    assert helped.proc.wait(30) == 0 and "--list" in helped.output()
+    assert "--connect" in helped.output() and "--config" in helped.output()
+    code = listed.proc.wait(30)
+    if code == 1:  # a CI machine has no camera, and says so
+        assert "no V4L2 devices" in listed.output()
+    else:  # a machine with one lists it
+        assert code == 0 and "/dev/video" in listed.output()
+
+
+def test_stops_promptly_while_a_stream_hangs_opening(router, spawn):
+    """A server that accepts and never answers: OpenCV blocks opening it (up to
+    open_timeout, 60 s here); SIGINT still stops the service at once, exit 0."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    held: list[socket.socket] = []
+    accepting = threading.Thread(target=lambda: held.append(server.accept()[0]), daemon=True)
+    accepting.start()
+    port = server.getsockname()[1]
+    try:
+        proc = spawn(
+            python_module(
+                "dronewrapper_camera_victure", "--connect", router,
+                "--set", f"source=http://127.0.0.1:{port}/hang.mjpg", "--set", "open_timeout=60",
+            ),
+            "camera_victure",
+        )  # fmt: skip
+        wait_for(lambda: held, 20, what="the service connecting")
+        started = time.monotonic()
+        assert proc.stop(timeout=15) == 0, proc.output()
+        assert time.monotonic() - started < 10  # not the 60 s open timeout
+    finally:
+        for conn in held:
+            conn.close()
+        server.close()
+
+
 def test_a_missing_device_exits_2_naming_it(router, spawn):
     proc = spawn(
         python_module("dronewrapper_camera_victure", "--connect", router, "--set", "source=7"),
