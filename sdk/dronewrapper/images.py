@@ -1,10 +1,9 @@
 """Camera messages as BGR numpy arrays (OpenCV channel order), the newest frame only.
 
-Both ways: messages to arrays (subscribers) and arrays to messages (camera publishers: the
-simulator's cameras, camera_victure). Raw images (``sensor_msgs/Image``) are converted with
-numpy alone. JPEG/PNG compressed images
-(for Wi-Fi links) are decoded with OpenCV, imported only when needed, so the SDK itself depends
-on numpy alone.
+Both ways: messages to arrays (subscribers) and arrays to messages (camera publishers such as
+camera_victure). Raw images (``sensor_msgs/Image``) are converted with numpy alone. JPEG/PNG
+compressed images (for Wi-Fi links) are encoded and decoded with OpenCV, imported only when
+needed, so the SDK itself depends on numpy alone.
 """
 
 from __future__ import annotations

@@ -124,7 +124,8 @@ class CameraStatus(msgspec.Struct, kw_only=True):
         width, height, fps, pixel_format: the mode granted (fps 0 / "" when unknown).
         fps_measured: frames published per second over the last status period (Hz).
         frames_captured: frames read from the source.
-        frames_published: frames published.
+        frames_published: frames sent out (on the keys someone subscribes to, or always
+            on the JPEG key when the service is told to).
         frames_dropped: captured frames replaced by a newer one before publishing.
         corrupt_frames: failed reads the source recovered from (undecodable frames).
         reconnects: times the source was lost and opened again.
