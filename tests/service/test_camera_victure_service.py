@@ -81,9 +81,10 @@ def test_publishes_stamped_bgr_frames_and_jpeg(router):
         stamps = [m.header.stamp for m in cam.raw]
         assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
         assert stamps == sorted(stamps)
-        # at its own rate (10 fps): capture stamps about 0.1 s apart
+        # at its own rate (10 fps): capture stamps 0.1 s apart on average (as fast as
+        # possible would be a few ms; a loaded machine may stretch it, never shrink it)
         span = (stamps[-1] - stamps[0]) / (seqs[-1] - seqs[0])
-        assert 0.07 < span < 0.2
+        assert 0.08 < span < 0.3
     assert cam.result == [0]
 
 
@@ -238,14 +239,15 @@ def test_device_mode_granted_and_driver_stamps(router, monkeypatch):
 
 
 def test_a_slow_publisher_drops_stale_frames_instead_of_queueing(router, monkeypatch):
-    """Publishing made slower (60 ms a frame) than capture (60 fps): stale frames are dropped,
-    so every published frame is fresh, where a queue would age them by seconds."""
+    """Publishing made slower (100 ms a frame) than capture (60 fps): stale frames are
+    dropped, so every published frame is fresh, where a queue would age frame n by n x 83 ms
+    (2.5 s by the 30th, and growing)."""
     from dronewrapper_camera_victure import node as camera_node
 
     real = camera_node.bgr_to_image
 
     def slow(*args):
-        time.sleep(0.06)
+        time.sleep(0.1)
         return real(*args)
 
     monkeypatch.setattr(camera_node, "bgr_to_image", slow)
@@ -260,13 +262,13 @@ def test_a_slow_publisher_drops_stale_frames_instead_of_queueing(router, monkeyp
         status = cam.wait_status(
             lambda s: s.frames_published >= 30 and s.frames_dropped >= 30, 30, "drops"
         )
-    # a queue after 30 published frames would hold ~60 frames (1 s) by now and keep growing;
-    # the newest-frame slot keeps each one at most one publishing time (60 ms) plus the load
-    assert max(latencies[5:]) < 0.5, latencies
+    # the newest-frame slot keeps each frame's age to about one publishing time (0.1 s) plus
+    # the machine's load
+    assert max(latencies[5:]) < 1.0, latencies
     # every captured frame is published or counted as dropped, bar those captured during the
-    # frame being published (60 ms at 60 fps: about 4) when the status was made
+    # frame being published (100 ms at 60 fps: about 6) when the status was made
     in_flight = status.frames_captured - status.frames_published - status.frames_dropped
-    assert 0 <= in_flight <= 10
+    assert 0 <= in_flight <= 12
 
 
 class VanishingCaptures:
