@@ -35,7 +35,14 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
-from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix
+from dronewrapper.msgs.sensor import (
+    BatteryState,
+    CameraInfo,
+    CameraStatus,
+    CompressedImage,
+    Image,
+    NavSatFix,
+)
 from dronewrapper.msgs.vision import Detections
 
 T = TypeVar("T")
@@ -197,6 +204,16 @@ IMAGE_COMPRESSED = Topic(
     ("sim", "camera_victure", "bridge_tello"),
     "JPEG, on request/config",
     STREAM,
+)
+CAMERA_INFO = Topic(
+    "{ns}/{camera}/camera_info",
+    CameraInfo,
+    30.0,
+    ("camera_victure",),
+    "intrinsics of the published frames, with each frame (when calibrated)",
+)
+CAMERA_STATUS = Topic(
+    "{ns}/{camera}/camera_status", CameraStatus, 1.0, ("camera_victure",), "camera service state"
 )
 DETECTIONS = Topic(
     "{ns}/perception/detections", Detections, 0.0, ("perception",), "per processed frame"

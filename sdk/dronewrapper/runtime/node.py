@@ -98,6 +98,13 @@ class Publisher(Generic[T]):
         self._pub.put(codec.encode(msg))
         self.count += 1
 
+    def watched(self) -> bool:
+        """True while at least one subscriber matches this key (so the work can be skipped)."""
+        try:
+            return bool(self._pub.matching_status.matching)
+        except zenoh.ZError:
+            return False
+
     def undeclare(self) -> None:
         self._pub.undeclare()
 
