@@ -246,7 +246,21 @@ class DroneWrapper:
             holder = self._images[key_name] = self._latest(topic, camera=key_name)
         return holder
 
-    def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> None:
+    def subscribe(
+        self, topic: Topic[T], callback: Callable[[T], None], **parts: str
+    ) -> zenoh.Subscriber:
+        """Call ``callback(msg)`` for every decodable message on ``topic`` in this drone's
+        namespace (``parts`` fill the other key fields, e.g. ``camera="cam_frontal"``).
+
+        The callback runs on a Zenoh thread: keep it short. Undecodable samples are counted in
+        ``decode_errors``; an exception in the callback is logged and never ends the
+        subscription. ``undeclare()`` the returned subscriber to stop; :meth:`close` does too.
+        """
+        return self._subscribe(topic, callback, **parts)
+
+    def _subscribe(
+        self, topic: Topic[T], callback: Callable[[T], None], **parts: str
+    ) -> zenoh.Subscriber:
         key = topic.key(self.ns, **parts)
         decoder = codec.decoder(topic.type)
 
@@ -267,7 +281,9 @@ class DroneWrapper:
         # store), and no non-daemon thread is left to block interpreter exit before our atexit
         # hook closes the session (the paper's listing never calls close()).
         handler = zenoh.handlers.Callback(on_sample, indirect=False)
-        self._subscribers.append(self.session.declare_subscriber(key, handler))
+        subscriber = self.session.declare_subscriber(key, handler)
+        self._subscribers.append(subscriber)
+        return subscriber
 
     def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))
@@ -362,7 +378,8 @@ class DroneWrapper:
             else:
                 for entity in [*self._subscribers, getattr(self, "_setpoints", None)]:
                     if entity is not None:
-                        entity.undeclare()
+                        with contextlib.suppress(Exception):  # one the caller undeclared
+                            entity.undeclare()
         except Exception as exc:  # a session already closed by its owner
             log.debug("close: %s", exc)
 
@@ -527,13 +544,15 @@ class DroneWrapper:
             )
         cached = self._decoded.get(key_name)
         if cached is None or cached[0] is not msg:
-            if self.compressed_images:
-                array = images.compressed_to_bgr(msg)
-            else:
-                array = images.image_to_bgr(msg)
-            self._decoded[key_name] = cached = (msg, array)
+            self._decoded[key_name] = cached = (msg, self.decode_image(msg))
         image = cached[1].copy()
         return (image, float(msg.header.stamp)) if with_stamp else image
+
+    def decode_image(self, msg: Any) -> np.ndarray:
+        """A camera message (raw or JPEG, as this object receives them) as a BGR array."""
+        if self.compressed_images:
+            return images.compressed_to_bgr(msg)
+        return images.image_to_bgr(msg)
 
     def get_frontal_image(self) -> np.ndarray:
         """The newest frontal camera frame, BGR ``uint8`` (height, width, 3)."""
