@@ -6,9 +6,10 @@
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
+    dronewrapper station [--host H] [--port P]       the web ground station (loopback)
 
-``up``, ``sim`` and ``detect`` come with the on-board stack (``make setup``); the SDK alone
-(``pip install ./sdk``) has ``router``, ``echo`` and ``alive``.
+``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
+SDK alone (``pip install ./sdk``) has ``router``, ``echo`` and ``alive``.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ _STACK_COMMANDS = {
     "up": ("dronewrapper_compose.launcher", "main"),
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
+    "station": ("dronewrapper_ground_station.cli", "main"),
 }
 
 
