@@ -1,6 +1,6 @@
 """The station process: the fleet on the bus, the web server beside it.
 
-uvicorn serves the app on its own thread (its event loop); the main thread keeps the Node's
+uvicorn serves the app on its own thread (:mod:`server`); the main thread keeps the Node's
 signal handling (SIGINT/SIGTERM -> stop), runs the teleop dead-man at 20 Hz, and a discovery
 thread lists the drones online every ``discover_period``.
 """
@@ -8,22 +8,18 @@ thread lists the drones online every ``discover_period``.
 from __future__ import annotations
 
 import logging
-import sys
 import threading
-import time
-
-import uvicorn
 
 from dronewrapper.runtime.node import Node
 from dronewrapper_ground_station.access import Access, is_loopback, new_token
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.fleet import Fleet
+from dronewrapper_ground_station.server import WebServer
 
 log = logging.getLogger("station")
 
 DEADMAN_PERIOD_S = 0.05
-START_TIMEOUT_S = 15.0
 
 
 def _discover_forever(fleet: Fleet, period: float, stop: threading.Event) -> None:
@@ -43,15 +39,16 @@ def page_url(host: str, port: int, token: str) -> str:
     return f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
 
 
+def operator_token(config: Config) -> str:
+    """The configured token, a fresh one when serving beyond loopback, or "" (loopback)."""
+    return config.token or ("" if is_loopback(config.host) else new_token())
+
+
 def run(node: Node, config: Config) -> int:
     """Serve the station until SIGINT/SIGTERM."""
-    token = config.token or ("" if is_loopback(config.host) else new_token())
+    token = operator_token(config)
     fleet = Fleet(node.session, config)
-    app = create_app(fleet, config, Access(token))
-    server = uvicorn.Server(
-        uvicorn.Config(app, host=config.host, port=config.port, log_level="warning", lifespan="off")
-    )
-    http = threading.Thread(target=server.run, name="station-http", daemon=True)
+    server = WebServer(create_app(fleet, config, Access(token)), config.host, config.port)
     discovery = threading.Thread(
         target=_discover_forever,
         args=(fleet, config.discover_period, node.stop_event),
@@ -59,17 +56,13 @@ def run(node: Node, config: Config) -> int:
         daemon=True,
     )
     try:
-        http.start()
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while not server.started:
-            if not http.is_alive() or time.monotonic() > deadline:
-                log.error("the web server did not start on %s:%d", config.host, config.port)
-                return 1
-            time.sleep(0.05)
-        port = server.servers[0].sockets[0].getsockname()[1]
+        try:
+            port = server.start()
+        except (RuntimeError, OSError) as exc:
+            log.error("%s", exc)
+            return 1
         discovery.start()
-        url = page_url(config.host, port, token)
-        print(f"station: open {url}", flush=True)
+        print(f"station: open {page_url(config.host, port, token)}", flush=True)
         if token:
             print(
                 "station: listening beyond loopback; the token above makes a page an operator's "
@@ -77,13 +70,11 @@ def run(node: Node, config: Config) -> int:
                 "Operator certificates (mTLS) are not available yet.",
                 flush=True,
             )
-        sys.stdout.flush()
         node.announce()
         while not node.stop_event.wait(DEADMAN_PERIOD_S):
             fleet.check_deadmen()
     finally:
-        server.should_exit = True
-        http.join(timeout=5.0)
+        server.stop()
         node.stop_event.set()
         if discovery.is_alive():
             discovery.join(timeout=3.0)
