@@ -223,7 +223,8 @@ function drawFrame(bitmap, header) {
     ctx.beginPath(); ctx.moveTo(w / 2 - 12, h / 2); ctx.lineTo(w / 2 + 12, h / 2); ctx.moveTo(w / 2, h / 2 - 12); ctx.lineTo(w / 2, h / 2 + 12); ctx.stroke();
   }
   const age = Date.now() / 1000 + station.offset - header.stamp;
-  station.frames += 1; station.lastFrame = header; station.frameAges.push(age);
+  station.frames += 1; station.lastFrame = header;
+  station.frameAges.push(Date.now() / 1000 - header.stamp); // page clock vs capture stamp (benchmark)
   if (station.frameAges.length > 300) station.frameAges.shift();
   $("frame-age").textContent = `${Math.round(age * 1000)} ms`;
   ctx.fillStyle = "rgba(0,0,0,.55)"; ctx.fillRect(0, h - 20, 220, 20);
