@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import shutil
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -38,15 +38,19 @@ def _find(candidates: tuple[str, ...], package: str) -> str:
 
 
 @contextlib.contextmanager
-def chromium(profile_dir: Path, *, page_load_timeout: float = 30.0) -> Iterator[Any]:
+def chromium(
+    profile_dir: Path, *, page_load_timeout: float = 30.0, extra_flags: Sequence[str] = ()
+) -> Iterator[Any]:
     """A headless Chromium WebDriver with a fresh profile in ``profile_dir``; console messages
-    are kept (``driver.get_log("browser")``). Quit on exit."""
+    are kept (``driver.get_log("browser")``). ``extra_flags`` are added (e.g.
+    ``--host-resolver-rules=MAP station.test 127.0.0.1`` to reach loopback by another name).
+    Quit on exit."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
     options = webdriver.ChromeOptions()
     options.binary_location = _find(CHROMIUM, "chromium")
-    for flag in CHROMIUM_FLAGS:
+    for flag in (*CHROMIUM_FLAGS, *extra_flags):
         options.add_argument(flag)
     profile_dir.mkdir(parents=True, exist_ok=True)
     options.add_argument(f"--user-data-dir={profile_dir}")
