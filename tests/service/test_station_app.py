@@ -14,7 +14,7 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool, SetMode
+from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool, SetMode, State
 from dronewrapper.msgs.sensor import CompressedImage
 from dronewrapper.msgs.std import Header
 from support import client_node, wait_for
@@ -313,3 +313,26 @@ def test_video_of_unknown_camera_or_drone_is_refused(env: StationEnv) -> None:
     for path in ("/ws/video/drone/thermal", "/ws/video/ghost/frontal"):
         with pytest.raises(Exception), _ws(env, path) as ws:  # noqa: B017
             ws.recv(timeout=5)
+
+
+def test_several_drones_with_their_health(env: StationEnv, router) -> None:
+    with client_node(router, name="bridge_two", namespace="drone2") as second:
+        state = second.publisher(registry.STATE)
+        second.announce()
+
+        def listed() -> list:
+            env.fleet.discover()
+            state.put(State(connected=False, autopilot="px4"))
+            return [d for d in env.http("GET", "/api/drones")[1] if d["ns"] == "drone2"]
+
+        entry = wait_for(lambda: (d := listed()) and d[0]["health"] != "stale" and d, 10)
+        assert entry[0]["health"] == "no_autopilot"  # a bridge whose autopilot is not linked
+        assert entry[0]["services"] == ["bridge_two"]
+    wait_for(
+        lambda: (
+            env.fleet.discover()
+            or [d["health"] for d in env.http("GET", "/api/drones")[1]] == ["ok", "offline"]
+        ),
+        10,
+        what="drone2 offline once its bridge left",
+    )
