@@ -68,7 +68,11 @@ class Access:
             host_header: the request's ``Host`` header.
             presented_token: the token the page sent ("" when none).
         """
-        if self.token and presented_token and hmac.compare_digest(presented_token, self.token):
+        if (
+            self.token
+            and presented_token
+            and hmac.compare_digest(presented_token.encode(), self.token.encode())
+        ):
             return OPERATOR
         if is_loopback(client_host) and is_loopback(split_host(host_header)):
             return OPERATOR

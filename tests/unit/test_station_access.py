@@ -48,6 +48,11 @@ def test_remote_page_is_an_observer_without_the_token() -> None:
     assert access.role("192.168.1.20", "192.168.1.10:8080", TOKEN) == OPERATOR
 
 
+def test_any_presented_token_is_compared_safely() -> None:
+    """Non-ASCII text must not crash the comparison (hmac refuses non-ASCII str)."""
+    assert Access(TOKEN).role("192.168.1.20", "h:1", "é" * 22) == OBSERVER
+
+
 def test_no_token_configured_means_no_remote_operator() -> None:
     assert Access("").role("192.168.1.20", "192.168.1.10:8080", "") == OBSERVER
 
