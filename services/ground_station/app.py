@@ -73,6 +73,14 @@ def _ok(body: Any) -> Response:
     return Response(_json.encode(body), 200, SECURITY_HEADERS, media_type="application/json")
 
 
+async def _receive_text(ws: WebSocket) -> str:
+    """The next text message ("" for a binary one). Raises WebSocketDisconnect at the end."""
+    message = await ws.receive()
+    if message["type"] == "websocket.disconnect":
+        raise WebSocketDisconnect(message.get("code", 1000))
+    return message.get("text") or ""
+
+
 def _command_action(link: DroneLink, command: str, body: Any, config: Config) -> Callable[[], None]:
     """The blocking call for ``command`` with its validated arguments (BadRequest if not)."""
     if command == "takeoff":
@@ -237,7 +245,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         pusher = asyncio.create_task(push())
         try:
             while True:
-                text = await ws.receive_text()
+                text = await _receive_text(ws)
                 try:
                     error = _on_message(json.loads(text), role, owner)
                 except (ValueError, KeyError, InvalidArgument) as exc:
@@ -297,7 +305,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         sender = asyncio.create_task(send_frames())
         try:
             while True:
-                if await ws.receive_text() == "ack":
+                if await _receive_text(ws) == "ack":
                     acked.set()
         except (WebSocketDisconnect, RuntimeError):
             pass

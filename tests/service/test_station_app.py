@@ -246,7 +246,7 @@ def test_closing_the_page_holds_the_drone(env: StationEnv, bus) -> None:
 
 def test_bad_and_forbidden_socket_messages_are_answered(env: StationEnv) -> None:
     def error_for(ws, msg) -> str:
-        ws.send(msg if isinstance(msg, str) else json.dumps(msg))
+        ws.send(msg if isinstance(msg, str | bytes) else json.dumps(msg))
         while True:
             reply = json.loads(ws.recv(timeout=5))
             if reply["type"] == "error":
@@ -259,6 +259,8 @@ def test_bad_and_forbidden_socket_messages_are_answered(env: StationEnv) -> None
             ws, {"type": "teleop", "ns": "ghost", "forward": 0, "left": 0, "up": 0, "turn": 0}
         )
         assert error_for(ws, "{not json")
+        assert error_for(ws, b"\x00binary")  # answered; the socket stays open
+        assert "unknown message type" in error_for(ws, {"type": "what"})
     assert not env.fleet.get("drone").deadman.active
     with _ws(env, "/ws/telemetry", host=REMOTE["Host"]) as ws:
         assert _telemetry(ws)["role"] == "observer"
