@@ -36,7 +36,14 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper.errors import (
+    CommandRefused,
+    DroneError,
+    InvalidArgument,
+    NoData,
+    NotConnected,
+    Timeout,
+)
 from dronewrapper_ground_station import requests
 from dronewrapper_ground_station.access import OPERATOR, Access
 from dronewrapper_ground_station.config import Config
@@ -248,7 +255,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                 text = await _receive_text(ws)
                 try:
                     error = _on_message(json.loads(text), role, owner)
-                except (ValueError, KeyError, InvalidArgument) as exc:
+                except (ValueError, KeyError, DroneError) as exc:
                     error = str(exc)
                 if error:
                     await ws.send_text(json.dumps({"type": "error", "error": error}))

@@ -78,7 +78,9 @@ class Subscriptions:
             except Exception:  # never let an exception reach Zenoh's thread
                 log.exception("handling %s failed", where)
 
-        sub = self.session.declare_subscriber(key, zenoh.handlers.Callback(on_sample))
+        # direct callbacks, as the SDK's: decode and store only, no thread per subscriber
+        handler = zenoh.handlers.Callback(on_sample, indirect=False)
+        sub = self.session.declare_subscriber(key, handler)
         self._declared.append(sub)
         return sub
 
