@@ -110,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
             ) / elapsed
             collect()
             errors = console_errors(driver)
+            driver.save_screenshot(str(logs / "station_two_drones.png"))
     finally:
         for proc in reversed(procs):
             proc.send_signal(2)

@@ -265,7 +265,9 @@ function drawMap() {
     ctx.beginPath(); ctx.arc(sx(gx), sy(gy), 8, 0, 2 * Math.PI); ctx.moveTo(sx(gx) - 12, sy(gy)); ctx.lineTo(sx(gx) + 12, sy(gy));
     ctx.moveTo(sx(gx), sy(gy) - 12); ctx.lineTo(sx(gx), sy(gy) + 12); ctx.stroke();
   }
-  for (const [ns, d] of Object.entries((tele && tele.drones) || {})) {
+  const drones = Object.entries((tele && tele.drones) || {});
+  drones.sort(([a], [b]) => (a === station.ns) - (b === station.ns)); // the picked one on top
+  for (const [ns, d] of drones) {
     if (!d.pose) continue;
     const x = sx(d.pose.x), y = sy(d.pose.y), a = -d.pose.yaw;
     ctx.fillStyle = ns === station.ns ? "#4cc2ff" : "#8b98a5";
