@@ -7,10 +7,11 @@
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
+    dronewrapper station [--host H] [--port P]       the web ground station (loopback)
     dronewrapper --version                           the installed version
 
-``up``, ``sim`` and ``detect`` come with the on-board stack (``make setup``); the SDK alone
-(``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``.
+``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
+SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ _STACK_COMMANDS = {
     "up": ("dronewrapper_compose.launcher", "main"),
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
+    "station": ("dronewrapper_ground_station.cli", "main"),
 }
 
 
