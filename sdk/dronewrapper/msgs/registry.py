@@ -36,6 +36,7 @@ from dronewrapper.msgs.mavros import (
     StatusText,
 )
 from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix
+from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
 T = TypeVar("T")
@@ -196,6 +197,15 @@ SIM_OBJECT_POSE = Topic(
 )
 SIM_OBJECT_CMD_VEL = Topic(
     "sim/objects/{name}/cmd_vel", Twist, 0.0, ("tests", "teleop"), "teleoperates an object"
+)
+
+# ---- replay ----
+CLOCK = Topic(
+    "clock",
+    Header,
+    0.0,
+    ("replay",),
+    "recorded time during a replay (header.stamp, s since the epoch), like ROS /clock",
 )
 
 # ---- services ----

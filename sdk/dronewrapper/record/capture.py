@@ -1,0 +1,108 @@
+"""Bus samples from a Zenoh session into a :class:`~.recorder.Recorder`.
+
+Zenoh delivers samples on its own threads; they go into a bounded queue and are written (and
+JPEG-compressed) on the caller's thread, so a slow disk never stalls the session. When the queue
+is full the sample is dropped and counted: recording never holds up the bus.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import zenoh
+
+from dronewrapper.msgs.registry import IMAGE_COMPRESSED, IMAGE_RAW
+from dronewrapper.record.recorder import Recorder
+
+QUEUE_SIZE = 512
+"""Samples waiting to be written before new ones are dropped."""
+
+
+@dataclass
+class CaptureStats:
+    """What a capture did: samples received, written, dropped (queue full or rate-limited)."""
+
+    received: int = 0
+    written: int = 0
+    dropped: Counter[str] = field(default_factory=Counter)
+
+
+class ImageThrottle:
+    """Keeps at most ``rate_hz`` camera frames per second per key (0: all); time injected."""
+
+    def __init__(self, rate_hz: float) -> None:
+        if rate_hz < 0:
+            raise ValueError(f"image rate must be >= 0 Hz, got {rate_hz}")
+        self.period = 1.0 / rate_hz if rate_hz > 0 else 0.0
+        self._next: dict[str, float] = {}
+
+    def keep(self, key: str, now: float) -> bool:
+        """True if a frame on ``key`` arriving at ``now`` (s) is recorded."""
+        if self.period == 0.0 or not (IMAGE_RAW.match(key) or IMAGE_COMPRESSED.match(key)):
+            return True
+        due = self._next.get(key, 0.0)
+        if now + 1e-6 < due:
+            return False
+        # step from the due time, not from now, so the mean rate holds with jittered arrivals
+        self._next[key] = max(due + self.period, now - self.period)
+        return True
+
+
+def capture(
+    session: zenoh.Session,
+    keyexprs: Sequence[str],
+    recorder: Recorder,
+    stop: threading.Event,
+    *,
+    duration: float = 0.0,
+    image_rate_hz: float = 0.0,
+) -> CaptureStats:
+    """Record every sample on ``keyexprs`` until ``stop`` is set or ``duration`` s (0: no limit).
+
+    Samples are stamped with their receive time (wall clock, ns since the epoch).
+    """
+    stats = CaptureStats()
+    samples: queue.Queue[tuple[str, bytes, int]] = queue.Queue(QUEUE_SIZE)
+    throttle = ImageThrottle(image_rate_hz)
+    lock = threading.Lock()
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        key = str(sample.key_expr)
+        now_ns = time.time_ns()
+        with lock:
+            stats.received += 1
+            if not throttle.keep(key, now_ns / 1e9):
+                stats.dropped["rate"] += 1
+                return
+        try:
+            samples.put_nowait((key, sample.payload.to_bytes(), now_ns))
+        except queue.Full:
+            with lock:
+                stats.dropped["queue_full"] += 1
+
+    subscribers = [session.declare_subscriber(k, on_sample) for k in keyexprs]
+    deadline = time.monotonic() + duration if duration > 0 else float("inf")
+    try:
+        while not stop.is_set() and time.monotonic() < deadline:
+            try:
+                key, payload, log_ns = samples.get(timeout=0.1)
+            except queue.Empty:
+                continue
+            recorder.write(key, payload, log_ns)
+            stats.written += 1
+    finally:
+        for sub in subscribers:
+            sub.undeclare()
+        while True:  # what was already received is written
+            try:
+                key, payload, log_ns = samples.get_nowait()
+            except queue.Empty:
+                break
+            recorder.write(key, payload, log_ns)
+            stats.written += 1
+    return stats
