@@ -45,11 +45,13 @@ class ImageThrottle:
         """True if a frame on ``key`` arriving at ``now`` (s) is recorded."""
         if self.period == 0.0 or not (IMAGE_RAW.match(key) or IMAGE_COMPRESSED.match(key)):
             return True
-        due = self._next.get(key, 0.0)
-        if now + 1e-6 < due:
+        due = self._next.get(key)
+        if due is not None and now + 1e-6 < due:
             return False
-        # step from the due time, not from now, so the mean rate holds with jittered arrivals
-        self._next[key] = max(due + self.period, now - self.period)
+        # step from the due time while on schedule, so the mean rate holds with jittered
+        # arrivals; from now after a gap (or the first frame), so no burst catches up
+        on_schedule = due is not None and now - due < self.period
+        self._next[key] = (due if on_schedule else now) + self.period
         return True
 
 
