@@ -1,0 +1,270 @@
+"""Record, replay and view on a real loopback router: ``dronewrapper record|replay|foxglove``.
+
+A simulated aircraft and its bridge are recorded and the file is read back with the ``mcap``
+reader; a recorder killed with SIGKILL leaves a file that opens; a recording replayed into the
+perception process gives back the detections of the live flight; the Foxglove server answers a
+real WebSocket client with the advertised channels.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import json
+import signal
+import struct
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import websockets
+from mcap.reader import make_reader
+
+from dronewrapper.msgs import Header, Point, Pose, PoseStamped, registry
+from dronewrapper.record.reader import read_bus, summarize
+from support import REPO, client_node, free_port, python_module, wait_for
+
+pytestmark = pytest.mark.integration
+
+HOLDOUT = REPO / "tests" / "replay" / "data" / "holdout_teleop.mcap"
+
+
+def _dronewrapper(*args: str) -> list[str]:
+    return [sys.executable, "-m", "dronewrapper", *args]
+
+
+def _wait_exit(proc, timeout: float) -> int:
+    try:
+        return proc.proc.wait(timeout)
+    except Exception as exc:
+        raise AssertionError(
+            f"{proc.argv} still running after {timeout} s:\n{proc.output()}"
+        ) from exc
+
+
+def test_record_a_simulated_aircraft_and_read_it_back(router, spawn, tmp_path):
+    port = free_port()
+    spawn(
+        python_module(
+            "dronewrapper_sim", "--scenario", "beacon_static", "--connect", router,
+            "--udp-onboard", f"{port}:0", "--udp-gcs", "off",
+            "--width", "160", "--height", "120", "--camera-rate", "10",
+        ),
+        "sim",
+    )  # fmt: skip
+    spawn(
+        python_module(
+            "dronewrapper_bridge_mavlink", "--connect", router,
+            "--set", f"connection=udpin:127.0.0.1:{port}",
+        ),
+        "bridge",
+    )  # fmt: skip
+    with client_node(router) as node:
+        pose = node.latest(registry.LOCAL_POSE)
+        frames = node.latest(registry.IMAGE_RAW, camera="cam_frontal")
+        wait_for(lambda: pose.count > 3 and frames.count > 1, 60, what="sim and bridge running")
+    out = tmp_path / "flight.mcap"
+    rec = spawn(
+        _dronewrapper(
+            "record", "drone/**", "sim/**", "-o", str(out), "--connect", router,
+            "--duration", "3", "--compressed-images",
+        ),
+        "record",
+    )  # fmt: skip
+    assert _wait_exit(rec, 60) == 0, rec.output()
+    assert "recorded" in rec.output()
+
+    with out.open("rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None and summary.chunk_indexes  # complete, chunked
+        schemas = {sid: s for sid, s in summary.schemas.items()}
+        channels = {c.topic: c for c in summary.channels.values()}
+        counts = summary.statistics.channel_message_counts
+
+        def schema_of(topic: str) -> str:
+            return schemas[channels[topic].schema_id].name
+
+        assert schema_of("/drone/cam_frontal/image_raw") == "foxglove.CompressedImage"
+        assert schema_of("/drone/mavros/local_position/pose") == "dronewrapper/PoseStamped"
+        assert schema_of("/tf") == "foxglove.FrameTransform"
+        assert schema_of("/drone/mavros/global_position/global/fix") == "foxglove.LocationFix"
+        assert channels["drone/mavros/state"].message_encoding == "msgpack"
+        # 3 s of a 10 Hz camera and >= 30 Hz telemetry, with margins for a loaded machine
+        assert counts[channels["/drone/cam_frontal/image_raw"].id] >= 10
+        assert counts[channels["drone/mavros/local_position/pose"].id] >= 30
+        assert counts[channels["drone/sim/ground_truth"].id] >= 30
+
+        json_schema = json.loads(schemas[channels["/drone/mavros/state"].schema_id].data)
+        assert "armed" in json_schema["properties"]
+        for _, _, msg in reader.iter_messages(topics=["/drone/mavros/local_position/pose"]):
+            decoded = json.loads(msg.data)
+            assert decoded["header"]["frame_id"] and "orientation" in decoded["pose"]
+            break
+
+    decoded_frames = [m.decode() for m in read_bus(out, ["drone/cam_frontal/image_raw"])]
+    first = decoded_frames[0]
+    assert (first.width, first.height, first.encoding) == (160, 120, "bgr8")
+    pixels = np.frombuffer(first.data, np.uint8).reshape(120, 160, 3)
+    assert pixels.std() > 5  # a rendered scene, not a blank frame
+    truth = [m.decode() for m in read_bus(out, ["drone/sim/ground_truth"])]
+    assert all(isinstance(m, PoseStamped) for m in truth)
+    assert all(b.header.stamp >= a.header.stamp for a, b in itertools.pairwise(truth))
+
+
+def test_a_sigkilled_recorder_leaves_a_file_that_opens(router, spawn, tmp_path):
+    out = tmp_path / "killed.mcap"
+    rec = spawn(_dronewrapper("record", "drone/**", "-o", str(out), "--connect", router), "rec")
+    sent = 0
+    with client_node(router) as node:
+        pub = node.publisher(registry.LOCAL_POSE)
+
+        def recorded_enough() -> bool:
+            nonlocal sent
+            assert rec.alive(), rec.output()
+            for _ in range(5):
+                sent += 1
+                pub.put(
+                    PoseStamped(header=Header(stamp=1e9 + sent), pose=Pose(position=Point(x=sent)))
+                )
+            return out.exists() and summarize(out).count >= 100
+
+        wait_for(recorded_enough, 60, interval=0.02, what="100 poses flushed to the file")
+        rec.proc.send_signal(signal.SIGKILL)
+        rec.proc.wait(10)
+    info = summarize(out)
+    assert info.truncated  # no summary, no footer: cut
+    assert info.count >= 100
+    xs = [m.decode().pose.position.x for m in read_bus(out)]
+    assert xs == sorted(xs) and len(xs) >= 50
+    with out.open("rb") as f:  # the mcap library's own streaming reader reads it too
+        from mcap.stream_reader import StreamReader
+
+        records = StreamReader(f).records
+        assert next(records).__class__.__name__ == "Header"
+
+
+def test_replay_into_the_perception_process_gives_the_live_detections(router, spawn):
+    perception = spawn(
+        python_module("dronewrapper_perception", "--connect", router, "--set", "detector=color"),
+        "perception",
+    )
+    live = {
+        m.decode().header.stamp: m.decode() for m in read_bus(HOLDOUT, [registry.DETECTIONS.key()])
+    }
+    with client_node(router) as node:
+        got = []
+        node.subscribe(registry.DETECTIONS, got.append)
+        wait_for(lambda: "perception ready" in perception.output(), 60, what="perception ready")
+        replay = spawn(
+            _dronewrapper(
+                "replay", str(HOLDOUT), "--keys", "drone/cam_frontal/image_raw",
+                "--connect", router,
+            ),
+            "replay",
+        )  # fmt: skip
+        assert _wait_exit(replay, 60) == 0, replay.output()
+        frames = sum(1 for _ in read_bus(HOLDOUT, ["drone/cam_frontal/image_raw"]))
+        # a loaded machine may skip frames (perception takes the newest), never invent any
+        wait_for(lambda: len(got) >= frames // 2, 30, what="detections for the replayed frames")
+        time.sleep(0.5)
+    matched = [(d, live[d.header.stamp]) for d in got if d.header.stamp in live]
+    assert len(matched) >= frames // 2
+    for det, ref in matched:
+        assert det.target() is not None and ref.target() is not None
+        dx = det.target().bbox.center.position.x - ref.target().bbox.center.position.x
+        dy = det.target().bbox.center.position.y - ref.target().bbox.center.position.y
+        assert abs(dx) < 4 and abs(dy) < 4
+
+
+def test_replay_keeps_the_timing_and_publishes_the_clock(router, spawn):
+    key = registry.CONTROLLER_STATUS.key()
+    recorded = [m.log_time_ns / 1e9 for m in read_bus(HOLDOUT, [key])]
+    with client_node(router) as node:
+        arrivals, clock = [], []
+        node.subscribe(registry.CONTROLLER_STATUS, lambda m: arrivals.append(time.monotonic()))
+        node.subscribe(registry.CLOCK, lambda m: clock.append(m.stamp))
+        time.sleep(0.5)  # the subscriptions reach the router
+        replay = spawn(
+            _dronewrapper(
+                "replay", str(HOLDOUT), "--keys", key, "--rate", "2", "--clock",
+                "--connect", router,
+            ),
+            "replay",
+        )  # fmt: skip
+        assert _wait_exit(replay, 60) == 0, replay.output()
+        wait_for(lambda: len(arrivals) >= len(recorded), 10, what="every replayed status")
+    # at twice the speed, never early: the span is at least half the recorded one
+    span = arrivals[-1] - arrivals[0]
+    assert span >= (recorded[-1] - recorded[0]) / 2 - 0.05
+    assert clock == sorted(clock) and len(clock) > 10
+    assert recorded[0] - 0.01 <= clock[0] and clock[-1] <= recorded[-1] + 0.01
+
+
+def test_foxglove_server_answers_a_websocket_client(router, spawn):
+    port = free_port()
+    server = spawn(_dronewrapper("foxglove", "--port", str(port), "--connect", router), "foxglove")
+    wait_for(lambda: "Foxglove: open" in server.output(), 30, what="the Foxglove server")
+    with client_node(router) as node:
+        pub = node.publisher(registry.LOCAL_POSE)
+        pose = PoseStamped(header=Header(stamp=1e9), pose=Pose(position=Point(x=1.5)))
+
+        async def talk() -> tuple[dict, dict, bytes]:
+            uri = f"ws://127.0.0.1:{port}"
+            async with websockets.connect(
+                uri, subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"], open_timeout=10
+            ) as ws:
+                info = json.loads(await asyncio.wait_for(ws.recv(), 10))
+                advertised = None
+                deadline = time.monotonic() + 30
+                while advertised is None and time.monotonic() < deadline:
+                    pub.put(pose)
+                    try:
+                        frame = await asyncio.wait_for(ws.recv(), 0.2)
+                    except asyncio.TimeoutError:
+                        continue
+                    if isinstance(frame, str):
+                        msg = json.loads(frame)
+                        if msg.get("op") == "advertise":
+                            for ch in msg["channels"]:
+                                if ch["topic"] == "/drone/mavros/local_position/pose":
+                                    advertised = ch
+                assert advertised is not None, "pose channel never advertised"
+                await ws.send(
+                    json.dumps(
+                        {
+                            "op": "subscribe",
+                            "subscriptions": [{"id": 7, "channelId": advertised["id"]}],
+                        }
+                    )
+                )
+                deadline = time.monotonic() + 30
+                while time.monotonic() < deadline:
+                    pub.put(pose)
+                    try:
+                        frame = await asyncio.wait_for(ws.recv(), 0.2)
+                    except asyncio.TimeoutError:
+                        continue
+                    if isinstance(frame, bytes) and frame[0] == 0x01:
+                        sub_id, _log_time = struct.unpack_from("<IQ", frame, 1)
+                        assert sub_id == 7
+                        return info, advertised, frame[13:]
+                raise AssertionError("no message on the subscribed channel")
+
+        info, advertised, payload = asyncio.run(talk())
+    assert info["op"] == "serverInfo"
+    assert (
+        advertised["encoding"] == "json" and advertised["schemaName"] == "dronewrapper/PoseStamped"
+    )
+    assert "properties" in json.loads(advertised["schema"])
+    assert json.loads(payload)["pose"]["position"]["x"] == 1.5
+    assert server.stop() == 0, server.output()
+
+
+def test_record_info_summarises_a_file():
+    from dronewrapper.cli import main
+
+    assert main(["record", "--info", str(HOLDOUT)]) == 0
+    assert Path(HOLDOUT).exists()
