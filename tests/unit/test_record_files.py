@@ -236,3 +236,26 @@ def test_compressed_bus_images_pass_through(tmp_path):
         rec.write(key, codec.encode(msg), 5)
     (back,) = read_bus(path)
     assert back.payload == codec.encode(msg)
+
+
+def test_the_layout_in_the_repository_is_the_generated_one_and_names_real_topics(tmp_path):
+    from dronewrapper.record.layout import layout_json
+    from support import REPO
+
+    stored = (REPO / "docs" / "foxglove_layout.json").read_text()
+    assert stored == layout_json(), "regenerate: python -m dronewrapper.record.layout"
+    path = tmp_path / "flight.mcap"
+    with path.open("wb") as f:
+        rec = _record(f, 2)
+        fix = NavSatFix(header=Header(stamp=T0), latitude=47.4)
+        rec.write(registry.GLOBAL_POSITION.key("drone"), codec.encode(fix), 1)
+        rec.close()
+    topics = {c.topic for c in summarize(path).channels}
+    text = json.dumps(json.loads(stored))
+    for topic in (
+        "/drone/cam_frontal/image_raw",
+        "/drone/perception/detections/annotations",
+        "/drone/controller/status",
+        "/drone/mavros/global_position/global/fix",
+    ):
+        assert topic in topics and f'"{topic}' in text, topic
