@@ -13,6 +13,7 @@ import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import zenoh
 
@@ -108,3 +109,47 @@ def capture(
             recorder.write(key, payload, log_ns)
             stats.written += 1
     return stats
+
+
+class BackgroundRecording:
+    """A recording made on a thread of its own, from an open session (for apps and the demo).
+
+    with BackgroundRecording(session, ["drone/**"], "flight.mcap", jpeg_quality=80):
+        ...                                  # fly; the file is complete after the block
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        keyexprs: Sequence[str],
+        path: str | Path,
+        *,
+        jpeg_quality: int | None = 80,
+        image_rate_hz: float = 0.0,
+    ) -> None:
+        self.path = Path(path)
+        self.stats = CaptureStats()
+        self._file = self.path.open("wb")
+        self.recorder = Recorder(self._file, jpeg_quality=jpeg_quality)
+        self._stop = threading.Event()
+
+        def run() -> None:
+            self.stats = capture(
+                session, keyexprs, self.recorder, self._stop, image_rate_hz=image_rate_hz
+            )
+
+        self._thread = threading.Thread(target=run, name="recording", daemon=True)
+        self._thread.start()
+
+    def __enter__(self) -> BackgroundRecording:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self, timeout: float = 10.0) -> None:
+        """Stop recording and complete the file (summary and footer)."""
+        self._stop.set()
+        self._thread.join(timeout)
+        self.recorder.close()
+        self._file.close()
