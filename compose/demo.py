@@ -201,7 +201,14 @@ class VideoRecorder:
                 self._writer.release()
 
 
-RECORDED_KEYS = ("drone/**", "sim/**")
+RECORDED_KEYS = (
+    "drone/mavros/**",
+    "drone/perception/**",
+    "drone/controller/**",
+    "drone/sim/**",
+    "drone/cam_frontal/image_raw",  # JPEG-compressed by the recorder; the sim's own JPEG
+    "sim/**",  # stream and the ventral camera would only double the file
+)
 
 
 def run_demo(
