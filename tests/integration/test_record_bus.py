@@ -268,3 +268,27 @@ def test_record_info_summarises_a_file():
 
     assert main(["record", "--info", str(HOLDOUT)]) == 0
     assert Path(HOLDOUT).exists()
+
+
+def test_replay_from_a_start_time_loops_until_stopped(router, spawn):
+    key = registry.CONTROLLER_STATUS.key()
+    times = [m.log_time_ns for m in read_bus(HOLDOUT, [key])]
+    start = summarize(HOLDOUT).start_ns  # --start counts from the recording's first message
+    after = sum(1 for t in times if t >= start + 2e9)  # the last second of the recording
+    with client_node(router) as node:
+        stamps = []
+        node.subscribe(registry.CONTROLLER_STATUS, lambda m: stamps.append(m.header.stamp))
+        time.sleep(0.5)
+        replay = spawn(
+            _dronewrapper(
+                "replay", str(HOLDOUT), "--keys", key, "--start", "2", "--loop", "--rate", "4",
+                "--connect", router,
+            ),
+            "replay",
+        )  # fmt: skip
+        wait_for(lambda: len(stamps) >= 2 * after + 1, 30, what="a second pass")
+        assert replay.stop() == 0, replay.output()
+    first_pass = stamps[:after]
+    assert stamps[after : 2 * after] == first_pass  # the same messages again
+    assert min(first_pass) >= start / 1e9 + 2.0 - 0.5  # stamps lag receive times a little
+    assert "pass(es)" in replay.output()
