@@ -146,6 +146,27 @@ def test_a_sigkilled_recorder_leaves_a_file_that_opens(router, spawn, tmp_path):
         assert next(records).__class__.__name__ == "Header"
 
 
+def test_an_interrupted_recorder_completes_its_file(router, spawn, tmp_path):
+    out = tmp_path / "stopped.mcap"
+    rec = spawn(_dronewrapper("record", "drone/**", "-o", str(out), "--connect", router), "rec")
+    with client_node(router) as node:
+        pub = node.publisher(registry.LOCAL_POSE)
+        received = []
+
+        def some_recorded() -> bool:
+            assert rec.alive(), rec.output()
+            pub.put(PoseStamped(header=Header(stamp=1e9 + len(received))))
+            received.append(1)
+            return out.exists() and summarize(out).count >= 10
+
+        wait_for(some_recorded, 60, interval=0.05, what="poses flushed to the file")
+        assert rec.stop() == 0, rec.output()  # SIGINT
+    with out.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and summary.statistics.message_count >= 20  # raw + JSON
+    assert not summarize(out).truncated
+
+
 def test_replay_into_the_perception_process_gives_the_live_detections(router, spawn):
     perception = spawn(
         python_module("dronewrapper_perception", "--connect", router, "--set", "detector=color"),
