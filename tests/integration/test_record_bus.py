@@ -253,26 +253,31 @@ def test_foxglove_server_answers_a_websocket_client(router, spawn):
                                 if ch["topic"] == "/drone/mavros/local_position/pose":
                                     advertised = ch
                 assert advertised is not None, "pose channel never advertised"
-                await ws.send(
-                    json.dumps(
-                        {
-                            "op": "subscribe",
-                            "subscriptions": [{"id": 7, "channelId": advertised["id"]}],
-                        }
-                    )
-                )
+                # foxglove-sdk may advertise a channel a moment before it accepts subscriptions
+                # to it ("Unknown channel ID"): subscribe again (new id) until data flows
+                subscriptions = []
                 deadline = time.monotonic() + 30
+                seen = []
+                next_subscribe = 0.0
                 while time.monotonic() < deadline:
+                    if time.monotonic() >= next_subscribe:
+                        subscriptions.append(7 + len(subscriptions))
+                        request = {"id": subscriptions[-1], "channelId": advertised["id"]}
+                        await ws.send(json.dumps({"op": "subscribe", "subscriptions": [request]}))
+                        next_subscribe = time.monotonic() + 1.0
                     pub.put(pose)
                     try:
                         frame = await asyncio.wait_for(ws.recv(), 0.2)
                     except asyncio.TimeoutError:
                         continue
+                    seen.append(frame[:1] if isinstance(frame, bytes) else frame[:80])
                     if isinstance(frame, bytes) and frame[0] == 0x01:
                         sub_id, _log_time = struct.unpack_from("<IQ", frame, 1)
-                        assert sub_id == 7
+                        assert sub_id in subscriptions
                         return info, advertised, frame[13:]
-                raise AssertionError("no message on the subscribed channel")
+                raise AssertionError(
+                    f"no message on the subscribed channel; got {seen[:20]}\n{server.output()}"
+                )
 
         info, advertised, payload = asyncio.run(talk())
     assert info["op"] == "serverInfo"
