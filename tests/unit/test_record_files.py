@@ -210,6 +210,19 @@ def test_unknown_keys_and_bad_payloads_keep_their_raw_bytes(tmp_path):
     ]
 
 
+def test_a_malformed_image_is_kept_raw_and_recording_goes_on(tmp_path):
+    key = registry.IMAGE_RAW.key("drone", camera="cam_frontal")
+    short = Image(header=Header(stamp=T0), height=24, width=32, step=96, data=b"\x00" * 10)
+    path = tmp_path / "bad.mcap"
+    with path.open("wb") as f, Recorder(f, jpeg_quality=80) as rec:
+        rec.write(key, codec.encode(short), 1)
+        rec.write(key, codec.encode(_image(2)), 2)
+        assert rec.view_errors[key] == 1
+    got = list(read_bus(path))
+    assert [m.payload == codec.encode(short) for m in got] == [True, False]
+    assert got[1].decode().width == 32
+
+
 def test_recorder_rejects_bad_settings():
     with pytest.raises(ValueError, match="jpeg_quality"):
         Recorder(io.BytesIO(), jpeg_quality=0)

@@ -21,6 +21,7 @@ import foxglove
 import msgspec
 import zenoh
 
+from dronewrapper.errors import DroneError
 from dronewrapper.msgs import codec, registry
 from dronewrapper.record.views import View, views
 
@@ -98,8 +99,14 @@ class FoxgloveBridge:
             if self.stats.decode_errors[key] == 1:
                 log.warning("%s: undecodable %s skipped: %s", key, topic.type.__name__, exc)
             return
-        jpeg = self.jpeg_quality
-        for view in views(key, topic, msg, jpeg_quality=jpeg):
+        try:
+            out = views(key, topic, msg, jpeg_quality=self.jpeg_quality)
+        except (ValueError, DroneError) as exc:  # e.g. an image shorter than its size
+            self.stats.decode_errors[key] += 1
+            if self.stats.decode_errors[key] == 1:
+                log.warning("%s: cannot show this %s: %s", key, topic.type.__name__, exc)
+            return
+        for view in out:
             self._channel(view).log(view.data, log_time=log_time_ns)
             self.stats.sent += 1
 

@@ -10,6 +10,7 @@ lossy).
 
 from __future__ import annotations
 
+import logging
 import struct
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
@@ -22,10 +23,13 @@ from mcap.exceptions import McapError
 from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
 
+from dronewrapper.errors import DroneError
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.record.recorder import RAW_ENCODING
+
+log = logging.getLogger("dronewrapper.record")
 
 
 @dataclass(frozen=True)
@@ -219,7 +223,11 @@ def read_bus(
             payload = bytes(message.data)
         elif meta.get("raw") in ("view", "jpeg"):
             schema = records.schemas[channel.schema_id]
-            payload = codec.encode(image_from_view(schema, message.data, meta["raw"]))
+            try:
+                payload = codec.encode(image_from_view(schema, message.data, meta["raw"]))
+            except (ValueError, DroneError) as exc:  # a frame damaged in the file: skipped
+                log.warning("%s at %d ns: frame skipped: %s", key, message.log_time, exc)
+                continue
         else:
             continue  # a derived view: not on the bus
         if key and _selected(key, wanted):

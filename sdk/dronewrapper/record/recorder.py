@@ -27,6 +27,7 @@ from typing import Any, BinaryIO
 import msgspec
 from mcap.writer import CompressionType, Writer
 
+from dronewrapper.errors import DroneError
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.record.views import SchemaSpec, View, message_schema, views
@@ -82,6 +83,7 @@ class Recorder:
         self.jpeg_quality = jpeg_quality
         self.counts: Counter[str] = Counter()  # bus messages per key
         self.decode_errors: Counter[str] = Counter()
+        self.view_errors: Counter[str] = Counter()
         self.bytes_in = 0
         self._output = output
         self._writer = Writer(output, chunk_size=chunk_size, compression=kinds[compression])
@@ -141,11 +143,21 @@ class Recorder:
                 if self.decode_errors[key] == 1:
                     log.warning("%s: undecodable %s kept raw: %s", key, topic.type.__name__, exc)
         pub_ns = _stamp_ns(msg, log_time_ns)
-        if topic is None or msg is None:
-            cid = self._channel_id(key, RAW_ENCODING, None, {"key": key, "type": ""})
+        out: list[View] | None = None
+        if topic is not None and msg is not None:
+            try:
+                out = views(key, topic, msg, jpeg_quality=self.jpeg_quality)
+            except (ValueError, DroneError) as exc:  # e.g. an image shorter than its size
+                self.view_errors[key] += 1
+                if self.view_errors[key] == 1:
+                    log.warning("%s: no Foxglove view (raw kept): %s", key, exc)
+        if topic is None or msg is None or out is None:
+            schema = message_schema(topic.type) if topic is not None else None
+            meta = {"key": key, "type": topic.type.__name__ if topic is not None else ""}
+            cid = self._channel_id(key, RAW_ENCODING, schema, meta)
             self._add(cid, log_time_ns, pub_ns, payload)
         else:
-            self._write_views(key, topic, msg, payload, log_time_ns, pub_ns)
+            self._write_views(key, topic, msg, payload, out, log_time_ns, pub_ns)
         if self._clock() - self._last_flush >= self._flush_period:
             self.flush()
 
@@ -155,6 +167,7 @@ class Recorder:
         topic: registry.Topic[Any],
         msg: Any,
         payload: bytes,
+        out: list[View],
         log_ns: int,
         pub_ns: int,
     ) -> None:
@@ -164,7 +177,6 @@ class Recorder:
             meta = {"key": key, "type": type_name}
             cid = self._channel_id(key, RAW_ENCODING, message_schema(topic.type), meta)
             self._add(cid, log_ns, pub_ns, payload)
-        out: list[View] = views(key, topic, msg, jpeg_quality=self.jpeg_quality)
         for i, view in enumerate(out):
             meta = {}
             if i == 0:
