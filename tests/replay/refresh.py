@@ -13,7 +13,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from harness import RECORDINGS, compare, outputs, reference_path
+from replay_harness import RECORDINGS, compare, outputs, reference_path
 
 
 def main() -> int:

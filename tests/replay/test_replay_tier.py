@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from harness import (
+from replay_harness import (
     CAMERA,
     HOLDOUT,
     RECORDINGS,
