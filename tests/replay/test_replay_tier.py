@@ -106,3 +106,16 @@ def test_holdout_flight_is_followed(replayed):
         # image x to the right, yaw counter-clockwise positive: target right -> turn right (< 0)
         assert cmd["yaw_rate"] * offset < 0, (cmd, offset)
     assert checked >= 5
+
+
+def test_the_comparison_catches_moved_outputs():
+    ref = json.loads(reference_path(HOLDOUT).read_text())
+    moved = json.loads(json.dumps(ref))
+    moved["perception"][3]["detections"][0]["cx"] += 1.5
+    moved["controller"][5]["yaw_rate"] += 0.01
+    moved["controller"].pop()
+    diff = compare(moved, ref)
+    report = diff.report(HOLDOUT)
+    assert len(diff.problems) == 3, report
+    assert "perception[3]" in report and "controller[5]" in report and "commands" in report
+    assert diff.max_bbox_px == pytest.approx(1.5)
