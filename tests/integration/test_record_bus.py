@@ -239,6 +239,7 @@ def test_foxglove_server_answers_a_websocket_client(router, spawn):
             ) as ws:
                 info = json.loads(await asyncio.wait_for(ws.recv(), 10))
                 advertised = None
+                channels: dict[str, dict] = {}
                 deadline = time.monotonic() + 30
                 while advertised is None and time.monotonic() < deadline:
                     pub.put(pose)
@@ -250,6 +251,7 @@ def test_foxglove_server_answers_a_websocket_client(router, spawn):
                         msg = json.loads(frame)
                         if msg.get("op") == "advertise":
                             for ch in msg["channels"]:
+                                channels[ch["topic"]] = ch
                                 if ch["topic"] == "/drone/mavros/local_position/pose":
                                     advertised = ch
                 assert advertised is not None, "pose channel never advertised"
@@ -259,8 +261,11 @@ def test_foxglove_server_answers_a_websocket_client(router, spawn):
                 deadline = time.monotonic() + 30
                 seen = []
                 next_subscribe = 0.0
+                data = None
                 while time.monotonic() < deadline:
-                    if time.monotonic() >= next_subscribe:
+                    if data is not None and "/tf" in channels:
+                        return info, channels, data
+                    if data is None and time.monotonic() >= next_subscribe:
                         subscriptions.append(7 + len(subscriptions))
                         request = {"id": subscriptions[-1], "channelId": advertised["id"]}
                         await ws.send(json.dumps({"op": "subscribe", "subscriptions": [request]}))
@@ -271,20 +276,26 @@ def test_foxglove_server_answers_a_websocket_client(router, spawn):
                     except asyncio.TimeoutError:
                         continue
                     seen.append(frame[:1] if isinstance(frame, bytes) else frame[:80])
-                    if isinstance(frame, bytes) and frame[0] == 0x01:
+                    if isinstance(frame, str) and json.loads(frame).get("op") == "advertise":
+                        channels.update({c["topic"]: c for c in json.loads(frame)["channels"]})
+                    if isinstance(frame, bytes) and frame[0] == 0x01 and data is None:
                         sub_id, _log_time = struct.unpack_from("<IQ", frame, 1)
                         assert sub_id in subscriptions
-                        return info, advertised, frame[13:]
+                        data = frame[13:]
                 raise AssertionError(
-                    f"no message on the subscribed channel; got {seen[:20]}\n{server.output()}"
+                    f"no message on the subscribed channel or no /tf; got {seen[:20]}\n"
+                    f"{server.output()}"
                 )
 
-        info, advertised, payload = asyncio.run(talk())
+        info, channels, payload = asyncio.run(talk())
+    advertised = channels["/drone/mavros/local_position/pose"]
     assert info["op"] == "serverInfo"
     assert (
         advertised["encoding"] == "json" and advertised["schemaName"] == "dronewrapper/PoseStamped"
     )
     assert "properties" in json.loads(advertised["schema"])
+    tf = channels["/tf"]  # the pose as a transform, same as the recorder writes
+    assert (tf["encoding"], tf["schemaName"]) == ("protobuf", "foxglove.FrameTransform")
     assert json.loads(payload)["pose"]["position"]["x"] == 1.5
     assert server.stop() == 0, server.output()
 
