@@ -44,15 +44,29 @@ KEYS = [
 
 @dataclass(frozen=True)
 class Recording:
+    """graph + scenario; ``start_when``: (object, y_min, y_max): start once the object is there
+    walking north (ENU m)."""
+
     graph: str
     scenario: str
     seconds: float
     teleop: bool = False
+    image_rate_hz: float = 6.0
+    start_when: tuple[str, float, float] | None = None
 
 
 RECORDINGS = {
     "beacon_smooth": Recording("sim_follow_color", "beacon_smooth", 3.0),
     "holdout_teleop": Recording("sim_follow_color", "beacon_static", 3.0, teleop=True),
+    # person1 walks between the drone and the target: recorded from about 3 s before it
+    # passes (the recorder takes a second to start), so a replay finds the target first
+    "people_crossing_front": Recording(
+        "sim_follow_person",
+        "people_crossing_front",
+        7.0,
+        image_rate_hz=3.0,
+        start_when=("person1", -5.0, -4.0),
+    ),
 }
 
 
@@ -76,6 +90,25 @@ def _wait_tracking(session: zenoh.Session, timeout: float) -> None:
     try:
         if not seen.wait(timeout):
             raise TimeoutError(f"the controller did not track within {timeout:g} s")
+    finally:
+        sub.undeclare()
+
+
+def _wait_object(session: zenoh.Session, name: str, y_min: float, y_max: float) -> None:
+    there = threading.Event()
+
+    last_y = [math.nan]
+
+    def on_pose(sample: zenoh.Sample) -> None:
+        y = codec.decode(registry.SIM_OBJECT_POSE.type, sample.payload.to_bytes()).pose.position.y
+        if y_min <= y <= y_max and y > last_y[0]:  # there, and walking toward +y (north)
+            there.set()
+        last_y[0] = y
+
+    sub = session.declare_subscriber(registry.SIM_OBJECT_POSE.key(name=name), on_pose)
+    try:
+        if not there.wait(60):
+            raise TimeoutError(f"{name} did not reach y in [{y_min}, {y_max}] within 60 s")
     finally:
         sub.undeclare()
 
@@ -110,6 +143,8 @@ def make(name: str) -> Path:
     stop = threading.Event()
     try:
         _wait_tracking(session, 90)
+        if spec.start_when is not None:
+            _wait_object(session, *spec.start_when)
         steer = threading.Thread(target=_steer, args=(session, stop), daemon=True)
         if spec.teleop:
             steer.start()
@@ -117,7 +152,7 @@ def make(name: str) -> Path:
             [
                 *(str(bin_), "record", *KEYS, "-o", str(out), "--connect", router),
                 *("--duration", str(spec.seconds), "--compressed-images"),
-                *("--jpeg-quality", "50", "--image-rate", "6"),
+                *("--jpeg-quality", "50", "--image-rate", str(spec.image_rate_hz)),
             ],
             cwd=REPO,
             check=True,

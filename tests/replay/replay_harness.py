@@ -31,6 +31,15 @@ RECORDINGS = {
     # name: (perception config, controller config overrides); the graph's settings
     "beacon_smooth": ({"detector": "color"}, {"mode": "follow_color"}),
     "holdout_teleop": ({"detector": "color"}, {"mode": "follow_color"}),
+    "people_crossing_front": (
+        {
+            "detector": "yolox",
+            "model_path": str(REPO / "assets" / "models" / "yolox_nano.onnx"),
+            "tracker": "kalman",
+            "threads": 1,  # same results on any machine: no thread-count-dependent sums
+        },
+        {"mode": "follow_person"},
+    ),
 }
 HOLDOUT = "holdout_teleop"
 """Flown on a path of its own (see record_sim.py): never used to tune anything."""
