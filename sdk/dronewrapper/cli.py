@@ -8,10 +8,14 @@
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
     dronewrapper station [--host H] [--port P]       the web ground station (loopback)
+    dronewrapper record [KEYEXPR...] -o FILE.mcap    the bus to MCAP (--info FILE summarises)
+    dronewrapper replay FILE.mcap [--rate R] [...]   a recording back on the bus
+    dronewrapper foxglove [KEYEXPR...] [--port P]    the live bus to Foxglove (WebSocket)
     dronewrapper --version                           the installed version
 
 ``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
-SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``.
+SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``; ``record``,
+``replay`` and ``foxglove`` come with its ``record`` extra (``pip install './sdk[record]'``).
 """
 
 from __future__ import annotations
@@ -33,6 +37,13 @@ _STACK_COMMANDS = {
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
     "station": ("dronewrapper_ground_station.cli", "main"),
+}
+
+# subcommand -> (module, function) of the SDK's record extra (mcap, foxglove-sdk)
+_RECORD_COMMANDS = {
+    "record": ("dronewrapper.record.cli", "record_main"),
+    "replay": ("dronewrapper.record.cli", "replay_main"),
+    "foxglove": ("dronewrapper.record.cli", "foxglove_main"),
 }
 
 
@@ -197,18 +208,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     local = {"router": _router, "echo": _echo, "alive": _alive, "doctor": _doctor}
     if command in local:
         return local[command](rest)
-    if command in _STACK_COMMANDS:
-        module_name, func = _STACK_COMMANDS[command]
+    if command in _STACK_COMMANDS or command in _RECORD_COMMANDS:
+        module_name, func = {**_STACK_COMMANDS, **_RECORD_COMMANDS}[command]
         try:
             module = importlib.import_module(module_name)
+            entry = getattr(module, func)
+            if command in _RECORD_COMMANDS:
+                import foxglove  # noqa: F401  (the record extra, checked before running)
+                import mcap  # noqa: F401
         except ModuleNotFoundError as exc:
+            need = (
+                "the record extra: pip install 'dronewrapper[record]'"
+                if command in _RECORD_COMMANDS
+                else "the on-board stack"
+            )
             print(
-                f"dronewrapper {command}: needs the on-board stack ({exc.name} is missing); "
+                f"dronewrapper {command}: needs {need} ({exc.name} is missing); "
                 "run `make setup` in the repository",
                 file=sys.stderr,
             )
             return 2
-        return int(getattr(module, func)(rest) or 0)
+        return int(entry(rest) or 0)
     print(f"dronewrapper: unknown command {command!r}\n\n{__doc__.strip()}", file=sys.stderr)
     return 2
 

@@ -43,6 +43,7 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
+from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
 T = TypeVar("T")
@@ -244,6 +245,15 @@ SIM_OBJECT_CMD_VEL = Topic(
     ("tests", "teleop"),
     "teleoperates an object",
     COMMAND,
+)
+
+# ---- replay ----
+CLOCK = Topic(
+    "clock",
+    Header,
+    0.0,
+    ("replay",),
+    "recorded time during a replay (header.stamp, s since the epoch), like ROS /clock",
 )
 
 # ---- services ----
