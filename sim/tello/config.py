@@ -24,6 +24,7 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         packet_bytes: largest video datagram payload, bytes (the real drone's 1460).
         physics_rate_hz: flight model step rate, Hz.
         state_rate_hz: state datagram rate, Hz (the real drone's 10).
+        auto_land_s: lands after this long without a command, s (the real drone's 15).
         netns_subnet: the /24 (or smaller) of ``--netns``: the drone at the first host address,
             the host side at the second; "" = 192.168.10.0/24 (192.168.(10+N).0/24 for
             instance N).
@@ -39,6 +40,7 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     packet_bytes: int = 1460
     physics_rate_hz: float = 100.0
     state_rate_hz: float = 10.0
+    auto_land_s: float = 15.0
     netns_subnet: str = ""
 
     def __post_init__(self) -> None:
@@ -52,6 +54,8 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             value = getattr(self, name)
             if not 0 < value <= 1000:
                 raise ValueError(f"{name} must be in (0, 1000], got {value}")
+        if not 1.0 <= self.auto_land_s <= 3600.0:
+            raise ValueError(f"auto_land_s must be in 1..3600, got {self.auto_land_s}")
         if not 50 <= self.bitrate_kbps <= 50_000:
             raise ValueError(f"bitrate_kbps must be in 50..50000, got {self.bitrate_kbps}")
         if not 1 <= self.keyframe_interval <= 600:

@@ -63,7 +63,8 @@ class Session:
         state_port, video_port: where the state string and the video go (``port`` moves them).
         streaming: video on (``streamon``).
         speed: speed of the moves, m/s (``speed``).
-        last_command_s: time of the last valid command (auto-landing), s.
+        last_command_s: time of the last valid command or the end of the last manoeuvre
+            (auto-landing), s.
     """
 
     client: Address | None = None
@@ -196,9 +197,11 @@ class TelloProtocol:
         flight = self.flight
         flight.step(dt)
         replies = []
-        if flight.take_finished() and self._pending is not None:
-            replies.append(Reply(OK, self._pending))
-            self._pending = None
+        if flight.take_finished():
+            self.session.last_command_s = now  # the 15 s count from the end of a manoeuvre
+            if self._pending is not None:
+                replies.append(Reply(OK, self._pending))
+                self._pending = None
         if flight.flying and not flight.busy:
             quiet = now - self.session.last_command_s
             if quiet >= flight.env.auto_land_s or (
@@ -263,6 +266,8 @@ class TelloProtocol:
     def _land(self, args: list[str], now: float) -> str:
         if args:
             raise BadArgs
+        if self.flight.phase is Phase.LANDING:
+            return ""  # already landing (by itself): answered on the ground
         if not self.flight.flying:
             return MOTOR_STOP
         self._pending = None

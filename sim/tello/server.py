@@ -17,6 +17,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -29,6 +30,7 @@ from dronewrapper_sim.frames import quat_from_euler
 from dronewrapper_sim.runner import PoseSnapshot, pose_msg
 from dronewrapper_sim.tello.config import TelloConfig
 from dronewrapper_sim.tello.flight import TelloFlight
+from dronewrapper_sim.tello.params import TELLO
 from dronewrapper_sim.tello.protocol import Reply, TelloProtocol
 from dronewrapper_sim.tello.state_string import format_state
 from dronewrapper_sim.world.scenario import Scenario
@@ -86,6 +88,7 @@ class TelloServer:
         self.flight = TelloFlight(
             start=(scenario.vehicle.x, scenario.vehicle.y, scenario.vehicle.yaw),
             wind=WindModel(wind.east_m_s, wind.north_m_s, wind.gust_m_s, seed=seed),
+            envelope=replace(TELLO, auto_land_s=config.auto_land_s),
             battery_percent=config.battery_percent,
         )
         self.protocol = TelloProtocol(self.flight, baro_origin_m=scenario.home.altitude_m)
