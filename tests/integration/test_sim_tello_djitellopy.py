@@ -1,0 +1,114 @@
+"""The most used third-party Tello library, djitellopy, flown unchanged against the simulated
+Tello in its own network namespace (``--netns``, root): connect, stream on and a frame,
+take-off, moves, rotation, rc, stop, land. And the namespace's veth pair is gone after the
+sim exits, also after it was killed with SIGKILL.
+
+djitellopy binds 8889, 8890 and 11111 on every interface (as on a laptop on the Tello's
+Wi-Fi) and keeps module-level sockets, so it flies from a child process of its own.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from support import python_module, wait_for
+
+pytestmark = pytest.mark.integration
+
+FLIGHT = r"""
+import json, time
+from djitellopy import Tello
+
+out = {}
+tello = Tello(host="192.168.10.1")
+tello.connect()
+out["battery"] = tello.get_battery()
+out["sdk"] = tello.query_sdk_version()
+tello.streamon()
+reader = tello.get_frame_read()
+deadline = time.time() + 15
+while time.time() < deadline and reader.frame.shape != (720, 960, 3):
+    time.sleep(0.05)
+out["frame"] = list(reader.frame.shape)
+out["frame_std"] = float(reader.frame.std())
+tello.takeoff()
+out["height_takeoff"] = tello.get_height()
+tello.move_forward(50)
+tello.move_up(30)
+out["height_up"] = tello.get_height()
+tello.rotate_clockwise(90)
+out["yaw_cw"] = tello.get_yaw()
+tello.send_rc_control(0, 60, 0, 0)
+time.sleep(1.5)
+out["rc_vgx_vgy"] = [tello.get_speed_x(), tello.get_speed_y()]
+tello.send_rc_control(0, 0, 0, 0)
+tello.send_control_command("stop")
+tello.land()
+out["height_landed"] = tello.get_height()
+tello.streamoff()
+print("RESULT " + json.dumps(out), flush=True)
+"""
+
+
+def veth_pairs() -> str:
+    return subprocess.run(["ip", "-o", "link", "show"], capture_output=True, text=True).stdout
+
+
+def test_djitellopy_flies_the_sim_through_netns(spawn):
+    assert os.geteuid() == 0, "this test needs root: --netns creates a namespace and veth pair"
+    proc = spawn(
+        python_module("dronewrapper_sim", "--aircraft", "tello", "--netns"),
+        "tello",
+    )
+    wait_for(lambda: "ready:" in proc.output() or not proc.alive(), 30, what="sim ready")
+    assert proc.alive(), proc.output()
+    host_if = f"tsim{proc.proc.pid}h"
+    assert host_if in veth_pairs()
+    flight = subprocess.run(
+        [sys.executable, "-c", FLIGHT], capture_output=True, text=True, timeout=120
+    )
+    lines = [line for line in flight.stdout.splitlines() if line.startswith("RESULT ")]
+    assert lines, flight.stdout + flight.stderr
+    out = json.loads(lines[0][len("RESULT ") :])
+    assert out["battery"] == 100
+    assert out["sdk"] == "20"
+    assert out["frame"] == [720, 960, 3]
+    assert out["frame_std"] > 5  # a rendered scene, decoded by djitellopy's PyAV reader
+    assert 80 <= out["height_takeoff"] <= 120  # cm
+    assert out["height_up"] - out["height_takeoff"] == pytest.approx(30, abs=8)
+    assert out["yaw_cw"] == pytest.approx(90, abs=3)  # clockwise > 0
+    vgx, vgy = out["rc_vgx_vgy"]  # forward after cw 90: to the right of the power-on heading
+    assert vgy >= 3 and abs(vgx) <= 2
+    assert out["height_landed"] == 0
+    assert proc.stop() == 0
+    assert host_if not in veth_pairs()  # removed at exit
+
+
+def test_netns_is_gone_after_sigkill(spawn):
+    assert os.geteuid() == 0, "this test needs root: --netns creates a namespace and veth pair"
+    proc = spawn(
+        python_module(
+            "dronewrapper_sim", "--aircraft", "tello", "--netns",
+            "--set", "tello.netns_subnet=10.213.77.0/24", "--set", "tello.video=false",
+        ),
+        "tello",
+    )  # fmt: skip
+    wait_for(lambda: "ready:" in proc.output() or not proc.alive(), 30, what="sim ready")
+    assert proc.alive(), proc.output()
+    host_if = f"tsim{proc.proc.pid}h"
+    assert host_if in veth_pairs()
+    assert (
+        "10.213.77.2/24"
+        in subprocess.run(
+            ["ip", "-o", "addr", "show", host_if], capture_output=True, text=True
+        ).stdout
+    )
+    os.kill(proc.proc.pid, signal.SIGKILL)
+    proc.proc.wait(10)
+    wait_for(lambda: host_if not in veth_pairs(), 10, what=f"{host_if} freed by the kernel")
