@@ -15,7 +15,7 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from dronewrapper_sim.tello.flight import Phase, TelloFlight, body_to_enu
 
@@ -73,7 +73,6 @@ class Session:
     streaming: bool = False
     speed: float = 1.0
     last_command_s: float = 0.0
-    counters: dict[str, int] = field(default_factory=dict)
 
 
 class BadArgs(Exception):

@@ -29,50 +29,13 @@ from dronewrapper_sim.frames import wrap_pi
 MISSION_PAD_FIELDS = "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;"
 """What a Tello sends with no mission pad in view (and what a non-EDU Tello always sends)."""
 
-INT_FIELDS = frozenset(
-    (
-        "mid",
-        "x",
-        "y",
-        "z",
-        "pitch",
-        "roll",
-        "yaw",
-        "vgx",
-        "vgy",
-        "vgz",
-        "templ",
-        "temph",
-        "tof",
-        "h",
-        "bat",
-        "time",
-    )
+FIELD_ORDER = (
+    *("mid", "x", "y", "z", "mpry", "pitch", "roll", "yaw", "vgx", "vgy", "vgz"),
+    *("templ", "temph", "tof", "h", "bat", "baro", "time", "agx", "agy", "agz"),
 )
+"""The fields of the state datagram, in the real drone's order."""
 FLOAT_FIELDS = frozenset(("baro", "agx", "agy", "agz"))
-FIELD_ORDER = [
-    "mid",
-    "x",
-    "y",
-    "z",
-    "mpry",
-    "pitch",
-    "roll",
-    "yaw",
-    "vgx",
-    "vgy",
-    "vgz",
-    "templ",
-    "temph",
-    "tof",
-    "h",
-    "bat",
-    "baro",
-    "time",
-    "agx",
-    "agy",
-    "agz",
-]
+INT_FIELDS = frozenset(FIELD_ORDER) - FLOAT_FIELDS - {"mpry"}
 
 
 def attitude_deg(flight) -> tuple[int, int, int]:

@@ -172,7 +172,7 @@ def test_tello_over_udp(tello, tmp_path):
         states = client.states(11)
         period = (states[-1][0] - states[0][0]) / 10
         assert 0.05 < period < 0.2
-        assert list(states[-1][1]) == FIELD_ORDER
+        assert tuple(states[-1][1]) == FIELD_ORDER
         assert states[-1][1]["bat"] == 100 and states[-1][1]["h"] == 0
 
         # bad input: answered, never crashes, changes nothing

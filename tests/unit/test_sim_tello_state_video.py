@@ -40,7 +40,7 @@ def state_of(protocol: TelloProtocol) -> dict:
     text = format_state(protocol)
     assert STATE_LINE.fullmatch(text), text
     fields = parse_state(text)
-    assert list(fields) == FIELD_ORDER
+    assert tuple(fields) == FIELD_ORDER
     return fields
 
 
