@@ -171,7 +171,7 @@ def test_tello_over_udp(tello, tmp_path):
         # the state string: 10 Hz, the real field order, parsed back
         states = client.states(11)
         period = (states[-1][0] - states[0][0]) / 10
-        assert 0.05 < period < 0.2
+        assert 0.05 < period < 0.3  # 10 Hz (bounds for a loaded machine)
         assert tuple(states[-1][1]) == FIELD_ORDER
         assert states[-1][1]["bat"] == 100 and states[-1][1]["h"] == 0
 
@@ -199,10 +199,8 @@ def test_tello_over_udp(tello, tmp_path):
         assert client.ask("up 30") == "ok"
         assert pose().position.z - p1.z == pytest.approx(0.3, abs=0.1)
         assert client.ask("ccw 90") == "ok"  # now heading north
-        assert (
-            client.ask("attitude?").endswith("yaw:-90;")
-            or abs(int(client.ask("attitude?").split("yaw:")[1].rstrip(";")) + 90) <= 3
-        )
+        attitude = parse_state(client.ask("attitude?"))
+        assert attitude["yaw"] == pytest.approx(-90, abs=3)  # counter-clockwise < 0
         assert client.ask("speed 50") == "ok"
         p2 = pose().position
         assert client.ask("go 50 0 -30 60") == "ok"  # forward (north) and down
