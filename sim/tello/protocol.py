@@ -18,6 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from dronewrapper_sim.tello.flight import Phase, TelloFlight, body_to_enu
+from dronewrapper_sim.tello.state_string import acceleration_mg, attitude_deg
 
 Address = tuple[str, int]
 
@@ -414,14 +415,10 @@ class TelloProtocol:
     def attitude_deg(self) -> tuple[int, int, int]:
         """Pitch (nose up > 0), roll (right side down > 0), yaw (clockwise > 0, from the heading
         at power-on, -180..180), whole degrees."""
-        from dronewrapper_sim.tello.state_string import attitude_deg
-
         return attitude_deg(self.flight)
 
     def acceleration_mg(self) -> tuple[float, float, float]:
         """Specific force in the body frame FRD, 0.001 g (agz ~ -1000 at rest)."""
-        from dronewrapper_sim.tello.state_string import acceleration_mg
-
         return acceleration_mg(self.flight.state)
 
 
