@@ -4,7 +4,9 @@ take-off, moves, rotation, rc, stop, land. And the namespace's veth pair is gone
 sim exits, also after it was killed with SIGKILL.
 
 djitellopy binds 8889, 8890 and 11111 on every interface (as on a laptop on the Tello's
-Wi-Fi) and keeps module-level sockets, so it flies from a child process of its own.
+Wi-Fi) and keeps module-level sockets, so it flies from a child process of its own, in an
+empty network namespace (``unshare --net``, the "laptop") where the sim is started too: its
+``--netns`` namespace hangs off that one, and no port can collide with other tests.
 """
 
 from __future__ import annotations
@@ -17,15 +19,35 @@ import sys
 
 import pytest
 
-from support import python_module, wait_for
+from support import REPO, python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
 FLIGHT = r"""
-import json, time
+import json, signal, subprocess, sys, time
+from pathlib import Path
+
+from dronewrapper_compose.launcher import die_with_parent
+
+# an empty network namespace of our own (unshare -n): djitellopy's 8889/8890/11111 on every
+# interface cannot collide with other tests on this machine
+subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
+log = Path(sys.argv[1])
+with open(log, "wb") as out_file:
+    sim = subprocess.Popen(
+        [sys.executable, "-m", "dronewrapper_sim", "--aircraft", "tello", "--netns"],
+        stdout=out_file, stderr=subprocess.STDOUT, preexec_fn=die_with_parent,
+    )
+deadline = time.time() + 30
+while "ready:" not in log.read_text() and sim.poll() is None and time.time() < deadline:
+    time.sleep(0.1)
+
+def links():
+    return subprocess.run(["ip", "-o", "link"], capture_output=True, text=True).stdout
+
+out = {"veth_while_running": f"tsim{sim.pid}h" in links()}
 from djitellopy import Tello
 
-out = {}
 tello = Tello(host="192.168.10.1")
 tello.connect()
 out["battery"] = tello.get_battery()
@@ -52,6 +74,9 @@ tello.send_control_command("stop")
 tello.land()
 out["height_landed"] = tello.get_height()
 tello.streamoff()
+sim.send_signal(signal.SIGINT)
+out["sim_exit"] = sim.wait(15)
+out["veth_after_exit"] = f"tsim{sim.pid}h" in links()
 print("RESULT " + json.dumps(out), flush=True)
 """
 
@@ -60,22 +85,21 @@ def veth_pairs() -> str:
     return subprocess.run(["ip", "-o", "link", "show"], capture_output=True, text=True).stdout
 
 
-def test_djitellopy_flies_the_sim_through_netns(spawn):
+def test_djitellopy_flies_the_sim_through_netns(tmp_path):
     assert os.geteuid() == 0, "this test needs root: --netns creates a namespace and veth pair"
-    proc = spawn(
-        python_module("dronewrapper_sim", "--aircraft", "tello", "--netns"),
-        "tello",
-    )
-    wait_for(lambda: "ready:" in proc.output() or not proc.alive(), 30, what="sim ready")
-    assert proc.alive(), proc.output()
-    host_if = f"tsim{proc.proc.pid}h"
-    assert host_if in veth_pairs()
+    log = tmp_path / "tello.log"
     flight = subprocess.run(
-        [sys.executable, "-c", FLIGHT], capture_output=True, text=True, timeout=120
+        ["unshare", "--net", "--", sys.executable, "-c", FLIGHT, str(log)],
+        capture_output=True,
+        text=True,
+        timeout=150,
+        cwd=REPO,
     )
     lines = [line for line in flight.stdout.splitlines() if line.startswith("RESULT ")]
-    assert lines, flight.stdout + flight.stderr
+    sim_log = log.read_text() if log.exists() else ""
+    assert lines, flight.stdout + flight.stderr + sim_log
     out = json.loads(lines[0][len("RESULT ") :])
+    assert out["veth_while_running"], sim_log
     assert out["battery"] == 100
     assert out["sdk"] == "20"
     assert out["frame"] == [720, 960, 3]
@@ -86,8 +110,9 @@ def test_djitellopy_flies_the_sim_through_netns(spawn):
     vgx, vgy = out["rc_vgx_vgy"]  # forward after cw 90: to the right of the power-on heading
     assert vgy >= 3 and abs(vgx) <= 2
     assert out["height_landed"] == 0
-    assert proc.stop() == 0
-    assert host_if not in veth_pairs()  # removed at exit
+    assert out["sim_exit"] == 0, sim_log
+    assert not out["veth_after_exit"]  # removed at exit
+    assert "Traceback" not in sim_log
 
 
 def test_netns_is_gone_after_sigkill(spawn):
