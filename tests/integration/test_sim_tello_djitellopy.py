@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -117,10 +118,11 @@ def test_djitellopy_flies_the_sim_through_netns(tmp_path):
 
 def test_netns_is_gone_after_sigkill(spawn):
     assert os.geteuid() == 0, "this test needs root: --netns creates a namespace and veth pair"
+    a, b = random.randrange(200, 250), random.randrange(256)  # unlikely to be in use
     proc = spawn(
         python_module(
             "dronewrapper_sim", "--aircraft", "tello", "--netns",
-            "--set", "tello.netns_subnet=10.213.77.0/24", "--set", "tello.video=false",
+            "--set", f"tello.netns_subnet=10.{a}.{b}.0/24", "--set", "tello.video=false",
         ),
         "tello",
     )  # fmt: skip
@@ -128,12 +130,10 @@ def test_netns_is_gone_after_sigkill(spawn):
     assert proc.alive(), proc.output()
     host_if = f"tsim{proc.proc.pid}h"
     assert host_if in veth_pairs()
-    assert (
-        "10.213.77.2/24"
-        in subprocess.run(
-            ["ip", "-o", "addr", "show", host_if], capture_output=True, text=True
-        ).stdout
+    addresses = subprocess.run(
+        ["ip", "-o", "addr", "show", host_if], capture_output=True, text=True
     )
+    assert f"10.{a}.{b}.2/24" in addresses.stdout
     os.kill(proc.proc.pid, signal.SIGKILL)
     proc.proc.wait(10)
     wait_for(lambda: host_if not in veth_pairs(), 10, what=f"{host_if} freed by the kernel")
