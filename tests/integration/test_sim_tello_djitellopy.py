@@ -73,6 +73,7 @@ out["rc_vgx_vgy"] = [tello.get_speed_x(), tello.get_speed_y()]
 tello.send_rc_control(0, 0, 0, 0)
 tello.send_control_command("stop")
 tello.land()
+time.sleep(0.3)  # the next state datagram (10 Hz) after the 'ok'
 out["height_landed"] = tello.get_height()
 tello.streamoff()
 sim.send_signal(signal.SIGINT)
