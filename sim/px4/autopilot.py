@@ -163,7 +163,8 @@ class Autopilot:
         self.nonfinite_setpoints = 0
         self.crashes = 0
         self._gains_version = -1
-        rates = link_rates or {"onboard": telemetry.ONBOARD_RATES, "gcs": telemetry.GCS_RATES}
+        default_rates = {"onboard": telemetry.ONBOARD_RATES, "gcs": telemetry.GCS_RATES}
+        rates = default_rates if link_rates is None else link_rates  # {}: no links at all
         self.links = {
             name: LinkState(name, telemetry.StreamScheduler(r)) for name, r in rates.items()
         }
