@@ -67,6 +67,10 @@ class FakePX4:
         self.climb_to: float | None = None  # ArduCopter: take-off height above the start, m
         self.takeoff_overridden = False
         self.armed_at = math.inf
+        self.refuse_modes: dict[int, str] = {}  # PX4 custom_mode -> the commander's reason
+        self.mode_acks = 2  # PX4: 2 (receiver + commander); 1: an autopilot that acks once
+        self.mode_changes = True  # False: acks a mode but never enters it
+        self.heartbeat_every = 10  # ticks of 20 ms (5 Hz keeps tests short; PX4 sends 1 Hz)
         self.conn = mavutil.mavlink_connection(
             f"udpout:127.0.0.1:{bridge_port}", source_system=1, source_component=1
         )
@@ -112,7 +116,7 @@ class FakePX4:
             if tick % 10 == 0:
                 self.send("extended_sys_state", 0, self.landed_state)
                 self.send("sys_status", 0, 0, 0, 0, 12100, 500, 80, 0, 0, 0, 0, 0, 0)
-            if tick % 10 == 0 and self.heartbeats:  # 5 Hz keeps tests short
+            if tick % self.heartbeat_every == 0 and self.heartbeats:
                 base = 29 | (ARMED if self.armed else 0)
                 self.send("heartbeat", 2, self.autopilot, base, self.custom_mode, 4)
 
@@ -122,6 +126,14 @@ class FakePX4:
             d = max(-self.climb_to, d - self.climb_rate * dt)
             self.position_ned = (n, e, d)
             self.landed_state = 2 if d < -0.2 else self.landed_state
+        if self.armed and self.custom_mode == 9:  # LAND: 1 m/s down, disarm on the ground
+            self.climb_to = None
+            d = min(0.0, d + 1.0 * dt)
+            self.position_ned = (n, e, d)
+            if d >= 0.0:
+                self.armed, self.landed_state = False, 1
+                self.send("statustext", 6, b"Disarming motors")
+            return
         if self.armed and d > -0.2 and time.monotonic() - self.armed_at >= self.disarm_delay:
             self.armed, self.climb_to = False, None
             self.send("statustext", 6, b"Disarming motors")
@@ -174,13 +186,17 @@ class FakePX4:
         elif msg.command == 176:  # PX4: the receiver's ACCEPTED, then the commander's result
             wanted = (int(msg.param2) << 16) | (int(msg.param3) << 24)
             self.send("command_ack", 176, 0)
-            if self.armed and wanted in (POSCTL, ALTCTL):  # no RC on this vehicle
+            refusal = self.refuse_modes.get(wanted)
+            if refusal is None and self.armed and wanted in (POSCTL, ALTCTL):  # no RC here
                 name = "Position" if wanted == POSCTL else "Altitude"
+                refusal = f"Switching to {name} is currently not available"
+            if refusal is not None:
                 self.send("command_ack", 176, 1)
-                text = f"Switching to {name} is currently not available\t"
-                self.send("statustext", 2, text.encode())
-            else:
+                self.send("statustext", 2, f"{refusal}\t".encode())
+                return
+            if self.mode_changes:
                 self.custom_mode = wanted
+            if self.mode_acks > 1:
                 self.send("command_ack", 176, 0)
         elif msg.command == 400:
             if self.refuse_arm:
