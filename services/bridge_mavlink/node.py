@@ -22,6 +22,8 @@ import msgspec
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
+    PARAM_INTEGER,
+    PARAM_REAL,
     SEVERITY_WARNING,
     CommandBool,
     CommandBoolResult,
@@ -881,9 +883,10 @@ class Bridge:
     def _param_decode(self, raw: float, param_type: int) -> ParamValue:
         if param_type in INTEGER_PARAM_TYPES:
             if self.autopilot == AUTOPILOT_ARDUPILOT:
-                return ParamValue(integer=int(raw))
-            return ParamValue(integer=_float_bits_to_int(raw))  # PX4: bytewise int32
-        return ParamValue(real=raw)
+                return ParamValue(integer=int(raw), kind=PARAM_INTEGER)
+            # PX4: bytewise int32
+            return ParamValue(integer=_float_bits_to_int(raw), kind=PARAM_INTEGER)
+        return ParamValue(real=raw, kind=PARAM_REAL)
 
     def _param_exchange(self, param_id: str, send: Any) -> tuple[float, int] | None:
         """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""

@@ -81,3 +81,23 @@ def test_scripted_arducopter_disarms_when_its_take_off_is_overridden(ardu_rig):
     user.publisher(registry.SETPOINT_RAW_LOCAL).put(ground)  # a hold at the ground
     wait_for(lambda: "Disarming motors" in texts, 10, what="ArduCopter's disarm")
     assert fake.takeoff_overridden and fake.position_ned[2] > -0.2
+
+
+@pytest.mark.parametrize("autopilot", [3, 12], ids=["arducopter", "px4"])
+def test_integer_parameter_zero_is_int_zero(router, autopilot):
+    """Issue 21: an integer parameter equal to 0 came back as 0.0 (on any autopilot).
+    ArduPilot 4.8's names (ARMING_SKIPCHK was ARMING_CHECK, MAV_SYSID was SYSID_THISMAV)."""
+    rig = make_rig(router, autopilot=autopilot)
+    _bridge, fake, _user = next(rig)
+    try:
+        fake.params.update({"ARMING_SKIPCHK": (0, 6), "MAV_SYSID": (1, 6), "WP_SPD": (0.0, 9)})
+        with DroneWrapper("drone", router, timeout=20, cameras=()) as drone:
+            zero = drone.param_get("ARMING_SKIPCHK")
+            assert zero == 0 and isinstance(zero, int)
+            assert drone.param_get("MAV_SYSID") == 1
+            real_zero = drone.param_get("WP_SPD")
+            assert real_zero == 0.0 and isinstance(real_zero, float)
+            written = drone.param_set("ARMING_SKIPCHK", 0)
+            assert written == 0 and isinstance(written, int)
+    finally:
+        rig.close()
