@@ -23,7 +23,9 @@ What the bridge streams to the autopilot each tick, and when it acts on its own:
   in the guided mode (a setpoint arrived while in it, it was entered with a fresh setpoint, or
   the bridge entered it with a primed stream). So an autopilot's own take-off in GUIDED
   (ArduPilot's NAV_TAKEOFF) is never overridden by a hold at the ground, and a vehicle nobody
-  commanded is left to the autopilot.
+  commanded is left to the autopilot. On the ground, holds are streamed only in PX4's OFFBOARD
+  (which needs the stream to stay in the mode and to arm); in ArduPilot's GUIDED a position
+  target would override a take-off, so the hold starts once the vehicle is airborne.
 
 Every state change is returned as a :class:`Transition` so the node publishes and logs it.
 """
@@ -40,7 +42,7 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     PositionTarget,
 )
-from dronewrapper_bridge_mavlink.modes import is_guided
+from dronewrapper_bridge_mavlink.modes import holds_on_the_ground, is_guided
 from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
 
 NONE, HOLD, LAND, RETURN = "", "hold", "land", "return"
@@ -224,7 +226,11 @@ class Failsafe:
         if fresh is not None:
             self._hold = None
             out.send = fresh
-        elif self.priming(now) or (in_control and self.state in (NONE, HOLD)):
+        elif self.priming(now) or (
+            in_control
+            and self.state in (NONE, HOLD)
+            and (self.airborne or holds_on_the_ground(self.mode))
+        ):
             self._hold_here(pose)
             out.send = self._hold
             if in_control and self.state == NONE and self.armed:

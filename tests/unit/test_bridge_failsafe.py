@@ -260,3 +260,27 @@ def test_primed_offboard_entered_by_the_bridge_keeps_its_stream():
     tick = fs.tick(1.4, POSE)
     assert tick.send.type_mask == MASK_POSITION and tick.send.position.z == 5.0
     assert fs.tick(6.4, POSE).request == "land"  # 5 s without a commander after OFFBOARD
+
+
+def test_no_ground_hold_in_arducopter_guided_until_airborne():
+    """A commander's velocity expires on the ground in GUIDED: no hold at the ground pose (it
+    would override a take-off); once airborne the contract's hold applies."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="GUIDED", armed=True, airborne=False, now=0.0)
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.engaged and fs.tick(0.1, POSE).send is not None  # the fresh command itself
+    for t in (0.6, 1.5, 2.5):
+        tick = fs.tick(t, POSE)
+        assert tick.send is None and fs.state == "" and tick.request is None
+    fs.on_vehicle(mode="GUIDED", armed=True, airborne=True, now=2.8)  # it lifted off
+    tick = fs.tick(2.9, POSE)
+    assert tick.send.type_mask == MASK_POSITION and fs.state == "hold"
+    assert fs.tick(5.1, POSE).request == "land"
+
+
+def test_offboard_holds_on_the_ground():
+    """PX4: OFFBOARD on the ground needs the stream (to stay in the mode and to arm)."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="OFFBOARD", armed=False, airborne=False, now=0.0)
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.tick(0.6, POSE).send.type_mask == MASK_POSITION
