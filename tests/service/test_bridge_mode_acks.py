@@ -141,3 +141,16 @@ def test_arming_still_acked_once(rig):
     _bridge, fake, user = rig
     assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
     assert fake.armed
+
+
+def test_set_mode_replies_after_the_commanders_ack_so_arming_comes_after_it(rig):
+    """A slow commander (0.4 s between the acks): set_mode must not return on the first one,
+    so the SDK's arm() (sent after set_mode returns) can never precede PX4's real answer."""
+    _bridge, fake, user = rig
+    fake.commander_delay = 0.4
+    reply = user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), timeout=15)
+    assert reply.mode_sent and reply.result == 0, reply
+    assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
+    (commander_ack,) = fake.commander_acks
+    arm_received = min(t for t, m in list(fake.commands) if m.command == 400)
+    assert arm_received > commander_ack

@@ -70,6 +70,8 @@ class FakePX4:
         self.refuse_modes: dict[int, str] = {}  # PX4 custom_mode -> the commander's reason
         self.mode_acks = 2  # PX4: 2 (receiver + commander); 1: an autopilot that acks once
         self.mode_changes = True  # False: acks a mode but never enters it
+        self.commander_delay = 0.0  # s between PX4's two DO_SET_MODE acks (11 ms measured)
+        self.commander_acks: list[float] = []  # when each commander (second) ack was sent
         self.heartbeat_every = 10  # ticks of 20 ms (5 Hz keeps tests short; PX4 sends 1 Hz)
         self.conn = mavutil.mavlink_connection(
             f"udpout:127.0.0.1:{bridge_port}", source_system=1, source_component=1
@@ -194,10 +196,12 @@ class FakePX4:
                 self.send("command_ack", 176, 1)
                 self.send("statustext", 2, f"{refusal}\t".encode())
                 return
-            if self.mode_changes:
-                self.custom_mode = wanted
             if self.mode_acks > 1:
-                self.send("command_ack", 176, 0)
+                commander = threading.Timer(self.commander_delay, self._commander_accepts, [wanted])
+                commander.daemon = True
+                commander.start()
+            elif self.mode_changes:
+                self.custom_mode = wanted
         elif msg.command == 400:
             if self.refuse_arm:
                 self.send("command_ack", 400, 1)
@@ -218,6 +222,14 @@ class FakePX4:
             self.send("command_ack", msg.command, 0)
         else:
             self.send("command_ack", msg.command, 3)
+
+    def _commander_accepts(self, mode: int) -> None:
+        if self._stop.is_set():
+            return
+        if self.mode_changes:
+            self.custom_mode = mode
+        self.commander_acks.append(time.monotonic())
+        self.send("command_ack", 176, 0)
 
     def commands_named(self, command: int) -> list:
         return [m for _, m in list(self.commands) if m.command == command]
