@@ -22,6 +22,8 @@ import msgspec
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
+    PARAM_INTEGER,
+    PARAM_REAL,
     SEVERITY_WARNING,
     CommandBool,
     CommandBoolResult,
@@ -54,6 +56,7 @@ from dronewrapper_bridge_mavlink.modes import (
     LAND_MODE,
     RETURN_MODE,
     canonical_mode,
+    is_guided,
     set_mode_params,
 )
 from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
@@ -114,6 +117,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     heartbeat_timeout: float = 3.0  # s without heartbeat -> State.connected false
     stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded
     offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
+    final_ack_timeout: float = 1.0  # s to wait for PX4's second (real) DO_SET_MODE ack
+    mode_confirm_timeout: float = 2.5  # s for HEARTBEAT to show a mode acked only once
     setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
     commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
     commander_lost_action: str = "land"  # hold | land | return
@@ -146,6 +151,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
                 raise ValueError(f"{name} must be > 0")
         if self.command_attempts < 1 or self.param_attempts < 1:
             raise ValueError("command_attempts and param_attempts must be >= 1")
+        for name in ("final_ack_timeout", "mode_confirm_timeout"):
+            if not 0 < getattr(self, name) <= 30:
+                raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")
 
 
 def _float_bits_to_int(value: float) -> int:
@@ -601,15 +609,16 @@ class Bridge:
 
     def _failsafe_request(self, action: str) -> None:
         autopilot = self.autopilot or AUTOPILOT_PX4
+        mode = LAND_MODE[autopilot] if action == "land" else RETURN_MODE[autopilot]
+        self.failsafe_mode_requested(mode)
         if action == "land":
-            self.failsafe_mode_requested(LAND_MODE[autopilot])
             result, message = self.command(
                 cmds.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, math.nan, math.nan, math.nan
             )
         else:
-            self.failsafe_mode_requested(RETURN_MODE[autopilot])
             result, message = self.command(cmds.MAV_CMD_NAV_RETURN_TO_LAUNCH)
         if result == cmds.MAV_RESULT_ACCEPTED:
+            self._mode_entered(mode)
             log.warning("failsafe %s: accepted by the autopilot", action)
         else:
             log.error("failsafe %s refused: %s", action, message)
@@ -654,10 +663,25 @@ class Bridge:
 
     def command(self, command: int, *params: float, attempts: int | None = None) -> tuple[int, str]:
         """Send a COMMAND_LONG and wait for its ack; returns (MAV_RESULT, explanation)."""
+        pending, message = self.command_exchange(command, *params, attempts=attempts)
+        return pending.result, message
+
+    def command_exchange(
+        self,
+        command: int,
+        *params: float,
+        attempts: int | None = None,
+        expected_acks: int = 1,
+    ) -> tuple[cmds.PendingCommand, str]:
+        """Send a COMMAND_LONG and wait for its final ack (the second of ``expected_acks`` = 2,
+        see commands.py); returns the finished command and an explanation (the autopilot's
+        STATUSTEXT reason for a refusal)."""
         pending = cmds.PendingCommand(
             cmds.command_long(command, *params),
             attempts=attempts or self.config.command_attempts,
             ack_timeout=self.config.command_ack_timeout,
+            expected_acks=expected_acks,
+            final_ack_timeout=self.config.final_ack_timeout,
         )
         name = cmds.command_name(command)
         with self._cmd_lock:
@@ -688,12 +712,12 @@ class Bridge:
                     self.acks.release(pending, time.monotonic())
         result = pending.result
         if result == cmds.MAV_RESULT_ACCEPTED:
-            return result, f"{name} accepted"
+            return pending, f"{name} accepted"
         if result == cmds.RESULT_NO_ACK:
-            return result, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
+            return pending, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
         reason = self._reason_since(started)
         text = f"{name} refused: {cmds.result_name(result)}"
-        return result, f"{text} ({reason})" if reason else text
+        return pending, f"{text} ({reason})" if reason else text
 
     def _reason_since(self, started: float) -> str:
         deadline = time.monotonic() + self.config.reason_wait
@@ -736,12 +760,15 @@ class Bridge:
                 self.telemetry.takeoff_altitude_amsl(height) if not math.isnan(height) else math.nan
             )
         with self._lock:
-            self.failsafe.on_mode_requested("AUTO.TAKEOFF", time.monotonic())
-            self.failsafe.on_mode_requested(HOLD_MODE[autopilot], time.monotonic())
-            self.failsafe.on_takeoff_requested()
+            now = time.monotonic()
+            self.failsafe.on_mode_requested("AUTO.TAKEOFF", now)
+            self.failsafe.on_mode_requested(HOLD_MODE[autopilot], now)
+            self.failsafe.on_takeoff_requested(now)  # no priming, no hold into the climb
         result, message = self.command(
             cmds.MAV_CMD_NAV_TAKEOFF, request.min_pitch, 0, 0, yaw_deg, math.nan, math.nan, altitude
         )
+        if result == cmds.MAV_RESULT_ACCEPTED and autopilot == AUTOPILOT_PX4:
+            self._mode_entered("AUTO.TAKEOFF")  # ArduCopter climbs in GUIDED itself
         if not math.isnan(height) and math.isnan(altitude):
             message += " (no home altitude known: the autopilot's default take-off altitude)"
         return CommandTOLResult(success=result == 0, result=result, message=message)
@@ -755,23 +782,73 @@ class Bridge:
                 raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
         self.failsafe_mode_requested(LAND_MODE[autopilot])
         result, message = self.command(cmds.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan)
+        if result == cmds.MAV_RESULT_ACCEPTED:
+            self._mode_entered(LAND_MODE[autopilot])  # not ~1 s later from the heartbeat
         return CommandTOLResult(success=result == 0, result=result, message=message)
 
     def handle_set_mode(self, request: SetMode) -> SetModeResult:
-        """SET_MODE by name; OFFBOARD on PX4 is preceded by > offboard_prime_s of streaming."""
+        """SET_MODE by name; replies once the autopilot has really entered or refused it.
+
+        PX4: OFFBOARD is preceded by > offboard_prime_s of streaming (priming); DO_SET_MODE is
+        acknowledged twice and the second ack (the commander's) is the answer, a refusal with
+        PX4's STATUSTEXT reason; with no second ack the mode must show in HEARTBEAT within
+        mode_confirm_timeout. ArduPilot: one ack, and ACCEPTED means the mode is entered; no
+        priming (a hold at the ground would override its take-off). An entered mode is known
+        at once (failsafe, State), not at the next 1 Hz heartbeat.
+        """
         autopilot = self._require_connected()
         params = set_mode_params(autopilot, request.custom_mode)  # ValueError lists valid modes
-        guided = params.name == GUIDED_MODE.get(autopilot)
-        if guided and autopilot == AUTOPILOT_PX4:
+        px4 = autopilot == AUTOPILOT_PX4
+        primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
+        if primed:
             self._prime_stream()
         self.failsafe_mode_requested(params.name)
-        result, message = self.command(
-            cmds.MAV_CMD_DO_SET_MODE, params.param1, params.param2, params.param3
+        pending, message = self.command_exchange(
+            cmds.MAV_CMD_DO_SET_MODE,
+            params.param1,
+            params.param2,
+            params.param3,
+            expected_acks=2 if px4 else 1,
         )
-        if guided and result == cmds.MAV_RESULT_ACCEPTED:
-            with self._lock:  # keep streaming until the heartbeat shows the new mode
-                self.failsafe.start_priming(time.monotonic(), 3.0)
+        result = pending.result
+        if result == cmds.MAV_RESULT_ACCEPTED and not pending.confirmed:
+            seen = self._wait_for_mode(params.name, self.config.mode_confirm_timeout)
+            if seen == params.name:
+                message += " (confirmed by HEARTBEAT)"
+            else:
+                result = cmds.MAV_RESULT_FAILED
+                message = (
+                    f"DO_SET_MODE {params.name}: acknowledged once, but the autopilot is still "
+                    f"in {seen or 'an unknown mode'} after {self.config.mode_confirm_timeout:g} s"
+                )
+        if result == cmds.MAV_RESULT_ACCEPTED:
+            self._mode_entered(params.name)
+        with self._lock:  # the stream goes on only if the bridge holds OFFBOARD now
+            self.failsafe.end_priming(time.monotonic(), engage=primed and result == 0)
         return SetModeResult(mode_sent=result == 0, result=result, message=message)
+
+    def _wait_for_mode(self, mode: str, timeout: float) -> str:
+        """Wait up to ``timeout`` s for HEARTBEAT to show ``mode``; returns the mode shown."""
+        deadline = time.monotonic() + timeout
+        while True:
+            with self._lock:
+                shown = self._heartbeat_state.mode if self._heartbeat_state else ""
+            if shown == mode or time.monotonic() >= deadline or self.node.stop_event.is_set():
+                return shown
+            time.sleep(0.02)
+
+    def _mode_entered(self, mode: str) -> None:
+        """The autopilot accepted a command that puts it in ``mode``: the failsafe and State
+        know it now (the next HEARTBEAT, up to 1 s later, confirms or corrects it)."""
+        now = time.monotonic()
+        with self._lock:
+            hb = self._heartbeat_state
+            if hb is None or hb.mode == mode:
+                return
+            self._heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=is_guided(mode))
+            self._update_failsafe_vehicle(now)
+        log.info("mode %s (from the accepted command)", mode)
+        self.publish_state()
 
     def _prime_stream(self) -> None:
         need = self.config.offboard_prime_s
@@ -806,9 +883,10 @@ class Bridge:
     def _param_decode(self, raw: float, param_type: int) -> ParamValue:
         if param_type in INTEGER_PARAM_TYPES:
             if self.autopilot == AUTOPILOT_ARDUPILOT:
-                return ParamValue(integer=int(raw))
-            return ParamValue(integer=_float_bits_to_int(raw))  # PX4: bytewise int32
-        return ParamValue(real=raw)
+                return ParamValue(integer=int(raw), kind=PARAM_INTEGER)
+            # PX4: bytewise int32
+            return ParamValue(integer=_float_bits_to_int(raw), kind=PARAM_INTEGER)
+        return ParamValue(real=raw, kind=PARAM_REAL)
 
     def _param_exchange(self, param_id: str, send: Any) -> tuple[float, int] | None:
         """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""

@@ -356,8 +356,10 @@ class Autopilot:
             else:
                 result = DENIED
         elif command == CMD_DO_SET_MODE:
+            # PX4 acks twice: its MAVLink receiver at once with ACCEPTED ("received"), then
+            # the commander with the real result (a refusal for a mode it cannot enter)
             result = self._set_mode_from(p[0], p[1], p[2])
-            return [self._ack(command, result, msg), self._ack(command, result, msg)]
+            return [self._ack(command, ACCEPTED, msg), self._ack(command, result, msg)]
         elif command == CMD_NAV_TAKEOFF:
             altitude = p[6] - self.config.home_alt_m if math.isfinite(p[6]) else math.nan
             result = cmd.takeoff(now, state, altitude)

@@ -51,6 +51,8 @@ def test_overrides_and_cli_flags():
         ("no_such_key=1", "no_such_key"),
         ("limits.max_speed=3", "max_speed"),
         ("baud=fast", "baud"),
+        ("final_ack_timeout=0", "final_ack_timeout"),
+        ("mode_confirm_timeout=nan", "mode_confirm_timeout"),
     ],
 )
 def test_bad_config_refused_naming_the_key(override, message):

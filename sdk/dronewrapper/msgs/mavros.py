@@ -134,24 +134,38 @@ class StatusText(msgspec.Struct, kw_only=True):
     text: str = ""
 
 
+PARAM_INTEGER = "integer"
+PARAM_REAL = "real"
+
+
 class ParamValue(msgspec.Struct, kw_only=True):
-    """A parameter value (mavros_msgs/ParamValue): ``integer`` for integers, else ``real``."""
+    """A parameter value (mavros_msgs/ParamValue): ``integer`` for integers, else ``real``.
+
+    ``kind`` (our addition: ``integer``, ``real``, or empty when unknown) says which field
+    holds the value, so an integer parameter equal to 0 is 0, not 0.0.
+    """
 
     integer: int = 0
     real: float = 0.0
+    kind: str = ""
 
     def as_number(self) -> int | float:
-        """The value as a Python number: the integer when non-zero, else the real."""
+        """The value as a Python number: by ``kind`` when set; else (as MAVROS) the integer
+        when non-zero, else the real."""
+        if self.kind == PARAM_INTEGER:
+            return self.integer
+        if self.kind == PARAM_REAL:
+            return self.real
         return self.integer if self.integer != 0 else self.real
 
     @classmethod
     def of(cls, value: int | float) -> ParamValue:
         """Wrap a Python number (bools and ints as integer, floats as real)."""
         if isinstance(value, bool | int):
-            return cls(integer=int(value))
+            return cls(integer=int(value), kind=PARAM_INTEGER)
         if not math.isfinite(float(value)):
             raise ValueError(f"parameter value must be finite, got {value!r}")
-        return cls(real=float(value))
+        return cls(real=float(value), kind=PARAM_REAL)
 
 
 # ---- services (request -> reply), as mavros_msgs/srv, with the autopilot's reason added ----
