@@ -721,10 +721,10 @@ class DroneWrapper:
         if autopilot in ARDUPILOT:
             self.set_mode("GUIDED")
             self.arm()
-            self._command(registry.TAKEOFF, CommandTOL(altitude=h, yaw=yaw), "takeoff")
+            self._command(registry.TAKEOFF, CommandTOL.takeoff(h, yaw), "takeoff")
             expected_mode = "GUIDED"
         elif autopilot in TELLO:
-            self._command(registry.TAKEOFF, CommandTOL(altitude=h), "takeoff")
+            self._command(registry.TAKEOFF, CommandTOL.takeoff(h), "takeoff")
         else:  # PX4 and the PX4-like simulator: OFFBOARD with a setpoint stream
             self.set_cmd_pos(x, y, z0, yaw)
             try:
@@ -782,7 +782,7 @@ class DroneWrapper:
         self.stop_commanding()
         if on_ground and not state.armed:
             return
-        self._command(registry.LAND, CommandTOL(), "land")
+        self._command(registry.LAND, CommandTOL.land(), "land")
 
         def landed() -> bool:
             ext, st = self._extended.value, self._state.value

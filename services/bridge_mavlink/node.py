@@ -11,7 +11,6 @@ from __future__ import annotations
 import collections
 import logging
 import math
-import struct
 import sys
 import threading
 import time
@@ -43,6 +42,7 @@ from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil
@@ -72,9 +72,6 @@ log = logging.getLogger("bridge_mavlink")
 MAV_TYPE_GCS = 6
 MAV_AUTOPILOT_INVALID = 8
 MAV_STATE_ACTIVE = 4
-MAV_PARAM_TYPE_REAL32 = 9
-MAV_PARAM_TYPE_INT32 = 6
-INTEGER_PARAM_TYPES = frozenset({1, 2, 3, 4, 5, 6})
 
 DEFAULT_MESSAGE_RATES = {
     "LOCAL_POSITION_NED": 50.0,
@@ -146,14 +143,6 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
                 raise ValueError(f"{name} must be > 0")
         if self.command_attempts < 1 or self.param_attempts < 1:
             raise ValueError("command_attempts and param_attempts must be >= 1")
-
-
-def _float_bits_to_int(value: float) -> int:
-    return struct.unpack("<i", struct.pack("<f", value))[0]
-
-
-def _int_to_float_bits(value: int) -> float:
-    return struct.unpack("<f", struct.pack("<i", value))[0]
 
 
 class Bridge:
@@ -804,11 +793,11 @@ class Bridge:
         return param_id
 
     def _param_decode(self, raw: float, param_type: int) -> ParamValue:
-        if param_type in INTEGER_PARAM_TYPES:
-            if self.autopilot == AUTOPILOT_ARDUPILOT:
-                return ParamValue(integer=int(raw))
-            return ParamValue(integer=_float_bits_to_int(raw))  # PX4: bytewise int32
-        return ParamValue(real=raw)
+        return param_values.decode_param(raw, param_type, bytewise=self._param_bytewise())
+
+    def _param_bytewise(self) -> bool:
+        """PX4 sends integer parameters as their bytes; ArduPilot as float values."""
+        return self.autopilot != AUTOPILOT_ARDUPILOT
 
     def _param_exchange(self, param_id: str, send: Any) -> tuple[float, int] | None:
         """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""
@@ -846,12 +835,14 @@ class Bridge:
         return ParamGetResult(success=True, value=self._param_decode(*got), message="ok")
 
     def handle_param_set(self, request: ParamSet) -> ParamSetResult:
-        """PARAM_SET: write, then report the value the autopilot echoes."""
+        """PARAM_SET: write, then report the value the autopilot echoes.
+
+        The value is checked against the parameter's type first (float32 range, integer
+        ranges, exactness); a value that does not fit is a bad request naming the field.
+        """
         self._require_connected()
         param_id = self._check_param_id(request.param_id)
-        value = request.value
-        if not math.isfinite(value.real):
-            raise ValueError(f"{param_id}: value must be finite, got {value.real!r}")
+        param_values.requested_number(param_id, request.value)  # refuse before any I/O
         with self._param_cond:
             known = self._params.get(param_id)
         if known is None:
@@ -861,19 +852,9 @@ class Bridge:
             param_type = known_read[1]
         else:
             param_type = known[1]
-        if param_type in INTEGER_PARAM_TYPES:
-            if value.real != 0.0 and value.real != int(value.real):
-                raise ValueError(f"{param_id} is an integer parameter, got {value.real!r}")
-            wanted = value.integer if value.integer != 0 else int(value.real)
-            if not -(2**31) <= wanted < 2**31:
-                raise ValueError(f"{param_id}: {wanted} does not fit in int32")
-            if self.autopilot == AUTOPILOT_ARDUPILOT:
-                raw = float(wanted)
-            else:
-                raw = _int_to_float_bits(wanted)
-        else:
-            wanted_real = value.real if value.integer == 0 else float(value.integer)
-            raw = wanted_real
+        raw = param_values.encode_param(
+            param_id, request.value, param_type, bytewise=self._param_bytewise()
+        )
         encoded = param_id.encode("ascii")
         got = self._param_exchange(
             param_id,
