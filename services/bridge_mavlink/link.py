@@ -1,12 +1,14 @@
 """The MAVLink connection: open by pymavlink URL, thread-safe sends, reopen after errors.
 
-URLs as pymavlink takes them: ``udpin:0.0.0.0:14540`` (listen; replies go to whoever sent),
-``udpout:HOST:PORT``, ``tcp:HOST:PORT`` (client, reconnects), ``tcpin:0.0.0.0:PORT``, or a
+URLs as pymavlink takes them: ``udpin:127.0.0.1:14540`` (listen; replies go to whoever sent),
+``udpout:HOST:PORT``, ``tcp:HOST:PORT`` (client, reconnects), ``tcpin:127.0.0.1:PORT``, or a
 serial device (``/dev/ttyACM0``) with ``baud``. MAVLink 2 is used for everything we send.
+A network link beyond loopback is a deliberate setting (see :func:`network_exposure`).
 """
 
 from __future__ import annotations
 
+import ipaddress
 import logging
 import os
 import threading
@@ -22,6 +24,28 @@ from pymavlink import mavutil
 log = logging.getLogger("bridge_mavlink.link")
 
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
+NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
+
+
+def network_exposure(url: str) -> str | None:
+    """Why ``url`` reaches beyond this machine (a sentence for the log), or None for loopback
+    and serial links. ``udpin:0.0.0.0:P`` listens on every interface and answers whoever sent
+    last; a host name is not loopback unless it is ``localhost``."""
+    scheme, sep, rest = url.partition(":")
+    if not sep or scheme not in NETWORK_SCHEMES:
+        return None  # a serial device
+    host = rest.rsplit(":", 1)[0].strip("[]")
+    if host == "localhost":
+        return None
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        return f"{url}: host {host!r} is not a loopback address"
+    if address.is_loopback:
+        return None
+    if address.is_unspecified:
+        return f"{url} listens on every network interface (not only loopback)"
+    return f"{url} talks to {host}, beyond this machine"
 
 
 class MavLink:

@@ -45,7 +45,7 @@ from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
-from dronewrapper_bridge_mavlink.link import MavLink, mavutil
+from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
@@ -101,7 +101,7 @@ class LimitsConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """bridge_mavlink configuration (units in the names' docs; see README.md)."""
 
-    connection: str = "udpin:0.0.0.0:14540"  # pymavlink URL
+    connection: str = "udpin:127.0.0.1:14540"  # pymavlink URL; loopback unless set otherwise
     baud: int = 57600  # serial only
     source_system: int = 255  # our MAVLink system id
     source_component: int = 190  # our MAVLink component id
@@ -889,6 +889,9 @@ def run(node: Node, config: Config) -> int:
     except ValueError as exc:  # e.g. an unknown commander_lost_action
         log.error("bad config: %s", exc)
         return 2
+    exposure = network_exposure(config.connection)
+    if exposure is not None:
+        log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
     threads = bridge.start()
     node.announce()
     log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
