@@ -48,6 +48,22 @@ def network_exposure(url: str) -> str | None:
     return f"{url} talks to {host}, beyond this machine"
 
 
+class _SourceNotingSocket:
+    """A UDP socket that records on ``owner.last_source`` where each datagram came from."""
+
+    def __init__(self, sock: Any, owner: MavLink) -> None:
+        self._sock = sock
+        self._owner = owner
+
+    def recvfrom(self, size: int) -> tuple[bytes, Any]:
+        data, address = self._sock.recvfrom(size)
+        self._owner.last_source = address
+        return data, address
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._sock, name)
+
+
 class MavLink:
     """One MAVLink connection with a send lock (sends come from several threads).
 
@@ -67,6 +83,8 @@ class MavLink:
         self._send_lock = threading.Lock()
         self._conn: Any = None
         self._t0 = time.monotonic()
+        self.last_source: Any = None  # (host, port) the last message came from (UDP), else None
+        self.peer: Any = None  # UDP listen: the address replies go to (None: the last sender)
         self.sent = 0
         self.send_errors = 0
 
@@ -90,7 +108,23 @@ class MavLink:
         conn = mavutil.mavlink_connection(self.url, **kwargs)
         if hasattr(conn, "mav"):
             conn.mav.robust_parsing = True
+        if getattr(conn, "udp_server", False):
+            self._track_udp_peers(conn)
         self._conn = conn
+
+    def _track_udp_peers(self, conn: Any) -> None:
+        """Note each datagram's source address; send only to ``peer`` once it is set."""
+        conn.port = _SourceNotingSocket(conn.port, self)
+        send_to_all = conn.write
+
+        def write(buf: bytes) -> None:
+            peer = self.peer
+            if peer is None:
+                send_to_all(buf)
+            else:
+                conn.port.sendto(buf, peer)
+
+        conn.write = write
 
     def close(self) -> None:
         """Close the connection (idempotent)."""
@@ -104,7 +138,11 @@ class MavLink:
         return self._conn is not None
 
     def recv(self, timeout: float) -> Any:
-        """The next message, or None after ``timeout`` s (raises OSError on a link error)."""
+        """The next message, or None after ``timeout`` s (raises OSError on a link error).
+
+        ``last_source`` is then the UDP address it came from. When ``peer`` is set, replies of
+        a listening UDP link keep going to it even if someone else sent last (pymavlink would
+        send to every recent sender: a second autopilot would receive our commands)."""
         conn = self._conn
         if conn is None:
             time.sleep(timeout)

@@ -45,6 +45,7 @@ from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
+from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
@@ -57,6 +58,7 @@ from dronewrapper_bridge_mavlink.modes import (
     set_mode_params,
 )
 from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
     Telemetry,
@@ -166,6 +168,8 @@ class Bridge:
             )
         )
         self.telemetry = Telemetry()
+        self.freshness = Freshness()
+        self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
         self._lock = threading.RLock()  # telemetry, failsafe, state
@@ -257,17 +261,20 @@ class Bridge:
             if msg is None:
                 continue
             try:
-                self.handle_mavlink(msg, time.time(), time.monotonic())
+                self.handle_mavlink(msg, time.time(), time.monotonic(), self.link.last_source)
             except Exception:
                 self.node.callback_errors["mavlink"] += 1
                 log.exception("error handling %s", msg.get_type())
 
-    def handle_mavlink(self, msg: Any, stamp: float, now: float) -> None:
-        """Dispatch one received MAVLink message (``stamp`` wall s, ``now`` monotonic s)."""
+    def handle_mavlink(self, msg: Any, stamp: float, now: float, source: Any = None) -> None:
+        """Dispatch one received MAVLink message (``stamp`` wall s, ``now`` monotonic s,
+        ``source`` the UDP address it came from, None when unknown)."""
         kind = msg.get_type()
         if kind == "BAD_DATA":
             return
         self.messages_received += 1
+        if not self._admit(msg, kind, source, now):
+            return
         if kind == "HEARTBEAT":
             self._on_heartbeat(msg, stamp, now)
             return
@@ -276,6 +283,36 @@ class Bridge:
         handler = self._HANDLERS.get(kind)
         if handler is not None:
             handler(self, msg, stamp, now)
+
+    def _admit(self, msg: Any, kind: str, source: Any, now: float) -> bool:
+        """False for a message to drop: from a second autopilot with the same system id, a
+        duplicated datagram, or one older than what was already used (seq / time_boot_ms)."""
+        system = msg.get_srcSystem()
+        verdict = self.sources.check(source, system, now)
+        if verdict.flag:
+            self._bridge_text(verdict.flag, now)
+        if not verdict.accept:
+            return False
+        if source is not None and system == self.target_system:
+            self.link.peer = self.sources.owner(system)
+        fresh = self.freshness.check(
+            source, system, msg.get_srcComponent(), msg.get_seq(), kind, boot_ms_of(msg), now
+        )
+        if not fresh.new:
+            log.debug("dropped %s: %s", kind, fresh.reason)
+        return fresh.new
+
+    def _bridge_text(self, text: str, now: float) -> None:
+        """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
+        log.warning("%s", text)
+        self._publish_text(
+            StatusText(
+                header=Header(stamp=time.time(), frame_id="bridge"),
+                severity=SEVERITY_WARNING,
+                text=f"bridge: {text}",
+            ),
+            now,
+        )
 
     def _on_heartbeat(self, msg: Any, stamp: float, now: float) -> None:
         if not is_autopilot_heartbeat(msg):
