@@ -177,6 +177,10 @@ class DroneWrapper:
                 idle_timeout=command_timeout,
                 name=f"{self.ns}-setpoints",
             )
+            self._bridge_matched = False
+            self._subscribers.append(
+                self._setpoints.declare_matching_listener(self._on_setpoint_matching)
+            )
             if wait:
                 self.wait_for_connection(max(0.0, deadline - time.monotonic()))
                 self._soft_wait(self._pose, min(2.0, max(0.0, deadline - time.monotonic())))
@@ -231,6 +235,16 @@ class DroneWrapper:
         holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))
         self._subscribe(topic, holder.update, **parts)
         return holder
+
+    def _on_setpoint_matching(self, status: Any) -> None:
+        """The bridge's setpoint subscriber became (un)reachable: a link gap (router restart,
+        lost Wi-Fi) withholds setpoints, and a command that went stale meanwhile is not resent
+        (see SetpointStreamer). "Unreachable" counts only after it was reachable once."""
+        if status.matching:
+            self._bridge_matched = True
+            self._streamer.link_up()
+        elif self._bridge_matched:
+            self._streamer.link_down()
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
         self._setpoints.put(codec.encode(target))
