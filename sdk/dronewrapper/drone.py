@@ -178,9 +178,9 @@ class DroneWrapper:
                 name=f"{self.ns}-setpoints",
             )
             self._bridge_matched = False
-            self._subscribers.append(
-                self._setpoints.declare_matching_listener(self._on_setpoint_matching)
-            )
+            self._matching = self._setpoints.declare_matching_listener(
+                zenoh.handlers.Callback(self._on_setpoint_matching, indirect=False)
+            )  # a direct callback: no thread to block interpreter exit (see _subscribe)
             if wait:
                 self.wait_for_connection(max(0.0, deadline - time.monotonic()))
                 self._soft_wait(self._pose, min(2.0, max(0.0, deadline - time.monotonic())))
@@ -240,6 +240,8 @@ class DroneWrapper:
         """The bridge's setpoint subscriber became (un)reachable: a link gap (router restart,
         lost Wi-Fi) withholds setpoints, and a command that went stale meanwhile is not resent
         (see SetpointStreamer). "Unreachable" counts only after it was reachable once."""
+        if self._closed:
+            return
         if status.matching:
             self._bridge_matched = True
             self._streamer.link_up()
@@ -294,6 +296,10 @@ class DroneWrapper:
         streamer = getattr(self, "_streamer", None)
         if streamer is not None:
             streamer.close()
+        matching = getattr(self, "_matching", None)
+        if matching is not None:
+            with contextlib.suppress(Exception):
+                matching.undeclare()
         try:
             if self._own_session:
                 time.sleep(0.05)  # let the last messages leave before the session closes
