@@ -49,15 +49,18 @@ def test_a_stale_command_is_not_resent_after_a_router_restart():
         wait_for(lambda: not streamer.link_ok, 30, what="the SDK to notice the link gap")
         withheld = streamer.withheld
         wait_for(lambda: streamer.withheld > withheld, 5, what="setpoints withheld in the gap")
+        stale_at = streamer._set_at + streamer.expiry + 0.2  # the gap outlasts the expiry
+        while time.monotonic() < stale_at:
+            time.sleep(0.05)
         with zenoh_router(endpoint):
             wait_for(lambda: streamer.link_ok, 60, what="the SDK to see the bridge again")
             back = time.monotonic()
-            assert streamer.dropped_after_gap == 1
+            assert streamer.dropped_after_gap == 1, vars(streamer)
             assert drone.commanding is None  # the stale 1 m/s is forgotten
             # the link works: a new command goes through, and only that one
             wait_for(lambda: drone._bridge_matched, 5)
             time.sleep(0.5)
-            assert received.since(back) == []
+            assert received.since(back) == [], len(received.since(back))
             drone.set_cmd_vel(vx=0.2)
             got = wait_for(lambda: received.since(back), 20, what="the new command")
             assert all(t.velocity.x == 0.2 for t in got)
