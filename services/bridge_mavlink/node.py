@@ -47,6 +47,7 @@ from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick,
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
+from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
@@ -276,7 +277,12 @@ class Bridge:
         if not self._admit(msg, kind, source, now):
             return
         if kind == "HEARTBEAT":
+            with self._lock:
+                was_connected, before = self.connected, self._heartbeat_state
+                lost_at = self._last_heartbeat
             self._on_heartbeat(msg, stamp, now)
+            if not was_connected and self.connected:
+                self._report_link_gap(before, now - lost_at, now)
             return
         if self.target_system and msg.get_srcSystem() != self.target_system:
             return
@@ -301,6 +307,16 @@ class Bridge:
         if not fresh.new:
             log.debug("dropped %s: %s", kind, fresh.reason)
         return fresh.new
+
+    def _report_link_gap(self, before: State | None, gap_s: float, now: float) -> None:
+        """After a link gap, report what the autopilot changed meanwhile (a failsafe)."""
+        with self._lock:
+            after = self._heartbeat_state
+        if after is None:
+            return
+        report = gap_report(before, after, gap_s)
+        if report is not None:
+            self._bridge_text(report, now)
 
     def _bridge_text(self, text: str, now: float) -> None:
         """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
