@@ -4,9 +4,10 @@ UDP can duplicate and reorder datagrams. Republishing them would publish a pose 
 already published, or the same pose twice as a new one (the pose rate went from 50 to 62 Hz
 under 30 % duplication). Two checks, per sender (source address, system id, component id):
 
-- MAVLink ``seq`` (one 8-bit counter per sender): a message whose seq equals the newest one, or
-  is up to ``REORDER_WINDOW`` behind it (mod 256), is a duplicate or arrived late: dropped. A
-  larger step forward is loss, which is fine.
+- MAVLink ``seq`` (one 8-bit counter per sender): a message identical (seq and bytes) to one of
+  the last ``REORDER_WINDOW`` received is a duplicate; one whose seq is 1 to ``REORDER_WINDOW``
+  behind the newest (mod 256) arrived late: both dropped. A larger step forward is loss, which
+  is fine. (A sender that never increments seq still gets every distinct message through.)
 - ``time_boot_ms`` (messages that carry it): per message type, a message not newer than the
   newest one of its type is dropped, unless it went back by more than ``REBOOT_JUMP_MS`` (the
   autopilot rebooted).
@@ -17,6 +18,7 @@ and its clock; a restarted simulator also has a new UDP source port, so a new se
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +33,7 @@ class _Sender:
     seq: int
     last_seen: float
     boot_ms: dict[str, int] = field(default_factory=dict)
+    recent: deque[tuple[int, int]] = field(default_factory=lambda: deque(maxlen=REORDER_WINDOW))
 
 
 @dataclass
@@ -58,6 +61,7 @@ class Freshness:
         kind: str,
         boot_ms: int | None,
         now: float,
+        payload: bytes = b"",
     ) -> Verdict:
         """Judge one message.
 
@@ -67,21 +71,27 @@ class Freshness:
             kind: its type name (``LOCAL_POSITION_NED``).
             boot_ms: its ``time_boot_ms`` field, None if it has none.
             now: monotonic time (s).
+            payload: its bytes (``get_msgbuf()``), to tell a duplicate from a new message that
+                reuses a seq.
         """
         key = (address, system, component)
+        fingerprint = (seq, hash(payload))
         sender = self._senders.get(key)
         if sender is None or now - sender.last_seen > SILENCE_RESET_S:
-            self._remember(key, _Sender(seq=seq, last_seen=now), now)
+            sender = _Sender(seq=seq, last_seen=now)
+            sender.recent.append(fingerprint)
+            self._remember(key, sender, now)
             if boot_ms is not None:
-                self._senders[key].boot_ms[kind] = boot_ms
+                sender.boot_ms[kind] = boot_ms
             return Verdict(True)
-        behind = (sender.seq - seq) % 256
-        if behind == 0:
+        if fingerprint in sender.recent:
             self.duplicates += 1
-            return Verdict(False, f"duplicate seq {seq}")
-        if behind <= REORDER_WINDOW:
+            return Verdict(False, f"duplicate of seq {seq}")
+        behind = (sender.seq - seq) % 256
+        if 0 < behind <= REORDER_WINDOW:
             self.stale += 1
             return Verdict(False, f"seq {seq} is {behind} behind the newest {sender.seq}")
+        sender.recent.append(fingerprint)
         sender.seq = seq
         sender.last_seen = now
         if boot_ms is not None:

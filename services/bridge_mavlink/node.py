@@ -302,7 +302,14 @@ class Bridge:
         if source is not None and system == self.target_system:
             self.link.peer = self.sources.owner(system)
         fresh = self.freshness.check(
-            source, system, msg.get_srcComponent(), msg.get_seq(), kind, boot_ms_of(msg), now
+            source,
+            system,
+            msg.get_srcComponent(),
+            msg.get_seq(),
+            kind,
+            boot_ms_of(msg),
+            now,
+            bytes(msg.get_msgbuf() or b""),
         )
         if not fresh.new:
             log.debug("dropped %s: %s", kind, fresh.reason)

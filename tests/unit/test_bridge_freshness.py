@@ -10,7 +10,8 @@ B = ("127.0.0.1", 14581)
 
 
 def pose(f: Freshness, seq: int, boot_ms: int, now: float = 0.0, address=A) -> bool:
-    return f.check(address, 1, 1, seq, "LOCAL_POSITION_NED", boot_ms, now).new
+    payload = f"{seq}:{boot_ms}".encode()  # the bytes differ whenever the content does
+    return f.check(address, 1, 1, seq, "LOCAL_POSITION_NED", boot_ms, now, payload).new
 
 
 def test_a_duplicated_datagram_is_dropped():
@@ -28,6 +29,13 @@ def test_a_late_datagram_is_dropped_and_loss_is_fine():
     assert not pose(f, 11, 1020)  # arrived after 12: older than what was published
     assert pose(f, 100, 2800)  # 88 lost: a forward step
     assert f.stale == 1
+
+
+def test_a_sender_that_never_advances_seq_still_gets_new_messages_through():
+    f = Freshness()
+    assert pose(f, 0, 1000)
+    assert pose(f, 0, 1020)
+    assert not pose(f, 0, 1020)  # the same bytes again: a duplicate
 
 
 def test_seq_wraps_around():
