@@ -67,6 +67,7 @@ from dronewrapper_bridge_mavlink.telemetry import (
     battery_from_sys_status,
     extended_state,
     is_autopilot_heartbeat,
+    non_finite_field,
     state_from_heartbeat,
 )
 
@@ -313,7 +314,13 @@ class Bridge:
         )
         if not fresh.new:
             log.debug("dropped %s: %s", kind, fresh.reason)
-        return fresh.new
+            return False
+        bad_field = non_finite_field(kind, msg)
+        if bad_field is not None:
+            self.node.callback_errors["mavlink non-finite"] += 1
+            log.debug("dropped %s", bad_field)
+            return False
+        return True
 
     def _report_link_gap(self, before: State | None, gap_s: float, now: float) -> None:
         """After a link gap, report what the autopilot changed meanwhile (a failsafe)."""
