@@ -15,8 +15,9 @@ from dataclasses import dataclass
 import msgspec
 from hypothesis import strategies as st
 
-from dronewrapper.msgs import registry
+from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import CommandTOL
+from dronewrapper.msgs.vision import Detections
 
 MAX_FLOAT = 1e300
 MAX_INT = 2**63 - 1
@@ -228,3 +229,71 @@ def bad_setpoint(draw: st.DrawFn) -> Bad:
     if 0x80 <= data[0] <= 0x8F or data[0] in (0xDE, 0xDF):
         data = b"\xc1" + data
     return Bad(data, "PositionTarget", how)
+
+
+# ---- perception and controller inputs ----
+
+NASTY_FLOATS = st.one_of(
+    st.sampled_from([math.nan, math.inf, -math.inf, 1e300, -1e300, 0.0, -0.0, 5e-324]),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(-2000, 2000),
+)
+SIZES = st.one_of(st.integers(-5, 5), st.integers(0, 4096), st.sampled_from([2**31, 2**62]))
+
+
+def detection(draw) -> dict:
+    return {
+        "header": {"stamp": draw(NASTY_FLOATS), "frame_id": "cam_frontal", "seq": 0},
+        "results": [
+            {"hypothesis": {"class_id": draw(st.sampled_from(["person", "red", ""])),
+                            "score": draw(NASTY_FLOATS)}}
+        ],
+        "bbox": {
+            "center": {"position": {"x": draw(NASTY_FLOATS), "y": draw(NASTY_FLOATS)},
+                       "theta": draw(NASTY_FLOATS)},
+            "size_x": draw(NASTY_FLOATS),
+            "size_y": draw(NASTY_FLOATS),
+        },
+        "id": draw(st.sampled_from(["", "1", "2"])),
+        "circle_radius": draw(NASTY_FLOATS),
+    }  # fmt: skip
+
+
+@st.composite
+def detections(draw) -> Detections:
+    fields = {
+        "header": {"stamp": draw(NASTY_FLOATS), "frame_id": "cam_frontal", "seq": 0},
+        "detections": [detection(draw) for _ in range(draw(st.integers(0, 3)))],
+        "image_width": draw(SIZES),
+        "image_height": draw(SIZES),
+        "detector": "color",
+        "target_id": draw(st.sampled_from(["", "1", "2"])),
+        "processing_time": draw(NASTY_FLOATS),
+    }
+    return codec.decode(Detections, msgspec.msgpack.encode(fields))
+
+
+@st.composite
+def bad_image(draw: st.DrawFn) -> bytes:
+    """An Image payload perception must survive: sizes that do not match the data, odd
+    encodings, non-finite stamps, huge dimensions, or not an Image at all."""
+    how = draw(st.sampled_from(["geometry", "encoding", "stamp", "bytes"]))
+    width, height = draw(SIZES), draw(SIZES)
+    fields = {
+        "header": {"stamp": 1.0, "frame_id": "cam_frontal", "seq": 0},
+        "height": min(height, 2**32 - 1) if height >= 0 else 0,
+        "width": min(width, 2**32 - 1) if width >= 0 else 0,
+        "encoding": "bgr8",
+        "is_bigendian": 0,
+        "step": 0,
+        "data": draw(st.binary(max_size=256)),
+    }
+    if how == "encoding":
+        fields["encoding"] = draw(st.sampled_from(["", "rgb16", "yuv422", "X" * 1000]))
+    elif how == "stamp":
+        fields["header"]["stamp"] = draw(st.sampled_from([math.nan, math.inf, -math.inf, -1.0]))
+        fields["width"], fields["height"] = 4, 2
+        fields["data"] = bytes(24)
+    elif how == "bytes":
+        return draw(st.binary(max_size=64))
+    return msgspec.msgpack.encode(fields)
