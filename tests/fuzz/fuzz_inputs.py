@@ -207,8 +207,11 @@ _SETPOINT_USED = (("velocity", "x"), ("velocity", "y"), ("velocity", "z"), ("yaw
 @st.composite
 def bad_setpoint(draw: st.DrawFn) -> Bad:
     """A PositionTarget payload the bridge must refuse (decode error or validation)."""
-    kinds = ["wrong_type", "non_finite", "huge", "mask", "truncated", "garbage"]
+    kinds = ["wrong_type", "non_finite", "huge", "mask", "missing", "truncated", "garbage"]
     how = draw(st.sampled_from(kinds))
+    if how == "missing":
+        path = draw(st.sampled_from([("type_mask",), ("coordinate_frame",)]))
+        return Bad(_encode(_without(SETPOINT_BASE, path)), path[-1], how)
     if how == "wrong_type":
         path = draw(st.sampled_from([*_SETPOINT_USED, ("type_mask",), ("header", "stamp")]))
         kind = "int" if path == ("type_mask",) else "float"

@@ -8,7 +8,14 @@ import msgspec
 import pytest
 
 from dronewrapper.msgs import codec
-from dronewrapper.msgs.mavros import CommandBool, CommandTOL, ParamGet, ParamSet, SetMode
+from dronewrapper.msgs.mavros import (
+    CommandBool,
+    CommandTOL,
+    ParamGet,
+    ParamSet,
+    PositionTarget,
+    SetMode,
+)
 
 
 def decode(msg_type, fields: dict):
@@ -98,3 +105,10 @@ def test_set_mode_and_param_set_ranges():
         decode(ParamSet, {"param_id": "X", "value": {"integer": 0, "real": math.inf}})
     with pytest.raises(msgspec.ValidationError, match="value"):
         decode(ParamSet, {"param_id": "X"})
+
+
+def test_an_empty_setpoint_is_not_a_position_target_at_the_origin():
+    with pytest.raises(msgspec.ValidationError, match="missing required field `coordinate_frame`"):
+        decode(PositionTarget, {})
+    with pytest.raises(msgspec.ValidationError, match="missing required field `type_mask`"):
+        decode(PositionTarget, {"coordinate_frame": 1})

@@ -113,12 +113,13 @@ class PositionTarget(msgspec.Struct, kw_only=True):
     body velocities, as MAVROS names them; the values themselves are ENU (local) and FLU (body),
     like MAVROS's topic side. ``type_mask`` bits set = field ignored (MASK_* constants).
     ``header.stamp`` is the stamp of the data that caused the command (a camera frame's stamp
-    for vision control), so latency can be measured end to end.
+    for vision control), so latency can be measured end to end. ``coordinate_frame`` and
+    ``type_mask`` are required (no default could be safe).
     """
 
     header: Header = msgspec.field(default_factory=Header)
-    coordinate_frame: int = FRAME_LOCAL_NED
-    type_mask: int = MASK_POSITION
+    coordinate_frame: int  # required: an empty message must not mean "go to the origin"
+    type_mask: int
     position: Point = msgspec.field(default_factory=Point)
     velocity: Vector3 = msgspec.field(default_factory=Vector3)
     acceleration_or_force: Vector3 = msgspec.field(default_factory=Vector3)
