@@ -26,6 +26,13 @@ from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import ParamGet
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import ErrorReply, Header
+from dronewrapper.msgs.vision import (
+    BoundingBox2D,
+    Detection2D,
+    Detections,
+    Point2D,
+    Pose2D,
+)
 from support import client_node, free_port, python_module, wait_for, zenoh_router
 
 pytestmark = [pytest.mark.fuzz, pytest.mark.integration]
@@ -119,6 +126,9 @@ def fuzz_graph(user, peer: AutopilotPeer, procs: dict) -> None:
         user.session.put(registry.IMAGE_RAW.key("drone", camera="cam_frontal"), image)
 
     published_garbage()
+    # issue 12 item 4, exactly: a target in view with header.stamp = inf killed the controller
+    for stamp in (math.inf, math.nan, -math.inf):
+        user.session.put(registry.DETECTIONS.key("drone"), codec.encode(target_in_view(stamp)))
 
     for name, proc in procs.items():
         assert proc.alive(), f"{name} died:\n{proc.output()[-3000:]}"
@@ -161,3 +171,20 @@ def refusals(user, shape):
         assert bad.named in message, message
 
     return refused
+
+
+def target_in_view(stamp: float) -> Detections:
+    """A red blob in the middle of the frame: the controller would steer on it."""
+    blob = Detection2D(
+        id="1",
+        bbox=BoundingBox2D(center=Pose2D(position=Point2D(x=160.0, y=120.0)), size_x=30, size_y=30),
+        circle_radius=15.0,
+    )
+    return Detections(
+        header=Header(stamp=stamp, frame_id="cam_frontal"),
+        detections=[blob],
+        image_width=320,
+        image_height=240,
+        detector="fuzz",
+        target_id="1",
+    )
