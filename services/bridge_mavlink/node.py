@@ -11,7 +11,6 @@ from __future__ import annotations
 import collections
 import logging
 import math
-import struct
 import sys
 import threading
 import time
@@ -22,8 +21,6 @@ import msgspec
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
-    PARAM_INTEGER,
-    PARAM_REAL,
     SEVERITY_WARNING,
     CommandBool,
     CommandBoolResult,
@@ -45,9 +42,12 @@ from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
-from dronewrapper_bridge_mavlink.link import MavLink, mavutil
+from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
+from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
+from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
@@ -60,6 +60,7 @@ from dronewrapper_bridge_mavlink.modes import (
     set_mode_params,
 )
 from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
     Telemetry,
@@ -67,6 +68,7 @@ from dronewrapper_bridge_mavlink.telemetry import (
     battery_from_sys_status,
     extended_state,
     is_autopilot_heartbeat,
+    non_finite_field,
     state_from_heartbeat,
 )
 
@@ -75,9 +77,6 @@ log = logging.getLogger("bridge_mavlink")
 MAV_TYPE_GCS = 6
 MAV_AUTOPILOT_INVALID = 8
 MAV_STATE_ACTIVE = 4
-MAV_PARAM_TYPE_REAL32 = 9
-MAV_PARAM_TYPE_INT32 = 6
-INTEGER_PARAM_TYPES = frozenset({1, 2, 3, 4, 5, 6})
 
 DEFAULT_MESSAGE_RATES = {
     "LOCAL_POSITION_NED": 50.0,
@@ -107,7 +106,7 @@ class LimitsConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """bridge_mavlink configuration (units in the names' docs; see README.md)."""
 
-    connection: str = "udpin:0.0.0.0:14540"  # pymavlink URL
+    connection: str = "udpin:127.0.0.1:14540"  # pymavlink URL; loopback unless set otherwise
     baud: int = 57600  # serial only
     source_system: int = 255  # our MAVLink system id
     source_component: int = 190  # our MAVLink component id
@@ -156,14 +155,6 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
                 raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")
 
 
-def _float_bits_to_int(value: float) -> int:
-    return struct.unpack("<i", struct.pack("<f", value))[0]
-
-
-def _int_to_float_bits(value: int) -> float:
-    return struct.unpack("<f", struct.pack("<i", value))[0]
-
-
 class Bridge:
     """Everything the bridge does, wired to one Node and one MAVLink link."""
 
@@ -185,6 +176,8 @@ class Bridge:
             )
         )
         self.telemetry = Telemetry()
+        self.freshness = Freshness()
+        self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
         self._lock = threading.RLock()  # telemetry, failsafe, state
@@ -276,25 +269,86 @@ class Bridge:
             if msg is None:
                 continue
             try:
-                self.handle_mavlink(msg, time.time(), time.monotonic())
+                self.handle_mavlink(msg, time.time(), time.monotonic(), self.link.last_source)
             except Exception:
                 self.node.callback_errors["mavlink"] += 1
                 log.exception("error handling %s", msg.get_type())
 
-    def handle_mavlink(self, msg: Any, stamp: float, now: float) -> None:
-        """Dispatch one received MAVLink message (``stamp`` wall s, ``now`` monotonic s)."""
+    def handle_mavlink(self, msg: Any, stamp: float, now: float, source: Any = None) -> None:
+        """Dispatch one received MAVLink message (``stamp`` wall s, ``now`` monotonic s,
+        ``source`` the UDP address it came from, None when unknown)."""
         kind = msg.get_type()
         if kind == "BAD_DATA":
             return
         self.messages_received += 1
+        if not self._admit(msg, kind, source, now):
+            return
         if kind == "HEARTBEAT":
+            with self._lock:
+                was_connected, before = self.connected, self._heartbeat_state
+                lost_at = self._last_heartbeat
             self._on_heartbeat(msg, stamp, now)
+            if not was_connected and self.connected:
+                self._report_link_gap(before, now - lost_at, now)
             return
         if self.target_system and msg.get_srcSystem() != self.target_system:
             return
         handler = self._HANDLERS.get(kind)
         if handler is not None:
             handler(self, msg, stamp, now)
+
+    def _admit(self, msg: Any, kind: str, source: Any, now: float) -> bool:
+        """False for a message to drop: from a second autopilot with the same system id, a
+        duplicated datagram, or one older than what was already used (seq / time_boot_ms)."""
+        system = msg.get_srcSystem()
+        verdict = self.sources.check(source, system, now)
+        if verdict.flag:
+            self._bridge_text(verdict.flag, now)
+        if not verdict.accept:
+            return False
+        if source is not None and system == self.target_system:
+            self.link.peer = self.sources.owner(system)
+        fresh = self.freshness.check(
+            source,
+            system,
+            msg.get_srcComponent(),
+            msg.get_seq(),
+            kind,
+            boot_ms_of(msg),
+            now,
+            bytes(msg.get_msgbuf() or b""),
+        )
+        if not fresh.new:
+            log.debug("dropped %s: %s", kind, fresh.reason)
+            return False
+        bad_field = non_finite_field(kind, msg)
+        if bad_field is not None:
+            self.node.callback_errors["mavlink non-finite"] += 1
+            log.debug("dropped %s", bad_field)
+            return False
+        return True
+
+    def _report_link_gap(self, before: State | None, gap_s: float, now: float) -> None:
+        """After a link gap, report what the autopilot changed meanwhile (a failsafe)."""
+        with self._lock:
+            after = self._heartbeat_state
+        if after is None:
+            return
+        report = gap_report(before, after, gap_s)
+        if report is not None:
+            self._bridge_text(report, now)
+
+    def _bridge_text(self, text: str, now: float) -> None:
+        """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
+        log.warning("%s", text)
+        self._publish_text(
+            StatusText(
+                header=Header(stamp=time.time(), frame_id="bridge"),
+                severity=SEVERITY_WARNING,
+                text=f"bridge: {text}",
+            ),
+            now,
+        )
 
     def _on_heartbeat(self, msg: Any, stamp: float, now: float) -> None:
         if not is_autopilot_heartbeat(msg):
@@ -881,12 +935,11 @@ class Bridge:
         return param_id
 
     def _param_decode(self, raw: float, param_type: int) -> ParamValue:
-        if param_type in INTEGER_PARAM_TYPES:
-            if self.autopilot == AUTOPILOT_ARDUPILOT:
-                return ParamValue(integer=int(raw), kind=PARAM_INTEGER)
-            # PX4: bytewise int32
-            return ParamValue(integer=_float_bits_to_int(raw), kind=PARAM_INTEGER)
-        return ParamValue(real=raw, kind=PARAM_REAL)
+        return param_values.decode_param(raw, param_type, bytewise=self._param_bytewise())
+
+    def _param_bytewise(self) -> bool:
+        """PX4 sends integer parameters as their bytes; ArduPilot as float values."""
+        return self.autopilot != AUTOPILOT_ARDUPILOT
 
     def _param_exchange(self, param_id: str, send: Any) -> tuple[float, int] | None:
         """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""
@@ -924,12 +977,14 @@ class Bridge:
         return ParamGetResult(success=True, value=self._param_decode(*got), message="ok")
 
     def handle_param_set(self, request: ParamSet) -> ParamSetResult:
-        """PARAM_SET: write, then report the value the autopilot echoes."""
+        """PARAM_SET: write, then report the value the autopilot echoes.
+
+        The value is checked against the parameter's type first (float32 range, integer
+        ranges, exactness); a value that does not fit is a bad request naming the field.
+        """
         self._require_connected()
         param_id = self._check_param_id(request.param_id)
-        value = request.value
-        if not math.isfinite(value.real):
-            raise ValueError(f"{param_id}: value must be finite, got {value.real!r}")
+        param_values.requested_number(param_id, request.value)  # refuse before any I/O
         with self._param_cond:
             known = self._params.get(param_id)
         if known is None:
@@ -939,19 +994,9 @@ class Bridge:
             param_type = known_read[1]
         else:
             param_type = known[1]
-        if param_type in INTEGER_PARAM_TYPES:
-            if value.real != 0.0 and value.real != int(value.real):
-                raise ValueError(f"{param_id} is an integer parameter, got {value.real!r}")
-            wanted = value.integer if value.integer != 0 else int(value.real)
-            if not -(2**31) <= wanted < 2**31:
-                raise ValueError(f"{param_id}: {wanted} does not fit in int32")
-            if self.autopilot == AUTOPILOT_ARDUPILOT:
-                raw = float(wanted)
-            else:
-                raw = _int_to_float_bits(wanted)
-        else:
-            wanted_real = value.real if value.integer == 0 else float(value.integer)
-            raw = wanted_real
+        raw = param_values.encode_param(
+            param_id, request.value, param_type, bytewise=self._param_bytewise()
+        )
         encoded = param_id.encode("ascii")
         got = self._param_exchange(
             param_id,
@@ -986,6 +1031,9 @@ def run(node: Node, config: Config) -> int:
     except ValueError as exc:  # e.g. an unknown commander_lost_action
         log.error("bad config: %s", exc)
         return 2
+    exposure = network_exposure(config.connection)
+    if exposure is not None:
+        log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
     threads = bridge.start()
     node.announce()
     log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)

@@ -462,7 +462,7 @@ def test_bad_setpoints_and_bytes_change_nothing(rig):
     time.sleep(0.3)
     assert len(fake.setpoints) == before  # not in OFFBOARD, nothing fresh: nothing sent
     with pytest.raises(ServiceError, match="altitude"):
-        user.call(registry.TAKEOFF, CommandTOL(altitude=math.inf), timeout=10)
+        user.call(registry.TAKEOFF, CommandTOL.takeoff(2000.0), timeout=10)
     replies = list(user.session.get(registry.ARMING.key("drone"), payload=b"\xc1", timeout=10))
     assert len(replies) == 1 and replies[0].err is not None
     assert b"bad CommandBool request" in replies[0].err.payload.to_bytes()
@@ -531,7 +531,7 @@ def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
     assert (mode_cmd.param1, mode_cmd.param2) == (1.0, 4.0)
     wait_for(lambda: state.value.mode == "GUIDED" and state.value.guided, 10)
     assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
-    assert user.call(registry.TAKEOFF, CommandTOL(altitude=4.0), timeout=10).success
+    assert user.call(registry.TAKEOFF, CommandTOL.takeoff(4.0), timeout=10).success
     (takeoff,) = fake.commands_named(22)
     assert takeoff.param7 == 4.0  # ArduPilot: metres above home, not AMSL
     fake.climb_to = None  # stop the scripted climb at 3 m
