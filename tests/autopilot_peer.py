@@ -113,6 +113,12 @@ class AutopilotPeer:
                 if tick % 10 == 0 and self.heartbeats:
                     self.send(self.heartbeat())
                     self.send(mavlink.MAVLink_extended_sys_state_message(0, 1))
+                    # battery, as every autopilot reports it (12.6 V, 80 %)
+                    self.send(
+                        mavlink.MAVLink_sys_status_message(
+                            0, 0, 0, 0, 12600, -1, 80, 0, 0, 0, 0, 0, 0
+                        )
+                    )
             except OSError:
                 return
 

@@ -95,7 +95,7 @@ def test_land_is_known_from_its_ack_no_spurious_hold(rig):
     for _ in range(3):  # each landing right after the SDK's stream stops, as land() does
         stream(pub, velocity(vx=0.5), 0.6)
         since = len(states)
-        reply = user.call(registry.LAND, CommandTOL(), timeout=15)
+        reply = user.call(registry.LAND, CommandTOL.land(), timeout=15)
         answered = time.monotonic()
         assert reply.success, reply
         wait_for(lambda: "AUTO.LAND" in modes_after(states, since), 5, what="AUTO.LAND")  # noqa: B023
