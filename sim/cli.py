@@ -44,6 +44,7 @@ def add_args(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--udp-gcs", metavar="[HOST:]PORT[:LOCAL]", help="GCS link, or 'off'")
     group.add_argument("--realtime-factor", type=float, help="sim seconds per wall second")
     group.add_argument("--compressed", action="store_true", help="always publish JPEG too")
+    group.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key at boot")
 
 
 def configure(args: argparse.Namespace, overrides: list[str]) -> None:
@@ -59,6 +60,7 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         "udp_onboard": args.udp_onboard,
         "udp_gcs": args.udp_gcs,
         "realtime_factor": args.realtime_factor,
+        "signing_key_file": args.signing_key,
     }
     for key, value in flags.items():
         if value is not None:

@@ -31,6 +31,9 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         jpeg_quality: JPEG quality 1..100.
         render_unwatched: render and publish raw images even when nobody subscribes.
         params: PX4 parameter overrides at boot (name: value).
+        signing_key_file: MAVLink 2 signing key provisioned at boot, like PX4's key file on the
+            SD card (64 hex digits, ``dronewrapper keys mavlink``); "" = none until a
+            SETUP_SIGNING arrives [--signing-key].
     """
 
     scenario: str = "beacon_static"
@@ -51,6 +54,7 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     jpeg_quality: int = 80
     render_unwatched: bool = False
     params: dict[str, float] = {}
+    signing_key_file: str = ""
 
     def __post_init__(self) -> None:
         if self.instance < 0:

@@ -33,11 +33,13 @@ from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Quaternion, Twi
 from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, encoding_for
+from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.frames import quat_from_euler
 from dronewrapper_sim.mavlink_io import MavlinkUdpLink, default_endpoints, parse_udp_spec
 from dronewrapper_sim.px4 import telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
+from dronewrapper_sim.px4.signing import SigningPolicy
 from dronewrapper_sim.world.scenario import Scenario
 
 log = logging.getLogger("sim")
@@ -233,6 +235,9 @@ class SimRunner:
         except OSError:
             self.close()
             raise
+        key = read_mavlink_key(config.signing_key_file) if config.signing_key_file else None
+        self.signing = SigningPolicy(key)
+        self._set_signing_key(key)
         self._snapshot = self._make_snapshot()
         self.cameras: CameraStreamer | None = None
         self._gt_pub = None
@@ -361,8 +366,27 @@ class SimRunner:
                 next_obj = max(next_obj + obj_period, now)
                 self._publish_objects()
 
+    def _set_signing_key(self, key: bytes | None) -> None:
+        for link in self.links.values():
+            link.set_signing_key(key, self.signing.allow_unsigned)
+
+    def _setup_signing(self, link: MavlinkUdpLink, msg: Any) -> None:
+        if msg.target_system not in (0, self.autopilot.sysid):
+            return
+        decision = self.signing.setup_signing(
+            bytes(msg.secret_key),
+            signed=bool(getattr(msg, "_signed", False)),
+            armed=self.autopilot.armed,
+        )
+        log.warning("%s link: SETUP_SIGNING %s", link.name, decision.reason)
+        if decision.accepted:
+            self._set_signing_key(decision.key)
+
     def _receive(self, link: MavlinkUdpLink) -> None:
         for msg in link.receive():
+            if msg.get_type() == "SETUP_SIGNING":
+                self._setup_signing(link, msg)
+                continue
             try:
                 replies = self.autopilot.handle(link.name, msg)
             except Exception:  # a message the autopilot cannot digest must not stop it

@@ -45,6 +45,7 @@ from dronewrapper.runtime import Node, Ratekeeper, ServiceError
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
+from dronewrapper_bridge_mavlink.guard import CommandGuard
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
@@ -130,6 +131,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
     )  # Hz asked with SET_MESSAGE_INTERVAL
     limits: LimitsConfig = msgspec.field(default_factory=LimitsConfig)
+    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
 
     def __post_init__(self) -> None:
         if self.commander_lost_action not in ("hold", "land", "return"):
@@ -167,6 +171,12 @@ class Bridge:
             baud=config.baud,
             source_system=config.source_system,
             source_component=config.source_component,
+            signing_key_file=config.signing_key_file,
+        )
+        self.guard = CommandGuard(
+            enabled=config.command_lease,
+            ttl_s=config.command_lease_ttl_s,
+            on_change=lambda: self.publish_state(force=True),
         )
         self.limits = Limits(**msgspec.structs.asdict(config.limits))
         self.failsafe = Failsafe(
@@ -230,6 +240,7 @@ class Bridge:
         self.node.serve(registry.SET_MODE, self.handle_set_mode)
         self.node.serve(registry.PARAM_GET, self.handle_param_get)
         self.node.serve(registry.PARAM_SET, self.handle_param_set)
+        self.guard.serve(self.node)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(target=self._stream_loop, name="stream", daemon=True),
@@ -437,6 +448,7 @@ class Bridge:
             state.header = Header.now()
             state.connected = self.connected
             state.failsafe = self.failsafe.state
+            state.commander = self.guard.holder()
             return state
 
     def publish_state(self, *, force: bool = False) -> None:
@@ -451,6 +463,7 @@ class Bridge:
             state.system_status,
             state.autopilot,
             state.failsafe,
+            state.commander,
         )
         now = time.monotonic()
         with self._lock:
@@ -512,6 +525,8 @@ class Bridge:
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: validate, remember, forward at once."""
+        if not self.guard.admit_setpoint():
+            return
         now = time.monotonic()
         try:
             kind = validate(target, self.limits)
@@ -711,6 +726,7 @@ class Bridge:
 
     def handle_arming(self, request: CommandBool) -> CommandBoolResult:
         """ARMING: MAV_CMD_COMPONENT_ARM_DISARM; the reply carries the real ack."""
+        self.guard.admit_command("arming")
         self._require_connected()
         result, message = self.command(
             cmds.MAV_CMD_COMPONENT_ARM_DISARM, 1.0 if request.value else 0.0
@@ -719,6 +735,7 @@ class Bridge:
 
     def handle_takeoff(self, request: CommandTOL) -> CommandTOLResult:
         """TAKEOFF: MAV_CMD_NAV_TAKEOFF to ``altitude`` m above the take-off point."""
+        self.guard.admit_command("takeoff")
         autopilot = self._require_connected()
         height = request.altitude
         if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
@@ -748,6 +765,7 @@ class Bridge:
 
     def handle_land(self, request: CommandTOL) -> CommandTOLResult:
         """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
+        self.guard.admit_command("land")
         autopilot = self._require_connected()
         lat, lon = request.latitude, request.longitude
         for name, value, bound in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
@@ -759,6 +777,7 @@ class Bridge:
 
     def handle_set_mode(self, request: SetMode) -> SetModeResult:
         """SET_MODE by name; OFFBOARD on PX4 is preceded by > offboard_prime_s of streaming."""
+        self.guard.admit_command("set_mode")
         autopilot = self._require_connected()
         params = set_mode_params(autopilot, request.custom_mode)  # ValueError lists valid modes
         guided = params.name == GUIDED_MODE.get(autopilot)
@@ -847,6 +866,7 @@ class Bridge:
 
     def handle_param_set(self, request: ParamSet) -> ParamSetResult:
         """PARAM_SET: write, then report the value the autopilot echoes."""
+        self.guard.admit_command("param_set")
         self._require_connected()
         param_id = self._check_param_id(request.param_id)
         value = request.value
