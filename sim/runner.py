@@ -237,6 +237,7 @@ class SimRunner:
             raise
         key = read_mavlink_key(config.signing_key_file) if config.signing_key_file else None
         self.signing = SigningPolicy(key)
+        self._rejections_logged: dict[str, tuple[int, float]] = {}
         self._set_signing_key(key)
         self._snapshot = self._make_snapshot()
         self.cameras: CameraStreamer | None = None
@@ -382,8 +383,22 @@ class SimRunner:
         if decision.accepted:
             self._set_signing_key(decision.key)
 
+    def _note_rejections(self, link: MavlinkUdpLink) -> None:
+        rejected, now = link.rejected, time.monotonic()
+        logged, at = self._rejections_logged.get(link.name, (0, -math.inf))
+        if rejected > logged and now - at >= 2.0:
+            self._rejections_logged[link.name] = (rejected, now)
+            log.warning(
+                "%s link: %d message(s) rejected so far (unsigned, wrongly signed or replayed)",
+                link.name,
+                rejected,
+            )
+
     def _receive(self, link: MavlinkUdpLink) -> None:
-        for msg in link.receive():
+        msgs = link.receive()
+        if link.rejected:
+            self._note_rejections(link)
+        for msg in msgs:
             if msg.get_type() == "SETUP_SIGNING":
                 self._setup_signing(link, msg)
                 continue

@@ -49,6 +49,8 @@ def test_rules_follow_the_registry():
     state = registry.STATE.key("drone")
     arming = registry.ARMING.key("drone")
     assert setpoint in _allowed(rules["operator"], "put", "ingress")
+    # a client publisher sends only while it sees a subscriber: the operator must see them
+    assert setpoint in _allowed(rules["operator"], "declare_subscriber", "egress")
     assert state not in _allowed(rules["operator"], "put", "ingress")
     assert arming in _allowed(rules["operator"], "query", "ingress")
     assert state in _allowed(rules["drone"], "put", "ingress")

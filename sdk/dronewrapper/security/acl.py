@@ -82,10 +82,12 @@ def acl_rules(namespaces: list[str]) -> dict[str, list[dict[str, Any]]]:
         _rule("drone_serve", ["declare_queryable", "reply"], ["ingress"], services),
         _rule("drone_queried", ["query"], ["egress"], services),
         _rule("drone_alive", ["liveliness_token"], ["ingress"], alive),
-        _rule("drone_subscribed", SUBSCRIBE, ["egress"], topics),
+        _rule("drone_subscribed", SUBSCRIBE, ["egress"], drone_pub),
     ]
     operator = [
         _rule("operator_publish", ["put", "delete"], ["ingress"], operator_pub),
+        # a client publisher sends only while it knows of a subscriber: let it see them
+        _rule("operator_subscribed", SUBSCRIBE, ["egress"], operator_pub),
         _rule("operator_call", ["query"], ["ingress"], services),
         _rule("operator_replies", ["reply"], ["egress"], services),
         _rule("operator_servers", ["declare_queryable"], ["egress"], services),

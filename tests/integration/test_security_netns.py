@@ -1,0 +1,128 @@
+"""Only authorised commanders fly the drone, across a real network (network namespaces, root).
+
+The drone's namespace runs a TLS router with access control, the simulated autopilot with a
+MAVLink signing key, the bridge with that key and the command lease, and a ground-truth monitor
+on loopback. From the laptop's namespace, clients with no certificate, a certificate of another
+CA, an observer's, an expired one and a revoked one try every command path, a parameter write,
+a setpoint stream and telemetry forgery: none is obeyed and no forged message is delivered.
+Then an operator flies; a second operator is refused until she takes the lease over.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import subprocess
+import sys
+
+import pytest
+from netns import is_root, two_hosts
+
+from dronewrapper.security.keystore import KeyStore
+from support import REPO, wait_for
+
+pytestmark = pytest.mark.integration
+
+ROUTER_LOCAL = "tcp/127.0.0.1:7447"
+TLS_PORT = 7448
+CLIENT = str(REPO / "tests" / "data" / "security_client.py")
+MONITOR = str(REPO / "tests" / "data" / "security_monitor.py")
+
+
+def _keys(tmp_path, drone_address: str) -> tuple[KeyStore, KeyStore]:
+    store = KeyStore(tmp_path / "keys")
+    store.init()
+    store.issue("drone1", "drone", hosts=[drone_address])
+    for name in ("alice", "carol", "rex"):
+        store.issue(name, "operator")
+    store.issue("olga", "observer")
+    past = dt.datetime.now(dt.timezone.utc) - dt.timedelta(days=3)
+    store.issue("old", "operator", days=1, now=past)
+    store.revoke("rex")
+    store.new_mavlink_key()
+    other = KeyStore(tmp_path / "other_ca")
+    other.init()
+    other.issue("mallory", "operator")
+    return store, other
+
+
+def _client(laptop, *args: str, timeout: float) -> dict:
+    done = subprocess.run(
+        laptop.argv(sys.executable, CLIENT, *args),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=REPO,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_only_authorised_commanders_fly(tmp_path, spawn):
+    if not is_root():
+        pytest.fail("needs root: it creates network namespaces (CI runs as root)")
+    with two_hosts() as (drone, laptop):
+        store, other = _keys(tmp_path, drone.address)
+        keys, mavkey = str(store.root), str(store.mavlink_key)
+        tls = f"tls/{drone.address}:{TLS_PORT}"
+        py = sys.executable
+        procs = [
+            spawn(drone.argv(py, "-m", "dronewrapper", "router", "--listen", ROUTER_LOCAL,
+                             "--listen", tls, "--identity", "drone1", "--keys", keys,
+                             "--namespace", "drone"), "router"),
+            spawn(drone.argv(py, "-m", "dronewrapper_sim", "--scenario", "empty",
+                             "--no-cameras", "--connect", ROUTER_LOCAL, "--udp-onboard",
+                             "14540:0", "--udp-gcs", "off", "--signing-key", mavkey), "sim"),
+            spawn(drone.argv(py, "-m", "dronewrapper_bridge_mavlink", "--connect", ROUTER_LOCAL,
+                             "--connection", "udpin:127.0.0.1:14540", "--set",
+                             "command_lease=true", "--set", f"signing_key_file={mavkey}"),
+                  "bridge"),
+        ]  # fmt: skip
+        truth = tmp_path / "truth.json"
+        monitor = spawn(drone.argv(py, MONITOR, ROUTER_LOCAL, str(truth)), "monitor")
+        ready = tmp_path / "truth.json.ready"
+        wait_for(lambda: ready.exists() or not monitor.alive(), 90, interval=0.2, what="monitor")
+        assert ready.exists(), monitor.output()[-2000:]
+
+        attackers = [
+            ("", keys, tls),  # no certificate
+            ("", keys, f"tcp/{drone.address}:7447"),  # plain tcp: nothing listens off loopback
+            ("mallory", str(other.root), tls),  # another CA
+            ("olga", keys, tls),  # an observer
+            ("old", keys, tls),  # expired
+            ("rex", keys, tls),  # revoked
+        ]
+        results = [_client(laptop, "attack", ep, who, k, timeout=120) for who, k, ep in attackers]
+        monitor.stop()
+        seen = json.loads(truth.read_text())
+
+        report = {f"{r['identity']}@{i}": r for i, r in enumerate(results)}
+        assert sum(r["obeyed"] for r in results) == 0, report
+        connected = {r["identity"]: r["connected"] for r in results}
+        assert connected == {"none": False, "mallory": False, "olga": True, "old": False,
+                             "rex": True}, report  # fmt: skip
+        for r in results:
+            if r["connected"]:  # the router denied every call: no reply, not even a refusal
+                assert r["no_reply"] == r["attempts"] - 2 and r["refused"] == 0, r
+            else:
+                assert r["refused"] == r["attempts"], r
+        assert seen["states"] > 0 and seen["poses"] > 0, seen  # the monitor did watch
+        assert seen["forged_states"] == 0 and seen["forged_poses"] == 0, seen
+        assert seen["setpoints"] == 0, seen  # no intruder setpoint reached the drone
+        assert not seen["armed"] and seen["max_z"] < 0.3, seen
+        assert seen["param_after"] == seen["param_before"], seen
+
+        flight = _client(laptop, "fly", tls, keys, timeout=240)
+        assert flight["alice_flew_to"] > 1.3, flight
+        assert flight["commander_after_takeoff"] == "alice", flight
+        assert flight["carol_arm"].startswith("refused") and "alice" in flight["carol_arm"], flight
+        assert flight["z_while_carol_refused"] < 1.8, flight  # carol's 2.5 m setpoints dropped
+        assert flight["carol_took_over_from"] == "alice", flight
+        assert flight["commander_after_take_over"] == "carol", flight
+        assert flight["carol_flew_to"] > 2.2, flight
+        assert flight["alice_land"].startswith("refused"), flight
+        assert flight["landed"], flight
+        for proc in reversed(procs):
+            proc.stop()
+        bridge_log = procs[2].output()
+        assert "command lease taken_over: carol (was alice)" in bridge_log, bridge_log[-2000:]
