@@ -14,7 +14,6 @@ link signs what it sends and drops what arrives unsigned, wrongly signed or repl
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import socket
 import time
@@ -22,6 +21,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper.security.mavlink_signing import verify_signed_frame
 
 log = logging.getLogger("sim.mavlink")
 
@@ -101,30 +102,13 @@ def signing_timestamp(now_s: float) -> int:
     return int((now_s - SIGNING_EPOCH_S) * 100_000)
 
 
-REPLAY_WINDOW = 6_000_000  # 10 µs units: a new stream may start at most 1 min behind us
-
-
 class VerifyingMAVLink(mavlink.MAVLink):
-    """pymavlink's parser with PX4's order of signature checks: a stream's last timestamp moves
-    only when a signature is valid (pymavlink moves it first, so one forged frame with a future
-    timestamp would make every genuine frame after it look replayed)."""
+    """pymavlink's parser with PX4's order of signature checks (see
+    ``dronewrapper.security.mavlink_signing``): a stream's timestamp moves only when a
+    signature is valid."""
 
     def check_signature(self, msgbuf: bytearray, srcSystem: int, srcComponent: int) -> bool:
-        signing = self.signing
-        link_id = msgbuf[-13]
-        timestamp = int.from_bytes(bytes(msgbuf[-12:-6]), "little")
-        stream = (link_id, srcSystem, srcComponent)
-        last = signing.stream_timestamps.get(stream)
-        if last is not None and timestamp <= last:
-            return False  # replayed or reordered
-        if last is None and timestamp + REPLAY_WINDOW < signing.timestamp:
-            return False  # a new stream too far in the past
-        digest = hashlib.sha256(signing.secret_key + bytes(msgbuf[:-6])).digest()[:6]
-        if digest != bytes(msgbuf[-6:]):
-            return False
-        signing.stream_timestamps[stream] = timestamp
-        signing.timestamp = max(signing.timestamp, timestamp)
-        return True
+        return verify_signed_frame(self.signing, msgbuf, srcSystem, srcComponent)
 
 
 def parse_datagram(

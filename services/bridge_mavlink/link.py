@@ -26,6 +26,8 @@ import contextlib
 
 from pymavlink import mavutil
 
+from dronewrapper.security.mavlink_signing import verify_signed_frame
+
 log = logging.getLogger("bridge_mavlink.link")
 
 UNSIGNED_ALLOWED = frozenset({109})  # RADIO_STATUS: inserted by telemetry radios, unsigned
@@ -92,6 +94,10 @@ class MavLink:
                 raise ValueError("MAVLink signing needs MAVLink 2 (MAVLINK20=1), not MAVLink 1")
             conn.setup_signing(
                 self.signing_key, sign_outgoing=True, allow_unsigned_callback=_allow_unsigned
+            )
+            signing = conn.mav.signing  # PX4's order: a forged frame cannot block the stream
+            conn.mav.check_signature = lambda buf, sysid, compid: verify_signed_frame(
+                signing, buf, sysid, compid
             )
         self._conn = conn
 
