@@ -151,3 +151,22 @@ def test_setup_signing_first_time_only_and_never_while_armed(spawn, router, stat
     station.setup_signing(signer, second)  # signed and disarmed: the key changes
     assert not station.obeyed(signer, arm=False)
     assert station.obeyed(station.encoder(second), arm=False)
+
+
+def test_provision_tool_keys_the_simulated_autopilot(spawn, router, station, tmp_path):
+    store = KeyStore(tmp_path / "keys")
+    key = store.new_mavlink_key()
+    start_sim(spawn, router, station)
+    assert station.obeyed(station.encoder(None), arm=False)  # no key yet
+    host, port = station.peer  # the sim's port: the tool speaks first, the sim answers it
+    tool = spawn(
+        python_module(
+            "dronewrapper_bridge_mavlink.provision", "--connection", f"udpout:{host}:{port}",
+            "--key", str(store.mavlink_key), "--timeout", "20",
+        ),
+        "provision",
+    )  # fmt: skip
+    assert tool.proc.wait(60) == 0, tool.output()
+    assert "now signs with the key" in tool.output()
+    assert not station.obeyed(station.encoder(None), arm=False)
+    assert station.obeyed(station.encoder(key), arm=False)
