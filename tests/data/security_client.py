@@ -23,6 +23,7 @@ from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     CommandBool,
     CommandTOL,
+    ParamGet,
     ParamGetResult,
     ParamSet,
     ParamValue,
@@ -39,6 +40,7 @@ NS = "drone"
 FORGED = "forged"
 PARAM = "MPC_XY_VEL_MAX"
 CALLS = [
+    ("param_get", registry.PARAM_GET, ParamGet(param_id=PARAM)),  # observers may not even read
     ("param_set", registry.PARAM_SET, ParamSet(param_id=PARAM, value=ParamValue(real=0.5))),
     ("take_over_lease", registry.COMMAND_LEASE, LeaseRequest(action="take_over")),
     ("set_mode", registry.SET_MODE, SetMode(custom_mode="OFFBOARD")),

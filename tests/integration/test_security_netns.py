@@ -165,7 +165,7 @@ def test_without_security_an_intruder_flies_the_drone(tmp_path, spawn):
         print(result)
         for proc in reversed(procs):
             proc.stop()
-    assert result["connected"] and result["obeyed"] >= 5, result  # param, mode, arm, ...
+    assert result["connected"] and result["obeyed"] >= 6, result  # param, arm, land, ...
     assert seen["param_after"] != seen["param_before"], seen
     assert seen["armed"] and seen["setpoints"] > 0, seen
     assert seen["forged_states"] > 0 and seen["forged_poses"] > 0, seen
