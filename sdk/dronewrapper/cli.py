@@ -1,7 +1,7 @@
 """The ``dronewrapper`` command.
 
     dronewrapper router [--listen ENDPOINT]          a Zenoh router (default tcp/127.0.0.1:7447)
-    dronewrapper keys init|issue|list|revoke|mavlink the project CA, certificates, MAVLink key
+    dronewrapper keys init|issue|list|revoke|...     the project CA, certificates, MAVLink key
     dronewrapper echo KEYEXPR [--count N]            print decoded messages
     dronewrapper alive [--connect ENDPOINT]          list running processes, by namespace
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)

@@ -68,6 +68,13 @@ def attack(endpoint: str, identity: str, keys: str) -> dict:
         return out
     out["connected"] = True
     label = commander_attachment(f"intruder-{identity}")
+    states = []  # genuine State samples received: observers may watch, the revoked may not
+
+    def on_state(sample) -> None:  # a session also gets its own puts: skip the forged ones
+        if codec.decode(State, sample.payload.to_bytes()).autopilot != FORGED:
+            states.append(sample)
+
+    watch = session.declare_subscriber(registry.STATE.key(NS), on_state)
     try:
         for name, service, request in CALLS:
             try:
@@ -78,8 +85,10 @@ def attack(endpoint: str, identity: str, keys: str) -> dict:
                 out["no_reply"] += 1
                 continue
             except ServiceError as exc:
-                out["refused"] += 1
                 out[f"{name}_error"] = exc.message
+                # Zenoh's own reply when a query outlives its timeout: no server answered
+                zenoh_timeout = exc.code == "internal" and exc.message == "Timeout"
+                out["no_reply" if zenoh_timeout else "refused"] += 1
                 continue
             ok = getattr(
                 reply, "success", getattr(reply, "mode_sent", getattr(reply, "granted", 0))
@@ -115,6 +124,8 @@ def attack(endpoint: str, identity: str, keys: str) -> dict:
         time.sleep(1.0)  # the monitor keeps asking the parameter and listing the alive
         token.undeclare()
         fake_bridge.undeclare()
+        watch.undeclare()
+        out["states_received"] = len(states)
     finally:
         session.close()
     return out

@@ -120,10 +120,12 @@ def test_only_authorised_commanders_fly(tmp_path, spawn):
                              "rex": True}, report  # fmt: skip
         for r in results:
             if r["connected"]:  # the router denied every call: no reply, not even a refusal
-                assert r["no_reply"] == r["attempts"] - 4 and r["refused"] == 0, r
+                assert r["no_reply"] == r["attempts"] - 4 and r["refused"] == 0, json.dumps(r)
             else:
                 assert r["refused"] == r["attempts"], r
         assert seen["states"] > 0 and seen["poses"] > 0, seen  # the monitor did watch
+        watched = {r["identity"]: r["states_received"] for r in results if r["connected"]}
+        assert watched["olga"] > 0 and watched["rex"] == 0, watched  # observers watch; revoked not
         assert seen["forged_states"] == 0 and seen["forged_poses"] == 0, seen
         assert seen["setpoints"] == 0, seen  # no intruder setpoint reached the drone
         assert not seen["armed"] and seen["max_z"] < 0.3, seen

@@ -93,6 +93,19 @@ def test_identity_resolves_by_name_or_path(store):
         Identity.load("bob", store.root)
 
 
+def test_export_copies_what_a_laptop_needs_and_never_the_ca_key(store, tmp_path):
+    store.issue("alice", "operator")
+    out = tmp_path / "laptop"
+    written = store.export("alice", out)
+    assert sorted(p.name for p in written) == ["alice.crt", "alice.key", "ca.crt"]
+    assert not (out / "ca.key").exists()
+    assert all(_mode(p) == 0o600 for p in written) and _mode(out) == 0o700
+    assert Identity.load("alice", out).cert == out / "alice.crt"
+    store.revoke("alice")
+    with pytest.raises(KeyStoreError, match="revoked"):
+        store.export("alice", tmp_path / "again")
+
+
 def test_cli_round_trip(tmp_path, capsys):
     keys = str(tmp_path / "k")
     assert cli_main(["keys", "--keys", keys, "init"]) == 0

@@ -6,12 +6,13 @@
     dronewrapper keys issue bob --role observer             an observer (may only watch)
     dronewrapper keys list                                  what was issued, valid or not
     dronewrapper keys revoke bob                            bob loses every permission
+    dronewrapper keys export alice /media/usb/keys          alice's files for her laptop
     dronewrapper keys mavlink                               the 32-byte MAVLink 2 signing key
 
 Files live in ``--keys DIR`` (default ``$DRONEWRAPPER_KEYS`` or ``~/.config/dronewrapper/keys``),
 each with mode 0600. A laptop needs ``ca.crt``, ``NAME.crt`` and ``NAME.key`` in its own key
-folder; ``ca.key`` stays where the CA was made. Restart the router after ``issue`` or
-``revoke``: its access control is generated from the key store when it starts.
+folder (``export`` copies exactly those); ``ca.key`` stays where the CA was made. Restart
+the router after ``issue`` or ``revoke``: its access control is generated when it starts.
 """
 
 from __future__ import annotations
@@ -41,6 +42,9 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("list", help="list issued certificates")
     revoke = sub.add_parser("revoke", help="revoke a certificate")
     revoke.add_argument("name")
+    export = sub.add_parser("export", help="copy an identity's files for another machine")
+    export.add_argument("name")
+    export.add_argument("dest", help="folder to write ca.crt, NAME.crt, NAME.key into")
     mav = sub.add_parser("mavlink", help="make the 32-byte MAVLink 2 signing key")
     mav.add_argument("--force", action="store_true", help="replace an existing key")
     return parser
@@ -65,6 +69,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "revoke":
             entry = store.revoke(args.name)
             print(f"revoked {entry.name} ({entry.role}); restart the router to apply")
+        elif args.command == "export":
+            paths = store.export(args.name, args.dest)
+            print("wrote " + ", ".join(str(p) for p in paths))
+            print(
+                "on that machine, put them in ~/.config/dronewrapper/keys (or $DRONEWRAPPER_KEYS)"
+            )
         elif args.command == "mavlink":
             store.new_mavlink_key(force=args.force)
             print(f"MAVLink signing key: {store.mavlink_key} (64 hex digits, mode 0600)")

@@ -238,6 +238,24 @@ class KeyStore:
                 return entry
         raise KeyStoreError(f"no certificate named {name!r} in {self.root}")
 
+    def export(self, name: str, dest: Path | str) -> list[Path]:
+        """Copy what ``name`` needs elsewhere (``ca.crt``, ``NAME.crt``, ``NAME.key``; never
+        ``ca.key``) into the folder ``dest``, each 0600: a key folder for that machine."""
+        files = [self.ca_cert, self.cert(name), self.key(name)]
+        for path in files:
+            if not path.is_file():
+                raise KeyStoreError(f"{path} is missing: issue {name!r} first")
+        if any(e.name == name and e.revoked for e in self.entries()):
+            raise KeyStoreError(f"{name!r} was revoked")
+        folder = Path(dest).expanduser()
+        folder.mkdir(parents=True, exist_ok=True)
+        os.chmod(folder, 0o700)
+        out = []
+        for path in files:
+            _write_private(folder / path.name, path.read_bytes())
+            out.append(folder / path.name)
+        return out
+
     def new_mavlink_key(self, *, force: bool = False) -> bytes:
         """Make the 32-byte MAVLink 2 signing key (``mavlink.key``, 64 hex digits, 0600)."""
         if self.mavlink_key.exists() and not force:
