@@ -23,6 +23,9 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
+import msgspec
+
+from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     FRAME_LOCAL_NED,
@@ -110,6 +113,8 @@ def validate(target: PositionTarget, limits: Limits = Limits()) -> Kind:
         )
     kind = _KIND_FOR_MASK[mask]
     p, v = target.position, target.velocity
+    if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
+        raise SetpointError(f"position is required with type_mask {mask}")
     if kind is Kind.POSITION:
         x, y = _finite("position.x", p.x), _finite("position.y", p.y)
         z = _finite("position.z", p.z)
@@ -201,9 +206,13 @@ def to_local_ned(
 
 def hold_target(position_enu: tuple[float, float, float], yaw_enu: float) -> PositionTarget:
     """A position + yaw PositionTarget (mask 3064, ENU) that holds ``position_enu``."""
-    target = PositionTarget(coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION, yaw=yaw_enu)
-    target.position.x, target.position.y, target.position.z = position_enu
-    return target
+    x, y, z = position_enu
+    return PositionTarget(
+        coordinate_frame=FRAME_LOCAL_NED,
+        type_mask=MASK_POSITION,
+        position=Point(x=x, y=y, z=z),
+        yaw=yaw_enu,
+    )
 
 
 def is_velocity_control(kind: Kind) -> bool:

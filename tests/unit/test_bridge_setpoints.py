@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import msgspec
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
@@ -129,9 +130,21 @@ def test_bad_setpoints_refused_with_reason(target, reason):
 
 def test_unused_fields_may_be_nan():
     target = vel(vx=1.0)
-    target.position.x = math.nan
+    target.position = Point(x=math.nan)
     target.yaw = math.inf
     assert validate(target) is Kind.VELOCITY
+
+
+@pytest.mark.parametrize("mask", [MASK_POSITION, MASK_MIXED])
+def test_a_target_that_leaves_out_its_position_is_refused(mask):
+    """Left out, the position is UNSET, never the origin at z = 0 (a dive to the ground)."""
+    frame = FRAME_LOCAL_NED if mask == MASK_POSITION else FRAME_BODY_NED
+    decoded = msgspec.msgpack.decode(
+        msgspec.msgpack.encode({"coordinate_frame": frame, "type_mask": mask}), type=PositionTarget
+    )
+    assert decoded.position is msgspec.UNSET
+    with pytest.raises(SetpointError, match=f"position is required with type_mask {mask}"):
+        validate(decoded)
 
 
 def test_hold_target_is_a_position_control():

@@ -117,13 +117,15 @@ class PositionTarget(msgspec.Struct, kw_only=True):
     like MAVROS's topic side. ``type_mask`` bits set = field ignored (MASK_* constants).
     ``header.stamp`` is the stamp of the data that caused the command (a camera frame's stamp
     for vision control), so latency can be measured end to end. ``coordinate_frame`` and
-    ``type_mask`` are required (no default could be safe).
+    ``type_mask`` are required (no default could be safe), and so is ``position`` for the
+    position and mixed masks (left out, it is UNSET, never the origin).
     """
 
     header: Header = msgspec.field(default_factory=Header)
     coordinate_frame: int  # required: an empty message must not mean "go to the origin"
     type_mask: int
-    position: Point = msgspec.field(default_factory=Point)
+    # UNSET when left out: a position or mixed target without it is refused, never "z = 0"
+    position: Point | msgspec.UnsetType = msgspec.UNSET
     velocity: Vector3 = msgspec.field(default_factory=Vector3)
     acceleration_or_force: Vector3 = msgspec.field(default_factory=Vector3)
     yaw: float = 0.0
