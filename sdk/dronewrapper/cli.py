@@ -12,6 +12,7 @@
     dronewrapper record [KEYEXPR...] -o FILE.mcap    the bus to MCAP (--info FILE summarises)
     dronewrapper replay FILE.mcap [--rate R] [...]   a recording back on the bus
     dronewrapper foxglove [KEYEXPR...] [--port P]    the live bus to Foxglove (WebSocket)
+    dronewrapper mavlink-forward [--udp HOST:PORT]   a drone's MAVLink for QGroundControl (UDP)
     dronewrapper --version                           the installed version
 
 ``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
@@ -213,6 +214,34 @@ def _doctor(argv: Sequence[str]) -> int:
     )
 
 
+def _mavlink_forward(argv: Sequence[str]) -> int:
+    from dronewrapper.mavlink_forward import forward, parse_udp
+    from dronewrapper.runtime.node import Node
+
+    parser = argparse.ArgumentParser(
+        prog="dronewrapper mavlink-forward",
+        description="a drone's MAVLink (bridge gcs_over_zenoh) as UDP for QGroundControl",
+    )
+    parser.add_argument(
+        "--udp", default="127.0.0.1:14550", metavar="HOST:PORT", help="QGC's port (default)"
+    )
+    add_zenoh_args(parser, default_mode="client")
+    args = parser.parse_args(argv)
+    try:
+        qgc = parse_udp(args.udp)
+    except ValueError as exc:
+        parser.error(str(exc))
+    setup_logging()
+    options = options_from_args(args, name="mavlink_forward")
+    try:
+        with Node("mavlink_forward", options) as node:
+            forward(node, qgc, node.stop_event)
+    except ConnectionError as exc:
+        print(f"dronewrapper mavlink-forward: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def _keys(argv: Sequence[str]) -> int:
     try:
         from dronewrapper.security.keys_cli import main as keys_main
@@ -234,7 +263,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"dronewrapper {_version()}")
         return 0
     command, rest = argv[0], argv[1:]
-    local = {"router": _router, "echo": _echo, "alive": _alive, "doctor": _doctor, "keys": _keys}
+    local = {
+        "router": _router,
+        "echo": _echo,
+        "alive": _alive,
+        "doctor": _doctor,
+        "keys": _keys,
+        "mavlink-forward": _mavlink_forward,
+    }
     if command in local:
         return local[command](rest)
     if command in _STACK_COMMANDS or command in _RECORD_COMMANDS:

@@ -195,6 +195,17 @@ class MavLink:
         """Milliseconds since this link was created (our ``time_boot_ms``)."""
         return int((time.monotonic() - self._t0) * 1000) & 0xFFFFFFFF
 
+    def write_raw(self, frame: bytes) -> None:
+        """Write whole frames as they are (a ground station's, forwarded); raises OSError.
+
+        On a signed link the ground station must sign with the same key (QGC can); the bridge
+        does not re-sign frames it did not make."""
+        conn = self._conn
+        if conn is None:
+            raise OSError("the autopilot link is not open")
+        with self._send_lock:
+            conn.write(frame)
+
     def send(self, name: str, *args: Any, **kwargs: Any) -> bool:
         """Send message ``name`` (e.g. ``heartbeat``) with its fields; False if not sent."""
         conn = self._conn

@@ -46,6 +46,7 @@ from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
+from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
 from dronewrapper_bridge_mavlink.guard import CommandGuard
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
 from dronewrapper_bridge_mavlink.link_gap import gap_report
@@ -110,7 +111,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     connection: str = "udpin:127.0.0.1:14540"  # pymavlink URL; loopback unless set otherwise
     baud: int = 57600  # serial only
     source_system: int = 255  # our MAVLink system id
-    source_component: int = 190  # our MAVLink component id
+    source_component: int = 191  # our MAVLink component id (onboard computer; QGC is 190)
     heartbeat_type: int = MAV_TYPE_GCS  # MAV_TYPE of our heartbeat (GCS: PX4 sends STATUSTEXT)
     target_system: int = 0  # autopilot system id; 0 = the first autopilot heard
     target_component: int = 1
@@ -138,6 +139,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
+    gcs_url: str = ""  # udp:HOST:PORT of a ground station (QGC 14550) to forward MAVLink to
+    gcs_over_zenoh: bool = False  # also forward on {ns}/mavlink/* (dronewrapper mavlink-forward)
 
     def __post_init__(self) -> None:
         if self.commander_lost_action not in ("hold", "land", "return"):
@@ -154,6 +157,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
                 raise ValueError(f"{name} must be > 0")
         if self.command_attempts < 1 or self.param_attempts < 1:
             raise ValueError("command_attempts and param_attempts must be >= 1")
+        if self.gcs_url:
+            parse_gcs_url(self.gcs_url)  # raises ValueError naming the expected form
         for name in ("final_ack_timeout", "mode_confirm_timeout"):
             if not 0 < getattr(self, name) <= 30:
                 raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")
@@ -165,6 +170,7 @@ class Bridge:
     def __init__(self, node: Node, config: Config, link: MavLink | None = None) -> None:
         self.node = node
         self.config = config
+        self.gcs: GcsForwarder | None = None  # ground-station forwarding, made at start()
         self.link = link or MavLink(
             config.connection,
             baud=config.baud,
@@ -246,10 +252,42 @@ class Bridge:
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(target=self._stream_loop, name="stream", daemon=True),
         ]
+        self.gcs = self._make_gcs_forwarder()
+        if self.gcs is not None:
+            threads.append(
+                threading.Thread(
+                    target=self.gcs.run, args=(self.node.stop_event,), name="gcs", daemon=True
+                )
+            )
         for thread in threads:
             thread.start()
         self.publish_state(force=True)
         return threads
+
+    def _make_gcs_forwarder(self) -> GcsForwarder | None:
+        """The ground-station forwarder of ``gcs_url`` / ``gcs_over_zenoh``, or None."""
+        address = parse_gcs_url(self.config.gcs_url) if self.config.gcs_url else None
+        if address is None and not self.config.gcs_over_zenoh:
+            return None
+        publish = None
+        if self.config.gcs_over_zenoh:
+            publisher = self.node.publisher(registry.MAVLINK_FROM_AUTOPILOT)
+            publish = publisher.put
+        forwarder = GcsForwarder(self.link.write_raw, address, publish)
+        if self.config.gcs_over_zenoh:
+            self.node.subscribe(registry.MAVLINK_TO_AUTOPILOT, forwarder.from_zenoh)
+        if address is not None and not is_loopback(address[0]):
+            log.warning(
+                "forwarding the autopilot's MAVLink to %s beyond loopback: anyone there can "
+                "command the autopilot unless MAVLink signing is on",
+                self.config.gcs_url,
+            )
+        log.info(
+            "ground-station forwarding: %s%s",
+            self.config.gcs_url or "no UDP",
+            ", and over Zenoh" if self.config.gcs_over_zenoh else "",
+        )
+        return forwarder
 
     def _open_link(self) -> bool:
         try:
@@ -279,6 +317,8 @@ class Bridge:
                 continue
             if msg is None:
                 continue
+            if self.gcs is not None and msg.get_type() != "BAD_DATA":
+                self.gcs.from_autopilot(bytes(msg.get_msgbuf()))
             try:
                 self.handle_mavlink(msg, time.time(), time.monotonic(), self.link.last_source)
             except Exception:
@@ -466,6 +506,10 @@ class Bridge:
         self.pub_text.put(text)
 
     def _on_command_ack(self, msg: Any, stamp: float, now: float) -> None:
+        target = (getattr(msg, "target_system", 0), getattr(msg, "target_component", 0))
+        ours = (self.config.source_system, self.config.source_component)
+        if target != (0, 0) and target != ours:
+            return  # the answer to a ground station's command (forwarded), not to ours
         with self._ack_cond:
             outcome = self.acks.on_ack(int(msg.command), int(msg.result), now)
             self._ack_cond.notify_all()
@@ -1061,6 +1105,8 @@ def run(node: Node, config: Config) -> int:
     for thread in threads:
         thread.join(timeout=2.0)
     bridge.link.close()
+    if bridge.gcs is not None:
+        bridge.gcs.close()
     return 0
 
 

@@ -20,6 +20,7 @@ from typing import Any, Generic, TypeVar
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
+from dronewrapper.msgs.mavlink import MavlinkFrames
 from dronewrapper.msgs.mavros import (
     CommandBool,
     CommandBoolResult,
@@ -188,6 +189,23 @@ SETPOINT_RAW_LOCAL = Topic(
     20.0,
     ("sdk", "controller"),
     "setpoint, ENU/FLU; re-published at >= 20 Hz while commanding",
+    COMMAND,
+)
+
+# ---- raw MAVLink for a ground station (bridge_mavlink's gcs_over_zenoh) ----
+MAVLINK_FROM_AUTOPILOT = Topic(
+    "{ns}/mavlink/from_autopilot",
+    MavlinkFrames,
+    0.0,
+    ("bridge",),
+    "the autopilot's MAVLink frames, for a ground station (when enabled)",
+)
+MAVLINK_TO_AUTOPILOT = Topic(
+    "{ns}/mavlink/to_autopilot",
+    MavlinkFrames,
+    0.0,
+    ("gcs",),
+    "a ground station's MAVLink frames for the autopilot (when enabled)",
     COMMAND,
 )
 

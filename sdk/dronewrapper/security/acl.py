@@ -28,7 +28,7 @@ from dronewrapper.msgs import registry
 LOOPBACK_INTERFACES = ("lo",)
 
 # registry process name -> security role (a process not listed runs on the drone)
-PROCESS_ROLES = {"sdk": "operator", "teleop": "operator", "tests": "operator"}
+PROCESS_ROLES = {"sdk": "operator", "teleop": "operator", "tests": "operator", "gcs": "operator"}
 
 SUBSCRIBE = ["declare_subscriber"]
 LIVELINESS_WATCH = ["liveliness_query", "declare_liveliness_subscriber"]
