@@ -5,9 +5,10 @@ name says ``_deg``.
 
 The Tello reports aircraft Euler angles as MAVLink/NED does: roll positive right side down,
 pitch positive nose up, yaw positive clockwise seen from above, 0 at its reference heading
-(the heading at power-on on a real Tello: it has no compass). We treat that reference heading
-as "north" of a local NED frame and convert exactly as MAVROS does: roll stays, pitch changes
-sign, ``yaw_enu = pi/2 - yaw_ned``. So a Tello at yaw 0 faces ENU +y (yaw_enu = +90 degrees).
+(the heading at power-on: a Tello has no compass). The local ENU frame (``odom``) is fixed at the
+take-off point with its x axis along ``reference_yaw`` (ENU yaw of the power-on heading, default
+0: x along the power-on heading, as ROS odometry starts), so ``yaw_enu = reference_yaw - yaw``;
+roll stays and pitch changes sign (FRD -> FLU), as MAVROS converts.
 """
 
 from __future__ import annotations
@@ -23,9 +24,10 @@ def wrap_pi(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def yaw_tello_to_enu(yaw_deg: float) -> float:
-    """The Tello's yaw (degrees, clockwise from its reference heading) as ENU yaw (rad, CCW)."""
-    return wrap_pi(math.pi / 2.0 - math.radians(yaw_deg))
+def yaw_tello_to_enu(yaw_deg: float, reference_yaw: float = 0.0) -> float:
+    """The Tello's yaw (degrees, clockwise from its reference heading) as ENU yaw (rad, CCW);
+    ``reference_yaw`` is the ENU yaw of the reference heading (rad)."""
+    return wrap_pi(reference_yaw - math.radians(yaw_deg))
 
 
 def quat_from_rpy(roll: float, pitch: float, yaw: float) -> Quat:
@@ -50,10 +52,14 @@ def rpy_from_quat(q: Quat) -> Vec3:
     return roll, pitch, yaw
 
 
-def attitude_enu(roll_deg: float, pitch_deg: float, yaw_deg: float) -> Quat:
-    """The Tello's attitude angles (degrees, NED/FRD convention) as body FLU in local ENU."""
+def attitude_enu(
+    roll_deg: float, pitch_deg: float, yaw_deg: float, reference_yaw: float = 0.0
+) -> Quat:
+    """The Tello's attitude angles (degrees, FRD convention) as body FLU in local ENU."""
     return quat_from_rpy(
-        math.radians(roll_deg), -math.radians(pitch_deg), yaw_tello_to_enu(yaw_deg)
+        math.radians(roll_deg),
+        -math.radians(pitch_deg),
+        yaw_tello_to_enu(yaw_deg, reference_yaw),
     )
 
 

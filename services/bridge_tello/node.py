@@ -120,7 +120,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     compressed: bool = False  # also publish JPEG on image_raw/compressed (else only on request)
     jpeg_quality: int = 80
     video_chunk: int = 1460  # bytes of a full video datagram (a shorter one ends a frame)
-    velocity_frame: str = "ned"  # ned | body_frd: the frame of vgx, vgy, vgz
+    velocity_frame: str = "reference"  # reference | body_frd: the frame of vgx, vgy, vgz
+    reference_yaw_deg: float = 0.0  # ENU yaw of the Tello's power-on heading (0: local +x)
     velocity_unit: float = 0.1  # m/s per vg* unit (the Tello sends dm/s)
     height_source: str = "h"  # h | tof
     tof_ground_cm: float = 10.0  # tof reading on the ground
@@ -152,8 +153,12 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError(f"rc_rate_hz must be in [20, 50], got {self.rc_rate_hz}")
         if not 0 < self.keepalive_s < 15.0:
             raise ValueError("keepalive_s must be in (0, 15): the Tello lands after 15 s")
-        if self.velocity_frame not in ("ned", "body_frd"):
-            raise ValueError(f"velocity_frame must be ned or body_frd, got {self.velocity_frame!r}")
+        if self.velocity_frame not in ("reference", "body_frd"):
+            raise ValueError(
+                f"velocity_frame must be reference or body_frd, got {self.velocity_frame!r}"
+            )
+        if not (math.isfinite(self.reference_yaw_deg) and abs(self.reference_yaw_deg) <= 360):
+            raise ValueError("reference_yaw_deg must be in [-360, 360]")
         if self.height_source not in ("h", "tof"):
             raise ValueError(f"height_source must be h or tof, got {self.height_source!r}")
         if not 1 <= self.scale.max_stick <= 100:
@@ -189,6 +194,7 @@ class Bridge:
         )
         self.telemetry = Telemetry(
             velocity_frame=config.velocity_frame,
+            reference_yaw=math.radians(config.reference_yaw_deg),
             velocity_unit=config.velocity_unit,
             height_source=config.height_source,
             tof_ground_cm=config.tof_ground_cm,

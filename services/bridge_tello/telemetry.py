@@ -5,9 +5,10 @@ Pure: every method takes the wall-clock stamp (float s since the epoch) and a mo
 
 * Orientation: the Tello's degrees -> an ENU/FLU quaternion (see :mod:`.frames`).
 * Velocities: ``vgx, vgy, vgz`` (dm/s, ``velocity_unit`` m each) in the frame named by
-  ``velocity_frame``: ``ned`` (x along the Tello's reference heading, y to its right, z down:
-  what the real drone sends) or ``body_frd`` (forward, right, down of the current heading).
-  Local velocity is ENU, body velocity FLU.
+  ``velocity_frame``: ``reference`` (x along the Tello's reference heading, y to its right, z
+  down: what the real drone sends) or ``body_frd`` (forward, right, down of the current
+  heading). Local velocity is ENU, body velocity FLU.
+* The local frame: x along ``reference_yaw`` (rad ENU; 0: the Tello's power-on heading is +x).
 * Position: a Tello has no position sensor. x, y are **dead-reckoned** by integrating the
   ENU velocity between state strings, reset to 0 on each take-off, so they drift; z is the
   height ``h`` (cm above the take-off point) or ``tof`` (cm to the ground, minus its reading on
@@ -37,16 +38,20 @@ from dronewrapper_bridge_tello.state import TelloState
 
 FRAME_ODOM = "odom"
 FRAME_BASE_LINK = "base_link"
-VELOCITY_FRAMES = ("ned", "body_frd")
+VELOCITY_FRAMES = ("reference", "body_frd")
 HEIGHT_SOURCES = ("h", "tof")
 MAX_INTEGRATION_STEP = 0.5  # s: a longer gap between state strings is not integrated over
 
 
-def velocity_enu(state: TelloState, q: Quat, frame: str, unit: float) -> Vec3:
-    """The state's velocity as local ENU m/s (``q``: the attitude, ``unit``: m per vg unit)."""
+def velocity_enu(
+    state: TelloState, q: Quat, frame: str, unit: float, reference_yaw: float = 0.0
+) -> Vec3:
+    """The state's velocity as local ENU m/s (``q``: the attitude, ``unit``: m per vg unit,
+    ``reference_yaw``: ENU yaw of the Tello's reference heading, rad)."""
     a, b, c = state.vgx * unit, state.vgy * unit, state.vgz * unit
-    if frame == "ned":
-        return (b, a, -c)
+    if frame == "reference":  # forward, right, down of the reference heading
+        cos, sin = math.cos(reference_yaw), math.sin(reference_yaw)
+        return (cos * a + sin * b, sin * a - cos * b, -c)
     return rotate(q, (a, -b, -c))  # body FRD -> FLU, then into ENU
 
 
@@ -120,7 +125,8 @@ class Telemetry:
         battery: latest percentage 0..1 (NaN before a state).
     """
 
-    velocity_frame: str = "ned"
+    velocity_frame: str = "reference"
+    reference_yaw: float = 0.0  # rad, ENU yaw of the Tello's yaw 0
     velocity_unit: float = 0.1  # m/s per vg* unit (dm/s)
     height_source: str = "h"
     tof_ground_cm: float = 10.0
@@ -160,8 +166,12 @@ class Telemetry:
 
     def on_state(self, state: TelloState, now: float) -> None:
         """Feed one parsed state string received at monotonic ``now``."""
-        self.attitude = attitude_enu(state.roll_deg, state.pitch_deg, state.yaw_deg)
-        v = velocity_enu(state, self.attitude, self.velocity_frame, self.velocity_unit)
+        self.attitude = attitude_enu(
+            state.roll_deg, state.pitch_deg, state.yaw_deg, self.reference_yaw
+        )
+        v = velocity_enu(
+            state, self.attitude, self.velocity_frame, self.velocity_unit, self.reference_yaw
+        )
         yaw = self.yaw_enu
         if self._last_at is not None:
             dt = now - self._last_at

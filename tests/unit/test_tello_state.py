@@ -61,12 +61,13 @@ def test_optional_field_garbage_does_not_reject_the_string():
 
 
 def test_attitude_quaternion_is_enu_flu_with_ccw_yaw():
-    # Tello yaw 0 (its reference heading, our "north") -> ENU yaw +90 degrees
-    assert rpy_from_quat(attitude_enu(0, 0, 0))[2] == pytest.approx(math.pi / 2)
-    # clockwise 90 degrees (Tello yaw +90) faces east: ENU yaw 0
-    assert rpy_from_quat(attitude_enu(0, 0, 90))[2] == pytest.approx(0.0, abs=1e-9)
-    # Tello yaw -90 (turned left) faces west: ENU yaw 180
-    assert abs(rpy_from_quat(attitude_enu(0, 0, -90))[2]) == pytest.approx(math.pi)
+    # Tello yaw 0 (its power-on heading) is the local frame's +x: ENU yaw 0
+    assert rpy_from_quat(attitude_enu(0, 0, 0))[2] == pytest.approx(0.0)
+    # clockwise 90 degrees (Tello yaw +90) -> ENU yaw -90 degrees (CCW positive)
+    assert rpy_from_quat(attitude_enu(0, 0, 90))[2] == pytest.approx(-math.pi / 2)
+    assert rpy_from_quat(attitude_enu(0, 0, -30))[2] == pytest.approx(math.radians(30))
+    # a known reference heading: power-on heading north (ENU yaw 90), turned 90 cw -> east
+    assert rpy_from_quat(attitude_enu(0, 0, 90, math.pi / 2))[2] == pytest.approx(0.0, abs=1e-9)
     # nose up (Tello pitch +10) -> the body x axis points up in ENU
     nose = rotate(attitude_enu(0, 10, 90), (1.0, 0.0, 0.0))
     assert nose[2] == pytest.approx(math.sin(math.radians(10)))
@@ -83,35 +84,46 @@ def feed(t: Telemetry, now: float, **over) -> None:
 
 def test_velocities_in_metres_per_second_enu_and_flu():
     t = Telemetry()
-    # facing east (yaw 90), moving north-forward at 5 dm/s: vgx is along the reference "north"
+    # turned 90 deg clockwise (facing -y), moving along the power-on heading at 5 dm/s, climbing
     feed(t, 0.0, yaw=90, vgx=5, vgy=0, vgz=-2)
     _, local, body = t.messages(1.0)
-    assert (local.twist.linear.x, local.twist.linear.y) == pytest.approx((0.0, 0.5))
+    assert (local.twist.linear.x, local.twist.linear.y) == pytest.approx((0.5, 0.0))
     assert local.twist.linear.z == pytest.approx(0.2)  # vgz is down-positive
-    # north is to the left of an east-facing drone
+    # the power-on heading (+x) is to the left of a drone facing -y
     assert body.twist.linear.x == pytest.approx(0.0, abs=1e-9)
     assert body.twist.linear.y == pytest.approx(0.5)
     assert body.twist.linear.z == pytest.approx(0.2)
+    feed(t, 0.1, yaw=0, vgy=3)  # vgy > 0 is to the right of the power-on heading: -y
+    _, local, body = t.messages(1.0)
+    assert (local.twist.linear.x, local.twist.linear.y) == pytest.approx((0.0, -0.3))
+    assert body.twist.linear.y == pytest.approx(-0.3)
+
+
+def test_reference_yaw_turns_the_local_frame():
+    t = Telemetry(reference_yaw=math.pi / 2)  # powered on facing north
+    feed(t, 0.0, yaw=0, vgx=5)
+    _, local, _ = t.messages(1.0)
+    assert (local.twist.linear.x, local.twist.linear.y) == pytest.approx((0.0, 0.5))
 
 
 def test_body_frd_velocity_frame():
     t = Telemetry(velocity_frame="body_frd")
-    feed(t, 0.0, yaw=90, vgx=5, vgy=3)  # forward 0.5, right 0.3, facing east
+    feed(t, 0.0, yaw=-90, vgx=5, vgy=3)  # forward 0.5, right 0.3, facing +y
     _, local, body = t.messages(1.0)
     assert (body.twist.linear.x, body.twist.linear.y) == pytest.approx((0.5, -0.3))
-    assert (local.twist.linear.x, local.twist.linear.y) == pytest.approx((0.5, -0.3))
+    assert (local.twist.linear.x, local.twist.linear.y) == pytest.approx((0.3, 0.5))
 
 
 def test_position_is_dead_reckoned_and_reset_on_takeoff():
     t = Telemetry()
-    for i in range(11):  # 1 s at 10 Hz, 1 m/s east (vgy = 10 dm/s), 80 cm high
-        feed(t, i * 0.1, vgy=10, h=80)
+    for i in range(11):  # 1 s at 10 Hz, 1 m/s along the power-on heading, 80 cm high
+        feed(t, i * 0.1, vgx=10, h=80)
     pose, _, _ = t.messages(5.0)
     assert pose.header.frame_id == "odom"
     assert pose.pose.position.x == pytest.approx(1.0)
     assert pose.pose.position.y == pytest.approx(0.0)
     assert pose.pose.position.z == pytest.approx(0.8)
-    feed(t, 3.0, vgy=10, h=80)  # a 2 s gap is not integrated over
+    feed(t, 3.0, vgx=10, h=80)  # a 2 s gap is not integrated over
     assert t.position_enu[0] == pytest.approx(1.0)
     t.reset_position()
     assert t.position_enu[:2] == (0.0, 0.0)
