@@ -7,6 +7,8 @@ scenario's world and the frontal and ventral cameras published on Zenoh.
     dronewrapper sim --scenario beacon_static
     dronewrapper sim --instance 1 --no-cameras          # a second drone: drone1, sysid 2
     dronewrapper sim --udp-onboard 15000:0 --udp-gcs off  # test ports (LOCAL 0 = ephemeral)
+    dronewrapper sim --aircraft tello                   # a DJI Tello on 127.0.0.1:8889
+    sudo dronewrapper sim --aircraft tello --netns      # ... at 192.168.10.1, as a real one
 """
 
 from __future__ import annotations
@@ -44,6 +46,11 @@ def add_args(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--udp-gcs", metavar="[HOST:]PORT[:LOCAL]", help="GCS link, or 'off'")
     group.add_argument("--realtime-factor", type=float, help="sim seconds per wall second")
     group.add_argument("--compressed", action="store_true", help="always publish JPEG too")
+    group.add_argument("--aircraft", choices=("iris", "tello"), help="vehicle (default iris)")
+    group.add_argument("--address", help="tello: address of UDP 8889 (default 127.0.0.1+N)")
+    group.add_argument(
+        "--netns", action="store_true", help="tello: own network namespace at 192.168.10.1 (root)"
+    )
 
 
 def configure(args: argparse.Namespace, overrides: list[str]) -> None:
@@ -59,6 +66,8 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         "udp_onboard": args.udp_onboard,
         "udp_gcs": args.udp_gcs,
         "realtime_factor": args.realtime_factor,
+        "aircraft": args.aircraft,
+        "address": args.address,
     }
     for key, value in flags.items():
         if value is not None:
@@ -67,6 +76,8 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         overrides.append("cameras=false")
     if args.compressed:
         overrides.append("compressed=true")
+    if args.netns:
+        overrides.append("netns=true")
     explicit_ns = args.namespace or os.environ.get(f"{ENV_PREFIX}NAMESPACE")
     if args.instance and not explicit_ns:
         args.namespace = f"{DEFAULT_NAMESPACE}{args.instance}"
@@ -82,6 +93,10 @@ def run(node: Node, config: SimConfig) -> int:
     except ConfigError as exc:
         log.error("%s", exc)
         return 2
+    if config.aircraft == "tello":
+        from dronewrapper_sim.tello.main import run_tello
+
+        return run_tello(node, config, scenario)
     try:
         runner = SimRunner(config, scenario, node)
     except OSError as exc:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import msgspec
 
 from dronewrapper_sim.mavlink_io import parse_udp_spec
+from dronewrapper_sim.tello.config import TelloConfig
 
 
 class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -31,6 +32,13 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         jpeg_quality: JPEG quality 1..100.
         render_unwatched: render and publish raw images even when nobody subscribes.
         params: PX4 parameter overrides at boot (name: value).
+        aircraft: ``iris`` (the PX4-like quadrotor on MAVLink) or ``tello`` (a DJI Tello on
+            the Tello SDK) [--aircraft].
+        address: Tello only: the address of its UDP port 8889; "" = 127.0.0.(1+N), or the
+            drone's address in the namespace with ``netns`` [--address].
+        netns: Tello only: live in a network namespace of its own joined to the host by a veth
+            pair (root) [--netns].
+        tello: the simulated Tello's settings (see ``dronewrapper_sim.tello.config``).
     """
 
     scenario: str = "beacon_static"
@@ -51,6 +59,10 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     jpeg_quality: int = 80
     render_unwatched: bool = False
     params: dict[str, float] = {}
+    aircraft: str = "iris"
+    address: str = ""
+    netns: bool = False
+    tello: TelloConfig = msgspec.field(default_factory=TelloConfig)
 
     def __post_init__(self) -> None:
         if self.instance < 0:
@@ -73,5 +85,9 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
                     parse_udp_spec(spec, 0)
                 except ValueError as exc:
                     raise ValueError(f"{name}: {exc}") from None
+        if self.aircraft not in ("iris", "tello"):
+            raise ValueError(f"aircraft must be iris or tello, got {self.aircraft!r}")
+        if (self.address or self.netns) and self.aircraft != "tello":
+            raise ValueError("address and netns are Tello settings (aircraft: tello)")
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")

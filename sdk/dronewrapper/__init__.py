@@ -6,7 +6,7 @@
     drone.set_cmd_vel(az=1)   # spin
     drone.land()
 
-The SDK talks to the aircraft's bridge over Zenoh (see DESIGN.md for keys, frames and units).
+The SDK talks to the aircraft's bridge over Zenoh (see docs/design.md for keys, frames and units).
 Heavy parts load on first use, so ``import dronewrapper`` stays light for the runtime's tools.
 """
 

@@ -6,6 +6,7 @@
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
+    dronewrapper --version                           the installed version
 
 ``up``, ``sim`` and ``detect`` come with the on-board stack (``make setup``); the SDK alone
 (``pip install ./sdk``) has ``router``, ``echo`` and ``alive``.
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -59,8 +61,26 @@ def _router(argv: Sequence[str]) -> int:
     return 0
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("dronewrapper")
+    except PackageNotFoundError:  # running from a source tree that was not installed
+        return "unknown (not installed)"
+
+
+def _quiet_broken_pipe() -> None:
+    """After the reader of stdout went away (``| head``), let the interpreter exit quietly."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
 def _echo(argv: Sequence[str]) -> int:
-    from dronewrapper.echo import echo
+    import zenoh
+
+    from dronewrapper.echo import echo, keyexpr_problem
+    from dronewrapper.runtime.errors import zenoh_error_text
     from dronewrapper.runtime.node import open_session
 
     parser = argparse.ArgumentParser(prog="dronewrapper echo", description="print messages")
@@ -69,6 +89,15 @@ def _echo(argv: Sequence[str]) -> int:
     parser.add_argument("--duration", type=float, default=0.0, help="stop after S seconds")
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
+    problem = keyexpr_problem(args.keyexpr)
+    if problem is None:
+        try:
+            zenoh.KeyExpr(args.keyexpr)
+        except zenoh.ZError as exc:
+            problem = f"{args.keyexpr!r} is not a key expression: {zenoh_error_text(exc)}"
+    if problem:
+        print(f"dronewrapper echo: {problem}", file=sys.stderr)
+        return 2
     stop = _stop_on_signals()
     try:
         session = open_session(options_from_args(args))
@@ -79,7 +108,17 @@ def _echo(argv: Sequence[str]) -> int:
         echo(session, args.keyexpr, count=args.count, duration=args.duration, stop=stop)
     finally:
         session.close()
+    if sys.stdout.closed or not _stdout_writable():
+        _quiet_broken_pipe()
     return 0
+
+
+def _stdout_writable() -> bool:
+    try:
+        sys.stdout.flush()
+    except (BrokenPipeError, ValueError):
+        return False
+    return True
 
 
 def _alive(argv: Sequence[str]) -> int:
@@ -108,6 +147,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not argv or argv[0] in ("-h", "--help"):
         print(__doc__.strip())
         return 0 if argv else 2
+    if argv[0] in ("-V", "--version"):
+        print(f"dronewrapper {_version()}")
+        return 0
     command, rest = argv[0], argv[1:]
     local = {"router": _router, "echo": _echo, "alive": _alive}
     if command in local:

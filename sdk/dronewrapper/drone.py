@@ -9,7 +9,7 @@
     sleep(5)
     drone.land()                        # returns on the ground
 
-Frames and units (DESIGN.md): local ENU fixed at the take-off point (x east, y north, z up, m);
+Frames and units (docs/design.md): local ENU fixed at the take-off point (x east, y north, z up, m);
 body FLU (forward, left, up, m/s); angles in radians, yaw counter-clockwise positive.
 
 Getters read the newest message already received (no network round trip) and raise
@@ -24,6 +24,7 @@ import atexit
 import collections
 import contextlib
 import logging
+import math
 import os
 import time
 import weakref
@@ -48,6 +49,8 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     LANDED_STATE_TAKEOFF,
+    MASK_MIXED,
+    MASK_POSITION,
     CommandBool,
     CommandTOL,
     ParamGet,
@@ -75,6 +78,17 @@ ARDUPILOT = ("ardupilotmega", "ardupilot")
 TELLO = ("tello",)
 STATE_FRESH_S = 3.0
 """The bridge publishes State at >= 1 Hz; older than this means the bridge is gone."""
+
+TELEMETRY_READ_BY_GETTERS = (
+    ("extended state", "_extended"),
+    ("local position", "_pose"),
+    ("body velocity", "_velocity_body"),
+    ("local velocity", "_velocity_local"),
+    ("battery state", "_battery"),
+)
+"""The streams every bridge publishes and the getters read: the constructor and
+:meth:`DroneWrapper.wait_for_connection` wait for each of them (global position needs a GPS and
+images a camera, so those are waited for by their own ``wait_for_*`` calls)."""
 
 _open_wrappers: weakref.WeakSet[DroneWrapper] = weakref.WeakSet()
 
@@ -156,6 +170,7 @@ class DroneWrapper:
         self.service_timeout = service_timeout
         self.decode_errors: collections.Counter[str] = collections.Counter()
         self._closed = False
+        self._warned_grounded = False
         self._subscribers: list[Any] = []
         self._own_session = session is None
         deadline = time.monotonic() + timeout
@@ -179,7 +194,6 @@ class DroneWrapper:
             )
             if wait:
                 self.wait_for_connection(max(0.0, deadline - time.monotonic()))
-                self._soft_wait(self._pose, min(2.0, max(0.0, deadline - time.monotonic())))
         except BaseException:
             self.close()
             raise
@@ -234,11 +248,6 @@ class DroneWrapper:
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
         self._setpoints.put(codec.encode(target))
-
-    @staticmethod
-    def _soft_wait(latest: Latest[Any], timeout: float) -> None:
-        with contextlib.suppress(TimeoutError):
-            latest.wait(timeout)
 
     def _need(self, latest: Latest[T], what: str) -> T:
         value = latest.value
@@ -305,23 +314,40 @@ class DroneWrapper:
         return bool(state is not None and state.connected)
 
     def wait_for_connection(self, timeout: float = 10.0) -> State:
-        """Block until the bridge reports its autopilot connected; returns that State.
+        """Block until the bridge reports its autopilot connected and every telemetry stream the
+        getters read (landed state, position, velocities, battery) has arrived; returns the State.
 
         Raises:
-            NotConnected: no bridge, or a bridge without an autopilot, within ``timeout`` s.
+            NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
+                after ``timeout`` s (the message names the missing keys).
         """
         deadline = time.monotonic() + timeout
         seen = -1
         while True:
             state = self._state.fresh(STATE_FRESH_S)
             if state is not None and state.connected:
-                return state
+                break
             remaining = deadline - time.monotonic()
             if remaining <= 0:
                 raise NotConnected(self._diagnose(timeout))
             seen = self._state.count
             with contextlib.suppress(TimeoutError):
                 self._state.wait(min(remaining, 0.5), newer_than=seen)
+        for _, attribute in TELEMETRY_READ_BY_GETTERS:
+            holder: Latest[Any] = getattr(self, attribute)
+            with contextlib.suppress(TimeoutError):
+                holder.wait(max(0.0, deadline - time.monotonic()))
+        missing = [
+            f"{what} ({getattr(self, attribute).name})"
+            for what, attribute in TELEMETRY_READ_BY_GETTERS
+            if getattr(self, attribute).value is None
+        ]
+        if missing:
+            raise NotConnected(
+                f"the bridge of drone {self.ns!r} is connected but after {timeout:g} s nothing "
+                f"arrived on: {', '.join(missing)}; is the link too slow, or the bridge old?"
+            )
+        return state
 
     def _diagnose(self, timeout: float) -> str:
         info = self.session.info
@@ -537,21 +563,30 @@ class DroneWrapper:
         self,
         x: float = 0.0,
         y: float = 0.0,
-        z: float = 0.0,
-        az: float = 0.0,
+        z: float | None = None,
+        az: float | None = None,
         *,
         stamp: float | None = None,
     ) -> None:
         """Position control: fly to (x, y, z) local ENU metres facing yaw ``az`` (rad, ENU).
 
-        Re-published at the stream rate until another command or :meth:`stop_commanding`.
-        ``stamp`` (seconds since the Unix epoch) is carried in ``header.stamp`` (default now).
+        Left out, ``z`` keeps the altitude (the one being commanded, else the current one) and
+        ``az`` keeps the heading, so ``set_cmd_pos(1, 0)`` moves sideways instead of diving to
+        the ground and turning east. Re-published at the stream rate until another command or
+        :meth:`stop_commanding`. ``stamp`` (seconds since the Unix epoch) is carried in
+        ``header.stamp`` (default now).
 
         Raises:
-            InvalidArgument: an argument is not a finite number (nothing is sent).
+            InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
+                (degrees by mistake); nothing is sent.
+            NoData: ``z`` or ``az`` left out before any position arrived.
         """
         stamp = setpoints.check_stamp(stamp, time.time())
-        self._command_setpoint(setpoints.position_target(x, y, z, az, stamp=stamp))
+        z = self._kept_altitude("set_cmd_pos") if z is None else z
+        az = self._kept_yaw("set_cmd_pos") if az is None else az
+        target = setpoints.position_target(x, y, z, az, stamp=stamp)
+        self._warn_if_grounded("set_cmd_pos")
+        self._command_setpoint(target)
 
     def set_cmd_vel(
         self,
@@ -568,27 +603,75 @@ class DroneWrapper:
         stream rate until changed: ``set_cmd_vel(az=1); sleep(5)`` spins for 5 s.
 
         Raises:
-            InvalidArgument: an argument is not a finite number (nothing is sent).
+            InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
+                per second (degrees by mistake); nothing is sent.
         """
         stamp = setpoints.check_stamp(stamp, time.time())
-        self._command_setpoint(setpoints.velocity_target(vx, vy, vz, az, stamp=stamp))
+        target = setpoints.velocity_target(vx, vy, vz, az, stamp=stamp)
+        self._warn_if_grounded("set_cmd_vel")
+        self._command_setpoint(target)
 
     def set_cmd_mix(
         self,
         vx: float = 0.0,
         vy: float = 0.0,
-        z: float = 0.0,
+        z: float | None = None,
         az: float = 0.0,
         *,
         stamp: float | None = None,
     ) -> None:
         """Mixed control: body FLU vx, vy (m/s), altitude ``z`` (local ENU m), yaw rate (rad/s).
 
+        Left out, ``z`` keeps the altitude (the one being commanded, else the current one).
+
         Raises:
             InvalidArgument: an argument is not a finite number (nothing is sent).
+            NoData: ``z`` left out before any position arrived.
         """
         stamp = setpoints.check_stamp(stamp, time.time())
-        self._command_setpoint(setpoints.mixed_target(vx, vy, z, az, stamp=stamp))
+        z = self._kept_altitude("set_cmd_mix") if z is None else z
+        target = setpoints.mixed_target(vx, vy, z, az, stamp=stamp)
+        self._warn_if_grounded("set_cmd_mix")
+        self._command_setpoint(target)
+
+    def _kept_altitude(self, what: str) -> float:
+        """The altitude a setpoint without ``z`` keeps: the commanded one, else the current."""
+        commanded = self._streamer.target
+        if commanded is not None and commanded.type_mask in (MASK_POSITION, MASK_MIXED):
+            return float(commanded.position.z)
+        pose = self._pose.value
+        if pose is None:
+            raise NoData(f"{what}: z left out, and no position yet to keep the altitude of")
+        return float(pose.pose.position.z)
+
+    def _kept_yaw(self, what: str) -> float:
+        """The heading a position setpoint without ``az`` keeps: the commanded, else current."""
+        commanded = self._streamer.target
+        if commanded is not None and commanded.type_mask == MASK_POSITION:
+            return float(commanded.yaw)
+        pose = self._pose.value
+        if pose is None:
+            raise NoData(f"{what}: az left out, and no attitude yet to keep the heading of")
+        return float(telemetry.orientation_of(pose)[2])
+
+    def _warn_if_grounded(self, what: str) -> None:
+        """Say once per landing that setpoints do nothing to a disarmed drone on the ground."""
+        state, extended = self._state.value, self._extended.value
+        grounded = (
+            state is not None
+            and not state.armed
+            and extended is not None
+            and extended.landed_state == LANDED_STATE_ON_GROUND
+        )
+        if grounded and not self._warned_grounded:
+            self._warned_grounded = True
+            log.warning(
+                "%s: drone %r is disarmed on the ground, so nothing moves until takeoff()",
+                what,
+                self.ns,
+            )
+        elif not grounded:
+            self._warned_grounded = False
 
     def _command_setpoint(self, target: PositionTarget) -> None:
         if self._closed:
@@ -638,8 +721,24 @@ class DroneWrapper:
         return reply
 
     def arm(self, *, timeout: float | None = None) -> None:
-        """Arm the motors. Raises CommandRefused with the autopilot's reason on refusal."""
-        self._command(registry.ARMING, CommandBool(value=True), "arming", timeout)
+        """Arm the motors. Raises CommandRefused with the autopilot's reason on refusal.
+
+        PX4 refuses to arm in OFFBOARD without a setpoint stream and says only "Resolve system
+        health failures first"; the error then names the real cause.
+        """
+        try:
+            self._command(registry.ARMING, CommandBool(value=True), "arming", timeout)
+        except CommandRefused as exc:
+            state = self._state.value
+            if state is not None and state.mode == "OFFBOARD" and self.commanding is None:
+                raise CommandRefused(
+                    "arming",
+                    f"{exc.reason}; the autopilot is in OFFBOARD and no setpoint is being "
+                    "streamed: PX4 arms in OFFBOARD only with a setpoint stream (use takeoff(), "
+                    "or set_cmd_pos(...) before arm())",
+                    exc.result,
+                ) from None
+            raise
 
     def disarm(self, *, timeout: float | None = None) -> None:
         """Disarm the motors (the autopilot refuses in flight). Raises CommandRefused."""
@@ -704,7 +803,15 @@ class DroneWrapper:
         deadline = time.monotonic() + timeout
         state = self._require_connected("takeoff")
         if self.is_flying():
-            log.info("takeoff: already flying")
+            pose = self._pose.value
+            now_z = float(pose.pose.position.z) if pose is not None else math.nan
+            log.warning(
+                "takeoff(h=%g): drone %r is already flying (z=%.2f m), so this does nothing; "
+                "use set_cmd_pos(z=...) or set_cmd_mix(z=...) to change altitude",
+                h,
+                self.ns,
+                now_z,
+            )
             return
         start = self._pose.value
         if start is None:
@@ -718,24 +825,30 @@ class DroneWrapper:
         target_z = (z0 if on_ground else 0.0) + h
         autopilot = state.autopilot.lower()
         expected_mode = ""
+        log.info("takeoff: drone %r to %.2f m (%s)", self.ns, target_z, autopilot or "?")
+        now = time.time()
         if autopilot in ARDUPILOT:
             self.set_mode("GUIDED")
             self.arm()
+            log.info("takeoff: armed in GUIDED, climbing")
             self._command(registry.TAKEOFF, CommandTOL(altitude=h, yaw=yaw), "takeoff")
             expected_mode = "GUIDED"
         elif autopilot in TELLO:
             self._command(registry.TAKEOFF, CommandTOL(altitude=h), "takeoff")
+            log.info("takeoff: the Tello took off, climbing")
         else:  # PX4 and the PX4-like simulator: OFFBOARD with a setpoint stream
-            self.set_cmd_pos(x, y, z0, yaw)
+            self._command_setpoint(setpoints.position_target(x, y, z0, yaw, stamp=now))
             try:
                 self.set_mode("OFFBOARD")
                 self.arm()
             except BaseException:
                 self.stop_commanding()
                 raise
-            self.set_cmd_pos(x, y, target_z, yaw)
+            log.info("takeoff: armed in OFFBOARD, climbing")
+            self._command_setpoint(setpoints.position_target(x, y, target_z, yaw, stamp=now))
             expected_mode = "OFFBOARD"
         self._wait_climb(target_z, deadline, timeout, tolerance, expected_mode)
+        log.info("takeoff: reached %.2f m", target_z)
 
     def _wait_climb(
         self, target_z: float, deadline: float, timeout: float, tolerance: float, mode: str
@@ -783,6 +896,7 @@ class DroneWrapper:
         if on_ground and not state.armed:
             return
         self._command(registry.LAND, CommandTOL(), "land")
+        log.info("land: drone %r landing from %s", self.ns, self._altitude_text())
 
         def landed() -> bool:
             ext, st = self._extended.value, self._state.value
@@ -795,6 +909,7 @@ class DroneWrapper:
 
         try:
             self.wait_for(landed, max(0.0, deadline - time.monotonic()), "landing")
+            log.info("land: drone %r on the ground and disarmed", self.ns)
         except Timeout:
             ext, st = self._extended.value, self._state.value
             raise Timeout(

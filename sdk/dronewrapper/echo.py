@@ -1,23 +1,77 @@
 """``dronewrapper echo KEYEXPR``: print decoded messages, like ``rostopic echo``.
 
 Each sample's key is looked up in the registry to find its type; images print as a summary
-(size, encoding, stamp) rather than their bytes.
+(size, encoding, stamp) rather than their bytes. When nothing arrives for a few seconds, echo says
+so on stderr, with the keys that are being published nearby; a closed output pipe
+(``dronewrapper echo ... | head``) ends it quietly.
 """
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Any, TextIO
 
 import msgspec
 import zenoh
 
 from dronewrapper.msgs import codec
-from dronewrapper.msgs.registry import topic_for_key
+from dronewrapper.msgs.registry import TOPICS, topic_for_key
+from dronewrapper.msgs.sensor import CompressedImage, Image
+
+QUIET_AFTER_S = 3.0
+"""Seconds without a sample after which echo says that nothing arrives."""
+
+
+def keyexpr_problem(keyexpr: str) -> str | None:
+    """Why ``keyexpr`` cannot be a Zenoh key expression, with a hint; None if it can (pure)."""
+    if keyexpr.startswith("/"):
+        return f"key expressions have no leading '/': try {keyexpr.lstrip('/')!r}"
+    if keyexpr.endswith("/") or "//" in keyexpr or not keyexpr:
+        return f"{keyexpr!r} has an empty chunk; chunks are separated by single '/'"
+    return None
+
+
+def light_key_families() -> list[str]:
+    """Wildcards of every registered topic that carries no images (cheap to listen to)."""
+    heavy = (Image, CompressedImage)
+    return sorted({t.wildcard() for t in TOPICS.values() if t.type not in heavy})
+
+
+def nearby(keyexpr: str, seen: set[str], limit: int = 6) -> list[str]:
+    """The keys in ``seen`` that look most like ``keyexpr``, most alike first (pure)."""
+    return difflib.get_close_matches(keyexpr, sorted(seen), n=limit, cutoff=0.3)
+
+
+def published_keys(session: zenoh.Session, listen_s: float) -> set[str]:
+    """The concrete keys of the registry's image-free topics published within ``listen_s``."""
+    seen: set[str] = set()
+    subs = [
+        session.declare_subscriber(family, lambda s: seen.add(str(s.key_expr)))
+        for family in light_key_families()
+    ]
+    try:
+        time.sleep(listen_s)
+    finally:
+        for sub in subs:
+            sub.undeclare()
+    return set(seen)
+
+
+def silence_notice(keyexpr: str, waited_s: float, seen: set[str]) -> str:
+    """What to tell a user who has received nothing on ``keyexpr`` (pure)."""
+    head = f"nothing received on {keyexpr!r} in {waited_s:.0f} s"
+    close = nearby(keyexpr, seen)
+    if close:
+        return f"{head}; published nearby: {', '.join(close)}"
+    if seen:
+        return f"{head}; {len(seen)} other keys are published (see: dronewrapper echo '**')"
+    return f"{head}; nothing else is published: is the graph running? (dronewrapper alive)"
 
 
 def _summarise(value: Any) -> Any:
@@ -53,8 +107,13 @@ def echo(
     duration: float = 0.0,
     stop: threading.Event | None = None,
     out: TextIO = sys.stdout,
+    quiet_after_s: float = QUIET_AFTER_S,
+    notice: Callable[[str], None] = lambda text: print(
+        f"dronewrapper echo: {text}", file=sys.stderr
+    ),
 ) -> int:
-    """Print samples on ``keyexpr`` until ``count`` printed, ``duration`` s passed, or ``stop``."""
+    """Print samples on ``keyexpr`` until ``count`` printed, ``duration`` s passed, ``stop``, or
+    the output is closed. Returns the number printed."""
     stop = stop or threading.Event()
     printed = 0
     lock = threading.Lock()
@@ -63,19 +122,29 @@ def echo(
         nonlocal printed
         line = format_sample(str(sample.key_expr), sample.payload.to_bytes())
         with lock:
-            if count and printed >= count:
+            if stop.is_set() or (count and printed >= count):
                 return
-            print(line, file=out, flush=True)
+            try:
+                print(line, file=out, flush=True)
+            except (BrokenPipeError, ValueError):  # reader gone (| head), or out closed
+                stop.set()
+                return
             printed += 1
             if count and printed >= count:
                 stop.set()
 
     sub = session.declare_subscriber(keyexpr, on_sample)
-    deadline = time.monotonic() + duration if duration > 0 else math.inf
+    started = time.monotonic()
+    deadline = started + duration if duration > 0 else math.inf
+    noticed = quiet_after_s <= 0
     try:
         while not stop.wait(0.1):
-            if time.monotonic() >= deadline:
+            now = time.monotonic()
+            if now >= deadline:
                 break
+            if not noticed and printed == 0 and now - started >= quiet_after_s:
+                noticed = True
+                notice(silence_notice(keyexpr, now - started, published_keys(session, 1.0)))
     finally:
         sub.undeclare()
     return printed

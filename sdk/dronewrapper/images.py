@@ -55,8 +55,9 @@ def jpeg_decoder() -> Any:
         import cv2
     except ImportError as exc:
         raise DroneError(
-            "compressed images need OpenCV to decode JPEG: pip install opencv-python-headless "
-            "(or use DroneWrapper(compressed_images=False) for raw images)"
+            "compressed images need OpenCV to decode JPEG: pip install 'dronewrapper[images]' "
+            "(from the repository: pip install './sdk[images]'), or use "
+            "DroneWrapper(compressed_images=False) for raw images"
         ) from exc
     return cv2
 

@@ -1,6 +1,6 @@
 """Setpoint building: the paper's three controls as PositionTarget messages (pure functions).
 
-Exactly DESIGN.md's table ("PositionTarget semantics"):
+Exactly docs/design.md's table ("PositionTarget semantics"):
 
 =================  =========  =======================  =========================================
 SDK call           type_mask  coordinate_frame         fields used
@@ -13,7 +13,8 @@ SDK call           type_mask  coordinate_frame         fields used
 
 The frame ids are MAVROS's names; the values are ENU/FLU as on MAVROS's topic side. Every
 argument must be a finite real number: NaN, inf, bools, strings and None raise
-:class:`~dronewrapper.errors.InvalidArgument` before anything is published.
+:class:`~dronewrapper.errors.InvalidArgument` before anything is published, and so does a yaw or
+yaw rate beyond a full turn (a value in degrees by mistake).
 """
 
 from __future__ import annotations
@@ -44,6 +45,25 @@ def finite(name: str, value: object) -> float:
     return number
 
 
+MAX_ANGLE_RAD = 2.0 * math.pi
+"""Largest yaw (rad) or yaw rate (rad/s) accepted: beyond a full turn it is a degrees mistake."""
+
+
+def radians(name: str, value: object, unit: str = "rad") -> float:
+    """``value`` as a finite float within one turn (|value| <= 2 pi), else InvalidArgument.
+
+    Angles are radians everywhere in the SDK; ``az=90`` is almost certainly meant in degrees,
+    and the error says so instead of spinning the drone a quarter turn 14 times over.
+    """
+    number = finite(name, value)
+    if abs(number) > MAX_ANGLE_RAD:
+        raise InvalidArgument(
+            f"{name}={number:g} {unit} is more than a full turn: angles are in radians "
+            f"(did you mean math.radians({number:g}) = {math.radians(number):.3f}?)"
+        )
+    return number
+
+
 def check_stamp(stamp: object, now: float) -> float:
     """The header stamp to use: ``now`` when ``stamp`` is None, else ``stamp`` if valid.
 
@@ -65,7 +85,7 @@ def position_target(x: float, y: float, z: float, yaw: float, *, stamp: float) -
         coordinate_frame=FRAME_LOCAL_NED,
         type_mask=MASK_POSITION,
         position=Point(x=finite("x", x), y=finite("y", y), z=finite("z", z)),
-        yaw=finite("yaw", yaw),
+        yaw=radians("az", yaw),
     )
 
 
@@ -78,7 +98,7 @@ def velocity_target(
         coordinate_frame=FRAME_BODY_NED,
         type_mask=MASK_VELOCITY,
         velocity=Vector3(x=finite("vx", vx), y=finite("vy", vy), z=finite("vz", vz)),
-        yaw_rate=finite("az", yaw_rate),
+        yaw_rate=radians("az", yaw_rate, "rad/s"),
     )
 
 
@@ -92,5 +112,5 @@ def mixed_target(
         type_mask=MASK_MIXED,
         position=Point(z=finite("z", z)),
         velocity=Vector3(x=finite("vx", vx), y=finite("vy", vy)),
-        yaw_rate=finite("az", yaw_rate),
+        yaw_rate=radians("az", yaw_rate, "rad/s"),
     )

@@ -1,7 +1,8 @@
 """The setpoint stream: ONE background thread re-publishes the latest setpoint at a fixed rate.
 
-DESIGN.md's failsafe contract: once the SDK commands, it keeps re-publishing the latest setpoint
-at >= 20 Hz until it is changed or stopped, so ``set_cmd_vel(az=1); sleep(5)`` keeps spinning.
+The failsafe contract (docs/design.md): once the SDK commands, it keeps re-publishing the latest
+setpoint at >= 20 Hz until it is changed or stopped, so ``set_cmd_vel(az=1); sleep(5)`` keeps
+spinning.
 If the stream stops (the app exits, crashes or calls :meth:`SetpointStreamer.stop`), the bridge
 holds position after its ``setpoint_timeout`` and lands after ``commander_lost_timeout``.
 

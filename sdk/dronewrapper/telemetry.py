@@ -1,8 +1,8 @@
 """Telemetry messages as the paper's numpy values (pure functions, no I/O).
 
-Frames and units (DESIGN.md): local ENU (x east, y north, z up) in metres, fixed at the take-off
-point; body FLU (forward, left, up) in m/s; angles in radians, yaw counter-clockwise positive
-from east.
+Frames and units (docs/design.md): local ENU (x east, y north, z up) in metres, fixed at the
+take-off point; body FLU (forward, left, up) in m/s; angles in radians, yaw counter-clockwise
+positive from east.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Connects to the autopilot with a pymavlink URL (``connection``, default udpin:0.0.0.0:14540),
 publishes state and telemetry in ENU/FLU, serves arming/takeoff/land/set_mode/param services,
-forwards setpoints at >= 20 Hz with the failsafe contract of DESIGN.md.
+forwards setpoints at >= 20 Hz with the failsafe contract of docs/design.md.
 """
 
 import argparse

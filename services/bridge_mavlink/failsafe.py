@@ -1,4 +1,4 @@
-"""The failsafe contract of DESIGN.md as a pure state machine (time is injected, monotonic s).
+"""The failsafe contract of docs/design.md as a pure state machine (time is injected, monotonic s).
 
 What the bridge streams to the autopilot each tick, and when it acts on its own:
 

@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from dronewrapper_perception.detection import Detection
-from dronewrapper_perception.model_file import check_model_file
+from dronewrapper_perception.model_file import ModelFileError, check_model_file
 
 __all__ = [
     "COCO_CLASSES",
@@ -289,7 +289,15 @@ class YoloxDetector:
             "session.intra_op.allow_spinning", "1" if spinning else "0"
         )
         self.providers = resolve_providers(providers, ort.get_available_providers())
-        self.session = ort.InferenceSession(str(path), options, providers=self.providers)
+        try:
+            self.session = ort.InferenceSession(str(path), options, providers=self.providers)
+        except (
+            ort.capi.onnxruntime_pybind11_state.InvalidProtobuf,
+            ort.capi.onnxruntime_pybind11_state.InvalidGraph,
+            ort.capi.onnxruntime_pybind11_state.Fail,
+        ) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ModelFileError(f"{path} is not an ONNX model (ONNX Runtime: {reason})") from exc
         model_input = self.session.get_inputs()[0]
         self.input_name = model_input.name
         shape = model_input.shape

@@ -51,7 +51,7 @@ SCENARIO_NAMES: tuple[str, ...] = (
     "people_crossing_front",
     "empty",
 )
-"""The fixed scenario names (DESIGN.md) plus ``empty`` (no objects, for bridge/SDK tests)."""
+"""The fixed scenario names (docs/design.md) plus ``empty`` (no objects, for bridge/SDK tests)."""
 
 Vec3 = tuple[float, float, float]
 Vec2 = tuple[float, float]

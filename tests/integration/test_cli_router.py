@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
+import threading
 
 import pytest
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import State
 from support import REPO, client_node, free_endpoint, python_module, wait_for
 
 pytestmark = pytest.mark.integration
@@ -48,3 +51,65 @@ def test_unknown_subcommand_and_help(spawn):
     helped = spawn(python_module("dronewrapper", "--help"), "help")
     assert helped.proc.wait(20) == 0
     assert "dronewrapper up compose/GRAPH.yaml" in helped.output()
+
+
+def test_version_and_key_hints(spawn):
+    version = spawn(python_module("dronewrapper", "--version"), "version")
+    assert version.proc.wait(20) == 0
+    assert version.output().startswith("dronewrapper ")
+    slash = spawn(python_module("dronewrapper", "echo", "/drone/mavros/state"), "slash")
+    assert slash.proc.wait(20) == 2
+    assert "no leading '/': try 'drone/mavros/state'" in slash.output()
+
+
+def test_zenoh_errors_are_one_line_without_source_paths(spawn):
+    bad = spawn(python_module("dronewrapper", "router", "--listen", "tcp/192.0.2.1:9"), "bad")
+    assert bad.proc.wait(30) == 1
+    lines = bad.output().strip().splitlines()
+    assert len(lines) == 1 and ".rs:" not in lines[0], lines
+
+
+def test_echo_into_a_closed_pipe_exits_quietly_and_silence_is_explained(router, spawn):
+    """`dronewrapper echo KEY | head -n 1` ends with status 0 and no traceback; a key that
+    nobody publishes is reported with what is published nearby."""
+    with client_node(router) as node:
+        state = node.publisher(registry.STATE)
+        stop = threading.Event()
+
+        def publish() -> None:
+            while not stop.wait(0.05):
+                state.put(State(connected=True, mode="OFFBOARD"))
+
+        thread = threading.Thread(target=publish, daemon=True)
+        thread.start()
+        try:
+            pipeline = subprocess.run(
+                f"{sys.executable} -m dronewrapper echo drone/mavros/state --connect {router}"
+                " | head -n 1",
+                shell=True,
+                capture_output=True,
+                text=True,
+                timeout=60,
+                executable="/bin/bash",
+            )
+            assert pipeline.stdout.startswith("drone/mavros/state [State]")
+            assert "Traceback" not in pipeline.stderr and "BrokenPipe" not in pipeline.stderr
+
+            quiet = spawn(
+                python_module(
+                    "dronewrapper",
+                    "echo",
+                    "drone/mavros/sate",
+                    "--connect",
+                    router,
+                    "--duration",
+                    "8",
+                ),
+                "quiet",
+            )
+            wait_for(lambda: "nothing received" in quiet.output(), 30, what="silence notice")
+            wait_for(lambda: not quiet.alive(), 30, what="echo to end")
+            assert "published nearby: drone/mavros/state" in quiet.output()
+        finally:
+            stop.set()
+            thread.join(2)

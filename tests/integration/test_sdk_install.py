@@ -78,7 +78,7 @@ def test_sdk_installs_alone_with_light_dependencies(tmp_path):
         assert heavy not in report["dists"]
     assert report["heavy_imported"] == []
     assert "cannot reach the Zenoh router" in report["error"]
-    assert "pip install opencv-python-headless" in report["jpeg_error"]  # cv2 is optional
+    assert "pip install 'dronewrapper[images]'" in report["jpeg_error"]  # cv2 is optional
 
     cli = subprocess.run(
         [str(venv / "bin" / "dronewrapper"), "up", "compose/sim_iris.yaml"],

@@ -23,7 +23,7 @@ from dronewrapper.msgs.control import (
     CONTROLLER_TRACKING,
     ControllerStatus,
 )
-from dronewrapper.msgs.geometry import PoseStamped
+from dronewrapper.msgs.geometry import PoseStamped, TwistStamped
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -36,6 +36,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
     State,
 )
+from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
 from dronewrapper.runtime.config import load_config
@@ -61,6 +62,11 @@ class FakeBridge:
         self._state = self.node.publisher(registry.STATE)
         self._ext = self.node.publisher(registry.EXTENDED_STATE)
         self._pose = self.node.publisher(registry.LOCAL_POSE)
+        self._velocities = [
+            self.node.publisher(registry.VELOCITY_BODY),
+            self.node.publisher(registry.VELOCITY_LOCAL),
+        ]
+        self._battery = self.node.publisher(registry.BATTERY)
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
         self.node.serve(registry.ARMING, self._arming)
         self.node.serve(registry.SET_MODE, self._set_mode)
@@ -118,6 +124,9 @@ class FakeBridge:
             pose.pose.position.z = self.z
             pose.pose.orientation.w = 1.0
             self._pose.put(pose)
+            for velocity in self._velocities:
+                velocity.put(TwistStamped(header=Header(stamp=now)))
+            self._battery.put(BatteryState(header=Header(stamp=now), percentage=0.9))
 
     def velocity_setpoints(self, since: float = 0.0) -> list[PositionTarget]:
         with self._lock:

@@ -9,6 +9,7 @@ rates, error messages) in a fraction of a second per test.
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 import subprocess
 import sys
@@ -29,6 +30,7 @@ from dronewrapper import (
     list_drones,
 )
 from dronewrapper.msgs import (
+    BatteryState,
     CommandBoolResult,
     CommandTOL,
     CommandTOLResult,
@@ -80,6 +82,9 @@ class FakeBridge:
         self.pub_ext = n.publisher(registry.EXTENDED_STATE)
         self.pub_pose = n.publisher(registry.LOCAL_POSE)
         self.pub_vel = n.publisher(registry.VELOCITY_BODY)
+        self.pub_vel_local = n.publisher(registry.VELOCITY_LOCAL)
+        self.pub_battery = n.publisher(registry.BATTERY)
+        self.silent: set[str] = set()  # keys of streams this bridge leaves out
         self.pub_text = n.publisher(registry.STATUSTEXT)
         self.pub_image = n.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         n.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
@@ -199,6 +204,12 @@ class FakeBridge:
                 twist = TwistStamped()
                 twist.twist.angular.z = 0.25
                 self.pub_vel.put(twist)
+                for pub, msg in (
+                    (self.pub_vel_local, TwistStamped()),
+                    (self.pub_battery, BatteryState(percentage=0.8)),
+                ):
+                    if pub.key not in self.silent:
+                        pub.put(msg)
             except Exception:
                 return
 
@@ -241,8 +252,7 @@ def test_getters_return_latest_values_at_once(drone, bridge):
     state = drone.get_state()
     assert state.connected and state.autopilot == "px4"
     assert drone.is_connected()
-    with pytest.raises(NoData, match="battery"):
-        drone.get_battery()  # the fake publishes no battery
+    assert drone.get_battery() == pytest.approx(0.8)  # the constructor waited for it
     with pytest.raises(NoData, match="GPS"):
         drone.get_global_position()
 
@@ -486,3 +496,82 @@ def test_a_script_that_never_closes_exits_and_stops_commanding(router, bridge):
     assert time.monotonic() - t0 < 30
     wait_for(lambda: bridge.setpoints, 10, what="the script's setpoint")
     bridge.wait_quiet()  # nobody streams after the app is gone
+
+
+def test_constructor_waits_for_every_stream_and_names_a_missing_one(router):
+    fake = FakeBridge(router)
+    fake.silent.add(registry.BATTERY.key("drone"))
+    try:
+        with pytest.raises(NotConnected, match=r"nothing arrived on: battery state \(drone/mavros"):
+            DroneWrapper("drone", router, timeout=3, mode="peer")
+        fake.silent.clear()
+        with DroneWrapper("drone", router, timeout=10, mode="peer") as drone:
+            # right after the constructor, every getter has a value (no NoData race)
+            assert drone.get_battery() == pytest.approx(0.8)
+            assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
+            assert drone.get_velocity_local().shape == (3,)
+    finally:
+        fake.close()
+
+
+def test_position_setpoint_without_z_or_yaw_keeps_altitude_and_heading(drone, bridge):
+    bridge.z = 1.7
+    wait_for(lambda: drone.get_position()[2] == pytest.approx(1.7), 10, what="pose at 1.7 m")
+    drone.set_cmd_pos(1.0, 0.0)  # the student's call: no dive to z = 0, no turn east
+    assert drone.commanding.position.z == pytest.approx(1.7)
+    assert drone.commanding.yaw == pytest.approx(0.0)
+    drone.set_cmd_pos(2.0, 1.0, 3.0, 0.5)
+    drone.set_cmd_pos(1.0, 0.0)  # keeps what is being commanded, not the current pose
+    assert (drone.commanding.position.z, drone.commanding.yaw) == pytest.approx((3.0, 0.5))
+    drone.set_cmd_mix(vx=0.5)
+    assert drone.commanding.position.z == pytest.approx(3.0)
+    drone.stop_commanding()
+    drone.set_cmd_mix(vx=0.5)
+    assert drone.commanding.position.z == pytest.approx(1.7)
+    drone.stop_commanding()
+
+
+def test_degrees_by_mistake_are_refused_with_the_conversion(drone, bridge):
+    t0 = time.monotonic()
+    with pytest.raises(InvalidArgument, match=r"radians.*math\.radians\(90\) = 1\.571"):
+        drone.set_cmd_pos(0.0, 0.0, 2.0, 90)
+    with pytest.raises(InvalidArgument, match="rad/s"):
+        drone.set_cmd_vel(az=45)
+    drone.set_cmd_vel(az=-6.0)  # within a turn per second: accepted
+    drone.stop_commanding()
+    assert all(sp.yaw_rate == -6.0 for sp in bridge.setpoints_since(t0))
+
+
+def test_grounded_setpoints_and_takeoff_while_flying_say_so(drone, bridge, caplog):
+    with caplog.at_level(logging.INFO, logger="dronewrapper"):
+        drone.set_cmd_vel(vx=1.0)
+        drone.set_cmd_vel(vx=1.0)
+        drone.stop_commanding()
+        grounded = [r for r in caplog.records if "nothing moves until takeoff()" in r.message]
+        assert len(grounded) == 1  # once, not at every call
+        drone.takeoff(h=1.0, timeout=20)
+        messages = [r.message for r in caplog.records]
+        assert any("armed in OFFBOARD, climbing" in m for m in messages)
+        assert any("takeoff: reached 1.00 m" in m for m in messages)
+        wait_for(drone.is_flying, 10, what="in air")
+        drone.takeoff(h=4.0)
+        assert any(
+            "already flying" in r.message and "does nothing" in r.message
+            for r in caplog.records
+            if r.levelno == logging.WARNING
+        )
+        drone.land(timeout=20)
+        assert any("on the ground and disarmed" in r.message for r in caplog.records)
+
+
+def test_arming_refused_in_offboard_without_a_stream_names_the_real_cause(drone, bridge):
+    bridge.mode = "OFFBOARD"
+    bridge.refuse_arming = "Resolve system health failures first"
+    wait_for(lambda: drone.get_state().mode == "OFFBOARD", 10, what="OFFBOARD state")
+    with pytest.raises(CommandRefused, match="no setpoint is being streamed"):
+        drone.arm()
+    bridge.mode = "POSCTL"
+    wait_for(lambda: drone.get_state().mode == "POSCTL", 10, what="POSCTL state")
+    with pytest.raises(CommandRefused) as info:
+        drone.arm()
+    assert "setpoint" not in str(info.value)

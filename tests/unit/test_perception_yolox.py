@@ -148,3 +148,10 @@ def test_model_checksum_and_missing_file(tmp_path):
         YoloxDetector(YOLOX_NANO, checksum="0" * 64)
     with pytest.raises(ModelFileError, match="does not exist"):
         YoloxDetector(tmp_path / "missing.onnx")
+
+
+def test_a_file_that_is_not_onnx_says_so(tmp_path):
+    corrupt = tmp_path / "detector.onnx"
+    corrupt.write_bytes(b"<html>404 Not Found</html>" * 40)
+    with pytest.raises(ModelFileError, match="is not an ONNX model"):
+        YoloxDetector(corrupt)

@@ -1,4 +1,4 @@
-"""Setpoint building: DESIGN.md's masks/frames, and argument validation (no I/O)."""
+"""Setpoint building: docs/design.md's masks/frames, and argument validation (no I/O)."""
 
 from __future__ import annotations
 

@@ -44,7 +44,7 @@ FORCE = 512
 IGNORE_YAW = 1024
 IGNORE_YAW_RATE = 2048
 
-# The DroneWrapper controls (DESIGN.md "PositionTarget semantics").
+# The DroneWrapper controls (docs/design.md "PositionTarget semantics").
 MASK_POSITION = 3064  # x, y, z (local ENU m), yaw (rad)
 MASK_VELOCITY = 1991  # vx, vy, vz (body FLU m/s), yaw_rate (rad/s)
 MASK_MIXED = 1987  # vx, vy (body FLU m/s), z (local ENU altitude m), yaw_rate (rad/s)

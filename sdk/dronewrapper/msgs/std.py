@@ -1,6 +1,6 @@
 """Standard message parts shared by every message: the header and the error reply.
 
-`Header.stamp` is float seconds since the Unix epoch (wall clock), as DESIGN.md fixes, so
+`Header.stamp` is float seconds since the Unix epoch (wall clock), as docs/design.md fixes, so
 stamps from different processes and machines can be compared directly.
 """
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 
 class ServiceError(RuntimeError):
     """A service answered with an error reply, or should answer with one.
@@ -22,3 +24,17 @@ class ServiceUnavailable(ServiceError):
 
     def __init__(self, message: str) -> None:
         super().__init__(message, code="unavailable")
+
+
+_RUST_SOURCE = re.compile(r"\s*\bat /\S+?\.rs:\d+\.?")
+_BRACKETED_EMPTY = re.compile(r"\[\s*\]")
+
+
+def zenoh_error_text(exc: BaseException) -> str:
+    """A Zenoh error as one readable line: no Rust source paths, no line breaks.
+
+    >>> zenoh_error_text(ValueError("Unable to connect!  at /root/.cargo/x/orchestrator.rs:447."))
+    'Unable to connect!'
+    """
+    text = _BRACKETED_EMPTY.sub("", _RUST_SOURCE.sub("", str(exc)))
+    return " ".join(text.split()).rstrip(" .:")

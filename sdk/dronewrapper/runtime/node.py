@@ -34,7 +34,7 @@ import zenoh
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.msgs.std import ErrorReply
-from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable, zenoh_error_text
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
 from dronewrapper.runtime.shm import remove_stale_segments
@@ -75,7 +75,8 @@ def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Sessi
             if options.mode == "router" or time.monotonic() >= deadline:
                 where = ", ".join(options.connect or options.listen)
                 raise ConnectionError(
-                    f"cannot open a zenoh {options.mode} session on {where}: {exc}"
+                    f"cannot open a zenoh {options.mode} session on {where}: "
+                    f"{zenoh_error_text(exc)}"
                 ) from exc
             time.sleep(0.2)
 

@@ -1,0 +1,247 @@
+"""The simulated Tello process: the SDK on UDP, the flight in real time, the world on Zenoh.
+
+One main loop (this thread) steps the flight at ``physics_rate_hz`` (simulated time = wall
+time), answers each datagram on ``A:8889`` as soon as it arrives (``select``), sends the state
+datagram at 10 Hz to the host of the last ``command`` sender on the state port, steps the world
+and publishes ``{ns}/sim/ground_truth`` and ``sim/objects/{name}/pose`` like the Iris sim. After
+``streamon`` the video thread renders the forward camera from the true pose, encodes H.264 and
+sends it to the same host on the video port.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import select
+import socket
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.geometry import Twist
+from dronewrapper.runtime import Node
+from dronewrapper_sim.dynamics import WindModel
+from dronewrapper_sim.frames import quat_from_euler
+from dronewrapper_sim.runner import PoseSnapshot, pose_msg
+from dronewrapper_sim.tello.config import TelloConfig
+from dronewrapper_sim.tello.flight import TelloFlight
+from dronewrapper_sim.tello.protocol import Reply, TelloProtocol
+from dronewrapper_sim.tello.state_string import format_state
+from dronewrapper_sim.world.scenario import Scenario
+
+log = logging.getLogger("sim.tello")
+
+COMMAND_PORT = 8889
+MAX_DATAGRAMS_PER_WAKE = 64  # a flood cannot starve the physics: at most this many per tick
+MAX_CATCH_UP_STEPS = 20
+GROUND_TRUTH_RATE_HZ = 50.0
+OBJECT_POSE_RATE_HZ = 20.0
+
+
+def bind_udp(address: str, port: int) -> socket.socket:
+    """A UDP socket bound to ``address:port`` (non-blocking)."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        sock.bind((address, port))
+    except OSError:
+        sock.close()
+        raise
+    sock.setblocking(False)
+    return sock
+
+
+class TelloServer:
+    """One simulated Tello and its world, run in real time (see module doc).
+
+    Args:
+        config: the Tello's settings.
+        scenario: the world (and the start pose).
+        node: the Zenoh node for ground truth, object poses and teleop (None: UDP only).
+        command_socket: the bound ``A:8889`` socket (made by the caller: it may live in
+            another network namespace).
+        seed: the world's random seed.
+    """
+
+    def __init__(
+        self,
+        config: TelloConfig,
+        scenario: Scenario,
+        node: Node | None,
+        command_socket: socket.socket,
+        seed: int | None = None,
+    ) -> None:
+        from dronewrapper_sim.world.world import World
+
+        self.config = config
+        self.scenario = scenario
+        self.node = node
+        seed = scenario.seed if seed is None else seed
+        self.world = World(scenario, seed=seed)
+        self.world_lock = threading.Lock()
+        wind = scenario.wind
+        self.flight = TelloFlight(
+            start=(scenario.vehicle.x, scenario.vehicle.y, scenario.vehicle.yaw),
+            wind=WindModel(wind.east_m_s, wind.north_m_s, wind.gust_m_s, seed=seed),
+            battery_percent=config.battery_percent,
+        )
+        self.protocol = TelloProtocol(self.flight, baro_origin_m=scenario.home.altitude_m)
+        self.sock = command_socket
+        self.lock = threading.Lock()  # flight + protocol, shared with the video thread
+        self.video: Any = None
+        self.datagrams = 0
+        self.replies = 0
+        self.states = 0
+        self.send_errors = 0
+        self.cmd_vel_errors = 0
+        self._snapshot = self._make_snapshot()
+        self._gt_pub = None
+        self._object_pubs: dict[str, Any] = {}
+        if node is not None:
+            self._gt_pub = node.publisher(registry.SIM_GROUND_TRUTH)
+            for obj in self.world.objects:
+                self._object_pubs[obj.name] = node.publisher(
+                    registry.SIM_OBJECT_POSE, name=obj.name
+                )
+                node.subscribe(
+                    registry.SIM_OBJECT_CMD_VEL, self._teleop_callback(obj.name), name=obj.name
+                )
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """The command socket's address."""
+        return self.sock.getsockname()
+
+    def snapshot(self) -> PoseSnapshot:
+        """The latest true pose (ENU, FLU->ENU quaternion)."""
+        return self._snapshot
+
+    def describe(self) -> str:
+        host, port = self.address
+        return (
+            f"Tello SDK on udp {host}:{port}, scenario {self.scenario.name}, "
+            f"video {'on streamon' if self.video is not None else 'off'}, "
+            f"namespace {self.node.ns if self.node else '-'}"
+        )
+
+    # ---- the loop ----
+
+    def run(self, stop: threading.Event, duration_s: float | None = None) -> None:
+        """Run until ``stop`` is set (or ``duration_s`` of wall time passed)."""
+        if self.video is not None:
+            self.video.start()
+        dt = 1.0 / self.config.physics_rate_hz
+        start = time.monotonic()
+        t0 = start
+        steps = 0
+        state_period = 1.0 / self.config.state_rate_hz
+        next_state = start
+        next_gt = next_obj = start
+        while not stop.is_set():
+            now = time.monotonic()
+            if duration_s is not None and now - start >= duration_s:
+                break
+            next_tick = t0 + (steps + 1) * dt
+            wait = min(max(next_tick - now, 0.0), 0.05)
+            readable, _, _ = select.select([self.sock], [], [], wait)
+            if readable:
+                self._receive()
+            now = time.monotonic()
+            if now < next_tick:
+                continue
+            owed = int((now - t0) / dt) - steps
+            if owed > MAX_CATCH_UP_STEPS:  # a long stall: slip the clock, do not burst
+                t0 += (owed - MAX_CATCH_UP_STEPS) * dt
+                owed = MAX_CATCH_UP_STEPS
+            replies: list[Reply] = []
+            with self.lock:
+                for _ in range(owed):
+                    replies += self.protocol.tick(dt, now)
+                self._snapshot = self._make_snapshot()
+            steps += owed
+            with self.world_lock:
+                self.world.step(owed * dt)
+            self._send(replies)
+            if now >= next_state:
+                next_state = max(next_state + state_period, now)
+                self._send_state()
+            if now >= next_gt:
+                next_gt = max(next_gt + 1.0 / GROUND_TRUTH_RATE_HZ, now)
+                if self._gt_pub is not None:
+                    self._gt_pub.put(pose_msg(self._snapshot, seq=self.states))
+            if now >= next_obj:
+                next_obj = max(next_obj + 1.0 / OBJECT_POSE_RATE_HZ, now)
+                self._publish_objects()
+
+    def _receive(self) -> None:
+        for _ in range(MAX_DATAGRAMS_PER_WAKE):
+            try:
+                data, sender = self.sock.recvfrom(65535)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:  # e.g. ICMP port unreachable reported on the socket
+                continue
+            self.datagrams += 1
+            with self.lock:
+                replies = self.protocol.handle(data, sender, time.monotonic())
+            self._send(replies)
+
+    def _send(self, replies: list[Reply]) -> None:
+        for reply in replies:
+            try:
+                self.sock.sendto(reply.text.encode("utf-8"), reply.address)
+                self.replies += 1
+            except OSError:
+                self.send_errors += 1
+
+    def _send_state(self) -> None:
+        session = self.protocol.session
+        if not self.protocol.sdk_mode or session.client is None:
+            return
+        with self.lock:
+            text = format_state(self.protocol)
+        try:
+            self.sock.sendto(text.encode("ascii"), (session.client[0], session.state_port))
+            self.states += 1
+        except OSError:
+            self.send_errors += 1
+
+    def _make_snapshot(self) -> PoseSnapshot:
+        s = self.flight.state
+        return PoseSnapshot((s.x, s.y, s.z), quat_from_euler(s.roll, s.pitch, s.yaw), time.time())
+
+    def _publish_objects(self) -> None:
+        if not self._object_pubs:
+            return
+        stamp = time.time()
+        with self.world_lock:
+            poses = [
+                (o.name, tuple(float(v) for v in o.position), o.yaw) for o in self.world.objects
+            ]
+        for name, (x, y, z), yaw in poses:
+            pub = self._object_pubs.get(name)
+            if pub is not None:
+                snap = PoseSnapshot((x, y, z), quat_from_euler(0.0, 0.0, float(yaw)), stamp)
+                pub.put(pose_msg(snap))
+
+    def _teleop_callback(self, name: str) -> Callable[[Twist], None]:
+        def on_cmd_vel(msg: Twist) -> None:
+            lin = np.array([msg.linear.x, msg.linear.y, msg.linear.z], dtype=float)
+            try:
+                with self.world_lock:
+                    self.world.set_cmd_vel(name, lin, float(msg.angular.z), self.world.time_s)
+            except (KeyError, ValueError) as exc:
+                self.cmd_vel_errors += 1
+                log.warning("cmd_vel for %s refused: %s", name, exc)
+
+        return on_cmd_vel
+
+    def close(self) -> None:
+        """Stop the video thread and close the socket."""
+        if self.video is not None:
+            self.video.close()
+        with contextlib.suppress(OSError):
+            self.sock.close()

@@ -1,0 +1,46 @@
+"""The echo command's pure helpers: key-expression hints, nearby keys, the silence notice, and
+Zenoh errors shown as one line."""
+
+from dronewrapper.echo import keyexpr_problem, light_key_families, nearby, silence_notice
+from dronewrapper.runtime.errors import zenoh_error_text
+
+
+def test_leading_slash_gets_a_hint_naming_the_right_key():
+    assert "try 'drone/mavros/state'" in keyexpr_problem("/drone/mavros/state")
+
+
+def test_empty_chunks_are_named():
+    assert "empty chunk" in keyexpr_problem("drone//state")
+    assert "empty chunk" in keyexpr_problem("drone/")
+    assert keyexpr_problem("drone/**") is None
+
+
+def test_light_families_leave_images_out():
+    families = light_key_families()
+    assert "*/mavros/state" in families
+    assert not any("image_raw" in family for family in families)
+
+
+def test_nearby_keys_are_ranked_by_likeness():
+    seen = {"drone/mavros/state", "drone/mavros/battery", "sim/objects/target/pose"}
+    assert nearby("drone/mavros/sate", seen)[0] == "drone/mavros/state"
+
+
+def test_silence_notice_says_what_is_published_instead():
+    text = silence_notice("drone1/mavros/state", 3.0, {"drone/mavros/state"})
+    assert "nothing received on 'drone1/mavros/state' in 3 s" in text
+    assert "published nearby: drone/mavros/state" in text
+    assert "is the graph running" in silence_notice("drone/mavros/state", 3.0, set())
+
+
+def test_zenoh_errors_lose_their_rust_source_paths():
+    raw = (
+        "Can not create a new TCP listener bound to tcp/1.2.3.4:9: [1.2.3.4:9: Cannot assign "
+        "requested address (os error 99) at /root/.cargo/git/checkouts/zenoh-9c599/cc83980/io/"
+        "zenoh-link-commons/src/tcp.rs:61.] at /root/.cargo/git/checkouts/zenoh-9c/cc83980/io/"
+        "zenoh-links/zenoh-link-tcp/src/unicast.rs:338."
+    )
+    text = zenoh_error_text(ValueError(raw))
+    assert ".rs" not in text and "/root/" not in text
+    assert text.endswith("Cannot assign requested address (os error 99)]")
+    assert "\n" not in zenoh_error_text(ValueError("a\nb  at /x/y.rs:1."))

@@ -1,0 +1,42 @@
+"""Every relative link in the repository's Markdown resolves to a file inside the repository."""
+
+import re
+import subprocess
+
+import pytest
+
+from support import REPO
+
+LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def markdown_files() -> list[str]:
+    out = subprocess.run(
+        ["git", "ls-files", "--cached", "--others", "--exclude-standard", "*.md"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    return sorted(line for line in out.splitlines() if line)
+
+
+def relative_links(text: str) -> list[str]:
+    return [
+        target.split("#", 1)[0]
+        for target in LINK.findall(text)
+        if not re.match(r"[a-z]+:", target) and not target.startswith("#")
+    ]
+
+
+@pytest.mark.parametrize("doc", markdown_files())
+def test_links_resolve_inside_the_repository(doc: str):
+    source = REPO / doc
+    for target in relative_links(source.read_text(encoding="utf-8")):
+        resolved = (source.parent / target).resolve()
+        assert resolved.is_relative_to(REPO), f"{doc}: {target} points outside the repository"
+        assert resolved.exists(), f"{doc}: {target} does not exist"
+
+
+def test_the_link_finder_sees_links():
+    assert relative_links("see [a](docs/a.md#x), [b](https://x.org) and [c](#top)") == ["docs/a.md"]
