@@ -654,9 +654,12 @@ class Bridge:
         self.publish_state(force=True)
         if result != 0 or math.isnan(height):
             return CommandTOLResult(success=result == 0, result=result, message=message)
-        z = (self.telemetry.position_enu or (0.0, 0.0, 0.0))[2]
+        z = self._settled_height()
         error_cm = (height - z) * 100.0
-        if abs(error_cm) > 5.0:
+        log.info("take-off done at %.2f m; %.2f m asked", z, height)
+        # the SDK's moves are 20-500 cm: correct only errors beyond 8 cm (a 20 cm move for a
+        # smaller error would overshoot by more than it corrects)
+        if abs(error_cm) > 8.0:
             verb = "up" if error_cm > 0 else "down"
             cm = round(min(500.0, max(20.0, abs(error_cm))))
             reply = self.command(f"{verb} {cm}", timeout=self.config.move_timeout, attempts=1)
@@ -665,6 +668,19 @@ class Bridge:
             if move_result != 0:
                 return CommandTOLResult(success=False, result=move_result, message=message)
         return CommandTOLResult(success=True, result=0, message=message)
+
+    def _settled_height(self, timeout: float = 3.0) -> float:
+        """The height (m) once the climb has stopped: the take-off ``ok`` may come while the
+        Tello still rises the last centimetres. Settled = two state strings in a row with
+        |vz| < 0.1 m/s; gives up after ``timeout`` s."""
+        deadline = time.monotonic() + timeout
+        calm, seen = 0, self.states_received
+        while time.monotonic() < deadline and calm < 2 and not self.node.stop_event.is_set():
+            time.sleep(0.02)
+            if self.states_received != seen:
+                seen = self.states_received
+                calm = calm + 1 if abs(self.telemetry.velocity[2]) < 0.1 else 0
+        return (self.telemetry.position_enu or (0.0, 0.0, 0.0))[2]
 
     def _land(self) -> str | None:
         with self._lock:

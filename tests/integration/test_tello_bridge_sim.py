@@ -115,7 +115,7 @@ class Rig:
     def take_off(self, height: float = 1.2) -> None:
         reply = self.call(registry.TAKEOFF, CommandTOL(altitude=height))
         assert reply.success, reply.message
-        assert self.true_xyz()[2] == pytest.approx(height, abs=0.15)
+        assert self.true_xyz()[2] == pytest.approx(height, abs=0.15), reply.message
         wait_for(
             lambda: self.ext.value and self.ext.value.landed_state == LANDED_STATE_IN_AIR,
             5,
@@ -125,6 +125,8 @@ class Rig:
     def fly(self, target: PositionTarget, seconds: float) -> np.ndarray:
         """Command ``target`` for ``seconds``; returns the true displacement in the body axes
         (forward, left, up) of the heading at the start, m."""
+        self.command(velocity())  # from a standstill: the last move's momentum is not judged
+        time.sleep(1.0)
         start, yaw = self.true_xyz(), self.true_yaw()
         self.command(target)
         time.sleep(seconds)
@@ -409,6 +411,27 @@ def test_video_frames_decoded_and_published(router, spawn):
         assert image.std() > 5.0  # a rendered scene, not a blank frame
         jpeg = rig.user.latest(registry.IMAGE_COMPRESSED, camera="cam_frontal")
         assert jpeg.wait(10).format == "jpeg"  # compressed on request
+    finally:
+        rig.close()
+        rig.user.close()
+
+
+def test_reconnects_after_the_tello_restarts(router, spawn):
+    rig = make_rig(router, spawn, "--set", "video=false")
+    try:
+        rig.sim.stop()
+        wait_for(lambda: not rig.state.value.connected, 10, what="link lost reported")
+        assert rig.bridge.alive()
+        rig.sim = start_sim(spawn, router, rig.address)  # a power-cycled Tello, same address
+        wait_for(
+            lambda: rig.state.value.connected and rig.state.value.guided,
+            40,
+            what="reconnected and back in SDK mode",
+        )
+        rig.take_off(1.0)
+        reply = rig.call(registry.LAND, CommandTOL())
+        assert reply.success, reply.message
+        rig.wait_landed()
     finally:
         rig.close()
         rig.user.close()
