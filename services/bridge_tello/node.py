@@ -551,12 +551,10 @@ class Bridge:
                 if stop.wait(0.2):
                     return
                 continue
-            frame = self.assembler.feed(data)
-            if frame is None:
-                continue
             stamp = time.time()
-            for decoded in self.decoder.decode(frame):
-                self.newest.put(decoded, stamp)
+            for frame in self.assembler.feed(data):
+                for decoded in self.decoder.decode(frame):
+                    self.newest.put(decoded, stamp)
 
     def _image_loop(self) -> None:
         stop = self.node.stop_event

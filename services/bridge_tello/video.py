@@ -2,7 +2,9 @@
 
 The Tello sends H.264 Annex-B on UDP 11111, each frame cut into datagrams of ``chunk`` (1460)
 bytes, the last one shorter. :class:`FrameAssembler` joins datagrams until a short one ends the
-frame (no parser: it would hold every frame back until the next one starts, +33 ms).
+frame (no parser: it would hold every frame back until the next one starts, +33 ms). A frame
+whose size is a multiple of the chunk has no short datagram; it ends where a datagram starts a
+new access unit (a start code followed by an SPS, PPS, AUD or a slice with first_mb 0).
 :class:`H264Decoder` decodes each frame; corrupt or partial data is counted and skipped, never
 raised. :class:`NewestFrame` is a one-slot mailbox: the publisher takes the newest decoded frame,
 older unpublished ones are dropped (counted), so a slow consumer never builds a backlog (the most
@@ -25,6 +27,23 @@ TELLO_CHUNK = 1460
 MAX_FRAME_BYTES = 2_000_000
 
 
+def starts_access_unit(datagram: bytes) -> bool:
+    """True if ``datagram`` begins a new access unit: a start code, then an SPS / PPS / AUD, or
+    a coded slice whose ``first_mb_in_slice`` is 0 (its first bit, ue(v) of 0, is 1)."""
+    if datagram.startswith(b"\x00\x00\x00\x01"):
+        i = 4
+    elif datagram.startswith(b"\x00\x00\x01"):
+        i = 3
+    else:
+        return False
+    if len(datagram) < i + 2:
+        return False
+    nal_type = datagram[i] & 0x1F
+    if nal_type in (7, 8, 9):
+        return True
+    return nal_type in (1, 5) and bool(datagram[i + 1] & 0x80)
+
+
 class FrameAssembler:
     """Joins video datagrams into whole frames (access units); pure."""
 
@@ -35,19 +54,24 @@ class FrameAssembler:
         self._parts: list[bytes] = []
         self._size = 0
 
-    def feed(self, datagram: bytes) -> bytes | None:
-        """Add one datagram; returns a complete frame when this datagram ends one."""
+    def _take(self) -> bytes:
+        frame = b"".join(self._parts)
+        self._parts, self._size = [], 0
+        return frame
+
+    def feed(self, datagram: bytes) -> list[bytes]:
+        """Add one datagram; returns the frames it completes (usually none or one)."""
+        out = []
+        if self._parts and starts_access_unit(datagram):
+            out.append(self._take())  # the previous frame was a multiple of the chunk
         self._parts.append(datagram)
         self._size += len(datagram)
         if self._size > self.max_frame_bytes:
             self.oversized += 1
             self._parts, self._size = [], 0
-            return None
-        if len(datagram) >= self.chunk:
-            return None
-        frame = b"".join(self._parts)
-        self._parts, self._size = [], 0
-        return frame
+        elif len(datagram) < self.chunk:
+            out.append(self._take())
+        return out
 
 
 @dataclass

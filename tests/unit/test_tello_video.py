@@ -5,7 +5,12 @@ from __future__ import annotations
 import av
 import numpy as np
 
-from dronewrapper_bridge_tello.video import FrameAssembler, H264Decoder, NewestFrame
+from dronewrapper_bridge_tello.video import (
+    FrameAssembler,
+    H264Decoder,
+    NewestFrame,
+    starts_access_unit,
+)
 
 W, H = 320, 240
 
@@ -37,8 +42,7 @@ def test_frames_split_in_datagrams_are_reassembled_and_decoded():
     for unit in units:
         assert len(unit) % 1460 != 0
         for d in datagrams(unit):
-            frame = asm.feed(d)
-            if frame is not None:
+            for frame in asm.feed(d):
                 out += dec.decode(frame)
     assert len(out) == 20 and dec.counts.corrupt == 0
     img = out[-1].to_ndarray(format="bgr24")
@@ -58,8 +62,7 @@ def test_corrupt_and_partial_units_are_counted_never_raised():
         elif i == 15:
             unit = b"\x00\x00\x01" + b"\xff" * 40  # a broken NAL unit
         for d in datagrams(unit):
-            frame = asm.feed(d)
-            if frame is not None:
+            for frame in asm.feed(d):
                 decoded += len(dec.decode(frame))
     assert dec.counts.packets == 30
     assert decoded >= 20  # the stream recovers (at the latest on the next key frame)
@@ -70,9 +73,34 @@ def test_corrupt_and_partial_units_are_counted_never_raised():
 def test_oversized_frames_are_dropped():
     asm = FrameAssembler(chunk=100, max_frame_bytes=1000)
     for _ in range(11):
-        assert asm.feed(b"x" * 100) is None
+        assert asm.feed(b"x" * 100) == []
     assert asm.oversized == 1
-    assert asm.feed(b"y" * 10) == b"y" * 10  # a fresh start after the drop
+    assert asm.feed(b"y" * 10) == [b"y" * 10]  # a fresh start after the drop
+
+
+def test_a_frame_of_a_whole_number_of_chunks_ends_at_the_next_access_unit():
+    units = encode(12)
+    chunk = 100
+    # pad one P frame to a whole number of chunks with trailing zero bytes (allowed after a
+    # NAL unit), so none of its datagrams is short
+    unit = units[4]
+    whole = -(-len(unit) // chunk) * chunk
+    units[4] = unit + b"\x00" * (whole - len(unit) + chunk)
+    asm, dec = FrameAssembler(chunk=chunk), H264Decoder()
+    frames = []
+    for unit in units:
+        for d in datagrams(unit, chunk):
+            frames += asm.feed(d)
+    assert frames[4] == units[4]  # not merged with the next frame
+    decoded = sum(len(dec.decode(f)) for f in frames)
+    assert decoded == 12 and dec.counts.corrupt == 0
+
+
+def test_access_unit_starts():
+    units = encode(3)
+    assert all(starts_access_unit(u) for u in units)
+    assert not starts_access_unit(units[1][100:200])
+    assert not starts_access_unit(b"\x00\x00\x01")
 
 
 def test_newest_frame_only():
