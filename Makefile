@@ -12,6 +12,7 @@ $(STAMP): pyproject.toml sdk/pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ./sdk -e '.[dev]'
+	$(BIN)/python -m pip install -q --no-deps 'djitellopy==2.5.0'  # test client; its opencv-python would shadow our headless cv2
 	@touch $(STAMP)
 
 demo: setup

@@ -5,10 +5,11 @@ through the launcher's Python API on a free loopback router and free UDP ports, 
 simulator's ground truth and the controller's status, prints one live status line, and at the
 end prints a summary (time to acquire, share of time the target was centred, distance error)
 and saves a plot of the trajectories (top view) and the errors over time to ``out/demo/`` (and,
-with ``--video``, perception's annotated frames with the status line as ``follow.mp4``).
+with ``--video``, perception's annotated frames with the status line as ``follow.mp4``; with
+``--record``, the whole bus as ``flight.mcap`` to open in Foxglove, camera frames as JPEG).
 
     python -m dronewrapper_compose.demo [--duration 60] [--scenario beacon_smooth] [--out DIR]
-                                        [--video]
+                                        [--video] [--record]
 
 The processes' own logs go to ``out/demo/graph.log``.
 """
@@ -200,8 +201,24 @@ class VideoRecorder:
                 self._writer.release()
 
 
+RECORDED_KEYS = (
+    "drone/mavros/**",
+    "drone/perception/**",
+    "drone/controller/**",
+    "drone/sim/**",
+    "drone/cam_frontal/image_raw",  # JPEG-compressed by the recorder; the sim's own JPEG
+    "sim/**",  # stream and the ventral camera would only double the file
+)
+
+
 def run_demo(
-    duration: float, scenario: str, out_dir: Path, *, live: bool = True, video: bool = False
+    duration: float,
+    scenario: str,
+    out_dir: Path,
+    *,
+    live: bool = True,
+    video: bool = False,
+    record: bool = False,
 ) -> tuple[int, FollowSummary | None]:
     """Fly the demo; returns (exit status, summary)."""
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -242,6 +259,11 @@ def run_demo(
                 )
 
             recorder = VideoRecorder(session, launcher.ns, out_dir / "follow.mp4", short)
+        recording = None
+        if record:
+            from dronewrapper.record.capture import BackgroundRecording
+
+            recording = BackgroundRecording(session, RECORDED_KEYS, out_dir / "flight.mcap")
         print(f"flying for {duration:g} s (Ctrl-C stops early)")
         tty = sys.stdout.isatty()
         last_print = 0.0
@@ -266,6 +288,12 @@ def run_demo(
             if recorder is not None:
                 recorder.close()
                 print(f"video: {recorder.frames} frames saved to {recorder.path}")
+            if recording is not None:
+                recording.close()
+                print(
+                    f"recording: {recording.stats.written} messages saved to {recording.path} "
+                    "(open it in Foxglove with docs/foxglove_layout.json)"
+                )
             session.close()
             print("stopping the graph (the drone lands first)...")
             code = launcher.stop()
@@ -294,10 +322,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--video", action="store_true", help="also save an annotated video (follow.mp4)"
     )
+    parser.add_argument(
+        "--record", action="store_true", help="also record the bus to flight.mcap (Foxglove)"
+    )
     args = parser.parse_args(argv)
     if not args.duration > 0:
         parser.error("--duration must be > 0")
-    code, _ = run_demo(args.duration, args.scenario, args.out, video=args.video)
+    code, _ = run_demo(args.duration, args.scenario, args.out, video=args.video, record=args.record)
     return code
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ipaddress
+
 import msgspec
 
 from dronewrapper_sim.mavlink_io import parse_udp_spec
@@ -89,5 +91,10 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             raise ValueError(f"aircraft must be iris or tello, got {self.aircraft!r}")
         if (self.address or self.netns) and self.aircraft != "tello":
             raise ValueError("address and netns are Tello settings (aircraft: tello)")
+        if self.address:
+            try:
+                ipaddress.IPv4Address(self.address)
+            except ValueError as exc:
+                raise ValueError(f"address: {exc}") from None
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")

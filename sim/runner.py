@@ -188,6 +188,56 @@ class CameraStreamer(threading.Thread):
             pub.undeclare()
 
 
+class WorldTopics:
+    """The world on Zenoh, the same for every aircraft: the vehicle's ``{ns}/sim/ground_truth``,
+    ``sim/objects/{name}/pose`` of each object, and their teleop ``sim/objects/{name}/cmd_vel``.
+
+    Args:
+        node: the Zenoh node.
+        world: the world whose objects are published and teleoperated.
+        world_lock: the lock the simulation holds while it steps ``world``.
+    """
+
+    def __init__(self, node: Node, world: Any, world_lock: threading.Lock) -> None:
+        self.world = world
+        self.world_lock = world_lock
+        self.cmd_vel_errors = 0
+        self._gt_pub = node.publisher(registry.SIM_GROUND_TRUTH)
+        self._object_pubs: dict[str, Any] = {}
+        for obj in world.objects:
+            self._object_pubs[obj.name] = node.publisher(registry.SIM_OBJECT_POSE, name=obj.name)
+            node.subscribe(
+                registry.SIM_OBJECT_CMD_VEL, self._teleop_callback(obj.name), name=obj.name
+            )
+
+    def publish_ground_truth(self, snapshot: PoseSnapshot) -> None:
+        """Publish the vehicle's true pose."""
+        self._gt_pub.put(pose_msg(snapshot, seq=self._gt_pub.count))
+
+    def publish_objects(self) -> None:
+        """Publish the true pose of every world object (stamped now)."""
+        stamp = time.time()
+        for obj in self.world.objects:
+            pub = self._object_pubs.get(obj.name)
+            if pub is None:
+                continue
+            x, y, z = (float(v) for v in obj.position)
+            snap = PoseSnapshot((x, y, z), quat_from_euler(0.0, 0.0, float(obj.yaw)), stamp)
+            pub.put(pose_msg(snap, seq=pub.count))
+
+    def _teleop_callback(self, name: str) -> Callable[[Twist], None]:
+        def on_cmd_vel(msg: Twist) -> None:
+            lin = np.array([msg.linear.x, msg.linear.y, msg.linear.z], dtype=float)
+            try:
+                with self.world_lock:
+                    self.world.set_cmd_vel(name, lin, float(msg.angular.z), self.world.time_s)
+            except (KeyError, ValueError) as exc:
+                self.cmd_vel_errors += 1
+                log.warning("cmd_vel for %s refused: %s", name, exc)
+
+        return on_cmd_vel
+
+
 class SimRunner:
     """One simulated vehicle and its world, run in real time (see module doc).
 
@@ -235,9 +285,7 @@ class SimRunner:
             raise
         self._snapshot = self._make_snapshot()
         self.cameras: CameraStreamer | None = None
-        self._gt_pub = None
-        self._object_pubs: dict[str, Any] = {}
-        self.cmd_vel_errors = 0
+        self.world_topics: WorldTopics | None = None
         self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
         # (monotonic wall s, simulated s, slipped_s) taken together after each stepping
         self.clock: tuple[float, float, float] = (time.monotonic(), 0.0, 0.0)
@@ -247,12 +295,7 @@ class SimRunner:
     # ---- setup ----
 
     def _setup_zenoh(self, node: Node) -> None:
-        self._gt_pub = node.publisher(registry.SIM_GROUND_TRUTH)
-        for obj in self.world.objects:
-            self._object_pubs[obj.name] = node.publisher(registry.SIM_OBJECT_POSE, name=obj.name)
-            node.subscribe(
-                registry.SIM_OBJECT_CMD_VEL, self._teleop_callback(obj.name), name=obj.name
-            )
+        self.world_topics = WorldTopics(node, self.world, self.world_lock)
         if self.config.cameras:
             self.cameras = self._make_cameras(node)
 
@@ -279,17 +322,10 @@ class SimRunner:
             render_unwatched=self.config.render_unwatched,
         )
 
-    def _teleop_callback(self, name: str) -> Callable[[Twist], None]:
-        def on_cmd_vel(msg: Twist) -> None:
-            lin = np.array([msg.linear.x, msg.linear.y, msg.linear.z], dtype=float)
-            try:
-                with self.world_lock:
-                    self.world.set_cmd_vel(name, lin, float(msg.angular.z), self.world.time_s)
-            except (KeyError, ValueError) as exc:
-                self.cmd_vel_errors += 1
-                log.warning("cmd_vel for %s refused: %s", name, exc)
-
-        return on_cmd_vel
+    @property
+    def cmd_vel_errors(self) -> int:
+        """Teleop commands refused (unknown object, bad values)."""
+        return self.world_topics.cmd_vel_errors if self.world_topics else 0
 
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.autopilot.state
@@ -372,20 +408,12 @@ class SimRunner:
                 link.send(replies)
 
     def _publish_ground_truth(self) -> None:
-        if self._gt_pub is not None:
-            self._gt_pub.put(pose_msg(self._snapshot, seq=self._gt_pub.count))
+        if self.world_topics is not None:
+            self.world_topics.publish_ground_truth(self._snapshot)
 
     def _publish_objects(self) -> None:
-        if not self._object_pubs:
-            return
-        stamp = time.time()
-        for obj in self.world.objects:
-            pub = self._object_pubs.get(obj.name)
-            if pub is None:
-                continue
-            x, y, z = (float(v) for v in obj.position)
-            snap = PoseSnapshot((x, y, z), quat_from_euler(0.0, 0.0, float(obj.yaw)), stamp)
-            pub.put(pose_msg(snap, seq=pub.count))
+        if self.world_topics is not None:
+            self.world_topics.publish_objects()
 
     def close(self) -> None:
         """Stop the camera thread and close the sockets."""

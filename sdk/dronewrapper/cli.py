@@ -2,14 +2,20 @@
 
     dronewrapper router [--listen ENDPOINT]          a Zenoh router (default tcp/127.0.0.1:7447)
     dronewrapper echo KEYEXPR [--count N]            print decoded messages
-    dronewrapper alive [--connect ENDPOINT]          list running processes, by namespace
+    dronewrapper alive [--connect ENDPOINT]          drones and processes online, with health
+    dronewrapper doctor [--connect ENDPOINT]         diagnose a setup and say what to fix
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
+    dronewrapper station [--host H] [--port P]       the web ground station (loopback)
+    dronewrapper record [KEYEXPR...] -o FILE.mcap    the bus to MCAP (--info FILE summarises)
+    dronewrapper replay FILE.mcap [--rate R] [...]   a recording back on the bus
+    dronewrapper foxglove [KEYEXPR...] [--port P]    the live bus to Foxglove (WebSocket)
     dronewrapper --version                           the installed version
 
-``up``, ``sim`` and ``detect`` come with the on-board stack (``make setup``); the SDK alone
-(``pip install ./sdk``) has ``router``, ``echo`` and ``alive``.
+``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
+SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``; ``record``,
+``replay`` and ``foxglove`` come with its ``record`` extra (``pip install './sdk[record]'``).
 """
 
 from __future__ import annotations
@@ -30,6 +36,14 @@ _STACK_COMMANDS = {
     "up": ("dronewrapper_compose.launcher", "main"),
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
+    "station": ("dronewrapper_ground_station.cli", "main"),
+}
+
+# subcommand -> (module, function) of the SDK's record extra (mcap, foxglove-sdk)
+_RECORD_COMMANDS = {
+    "record": ("dronewrapper.record.cli", "record_main"),
+    "replay": ("dronewrapper.record.cli", "replay_main"),
+    "foxglove": ("dronewrapper.record.cli", "foxglove_main"),
 }
 
 
@@ -122,9 +136,16 @@ def _stdout_writable() -> bool:
 
 
 def _alive(argv: Sequence[str]) -> int:
+    from dronewrapper.discovery import services_by_namespace
+    from dronewrapper.doctor import describe_drone, listen, topic_families
     from dronewrapper.runtime.node import open_session
 
-    parser = argparse.ArgumentParser(prog="dronewrapper alive", description="running processes")
+    parser = argparse.ArgumentParser(
+        prog="dronewrapper alive", description="drones and processes online, with health"
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=1.5, metavar="S", help="seconds to hear states (1.5)"
+    )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
     try:
@@ -134,11 +155,44 @@ def _alive(argv: Sequence[str]) -> int:
         return 1
     try:
         keys = sorted(str(r.ok.key_expr) for r in session.liveliness().get("*/alive/*") if r.ok)
+        heard = listen(session, topic_families(images=False), args.seconds) if keys else None
     finally:
         session.close()
-    for key in keys:
-        print(key)
+    for ns, processes in services_by_namespace(set(keys)).items():
+        verdict, sentence = describe_drone(ns, processes, heard.latest if heard else {})
+        print(f"{'' if verdict == 'ok' else verdict.upper() + ' '}{sentence}")
+        for name in processes:
+            print(f"  {ns}/alive/{name}")
+    if not keys:
+        print("nothing alive on this router", file=sys.stderr)
     return 0
+
+
+def _doctor(argv: Sequence[str]) -> int:
+    from dronewrapper.doctor import run_doctor
+
+    parser = argparse.ArgumentParser(
+        prog="dronewrapper doctor", description="diagnose a setup and say what to fix"
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=3.0, metavar="S", help="seconds to listen (3)"
+    )
+    parser.add_argument("--images", action="store_true", help="also measure camera streams")
+    parser.add_argument("--no-bandwidth", action="store_true", help="skip the bandwidth probe")
+    add_zenoh_args(parser, default_mode="client")
+    args = parser.parse_args(argv)
+    labels = {"ok": "ok  ", "warn": "warn", "fail": "FAIL"}
+
+    def report(verdict: str, text: str) -> None:
+        print(f"{labels[verdict]} {text}", flush=True)
+
+    return run_doctor(
+        options_from_args(args),
+        report,
+        listen_s=args.seconds,
+        images=args.images,
+        bandwidth=not args.no_bandwidth,
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -151,21 +205,30 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"dronewrapper {_version()}")
         return 0
     command, rest = argv[0], argv[1:]
-    local = {"router": _router, "echo": _echo, "alive": _alive}
+    local = {"router": _router, "echo": _echo, "alive": _alive, "doctor": _doctor}
     if command in local:
         return local[command](rest)
-    if command in _STACK_COMMANDS:
-        module_name, func = _STACK_COMMANDS[command]
+    if command in _STACK_COMMANDS or command in _RECORD_COMMANDS:
+        module_name, func = {**_STACK_COMMANDS, **_RECORD_COMMANDS}[command]
         try:
             module = importlib.import_module(module_name)
+            entry = getattr(module, func)
+            if command in _RECORD_COMMANDS:
+                import foxglove  # noqa: F401  (the record extra, checked before running)
+                import mcap  # noqa: F401
         except ModuleNotFoundError as exc:
+            need = (
+                "the record extra: pip install 'dronewrapper[record]'"
+                if command in _RECORD_COMMANDS
+                else "the on-board stack"
+            )
             print(
-                f"dronewrapper {command}: needs the on-board stack ({exc.name} is missing); "
+                f"dronewrapper {command}: needs {need} ({exc.name} is missing); "
                 "run `make setup` in the repository",
                 file=sys.stderr,
             )
             return 2
-        return int(getattr(module, func)(rest) or 0)
+        return int(entry(rest) or 0)
     print(f"dronewrapper: unknown command {command!r}\n\n{__doc__.strip()}", file=sys.stderr)
     return 2
 

@@ -13,7 +13,11 @@ import zenoh
 from dronewrapper.errors import NotConnected
 from dronewrapper.msgs.registry import ALIVE, STATE
 from dronewrapper.runtime.node import open_session
-from dronewrapper.runtime.options import DEFAULT_ROUTER, ENV_PREFIX, ZenohOptions
+from dronewrapper.runtime.options import (
+    DEFAULT_ROUTER,
+    ENV_PREFIX,
+    ZenohOptions,
+)
 
 BRIDGE_PREFIX = "bridge"
 """A process whose name starts with this is a bridge to an aircraft (bridge_mavlink, bridge)."""

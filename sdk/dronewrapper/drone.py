@@ -44,6 +44,7 @@ from dronewrapper.discovery import (
     open_client,
 )
 from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper.health import stale_after
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -65,6 +66,8 @@ from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
+from dronewrapper.runtime.options import is_local_endpoint
+from dronewrapper.runtime.qos import qos_for
 from dronewrapper.streamer import SetpointStreamer
 
 T = TypeVar("T")
@@ -127,9 +130,13 @@ class DroneWrapper:
         mode: Zenoh session mode (``client``: everything through the router; ``peer``).
         session: an open ``zenoh.Session`` to reuse (a service embedding the SDK); it is not
             closed by :meth:`close`. ``connect`` and ``mode`` are then ignored.
-        cameras: the cameras to receive (``frontal``, ``ventral``); ``()`` receives none.
-        compressed_images: receive JPEG images (``.../image_raw/compressed``, for Wi-Fi links;
-            needs OpenCV to decode) instead of raw ones.
+        cameras: the cameras to receive from the start (``frontal``, ``ventral``); ``()``
+            receives none; None (default) subscribes to a camera the first time it is read, so
+            frames cross the network only for a program that uses them.
+        compressed_images: receive JPEG images (``.../image_raw/compressed``; needs OpenCV:
+            ``pip install 'dronewrapper[images]'``) instead of raw ones. None (default): JPEG
+            when the router is on another machine (raw 640x480 frames need ~220 Mbit/s per
+            camera), raw on this one; without OpenCV it falls back to raw with a warning.
         land_on_exit: when used as a context manager, land on exit if flying (also after an
             exception); without it, exiting only stops commanding (the bridge hovers).
         setpoint_rate_hz: rate of the setpoint stream (>= 20 Hz).
@@ -152,8 +159,8 @@ class DroneWrapper:
         *,
         mode: str = "client",
         session: zenoh.Session | None = None,
-        cameras: Sequence[str] = ("frontal", "ventral"),
-        compressed_images: bool = False,
+        cameras: Sequence[str] | None = None,
+        compressed_images: bool | None = None,
         land_on_exit: bool = False,
         setpoint_rate_hz: float = 30.0,
         command_timeout: float | None = None,
@@ -161,16 +168,27 @@ class DroneWrapper:
         wait: bool = True,
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
-        if compressed_images and cameras:
+        self.connect = connect or default_connect()
+        if compressed_images is None:
+            remote = session is None and not is_local_endpoint(self.connect)
+            compressed_images = remote and images.has_jpeg_decoder()
+            if remote and not compressed_images:
+                log.warning(
+                    "the router %s is on another machine but OpenCV is missing, so camera "
+                    "frames come raw (~220 Mbit/s each): pip install 'dronewrapper[images]'",
+                    self.connect,
+                )
+        elif compressed_images and cameras != ():
             images.jpeg_decoder()  # fail now, not at the first frame, if OpenCV is missing
         registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
-        self.connect = connect or default_connect()
         self.land_on_exit = land_on_exit
         self.compressed_images = compressed_images
         self.service_timeout = service_timeout
         self.decode_errors: collections.Counter[str] = collections.Counter()
         self._closed = False
         self._warned_grounded = False
+        self._stale_after: dict[str, float] = {}
+        self._stale_warned: set[str] = set()
         self._subscribers: list[Any] = []
         self._own_session = session is None
         deadline = time.monotonic() + timeout
@@ -183,8 +201,7 @@ class DroneWrapper:
             self._setpoints = session.declare_publisher(
                 registry.SETPOINT_RAW_LOCAL.key(self.ns),
                 encoding=encoding_for(PositionTarget),
-                express=True,  # no batching: a setpoint leaves at once
-                priority=zenoh.Priority.INTERACTIVE_HIGH,
+                **qos_for(registry.SETPOINT_RAW_LOCAL),
             )
             self._streamer = SetpointStreamer(
                 self._publish_setpoint,
@@ -211,14 +228,39 @@ class DroneWrapper:
         self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
         """The autopilot's last 20 text messages (newest last)."""
         self._subscribe(registry.STATUSTEXT, self.status_texts.append)
-        image_topic = registry.IMAGE_COMPRESSED if self.compressed_images else registry.IMAGE_RAW
         self._images: dict[str, Latest[Any]] = {}
         self._decoded: dict[str, tuple[Any, np.ndarray]] = {}
-        for camera in cameras:
-            key_name = _camera_key_name(camera)
-            self._images[key_name] = self._latest(image_topic, camera=key_name)
+        self._lazy_cameras = cameras is None
+        self._images_declared = False
+        for camera in cameras or ():
+            self._camera_holder(camera)
+        self._images_declared = True
 
-    def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> None:
+    def _camera_holder(self, camera: str) -> Latest[Any] | None:
+        """The newest-frame holder of ``camera``, subscribing now if cameras are lazy; None if
+        the camera was not requested."""
+        key_name = _camera_key_name(camera)
+        holder = self._images.get(key_name)
+        if holder is None and (self._lazy_cameras or not self._images_declared):
+            topic = registry.IMAGE_COMPRESSED if self.compressed_images else registry.IMAGE_RAW
+            holder = self._images[key_name] = self._latest(topic, camera=key_name)
+        return holder
+
+    def subscribe(
+        self, topic: Topic[T], callback: Callable[[T], None], **parts: str
+    ) -> zenoh.Subscriber:
+        """Call ``callback(msg)`` for every decodable message on ``topic`` in this drone's
+        namespace (``parts`` fill the other key fields, e.g. ``camera="cam_frontal"``).
+
+        The callback runs on a Zenoh thread: keep it short. Undecodable samples are counted in
+        ``decode_errors``; an exception in the callback is logged and never ends the
+        subscription. ``undeclare()`` the returned subscriber to stop; :meth:`close` does too.
+        """
+        return self._subscribe(topic, callback, **parts)
+
+    def _subscribe(
+        self, topic: Topic[T], callback: Callable[[T], None], **parts: str
+    ) -> zenoh.Subscriber:
         key = topic.key(self.ns, **parts)
         decoder = codec.decoder(topic.type)
 
@@ -239,11 +281,14 @@ class DroneWrapper:
         # store), and no non-daemon thread is left to block interpreter exit before our atexit
         # hook closes the session (the paper's listing never calls close()).
         handler = zenoh.handlers.Callback(on_sample, indirect=False)
-        self._subscribers.append(self.session.declare_subscriber(key, handler))
+        subscriber = self.session.declare_subscriber(key, handler)
+        self._subscribers.append(subscriber)
+        return subscriber
 
     def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))
         self._subscribe(topic, holder.update, **parts)
+        self._stale_after[holder.name] = stale_after(topic.rate_hz)
         return holder
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
@@ -256,7 +301,44 @@ class DroneWrapper:
                 f"no {what} received yet on {latest.name}: is the bridge running and publishing? "
                 "(wait_for_connection() waits for it)"
             )
+        age, limit = latest.age(), self._stale_after.get(latest.name, float("inf"))
+        if age > limit and latest.name not in self._stale_warned:
+            self._stale_warned.add(latest.name)
+            log.warning(
+                "%s is %.1f s old (stale after %.1f s for its rate): the link or the bridge is "
+                "slow; check with `dronewrapper doctor`",
+                latest.name,
+                age,
+                limit,
+            )
+        elif age <= limit:
+            self._stale_warned.discard(latest.name)
         return value
+
+    def age(self, what: str) -> float:
+        """Seconds since the newest value of a getter's stream arrived (inf before the first).
+
+        ``what`` names a getter without ``get_``: ``position``, ``orientation``, ``velocity``,
+        ``velocity_local``, ``yaw_rate``, ``landed_state``, ``battery``, ``global_position``,
+        ``state``, ``frontal_image``, ``ventral_image``.
+        """
+        holders = {
+            "position": self._pose,
+            "orientation": self._pose,
+            "velocity": self._velocity_body,
+            "yaw_rate": self._velocity_body,
+            "velocity_local": self._velocity_local,
+            "landed_state": self._extended,
+            "battery": self._battery,
+            "global_position": self._global,
+            "state": self._state,
+        }
+        if what in ("frontal_image", "ventral_image"):
+            holder = self._camera_holder(what.removesuffix("_image"))
+            return holder.age() if holder is not None else float("inf")
+        if what not in holders:
+            raise InvalidArgument(f"age of {what!r}: use one of {', '.join(sorted(holders))}")
+        return holders[what].age()
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -296,7 +378,8 @@ class DroneWrapper:
             else:
                 for entity in [*self._subscribers, getattr(self, "_setpoints", None)]:
                     if entity is not None:
-                        entity.undeclare()
+                        with contextlib.suppress(Exception):  # one the caller undeclared
+                            entity.undeclare()
         except Exception as exc:  # a session already closed by its owner
             log.debug("close: %s", exc)
 
@@ -448,7 +531,7 @@ class DroneWrapper:
                 requested in ``cameras=``).
         """
         key_name = _camera_key_name(camera)
-        holder = self._images.get(key_name)
+        holder = self._camera_holder(camera)
         if holder is None:
             raise NoData(
                 f"camera {camera!r} was not requested: DroneWrapper(cameras=[..., {camera!r}])"
@@ -461,13 +544,15 @@ class DroneWrapper:
             )
         cached = self._decoded.get(key_name)
         if cached is None or cached[0] is not msg:
-            if self.compressed_images:
-                array = images.compressed_to_bgr(msg)
-            else:
-                array = images.image_to_bgr(msg)
-            self._decoded[key_name] = cached = (msg, array)
+            self._decoded[key_name] = cached = (msg, self.decode_image(msg))
         image = cached[1].copy()
         return (image, float(msg.header.stamp)) if with_stamp else image
+
+    def decode_image(self, msg: Any) -> np.ndarray:
+        """A camera message (raw or JPEG, as this object receives them) as a BGR array."""
+        if self.compressed_images:
+            return images.compressed_to_bgr(msg)
+        return images.image_to_bgr(msg)
 
     def get_frontal_image(self) -> np.ndarray:
         """The newest frontal camera frame, BGR ``uint8`` (height, width, 3)."""
@@ -540,8 +625,7 @@ class DroneWrapper:
         Raises:
             Timeout: no frame within ``timeout`` s (no camera publishing on the key).
         """
-        key_name = _camera_key_name(camera)
-        holder = self._images.get(key_name)
+        holder = self._camera_holder(camera)
         if holder is None:
             return self.get_image(camera)  # raises NoData naming the cameras= argument
         try:

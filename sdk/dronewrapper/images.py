@@ -1,8 +1,9 @@
 """Camera messages as BGR numpy arrays (OpenCV channel order), the newest frame only.
 
-Raw images (``sensor_msgs/Image``) are converted with numpy alone. JPEG/PNG compressed images
-(for Wi-Fi links) are decoded with OpenCV, imported only when needed, so the SDK itself depends
-on numpy alone.
+Both ways: messages to arrays (subscribers) and arrays to messages (camera publishers such as
+camera_victure). Raw images (``sensor_msgs/Image``) are converted with numpy alone. JPEG/PNG
+compressed images (for Wi-Fi links) are encoded and decoded with OpenCV, imported only when
+needed, so the SDK itself depends on numpy alone.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import numpy as np
 
 from dronewrapper.errors import DroneError
 from dronewrapper.msgs.sensor import CompressedImage, Image
+from dronewrapper.msgs.std import Header
 
 _CHANNELS = {"bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4, "mono8": 1, "8UC3": 3, "8UC1": 1}
 
@@ -62,6 +64,15 @@ def jpeg_decoder() -> Any:
     return cv2
 
 
+def has_jpeg_decoder() -> bool:
+    """True if OpenCV can be imported (JPEG frames can be decoded)."""
+    try:
+        jpeg_decoder()
+    except DroneError:
+        return False
+    return True
+
+
 def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
     """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` array (needs OpenCV).
 
@@ -73,3 +84,43 @@ def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
     if image is None:
         raise DroneError(f"cannot decode a {len(msg.data)}-byte {msg.format!r} image")
     return image
+
+
+def bgr_to_image(bgr: np.ndarray, stamp: float, frame_id: str, seq: int = 0) -> Image:
+    """A ``bgr8`` Image of a (height, width, 3) ``uint8`` array (``step`` = width * 3).
+
+    ``stamp`` is the capture time (epoch s), ``frame_id`` the camera name, ``seq`` the frame
+    number. ``data`` is a view of the array (no copy): publish the message before changing the
+    array.
+
+    Raises:
+        DroneError: the array is not (h, w, 3) uint8.
+    """
+    if bgr.dtype != np.uint8 or bgr.ndim != 3 or bgr.shape[2] != 3:
+        raise DroneError(f"expected a (h, w, 3) uint8 BGR array, got {bgr.shape} {bgr.dtype}")
+    height, width = bgr.shape[:2]
+    return Image(
+        header=Header(stamp=stamp, frame_id=frame_id, seq=seq),
+        height=height,
+        width=width,
+        encoding="bgr8",
+        step=width * 3,
+        data=memoryview(np.ascontiguousarray(bgr).reshape(-1)),
+    )
+
+
+def bgr_to_jpeg(
+    bgr: np.ndarray, stamp: float, frame_id: str, seq: int = 0, quality: int = 80
+) -> CompressedImage:
+    """A JPEG CompressedImage of a BGR array at ``quality`` 1..100 (needs OpenCV); the header
+    as :func:`bgr_to_image`'s.
+
+    Raises:
+        DroneError: OpenCV is not installed, or the encoder refused the array.
+    """
+    cv2 = jpeg_decoder()
+    ok, buffer = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    if not ok:
+        raise DroneError(f"cannot JPEG-encode a {bgr.shape} {bgr.dtype} array")
+    header = Header(stamp=stamp, frame_id=frame_id, seq=seq)
+    return CompressedImage(header=header, format="jpeg", data=buffer.tobytes())

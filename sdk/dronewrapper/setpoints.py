@@ -85,7 +85,7 @@ def position_target(x: float, y: float, z: float, yaw: float, *, stamp: float) -
         coordinate_frame=FRAME_LOCAL_NED,
         type_mask=MASK_POSITION,
         position=Point(x=finite("x", x), y=finite("y", y), z=finite("z", z)),
-        yaw=radians("az", yaw),
+        yaw=radians("yaw", yaw),
     )
 
 

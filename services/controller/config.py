@@ -152,6 +152,8 @@ class Config(ServoConfig, kw_only=True, forbid_unknown_fields=True):
         on_exit: ``stop`` (send one zero command and stop commanding; the bridge then hovers
             and, after its commander-lost timeout, lands) or ``land`` (land and wait for it).
         land_timeout: how long to wait for the landing on exit (s).
+        dry_run: compute the commands and publish them in the status only: no aircraft is
+            waited for, taken off, commanded or landed (a desk test with a webcam).
     """
 
     aircraft: str = "iris_sim"
@@ -161,6 +163,7 @@ class Config(ServoConfig, kw_only=True, forbid_unknown_fields=True):
     takeoff: TakeoffConfig = msgspec.field(default_factory=TakeoffConfig)
     on_exit: str = "land"
     land_timeout: float = 30.0
+    dry_run: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -7,7 +7,8 @@ source camera frame's stamp); publishes ``{ns}/controller/status`` at ``status_r
 
 Lifecycle: wait for the bridge -> announce ready -> take off to ``takeoff.height`` (if
 ``takeoff.on_start``) -> servo until SIGINT/SIGTERM -> land (``on_exit: land``) or send one
-zero command and stop commanding (``on_exit: stop``).
+zero command and stop commanding (``on_exit: stop``). With ``dry_run`` no aircraft is involved:
+announce ready -> servo until stopped, the commands only in the status.
 """
 
 from __future__ import annotations
@@ -150,7 +151,7 @@ def servo_until_stopped(
             takeoff = None
             status.phase = None
         cmd = loop.tick(now, detections.value, detections.age())
-        if cmd is None:
+        if cmd is None or drone is None:  # no drone: a dry run, the status shows the command
             continue
         stamp = cmd.source_stamp if cmd.source_stamp > 0 else None
         drone.set_cmd_vel(cmd.vx, 0.0, cmd.vz, cmd.yaw_rate, stamp=stamp)
@@ -179,11 +180,26 @@ def shutdown(config: Config, drone, status: StatusPublisher) -> None:
             log.error("stop failed: %s", exc)
 
 
+def run_dry(node: Node, config: Config, loop: ControlLoop, status: StatusPublisher) -> int:
+    """``dry_run``: servo on the detections with no aircraft; commands go only in the status."""
+    log.info("%s dry run: commands are shown in the status, not sent", config.mode)
+    node.announce()
+    status.phase = None
+    detections = node.latest(registry.DETECTIONS)
+    servo_until_stopped(node, config, loop, None, detections, None, status)
+    return 0
+
+
 def run(node: Node, config: Config) -> int:
     """The controller service (see the module doc)."""
     loop = ControlLoop(config)
     status = StatusPublisher(node, loop, config.status_rate_hz)
     status.start()
+    if config.dry_run:
+        try:
+            return run_dry(node, config, loop, status)
+        finally:
+            status.close()
     drone = _open_drone(node)
     try:
         log.info("%s on %s: waiting for the bridge", config.mode, config.aircraft)

@@ -19,11 +19,14 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             and nothing is sent).
         width, height: video size, px (the real drone's 960x720).
         fps: video frame rate, Hz (the real drone's 30).
+        render_scale: the camera is rendered at this fraction of the video size and scaled up
+            (0.5: 480x360 rendered, 960x720 encoded; halves the sim's CPU while turning).
         bitrate_kbps: H.264 bit rate, kbit/s.
         keyframe_interval: frames between key frames (each carries SPS and PPS).
         packet_bytes: largest video datagram payload, bytes (the real drone's 1460).
         physics_rate_hz: flight model step rate, Hz.
         state_rate_hz: state datagram rate, Hz (the real drone's 10).
+        auto_land_s: lands after this long without a command, s (the real drone's 15).
         netns_subnet: the /24 (or smaller) of ``--netns``: the drone at the first host address,
             the host side at the second; "" = 192.168.10.0/24 (192.168.(10+N).0/24 for
             instance N).
@@ -34,11 +37,13 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     width: int = 960
     height: int = 720
     fps: float = 30.0
+    render_scale: float = 0.5
     bitrate_kbps: int = 1500
     keyframe_interval: int = 30
     packet_bytes: int = 1460
     physics_rate_hz: float = 100.0
     state_rate_hz: float = 10.0
+    auto_land_s: float = 15.0
     netns_subnet: str = ""
 
     def __post_init__(self) -> None:
@@ -52,6 +57,10 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             value = getattr(self, name)
             if not 0 < value <= 1000:
                 raise ValueError(f"{name} must be in (0, 1000], got {value}")
+        if not 0.1 <= self.render_scale <= 1.0:
+            raise ValueError(f"render_scale must be in 0.1..1, got {self.render_scale}")
+        if not 1.0 <= self.auto_land_s <= 3600.0:
+            raise ValueError(f"auto_land_s must be in 1..3600, got {self.auto_land_s}")
         if not 50 <= self.bitrate_kbps <= 50_000:
             raise ValueError(f"bitrate_kbps must be in 50..50000, got {self.bitrate_kbps}")
         if not 1 <= self.keyframe_interval <= 600:

@@ -140,7 +140,14 @@ class TelloNamespace:
         swept = sweep_stale()
         if swept:
             log.info("removed stale veth pairs of dead simulated Tellos: %s", ", ".join(swept))
-        ns = cls(subnet or default_netns_subnet(instance))
+        subnet = subnet or default_netns_subnet(instance)
+        in_use = _ip("-o", "-4", "addr", "show", "to", subnet).strip()
+        if in_use:
+            raise RuntimeError(
+                f"{subnet} is already in use on the host ({in_use.split()[1]}: another simulated "
+                "Tello?); pick another --instance or tello.netns_subnet"
+            )
+        ns = cls(subnet)
         try:
             ns._setup()
         except BaseException:

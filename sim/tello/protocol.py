@@ -15,9 +15,10 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from dronewrapper_sim.tello.flight import Phase, TelloFlight, body_to_enu
+from dronewrapper_sim.tello.state_string import acceleration_mg, attitude_deg
 
 Address = tuple[str, int]
 
@@ -63,7 +64,8 @@ class Session:
         state_port, video_port: where the state string and the video go (``port`` moves them).
         streaming: video on (``streamon``).
         speed: speed of the moves, m/s (``speed``).
-        last_command_s: time of the last valid command (auto-landing), s.
+        last_command_s: time of the last valid command or the end of the last manoeuvre
+            (auto-landing), s.
     """
 
     client: Address | None = None
@@ -72,7 +74,6 @@ class Session:
     streaming: bool = False
     speed: float = 1.0
     last_command_s: float = 0.0
-    counters: dict[str, int] = field(default_factory=dict)
 
 
 class BadArgs(Exception):
@@ -196,9 +197,11 @@ class TelloProtocol:
         flight = self.flight
         flight.step(dt)
         replies = []
-        if flight.take_finished() and self._pending is not None:
-            replies.append(Reply(OK, self._pending))
-            self._pending = None
+        if flight.take_finished():
+            self.session.last_command_s = now  # the 15 s count from the end of a manoeuvre
+            if self._pending is not None:
+                replies.append(Reply(OK, self._pending))
+                self._pending = None
         if flight.flying and not flight.busy:
             quiet = now - self.session.last_command_s
             if quiet >= flight.env.auto_land_s or (
@@ -263,6 +266,8 @@ class TelloProtocol:
     def _land(self, args: list[str], now: float) -> str:
         if args:
             raise BadArgs
+        if self.flight.phase is Phase.LANDING:
+            return ""  # already landing (by itself): answered on the ground
         if not self.flight.flying:
             return MOTOR_STOP
         self._pending = None
@@ -410,14 +415,10 @@ class TelloProtocol:
     def attitude_deg(self) -> tuple[int, int, int]:
         """Pitch (nose up > 0), roll (right side down > 0), yaw (clockwise > 0, from the heading
         at power-on, -180..180), whole degrees."""
-        from dronewrapper_sim.tello.state_string import attitude_deg
-
         return attitude_deg(self.flight)
 
     def acceleration_mg(self) -> tuple[float, float, float]:
         """Specific force in the body frame FRD, 0.001 g (agz ~ -1000 at rest)."""
-        from dronewrapper_sim.tello.state_string import acceleration_mg
-
         return acceleration_mg(self.flight.state)
 
 

@@ -16,19 +16,16 @@ import select
 import socket
 import threading
 import time
-from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
-import numpy as np
-
-from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Twist
 from dronewrapper.runtime import Node
 from dronewrapper_sim.dynamics import WindModel
 from dronewrapper_sim.frames import quat_from_euler
-from dronewrapper_sim.runner import PoseSnapshot, pose_msg
+from dronewrapper_sim.runner import PoseSnapshot, WorldTopics
 from dronewrapper_sim.tello.config import TelloConfig
 from dronewrapper_sim.tello.flight import TelloFlight
+from dronewrapper_sim.tello.params import TELLO
 from dronewrapper_sim.tello.protocol import Reply, TelloProtocol
 from dronewrapper_sim.tello.state_string import format_state
 from dronewrapper_sim.world.scenario import Scenario
@@ -86,6 +83,7 @@ class TelloServer:
         self.flight = TelloFlight(
             start=(scenario.vehicle.x, scenario.vehicle.y, scenario.vehicle.yaw),
             wind=WindModel(wind.east_m_s, wind.north_m_s, wind.gust_m_s, seed=seed),
+            envelope=replace(TELLO, auto_land_s=config.auto_land_s),
             battery_percent=config.battery_percent,
         )
         self.protocol = TelloProtocol(self.flight, baro_origin_m=scenario.home.altitude_m)
@@ -96,19 +94,10 @@ class TelloServer:
         self.replies = 0
         self.states = 0
         self.send_errors = 0
-        self.cmd_vel_errors = 0
         self._snapshot = self._make_snapshot()
-        self._gt_pub = None
-        self._object_pubs: dict[str, Any] = {}
-        if node is not None:
-            self._gt_pub = node.publisher(registry.SIM_GROUND_TRUTH)
-            for obj in self.world.objects:
-                self._object_pubs[obj.name] = node.publisher(
-                    registry.SIM_OBJECT_POSE, name=obj.name
-                )
-                node.subscribe(
-                    registry.SIM_OBJECT_CMD_VEL, self._teleop_callback(obj.name), name=obj.name
-                )
+        self.world_topics = (
+            WorldTopics(node, self.world, self.world_lock) if node is not None else None
+        )
 
     @property
     def address(self) -> tuple[str, int]:
@@ -170,11 +159,12 @@ class TelloServer:
                 self._send_state()
             if now >= next_gt:
                 next_gt = max(next_gt + 1.0 / GROUND_TRUTH_RATE_HZ, now)
-                if self._gt_pub is not None:
-                    self._gt_pub.put(pose_msg(self._snapshot, seq=self.states))
+                if self.world_topics is not None:
+                    self.world_topics.publish_ground_truth(self._snapshot)
             if now >= next_obj:
                 next_obj = max(next_obj + 1.0 / OBJECT_POSE_RATE_HZ, now)
-                self._publish_objects()
+                if self.world_topics is not None:
+                    self.world_topics.publish_objects()
 
     def _receive(self) -> None:
         for _ in range(MAX_DATAGRAMS_PER_WAKE):
@@ -212,32 +202,6 @@ class TelloServer:
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.flight.state
         return PoseSnapshot((s.x, s.y, s.z), quat_from_euler(s.roll, s.pitch, s.yaw), time.time())
-
-    def _publish_objects(self) -> None:
-        if not self._object_pubs:
-            return
-        stamp = time.time()
-        with self.world_lock:
-            poses = [
-                (o.name, tuple(float(v) for v in o.position), o.yaw) for o in self.world.objects
-            ]
-        for name, (x, y, z), yaw in poses:
-            pub = self._object_pubs.get(name)
-            if pub is not None:
-                snap = PoseSnapshot((x, y, z), quat_from_euler(0.0, 0.0, float(yaw)), stamp)
-                pub.put(pose_msg(snap))
-
-    def _teleop_callback(self, name: str) -> Callable[[Twist], None]:
-        def on_cmd_vel(msg: Twist) -> None:
-            lin = np.array([msg.linear.x, msg.linear.y, msg.linear.z], dtype=float)
-            try:
-                with self.world_lock:
-                    self.world.set_cmd_vel(name, lin, float(msg.angular.z), self.world.time_s)
-            except (KeyError, ValueError) as exc:
-                self.cmd_vel_errors += 1
-                log.warning("cmd_vel for %s refused: %s", name, exc)
-
-        return on_cmd_vel
 
     def close(self) -> None:
         """Stop the video thread and close the socket."""

@@ -22,62 +22,29 @@ Field order and format of the real drone (SDK 2.0, mission pads off)::
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from dronewrapper_sim.dynamics import GRAVITY, QuadState
 from dronewrapper_sim.frames import wrap_pi
 
+if TYPE_CHECKING:
+    from dronewrapper_sim.tello.flight import TelloFlight
+    from dronewrapper_sim.tello.protocol import TelloProtocol
+
 MISSION_PAD_FIELDS = "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;"
 """What a Tello sends with no mission pad in view (and what a non-EDU Tello always sends)."""
 
-INT_FIELDS = frozenset(
-    (
-        "mid",
-        "x",
-        "y",
-        "z",
-        "pitch",
-        "roll",
-        "yaw",
-        "vgx",
-        "vgy",
-        "vgz",
-        "templ",
-        "temph",
-        "tof",
-        "h",
-        "bat",
-        "time",
-    )
+FIELD_ORDER = (
+    *("mid", "x", "y", "z", "mpry", "pitch", "roll", "yaw", "vgx", "vgy", "vgz"),
+    *("templ", "temph", "tof", "h", "bat", "baro", "time", "agx", "agy", "agz"),
 )
+"""The fields of the state datagram, in the real drone's order."""
 FLOAT_FIELDS = frozenset(("baro", "agx", "agy", "agz"))
-FIELD_ORDER = [
-    "mid",
-    "x",
-    "y",
-    "z",
-    "mpry",
-    "pitch",
-    "roll",
-    "yaw",
-    "vgx",
-    "vgy",
-    "vgz",
-    "templ",
-    "temph",
-    "tof",
-    "h",
-    "bat",
-    "baro",
-    "time",
-    "agx",
-    "agy",
-    "agz",
-]
+INT_FIELDS = frozenset(FIELD_ORDER) - FLOAT_FIELDS - {"mpry"}
 
 
-def attitude_deg(flight) -> tuple[int, int, int]:
-    """(pitch, roll, yaw) of a :class:`~dronewrapper_sim.tello.flight.TelloFlight`, whole
-    degrees in the Tello's signs (see module doc)."""
+def attitude_deg(flight: TelloFlight) -> tuple[int, int, int]:
+    """(pitch, roll, yaw) of ``flight`` in whole degrees, the Tello's signs (see module doc)."""
     s = flight.state
     pitch = -math.degrees(s.pitch)  # FLU pitch > 0 is nose down
     roll = math.degrees(s.roll)  # FLU and FRD roll agree
@@ -85,7 +52,7 @@ def attitude_deg(flight) -> tuple[int, int, int]:
     return round(pitch), round(roll), round(yaw)
 
 
-def velocity_dm_s(flight) -> tuple[int, int, int]:
+def velocity_dm_s(flight: TelloFlight) -> tuple[int, int, int]:
     """(vgx, vgy, vgz) in dm/s: forward, right, down of the power-on heading."""
     s = flight.state
     c, sn = math.cos(flight.origin_yaw), math.sin(flight.origin_yaw)
@@ -111,8 +78,8 @@ def acceleration_mg(s: QuadState) -> tuple[float, float, float]:
     return fwd * scale, -left * scale, -up * scale
 
 
-def format_state(protocol) -> str:
-    """The state datagram of a :class:`~dronewrapper_sim.tello.protocol.TelloProtocol` now."""
+def format_state(protocol: TelloProtocol) -> str:
+    """The state datagram of ``protocol``'s Tello now."""
     flight = protocol.flight
     pitch, roll, yaw = attitude_deg(flight)
     vgx, vgy, vgz = velocity_dm_s(flight)

@@ -2,7 +2,8 @@
 
 :class:`H264Encoder` turns BGR images into H.264 Annex-B access units with libx264 (PyAV)
 tuned for zero latency (no B-frames, no look-ahead), a key frame every ``keyframe_interval``
-frames, each key frame carrying SPS and PPS so that a decoder can join at any key frame.
+frames, each key frame carrying SPS and PPS so that a decoder can join at any key frame; one
+thread (no slice threads), the rate capped by a one-second VBV buffer.
 :func:`packetise` cuts an access unit into datagrams of at most 1460 bytes, as the real Tello
 sends its stream (a frame's last datagram is the short one). :class:`VideoStreamer` is the
 thread that renders, encodes and sends at the frame rate while ``streamon`` is in force.
@@ -55,7 +56,10 @@ class H264Encoder:
         codec.options = {
             "preset": "ultrafast",
             "tune": "zerolatency",
-            "x264-params": f"repeat-headers=1:keyint={keyframe_interval}:scenecut=0",
+            "x264-params": (
+                f"repeat-headers=1:keyint={keyframe_interval}:scenecut=0:threads=1:"
+                f"vbv-maxrate={bitrate_kbps}:vbv-bufsize={bitrate_kbps}"
+            ),
         }
         self._codec = codec
         self._av = av
@@ -107,7 +111,9 @@ class VideoStreamer(threading.Thread):
         cfg = server.config
         self.server = server
         self.config = cfg
-        camera = PinholeCamera(cfg.width, cfg.height, camera_hfov_rad(cfg.width, cfg.height))
+        render_w = max(16, round(cfg.width * cfg.render_scale))
+        render_h = max(16, round(cfg.height * cfg.render_scale))
+        camera = PinholeCamera(render_w, render_h, camera_hfov_rad(cfg.width, cfg.height))
         self.renderer = Renderer(
             server.world, camera, sprites_dir=Path(sprites) if sprites else None
         )
@@ -160,6 +166,10 @@ class VideoStreamer(threading.Thread):
                 self.mount, np.asarray(snap.position), np.asarray(snap.quaternion)
             )
         encoding = time.perf_counter()
+        if image.shape[:2] != (cfg.height, cfg.width):
+            import cv2
+
+            image = cv2.resize(image, (cfg.width, cfg.height), interpolation=cv2.INTER_LINEAR)
         access_unit = self.encoder.encode(image)
         for datagram in packetise(access_unit, cfg.packet_bytes):
             try:

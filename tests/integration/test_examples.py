@@ -118,20 +118,10 @@ def test_save_frames(sim, tmp_path):
     assert "captured" in out
 
 
-def test_two_drones(router, tmp_path):
-    with sim_graphs(tmp_path, ["drone1", "drone2"], router):
-        out = run_example(
-            "two_drones.py",
-            router,
-            "--names",
-            "drone1",
-            "drone2",
-            "--connect",
-            router,
-            "--height",
-            "1",
-            "--seconds",
-            "1",
-        )
-    assert "drones online: drone1, drone2" in out
-    assert "drone1: landed" in out and "drone2: landed" in out
+def test_swarm_of_three(router, tmp_path):
+    names = ["drone1", "drone2", "drone3"]
+    with sim_graphs(tmp_path, names, router):
+        out = run_example("swarm.py", router, "--connect", router, "--side", "0.5", timeout=240)
+    assert "swarm of 3: drone1, drone2, drone3" in out
+    for ns, height in zip(names, ("1", "1.5", "2"), strict=True):
+        assert f"{ns}: flew its square at {height} m and landed" in out

@@ -85,6 +85,7 @@ class FakeBridge:
         self.pub_vel_local = n.publisher(registry.VELOCITY_LOCAL)
         self.pub_battery = n.publisher(registry.BATTERY)
         self.silent: set[str] = set()  # keys of streams this bridge leaves out
+        self.paused = False  # publish nothing (a stalled link)
         self.pub_text = n.publisher(registry.STATUSTEXT)
         self.pub_image = n.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         n.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
@@ -187,6 +188,8 @@ class FakeBridge:
             elif self.armed and self.climb_to is not None:
                 self.z += max(-0.2, min(0.2, self.climb_to - self.z))
             in_air = self.armed and self.z > 0.05
+            if self.paused:
+                continue
             try:
                 self.pub_state.put(
                     State(
@@ -575,3 +578,37 @@ def test_arming_refused_in_offboard_without_a_stream_names_the_real_cause(drone,
     with pytest.raises(CommandRefused) as info:
         drone.arm()
     assert "setpoint" not in str(info.value)
+
+
+def test_cameras_are_subscribed_only_when_read(drone, bridge):
+    """A program that never reads a frame never pulls one across the network."""
+    publisher = bridge.pub_image._pub
+    time.sleep(0.5)
+    assert not publisher.matching_status.matching
+    assert not drone.compressed_images  # the router is on this machine: raw frames
+    with pytest.raises(NoData, match="no image received yet"):
+        drone.get_frontal_image()
+    wait_for(lambda: publisher.matching_status.matching, 10, what="a camera subscriber")
+
+
+def test_explicitly_refused_cameras_stay_refused(router, bridge):
+    with (
+        DroneWrapper("drone", router, timeout=10, mode="peer", cameras=()) as drone,
+        pytest.raises(NoData, match="was not requested"),
+    ):
+        drone.get_frontal_image()
+
+
+def test_every_getter_says_its_age_and_stale_telemetry_is_warned_once(drone, bridge, caplog):
+    assert drone.age("position") < 1.0 and drone.age("battery") < 1.0
+    assert drone.age("frontal_image") == float("inf")
+    with pytest.raises(InvalidArgument, match="use one of"):
+        drone.age("altitude")
+    bridge.paused = True
+    wait_for(lambda: drone.age("position") > 0.6, 10, what="the pose to go stale")
+    with caplog.at_level(logging.WARNING, logger="dronewrapper"):
+        drone.get_position()
+        drone.get_position()
+    stale = [r for r in caplog.records if "stale after 0.5 s" in r.message]
+    assert len(stale) == 1 and "drone/mavros/local_position/pose" in stale[0].message
+    bridge.paused = False

@@ -11,12 +11,17 @@ from dronewrapper.runtime.config import load_config
 from dronewrapper_compose.graph import REPO, load_graph
 from dronewrapper_compose.launcher import Launcher, build_argv
 
-GRAPHS = ["sim_follow_color", "sim_follow_person", "px4_real_follow_person"]
+GRAPHS = [
+    "sim_follow_color",
+    "sim_follow_person",
+    "px4_real_follow_person",
+    "webcam_follow_color",
+]
 
 # module run by the graph -> "module:ConfigClass" of its strict config schema
 SCHEMAS = {
     "dronewrapper_controller": "dronewrapper_controller.config:Config",
-    "dronewrapper_compose.usb_camera": "dronewrapper_compose.usb_camera:Config",
+    "dronewrapper_camera_victure": "dronewrapper_camera_victure.config:Config",
     "dronewrapper_bridge_mavlink": "dronewrapper_bridge_mavlink.node:Config",
     "dronewrapper_perception": "dronewrapper_perception.config:Config",
 }

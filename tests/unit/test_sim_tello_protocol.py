@@ -290,15 +290,15 @@ def test_half_stick_gives_half_speed():
 
 
 def test_auto_land_after_15_s_without_a_command():
-    t = Tello().airborne()  # the 15 s count from the take-off command (a few s ago)
-    t.run(9.0)
+    t = Tello().airborne()  # the 15 s count from the end of the take-off
+    t.run(14.0)
     assert t.flight.flying
     t.send("battery?")  # any command keeps it up
     t.run(14.0)
     assert t.flight.flying
     t.run(2.0)
     assert t.flight.phase is Phase.LANDING
-    t.run(5.0)
+    assert t.blocking("land") < 5.0  # a land during the auto-landing: ok on the ground
     assert t.flight.phase is Phase.LANDED
     assert t.flight.state.z == pytest.approx(0.0, abs=0.01)
 

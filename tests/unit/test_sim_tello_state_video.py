@@ -40,7 +40,7 @@ def state_of(protocol: TelloProtocol) -> dict:
     text = format_state(protocol)
     assert STATE_LINE.fullmatch(text), text
     fields = parse_state(text)
-    assert list(fields) == FIELD_ORDER
+    assert tuple(fields) == FIELD_ORDER
     return fields
 
 
@@ -165,5 +165,7 @@ def test_config_defaults_and_errors_name_the_key():
         msgspec.convert({"address": "127.0.0.2"}, SimConfig)  # a Tello setting on the Iris
     with pytest.raises(msgspec.ValidationError, match="tello"):
         msgspec.convert({"aircraft": "tello", "tello": {"colour": "red"}}, SimConfig)
+    with pytest.raises(msgspec.ValidationError, match="address"):
+        msgspec.convert({"aircraft": "tello", "address": "localhost:8889"}, SimConfig)
     config = msgspec.convert({"aircraft": "tello", "tello": {"battery_percent": 50}}, SimConfig)
     assert config.tello.battery_percent == 50

@@ -32,7 +32,15 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
-from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix, NavSatStatus
+from dronewrapper.msgs.sensor import (
+    BatteryState,
+    CameraInfo,
+    CameraStatus,
+    CompressedImage,
+    Image,
+    NavSatFix,
+    NavSatStatus,
+)
 from dronewrapper.msgs.std import ErrorReply, Header
 from dronewrapper.msgs.vision import (
     BoundingBox2D,
@@ -47,6 +55,8 @@ from dronewrapper.msgs.vision import (
 __all__ = [
     "BatteryState",
     "BoundingBox2D",
+    "CameraInfo",
+    "CameraStatus",
     "CommandBool",
     "CommandBoolResult",
     "CommandTOL",

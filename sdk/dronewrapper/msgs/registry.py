@@ -35,7 +35,15 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
-from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix
+from dronewrapper.msgs.sensor import (
+    BatteryState,
+    CameraInfo,
+    CameraStatus,
+    CompressedImage,
+    Image,
+    NavSatFix,
+)
+from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
 T = TypeVar("T")
@@ -96,14 +104,32 @@ class _Template:
         return m.groupdict() if m else None
 
 
+COMMAND = "command"
+"""Transport class of commands (setpoints, teleop): highest priority, sent at once, and the
+sender waits rather than drop one."""
+TELEMETRY = "telemetry"
+"""Transport class of telemetry, state and detections: high priority, never behind images; a
+publisher is never blocked by a slow subscriber (its queue drops only if the link is dead)."""
+STREAM = "stream"
+"""Transport class of camera frames: lowest priority, latest-only, dropped under congestion,
+so a slow link loses frames but never control."""
+TRANSPORTS = (COMMAND, TELEMETRY, STREAM)
+
+
 @dataclass(frozen=True)
 class Topic(_Template, Generic[T]):
-    """A pub/sub key: template, message type, nominal rate (Hz, 0 = event-driven), publishers."""
+    """A pub/sub key: template, message type, nominal rate (Hz, 0 = event-driven), publishers,
+    and its transport class (``command``, ``telemetry`` or ``stream``)."""
 
     type: type[T] = field(default=object)  # type: ignore[assignment]
     rate_hz: float = 0.0
     publishers: tuple[str, ...] = ()
     doc: str = ""
+    transport: str = TELEMETRY
+
+    def __post_init__(self) -> None:
+        if self.transport not in TRANSPORTS:
+            raise ValueError(f"{self.template}: transport must be one of {TRANSPORTS}")
 
 
 @dataclass(frozen=True)
@@ -160,11 +186,17 @@ SETPOINT_RAW_LOCAL = Topic(
     20.0,
     ("sdk", "controller"),
     "setpoint, ENU/FLU; re-published at >= 20 Hz while commanding",
+    COMMAND,
 )
 
 # ---- cameras and perception ----
 IMAGE_RAW = Topic(
-    "{ns}/{camera}/image_raw", Image, 30.0, ("sim", "camera_victure", "bridge_tello"), "bgr8"
+    "{ns}/{camera}/image_raw",
+    Image,
+    30.0,
+    ("sim", "camera_victure", "bridge_tello"),
+    "bgr8",
+    STREAM,
 )
 IMAGE_COMPRESSED = Topic(
     "{ns}/{camera}/image_raw/compressed",
@@ -172,6 +204,17 @@ IMAGE_COMPRESSED = Topic(
     30.0,
     ("sim", "camera_victure", "bridge_tello"),
     "JPEG, on request/config",
+    STREAM,
+)
+CAMERA_INFO = Topic(
+    "{ns}/{camera}/camera_info",
+    CameraInfo,
+    30.0,
+    ("camera_victure",),
+    "intrinsics of the published frames, with each frame (when calibrated)",
+)
+CAMERA_STATUS = Topic(
+    "{ns}/{camera}/camera_status", CameraStatus, 1.0, ("camera_victure",), "camera service state"
 )
 DETECTIONS = Topic(
     "{ns}/perception/detections", Detections, 0.0, ("perception",), "per processed frame"
@@ -182,6 +225,7 @@ DETECTIONS_DEBUG_IMAGE = Topic(
     0.0,
     ("perception",),
     "annotated frame for people to watch (optional)",
+    STREAM,
 )
 CONTROLLER_STATUS = Topic(
     "{ns}/controller/status", ControllerStatus, 5.0, ("controller",), "controller state"
@@ -195,7 +239,21 @@ SIM_OBJECT_POSE = Topic(
     "sim/objects/{name}/pose", PoseStamped, 10.0, ("sim",), "true pose of a world object, ENU"
 )
 SIM_OBJECT_CMD_VEL = Topic(
-    "sim/objects/{name}/cmd_vel", Twist, 0.0, ("tests", "teleop"), "teleoperates an object"
+    "sim/objects/{name}/cmd_vel",
+    Twist,
+    0.0,
+    ("tests", "teleop"),
+    "teleoperates an object",
+    COMMAND,
+)
+
+# ---- replay ----
+CLOCK = Topic(
+    "clock",
+    Header,
+    0.0,
+    ("replay",),
+    "recorded time during a replay (header.stamp, s since the epoch), like ROS /clock",
 )
 
 # ---- services ----

@@ -85,3 +85,68 @@ class CompressedImage(msgspec.Struct, kw_only=True):
     header: Header = msgspec.field(default_factory=Header)
     format: str = "jpeg"
     data: memoryview = msgspec.field(default_factory=lambda: memoryview(b""))
+
+
+class CameraInfo(msgspec.Struct, kw_only=True):
+    """Intrinsics of the frames a camera publishes (sensor_msgs/CameraInfo, ROS 2 names).
+
+    Published alongside each frame with the frame's ``header`` (same stamp and seq), for the
+    frame as published (after any flip, rotation, crop or resize).
+
+    Attributes:
+        height, width: the frame size the intrinsics are for (px).
+        distortion_model: ``plumb_bob`` (d = k1 k2 p1 p2 k3), ``rational_polynomial`` or
+            ``equidistant``.
+        d: distortion coefficients.
+        k: camera matrix, 3x3 row-major (fx 0 cx / 0 fy cy / 0 0 1, px).
+        r: rectification rotation, 3x3 row-major (identity for a monocular camera).
+        p: projection matrix, 3x4 row-major (px).
+    """
+
+    header: Header = msgspec.field(default_factory=Header)
+    height: int = 0
+    width: int = 0
+    distortion_model: str = "plumb_bob"
+    d: list[float] = msgspec.field(default_factory=list)
+    k: list[float] = msgspec.field(default_factory=lambda: [0.0] * 9)
+    r: list[float] = msgspec.field(default_factory=lambda: [0.0] * 9)
+    p: list[float] = msgspec.field(default_factory=lambda: [0.0] * 12)
+
+
+class CameraStatus(msgspec.Struct, kw_only=True):
+    """What a camera service is doing, published about once a second.
+
+    Attributes:
+        header: ``stamp`` when the status was made, ``frame_id`` the camera name.
+        source: what is captured (device path, file, URL, ``pattern``).
+        state: ``connecting``, ``streaming``, ``reconnecting`` (lost, retrying with backoff) or
+            ``ended`` (a file played once).
+        width, height, fps, pixel_format: the mode granted (fps 0 / "" when unknown).
+        fps_measured: frames published per second over the last status period (Hz).
+        frames_captured: frames read from the source.
+        frames_published: frames sent out (on the keys someone subscribes to, or always
+            on the JPEG key when the service is told to).
+        frames_dropped: captured frames replaced by a newer one before publishing.
+        corrupt_frames: failed reads the source recovered from (undecodable frames).
+        reconnects: times the source was lost and opened again.
+        open_failures: failed attempts to open the source.
+        truncated: times a file ended before the frame count its header gives.
+        last_error: the most recent error, for a person to read ("" when none).
+    """
+
+    header: Header = msgspec.field(default_factory=Header)
+    source: str = ""
+    state: str = "connecting"
+    width: int = 0
+    height: int = 0
+    fps: float = 0.0
+    pixel_format: str = ""
+    fps_measured: float = 0.0
+    frames_captured: int = 0
+    frames_published: int = 0
+    frames_dropped: int = 0
+    corrupt_frames: int = 0
+    reconnects: int = 0
+    open_failures: int = 0
+    truncated: int = 0
+    last_error: str = ""

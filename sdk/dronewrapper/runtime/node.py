@@ -37,6 +37,7 @@ from dronewrapper.msgs.std import ErrorReply
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable, zenoh_error_text
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
+from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
 from dronewrapper.runtime.shm import remove_stale_segments
 
 T = TypeVar("T")
@@ -96,6 +97,13 @@ class Publisher(Generic[T]):
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
         self._pub.put(codec.encode(msg))
         self.count += 1
+
+    def watched(self) -> bool:
+        """True while at least one subscriber matches this key (so the work can be skipped)."""
+        try:
+            return bool(self._pub.matching_status.matching)
+        except zenoh.ZError:
+            return False
 
     def undeclare(self) -> None:
         self._pub.undeclare()
@@ -229,10 +237,11 @@ class Node:
     ) -> Publisher[T]:
         """A typed publisher for ``topic`` in this node's namespace (``parts`` fill the key).
 
-        ``qos`` passes Zenoh publisher options (``congestion_control``, ``priority``,
-        ``express``); the default drops samples under congestion, right for live data.
+        Its Zenoh options come from the topic's transport class in the registry (see
+        :mod:`dronewrapper.runtime.qos`); ``qos`` overrides single options.
         """
-        pub = Publisher(self.session, key or topic.key(self.ns, **parts), topic.type, **(qos or {}))
+        options = {**qos_for(topic), **(qos or {})}
+        pub = Publisher(self.session, key or topic.key(self.ns, **parts), topic.type, **options)
         self._declared.append(pub)
         return pub
 
@@ -385,6 +394,7 @@ def call_service(
             payload=payload,
             encoding=encoding_for(service.request),
             timeout=max(0.001, deadline - time.monotonic()),
+            **SERVICE_QOS,
         )
         for reply in replies:
             if reply.ok is not None:

@@ -1,0 +1,217 @@
+"""The DroneWrapper API for asyncio programs (for users coming from MAVSDK).
+
+    import asyncio
+    from dronewrapper.aio import Drone
+
+    async def main():
+        async with Drone() as drone:                 # connects, waits for telemetry
+            await drone.takeoff(h=2.0)
+            drone.set_cmd_vel(az=0.5)                # setpoints never block: plain calls
+            async for position in drone.position():  # newest values as they arrive
+                if position[2] > 1.9:
+                    break
+            await drone.land()
+
+    asyncio.run(main())
+
+One core, two fronts: :class:`Drone` drives a :class:`~dronewrapper.drone.DroneWrapper` and adds
+no flight logic of its own. Blocking calls (take-off, landing, mode changes, parameters, waits)
+run on a worker thread and are awaited, so the event loop keeps running; getters and setpoints
+return at once, as in the sync API. Telemetry and frames are async iterators of the newest
+values: a slow consumer skips values instead of queueing them (never a backlog).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from collections.abc import AsyncIterator, Callable
+from typing import Any, TypeVar
+
+import numpy as np
+
+from dronewrapper import telemetry
+from dronewrapper.drone import DroneWrapper
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import ExtendedState, State
+from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.sensor import BatteryState
+
+T = TypeVar("T")
+V = TypeVar("V")
+
+
+class _Newest:
+    """A one-slot mailbox from a Zenoh thread to an event loop: ``put`` keeps only the newest."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._loop = loop
+        self._event = asyncio.Event()
+        self._value: Any = None
+        self._lock = threading.Lock()
+        self.closed = False
+
+    def put(self, value: Any) -> None:
+        """Called from any thread."""
+        with self._lock:
+            self._value = value
+        if not self.closed:
+            self._loop.call_soon_threadsafe(self._event.set)
+
+    async def get(self) -> Any:
+        await self._event.wait()
+        self._event.clear()
+        with self._lock:
+            return self._value
+
+
+class Drone:
+    """One drone for asyncio code: the constructor's arguments are :class:`DroneWrapper`'s.
+
+    Use ``async with Drone(...) as drone`` (or ``await drone.connect()`` and
+    ``await drone.close()``). The sync object is :attr:`sync`, for anything not wrapped here.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self._args, self._kwargs = args, kwargs
+        self._sync: DroneWrapper | None = None
+
+    # ------------------------------------------------------------------ lifecycle
+
+    async def connect(self) -> Drone:
+        """Open the session and wait for the bridge and its telemetry (see DroneWrapper)."""
+        if self._sync is None:
+            self._sync = await asyncio.to_thread(DroneWrapper, *self._args, **self._kwargs)
+        return self
+
+    async def close(self) -> None:
+        """Stop commanding and close (the bridge hovers, then lands if nobody commands)."""
+        if self._sync is not None:
+            await asyncio.to_thread(self._sync.close)
+
+    async def __aenter__(self) -> Drone:
+        return await self.connect()
+
+    async def __aexit__(self, exc_type: object, exc: object, tb: object) -> None:
+        if self._sync is not None:
+            await asyncio.to_thread(self._sync.__exit__, exc_type, exc, tb)
+
+    @property
+    def sync(self) -> DroneWrapper:
+        """The underlying synchronous DroneWrapper (connected)."""
+        if self._sync is None:
+            raise RuntimeError("not connected: use `async with Drone(...)` or await connect()")
+        return self._sync
+
+    def __getattr__(self, name: str) -> Any:
+        """Non-blocking members of DroneWrapper (getters, setpoints, ``ns`` ...) as they are."""
+        if name.startswith("_") or name in _AWAITABLE:
+            raise AttributeError(name)
+        return getattr(self.sync, name)
+
+    # ------------------------------------------------------------------ awaitable commands
+
+    async def _run(self, method: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        return await asyncio.to_thread(method, *args, **kwargs)
+
+    async def takeoff(self, h: float = 3.0, **kwargs: Any) -> None:
+        """Take off to ``h`` m and return there (see :meth:`DroneWrapper.takeoff`)."""
+        await self._run(self.sync.takeoff, h, **kwargs)
+
+    async def land(self, **kwargs: Any) -> None:
+        """Land and return on the ground, disarmed (see :meth:`DroneWrapper.land`)."""
+        await self._run(self.sync.land, **kwargs)
+
+    async def arm(self, **kwargs: Any) -> None:
+        await self._run(self.sync.arm, **kwargs)
+
+    async def disarm(self, **kwargs: Any) -> None:
+        await self._run(self.sync.disarm, **kwargs)
+
+    async def set_mode(self, mode: str, **kwargs: Any) -> None:
+        await self._run(self.sync.set_mode, mode, **kwargs)
+
+    async def param_get(self, param: str, **kwargs: Any) -> int | float:
+        return await self._run(self.sync.param_get, param, **kwargs)
+
+    async def param_set(self, param: str, value: int | float, **kwargs: Any) -> int | float:
+        return await self._run(self.sync.param_set, param, value, **kwargs)
+
+    async def wait_for_connection(self, timeout: float = 10.0) -> State:
+        return await self._run(self.sync.wait_for_connection, timeout)
+
+    async def wait_for_altitude(self, z: float, timeout: float = 30.0, **kw: Any) -> np.ndarray:
+        return await self._run(self.sync.wait_for_altitude, z, timeout, **kw)
+
+    async def wait_for_landed_state(self, landed_state: int, timeout: float = 30.0) -> int:
+        return await self._run(self.sync.wait_for_landed_state, landed_state, timeout)
+
+    async def wait_for_image(self, camera: str = "frontal", timeout: float = 10.0) -> np.ndarray:
+        return await self._run(self.sync.wait_for_image, camera, timeout)
+
+    # ------------------------------------------------------------------ async iterators
+
+    async def _stream(self, topic: Topic[V], convert: Callable[[V], T], **parts: str):
+        mailbox = _Newest(asyncio.get_running_loop())
+        subscription = self.sync.subscribe(topic, mailbox.put, **parts)
+        try:
+            while True:
+                yield convert(await mailbox.get())
+        finally:
+            mailbox.closed = True
+            subscription.undeclare()
+
+    def position(self) -> AsyncIterator[np.ndarray]:
+        """Positions ``[x, y, z]`` (local ENU m) as they arrive."""
+        return self._stream(registry.LOCAL_POSE, telemetry.position_of)
+
+    def orientation(self) -> AsyncIterator[np.ndarray]:
+        """Orientations ``[roll, pitch, yaw]`` (rad, ENU) as they arrive."""
+        return self._stream(registry.LOCAL_POSE, telemetry.orientation_of)
+
+    def velocity(self) -> AsyncIterator[np.ndarray]:
+        """Body FLU velocities ``[vx, vy, vz]`` (m/s) as they arrive."""
+        return self._stream(registry.VELOCITY_BODY, telemetry.linear_of)
+
+    def landed_state(self) -> AsyncIterator[int]:
+        """MAVROS landed states (1 on ground, 2 in air, ...) as they arrive."""
+        return self._stream(registry.EXTENDED_STATE, _landed_state_of)
+
+    def state(self) -> AsyncIterator[State]:
+        """Autopilot States (connected, armed, mode ...) as they arrive."""
+        return self._stream(registry.STATE, _same)
+
+    def battery(self) -> AsyncIterator[float]:
+        """Battery charge fractions 0..1 as they arrive."""
+        return self._stream(registry.BATTERY, _percentage_of)
+
+    async def frames(self, camera: str = "frontal") -> AsyncIterator[np.ndarray]:
+        """Camera frames (BGR ``uint8``), the newest each time; slow consumers skip frames."""
+        mailbox = _Newest(asyncio.get_running_loop())
+        topic = registry.IMAGE_COMPRESSED if self.sync.compressed_images else registry.IMAGE_RAW
+        key_name = {"frontal": "cam_frontal", "ventral": "cam_ventral"}.get(camera, camera)
+        subscription = self.sync.subscribe(topic, mailbox.put, camera=key_name)
+        try:
+            while True:
+                yield self.sync.decode_image(await mailbox.get())
+        finally:
+            mailbox.closed = True
+            subscription.undeclare()
+
+
+def _same(value: T) -> T:
+    return value
+
+
+def _landed_state_of(msg: ExtendedState) -> int:
+    return int(msg.landed_state)
+
+
+def _percentage_of(msg: BatteryState) -> float:
+    return float(msg.percentage)
+
+
+_AWAITABLE = frozenset(
+    name for name, value in vars(Drone).items() if asyncio.iscoroutinefunction(value)
+)
+"""Blocking DroneWrapper methods that Drone replaces with awaitables (never passed through)."""

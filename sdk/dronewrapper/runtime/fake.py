@@ -1,0 +1,281 @@
+"""A fake bus in injected time: run a service's logic on recorded or scripted messages.
+
+:class:`FakeNode` has the surface of :class:`~dronewrapper.runtime.node.Node` a service uses
+(``publisher``, ``subscribe``, ``latest``, ``serve``, ``call``, ``stop_event``, ``announce`` ...)
+but no Zenoh session: messages go through a :class:`FakeBus` in process. The bus delivers
+scheduled messages in time order on the caller's thread, moving its :class:`FakeClock` to each
+message's time first, so a service fed through it sees recorded time, deterministically, however
+loaded the machine is (openpilot's process replay idea).
+
+    bus = FakeBus(start=t0)
+    node = FakeNode("perception", bus)
+    service = PerceptionService(node, config)         # subscribes, declares its publisher
+    for msg in recording:
+        bus.schedule(msg.log_time_ns / 1e9, msg.key, msg.payload)
+    while bus.step():                                 # one message delivered, clock moved
+        service.spin_once(0.0)
+    outputs = bus.published[registry.DETECTIONS.key("drone")]
+
+Payloads are encoded and decoded with the registry's types exactly as on the real bus, so a
+malformed one is counted in ``decode_errors`` the same way. Key expressions with wildcards
+match as Zenoh matches them.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import logging
+import threading
+from collections import Counter, defaultdict
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
+
+import msgspec
+import zenoh
+
+from dronewrapper.msgs import codec
+from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.latest import Latest
+
+T = TypeVar("T")
+Req = TypeVar("Req")
+Rep = TypeVar("Rep")
+
+
+class FakeClock:
+    """Time that moves only when told to (s; any epoch, e.g. recorded wall-clock time)."""
+
+    def __init__(self, start: float = 0.0) -> None:
+        self._now = start
+
+    def __call__(self) -> float:
+        return self._now
+
+    def now(self) -> float:
+        return self._now
+
+    def advance_to(self, t: float) -> None:
+        """Move to ``t``; time never goes back."""
+        if t > self._now:
+            self._now = t
+
+
+@dataclass(frozen=True)
+class Delivered(Generic[T]):
+    """A message published on the fake bus, with the bus time it was published at (s)."""
+
+    time: float
+    msg: T
+
+
+class _Subscription:
+    def __init__(self, keyexpr: str, on_payload: Callable[[str, bytes], None]) -> None:
+        self.keyexpr = zenoh.KeyExpr(keyexpr)
+        self.on_payload = on_payload
+        self.active = True
+
+    def undeclare(self) -> None:
+        self.active = False
+
+
+class FakeBus:
+    """Publish/subscribe in process, in injected time.
+
+    ``published`` keeps, per concrete key, every message published by a node (decoded), with
+    the bus time; ``schedule`` queues payloads to be delivered later by :meth:`step`.
+    """
+
+    def __init__(self, start: float = 0.0, clock: FakeClock | None = None) -> None:
+        self.clock = clock or FakeClock(start)
+        self.published: defaultdict[str, list[Delivered[Any]]] = defaultdict(list)
+        self._subs: list[_Subscription] = []
+        self._queue: list[tuple[float, int, str, bytes]] = []
+        self._seq = itertools.count()
+        self._services: dict[str, Callable[[bytes], Any]] = {}
+
+    def subscribe(self, keyexpr: str, on_payload: Callable[[str, bytes], None]) -> _Subscription:
+        sub = _Subscription(keyexpr, on_payload)
+        self._subs.append(sub)
+        return sub
+
+    def put(self, key: str, payload: bytes) -> None:
+        """Deliver ``payload`` on concrete ``key`` to every matching subscriber, now."""
+        ke = zenoh.KeyExpr(key)
+        for sub in list(self._subs):
+            if sub.active and sub.keyexpr.intersects(ke):
+                sub.on_payload(key, payload)
+
+    def schedule(self, at: float, key: str, msg: Any) -> None:
+        """Queue ``msg`` (a message Struct or encoded bytes) for delivery at bus time ``at``."""
+        payload = msg if isinstance(msg, bytes | bytearray) else codec.encode(msg)
+        heapq.heappush(self._queue, (at, next(self._seq), key, bytes(payload)))
+
+    @property
+    def pending(self) -> int:
+        return len(self._queue)
+
+    def next_time(self) -> float | None:
+        """Bus time of the next scheduled message, or None."""
+        return self._queue[0][0] if self._queue else None
+
+    def step(self) -> bool:
+        """Deliver the next scheduled message (moving the clock to its time); False if none."""
+        if not self._queue:
+            return False
+        at, _, key, payload = heapq.heappop(self._queue)
+        self.clock.advance_to(at)
+        self.put(key, payload)
+        return True
+
+    def run_until(self, t: float) -> int:
+        """Deliver every message scheduled up to ``t`` and move the clock to ``t``."""
+        count = 0
+        while self._queue and self._queue[0][0] <= t:
+            self.step()
+            count += 1
+        self.clock.advance_to(t)
+        return count
+
+
+class FakePublisher(Generic[T]):
+    """A typed publisher on the fake bus (same checks as the real one)."""
+
+    def __init__(self, bus: FakeBus, key: str, msg_type: type[T]) -> None:
+        self.key = key
+        self.type = msg_type
+        self.count = 0
+        self._bus = bus
+
+    def put(self, msg: T) -> None:
+        if type(msg) is not self.type:
+            raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
+        self.count += 1
+        self._bus.published[self.key].append(Delivered(self._bus.clock(), msg))
+        self._bus.put(self.key, codec.encode(msg))
+
+    def undeclare(self) -> None:
+        pass
+
+
+class FakeNode:
+    """A :class:`~dronewrapper.runtime.node.Node` on a :class:`FakeBus` (no network, no threads).
+
+    Subscriber callbacks run on the thread that delivers (``FakeBus.step``); ``latest`` holders
+    age by the bus clock; services answer synchronously.
+    """
+
+    def __init__(self, name: str, bus: FakeBus, *, ns: str = "drone") -> None:
+        self.name = name
+        self.ns = ns
+        self.bus = bus
+        self.clock = bus.clock
+        self.log = logging.getLogger(name)
+        self.stop_event = threading.Event()
+        self.decode_errors: Counter[str] = Counter()
+        self.callback_errors: Counter[str] = Counter()
+        self.announced = False
+        self.session = None  # no Zenoh session: code that needs one cannot run here
+
+    def __enter__(self) -> FakeNode:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def stopping(self) -> bool:
+        return self.stop_event.is_set()
+
+    def stop(self) -> None:
+        self.stop_event.set()
+
+    def sleep(self, seconds: float) -> bool:
+        """Move the bus to ``seconds`` later (delivering what is due); False if stopped."""
+        self.bus.run_until(self.clock() + seconds)
+        return not self.stopping
+
+    def spin(self) -> None:
+        """Deliver everything scheduled, then return."""
+        while not self.stopping and self.bus.step():
+            pass
+
+    def announce(self) -> None:
+        self.announced = True
+
+    def close(self) -> None:
+        self.stop_event.set()
+
+    def publisher(
+        self,
+        topic: Topic[T],
+        *,
+        key: str | None = None,
+        qos: dict[str, Any] | None = None,
+        **parts: str,
+    ) -> FakePublisher[T]:
+        return FakePublisher(self.bus, key or topic.key(self.ns, **parts), topic.type)
+
+    def subscribe(
+        self,
+        topic: Topic[T],
+        callback: Callable[[T], None],
+        *,
+        key: str | None = None,
+        **parts: str,
+    ) -> _Subscription:
+        keyexpr = key or topic.key(self.ns, **parts)
+        dec = codec.decoder(topic.type)
+
+        def on_payload(where: str, payload: bytes) -> None:
+            try:
+                msg = dec.decode(payload)
+            except (msgspec.DecodeError, msgspec.ValidationError):
+                self.decode_errors[where] += 1
+                return
+            try:
+                callback(msg)
+            except Exception:
+                self.callback_errors[where] += 1
+                self.log.exception("callback error on %s", where)
+
+        return self.bus.subscribe(keyexpr, on_payload)
+
+    def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
+        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)
+        self.subscribe(topic, holder.update, key=key, **parts)
+        return holder
+
+    def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str):
+        key = service.key(self.ns, **parts)
+
+        def answer(payload: bytes) -> Rep:
+            try:
+                request = codec.decode(service.request, payload)
+            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+                raise ServiceError(f"{key}: bad request: {exc}", "bad_request") from exc
+            try:
+                return handler(request)
+            except ValueError as exc:
+                raise ServiceError(f"{key}: {exc}", "bad_request") from exc
+
+        self.bus._services[key] = answer
+        return key
+
+    def call(
+        self,
+        service: Service[Req, Rep],
+        request: Req,
+        *,
+        timeout: float = 5.0,
+        ns: str | None = None,
+        **parts: str,
+    ) -> Rep:
+        key = service.key(ns or self.ns, **parts)
+        answer = self.bus._services.get(key)
+        if answer is None:
+            raise ServiceUnavailable(f"no reply from {key}: nothing serves it on the fake bus")
+        reply = answer(codec.encode(request))
+        return codec.decode(service.reply, codec.encode(reply))

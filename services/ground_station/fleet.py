@@ -1,0 +1,378 @@
+"""The bus side of the station: the drones online, their telemetry, video and commands.
+
+Commands go through the DroneWrapper SDK (one wrapper per drone on the station's session);
+telemetry, video, detections, the controller's status and the simulator's topics are
+subscribed by their registry topics. Nothing here spells a key.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import threading
+import time
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import msgspec
+import zenoh
+
+from dronewrapper import DroneWrapper
+from dronewrapper.discovery import BRIDGE_PREFIX, alive_services, services_by_namespace
+from dronewrapper.msgs import codec, registry
+from dronewrapper.msgs.geometry import Twist, Vector3
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper.msgs.registry import Topic
+from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.node import encoding_for
+from dronewrapper_ground_station import snapshot
+from dronewrapper_ground_station.config import Config
+from dronewrapper_ground_station.frames import FrameSlot
+from dronewrapper_ground_station.requests import VelocityCommand
+from dronewrapper_ground_station.teleop import DeadMan
+
+T = TypeVar("T")
+
+log = logging.getLogger("station")
+
+CAMERAS = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
+
+# (snapshot section, topic, message -> fields)
+TELEMETRY: tuple[tuple[str, Topic[Any], Callable[[Any], dict[str, Any]]], ...] = (
+    ("state", registry.STATE, snapshot.state_fields),
+    ("landed", registry.EXTENDED_STATE, snapshot.extended_fields),
+    ("pose", registry.LOCAL_POSE, snapshot.pose_fields),
+    ("velocity", registry.VELOCITY_LOCAL, snapshot.twist_fields),
+    ("velocity_body", registry.VELOCITY_BODY, snapshot.twist_fields),
+    ("battery", registry.BATTERY, snapshot.battery_fields),
+    ("gps", registry.GLOBAL_POSITION, snapshot.gps_fields),
+    ("ground_truth", registry.SIM_GROUND_TRUTH, snapshot.pose_fields),
+    ("controller", registry.CONTROLLER_STATUS, snapshot.controller_fields),
+    ("detections", registry.DETECTIONS, snapshot.detection_fields),
+)
+
+
+class Subscriptions:
+    """Typed subscriptions on a shared session, undeclared together."""
+
+    def __init__(self, session: zenoh.Session) -> None:
+        self.session = session
+        self.decode_errors: collections.Counter[str] = collections.Counter()
+        self._declared: list[Any] = []
+
+    def subscribe(self, topic: Topic[T], key: str, callback: Callable[[str, T], None]) -> Any:
+        """Call ``callback(key, msg)`` for every decodable sample on ``key``."""
+        decoder = codec.decoder(topic.type)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            where = str(sample.key_expr)
+            try:
+                msg = decoder.decode(sample.payload.to_bytes())
+            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
+                self.decode_errors[where] += 1
+                if self.decode_errors[where] == 1:
+                    log.warning("undecodable %s on %s: %s", topic.type.__name__, where, exc)
+                return
+            try:
+                callback(where, msg)
+            except Exception:  # never let an exception reach Zenoh's thread
+                log.exception("handling %s failed", where)
+
+        # direct callbacks, as the SDK's: decode and store only, no thread per subscriber
+        handler = zenoh.handlers.Callback(on_sample, indirect=False)
+        sub = self.session.declare_subscriber(key, handler)
+        self._declared.append(sub)
+        return sub
+
+    def undeclare(self, entity: Any) -> None:
+        if entity in self._declared:
+            self._declared.remove(entity)
+        entity.undeclare()
+
+    def close(self) -> None:
+        for entity in reversed(self._declared):
+            try:
+                entity.undeclare()
+            except Exception as exc:  # the session is already closed
+                log.debug("undeclare: %s", exc)
+        self._declared.clear()
+
+
+class DroneLink:
+    """One drone as the station sees it: telemetry holders, video slots, commands.
+
+    Args:
+        session: the station's Zenoh session (shared by every drone).
+        ns: the drone's namespace.
+        config: the station config.
+        clock: monotonic clock (s), injectable.
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        ns: str,
+        config: Config,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.ns = ns
+        self.config = config
+        self.clock = clock
+        self.services: list[str] = []
+        self.online = True
+        self._subs = Subscriptions(session)
+        self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {}
+        for name, topic, fields in TELEMETRY:
+            holder: Latest[Any] = Latest(name=topic.key(ns), clock=clock)
+            self._subs.subscribe(topic, topic.key(ns), lambda _k, m, h=holder: h.update(m))
+            self._latest[name] = (holder, topic.rate_hz, fields)
+        self.status_texts: collections.deque[dict[str, Any]] = collections.deque(maxlen=50)
+        self._subs.subscribe(
+            registry.STATUSTEXT,
+            registry.STATUSTEXT.key(ns),
+            lambda _k, m: self.status_texts.append(snapshot.status_text_entry(m)),
+        )
+        self.slots = {camera: FrameSlot() for camera in CAMERAS}
+        self._video_subs: dict[str, Any] = {}
+        self._video_lock = threading.Lock()
+        self.deadman = DeadMan(config.teleop.timeout)
+        self._command_lock = threading.Lock()
+        self.last_command: dict[str, Any] | None = None
+        self.drone = DroneWrapper(ns, session=session, cameras=(), wait=False)
+
+    # ---- telemetry
+
+    def value(self, section: str) -> Any:
+        """The newest message of a telemetry section, or None."""
+        return self._latest[section][0].value
+
+    def snapshot(self) -> dict[str, Any]:
+        """Every telemetry section with ages and stale flags, the log and the command."""
+        out: dict[str, Any] = {"ns": self.ns, "online": self.online, "services": self.services}
+        for name, (holder, rate, fields) in self._latest.items():
+            msg = holder.value
+            out[name] = snapshot.section(
+                None if msg is None else fields(msg),
+                holder.age(),
+                snapshot.stale_limit(rate, self.config.stale_after),
+            )
+        out["log"] = list(self.status_texts)[-20:]
+        out["command"] = self.last_command
+        out["teleop"] = self.deadman.active
+        for camera, slot in self.slots.items():
+            frame = slot.latest()
+            out[f"video_{camera}_age"] = None if frame is None else self.clock() - frame.received
+        return out
+
+    def health(self) -> str:
+        """``ok``, ``stale`` (telemetry stopped), ``no_autopilot`` or ``offline``."""
+        if not self.online:
+            return "offline"
+        holder, rate, _ = self._latest["state"]
+        state = holder.value
+        if state is None or holder.age() > snapshot.stale_limit(rate, self.config.stale_after):
+            return "stale"
+        return "ok" if state.connected else "no_autopilot"
+
+    # ---- video (subscribed only while someone watches; the sim encodes JPEG only then)
+
+    def watch(self, camera: str) -> FrameSlot:
+        """Start receiving ``camera``'s JPEG frames (counted per viewer)."""
+        key_name = CAMERAS[camera]
+        slot = self.slots[camera]
+        with self._video_lock:
+            if camera not in self._video_subs:
+                topic = registry.IMAGE_COMPRESSED
+                self._video_subs[camera] = self._subs.subscribe(
+                    topic,
+                    topic.key(self.ns, camera=key_name),
+                    lambda _k, m: slot.put(m.header.stamp, bytes(m.data), self.clock()),
+                )
+        return slot
+
+    def unwatch(self, camera: str) -> None:
+        """Stop receiving ``camera`` when its last viewer left."""
+        with self._video_lock:
+            slot = self.slots[camera]
+            if slot.listeners == 0 and camera in self._video_subs:
+                self._subs.undeclare(self._video_subs.pop(camera))
+
+    # ---- commands (blocking: run them on a worker thread)
+
+    def _note(self, what: str, **fields: Any) -> None:
+        self.last_command = {"what": what, "at": time.time(), **fields}
+
+    def teleop(self, cmd: VelocityCommand, owner: object) -> None:
+        """Velocity teleop, body FLU; must be renewed within the teleop timeout."""
+        self.deadman.renew(self.clock(), owner)
+        self.drone.set_cmd_vel(cmd.vx, cmd.vy, cmd.vz, cmd.yaw_rate)
+        self._note("velocity", vx=cmd.vx, vy=cmd.vy, vz=cmd.vz, yaw_rate=cmd.yaw_rate)
+
+    def release(self, owner: object | None = None) -> None:
+        """The page let go of the sticks (or left): hold where the drone is."""
+        if owner is not None and self.deadman.owner is not owner:
+            return
+        if self.deadman.release():
+            self.hold()
+
+    def check_deadman(self) -> None:
+        """Hold if the velocity teleop was not renewed in time (called periodically)."""
+        if self.deadman.expired(self.clock()):
+            log.info("%s: teleop not renewed within %g s: holding", self.ns, self.deadman.timeout)
+            self.hold()
+
+    def hold(self) -> None:
+        """Hold position where the drone is now (a position setpoint); on the ground, stop
+        commanding."""
+        with self._command_lock:
+            self.deadman.release()
+            pose = self.value("pose")
+            landed = self.value("landed")
+            on_ground = landed is not None and landed.landed_state == LANDED_STATE_ON_GROUND
+            if pose is None or on_ground:
+                self.drone.stop_commanding()
+                self._note("stop")
+                return
+            f = snapshot.pose_fields(pose)
+            self.drone.set_cmd_pos(f["x"], f["y"], f["z"], f["yaw"])
+            self._note("hold", x=f["x"], y=f["y"], z=f["z"])
+
+    def goto(self, x: float, y: float) -> None:
+        """Fly to local ENU (x, y) at the current altitude and heading."""
+        pose = self.value("pose")
+        if pose is None:
+            raise RuntimeError(f"{self.ns}: no position yet, cannot go to a point")
+        with self._command_lock:
+            self.deadman.release()
+            f = snapshot.pose_fields(pose)
+            self.drone.set_cmd_pos(x, y, f["z"], f["yaw"])
+            self._note("goto", x=x, y=y, z=f["z"])
+
+    def takeoff(self, height: float) -> None:
+        self.deadman.release()
+        self._note("takeoff", height=height)
+        self.drone.takeoff(height, timeout=self.config.command_timeout)
+
+    def land(self) -> None:
+        self.deadman.release()
+        self._note("land")
+        self.drone.land(timeout=self.config.command_timeout)
+
+    def arm(self) -> None:
+        self.drone.arm()
+
+    def disarm(self) -> None:
+        self.drone.disarm()
+
+    def set_mode(self, mode: str) -> None:
+        self.drone.set_mode(mode)
+
+    def close(self) -> None:
+        self.drone.close()
+        self._subs.close()
+
+
+class SimObjects:
+    """The simulator's world objects: their true poses, and keyboard teleop of them."""
+
+    def __init__(self, session: zenoh.Session, clock: Callable[[], float] = time.monotonic):
+        self.session = session
+        self.clock = clock
+        self._subs = Subscriptions(session)
+        self._poses: dict[str, tuple[dict[str, Any], float]] = {}
+        self._publishers: dict[str, Any] = {}
+        self._subs.subscribe(
+            registry.SIM_OBJECT_POSE, registry.SIM_OBJECT_POSE.wildcard(), self._on_pose
+        )
+
+    def _on_pose(self, key: str, msg: Any) -> None:
+        parts = registry.SIM_OBJECT_POSE.match(key)
+        if parts is not None:
+            self._poses[parts["name"]] = (snapshot.pose_fields(msg), self.clock())
+
+    def snapshot(self) -> dict[str, Any]:
+        """``{name: {x, y, z, yaw, age}}`` of the objects seen in the last 5 s."""
+        now = self.clock()
+        return {
+            name: {**fields, "age": round(now - at, 3)}
+            for name, (fields, at) in sorted(self._poses.items())
+            if now - at < 5.0
+        }
+
+    def move(self, name: str, east: float, north: float) -> None:
+        """Send one velocity command (ENU m/s) to object ``name``; the sim lets it expire."""
+        if name not in self._poses:
+            raise KeyError(f"no simulated object {name!r}")
+        pub = self._publishers.get(name)
+        if pub is None:
+            topic = registry.SIM_OBJECT_CMD_VEL
+            pub = self.session.declare_publisher(
+                topic.key(name=name), encoding=encoding_for(topic.type)
+            )
+            self._publishers[name] = pub
+        pub.put(codec.encode(Twist(linear=Vector3(x=east, y=north, z=0.0))))
+
+    def close(self) -> None:
+        for pub in self._publishers.values():
+            try:
+                pub.undeclare()
+            except Exception as exc:
+                log.debug("undeclare: %s", exc)
+        self._subs.close()
+
+
+class Fleet:
+    """Every drone the station shows, found by their bridges' liveliness tokens.
+
+    Args:
+        session: the station's Zenoh session.
+        config: the station config (``namespaces`` fixes the list; empty: discover).
+    """
+
+    def __init__(self, session: zenoh.Session, config: Config) -> None:
+        self.session = session
+        self.config = config
+        self.links: dict[str, DroneLink] = {}
+        self.objects = SimObjects(session)
+        self._lock = threading.Lock()
+        for ns in config.namespaces:
+            self.links[ns] = DroneLink(session, ns, config)
+
+    def discover(self) -> None:
+        """List the processes alive now; add new drones, mark vanished ones offline."""
+        keys = alive_services(self.session, "*", timeout=1.0)
+        by_ns = services_by_namespace(keys)
+        for ns, names in by_ns.items():
+            has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
+            if ns not in self.links and has_bridge and not self.config.namespaces:
+                log.info("drone online: %s (%s)", ns, ", ".join(names))
+                with self._lock:
+                    self.links[ns] = DroneLink(self.session, ns, self.config)
+        for ns, link in self.links.items():
+            link.services = by_ns.get(ns, [])
+            link.online = any(name.startswith(BRIDGE_PREFIX) for name in link.services)
+
+    def get(self, ns: str) -> DroneLink:
+        """The drone ``ns``. Raises KeyError if the station does not know it."""
+        return self.links[ns]
+
+    def summary(self) -> list[dict[str, Any]]:
+        """The drones to pick from, each with its health and services."""
+        return [
+            {"ns": ns, "health": link.health(), "services": link.services}
+            for ns, link in sorted(self.links.items())
+        ]
+
+    def check_deadmen(self) -> None:
+        for link in list(self.links.values()):
+            link.check_deadman()
+
+    def release_owner(self, owner: object) -> None:
+        """A page went away: every drone it was driving holds."""
+        for link in list(self.links.values()):
+            link.release(owner)
+
+    def close(self) -> None:
+        for link in self.links.values():
+            link.close()
+        self.objects.close()

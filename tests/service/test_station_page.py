@@ -1,0 +1,118 @@
+"""The page itself in a real headless Chromium, against an in-process station with the
+stand-in bridge (see station_env): read-only observers, the token, the gamepad's dead-man
+button, refusals shown with their reason. The simulated flight is tests/integration/
+test_station_browser.py."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from selenium.webdriver.common.action_chains import ActionChains
+from selenium.webdriver.common.by import By
+from station_env import POSE, TOKEN, StationEnv, station_env
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool
+from dronewrapper_ground_station.browser import chromium, console_errors
+from support import client_node, wait_for
+
+pytestmark = pytest.mark.timeout(120)
+
+OTHER_NAME = "station.test"  # resolves to 127.0.0.1 in this browser only: not a loopback name
+
+# a stand-in for the Gamepad API (headless Chromium has no gamepads): the page reads
+# navigator.getGamepads() as with a real pad; the test moves its sticks and buttons
+FAKE_GAMEPAD = """
+window.fakePad = {connected: true, axes: [0, 0, 0, 0],
+                  buttons: Array.from({length: 16}, () => ({pressed: false, value: 0}))};
+navigator.getGamepads = () => [window.fakePad];
+"""
+
+
+@pytest.fixture
+def env(router):
+    with station_env(router) as env:
+        yield env
+
+
+@pytest.fixture
+def driver(tmp_path: Path):
+    rules = f"--host-resolver-rules=MAP {OTHER_NAME} 127.0.0.1"
+    with chromium(tmp_path / "profile", extra_flags=[rules]) as driver:
+        yield driver
+
+
+def _open(driver, env: StationEnv, host: str = "127.0.0.1", query: str = "") -> None:
+    driver.get(f"http://{host}:{env.port}/{query}")
+    wait_for(
+        lambda: driver.execute_script("return window.station.ns && window.station.drone"),
+        20,
+        what="the page to show the drone",
+    )
+
+
+def test_observer_page_is_read_only(env: StationEnv, driver, router) -> None:
+    probe = client_node(router, name="probe")
+    setpoints = probe.latest(registry.SETPOINT_RAW_LOCAL)
+    _open(driver, env, OTHER_NAME)
+    assert driver.execute_script("return window.station.role") == "observer"
+    assert driver.find_element(By.ID, "readonly").is_displayed()
+    for button in ("btn-arm", "btn-takeoff", "btn-land", "btn-mode"):
+        assert not driver.find_element(By.ID, button).is_enabled(), button
+    stick = driver.find_element(By.ID, "stick-right")
+    ActionChains(driver, duration=50).move_to_element(stick).click_and_hold().move_by_offset(
+        0, -60
+    ).pause(1.0).release().perform()
+    driver.find_element(By.TAG_NAME, "body").send_keys("wwww")
+    probe.close()
+    assert setpoints.count == 0, "an observer's page commanded the drone"
+    assert driver.find_element(By.ID, "tm-position").text.startswith("position")
+    assert console_errors(driver) == []
+
+
+def test_the_token_makes_an_operator_and_leaves_the_address_bar(env: StationEnv, driver) -> None:
+    _open(driver, env, OTHER_NAME, f"?token={TOKEN}")
+    assert driver.execute_script("return window.station.role") == "operator"
+    assert TOKEN not in driver.current_url
+    driver.find_element(By.ID, "btn-arm").click()
+    wait_for(lambda: "arm: done" in driver.find_element(By.ID, "result").text, 10, what="arm")
+    assert env.bridge.requests[-1] == CommandBool(value=True)
+    assert console_errors(driver) == []
+
+
+def test_refusals_show_the_reason(env: StationEnv, driver) -> None:
+    _open(driver, env)
+    driver.find_element(By.ID, "btn-disarm").click()
+    result = driver.find_element(By.ID, "result")
+    wait_for(lambda: "disarming denied in flight" in result.text, 10, what="the reason")
+    assert "bad" in result.get_attribute("class")
+
+
+def test_gamepad_drives_only_while_its_dead_man_is_held(env: StationEnv, driver, router) -> None:
+    _open(driver, env)
+    driver.execute_script(FAKE_GAMEPAD)
+    link = env.fleet.get("drone")
+    with client_node(router, name="probe") as probe:
+        setpoints = probe.latest(registry.SETPOINT_RAW_LOCAL)
+        driver.execute_script("window.fakePad.axes[3] = -1")  # right stick fully forward
+        wait_for(
+            lambda: "hold LB" in driver.find_element(By.ID, "gamepad").text, 5, what="pad seen"
+        )
+        assert not link.deadman.active  # sticks without the dead-man button do nothing
+        driver.execute_script("window.fakePad.buttons[4].pressed = true")
+        sp = wait_for(
+            lambda: (s := setpoints.fresh(0.5)) and s.type_mask != MASK_POSITION and s,
+            5,
+            what="velocity setpoints",
+        )
+        assert sp.velocity.x == env.config.teleop.horizontal
+        assert link.deadman.active
+        driver.execute_script("window.fakePad.buttons[4].pressed = false")
+        sp = wait_for(
+            lambda: (s := setpoints.fresh(0.5)) and s.type_mask == MASK_POSITION and s,
+            5,
+            what="a hold on release",
+        )
+        assert (sp.position.x, sp.position.y, sp.position.z) == POSE
+    assert console_errors(driver) == []
