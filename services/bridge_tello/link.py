@@ -28,10 +28,15 @@ class TelloAddress:
 
 def _udp(address: str, port: int, *, buffer: int = 0) -> socket.socket:
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    # no SO_REUSEADDR: a second bridge (or Tello client) on the same address must fail loudly
+    # instead of silently sharing the state and video datagrams with this one
     if buffer:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, buffer)
-    sock.bind((address, port))
+    try:
+        sock.bind((address, port))
+    except OSError:
+        sock.close()
+        raise
     return sock
 
 

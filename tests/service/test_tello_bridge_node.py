@@ -192,3 +192,10 @@ def test_modes_mapped_to_tello_commands(tello_and_bridge):
     assert user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD")).mode_sent
     sent = [text for _, text in tello.received if not text.startswith("rc ")]
     assert sent[-2:] == ["stop", "command"]
+
+
+def test_a_second_bridge_on_the_same_address_fails_loudly(tello_and_bridge):
+    _, bridge, user = tello_and_bridge
+    with pytest.raises(OSError):
+        Bridge(user, bridge.config)
+    assert bridge.connected
