@@ -32,10 +32,12 @@ TELLO_CONFIG = REPO / "services" / "controller" / "config" / "tello.yaml"
 # scenario -> (graph, seconds of servoing after the take-off, max acquire s, min centred,
 # min within distance)
 CASES = {
-    "beacon_static": ("sim_tello_follow_color", 20, 15, 0.8, 0.7),
+    "beacon_static": ("sim_tello_follow_color", 25, 15, 0.8, 0.7),
     "beacon_smooth": ("sim_tello_follow_color", 27, 15, 0.6, 0.6),
+    "beacon_abrupt": ("sim_tello_follow_color", 27, 15, 0.6, 0.6),
     "person_static": ("sim_tello_follow_person", 20, 20, 0.7, 0.6),
     "person_moving": ("sim_tello_follow_person", 27, 20, 0.5, 0.4),
+    "people_crossing_behind": ("sim_tello_follow_person", 27, 20, 0.5, 0.4),
 }
 
 
