@@ -16,9 +16,11 @@ from scenario_flight import CENTRED_TOLERANCE, DISTANCE_TOLERANCE, PERSON_BOX, f
 from dronewrapper.runtime.config import load_config
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_controller.metrics import (
+    bearing_error,
     colour_intended_distance,
     person_intended_distance,
     summarize,
+    wrap_angle,
 )
 from dronewrapper_sim.tello.config import TelloConfig
 from dronewrapper_sim.tello.params import camera_hfov_rad
@@ -80,3 +82,18 @@ def test_tello_follow(scenario, tmp_path):
     assert s.centred_share >= min_centred, detail
     assert s.distance_share >= min_distance, detail
     assert math.isfinite(goal) and goal > 1.0
+    if scenario.startswith("people_crossing"):
+        # passers-by did cross the line of sight, and the drone still points at `target` in
+        # the last quarter (as the Iris test judges identity)
+        crossings = sum(
+            any(
+                abs(wrap_angle(bearing_error(x.vehicle, x.yaw, pos) - x.bearing)) < math.radians(5)
+                for pos in x.others.values()
+            )
+            for x in flight.samples
+        )
+        assert crossings > 0, "no passer-by crossed the line of sight: the test proves nothing"
+        tail = flight.samples[-len(flight.samples) // 4 :]
+        nearest = sum(x.closest_to_axis() == "target" for x in tail) / len(tail)
+        centred = sum(x.centred(CENTRED_TOLERANCE) for x in tail) / len(tail)
+        assert nearest >= 0.5 and centred >= 0.6, (nearest, centred, flight.timeline())
