@@ -5,7 +5,8 @@ A graph lists the processes that run together (in start order) and their config:
     version: 1
     description: Simulated Iris and its MAVLink bridge
     namespace: drone
-    vars: {scenario: empty, onboard_port: "14540"}
+    vars: {scenario: empty, onboard_port: auto}
+    ports: {onboard_port: udp}        # bound here: checked free; auto = a free port
     processes:
       - name: sim
         module: dronewrapper_sim
@@ -76,6 +77,7 @@ class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     description: str = ""
     namespace: str = "drone"
     vars: dict[str, str] = msgspec.field(default_factory=dict)
+    ports: dict[str, str] = msgspec.field(default_factory=dict)  # var -> udp | tcp (ports.py)
     processes: list[ProcessSpec]
 
 
@@ -139,6 +141,13 @@ def load_graph(path: str | Path) -> Graph:
         )
     if not graph.processes:
         raise GraphError(f"{path}: no processes - at `$.processes`")
+    for var, kind in graph.ports.items():
+        if kind not in ("udp", "tcp"):
+            raise GraphError(
+                f"{path}: port kind must be udp or tcp, got {kind!r} - at `$.ports.{var}`"
+            )
+        if var not in graph.vars:
+            raise GraphError(f"{path}: port {var!r} has no variable - at `$.ports.{var}`")
     seen: set[str] = set()
     for i, proc in enumerate(graph.processes):
         at = f"at `$.processes[{i}]`"

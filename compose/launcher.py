@@ -40,6 +40,12 @@ from dronewrapper_compose.graph import (
     resolve_graph_path,
     substitute,
 )
+from dronewrapper_compose.ports import (
+    PortInUse,
+    check_ports_free,
+    choose_ports,
+    router_port_in_use,
+)
 
 _PR_SET_PDEATHSIG = 1
 
@@ -183,6 +189,10 @@ class Launcher:
             "assets": str(assets_dir()),
             "python": sys.executable,
         }
+        try:
+            self.values.update(choose_ports(graph.ports, self.values))
+        except ValueError as exc:
+            raise GraphError(f"{graph_path}: {exc}") from exc
         self.children: list[_Child] = []
         self.failures: list[str] = []
         self.exit_code: int | None = None
@@ -235,6 +245,18 @@ class Launcher:
             LaunchError: a process exited or did not become ready in time.
             GraphError: a variable or config path in the graph is wrong.
         """
+        try:
+            check_ports_free(self.graph.ports, self.values)
+        except PortInUse as exc:
+            raise LaunchError(f"{self.graph_path.name}: {exc}") from exc
+        if self.start_router and (taken := router_port_in_use(self.router)) is not None:
+            raise LaunchError(
+                f"router endpoint {self.router}: TCP port {taken} is already in use (another "
+                f"graph's router?); pick another with --router tcp/127.0.0.1:N, or join the "
+                f"running one with --use-router"
+            )
+        for var in self.graph.ports:
+            self._say(f"{var} = {self.values[var]}")
         mode = "router" if self.start_router else "client"
         options = ZenohOptions(
             mode=mode,

@@ -14,55 +14,28 @@ Threads:
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 import select
 import threading
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import zenoh
-
-from dronewrapper.msgs import codec, registry
-from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Quaternion, Twist
-from dronewrapper.msgs.sensor import CompressedImage, Image
-from dronewrapper.msgs.std import Header
-from dronewrapper.runtime import Node, Ratekeeper, encoding_for
+from dronewrapper.runtime import Node
+from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.frames import quat_from_euler
 from dronewrapper_sim.mavlink_io import MavlinkUdpLink, default_endpoints, parse_udp_spec
+from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.px4 import telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 from dronewrapper_sim.world.scenario import Scenario
+from dronewrapper_sim.world_topics import WorldTopics
 
 log = logging.getLogger("sim")
 
 MAX_CATCH_UP_STEPS = 50  # after a stall, at most this many physics steps at once; then slip
-
-
-@dataclass(frozen=True)
-class PoseSnapshot:
-    """The true vehicle pose at one instant: ENU position (m), quaternion x y z w (FLU->ENU),
-    wall-clock time (s since the epoch)."""
-
-    position: tuple[float, float, float]
-    quaternion: tuple[float, float, float, float]
-    stamp: float
-
-
-def pose_msg(snapshot: PoseSnapshot, frame_id: str = "map", seq: int = 0) -> PoseStamped:
-    """A PoseStamped of ``snapshot`` in local ENU."""
-    x, y, z = snapshot.position
-    qx, qy, qz, qw = snapshot.quaternion
-    return PoseStamped(
-        header=Header(stamp=snapshot.stamp, frame_id=frame_id, seq=seq),
-        pose=Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
-    )
 
 
 def link_endpoints(config: SimConfig) -> dict[str, Any]:
@@ -73,169 +46,6 @@ def link_endpoints(config: SimConfig) -> dict[str, Any]:
         default = defaults[name]
         out[name] = parse_udp_spec(spec, default.local_port) if spec else default
     return out
-
-
-class _WatchedPublisher:
-    """A Zenoh publisher that knows whether any subscriber matches it."""
-
-    def __init__(self, session: zenoh.Session, key: str, msg_type: type) -> None:
-        self.key = key
-        self.count = 0
-        self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type))
-
-    def watched(self) -> bool:
-        try:
-            return bool(self._pub.matching_status.matching)
-        except zenoh.ZError:
-            return False
-
-    def put(self, msg: Any) -> None:
-        self._pub.put(codec.encode(msg))
-        self.count += 1
-
-    def undeclare(self) -> None:
-        with contextlib.suppress(zenoh.ZError):
-            self._pub.undeclare()
-
-
-class CameraStreamer(threading.Thread):
-    """Renders and publishes the cameras at a fixed rate (see module doc)."""
-
-    def __init__(
-        self,
-        node: Node,
-        renderer: Any,
-        mounts: list[Any],
-        rate_hz: float,
-        pose_source: Callable[[], PoseSnapshot],
-        *,
-        compressed: bool = False,
-        jpeg_quality: int = 80,
-        render_unwatched: bool = False,
-    ) -> None:
-        super().__init__(name="sim-cameras", daemon=True)
-        self.node = node
-        self.renderer = renderer
-        self.mounts = mounts
-        self.rate_hz = rate_hz
-        self.pose_source = pose_source
-        self.compressed = compressed
-        self.jpeg_quality = jpeg_quality
-        self.render_unwatched = render_unwatched
-        self.frames = {m.name: 0 for m in mounts}
-        self.render_s = 0.0
-        self.errors = 0
-        ns = node.ns
-        self._raw = {
-            m.name: _WatchedPublisher(
-                node.session, registry.IMAGE_RAW.key(ns, camera=m.name), Image
-            )
-            for m in mounts
-        }
-        self._jpeg = {
-            m.name: _WatchedPublisher(
-                node.session, registry.IMAGE_COMPRESSED.key(ns, camera=m.name), CompressedImage
-            )
-            for m in mounts
-        }
-
-    def run(self) -> None:
-        rate = Ratekeeper(self.rate_hz, stop=self.node.stop_event)
-        while rate.sleep():
-            for mount in self.mounts:
-                try:
-                    self._one(mount)
-                except Exception:  # a rendering bug must not stop the simulator
-                    self.errors += 1
-                    if self.errors <= 3:
-                        log.exception("camera %s failed", mount.name)
-
-    def _one(self, mount: Any) -> None:
-        raw, jpeg = self._raw[mount.name], self._jpeg[mount.name]
-        want_raw = self.render_unwatched or raw.watched()
-        want_jpeg = self.compressed or jpeg.watched()
-        if not (want_raw or want_jpeg):
-            return
-        snap = self.pose_source()
-        stamp = time.time()
-        started = time.perf_counter()
-        image = self.renderer.render(mount, np.asarray(snap.position), np.asarray(snap.quaternion))
-        self.render_s += time.perf_counter() - started
-        seq = self.frames[mount.name]
-        self.frames[mount.name] = seq + 1
-        header = Header(stamp=stamp, frame_id=mount.name, seq=seq)
-        height, width = image.shape[:2]
-        if want_raw:
-            raw.put(
-                Image(
-                    header=header,
-                    height=height,
-                    width=width,
-                    encoding="bgr8",
-                    step=width * 3,
-                    data=image.tobytes(),
-                )
-            )
-        if want_jpeg:
-            import cv2
-
-            ok, buf = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
-            if ok:
-                jpeg.put(CompressedImage(header=header, format="jpeg", data=buf.tobytes()))
-
-    def close(self) -> None:
-        for pub in [*self._raw.values(), *self._jpeg.values()]:
-            pub.undeclare()
-
-
-class WorldTopics:
-    """The world on Zenoh, the same for every aircraft: the vehicle's ``{ns}/sim/ground_truth``,
-    ``sim/objects/{name}/pose`` of each object, and their teleop ``sim/objects/{name}/cmd_vel``.
-
-    Args:
-        node: the Zenoh node.
-        world: the world whose objects are published and teleoperated.
-        world_lock: the lock the simulation holds while it steps ``world``.
-    """
-
-    def __init__(self, node: Node, world: Any, world_lock: threading.Lock) -> None:
-        self.world = world
-        self.world_lock = world_lock
-        self.cmd_vel_errors = 0
-        self._gt_pub = node.publisher(registry.SIM_GROUND_TRUTH)
-        self._object_pubs: dict[str, Any] = {}
-        for obj in world.objects:
-            self._object_pubs[obj.name] = node.publisher(registry.SIM_OBJECT_POSE, name=obj.name)
-            node.subscribe(
-                registry.SIM_OBJECT_CMD_VEL, self._teleop_callback(obj.name), name=obj.name
-            )
-
-    def publish_ground_truth(self, snapshot: PoseSnapshot) -> None:
-        """Publish the vehicle's true pose."""
-        self._gt_pub.put(pose_msg(snapshot, seq=self._gt_pub.count))
-
-    def publish_objects(self) -> None:
-        """Publish the true pose of every world object (stamped now)."""
-        stamp = time.time()
-        for obj in self.world.objects:
-            pub = self._object_pubs.get(obj.name)
-            if pub is None:
-                continue
-            x, y, z = (float(v) for v in obj.position)
-            snap = PoseSnapshot((x, y, z), quat_from_euler(0.0, 0.0, float(obj.yaw)), stamp)
-            pub.put(pose_msg(snap, seq=pub.count))
-
-    def _teleop_callback(self, name: str) -> Callable[[Twist], None]:
-        def on_cmd_vel(msg: Twist) -> None:
-            lin = np.array([msg.linear.x, msg.linear.y, msg.linear.z], dtype=float)
-            try:
-                with self.world_lock:
-                    self.world.set_cmd_vel(name, lin, float(msg.angular.z), self.world.time_s)
-            except (KeyError, ValueError) as exc:
-                self.cmd_vel_errors += 1
-                log.warning("cmd_vel for %s refused: %s", name, exc)
-
-        return on_cmd_vel
 
 
 class SimRunner:
@@ -295,7 +105,7 @@ class SimRunner:
     # ---- setup ----
 
     def _setup_zenoh(self, node: Node) -> None:
-        self.world_topics = WorldTopics(node, self.world, self.world_lock)
+        self.world_topics = WorldTopics(node, self.world, self.world_lock, seed=self.config.seed)
         if self.config.cameras:
             self.cameras = self._make_cameras(node)
 

@@ -33,8 +33,24 @@ def _value(tp, rng: random.Random):
     raise TypeError(f"no sample for {tp!r}")
 
 
+# Fields whose messages check their range (requests): a random value within it.
+_RANGED = {
+    ("CommandTOL", "min_pitch"): lambda rng: rng.uniform(-90.0, 90.0),
+    ("CommandTOL", "yaw"): lambda rng: rng.uniform(-3.0, 3.0),
+    ("CommandTOL", "latitude"): lambda rng: rng.uniform(-90.0, 90.0),
+    ("CommandTOL", "longitude"): lambda rng: rng.uniform(-180.0, 180.0),
+    ("CommandTOL", "altitude"): lambda rng: rng.uniform(0.5, 100.0),
+    ("SetMode", "base_mode"): lambda rng: 0,
+}
+
+
 def sample(msg_type, seed: int = 0, rng: random.Random | None = None):
     """An instance of ``msg_type`` with random non-default values in every field."""
     rng = rng or random.Random(seed)
     hints = typing.get_type_hints(msg_type)
-    return msg_type(**{name: _value(hints[name], rng) for name in msg_type.__struct_fields__})
+    return msg_type(
+        **{
+            name: _RANGED.get((msg_type.__name__, name), lambda r, n=name: _value(hints[n], r))(rng)
+            for name in msg_type.__struct_fields__
+        }
+    )

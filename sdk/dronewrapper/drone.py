@@ -209,6 +209,10 @@ class DroneWrapper:
                 idle_timeout=command_timeout,
                 name=f"{self.ns}-setpoints",
             )
+            self._bridge_matched = False
+            self._matching = self._setpoints.declare_matching_listener(
+                zenoh.handlers.Callback(self._on_setpoint_matching, indirect=False)
+            )  # a direct callback: no thread to block interpreter exit (see _subscribe)
             if wait:
                 self.wait_for_connection(max(0.0, deadline - time.monotonic()))
         except BaseException:
@@ -291,6 +295,18 @@ class DroneWrapper:
         self._stale_after[holder.name] = stale_after(topic.rate_hz)
         return holder
 
+    def _on_setpoint_matching(self, status: Any) -> None:
+        """The bridge's setpoint subscriber became (un)reachable: a link gap (router restart,
+        lost Wi-Fi) withholds setpoints, and a command that went stale meanwhile is not resent
+        (see SetpointStreamer). "Unreachable" counts only after it was reachable once."""
+        if self._closed:
+            return
+        if status.matching:
+            self._bridge_matched = True
+            self._streamer.link_up()
+        elif self._bridge_matched:
+            self._streamer.link_down()
+
     def _publish_setpoint(self, target: PositionTarget) -> None:
         self._setpoints.put(codec.encode(target))
 
@@ -371,6 +387,10 @@ class DroneWrapper:
         streamer = getattr(self, "_streamer", None)
         if streamer is not None:
             streamer.close()
+        matching = getattr(self, "_matching", None)
+        if matching is not None:
+            with contextlib.suppress(Exception):
+                matching.undeclare()
         try:
             if self._own_session:
                 time.sleep(0.05)  # let the last messages leave before the session closes
@@ -915,10 +935,10 @@ class DroneWrapper:
             self.set_mode("GUIDED")
             self.arm()
             log.info("takeoff: armed in GUIDED, climbing")
-            self._command(registry.TAKEOFF, CommandTOL(altitude=h, yaw=yaw), "takeoff")
+            self._command(registry.TAKEOFF, CommandTOL.takeoff(h, yaw), "takeoff")
             expected_mode = "GUIDED"
         elif autopilot in TELLO:
-            self._command(registry.TAKEOFF, CommandTOL(altitude=h), "takeoff")
+            self._command(registry.TAKEOFF, CommandTOL.takeoff(h), "takeoff")
             log.info("takeoff: the Tello took off, climbing")
         else:  # PX4 and the PX4-like simulator: OFFBOARD with a setpoint stream
             self._command_setpoint(setpoints.position_target(x, y, z0, yaw, stamp=now))
@@ -979,7 +999,7 @@ class DroneWrapper:
         self.stop_commanding()
         if on_ground and not state.armed:
             return
-        self._command(registry.LAND, CommandTOL(), "land")
+        self._command(registry.LAND, CommandTOL.land(), "land")
         log.info("land: drone %r landing from %s", self.ns, self._altitude_text())
 
         def landed() -> bool:

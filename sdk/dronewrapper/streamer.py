@@ -9,6 +9,12 @@ holds position after its ``setpoint_timeout`` and lands after ``commander_lost_t
 A new setpoint is published at once on the caller's thread (lowest latency); the thread then
 repeats it every period. ``header.stamp`` keeps the stamp given with the command (the source
 frame's capture time), ``header.seq`` counts every publication.
+
+Link gaps: while the link to the bridge is down (:meth:`SetpointStreamer.link_down`, e.g. the
+router restarted) nothing is published; when it is back (:meth:`SetpointStreamer.link_up`) a
+command older than ``expiry`` (the bridge's setpoint expiry) is not resent: the stream stops
+and the app must command again. Otherwise a stale 1 m/s, repeated into the void during the
+gap, would make a hovering drone fly off again the moment the link returned.
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ class SetpointStreamer:
             seconds (the bridge then hovers): a deadman for apps that may hang. None (the
             paper's behaviour) streams until changed or stopped.
         name: thread name, for debugging.
+        expiry: seconds after which a command is stale if the link was down meanwhile (the
+            bridge's ``setpoint_timeout``, 0.5 s by default).
     """
 
     def __init__(
@@ -45,13 +53,20 @@ class SetpointStreamer:
         rate_hz: float = 30.0,
         idle_timeout: float | None = None,
         name: str = "setpoints",
+        expiry: float = 0.5,
     ) -> None:
         if not rate_hz >= MIN_RATE_HZ:
             raise ValueError(f"setpoint rate must be >= {MIN_RATE_HZ:g} Hz, got {rate_hz!r}")
         if idle_timeout is not None and not idle_timeout > 0:
             raise ValueError(f"idle_timeout must be > 0 s or None, got {idle_timeout!r}")
+        if not expiry > 0:
+            raise ValueError(f"expiry must be > 0 s, got {expiry!r}")
         self.period = 1.0 / rate_hz
         self.idle_timeout = idle_timeout
+        self.expiry = expiry
+        self.link_ok = True
+        self.withheld = 0  # publications skipped while the link was down
+        self.dropped_after_gap = 0  # commands not resent because they were stale after a gap
         self.published = 0
         self.errors = 0
         self._publish = publish
@@ -85,6 +100,33 @@ class SetpointStreamer:
                 self._thread.start()
             self._cond.notify_all()
 
+    def link_down(self) -> None:
+        """The bridge is unreachable: publish nothing until :meth:`link_up`."""
+        with self._cond:
+            if self.link_ok:
+                log.warning("link to the bridge lost: setpoints withheld until it returns")
+            self.link_ok = False
+
+    def link_up(self, now: float | None = None) -> None:
+        """The bridge is reachable again: resume, unless the command is older than ``expiry``
+        (``now``: monotonic s, injectable for tests)."""
+        now = time.monotonic() if now is None else now
+        with self._cond:
+            if self.link_ok:
+                return
+            self.link_ok = True
+            age = now - self._set_at
+            if self._target is not None and age > self.expiry:
+                log.warning(
+                    "link to the bridge back: the last command is %.1f s old (> %.1f s), "
+                    "not resent; command again",
+                    age,
+                    self.expiry,
+                )
+                self._target = None
+                self.dropped_after_gap += 1
+            self._cond.notify_all()
+
     def stop(self) -> None:
         """Stop commanding: nothing more is published until the next :meth:`set`."""
         with self._cond:
@@ -101,6 +143,9 @@ class SetpointStreamer:
             self._thread.join(timeout)
 
     def _send(self, target: PositionTarget) -> None:
+        if not self.link_ok:
+            self.withheld += 1
+            return
         target.header.seq = self.published
         try:
             self._publish(target)

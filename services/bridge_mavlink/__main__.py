@@ -1,6 +1,6 @@
 """bridge_mavlink: a PX4 / ArduPilot autopilot over MAVLink on MAVROS-equivalent Zenoh keys.
 
-Connects to the autopilot with a pymavlink URL (``connection``, default udpin:0.0.0.0:14540),
+Connects to the autopilot with a pymavlink URL (``connection``, default udpin:127.0.0.1:14540),
 publishes state and telemetry in ENU/FLU, serves arming/takeoff/land/set_mode/param services,
 forwards setpoints at >= 20 Hz with the failsafe contract of docs/design.md.
 """

@@ -6,10 +6,17 @@ returns and feeds every COMMAND_ACK to :meth:`AckRouter.on_ack`.
 * A command is re-sent every ``ack_timeout`` seconds, up to ``attempts`` times, with the
   ``confirmation`` field incremented on each re-send (as MAVLink asks).
 * IN_PROGRESS (5) is not final: it extends the wait by ``in_progress_timeout``.
-* PX4 acknowledges DO_SET_MODE twice. An ack for a command id with nothing pending is a
-  duplicate (if that id completed within ``dedup_window`` s) or unsolicited; either way it is
-  counted and ignored. To keep a late duplicate from being taken for the ack of the next command
-  with the same id, the next one is not sent before :meth:`AckRouter.quiet_until`.
+* PX4 acknowledges DO_SET_MODE twice, and the two acks mean different things: its MAVLink
+  receiver answers ACCEPTED at once ("received"), then the commander sends the real result
+  (TEMPORARILY_REJECTED for a mode it cannot enter). A command sent with ``expected_acks=2``
+  therefore takes a first ACCEPTED as provisional and waits up to ``final_ack_timeout`` for the
+  second; a refusal, in either ack, is final. If no second ack comes, the command finishes
+  ACCEPTED but not :attr:`PendingCommand.confirmed` (the caller must confirm another way, e.g.
+  by the mode in HEARTBEAT).
+* An ack for a command id with nothing pending is a duplicate (if that id completed within
+  ``dedup_window`` s) or unsolicited; either way it is counted and ignored. To keep a late
+  duplicate from being taken for the ack of the next command with the same id, the next one is
+  not sent before :meth:`AckRouter.quiet_until`.
 """
 
 from __future__ import annotations
@@ -26,6 +33,7 @@ MAV_CMD_SET_MESSAGE_INTERVAL = 511
 MAV_CMD_REQUEST_MESSAGE = 512
 
 MAV_RESULT_ACCEPTED = 0
+MAV_RESULT_FAILED = 4
 MAV_RESULT_IN_PROGRESS = 5
 RESULT_NO_ACK = -1
 
@@ -82,16 +90,24 @@ class PendingCommand:
     """One command waiting for its COMMAND_ACK, with its retry schedule.
 
     Attributes:
+        expected_acks: acks the autopilot sends for this command (2: PX4's DO_SET_MODE).
+        final_ack_timeout: s to wait for the last expected ack after a provisional ACCEPTED.
         result: MAV_RESULT once final, else RESULT_NO_ACK.
         sent: how many times it was sent.
+        acks: how many acks arrived.
+        confirmed: False while (or when it ended) ACCEPTED only provisionally.
     """
 
     cmd: CommandLong
     attempts: int = 3
     ack_timeout: float = 1.0
     in_progress_timeout: float = 5.0
+    expected_acks: int = 1
+    final_ack_timeout: float = 1.0
     result: int = RESULT_NO_ACK
     sent: int = 0
+    acks: int = 0
+    confirmed: bool = True
     done: bool = False
     acked_at: float | None = None
     _next_send: float = -math.inf
@@ -108,20 +124,30 @@ class PendingCommand:
         return msg
 
     def on_ack(self, result: int, now: float) -> None:
-        """Feed the ack's MAV_RESULT (IN_PROGRESS extends the wait; others are final)."""
+        """Feed the ack's MAV_RESULT: IN_PROGRESS extends the wait; a first ACCEPTED of a
+        command acknowledged twice waits for the second; anything else is final."""
         self.acked_at = now
         self.result = result
+        self.acks += 1
         if result == MAV_RESULT_IN_PROGRESS:
             self._next_send = math.inf  # the autopilot is working on it: do not re-send
             self._deadline = now + self.in_progress_timeout
             return
+        if result == MAV_RESULT_ACCEPTED and self.acks < self.expected_acks:
+            self.confirmed = False  # "received": the real answer is still to come
+            self._next_send = math.inf
+            self._deadline = now + self.final_ack_timeout
+            return
+        self.confirmed = True
         self.done = True
 
     def finished(self, now: float) -> bool:
         """True once acked with a final result or out of attempts and time."""
         if self.done:
             return True
-        if self.sent >= self.attempts and now >= self._deadline:
+        if not self.confirmed and now >= self._deadline:
+            self.done = True  # ACCEPTED once; the final answer never came
+        elif self.sent >= self.attempts and now >= self._deadline:
             self.done = True
             if self.result == MAV_RESULT_IN_PROGRESS:
                 self.result = RESULT_NO_ACK

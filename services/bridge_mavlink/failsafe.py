@@ -12,13 +12,20 @@ What the bridge streams to the autopilot each tick, and when it acts on its own:
   requested again.
 * Never fight the pilot: the bridge acts only while the autopilot is in its guided mode. If the
   autopilot leaves it for a mode the bridge did not ask for, that is reported (an event) and the
-  bridge neither switches back nor acts on commander loss until someone requests the guided mode.
-* Priming: before the bridge asks for OFFBOARD it must have streamed for > 1 s; while priming it
-  streams the fresh setpoint or, without one, a hold at the current pose.
+  bridge neither switches back nor acts on commander loss until the guided mode is back: when
+  someone (the bridge or a ground station) re-enters it, the contract applies again as soon as
+  a commander streams (at once if one still is).
+* Priming (PX4's OFFBOARD only): before the bridge asks for OFFBOARD it must have streamed for
+  > 1 s; while priming it streams the fresh setpoint or, without one, a hold at the current
+  pose. Priming ends the moment the mode is confirmed (then the primed stream goes on as the
+  engaged stream) or a take-off is requested.
 * Engagement: the hold stream and the commander-lost action apply once a commander has steered
-  in the guided mode (a setpoint arrived while in it, or it was entered with a fresh setpoint).
-  So an autopilot's own take-off in GUIDED (ArduPilot's NAV_TAKEOFF) is never overridden by a
-  hold at the ground, and a vehicle nobody commanded is left to the autopilot.
+  in the guided mode (a setpoint arrived while in it, it was entered with a fresh setpoint, or
+  the bridge entered it with a primed stream). So an autopilot's own take-off in GUIDED
+  (ArduPilot's NAV_TAKEOFF) is never overridden by a hold at the ground, and a vehicle nobody
+  commanded is left to the autopilot. On the ground, holds are streamed only in PX4's OFFBOARD
+  (which needs the stream to stay in the mode and to arm); in ArduPilot's GUIDED a position
+  target would override a take-off, so the hold starts once the vehicle is airborne.
 
 Every state change is returned as a :class:`Transition` so the node publishes and logs it.
 """
@@ -35,7 +42,7 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     PositionTarget,
 )
-from dronewrapper_bridge_mavlink.modes import is_guided
+from dronewrapper_bridge_mavlink.modes import holds_on_the_ground, is_guided
 from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
 
 NONE, HOLD, LAND, RETURN = "", "hold", "land", "return"
@@ -143,10 +150,12 @@ class Failsafe:
             if self.state in (LAND, RETURN):
                 self._set(NONE, f"{mode} requested")
 
-    def on_takeoff_requested(self) -> None:
-        """The autopilot flies its own take-off now: the bridge stays out until commanded."""
+    def on_takeoff_requested(self, now: float) -> None:
+        """The autopilot flies its own take-off now: the bridge stays out until commanded
+        (no priming, no hold: a hold at the ground would override the take-off)."""
         self.engaged = False
         self._hold = None
+        self._prime_until = min(self._prime_until, now)
 
     def start_priming(self, now: float, duration: float) -> None:
         """Stream for ``duration`` s from now (fresh setpoint, else a hold) before OFFBOARD."""
@@ -157,12 +166,22 @@ class Failsafe:
         """True while a priming stream is running."""
         return now < self._prime_until
 
+    def end_priming(self, now: float, *, engage: bool) -> None:
+        """The requested mode is confirmed (or refused): stop priming. With ``engage``, the
+        primed stream goes on as the engaged stream if the autopilot is now in its guided mode
+        (the bridge entered it holding the pose: PX4 must not lose its OFFBOARD stream)."""
+        self._prime_until = min(self._prime_until, now)
+        if engage and is_guided(self.mode) and not self.pilot_override:
+            self.engaged = True
+
     def on_vehicle(self, *, mode: str, armed: bool, airborne: bool, now: float) -> None:
         """The autopilot's latest mode, arming and landed state."""
         old_mode = self.mode
         if mode != old_mode:
             if is_guided(mode):
                 self._guided_since = now
+                if not is_guided(old_mode):
+                    self.pilot_override = False  # handed back: the contract applies again
                 self.engaged = self.fresh_target(now) is not None
             else:
                 self.engaged = False
@@ -207,7 +226,11 @@ class Failsafe:
         if fresh is not None:
             self._hold = None
             out.send = fresh
-        elif self.priming(now) or (in_control and self.state in (NONE, HOLD)):
+        elif self.priming(now) or (
+            in_control
+            and self.state in (NONE, HOLD)
+            and (self.airborne or holds_on_the_ground(self.mode))
+        ):
             self._hold_here(pose)
             out.send = self._hold
             if in_control and self.state == NONE and self.armed:

@@ -1,12 +1,14 @@
 """The MAVLink connection: open by pymavlink URL, thread-safe sends, reopen after errors.
 
-URLs as pymavlink takes them: ``udpin:0.0.0.0:14540`` (listen; replies go to whoever sent),
-``udpout:HOST:PORT``, ``tcp:HOST:PORT`` (client, reconnects), ``tcpin:0.0.0.0:PORT``, or a
+URLs as pymavlink takes them: ``udpin:127.0.0.1:14540`` (listen; replies go to whoever sent),
+``udpout:HOST:PORT``, ``tcp:HOST:PORT`` (client, reconnects), ``tcpin:127.0.0.1:PORT``, or a
 serial device (``/dev/ttyACM0``) with ``baud``. MAVLink 2 is used for everything we send.
+A network link beyond loopback is a deliberate setting (see :func:`network_exposure`).
 """
 
 from __future__ import annotations
 
+import ipaddress
 import logging
 import os
 import threading
@@ -22,6 +24,44 @@ from pymavlink import mavutil
 log = logging.getLogger("bridge_mavlink.link")
 
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
+NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
+
+
+def network_exposure(url: str) -> str | None:
+    """Why ``url`` reaches beyond this machine (a sentence for the log), or None for loopback
+    and serial links. ``udpin:0.0.0.0:P`` listens on every interface and answers whoever sent
+    last; a host name is not loopback unless it is ``localhost``."""
+    scheme, sep, rest = url.partition(":")
+    if not sep or scheme not in NETWORK_SCHEMES:
+        return None  # a serial device
+    host = rest.rsplit(":", 1)[0].strip("[]")
+    if host == "localhost":
+        return None
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        return f"{url}: host {host!r} is not a loopback address"
+    if address.is_loopback:
+        return None
+    if address.is_unspecified:
+        return f"{url} listens on every network interface (not only loopback)"
+    return f"{url} talks to {host}, beyond this machine"
+
+
+class _SourceNotingSocket:
+    """A UDP socket that records on ``owner.last_source`` where each datagram came from."""
+
+    def __init__(self, sock: Any, owner: MavLink) -> None:
+        self._sock = sock
+        self._owner = owner
+
+    def recvfrom(self, size: int) -> tuple[bytes, Any]:
+        data, address = self._sock.recvfrom(size)
+        self._owner.last_source = address
+        return data, address
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._sock, name)
 
 
 class MavLink:
@@ -43,6 +83,8 @@ class MavLink:
         self._send_lock = threading.Lock()
         self._conn: Any = None
         self._t0 = time.monotonic()
+        self.last_source: Any = None  # (host, port) the last message came from (UDP), else None
+        self.peer: Any = None  # UDP listen: the address replies go to (None: the last sender)
         self.sent = 0
         self.send_errors = 0
 
@@ -66,7 +108,23 @@ class MavLink:
         conn = mavutil.mavlink_connection(self.url, **kwargs)
         if hasattr(conn, "mav"):
             conn.mav.robust_parsing = True
+        if getattr(conn, "udp_server", False):
+            self._track_udp_peers(conn)
         self._conn = conn
+
+    def _track_udp_peers(self, conn: Any) -> None:
+        """Note each datagram's source address; send only to ``peer`` once it is set."""
+        conn.port = _SourceNotingSocket(conn.port, self)
+        send_to_all = conn.write
+
+        def write(buf: bytes) -> None:
+            peer = self.peer
+            if peer is None:
+                send_to_all(buf)
+            else:
+                conn.port.sendto(buf, peer)
+
+        conn.write = write
 
     def close(self) -> None:
         """Close the connection (idempotent)."""
@@ -80,7 +138,11 @@ class MavLink:
         return self._conn is not None
 
     def recv(self, timeout: float) -> Any:
-        """The next message, or None after ``timeout`` s (raises OSError on a link error)."""
+        """The next message, or None after ``timeout`` s (raises OSError on a link error).
+
+        ``last_source`` is then the UDP address it came from. When ``peer`` is set, replies of
+        a listening UDP link keep going to it even if someone else sent last (pymavlink would
+        send to every recent sender: a second autopilot would receive our commands)."""
         conn = self._conn
         if conn is None:
             time.sleep(timeout)

@@ -166,3 +166,10 @@ def set_mode_params(autopilot: str, name: str) -> SetModeParams:
 def is_guided(mode: str) -> bool:
     """True in a mode where the autopilot follows external setpoints (OFFBOARD, GUIDED)."""
     return mode in GUIDED_MODES
+
+
+def holds_on_the_ground(mode: str) -> bool:
+    """True in a guided mode where a position hold streamed on the ground is safe and needed:
+    PX4's OFFBOARD (no stream, no mode, no arming). Not ArduCopter's GUIDED, where a position
+    target overrides NAV_TAKEOFF and keeps the vehicle on the ground until it disarms."""
+    return mode == GUIDED_MODE[AUTOPILOT_PX4]

@@ -11,7 +11,6 @@ from __future__ import annotations
 import collections
 import logging
 import math
-import struct
 import sys
 import threading
 import time
@@ -43,9 +42,12 @@ from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
-from dronewrapper_bridge_mavlink.link import MavLink, mavutil
+from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
+from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
+from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
@@ -54,9 +56,11 @@ from dronewrapper_bridge_mavlink.modes import (
     LAND_MODE,
     RETURN_MODE,
     canonical_mode,
+    is_guided,
     set_mode_params,
 )
 from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
     Telemetry,
@@ -64,6 +68,7 @@ from dronewrapper_bridge_mavlink.telemetry import (
     battery_from_sys_status,
     extended_state,
     is_autopilot_heartbeat,
+    non_finite_field,
     state_from_heartbeat,
 )
 
@@ -72,9 +77,6 @@ log = logging.getLogger("bridge_mavlink")
 MAV_TYPE_GCS = 6
 MAV_AUTOPILOT_INVALID = 8
 MAV_STATE_ACTIVE = 4
-MAV_PARAM_TYPE_REAL32 = 9
-MAV_PARAM_TYPE_INT32 = 6
-INTEGER_PARAM_TYPES = frozenset({1, 2, 3, 4, 5, 6})
 
 DEFAULT_MESSAGE_RATES = {
     "LOCAL_POSITION_NED": 50.0,
@@ -104,7 +106,7 @@ class LimitsConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """bridge_mavlink configuration (units in the names' docs; see README.md)."""
 
-    connection: str = "udpin:0.0.0.0:14540"  # pymavlink URL
+    connection: str = "udpin:127.0.0.1:14540"  # pymavlink URL; loopback unless set otherwise
     baud: int = 57600  # serial only
     source_system: int = 255  # our MAVLink system id
     source_component: int = 190  # our MAVLink component id
@@ -114,6 +116,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     heartbeat_timeout: float = 3.0  # s without heartbeat -> State.connected false
     stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded
     offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
+    final_ack_timeout: float = 1.0  # s to wait for PX4's second (real) DO_SET_MODE ack
+    mode_confirm_timeout: float = 2.5  # s for HEARTBEAT to show a mode acked only once
     setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
     commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
     commander_lost_action: str = "land"  # hold | land | return
@@ -146,14 +150,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
                 raise ValueError(f"{name} must be > 0")
         if self.command_attempts < 1 or self.param_attempts < 1:
             raise ValueError("command_attempts and param_attempts must be >= 1")
-
-
-def _float_bits_to_int(value: float) -> int:
-    return struct.unpack("<i", struct.pack("<f", value))[0]
-
-
-def _int_to_float_bits(value: int) -> float:
-    return struct.unpack("<f", struct.pack("<i", value))[0]
+        for name in ("final_ack_timeout", "mode_confirm_timeout"):
+            if not 0 < getattr(self, name) <= 30:
+                raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")
 
 
 class Bridge:
@@ -177,6 +176,8 @@ class Bridge:
             )
         )
         self.telemetry = Telemetry()
+        self.freshness = Freshness()
+        self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
         self._lock = threading.RLock()  # telemetry, failsafe, state
@@ -268,25 +269,86 @@ class Bridge:
             if msg is None:
                 continue
             try:
-                self.handle_mavlink(msg, time.time(), time.monotonic())
+                self.handle_mavlink(msg, time.time(), time.monotonic(), self.link.last_source)
             except Exception:
                 self.node.callback_errors["mavlink"] += 1
                 log.exception("error handling %s", msg.get_type())
 
-    def handle_mavlink(self, msg: Any, stamp: float, now: float) -> None:
-        """Dispatch one received MAVLink message (``stamp`` wall s, ``now`` monotonic s)."""
+    def handle_mavlink(self, msg: Any, stamp: float, now: float, source: Any = None) -> None:
+        """Dispatch one received MAVLink message (``stamp`` wall s, ``now`` monotonic s,
+        ``source`` the UDP address it came from, None when unknown)."""
         kind = msg.get_type()
         if kind == "BAD_DATA":
             return
         self.messages_received += 1
+        if not self._admit(msg, kind, source, now):
+            return
         if kind == "HEARTBEAT":
+            with self._lock:
+                was_connected, before = self.connected, self._heartbeat_state
+                lost_at = self._last_heartbeat
             self._on_heartbeat(msg, stamp, now)
+            if not was_connected and self.connected:
+                self._report_link_gap(before, now - lost_at, now)
             return
         if self.target_system and msg.get_srcSystem() != self.target_system:
             return
         handler = self._HANDLERS.get(kind)
         if handler is not None:
             handler(self, msg, stamp, now)
+
+    def _admit(self, msg: Any, kind: str, source: Any, now: float) -> bool:
+        """False for a message to drop: from a second autopilot with the same system id, a
+        duplicated datagram, or one older than what was already used (seq / time_boot_ms)."""
+        system = msg.get_srcSystem()
+        verdict = self.sources.check(source, system, now)
+        if verdict.flag:
+            self._bridge_text(verdict.flag, now)
+        if not verdict.accept:
+            return False
+        if source is not None and system == self.target_system:
+            self.link.peer = self.sources.owner(system)
+        fresh = self.freshness.check(
+            source,
+            system,
+            msg.get_srcComponent(),
+            msg.get_seq(),
+            kind,
+            boot_ms_of(msg),
+            now,
+            bytes(msg.get_msgbuf() or b""),
+        )
+        if not fresh.new:
+            log.debug("dropped %s: %s", kind, fresh.reason)
+            return False
+        bad_field = non_finite_field(kind, msg)
+        if bad_field is not None:
+            self.node.callback_errors["mavlink non-finite"] += 1
+            log.debug("dropped %s", bad_field)
+            return False
+        return True
+
+    def _report_link_gap(self, before: State | None, gap_s: float, now: float) -> None:
+        """After a link gap, report what the autopilot changed meanwhile (a failsafe)."""
+        with self._lock:
+            after = self._heartbeat_state
+        if after is None:
+            return
+        report = gap_report(before, after, gap_s)
+        if report is not None:
+            self._bridge_text(report, now)
+
+    def _bridge_text(self, text: str, now: float) -> None:
+        """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
+        log.warning("%s", text)
+        self._publish_text(
+            StatusText(
+                header=Header(stamp=time.time(), frame_id="bridge"),
+                severity=SEVERITY_WARNING,
+                text=f"bridge: {text}",
+            ),
+            now,
+        )
 
     def _on_heartbeat(self, msg: Any, stamp: float, now: float) -> None:
         if not is_autopilot_heartbeat(msg):
@@ -601,15 +663,16 @@ class Bridge:
 
     def _failsafe_request(self, action: str) -> None:
         autopilot = self.autopilot or AUTOPILOT_PX4
+        mode = LAND_MODE[autopilot] if action == "land" else RETURN_MODE[autopilot]
+        self.failsafe_mode_requested(mode)
         if action == "land":
-            self.failsafe_mode_requested(LAND_MODE[autopilot])
             result, message = self.command(
                 cmds.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, math.nan, math.nan, math.nan
             )
         else:
-            self.failsafe_mode_requested(RETURN_MODE[autopilot])
             result, message = self.command(cmds.MAV_CMD_NAV_RETURN_TO_LAUNCH)
         if result == cmds.MAV_RESULT_ACCEPTED:
+            self._mode_entered(mode)
             log.warning("failsafe %s: accepted by the autopilot", action)
         else:
             log.error("failsafe %s refused: %s", action, message)
@@ -654,10 +717,25 @@ class Bridge:
 
     def command(self, command: int, *params: float, attempts: int | None = None) -> tuple[int, str]:
         """Send a COMMAND_LONG and wait for its ack; returns (MAV_RESULT, explanation)."""
+        pending, message = self.command_exchange(command, *params, attempts=attempts)
+        return pending.result, message
+
+    def command_exchange(
+        self,
+        command: int,
+        *params: float,
+        attempts: int | None = None,
+        expected_acks: int = 1,
+    ) -> tuple[cmds.PendingCommand, str]:
+        """Send a COMMAND_LONG and wait for its final ack (the second of ``expected_acks`` = 2,
+        see commands.py); returns the finished command and an explanation (the autopilot's
+        STATUSTEXT reason for a refusal)."""
         pending = cmds.PendingCommand(
             cmds.command_long(command, *params),
             attempts=attempts or self.config.command_attempts,
             ack_timeout=self.config.command_ack_timeout,
+            expected_acks=expected_acks,
+            final_ack_timeout=self.config.final_ack_timeout,
         )
         name = cmds.command_name(command)
         with self._cmd_lock:
@@ -688,12 +766,12 @@ class Bridge:
                     self.acks.release(pending, time.monotonic())
         result = pending.result
         if result == cmds.MAV_RESULT_ACCEPTED:
-            return result, f"{name} accepted"
+            return pending, f"{name} accepted"
         if result == cmds.RESULT_NO_ACK:
-            return result, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
+            return pending, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
         reason = self._reason_since(started)
         text = f"{name} refused: {cmds.result_name(result)}"
-        return result, f"{text} ({reason})" if reason else text
+        return pending, f"{text} ({reason})" if reason else text
 
     def _reason_since(self, started: float) -> str:
         deadline = time.monotonic() + self.config.reason_wait
@@ -736,12 +814,15 @@ class Bridge:
                 self.telemetry.takeoff_altitude_amsl(height) if not math.isnan(height) else math.nan
             )
         with self._lock:
-            self.failsafe.on_mode_requested("AUTO.TAKEOFF", time.monotonic())
-            self.failsafe.on_mode_requested(HOLD_MODE[autopilot], time.monotonic())
-            self.failsafe.on_takeoff_requested()
+            now = time.monotonic()
+            self.failsafe.on_mode_requested("AUTO.TAKEOFF", now)
+            self.failsafe.on_mode_requested(HOLD_MODE[autopilot], now)
+            self.failsafe.on_takeoff_requested(now)  # no priming, no hold into the climb
         result, message = self.command(
             cmds.MAV_CMD_NAV_TAKEOFF, request.min_pitch, 0, 0, yaw_deg, math.nan, math.nan, altitude
         )
+        if result == cmds.MAV_RESULT_ACCEPTED and autopilot == AUTOPILOT_PX4:
+            self._mode_entered("AUTO.TAKEOFF")  # ArduCopter climbs in GUIDED itself
         if not math.isnan(height) and math.isnan(altitude):
             message += " (no home altitude known: the autopilot's default take-off altitude)"
         return CommandTOLResult(success=result == 0, result=result, message=message)
@@ -755,23 +836,73 @@ class Bridge:
                 raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
         self.failsafe_mode_requested(LAND_MODE[autopilot])
         result, message = self.command(cmds.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan)
+        if result == cmds.MAV_RESULT_ACCEPTED:
+            self._mode_entered(LAND_MODE[autopilot])  # not ~1 s later from the heartbeat
         return CommandTOLResult(success=result == 0, result=result, message=message)
 
     def handle_set_mode(self, request: SetMode) -> SetModeResult:
-        """SET_MODE by name; OFFBOARD on PX4 is preceded by > offboard_prime_s of streaming."""
+        """SET_MODE by name; replies once the autopilot has really entered or refused it.
+
+        PX4: OFFBOARD is preceded by > offboard_prime_s of streaming (priming); DO_SET_MODE is
+        acknowledged twice and the second ack (the commander's) is the answer, a refusal with
+        PX4's STATUSTEXT reason; with no second ack the mode must show in HEARTBEAT within
+        mode_confirm_timeout. ArduPilot: one ack, and ACCEPTED means the mode is entered; no
+        priming (a hold at the ground would override its take-off). An entered mode is known
+        at once (failsafe, State), not at the next 1 Hz heartbeat.
+        """
         autopilot = self._require_connected()
         params = set_mode_params(autopilot, request.custom_mode)  # ValueError lists valid modes
-        guided = params.name == GUIDED_MODE.get(autopilot)
-        if guided and autopilot == AUTOPILOT_PX4:
+        px4 = autopilot == AUTOPILOT_PX4
+        primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
+        if primed:
             self._prime_stream()
         self.failsafe_mode_requested(params.name)
-        result, message = self.command(
-            cmds.MAV_CMD_DO_SET_MODE, params.param1, params.param2, params.param3
+        pending, message = self.command_exchange(
+            cmds.MAV_CMD_DO_SET_MODE,
+            params.param1,
+            params.param2,
+            params.param3,
+            expected_acks=2 if px4 else 1,
         )
-        if guided and result == cmds.MAV_RESULT_ACCEPTED:
-            with self._lock:  # keep streaming until the heartbeat shows the new mode
-                self.failsafe.start_priming(time.monotonic(), 3.0)
+        result = pending.result
+        if result == cmds.MAV_RESULT_ACCEPTED and not pending.confirmed:
+            seen = self._wait_for_mode(params.name, self.config.mode_confirm_timeout)
+            if seen == params.name:
+                message += " (confirmed by HEARTBEAT)"
+            else:
+                result = cmds.MAV_RESULT_FAILED
+                message = (
+                    f"DO_SET_MODE {params.name}: acknowledged once, but the autopilot is still "
+                    f"in {seen or 'an unknown mode'} after {self.config.mode_confirm_timeout:g} s"
+                )
+        if result == cmds.MAV_RESULT_ACCEPTED:
+            self._mode_entered(params.name)
+        with self._lock:  # the stream goes on only if the bridge holds OFFBOARD now
+            self.failsafe.end_priming(time.monotonic(), engage=primed and result == 0)
         return SetModeResult(mode_sent=result == 0, result=result, message=message)
+
+    def _wait_for_mode(self, mode: str, timeout: float) -> str:
+        """Wait up to ``timeout`` s for HEARTBEAT to show ``mode``; returns the mode shown."""
+        deadline = time.monotonic() + timeout
+        while True:
+            with self._lock:
+                shown = self._heartbeat_state.mode if self._heartbeat_state else ""
+            if shown == mode or time.monotonic() >= deadline or self.node.stop_event.is_set():
+                return shown
+            time.sleep(0.02)
+
+    def _mode_entered(self, mode: str) -> None:
+        """The autopilot accepted a command that puts it in ``mode``: the failsafe and State
+        know it now (the next HEARTBEAT, up to 1 s later, confirms or corrects it)."""
+        now = time.monotonic()
+        with self._lock:
+            hb = self._heartbeat_state
+            if hb is None or hb.mode == mode:
+                return
+            self._heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=is_guided(mode))
+            self._update_failsafe_vehicle(now)
+        log.info("mode %s (from the accepted command)", mode)
+        self.publish_state()
 
     def _prime_stream(self) -> None:
         need = self.config.offboard_prime_s
@@ -804,11 +935,11 @@ class Bridge:
         return param_id
 
     def _param_decode(self, raw: float, param_type: int) -> ParamValue:
-        if param_type in INTEGER_PARAM_TYPES:
-            if self.autopilot == AUTOPILOT_ARDUPILOT:
-                return ParamValue(integer=int(raw))
-            return ParamValue(integer=_float_bits_to_int(raw))  # PX4: bytewise int32
-        return ParamValue(real=raw)
+        return param_values.decode_param(raw, param_type, bytewise=self._param_bytewise())
+
+    def _param_bytewise(self) -> bool:
+        """PX4 sends integer parameters as their bytes; ArduPilot as float values."""
+        return self.autopilot != AUTOPILOT_ARDUPILOT
 
     def _param_exchange(self, param_id: str, send: Any) -> tuple[float, int] | None:
         """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""
@@ -846,12 +977,14 @@ class Bridge:
         return ParamGetResult(success=True, value=self._param_decode(*got), message="ok")
 
     def handle_param_set(self, request: ParamSet) -> ParamSetResult:
-        """PARAM_SET: write, then report the value the autopilot echoes."""
+        """PARAM_SET: write, then report the value the autopilot echoes.
+
+        The value is checked against the parameter's type first (float32 range, integer
+        ranges, exactness); a value that does not fit is a bad request naming the field.
+        """
         self._require_connected()
         param_id = self._check_param_id(request.param_id)
-        value = request.value
-        if not math.isfinite(value.real):
-            raise ValueError(f"{param_id}: value must be finite, got {value.real!r}")
+        param_values.requested_number(param_id, request.value)  # refuse before any I/O
         with self._param_cond:
             known = self._params.get(param_id)
         if known is None:
@@ -861,19 +994,9 @@ class Bridge:
             param_type = known_read[1]
         else:
             param_type = known[1]
-        if param_type in INTEGER_PARAM_TYPES:
-            if value.real != 0.0 and value.real != int(value.real):
-                raise ValueError(f"{param_id} is an integer parameter, got {value.real!r}")
-            wanted = value.integer if value.integer != 0 else int(value.real)
-            if not -(2**31) <= wanted < 2**31:
-                raise ValueError(f"{param_id}: {wanted} does not fit in int32")
-            if self.autopilot == AUTOPILOT_ARDUPILOT:
-                raw = float(wanted)
-            else:
-                raw = _int_to_float_bits(wanted)
-        else:
-            wanted_real = value.real if value.integer == 0 else float(value.integer)
-            raw = wanted_real
+        raw = param_values.encode_param(
+            param_id, request.value, param_type, bytewise=self._param_bytewise()
+        )
         encoded = param_id.encode("ascii")
         got = self._param_exchange(
             param_id,
@@ -908,6 +1031,9 @@ def run(node: Node, config: Config) -> int:
     except ValueError as exc:  # e.g. an unknown commander_lost_action
         log.error("bad config: %s", exc)
         return 2
+    exposure = network_exposure(config.connection)
+    if exposure is not None:
+        log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
     threads = bridge.start()
     node.announce()
     log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)

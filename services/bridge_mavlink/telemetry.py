@@ -10,6 +10,7 @@ Frames: local ENU (``map``), body FLU (``base_link``); see :mod:`.frames`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -264,3 +265,21 @@ class StatusTextAssembler:
     @staticmethod
     def _make(severity: int, text: str, stamp: float) -> StatusText:
         return StatusText(header=Header(stamp=stamp), severity=int(severity), text=text.rstrip())
+
+
+# Fields that must be finite for a telemetry message to be used: a NaN or infinite pose would be
+# published to every app, and held by the failsafe as a position target.
+FINITE_FIELDS = {
+    "LOCAL_POSITION_NED": ("x", "y", "z", "vx", "vy", "vz"),
+    "ATTITUDE": ("roll", "pitch", "yaw", "rollspeed", "pitchspeed", "yawspeed"),
+    "ATTITUDE_QUATERNION": ("q1", "q2", "q3", "q4", "rollspeed", "pitchspeed", "yawspeed"),
+}
+
+
+def non_finite_field(kind: str, msg: Any) -> str | None:
+    """The first field of a pose/attitude message that is NaN or infinite, or None."""
+    for name in FINITE_FIELDS.get(kind, ()):
+        value = getattr(msg, name, 0.0)
+        if not math.isfinite(value):
+            return f"{kind}.{name} = {value!r}"
+    return None

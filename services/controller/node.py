@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import threading
 import time
 
@@ -27,6 +28,7 @@ from dronewrapper.msgs.control import (
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper_controller.config import Config
+from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop
 
 log = logging.getLogger("controller")
@@ -97,6 +99,23 @@ def _run_with_stop(node: Node, what: str, func, timeout: float) -> bool:
     return True
 
 
+def subscribe_detections(node: Node) -> Latest[Detections]:
+    """The newest usable Detections: non-finite or out-of-range messages are counted in
+    ``node.callback_errors`` under ``detections refused`` and dropped (logged at most every 2 s)."""
+    holder: Latest[Detections] = Latest(name=registry.DETECTIONS.key(node.ns))
+    last_log = [-math.inf]
+
+    def on_drop(count: int, problem: str) -> None:
+        node.callback_errors["detections refused"] += 1
+        now = time.monotonic()
+        if now - last_log[0] >= 2.0:
+            last_log[0] = now
+            log.warning("detections refused (%d so far): %s", count, problem)
+
+    node.subscribe(registry.DETECTIONS, DetectionsGate(holder.update, on_drop))
+    return holder
+
+
 class Takeoff:
     """The SDK's blocking take-off on a worker thread, so the loop can watch meanwhile."""
 
@@ -150,7 +169,12 @@ def servo_until_stopped(
             log.info("take-off done")
             takeoff = None
             status.phase = None
-        cmd = loop.tick(now, detections.value, detections.age())
+        try:
+            cmd = loop.tick(now, detections.value, detections.age())
+        except ValueError as exc:  # never die on input: hover on the last command instead
+            node.callback_errors["controller tick"] += 1
+            log.error("control step failed, command unchanged: %s", exc)
+            continue
         if cmd is None or drone is None:  # no drone: a dry run, the status shows the command
             continue
         stamp = cmd.source_stamp if cmd.source_stamp > 0 else None
@@ -211,7 +235,7 @@ def run(node: Node, config: Config) -> int:
         ):
             return 0 if node.stopping else 1
         node.announce()
-        detections = node.latest(registry.DETECTIONS)
+        detections = subscribe_detections(node)
         takeoff = None
         if config.takeoff.on_start:
             status.phase = CONTROLLER_TAKEOFF

@@ -44,6 +44,7 @@ from dronewrapper.errors import (
     NotConnected,
     Timeout,
 )
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper_ground_station import requests
 from dronewrapper_ground_station.access import OPERATOR, Access
 from dronewrapper_ground_station.config import Config
@@ -201,6 +202,29 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
             return _error(404, str(exc.args[0]))
         return _ok({"ok": True})
 
+    async def world(_: Request) -> Response:
+        try:
+            state = await asyncio.to_thread(fleet.objects.world)
+        except ServiceUnavailable as exc:
+            return _error(503, f"no simulator answers: {exc}")
+        return _ok(msgspec.to_builtins(state))
+
+    async def world_load(request: Request) -> Response:
+        refused = _operator_check(request)
+        if refused:
+            return refused
+        try:
+            scenario = requests.scenario_name(await _body(request))
+            state = await asyncio.to_thread(fleet.objects.load, scenario)
+        except requests.BadRequest as exc:
+            return _error(400, str(exc))
+        except ServiceUnavailable as exc:
+            return _error(503, f"no simulator answers: {exc}")
+        except ServiceError as exc:
+            return _error(400 if exc.code == "bad_request" else 409, exc.message)
+        log.info("world loaded: %s", state.scenario)
+        return _ok({"ok": True, **msgspec.to_builtins(state)})
+
     async def _accept(ws: WebSocket) -> str | None:
         if not access.same_origin(ws.headers.get("origin"), ws.headers.get("host", "")):
             await ws.close(code=1008, reason="cross-origin WebSocket refused")
@@ -331,6 +355,8 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         Route("/api/drones/{ns}/{command}", command, methods=["POST"]),
         Route("/api/objects", objects),
         Route("/api/objects/{name}/velocity", object_velocity, methods=["POST"]),
+        Route("/api/world", world),
+        Route("/api/world", world_load, methods=["POST"]),
         WebSocketRoute("/ws/telemetry", telemetry),
         WebSocketRoute("/ws/video/{ns}/{camera}", video),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),

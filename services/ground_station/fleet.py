@@ -23,8 +23,9 @@ from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
 from dronewrapper.runtime.latest import Latest
-from dronewrapper.runtime.node import encoding_for
+from dronewrapper.runtime.node import call_service, encoding_for
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.frames import FrameSlot
@@ -275,6 +276,9 @@ class DroneLink:
 class SimObjects:
     """The simulator's world objects: their true poses, and keyboard teleop of them."""
 
+    WORLD_NS = registry.DEFAULT_NAMESPACE
+    """The world's keys (``sim/...``) belong to no vehicle; the namespace is not used."""
+
     def __init__(self, session: zenoh.Session, clock: Callable[[], float] = time.monotonic):
         self.session = session
         self.clock = clock
@@ -311,6 +315,28 @@ class SimObjects:
             )
             self._publishers[name] = pub
         pub.put(codec.encode(Twist(linear=Vector3(x=east, y=north, z=0.0))))
+
+    def world(self, timeout: float = 3.0) -> WorldState:
+        """The simulator's world (scenario, objects, loadable scenarios).
+
+        Raises:
+            ServiceUnavailable: no simulator answers (a real aircraft, or none running).
+        """
+        return call_service(
+            self.session, registry.SIM_WORLD, WorldQuery(), ns=self.WORLD_NS, timeout=timeout
+        )
+
+    def load(self, scenario: str, timeout: float = 10.0) -> WorldState:
+        """Load scenario ``scenario``'s world (the running one again: reset its objects).
+
+        Raises:
+            ServiceError: the simulator refused (an unknown scenario: ``bad_request``).
+            ServiceUnavailable: no simulator answers.
+        """
+        request = WorldLoad(scenario=scenario)
+        return call_service(
+            self.session, registry.SIM_WORLD_LOAD, request, ns=self.WORLD_NS, timeout=timeout
+        )
 
     def close(self) -> None:
         for pub in self._publishers.values():

@@ -78,3 +78,8 @@ def goto(data: Any, max_distance: float) -> tuple[float, float]:
 def object_velocity(data: Any, speed: float) -> tuple[float, float]:
     """A simulated object's keyboard command: ``east``, ``north`` in [-1, 1] times ``speed``."""
     return number(data, "east", -1, 1) * speed, number(data, "north", -1, 1) * speed
+
+
+def scenario_name(data: Any) -> str:
+    """The ``scenario`` to load in the simulator (the simulator checks it is a known one)."""
+    return text(data, "scenario")

@@ -10,6 +10,7 @@ Detections message carrying the frame's own stamp. Bad frames are counted by rea
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -102,6 +103,9 @@ class PerceptionService:
             return
         decode_time = time.perf_counter() - start
         header = msg.header
+        if not (math.isfinite(header.stamp) and header.stamp >= 0.0):  # it becomes the PIDs' time
+            self._bad(BadFrame("bad_stamp", f"header.stamp must be finite, got {header.stamp!r}"))
+            return
         frame_id = header.frame_id or self.config.camera
         try:
             result = self.pipeline.process(bgr, header.stamp)

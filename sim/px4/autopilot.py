@@ -163,7 +163,8 @@ class Autopilot:
         self.nonfinite_setpoints = 0
         self.crashes = 0
         self._gains_version = -1
-        rates = link_rates or {"onboard": telemetry.ONBOARD_RATES, "gcs": telemetry.GCS_RATES}
+        default_rates = {"onboard": telemetry.ONBOARD_RATES, "gcs": telemetry.GCS_RATES}
+        rates = default_rates if link_rates is None else link_rates  # {}: no links at all
         self.links = {
             name: LinkState(name, telemetry.StreamScheduler(r)) for name, r in rates.items()
         }
@@ -355,8 +356,10 @@ class Autopilot:
             else:
                 result = DENIED
         elif command == CMD_DO_SET_MODE:
+            # PX4 acks twice: its MAVLink receiver at once with ACCEPTED ("received"), then
+            # the commander with the real result (a refusal for a mode it cannot enter)
             result = self._set_mode_from(p[0], p[1], p[2])
-            return [self._ack(command, result, msg), self._ack(command, result, msg)]
+            return [self._ack(command, ACCEPTED, msg), self._ack(command, result, msg)]
         elif command == CMD_NAV_TAKEOFF:
             altitude = p[6] - self.config.home_alt_m if math.isfinite(p[6]) else math.nan
             result = cmd.takeoff(now, state, altitude)

@@ -4,7 +4,9 @@ auto-disarm and the offboard-loss failsafe. A pure state machine: time comes in 
 
 Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
 - a mode change while disarmed is always accepted; while armed the mode must be able to run
-  (OFFBOARD needs a fresh setpoint stream, manual modes need RC, which this vehicle lacks);
+  (OFFBOARD needs a fresh setpoint stream, manual modes need RC, which this vehicle lacks),
+  else TEMPORARILY_REJECTED with "Switching to <mode> is currently not available" (the
+  autopilot sends this result as the second of DO_SET_MODE's two acks, after an ACCEPTED);
 - arming is refused (TEMPORARILY_REJECTED, "Arming denied: Resolve system health failures
   first") when the intended mode cannot run: OFFBOARD with no setpoint stream, manual modes,
   MISSION (no mission), LAND and RTL;

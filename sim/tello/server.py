@@ -22,13 +22,14 @@ from typing import Any
 from dronewrapper.runtime import Node
 from dronewrapper_sim.dynamics import WindModel
 from dronewrapper_sim.frames import quat_from_euler
-from dronewrapper_sim.runner import PoseSnapshot, WorldTopics
+from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.tello.config import TelloConfig
 from dronewrapper_sim.tello.flight import TelloFlight
 from dronewrapper_sim.tello.params import TELLO
 from dronewrapper_sim.tello.protocol import Reply, TelloProtocol
 from dronewrapper_sim.tello.state_string import format_state
 from dronewrapper_sim.world.scenario import Scenario
+from dronewrapper_sim.world_topics import WorldTopics
 
 log = logging.getLogger("sim.tello")
 
@@ -76,6 +77,7 @@ class TelloServer:
         self.config = config
         self.scenario = scenario
         self.node = node
+        seed_override = seed  # None: each scenario loaded later uses its own seed
         seed = scenario.seed if seed is None else seed
         self.world = World(scenario, seed=seed)
         self.world_lock = threading.Lock()
@@ -96,7 +98,9 @@ class TelloServer:
         self.send_errors = 0
         self._snapshot = self._make_snapshot()
         self.world_topics = (
-            WorldTopics(node, self.world, self.world_lock) if node is not None else None
+            WorldTopics(node, self.world, self.world_lock, seed=seed_override)
+            if node is not None
+            else None
         )
 
     @property

@@ -122,6 +122,11 @@ class World:
     """
 
     def __init__(self, scenario: Scenario, seed: int | None = None) -> None:
+        self.load(scenario, seed)
+
+    def load(self, scenario: Scenario, seed: int | None = None) -> None:
+        """Become ``scenario``'s world at time 0: its objects from their scripted start. In
+        place, so every holder of this world (renderer, publishers) sees the new one."""
         self.scenario = scenario
         self.seed = scenario.seed if seed is None else int(seed)
         self.time_s = 0.0

@@ -263,7 +263,7 @@ def test_dronewrapper_flight_at_key_level(rig):
 
     # land and disarm
     rig.command(None)
-    reply = rig.call(registry.LAND, CommandTOL())
+    reply = rig.call(registry.LAND, CommandTOL.land())
     assert reply.success, reply.message
     wait_for(lambda: rig.state.value.mode == "AUTO.LAND", 10, what="AUTO.LAND")
     rig.wait_landed_disarmed()
@@ -381,12 +381,12 @@ def test_lossy_link_arm_takeoff_land(router, spawn):
         armed = rig.call(registry.ARMING, CommandBool(value=True), timeout=30)
         assert armed.success, armed.message
         # 3.5 m, not the autopilot's default 2.5 m: proves the AMSL conversion of param7
-        took_off = rig.call(registry.TAKEOFF, CommandTOL(altitude=3.5), timeout=30)
+        took_off = rig.call(registry.TAKEOFF, CommandTOL.takeoff(3.5), timeout=30)
         assert took_off.success, took_off.message
         wait_for(lambda: rig.z() > 3.2, 25, what="take-off to 3.5 m")
         time.sleep(1.0)
         assert 3.2 < rig.z() < 3.9
-        landing = rig.call(registry.LAND, CommandTOL(), timeout=30)
+        landing = rig.call(registry.LAND, CommandTOL.land(), timeout=30)
         assert landing.success, landing.message
         rig.wait_landed_disarmed(40)
         # the link really was lossy, both ways (the bridge -> sim way carries little traffic)
@@ -425,7 +425,7 @@ def test_ground_station_mode_switch_not_fought(rig):
     finally:
         gcs.close()
     rig.command(None)
-    assert rig.call(registry.LAND, CommandTOL()).success
+    assert rig.call(registry.LAND, CommandTOL.land()).success
     rig.wait_landed_disarmed(40)
 
 
@@ -459,7 +459,7 @@ def test_bad_input_refused_and_nothing_changes(rig):
     with pytest.raises(ServiceError, match="valid modes"):
         rig.call(registry.SET_MODE, SetMode(custom_mode="FLY_AWAY"))
     with pytest.raises(ServiceError, match="altitude"):
-        rig.call(registry.TAKEOFF, CommandTOL(altitude=-3.0))
+        rig.call(registry.TAKEOFF, CommandTOL.takeoff(-3.0))
     wait_for(lambda: "setpoint refused" in rig.bridge.output(), 15, what="refusal logged")
     time.sleep(1.0)
     after = rig.state.value

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from dronewrapper.msgs import CommandBool, ControllerStatus, codec, registry
+from dronewrapper.msgs import CommandBool, CommandTOL, ControllerStatus, codec, registry
 from dronewrapper.runtime import ServiceError, ServiceUnavailable
 from support import REPO, client_node, python_module, wait_for
 
@@ -80,7 +80,7 @@ def test_services_answer_and_bad_requests_get_error_replies(router, spawn):
             node.call(registry.ARMING, ControllerStatus())
         t0 = time.monotonic()
         with pytest.raises(ServiceUnavailable, match="cmd/takeoff"):
-            node.call(registry.TAKEOFF, registry.TAKEOFF.request(), timeout=3)
+            node.call(registry.TAKEOFF, CommandTOL.takeoff(), timeout=3)
         assert time.monotonic() - t0 < 6.0  # bounded by the 3 s timeout (2x for a loaded machine)
 
 

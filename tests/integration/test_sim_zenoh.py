@@ -129,3 +129,55 @@ def median_period(msgs: list) -> float:
     stamps = [m.header.stamp for m in msgs]
     gaps = sorted(b - a for a, b in itertools.pairwise(stamps))
     return gaps[len(gaps) // 2]
+
+
+def test_world_control_loads_a_scenario_and_resets_it(spawn, router):
+    """The world services a ground station uses: which scenario runs; load another one; load
+    the same one again to put its objects back at their start. Only fixed names load."""
+    from dronewrapper.msgs.simulation import WorldLoad, WorldQuery
+    from dronewrapper.runtime import ServiceError
+
+    argv = python_module(
+        "dronewrapper_sim", "--scenario", "beacon_static", "--connect", router,
+        "--udp-onboard", "off", "--udp-gcs", "off", "--no-cameras",
+    )  # fmt: skip
+    spawn(argv, "sim")
+    with client_node(router) as node:
+        state = wait_for(
+            lambda: _call_or_none(node, registry.SIM_WORLD, WorldQuery()), 30, what="world info"
+        )
+        assert state.scenario == "beacon_static" and state.objects == ["target"]
+        assert "people_crossing_front" in state.available and state.loads == 0
+
+        target = node.latest(registry.SIM_OBJECT_POSE, name="target")
+        start = target.wait(10).pose.position
+        push = node.publisher(registry.SIM_OBJECT_CMD_VEL, name="target")
+        for _ in range(20):  # 1 s east at 1 m/s
+            push.put(Twist(linear=Vector3(x=1.0)))
+            time.sleep(0.05)
+        wait_for(lambda: target.value.pose.position.x > start.x + 0.4, 10, what="target moved")
+
+        reset = node.call(registry.SIM_WORLD_LOAD, WorldLoad(scenario="beacon_static"))
+        assert reset.loads == 1
+        wait_for(
+            lambda: abs(target.value.pose.position.x - start.x) < 0.05, 10, what="target reset"
+        )
+
+        crossing = node.call(registry.SIM_WORLD_LOAD, WorldLoad(scenario="people_crossing_front"))
+        assert crossing.scenario == "people_crossing_front" and len(crossing.objects) >= 2
+        person = next(name for name in crossing.objects if name != "target")
+        node.latest(registry.SIM_OBJECT_POSE, name=person).wait(10)
+
+        for bad in ("nope", "../sim/scenarios/beacon_static.yaml", "/etc/passwd"):
+            with pytest.raises(ServiceError, match="unknown scenario") as info:
+                node.call(registry.SIM_WORLD_LOAD, WorldLoad(scenario=bad))
+            assert info.value.code == "bad_request"
+
+
+def _call_or_none(node, service, request):
+    from dronewrapper.runtime import ServiceUnavailable
+
+    try:
+        return node.call(service, request, timeout=2.0)
+    except ServiceUnavailable:
+        return None

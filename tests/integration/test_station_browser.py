@@ -221,6 +221,37 @@ def test_fly_from_the_page(tmp_path: Path) -> None:
                 )
                 assert abs(moved.pose.position.y - start.y) < 0.1, "ArrowRight is east only"
 
+                # Reset puts the beacon back where the scenario starts it
+                wait_for(
+                    lambda: (
+                        "running beacon_static"
+                        in _page(driver, "document.getElementById('world-state').textContent")
+                    ),
+                    15,
+                    what="the world shown",
+                )
+                driver.find_element(By.ID, "btn-world-reset").click()
+                wait_for(
+                    lambda: (b := beacon.fresh(1.0)) and abs(b.pose.position.x - start.x) < 0.1,
+                    15,
+                    what="the beacon reset to its start",
+                )
+                # picking another scenario loads its world (people appear)
+                driver.execute_script(
+                    "document.getElementById('scenario-select').value = 'people_crossing_front'"
+                )
+                driver.find_element(By.ID, "btn-world-load").click()
+                try:
+                    wait_for(
+                        lambda: "world: people_crossing_front loaded" in _result(driver),
+                        20,
+                        what="the load reported",
+                    )
+                except AssertionError as exc:
+                    raise AssertionError(f"{exc}; the page says {_result(driver)!r}") from None
+                person = node.latest(registry.SIM_OBJECT_POSE, name="person1")
+                wait_for(lambda: person.fresh(1.0), 15, what="a passer-by on the bus")
+
                 # land click -> on the ground
                 driver.find_element(By.ID, "btn-land").click()
                 wait_for(

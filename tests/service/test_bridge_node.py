@@ -1,8 +1,11 @@
 """The bridge's logic in-process, over real UDP MAVLink and a real Zenoh router.
 
-The autopilot is a small pymavlink peer in this file (a scripted PX4: double DO_SET_MODE acks,
-arming refusals with STATUSTEXT, int32 params as raw bits), so each rule of the contract can be
-checked exactly on the wire. Flights against the simulator are in tests/integration.
+The autopilot is a small pymavlink peer in this file (a scripted PX4: DO_SET_MODE acked twice,
+ACCEPTED then the commander's real result, refusals of modes that need RC, arming refusals with
+STATUSTEXT, int32 params as raw bits; or a scripted ArduCopter: one ack, position targets in
+GUIDED override its take-off, disarm 10 s after arming on the ground), so each rule of the
+contract can be checked exactly on the wire. Flights against the simulator are in
+tests/integration; against real ArduCopter SITL in tests/sitl.
 """
 
 from __future__ import annotations
@@ -41,16 +44,35 @@ from support import client_node, free_port, wait_for
 
 OFFBOARD = 6 << 16
 POSCTL = 3 << 16
+ALTCTL = 2 << 16
 AUTO_LAND = (4 << 16) | (6 << 24)
 AUTO_LOITER = (4 << 16) | (3 << 24)
 ARMED = 128
 
 
 class FakePX4:
-    """A scripted PX4 on a real UDP socket: sends telemetry, answers commands, logs traffic."""
+    """A scripted PX4 (or, with ``autopilot=3``, ArduCopter) on a real UDP socket: sends
+    telemetry, answers commands, logs traffic.
 
-    def __init__(self, bridge_port: int, autopilot: int = 12) -> None:
+    ArduCopter as measured against its SITL (issue 21): NAV_TAKEOFF in GUIDED, armed, climbs
+    (``climb_rate`` m/s to the requested height) unless a position target arrives after it
+    (ArduCopter obeys the target instead: a ground-level hold keeps the motors idle), and it
+    disarms itself ``disarm_delay`` s (10) after arming if it never left the ground.
+    """
+
+    def __init__(self, bridge_port: int, autopilot: int = 12, disarm_delay: float = 10.0) -> None:
         self.autopilot = autopilot  # MAV_AUTOPILOT: 12 PX4, 3 ArduPilot
+        self.disarm_delay = disarm_delay
+        self.climb_rate = 2.0
+        self.climb_to: float | None = None  # ArduCopter: take-off height above the start, m
+        self.takeoff_overridden = False
+        self.armed_at = math.inf
+        self.refuse_modes: dict[int, str] = {}  # PX4 custom_mode -> the commander's reason
+        self.mode_acks = 2  # PX4: 2 (receiver + commander); 1: an autopilot that acks once
+        self.mode_changes = True  # False: acks a mode but never enters it
+        self.commander_delay = 0.0  # s between PX4's two DO_SET_MODE acks (11 ms measured)
+        self.commander_acks: list[float] = []  # when each commander (second) ack was sent
+        self.heartbeat_every = 10  # ticks of 20 ms (5 Hz keeps tests short; PX4 sends 1 Hz)
         self.conn = mavutil.mavlink_connection(
             f"udpout:127.0.0.1:{bridge_port}", source_system=1, source_component=1
         )
@@ -88,15 +110,41 @@ class FakePX4:
         tick = 0
         while not self._stop.wait(0.02):  # 50 Hz
             tick += 1
+            if self.autopilot == 3:
+                self._arducopter_step(0.02)
             n, e, d = self.position_ned
             self.send("local_position_ned", tick * 20, n, e, d, 0.0, 0.0, 0.0)
             self.send("attitude", tick * 20, 0.0, 0.0, self.yaw_ned, 0.0, 0.0, 0.0)
             if tick % 10 == 0:
                 self.send("extended_sys_state", 0, self.landed_state)
                 self.send("sys_status", 0, 0, 0, 0, 12100, 500, 80, 0, 0, 0, 0, 0, 0)
-            if tick % 10 == 0 and self.heartbeats:  # 5 Hz keeps tests short
+            if tick % self.heartbeat_every == 0 and self.heartbeats:
                 base = 29 | (ARMED if self.armed else 0)
                 self.send("heartbeat", 2, self.autopilot, base, self.custom_mode, 4)
+
+    def _arducopter_step(self, dt: float) -> None:
+        n, e, d = self.position_ned
+        if self.armed and self.climb_to is not None:
+            d = max(-self.climb_to, d - self.climb_rate * dt)
+            self.position_ned = (n, e, d)
+            self.landed_state = 2 if d < -0.2 else self.landed_state
+        if self.armed and self.custom_mode == 9:  # LAND: 1 m/s down, disarm on the ground
+            self.climb_to = None
+            d = min(0.0, d + 1.0 * dt)
+            self.position_ned = (n, e, d)
+            if d >= 0.0:
+                self.armed, self.landed_state = False, 1
+                self.send("statustext", 6, b"Disarming motors")
+            return
+        if self.armed and d > -0.2 and time.monotonic() - self.armed_at >= self.disarm_delay:
+            self.armed, self.climb_to = False, None
+            self.send("statustext", 6, b"Disarming motors")
+
+    def _on_setpoint_arducopter(self, msg) -> None:
+        position_ignored = msg.type_mask & 0b111 == 0b111
+        if self.custom_mode == 4 and not position_ignored and self.climb_to is not None:
+            self.climb_to = None  # GUIDED obeys the position target, not the take-off
+            self.takeoff_overridden = True
 
     def _recv_loop(self) -> None:
         while not self._stop.is_set():
@@ -109,6 +157,8 @@ class FakePX4:
                 self.gcs_heartbeats += 1
             elif kind == "SET_POSITION_TARGET_LOCAL_NED":
                 self.setpoints.append((now, msg))
+                if self.autopilot == 3:
+                    self._on_setpoint_arducopter(msg)
             elif kind == "COMMAND_LONG":
                 self.commands.append((now, msg))
                 self._on_command(msg)
@@ -132,27 +182,54 @@ class FakePX4:
         self.send("param_value", name.encode(), wire, ptype, len(self.params), 0)
 
     def _on_command(self, msg) -> None:
-        if msg.command == 176:  # DO_SET_MODE, acknowledged twice like PX4
-            if self.autopilot == 3:  # ArduCopter: plain mode number
-                self.custom_mode = int(msg.param2)
-            else:
-                self.custom_mode = (int(msg.param2) << 16) | (int(msg.param3) << 24)
+        if msg.command == 176 and self.autopilot == 3:  # ArduCopter: mode number, one ack
+            self.custom_mode = int(msg.param2)
             self.send("command_ack", 176, 0)
+        elif msg.command == 176:  # PX4: the receiver's ACCEPTED, then the commander's result
+            wanted = (int(msg.param2) << 16) | (int(msg.param3) << 24)
             self.send("command_ack", 176, 0)
+            refusal = self.refuse_modes.get(wanted)
+            if refusal is None and self.armed and wanted in (POSCTL, ALTCTL):  # no RC here
+                name = "Position" if wanted == POSCTL else "Altitude"
+                refusal = f"Switching to {name} is currently not available"
+            if refusal is not None:
+                self.send("command_ack", 176, 1)
+                self.send("statustext", 2, f"{refusal}\t".encode())
+                return
+            if self.mode_acks > 1:
+                commander = threading.Timer(self.commander_delay, self._commander_accepts, [wanted])
+                commander.daemon = True
+                commander.start()
+            elif self.mode_changes:
+                self.custom_mode = wanted
         elif msg.command == 400:
             if self.refuse_arm:
                 self.send("command_ack", 400, 1)
                 self.send("statustext", 2, b"Arming denied: Resolve system health failures first\t")
             else:
                 self.armed = msg.param1 == 1
+                self.armed_at = time.monotonic()
                 self.send("command_ack", 400, 0)
         elif msg.command == 21:
-            self.custom_mode = AUTO_LAND
+            self.custom_mode = 9 if self.autopilot == 3 else AUTO_LAND
             self.send("command_ack", 21, 0)
+        elif msg.command == 22 and self.autopilot == 3:
+            ok = self.armed and self.custom_mode == 4  # ArduCopter: armed, in GUIDED
+            if ok:
+                self.climb_to = msg.param7
+            self.send("command_ack", 22, 0 if ok else 4)
         elif msg.command in (22, 511):
             self.send("command_ack", msg.command, 0)
         else:
             self.send("command_ack", msg.command, 3)
+
+    def _commander_accepts(self, mode: int) -> None:
+        if self._stop.is_set():
+            return
+        if self.mode_changes:
+            self.custom_mode = mode
+        self.commander_acks.append(time.monotonic())
+        self.send("command_ack", 176, 0)
 
     def commands_named(self, command: int) -> list:
         return [m for _, m in list(self.commands) if m.command == command]
@@ -311,7 +388,7 @@ def test_set_mode_double_ack_and_unknown_mode(rig):
     for mode in ("OFFBOARD", "AUTO.LOITER", "OFFBOARD"):
         reply = user.call(registry.SET_MODE, SetMode(custom_mode=mode), timeout=10)
         assert reply.mode_sent and reply.result == 0, reply
-    assert bridge.acks.duplicates >= 2  # PX4's second acks were recognised and dropped
+    assert bridge.acks.duplicates == 0  # PX4's second ack is the answer, not a duplicate
     with pytest.raises(ServiceError, match="valid modes"):
         user.call(registry.SET_MODE, SetMode(custom_mode="WARP9"), timeout=10)
 
@@ -385,7 +462,7 @@ def test_bad_setpoints_and_bytes_change_nothing(rig):
     time.sleep(0.3)
     assert len(fake.setpoints) == before  # not in OFFBOARD, nothing fresh: nothing sent
     with pytest.raises(ServiceError, match="altitude"):
-        user.call(registry.TAKEOFF, CommandTOL(altitude=math.inf), timeout=10)
+        user.call(registry.TAKEOFF, CommandTOL.takeoff(2000.0), timeout=10)
     replies = list(user.session.get(registry.ARMING.key("drone"), payload=b"\xc1", timeout=10))
     assert len(replies) == 1 and replies[0].err is not None
     assert b"bad CommandBool request" in replies[0].err.payload.to_bytes()
@@ -436,8 +513,9 @@ def test_params_int32_bits_and_real(rig):
 
 
 def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
-    """ArduCopter: GUIDED by number, no OFFBOARD priming, frame 1 (never 9), relative take-off
-    altitude, mixed control emulated with vz, integer params cast (not bit-reinterpreted)."""
+    """ArduCopter: GUIDED by number, no priming (before or after the ack), frame 1 (never 9),
+    relative take-off altitude, mixed control emulated with vz, integer params cast (not
+    bit-reinterpreted)."""
     _bridge, fake, user = ardu_rig
     state = user.latest(registry.STATE)
     assert wait_for(lambda: state.value and state.value.mode == "LOITER", 10)
@@ -446,15 +524,17 @@ def test_ardupilot_guided_modes_frames_takeoff_params(ardu_rig):
         user.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), timeout=5)
     before = len(fake.setpoints)
     assert user.call(registry.SET_MODE, SetMode(custom_mode="GUIDED"), timeout=10).mode_sent
-    ((mode_at, mode_cmd),) = [(t, m) for t, m in list(fake.commands) if m.command == 176]
-    # No priming stream before the mode change (a hold stream may follow the ack: that is fine).
-    assert len([t for t, _ in list(fake.setpoints) if t < mode_at]) == before
+    (mode_cmd,) = fake.commands_named(176)
+    # No priming stream, before the mode change or after it (it would override a take-off).
+    time.sleep(0.5)
+    assert len(fake.setpoints) == before
     assert (mode_cmd.param1, mode_cmd.param2) == (1.0, 4.0)
     wait_for(lambda: state.value.mode == "GUIDED" and state.value.guided, 10)
     assert user.call(registry.ARMING, CommandBool(value=True), timeout=10).success
-    assert user.call(registry.TAKEOFF, CommandTOL(altitude=4.0), timeout=10).success
+    assert user.call(registry.TAKEOFF, CommandTOL.takeoff(4.0), timeout=10).success
     (takeoff,) = fake.commands_named(22)
     assert takeoff.param7 == 4.0  # ArduPilot: metres above home, not AMSL
+    fake.climb_to = None  # stop the scripted climb at 3 m
     fake.landed_state, fake.position_ned = 2, (0.0, 0.0, -3.0)
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
     mixed = PositionTarget(

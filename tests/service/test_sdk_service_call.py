@@ -42,7 +42,7 @@ def test_a_call_without_server_gives_up_within_its_timeout(router):
     with client_node(router, name="user") as user:
         t0 = time.monotonic()
         with pytest.raises(ServiceUnavailable, match="cmd/arming"):
-            user.call(registry.ARMING, registry.ARMING.request(), timeout=1.0)
+            user.call(registry.ARMING, registry.ARMING.request(value=False), timeout=1.0)
         elapsed = time.monotonic() - t0
         assert elapsed >= min(1.0, ROUTE_WAIT_S) - 0.1  # kept asking for the route wait
         assert elapsed < 5.0  # and stopped (the timeout is 1 s; generous for a busy machine)

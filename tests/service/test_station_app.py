@@ -16,7 +16,9 @@ from websockets.sync.client import connect
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool, SetMode, State
 from dronewrapper.msgs.sensor import CompressedImage
+from dronewrapper.msgs.simulation import WorldLoad, WorldState
 from dronewrapper.msgs.std import Header
+from dronewrapper.runtime import ServiceError
 from support import client_node, wait_for
 
 pytestmark = pytest.mark.timeout(120)
@@ -170,6 +172,31 @@ def test_objects_and_their_teleop(env: StationEnv, bus) -> None:
     assert env.http("POST", path, {"east": 2.0, "north": 0})[0] == 400
     assert env.http("POST", "/api/objects/ghost/velocity", {"east": 0, "north": 0})[0] == 404
     assert env.http("POST", path, {"east": 0, "north": 0}, headers=REMOTE)[0] == 403
+
+
+def test_world_of_the_simulator_is_shown_and_loaded(env: StationEnv, bus) -> None:
+    assert env.http("GET", "/api/world")[0] == 503  # no simulator answers yet
+    loaded: list[str] = []
+
+    def load(request: WorldLoad) -> WorldState:
+        if request.scenario not in ("beacon_static", "empty"):
+            raise ServiceError(f"unknown scenario {request.scenario!r}", "bad_request")
+        loaded.append(request.scenario)
+        return WorldState(scenario=request.scenario, objects=[], available=["beacon_static"])
+
+    bus.serve(registry.SIM_WORLD, lambda _: WorldState(scenario="empty", available=["empty"]))
+    bus.serve(registry.SIM_WORLD_LOAD, load)
+    status, world = wait_for(
+        lambda: (r := env.http("GET", "/api/world"))[0] == 200 and r[:2], 10, what="world"
+    )
+    assert world["scenario"] == "empty" and world["available"] == ["empty"]
+    status, reply, _ = env.http("POST", "/api/world", {"scenario": "beacon_static"})
+    assert status == 200 and reply["ok"] and reply["scenario"] == "beacon_static"
+    status, reply, _ = env.http("POST", "/api/world", {"scenario": "../etc/passwd"})
+    assert status == 400 and "unknown scenario" in reply["error"]
+    assert env.http("POST", "/api/world", {})[0] == 400  # scenario is required
+    assert env.http("POST", "/api/world", {"scenario": "empty"}, headers=REMOTE)[0] == 403
+    assert loaded == ["beacon_static"]
 
 
 # ---- WebSockets

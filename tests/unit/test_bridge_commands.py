@@ -14,11 +14,18 @@ from dronewrapper_bridge_mavlink.commands import (
     result_name,
 )
 
+TEMPORARILY_REJECTED = 1
 DENIED = 2
 
 
-def pending(command=MAV_CMD_DO_SET_MODE, attempts=3, timeout=1.0):
-    return PendingCommand(command_long(command, 1, 6, 0), attempts=attempts, ack_timeout=timeout)
+def pending(command=MAV_CMD_DO_SET_MODE, attempts=3, timeout=1.0, expected_acks=1):
+    return PendingCommand(
+        command_long(command, 1, 6, 0),
+        attempts=attempts,
+        ack_timeout=timeout,
+        expected_acks=expected_acks,
+        final_ack_timeout=1.0,
+    )
 
 
 def test_first_send_then_retries_with_confirmation_increments():
@@ -40,7 +47,7 @@ def test_ack_completes_and_duplicate_ack_is_dropped():
     router.register(p)
     p.due(0.0)
     assert router.on_ack(MAV_CMD_DO_SET_MODE, MAV_RESULT_ACCEPTED, 0.05) == "matched"
-    # PX4's second ACCEPTED for the same DO_SET_MODE arrives right after
+    # a repeated ack of a command acked once (e.g. answering a retry) arrives right after
     assert router.on_ack(MAV_CMD_DO_SET_MODE, MAV_RESULT_ACCEPTED, 0.06) == "duplicate"
     assert p.finished(0.06) and p.result == MAV_RESULT_ACCEPTED
     router.release(p, 0.07)
@@ -99,6 +106,42 @@ def test_in_progress_then_silence_is_no_ack():
     p.on_ack(MAV_RESULT_IN_PROGRESS, 0.5)
     assert not p.finished(2.0)
     assert p.finished(2.6) and p.result == RESULT_NO_ACK
+
+
+def test_px4_double_ack_the_second_is_the_answer():
+    """PX4: ACCEPTED from the MAVLink receiver, then the commander's refusal 11 ms later."""
+    router = AckRouter()
+    p = pending(expected_acks=2)
+    router.register(p)
+    p.due(0.0)
+    assert router.on_ack(MAV_CMD_DO_SET_MODE, MAV_RESULT_ACCEPTED, 0.010) == "matched"
+    assert not p.finished(0.011) and not p.confirmed  # provisional: wait for the real answer
+    assert p.due(0.5) is None  # and never re-send meanwhile
+    assert router.on_ack(MAV_CMD_DO_SET_MODE, TEMPORARILY_REJECTED, 0.021) == "matched"
+    assert p.finished(0.021) and p.result == TEMPORARILY_REJECTED and p.confirmed
+
+
+def test_px4_double_ack_both_accepted_is_confirmed():
+    p = pending(expected_acks=2)
+    p.due(0.0)
+    p.on_ack(MAV_RESULT_ACCEPTED, 0.01)
+    p.on_ack(MAV_RESULT_ACCEPTED, 0.02)
+    assert p.finished(0.02) and p.result == MAV_RESULT_ACCEPTED and p.confirmed and p.acks == 2
+
+
+def test_px4_double_ack_missing_second_ends_accepted_but_unconfirmed():
+    p = pending(expected_acks=2)
+    p.due(0.0)
+    p.on_ack(MAV_RESULT_ACCEPTED, 0.01)
+    assert not p.finished(1.0)
+    assert p.finished(1.02) and p.result == MAV_RESULT_ACCEPTED and not p.confirmed
+
+
+def test_a_first_refusal_is_final_even_when_two_acks_are_expected():
+    p = pending(expected_acks=2)
+    p.due(0.0)
+    p.on_ack(DENIED, 0.01)
+    assert p.finished(0.01) and p.result == DENIED and p.confirmed
 
 
 def test_result_names():

@@ -8,6 +8,7 @@ import pytest
 
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_bridge_mavlink.__main__ import _configure
+from dronewrapper_bridge_mavlink.link import network_exposure
 from dronewrapper_bridge_mavlink.node import Config
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "services" / "bridge_mavlink" / "config"
@@ -15,7 +16,7 @@ CONFIG_DIR = Path(__file__).resolve().parents[2] / "services" / "bridge_mavlink"
 
 def test_defaults_match_the_contract():
     c = Config()
-    assert c.connection == "udpin:0.0.0.0:14540"
+    assert c.connection == "udpin:127.0.0.1:14540"
     assert (c.setpoint_timeout, c.commander_lost_timeout, c.commander_lost_action) == (
         0.5, 5.0, "land",
     )  # fmt: skip
@@ -51,8 +52,31 @@ def test_overrides_and_cli_flags():
         ("no_such_key=1", "no_such_key"),
         ("limits.max_speed=3", "max_speed"),
         ("baud=fast", "baud"),
+        ("final_ack_timeout=0", "final_ack_timeout"),
+        ("mode_confirm_timeout=nan", "mode_confirm_timeout"),
     ],
 )
 def test_bad_config_refused_naming_the_key(override, message):
     with pytest.raises(ConfigError, match=message):
         load_config(Config, None, [override])
+
+
+def test_the_default_autopilot_link_is_loopback():
+    assert Config().connection == "udpin:127.0.0.1:14540"
+    assert network_exposure(Config().connection) is None
+
+
+@pytest.mark.parametrize(
+    ("url", "exposed"),
+    [
+        ("udpin:127.0.0.1:14540", False),
+        ("udpin:localhost:14540", False),
+        ("tcp:[::1]:5760", False),
+        ("/dev/ttyACM0", False),
+        ("udpin:0.0.0.0:14540", True),
+        ("udpout:192.168.1.20:14550", True),
+        ("tcp:drone.local:5760", True),
+    ],
+)
+def test_a_link_beyond_loopback_is_recognised(url, exposed):
+    assert (network_exposure(url) is not None) == exposed

@@ -162,7 +162,7 @@ def test_not_engaged_before_anyone_commands_in_guided_mode():
     """ArduPilot: GUIDED + NAV_TAKEOFF, nobody streaming: no hold at the ground, no land."""
     fs = Failsafe()
     fs.on_vehicle(mode="GUIDED", armed=True, airborne=True, now=0.0)
-    fs.on_takeoff_requested()
+    fs.on_takeoff_requested(0.0)
     for t in (1.0, 6.0, 20.0):
         tick = fs.tick(t, POSE)
         assert tick.send is None and tick.request is None and fs.state == ""
@@ -194,3 +194,93 @@ def test_hold_ends_when_a_requested_landing_starts():
     tick = fs.tick(1.1, POSE)
     assert fs.state == "" and tick.send is None and tick.events == []
     assert [(t.old, t.new) for t in tick.transitions] == [("hold", "")]
+
+
+def test_guided_re_entered_by_someone_else_with_a_live_commander_applies_the_contract():
+    """Issue 12.2: a GCS switched OFFBOARD -> AUTO.LOITER -> OFFBOARD while the app kept
+    streaming; when the app then dies the bridge must hold, then land (not leave it to PX4's
+    own failsafe, which flew RTL)."""
+    fs = flying(Failsafe())
+    for t in (0.0, 0.5, 1.0):
+        fs.on_setpoint(velocity(), Kind.VELOCITY, t)
+    fs.on_vehicle(mode="AUTO.LOITER", armed=True, airborne=True, now=1.2)  # the GCS
+    assert fs.pilot_override
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 1.5)
+    fs.on_vehicle(mode="OFFBOARD", armed=True, airborne=True, now=1.8)  # the GCS, back
+    assert not fs.pilot_override and fs.engaged  # the app still streams: engaged at once
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 2.0)  # the app's last setpoint, then it dies
+    tick = fs.tick(2.6, POSE)
+    assert fs.state == "hold" and tick.send.type_mask == MASK_POSITION
+    assert fs.tick(7.1, POSE).request == "land"
+
+
+def test_guided_re_entered_with_nobody_streaming_is_left_to_the_autopilot():
+    fs = flying(Failsafe())
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    fs.on_vehicle(mode="AUTO.LOITER", armed=True, airborne=True, now=1.0)
+    fs.on_vehicle(mode="OFFBOARD", armed=True, airborne=True, now=10.0)
+    assert not fs.pilot_override and not fs.engaged
+    for t in (10.6, 16.0, 30.0):
+        tick = fs.tick(t, POSE)
+        assert tick.send is None and tick.request is None
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 31.0)  # a commander steers again
+    assert fs.engaged and fs.tick(36.1, POSE).request == "land"
+
+
+def test_takeoff_request_ends_priming_no_ground_hold_into_the_climb():
+    """Issue 21: no hold at the ground pose may be streamed once a take-off is requested."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="GUIDED", armed=False, airborne=False, now=0.0)
+    fs.start_priming(0.0, 3.0)
+    assert fs.tick(0.1, POSE).send is not None
+    fs.on_vehicle(mode="GUIDED", armed=True, airborne=False, now=0.15)
+    fs.on_takeoff_requested(0.2)
+    assert not fs.priming(0.21)
+    for t in (0.25, 1.0, 2.9, 12.0):
+        assert fs.tick(t, POSE).send is None
+
+
+def test_confirmed_mode_ends_priming():
+    fs = Failsafe()
+    fs.on_vehicle(mode="AUTO.LOITER", armed=False, airborne=False, now=0.0)
+    fs.start_priming(0.0, 3.2)
+    fs.on_vehicle(mode="OFFBOARD", armed=False, airborne=False, now=1.3)
+    fs.end_priming(1.3, engage=False)
+    assert not fs.priming(1.31) and fs.tick(1.4, POSE).send is None
+
+
+def test_primed_offboard_entered_by_the_bridge_keeps_its_stream():
+    """PX4: the bridge primed and entered OFFBOARD itself: dropping the stream then would make
+    PX4 fall back to RTL one second later, so the primed hold goes on as the engaged stream."""
+    fs = flying(Failsafe(), mode="AUTO.LOITER")
+    fs.start_priming(0.0, 3.2)
+    fs.on_vehicle(mode="OFFBOARD", armed=True, airborne=True, now=1.3)
+    fs.end_priming(1.3, engage=True)
+    assert fs.engaged
+    tick = fs.tick(1.4, POSE)
+    assert tick.send.type_mask == MASK_POSITION and tick.send.position.z == 5.0
+    assert fs.tick(6.4, POSE).request == "land"  # 5 s without a commander after OFFBOARD
+
+
+def test_no_ground_hold_in_arducopter_guided_until_airborne():
+    """A commander's velocity expires on the ground in GUIDED: no hold at the ground pose (it
+    would override a take-off); once airborne the contract's hold applies."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="GUIDED", armed=True, airborne=False, now=0.0)
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.engaged and fs.tick(0.1, POSE).send is not None  # the fresh command itself
+    for t in (0.6, 1.5, 2.5):
+        tick = fs.tick(t, POSE)
+        assert tick.send is None and fs.state == "" and tick.request is None
+    fs.on_vehicle(mode="GUIDED", armed=True, airborne=True, now=2.8)  # it lifted off
+    tick = fs.tick(2.9, POSE)
+    assert tick.send.type_mask == MASK_POSITION and fs.state == "hold"
+    assert fs.tick(5.1, POSE).request == "land"
+
+
+def test_offboard_holds_on_the_ground():
+    """PX4: OFFBOARD on the ground needs the stream (to stay in the mode and to arm)."""
+    fs = Failsafe()
+    fs.on_vehicle(mode="OFFBOARD", armed=False, airborne=False, now=0.0)
+    fs.on_setpoint(velocity(), Kind.VELOCITY, 0.0)
+    assert fs.tick(0.6, POSE).send.type_mask == MASK_POSITION

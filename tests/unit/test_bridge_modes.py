@@ -66,3 +66,9 @@ def test_autopilot_kind():
     assert modes.autopilot_kind(0) == "generic"
     assert modes.is_guided("OFFBOARD") and modes.is_guided("GUIDED")
     assert not modes.is_guided("AUTO.LAND")
+
+
+def test_holds_on_the_ground_only_in_offboard():
+    """PX4's OFFBOARD needs a stream on the ground; ArduCopter's GUIDED must not get one."""
+    assert modes.holds_on_the_ground("OFFBOARD")
+    assert not modes.holds_on_the_ground("GUIDED") and not modes.holds_on_the_ground("LOITER")

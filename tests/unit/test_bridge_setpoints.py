@@ -117,7 +117,7 @@ def test_mixed_ardupilot_emulated_with_climb_rate():
         (pos(z=-5000.0), "altitude"),
         (pos(yaw=math.nan), "finite"),
         (mix(z=math.nan), "finite"),
-        (PositionTarget(type_mask=2040), "type_mask 2040"),
+        (PositionTarget(type_mask=2040, coordinate_frame=1), "type_mask 2040"),
         (vel(frame=FRAME_BODY_OFFSET_NED), "coordinate_frame 9"),
         (PositionTarget(type_mask=MASK_POSITION, coordinate_frame=FRAME_BODY_NED), "frame 8"),
     ],

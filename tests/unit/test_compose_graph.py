@@ -10,7 +10,7 @@ from dronewrapper_compose.graph import GRAPH_DIR, GraphError, load_graph, substi
 from dronewrapper_compose.launcher import Launcher, build_argv
 
 SHIPPED = sorted(GRAPH_DIR.glob("*.yaml"))
-FIXED_NAMES = ["sim_iris", "px4_sitl"]
+FIXED_NAMES = ["sim_iris", "px4_sitl", "ardupilot_sitl"]
 
 
 def test_fixed_graph_names_exist():

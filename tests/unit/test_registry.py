@@ -70,9 +70,14 @@ MESSAGE_TYPES = sorted(
 )
 
 
+def has_all_defaults(msg_type) -> bool:
+    return all(f.required is False for f in msgspec.structs.fields(msg_type))
+
+
 @pytest.mark.parametrize("msg_type", MESSAGE_TYPES, ids=lambda t: t.__name__)
 def test_every_type_decodes_what_it_encodes(msg_type):
-    for msg in (msg_type(), sample(msg_type, seed=1), sample(msg_type, seed=2)):
+    first = msg_type() if has_all_defaults(msg_type) else sample(msg_type, seed=0)
+    for msg in (first, sample(msg_type, seed=1), sample(msg_type, seed=2)):
         data = codec.encode(msg)
         decoded = codec.decode(msg_type, data)
         assert type(decoded) is msg_type

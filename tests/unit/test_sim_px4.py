@@ -364,6 +364,20 @@ def test_do_set_mode_is_acked_twice_other_commands_once():
     assert ap.armed
 
 
+def test_refused_mode_is_acked_accepted_then_rejected_with_the_reason():
+    """PX4's receiver acks DO_SET_MODE at once; the commander's refusal is the second ack."""
+    ap = Autopilot()
+    client = Client(ap, "gcs")
+    client.heartbeat(mavlink.MAV_TYPE_GCS)
+    assert acks(client.command(400, 1)) == [(400, ACK_ACCEPTED)]  # armed in AUTO.LOITER
+    for main, name in ((3, "Position"), (2, "Altitude")):  # POSCTL, ALTCTL: need RC
+        refused = acks(client.command(176, 1, main, 0))
+        assert refused == [(176, ACK_ACCEPTED), (176, mavlink.MAV_RESULT_TEMPORARILY_REJECTED)]
+        assert ap.mode is Mode.LOITER
+        texts = texts_of(run(ap, 1.1))  # 1.1 s: past the 1 s between two refusal texts
+        assert f"Switching to {name} is currently not available\t" in texts
+
+
 def test_unknown_command_is_unsupported_and_wrong_target_ignored():
     ap = Autopilot()
     client = Client(ap)

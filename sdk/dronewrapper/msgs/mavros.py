@@ -113,12 +113,13 @@ class PositionTarget(msgspec.Struct, kw_only=True):
     body velocities, as MAVROS names them; the values themselves are ENU (local) and FLU (body),
     like MAVROS's topic side. ``type_mask`` bits set = field ignored (MASK_* constants).
     ``header.stamp`` is the stamp of the data that caused the command (a camera frame's stamp
-    for vision control), so latency can be measured end to end.
+    for vision control), so latency can be measured end to end. ``coordinate_frame`` and
+    ``type_mask`` are required (no default could be safe).
     """
 
     header: Header = msgspec.field(default_factory=Header)
-    coordinate_frame: int = FRAME_LOCAL_NED
-    type_mask: int = MASK_POSITION
+    coordinate_frame: int  # required: an empty message must not mean "go to the origin"
+    type_mask: int
     position: Point = msgspec.field(default_factory=Point)
     velocity: Vector3 = msgspec.field(default_factory=Vector3)
     acceleration_or_force: Vector3 = msgspec.field(default_factory=Vector3)
@@ -134,33 +135,60 @@ class StatusText(msgspec.Struct, kw_only=True):
     text: str = ""
 
 
-class ParamValue(msgspec.Struct, kw_only=True):
-    """A parameter value (mavros_msgs/ParamValue): ``integer`` for integers, else ``real``."""
+PARAM_INTEGER = "integer"
+PARAM_REAL = "real"
+
+
+class ParamValue(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """A parameter value (mavros_msgs/ParamValue): ``integer`` for integers, else ``real``.
+
+    ``kind`` (our addition: ``integer``, ``real``, or empty when unknown) says which field
+    holds the value, so an integer parameter equal to 0 is 0, not 0.0.
+    """
 
     integer: int = 0
     real: float = 0.0
+    kind: str = ""
 
     def as_number(self) -> int | float:
-        """The value as a Python number: the integer when non-zero, else the real."""
+        """The value as a Python number: by ``kind`` when set; else (as MAVROS) the integer
+        when non-zero, else the real."""
+        if self.kind == PARAM_INTEGER:
+            return self.integer
+        if self.kind == PARAM_REAL:
+            return self.real
         return self.integer if self.integer != 0 else self.real
 
     @classmethod
     def of(cls, value: int | float) -> ParamValue:
         """Wrap a Python number (bools and ints as integer, floats as real)."""
         if isinstance(value, bool | int):
-            return cls(integer=int(value))
+            return cls(integer=int(value), kind=PARAM_INTEGER)
         if not math.isfinite(float(value)):
             raise ValueError(f"parameter value must be finite, got {value!r}")
-        return cls(real=float(value))
+        return cls(real=float(value), kind=PARAM_REAL)
 
 
 # ---- services (request -> reply), as mavros_msgs/srv, with the autopilot's reason added ----
+#
+# Requests are strict (DESIGN.md "bad input changes nothing"): every field that could make the
+# aircraft do something has no default, so a request that leaves it out is refused instead of
+# acting on a guess (``CommandBool {}`` must never arm); unknown fields are refused with their
+# name (a misspelt ``altitude`` must not be silently ignored); values are checked for finiteness
+# and range at decode time, so a bad request is answered with an error naming the field before
+# any handler runs.
 
 
-class CommandBool(msgspec.Struct, kw_only=True):
-    """Arming request (mavros_msgs/CommandBool): ``value`` True arms, False disarms."""
+def _check_nan_or_within(owner: str, name: str, value: float, bound: float, unit: str) -> None:
+    if not math.isnan(value) and not (math.isfinite(value) and abs(value) <= bound):
+        raise ValueError(f"{owner}.{name} must be NaN or within ±{bound:g} {unit}, got {value!r}")
 
-    value: bool = True
+
+class CommandBool(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Arming request (mavros_msgs/CommandBool): ``value`` True arms, False disarms (required:
+    an empty request arms nothing)."""
+
+    value: bool
 
 
 class CommandBoolResult(msgspec.Struct, kw_only=True):
@@ -171,19 +199,46 @@ class CommandBoolResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class CommandTOL(msgspec.Struct, kw_only=True):
-    """Take-off / land request (mavros_msgs/CommandTOL).
+MAX_TOL_ALTITUDE = 10_000.0  # m: bound on CommandTOL.altitude (services narrow it further)
+
+
+class CommandTOL(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Take-off / land request (mavros_msgs/CommandTOL); every field is required.
 
     ``altitude`` is the height above the take-off point in metres for take-off (NaN: the
-    autopilot's default); latitude/longitude in degrees, NaN for "here" (works without GPS);
-    ``yaw`` in radians ENU, NaN to keep the current heading.
+    autopilot's default; ignored by land); latitude/longitude in degrees, NaN for "here" (works
+    without GPS); ``yaw`` in radians ENU, NaN to keep the current heading; ``min_pitch`` in
+    degrees (MAV_CMD_NAV_TAKEOFF param 1, finite, within ±90; 0 for multicopters). Use
+    :meth:`takeoff` and :meth:`land` to build one.
     """
 
-    min_pitch: float = 0.0
-    yaw: float = float("nan")
-    latitude: float = float("nan")
-    longitude: float = float("nan")
-    altitude: float = float("nan")
+    min_pitch: float
+    yaw: float
+    latitude: float
+    longitude: float
+    altitude: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.min_pitch) and abs(self.min_pitch) <= 90.0):
+            raise ValueError(
+                f"CommandTOL.min_pitch must be finite within ±90 degrees, got {self.min_pitch!r}"
+            )
+        _check_nan_or_within("CommandTOL", "yaw", self.yaw, 4.0 * math.pi, "rad")
+        _check_nan_or_within("CommandTOL", "latitude", self.latitude, 90.0, "degrees")
+        _check_nan_or_within("CommandTOL", "longitude", self.longitude, 180.0, "degrees")
+        _check_nan_or_within("CommandTOL", "altitude", self.altitude, MAX_TOL_ALTITUDE, "m")
+
+    @classmethod
+    def takeoff(cls, altitude: float = math.nan, yaw: float = math.nan) -> CommandTOL:
+        """A take-off request: ``altitude`` m above the take-off point, ``yaw`` rad ENU."""
+        return cls(min_pitch=0.0, yaw=yaw, latitude=math.nan, longitude=math.nan, altitude=altitude)
+
+    @classmethod
+    def land(cls, latitude: float = math.nan, longitude: float = math.nan) -> CommandTOL:
+        """A land request at ``latitude``/``longitude`` degrees (NaN: here)."""
+        return cls(
+            min_pitch=0.0, yaw=math.nan, latitude=latitude, longitude=longitude, altitude=math.nan
+        )
 
 
 class CommandTOLResult(msgspec.Struct, kw_only=True):
@@ -194,12 +249,22 @@ class CommandTOLResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class SetMode(msgspec.Struct, kw_only=True):
+class SetMode(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """Mode request (mavros_msgs/SetMode): ``custom_mode`` is a mode name (``OFFBOARD``,
-    ``AUTO.LOITER``, ``AUTO.LAND``, ``POSCTL``, ``GUIDED``, ``LAND`` ...)."""
+    ``AUTO.LOITER``, ``AUTO.LAND``, ``POSCTL``, ``GUIDED``, ``LAND`` ...), required;
+    ``base_mode`` must be 0 (MAVROS's "use custom_mode"; the bridge sets the base mode)."""
 
     base_mode: int = 0
-    custom_mode: str = ""
+    custom_mode: str
+
+    def __post_init__(self) -> None:
+        if self.base_mode != 0:
+            raise ValueError(f"SetMode.base_mode must be 0 (use custom_mode), got {self.base_mode}")
+        if not self.custom_mode or len(self.custom_mode) > 64:
+            raise ValueError(
+                f"SetMode.custom_mode must be a mode name of 1-64 characters, "
+                f"got {self.custom_mode[:80]!r}"
+            )
 
 
 class SetModeResult(msgspec.Struct, kw_only=True):
@@ -210,10 +275,10 @@ class SetModeResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class ParamGet(msgspec.Struct, kw_only=True):
-    """Parameter read request (mavros_msgs/ParamGet)."""
+class ParamGet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Parameter read request (mavros_msgs/ParamGet); ``param_id`` is required."""
 
-    param_id: str = ""
+    param_id: str
 
 
 class ParamGetResult(msgspec.Struct, kw_only=True):
@@ -224,11 +289,17 @@ class ParamGetResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class ParamSet(msgspec.Struct, kw_only=True):
-    """Parameter write request (mavros_msgs/ParamSet)."""
+class ParamSet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Parameter write request (mavros_msgs/ParamSet); both fields are required (an empty
+    ``value`` would write 0). ``value.real`` must be finite; the bridge checks the range
+    against the parameter's type (float32, int32)."""
 
-    param_id: str = ""
-    value: ParamValue = msgspec.field(default_factory=ParamValue)
+    param_id: str
+    value: ParamValue
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.value.real):
+            raise ValueError(f"ParamSet.value.real must be finite, got {self.value.real!r}")
 
 
 class ParamSetResult(msgspec.Struct, kw_only=True):

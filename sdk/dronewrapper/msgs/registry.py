@@ -43,6 +43,7 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
+from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
@@ -263,6 +264,11 @@ LAND = Service("{ns}/mavros/cmd/land", CommandTOL, CommandTOLResult, "bridge", "
 SET_MODE = Service("{ns}/mavros/set_mode", SetMode, SetModeResult, "bridge", "change mode")
 PARAM_GET = Service("{ns}/mavros/param/get", ParamGet, ParamGetResult, "bridge", "read param")
 PARAM_SET = Service("{ns}/mavros/param/set", ParamSet, ParamSetResult, "bridge", "write param")
+
+SIM_WORLD_LOAD = Service(
+    "sim/world/load", WorldLoad, WorldState, "sim", "load a scenario's world, or reset it"
+)
+SIM_WORLD = Service("sim/world/info", WorldQuery, WorldState, "sim", "the world the sim runs")
 
 # ---- liveliness ----
 ALIVE = Liveliness("{ns}/alive/{service}", "held by every running service")

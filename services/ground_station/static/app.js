@@ -48,6 +48,33 @@ async function command(name, body = {}) {
   } finally { $("busy").textContent = ""; }
 }
 
+// ---- the simulator's world: which scenario runs; load another or reset it
+async function refreshWorld() {
+  const r = await fetch("/api/world");
+  const sel = $("scenario-select");
+  if (!r.ok) { $("world-state").textContent = "no simulator"; sel.hidden = true; return null; }
+  const world = await r.json();
+  sel.hidden = false;
+  if (sel.dataset.sig !== world.available.join()) {
+    sel.replaceChildren(...world.available.map((n) => { const o = document.createElement("option"); o.value = o.textContent = n; return o; }));
+    sel.dataset.sig = world.available.join();
+  }
+  sel.value = world.scenario;
+  $("world-state").textContent = `running ${world.scenario} (${world.objects.length} objects)`;
+  return world;
+}
+async function loadWorld(scenario) {
+  const el = $("result");
+  const r = await fetch("/api/world", {
+    method: "POST", headers: { "Content-Type": "application/json", "X-Station-Token": station.token },
+    body: JSON.stringify({ scenario }),
+  });
+  const reply = await r.json();
+  if (reply.ok) { el.className = "result ok"; el.textContent = `world: ${reply.scenario} loaded`; logLine(`world: ${reply.scenario} loaded`); }
+  else { el.className = "result bad"; el.textContent = reply.error; logLine(`world: ${reply.error}`, "error"); }
+  await refreshWorld();
+}
+
 // ---- telemetry socket (also carries teleop)
 let teleSocket = null;
 function connectTelemetry() {
@@ -105,7 +132,7 @@ function setRole(role) {
   station.role = role;
   $("role").textContent = role; $("role").className = `badge ${role === "operator" ? "ok" : ""}`;
   $("readonly").hidden = role === "operator";
-  for (const el of document.querySelectorAll(".cmd, #mode-select, #takeoff-height, #object-select")) el.disabled = role !== "operator";
+  for (const el of document.querySelectorAll(".cmd, #mode-select, #takeoff-height, #object-select, #scenario-select")) el.disabled = role !== "operator";
   for (const s of sticks) s.enabled = role === "operator";
 }
 
@@ -343,6 +370,10 @@ async function start() {
     for (const o of document.querySelectorAll(".seg button")) o.classList.toggle("on", o === b);
     connectVideo();
   };
+  $("btn-world-load").onclick = () => loadWorld($("scenario-select").value);
+  $("btn-world-reset").onclick = async () => { const w = await refreshWorld(); if (w) loadWorld(w.scenario); };
+  refreshWorld();
+  setInterval(refreshWorld, 5000);
   $("map").addEventListener("click", onMapClick);
   $("map").addEventListener("wheel", (e) => { e.preventDefault(); map.scale = Math.max(2, Math.min(80, map.scale * (e.deltaY < 0 ? 1.2 : 1 / 1.2))); }, { passive: false });
   document.addEventListener("visibilitychange", () => { if (document.hidden) { for (const s of sticks) s.release(); keyboard.down.clear(); stopTeleop(); } });

@@ -1,0 +1,92 @@
+"""A graph's own ports: taken ones are refused with a clear message, ``auto`` picks a free one.
+
+Two graphs using the same UDP port cross-talk silently: the bridge's listening socket allows
+address reuse, so a second simulator's datagrams reach the first graph's bridge, which then sees
+two autopilots. A graph names the variables that are ports it binds on this machine
+(``ports: {onboard_port: udp}``); before anything starts the launcher checks each is free, and
+a value of ``auto`` (the simulated graphs' default) is replaced by a free port.
+"""
+
+from __future__ import annotations
+
+import errno
+import socket
+from collections.abc import Mapping
+
+PORT_KINDS = {"udp": socket.SOCK_DGRAM, "tcp": socket.SOCK_STREAM}
+AUTO = "auto"
+
+
+class PortInUse(ValueError):
+    """A port a graph needs is already bound; the message names the variable and the port."""
+
+
+def port_in_use(kind: str, port: int, host: str = "127.0.0.1") -> bool:
+    """Whether ``port`` (``kind`` udp/tcp) on ``host`` is bound by someone (a test bind
+    without address reuse fails even against sockets that allow reuse)."""
+    with socket.socket(socket.AF_INET, PORT_KINDS[kind]) as sock:
+        try:
+            sock.bind((host, port))
+        except OSError as exc:
+            if exc.errno in (errno.EADDRINUSE, errno.EACCES):
+                return True
+            raise
+    return False
+
+
+def free_port(kind: str, host: str = "127.0.0.1") -> int:
+    """A port of ``kind`` that is free on ``host`` right now."""
+    with socket.socket(socket.AF_INET, PORT_KINDS[kind]) as sock:
+        sock.bind((host, 0))
+        return sock.getsockname()[1]
+
+
+def choose_ports(ports: Mapping[str, str], values: Mapping[str, str]) -> dict[str, str]:
+    """The port variables with ``auto`` replaced by free ports (others as given).
+
+    Raises:
+        ValueError: a port variable is missing, not ``auto`` and not a port number, or of an
+            unknown kind.
+    """
+    chosen = {}
+    for var, kind in ports.items():
+        if kind not in PORT_KINDS:
+            raise ValueError(f"ports.{var}: kind must be udp or tcp, got {kind!r}")
+        value = values.get(var)
+        if value is None:
+            raise ValueError(f"ports.{var}: no variable ${{{var}}} to hold the port")
+        if value == AUTO:
+            chosen[var] = str(free_port(kind))
+            continue
+        if not (value.isdigit() and 1 <= int(value) <= 65535):
+            raise ValueError(f"{var}={value!r} must be a port number 1-65535 or {AUTO}")
+        chosen[var] = value
+    return chosen
+
+
+def check_ports_free(ports: Mapping[str, str], values: Mapping[str, str]) -> None:
+    """Refuse if a graph's port is already bound.
+
+    Raises:
+        PortInUse: names the variable, the port and what to do.
+    """
+    for var, kind in ports.items():
+        port = int(values[var])
+        if port_in_use(kind, port):
+            raise PortInUse(
+                f"{kind.upper()} port {port} (${{{var}}}) is already in use on this machine "
+                f"(another graph or autopilot link?); stop it, or pick another port with "
+                f"--var {var}=N (or --var {var}={AUTO})"
+            )
+
+
+def router_port_in_use(endpoint: str) -> int | None:
+    """The TCP port of a ``tcp/HOST:PORT`` router endpoint when it is already bound, else None."""
+    proto, _, rest = endpoint.partition("/")
+    host, _, port = rest.rpartition(":")
+    if proto != "tcp" or not port.isdigit():
+        return None
+    host = host.strip("[]")
+    if host not in ("127.0.0.1", "localhost", "0.0.0.0"):
+        return None
+    return int(port) if port_in_use("tcp", int(port), "127.0.0.1") else None

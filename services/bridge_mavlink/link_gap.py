@@ -1,0 +1,53 @@
+"""What changed while the autopilot link was down (pure), so it is reported when it returns.
+
+A failsafe that happens while the link is down (the autopilot's own RTL or land on data-link
+loss, a disarm, an emergency) used to go unreported: the bridge simply published the new state
+as if nothing had happened. On reconnection the state the autopilot reports is compared with
+the last one heard before the gap, and every difference is named.
+"""
+
+from __future__ import annotations
+
+from dronewrapper.msgs.mavros import State
+
+MAV_STATE_NAMES = {
+    0: "UNINIT",
+    1: "BOOT",
+    2: "CALIBRATING",
+    3: "STANDBY",
+    4: "ACTIVE",
+    5: "CRITICAL",
+    6: "EMERGENCY",
+    7: "POWEROFF",
+    8: "FLIGHT_TERMINATION",
+}
+
+
+def _status(value: int) -> str:
+    return MAV_STATE_NAMES.get(value, str(value))
+
+
+def gap_changes(before: State, after: State) -> list[str]:
+    """The differences between the last state before a link gap and the first one after."""
+    changes = []
+    if before.mode != after.mode:
+        changes.append(f"mode {before.mode or '?'} -> {after.mode or '?'}")
+    if before.armed != after.armed:
+        changes.append("disarmed" if before.armed else "armed")
+    if before.system_status != after.system_status:
+        changes.append(
+            f"system status {_status(before.system_status)} -> {_status(after.system_status)}"
+        )
+    if before.autopilot != after.autopilot:
+        changes.append(f"autopilot {before.autopilot} -> {after.autopilot}")
+    return changes
+
+
+def gap_report(before: State | None, after: State, gap_s: float) -> str | None:
+    """A sentence for the log and STATUSTEXT, or None when nothing changed (or no history)."""
+    if before is None:
+        return None
+    changes = gap_changes(before, after)
+    if not changes:
+        return None
+    return f"while the autopilot link was down ({gap_s:.1f} s): " + ", ".join(changes)

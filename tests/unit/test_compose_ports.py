@@ -1,0 +1,90 @@
+"""A graph's ports: taken ones are refused naming the variable, ``auto`` picks a free one."""
+
+from __future__ import annotations
+
+import io
+import socket
+
+import pytest
+
+from dronewrapper_compose.graph import GRAPH_DIR, GraphError, load_graph
+from dronewrapper_compose.launcher import Launcher, LaunchError
+from dronewrapper_compose.ports import (
+    PortInUse,
+    check_ports_free,
+    choose_ports,
+    port_in_use,
+    router_port_in_use,
+)
+
+
+@pytest.fixture
+def bound_udp():
+    """A UDP port held like the bridge holds it (udpin sets SO_REUSEADDR)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind(("127.0.0.1", 0))
+        yield sock.getsockname()[1]
+
+
+def test_a_reusable_udp_bind_counts_as_taken(bound_udp):
+    assert port_in_use("udp", bound_udp)
+
+
+def test_taken_ports_are_refused_naming_the_variable(bound_udp):
+    with pytest.raises(
+        PortInUse, match=rf"UDP port {bound_udp} \(\$\{{onboard_port\}}\) is already"
+    ):
+        check_ports_free({"onboard_port": "udp"}, {"onboard_port": str(bound_udp)})
+
+
+def test_auto_picks_a_free_port_and_numbers_stay():
+    chosen = choose_ports({"a": "udp", "b": "tcp"}, {"a": "auto", "b": "15000"})
+    assert chosen["b"] == "15000"
+    assert not port_in_use("udp", int(chosen["a"]))
+    with pytest.raises(ValueError, match="must be a port number"):
+        choose_ports({"a": "udp"}, {"a": "fourteen"})
+
+
+def test_the_simulated_graphs_pick_free_ports_and_px4_sitl_does_not():
+    for name in ("sim_iris", "sim_follow_color", "sim_follow_person"):
+        graph = load_graph(GRAPH_DIR / f"{name}.yaml")
+        assert graph.ports == {"onboard_port": "udp"} and graph.vars["onboard_port"] == "auto"
+    sitl = load_graph(GRAPH_DIR / "px4_sitl.yaml")
+    assert sitl.ports == {"onboard_port": "udp"} and sitl.vars["onboard_port"] == "14540"
+
+
+def test_two_sim_graphs_get_different_ports():
+    a = Launcher.from_file("sim_iris", out=io.StringIO())
+    b = Launcher.from_file("sim_iris", out=io.StringIO())
+    assert a.values["onboard_port"] != b.values["onboard_port"]
+
+
+def test_a_graph_whose_port_is_taken_refuses_to_start(bound_udp):
+    launcher = Launcher.from_file(
+        "sim_iris", variables={"onboard_port": str(bound_udp)}, out=io.StringIO()
+    )
+    with pytest.raises(LaunchError, match=rf"sim_iris.yaml: UDP port {bound_udp}"):
+        launcher.start()
+    assert launcher.children == []  # nothing was started
+
+
+def test_a_taken_router_port_is_named():
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.listen()
+        port = sock.getsockname()[1]
+        assert router_port_in_use(f"tcp/127.0.0.1:{port}") == port
+    assert router_port_in_use("tcp/192.168.1.2:7447") is None
+
+
+def test_a_port_without_a_variable_is_a_graph_error(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("version: 1\nports: {p: udp}\nprocesses:\n  - {name: a, module: m}\n")
+    with pytest.raises(GraphError, match=r"\$\.ports\.p"):
+        load_graph(bad)
+    bad.write_text(
+        "version: 1\nvars: {p: '1'}\nports: {p: sctp}\nprocesses:\n  - {name: a, module: m}\n"
+    )
+    with pytest.raises(GraphError, match="udp or tcp"):
+        load_graph(bad)
