@@ -751,7 +751,7 @@ class Bridge:
         value = _number(reply)
         if value is None:
             return ParamGetResult(success=False, message=f"{param_id}: the Tello said {reply!r}")
-        return ParamGetResult(success=True, value=ParamValue(real=value), message=reply)
+        return ParamGetResult(success=True, value=ParamValue.of(value), message=reply)
 
     def handle_param_set(self, request: ParamSet) -> ParamSetResult:
         """Only SPEED (cm/s, ``speed x``, 10..100) can be written."""
@@ -760,14 +760,14 @@ class Bridge:
         setter = PARAMS[param_id][1]
         if setter is None:
             return ParamSetResult(success=False, message=f"{param_id} is read-only on a Tello")
-        value = request.value.real if request.value.integer == 0 else float(request.value.integer)
+        value = float(request.value.as_number())
         verb, low, high = setter
         if not (math.isfinite(value) and low <= value <= high):
             raise ValueError(f"{param_id} must be in [{low:g}, {high:g}], got {value!r}")
         reply = self.command(f"{verb} {round(value)}")
         result, message = self._result(reply, f"{verb} {round(value)}")
         return ParamSetResult(
-            success=result == 0, value=ParamValue(real=float(round(value))), message=message
+            success=result == 0, value=ParamValue.of(float(round(value))), message=message
         )
 
 

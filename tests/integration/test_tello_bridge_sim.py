@@ -113,7 +113,7 @@ class Rig:
         return yaw_of(self.truth.wait(10))
 
     def take_off(self, height: float = 1.2) -> None:
-        reply = self.call(registry.TAKEOFF, CommandTOL(altitude=height))
+        reply = self.call(registry.TAKEOFF, CommandTOL.takeoff(height))
         assert reply.success, reply.message
         assert self.true_xyz()[2] == pytest.approx(height, abs=0.15), reply.message
         wait_for(
@@ -212,10 +212,10 @@ def test_state_and_services_honestly_mapped(rig):
     with pytest.raises(ServiceError, match="valid: OFFBOARD"):
         rig.call(registry.SET_MODE, SetMode(custom_mode="ACRO"))
     with pytest.raises(ServiceError, match="altitude"):
-        rig.call(registry.TAKEOFF, CommandTOL(altitude=math.inf))
+        rig.call(registry.TAKEOFF, CommandTOL.takeoff(50.0))  # a Tello: at most 30 m
     with pytest.raises(ServiceError, match="unknown Tello parameter"):
         rig.call(registry.PARAM_GET, ParamGet(param_id="MPC_XY_VEL_MAX"))
-    landed = rig.call(registry.LAND, CommandTOL())
+    landed = rig.call(registry.LAND, CommandTOL.land())
     assert landed.success and "already on the ground" in landed.message
     assert rig.bridge.alive()
 
@@ -224,7 +224,7 @@ def test_takeoff_axes_yaw_stop_position_land(rig):
     rig.take_off(1.2)
     assert rig.state.value.armed  # "armed" = motors running
     # a second take-off is idempotent
-    again = rig.call(registry.TAKEOFF, CommandTOL(altitude=1.2))
+    again = rig.call(registry.TAKEOFF, CommandTOL.takeoff(1.2))
     assert again.success and "already flying" in again.message
 
     forward = rig.fly(velocity(vx=0.4), 1.5)
@@ -270,7 +270,7 @@ def test_takeoff_axes_yaw_stop_position_land(rig):
     rig.command(None)
     assert np.linalg.norm((rig.true_xyz() - start)[:2]) == pytest.approx(0.6, abs=0.2)
 
-    reply = rig.call(registry.LAND, CommandTOL())
+    reply = rig.call(registry.LAND, CommandTOL.land())
     assert reply.success, reply.message
     rig.wait_landed()
 
@@ -381,7 +381,7 @@ def test_lost_replies_and_malformed_state_strings_survived(router, spawn):
             answered += reply.success
         assert answered >= 7, answered
         rig.take_off(1.0)  # its single 'ok' may be lost: the height confirms it
-        rig.call(registry.LAND, CommandTOL())  # its 'ok' may be lost too: judged from truth
+        rig.call(registry.LAND, CommandTOL.land())  # its 'ok' may be lost too: judged from truth
         rig.wait_landed(30)
         assert relay.dropped > 0
         assert bridge.alive() and "malformed state string" in bridge.output()
@@ -429,7 +429,7 @@ def test_reconnects_after_the_tello_restarts(router, spawn):
             what="reconnected and back in SDK mode",
         )
         rig.take_off(1.0)
-        reply = rig.call(registry.LAND, CommandTOL())
+        reply = rig.call(registry.LAND, CommandTOL.land())
         assert reply.success, reply.message
         rig.wait_landed()
     finally:

@@ -124,16 +124,16 @@ def tello_and_bridge(router) -> Iterator[tuple[ScriptedTello, Bridge, object]]:
 def test_refusals_carry_the_tellos_text(tello_and_bridge):
     tello, bridge, user = tello_and_bridge
     tello.script["takeoff"] = "error No valid imu"
-    reply = user.call(registry.TAKEOFF, CommandTOL(), timeout=30)
+    reply = user.call(registry.TAKEOFF, CommandTOL.takeoff(), timeout=30)
     assert not reply.success and reply.result == 2
     assert "error No valid imu" in reply.message
     assert not bridge.telemetry.landed.flying
     tello.script["speed 50"] = "out of range"
-    reply = user.call(registry.PARAM_SET, ParamSet(param_id="SPEED", value=ParamValue(real=50)))
+    reply = user.call(registry.PARAM_SET, ParamSet(param_id="SPEED", value=ParamValue.of(50)))
     assert not reply.success and "out of range" in reply.message
     with pytest.raises(ServiceError, match=r"\[10, 100\]"):
-        user.call(registry.PARAM_SET, ParamSet(param_id="SPEED", value=ParamValue(real=500)))
-    reply = user.call(registry.PARAM_SET, ParamSet(param_id="BATTERY", value=ParamValue(real=5)))
+        user.call(registry.PARAM_SET, ParamSet(param_id="SPEED", value=ParamValue.of(500)))
+    reply = user.call(registry.PARAM_SET, ParamSet(param_id="BATTERY", value=ParamValue.of(5)))
     assert not reply.success and "read-only" in reply.message
 
 
@@ -150,7 +150,7 @@ def test_silence_is_retried_then_reported(tello_and_bridge):
 
 def test_rc_on_the_wire_signs_rate_and_a_real_stop(tello_and_bridge):
     tello, bridge, user = tello_and_bridge
-    assert user.call(registry.TAKEOFF, CommandTOL(), timeout=30).success
+    assert user.call(registry.TAKEOFF, CommandTOL.takeoff(), timeout=30).success
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
     # forward 0.3, left 0.2, up 0.1 m/s, CCW 0.4 rad/s -> a -20, b 30, c 10, d -23
     target = PositionTarget(
