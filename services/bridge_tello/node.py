@@ -713,7 +713,8 @@ class Bridge:
         mode = request.custom_mode.strip().upper() if isinstance(request.custom_mode, str) else ""
         if mode not in ALL_MODES:
             raise ValueError(
-                f"unknown mode {request.custom_mode!r} for a Tello; valid: {', '.join(ALL_MODES)}"
+                f"custom_mode {request.custom_mode[:40]!r} is not a Tello mode; "
+                f"valid: {', '.join(ALL_MODES)}"
             )
         if mode in SDK_MODES:
             reply = self.command("command")
@@ -738,7 +739,10 @@ class Bridge:
 
     def _param_id(self, param_id: str) -> str:
         if not isinstance(param_id, str) or param_id.upper() not in PARAMS:
-            raise ValueError(f"unknown Tello parameter {param_id!r}; known: {', '.join(PARAMS)}")
+            shown = param_id[:40] if isinstance(param_id, str) else param_id
+            raise ValueError(
+                f"param_id {shown!r} is not a Tello parameter; known: {', '.join(PARAMS)}"
+            )
         return param_id.upper()
 
     def handle_param_get(self, request: ParamGet) -> ParamGetResult:
@@ -763,7 +767,9 @@ class Bridge:
         value = float(request.value.as_number())
         verb, low, high = setter
         if not (math.isfinite(value) and low <= value <= high):
-            raise ValueError(f"{param_id} must be in [{low:g}, {high:g}], got {value!r}")
+            raise ValueError(
+                f"value: {param_id} (real or integer) must be in [{low:g}, {high:g}], got {value!r}"
+            )
         reply = self.command(f"{verb} {round(value)}")
         result, message = self._result(reply, f"{verb} {round(value)}")
         return ParamSetResult(
