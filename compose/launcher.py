@@ -26,10 +26,12 @@ from typing import TextIO
 import zenoh
 
 from dronewrapper.msgs.registry import ALIVE
+from dronewrapper.router import InsecureEndpoint, router_options
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
 from dronewrapper.runtime.shm import remove_stale_segments
+from dronewrapper.security.keystore import default_keys_dir
 from dronewrapper_compose.graph import (
     REPO,
     Graph,
@@ -172,8 +174,18 @@ class Launcher:
         variables: Mapping[str, str] | None = None,
         namespace: str | None = None,
         out: TextIO | None = None,
+        listen: Sequence[str] = (),
+        identity: str = "",
+        keys_dir: str = "",
+        insecure: bool = False,
     ) -> None:
         self.graph = graph
+        # the router's endpoints for other machines (tls/ with the drone's identity); the
+        # graph's own processes always use ``router``
+        self.listen = list(listen)
+        self.identity = identity
+        self.keys_dir = keys_dir
+        self.insecure = insecure
         self.graph_path = graph_path
         self.router = router
         self.start_router = start_router
@@ -188,6 +200,7 @@ class Launcher:
             "graph_dir": str(graph_path.parent.resolve()),
             "assets": str(assets_dir()),
             "python": sys.executable,
+            "keys": keys_dir or str(default_keys_dir()),
         }
         try:
             self.values.update(choose_ports(graph.ports, self.values))
@@ -257,15 +270,21 @@ class Launcher:
             )
         for var in self.graph.ports:
             self._say(f"{var} = {self.values[var]}")
-        mode = "router" if self.start_router else "client"
-        options = ZenohOptions(
-            mode=mode,
-            listen=[self.router] if self.start_router else [],
-            connect=[] if self.start_router else [self.router],
-            namespace=self.ns,
-        )
+        if self.start_router:
+            options = router_options(
+                [self.router, *self.listen],
+                identity=self.identity,
+                keys_dir=self.keys_dir,
+                insecure=self.insecure,
+                acl_namespaces=[self.ns],
+            )
+            options.namespace = self.ns
+        else:
+            options = ZenohOptions(mode="client", connect=[self.router], namespace=self.ns)
         self._session = open_session(options)
-        self._say(f"{'router listening on' if self.start_router else 'using router'} {self.router}")
+        where = ", ".join([self.router, *self.listen]) if self.start_router else self.router
+        acl = " (access control on)" if options.access_control else ""
+        self._say(f"{'router listening on' if self.start_router else 'using router'} {where}{acl}")
         self._token_sub = self._session.liveliness().declare_subscriber(
             ALIVE.wildcard(self.ns), self._on_token, history=True
         )
@@ -370,6 +389,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--namespace", "--ns", help="vehicle namespace (default: the graph's)")
     parser.add_argument("--var", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--check", action="store_true", help="validate the graph and print argv")
+    parser.add_argument(
+        "--listen",
+        action="append",
+        default=[],
+        metavar="ENDPOINT",
+        help="also listen here for other machines, e.g. tls/0.0.0.0:7448 (needs --identity)",
+    )
+    parser.add_argument("--identity", default="", help="the drone's certificate (keys)")
+    parser.add_argument("--keys", default="", metavar="DIR", help="key store folder")
+    parser.add_argument(
+        "--insecure", action="store_true", help="allow plain tcp/ off loopback (trusted networks)"
+    )
     args = parser.parse_args(argv)
     setup_logging()
     try:
@@ -382,6 +413,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             start_router=not args.use_router,
             variables=variables,
             namespace=args.namespace,
+            listen=args.listen,
+            identity=args.identity,
+            keys_dir=args.keys,
+            insecure=args.insecure,
         )
         if args.check:
             for spec in launcher.graph.processes:
@@ -406,7 +441,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, on_signal)
     try:
         launcher.start()
-    except (LaunchError, GraphError, ConnectionError) as exc:
+    except (LaunchError, GraphError, ConnectionError, InsecureEndpoint, FileNotFoundError) as exc:
         launcher.failures.append(str(exc))
         launcher._say(f"start failed: {exc}")
         launcher.stop()

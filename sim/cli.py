@@ -51,6 +51,7 @@ def add_args(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--netns", action="store_true", help="tello: own network namespace at 192.168.10.1 (root)"
     )
+    group.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key at boot")
 
 
 def configure(args: argparse.Namespace, overrides: list[str]) -> None:
@@ -68,6 +69,7 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         "realtime_factor": args.realtime_factor,
         "aircraft": args.aircraft,
         "address": args.address,
+        "signing_key_file": args.signing_key,
     }
     for key, value in flags.items():
         if value is not None:

@@ -41,6 +41,9 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         netns: Tello only: live in a network namespace of its own joined to the host by a veth
             pair (root) [--netns].
         tello: the simulated Tello's settings (see ``dronewrapper_sim.tello.config``).
+        signing_key_file: MAVLink 2 signing key provisioned at boot, like PX4's key file on the
+            SD card (64 hex digits, ``dronewrapper keys mavlink``); "" = none until a
+            SETUP_SIGNING arrives [--signing-key].
     """
 
     scenario: str = "beacon_static"
@@ -65,6 +68,7 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     address: str = ""
     netns: bool = False
     tello: TelloConfig = msgspec.field(default_factory=TelloConfig)
+    signing_key_file: str = ""
 
     def __post_init__(self) -> None:
         if self.instance < 0:

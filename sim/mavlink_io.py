@@ -6,15 +6,23 @@ sender's address becomes the remote. Messages are MAVLink 2 (pymavlink's ``commo
 from system ``sysid`` component 1; bytes that do not parse are counted and dropped. Each
 datagram is parsed on its own (a UDP datagram carries whole frames), so a datagram that ends in
 a partial or bogus frame header cannot swallow the start of the next one.
+
+With a signing key (:meth:`MavlinkUdpLink.set_signing_key`, policy in ``px4/signing.py``) the
+link signs what it sends and drops what arrives unsigned, wrongly signed or replayed
+(``rejected`` counts them); its signing state (key, stream timestamps) outlives each datagram.
 """
 
 from __future__ import annotations
 
 import logging
 import socket
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper.security.mavlink_signing import verify_signed_frame
 
 log = logging.getLogger("sim.mavlink")
 
@@ -86,12 +94,34 @@ def parse_udp_spec(spec: str, default_local: int) -> UdpEndpoint | None:
     raise ValueError(f"UDP link {spec!r} is not [HOST:]PORT[:LOCAL] or 'off'")
 
 
-def parse_datagram(data: bytes) -> list[mavlink.MAVLink_message]:
+SIGNING_EPOCH_S = 1420070400  # 2015-01-01T00:00:00Z, MAVLink signing timestamps count from here
+
+
+def signing_timestamp(now_s: float) -> int:
+    """A MAVLink signing timestamp (10 µs units since 2015) for Unix time ``now_s``."""
+    return int((now_s - SIGNING_EPOCH_S) * 100_000)
+
+
+class VerifyingMAVLink(mavlink.MAVLink):
+    """pymavlink's parser with PX4's order of signature checks (see
+    ``dronewrapper.security.mavlink_signing``): a stream's timestamp moves only when a
+    signature is valid."""
+
+    def check_signature(self, msgbuf: bytearray, srcSystem: int, srcComponent: int) -> bool:
+        return verify_signed_frame(self.signing, msgbuf, srcSystem, srcComponent)
+
+
+def parse_datagram(
+    data: bytes, signing: mavlink.MAVLinkSigning | None = None
+) -> list[mavlink.MAVLink_message]:
     """The MAVLink messages in one datagram, parsed on their own: bytes left over at its end
     (a truncated frame, or garbage that looks like a frame header) are dropped with it instead
-    of waiting for the next datagram. Unparsable bytes come back as BAD_DATA messages."""
-    parser = mavlink.MAVLink(None)
+    of waiting for the next datagram. Unparsable bytes come back as BAD_DATA messages, and so
+    do messages ``signing`` rejects (a link's signing state, shared across datagrams)."""
+    parser = VerifyingMAVLink(None)
     parser.robust_parsing = True
+    if signing is not None:
+        parser.signing = signing
     return parser.parse_buffer(data) or []
 
 
@@ -119,6 +149,20 @@ class MavlinkUdpLink:
         self.bad = 0
         self.send_errors = 0
 
+    def set_signing_key(self, key: bytes | None, allow_unsigned: Callable[[int], bool]) -> None:
+        """Sign what we send and verify what arrives with ``key`` (None: signing off)."""
+        signing = self.mav.signing
+        signing.secret_key = key
+        signing.sign_outgoing = key is not None
+        signing.allow_unsigned_callback = None if key is None else (lambda _m, i: allow_unsigned(i))
+        signing.timestamp = max(signing.timestamp, signing_timestamp(time.time()))
+        signing.link_id = 0
+
+    @property
+    def rejected(self) -> int:
+        """Messages dropped for a missing, wrong or replayed signature."""
+        return int(self.mav.signing.reject_count)
+
     def fileno(self) -> int:
         return self.sock.fileno()
 
@@ -135,7 +179,7 @@ class MavlinkUdpLink:
                 break
             self.remote = (addr[0], addr[1])
             try:
-                msgs = parse_datagram(data)
+                msgs = parse_datagram(data, self.mav.signing)
             except Exception as exc:  # never let bad bytes end the link
                 self.bad += 1
                 log.debug("%s link: unparsable datagram: %s", self.name, exc)

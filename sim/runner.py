@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from dronewrapper.runtime import Node
+from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.frames import quat_from_euler
@@ -30,6 +31,7 @@ from dronewrapper_sim.mavlink_io import MavlinkUdpLink, default_endpoints, parse
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.px4 import telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
+from dronewrapper_sim.px4.signing import SigningPolicy
 from dronewrapper_sim.world.scenario import Scenario
 from dronewrapper_sim.world_topics import WorldTopics
 
@@ -93,6 +95,10 @@ class SimRunner:
         except OSError:
             self.close()
             raise
+        key = read_mavlink_key(config.signing_key_file) if config.signing_key_file else None
+        self.signing = SigningPolicy(key)
+        self._rejections_logged: dict[str, tuple[int, float]] = {}
+        self._set_signing_key(key)
         self._snapshot = self._make_snapshot()
         self.cameras: CameraStreamer | None = None
         self.world_topics: WorldTopics | None = None
@@ -207,8 +213,41 @@ class SimRunner:
                 next_obj = max(next_obj + obj_period, now)
                 self._publish_objects()
 
+    def _set_signing_key(self, key: bytes | None) -> None:
+        for link in self.links.values():
+            link.set_signing_key(key, self.signing.allow_unsigned)
+
+    def _setup_signing(self, link: MavlinkUdpLink, msg: Any) -> None:
+        if msg.target_system not in (0, self.autopilot.sysid):
+            return
+        decision = self.signing.setup_signing(
+            bytes(msg.secret_key),
+            signed=bool(getattr(msg, "_signed", False)),
+            armed=self.autopilot.armed,
+        )
+        log.warning("%s link: SETUP_SIGNING %s", link.name, decision.reason)
+        if decision.accepted:
+            self._set_signing_key(decision.key)
+
+    def _note_rejections(self, link: MavlinkUdpLink) -> None:
+        rejected, now = link.rejected, time.monotonic()
+        logged, at = self._rejections_logged.get(link.name, (0, -math.inf))
+        if rejected > logged and now - at >= 2.0:
+            self._rejections_logged[link.name] = (rejected, now)
+            log.warning(
+                "%s link: %d message(s) rejected so far (unsigned, wrongly signed or replayed)",
+                link.name,
+                rejected,
+            )
+
     def _receive(self, link: MavlinkUdpLink) -> None:
-        for msg in link.receive():
+        msgs = link.receive()
+        if link.rejected:
+            self._note_rejections(link)
+        for msg in msgs:
+            if msg.get_type() == "SETUP_SIGNING":
+                self._setup_signing(link, msg)
+                continue
             try:
                 replies = self.autopilot.handle(link.name, msg)
             except Exception:  # a message the autopilot cannot digest must not stop it

@@ -1,6 +1,7 @@
 """The ``dronewrapper`` command.
 
     dronewrapper router [--listen ENDPOINT]          a Zenoh router (default tcp/127.0.0.1:7447)
+    dronewrapper keys init|issue|list|revoke|...     the project CA, certificates, MAVLink key
     dronewrapper echo KEYEXPR [--count N]            print decoded messages
     dronewrapper alive [--connect ENDPOINT]          drones and processes online, with health
     dronewrapper doctor [--connect ENDPOINT]         diagnose a setup and say what to fix
@@ -64,12 +65,29 @@ def _router(argv: Sequence[str]) -> int:
     parser.add_argument(
         "--connect", action="append", default=[], metavar="ENDPOINT", help="another router"
     )
+    parser.add_argument(
+        "--identity", default="", metavar="NAME", help="the drone's certificate (tls/ listeners)"
+    )
+    parser.add_argument("--keys", default="", metavar="DIR", help="key store folder")
+    parser.add_argument(
+        "--insecure", action="store_true", help="allow plain tcp/ off loopback (trusted networks)"
+    )
+    parser.add_argument(
+        "--namespace", action="append", default=None, help="vehicles the access control covers"
+    )
     args = parser.parse_args(argv)
     setup_logging()
     try:
-        options = router_options(args.listen, args.connect)
+        options = router_options(
+            args.listen,
+            args.connect,
+            identity=args.identity,
+            keys_dir=args.keys,
+            insecure=args.insecure,
+            acl_namespaces=args.namespace,
+        )
         run_router(options, _stop_on_signals())
-    except (ValueError, ConnectionError) as exc:
+    except (ValueError, ConnectionError, FileNotFoundError) as exc:
         print(f"dronewrapper router: {exc}", file=sys.stderr)
         return 1
     return 0
@@ -195,6 +213,17 @@ def _doctor(argv: Sequence[str]) -> int:
     )
 
 
+def _keys(argv: Sequence[str]) -> int:
+    try:
+        from dronewrapper.security.keys_cli import main as keys_main
+    except ModuleNotFoundError as exc:  # the SDK without the security extra
+        print(
+            f"dronewrapper keys: needs {exc.name} (pip install './sdk[security]')", file=sys.stderr
+        )
+        return 2
+    return keys_main(argv)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Dispatch ``dronewrapper SUBCOMMAND ...``."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -205,7 +234,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"dronewrapper {_version()}")
         return 0
     command, rest = argv[0], argv[1:]
-    local = {"router": _router, "echo": _echo, "alive": _alive, "doctor": _doctor}
+    local = {"router": _router, "echo": _echo, "alive": _alive, "doctor": _doctor, "keys": _keys}
     if command in local:
         return local[command](rest)
     if command in _STACK_COMMANDS or command in _RECORD_COMMANDS:

@@ -107,14 +107,17 @@ def connection_problem(
     return f"drone {ns!r} is connected"
 
 
-def open_client(connect: str, timeout: float, *, mode: str = "client") -> zenoh.Session:
-    """A session to the router at ``connect`` (``client`` mode unless told otherwise).
+def open_client(
+    connect: str, timeout: float, *, mode: str = "client", identity: str = ""
+) -> zenoh.Session:
+    """A session to the router at ``connect`` (``client`` mode unless told otherwise);
+    ``identity`` is the certificate for a ``tls/`` router (see ``dronewrapper keys``).
 
     Raises:
         NotConnected: the router cannot be reached within ``timeout`` seconds.
         ValueError: a malformed endpoint or an unknown mode.
     """
-    options = ZenohOptions(mode=mode, connect=[connect])
+    options = ZenohOptions(mode=mode, connect=[connect], identity=identity)
     try:
         return open_session(options, timeout=timeout)
     except ConnectionError as exc:

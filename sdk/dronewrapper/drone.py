@@ -23,12 +23,15 @@ from __future__ import annotations
 import atexit
 import collections
 import contextlib
+import getpass
 import logging
 import math
 import os
+import socket
 import time
 import weakref
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any, TypeVar
 
 import msgspec
@@ -46,6 +49,7 @@ from dronewrapper.discovery import (
 from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
 from dronewrapper.health import stale_after
 from dronewrapper.msgs import codec, registry
+from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -63,6 +67,7 @@ from dronewrapper.msgs.mavros import (
     StatusText,
 )
 from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
@@ -92,6 +97,18 @@ TELEMETRY_READ_BY_GETTERS = (
 """The streams every bridge publishes and the getters read: the constructor and
 :meth:`DroneWrapper.wait_for_connection` wait for each of them (global position needs a GPS and
 images a camera, so those are waited for by their own ``wait_for_*`` calls)."""
+
+
+def default_commander(identity: str = "") -> str:
+    """Our name on the command lease: ``$DRONEWRAPPER_COMMANDER``, the identity's name, or
+    ``user@host``."""
+    env = os.environ.get("DRONEWRAPPER_COMMANDER")
+    if env:
+        return env
+    if identity:
+        return Path(identity).stem if identity.endswith(".crt") else identity
+    return f"{getpass.getuser()}@{socket.gethostname()}"
+
 
 _open_wrappers: weakref.WeakSet[DroneWrapper] = weakref.WeakSet()
 
@@ -145,6 +162,10 @@ class DroneWrapper:
             the paper's behaviour: stream until changed.
         service_timeout: seconds to wait for the bridge's reply to a service call.
         wait: wait for the bridge (True) or return at once after reaching the router.
+        identity: our certificate for a ``tls/`` router (a key-store name or a path to
+            NAME.crt, see ``dronewrapper keys``; env ``DRONEWRAPPER_IDENTITY``).
+        commander: our name on the command lease (default: the identity's name, or
+            ``user@host``); the bridge obeys one commander at a time, see take_command().
 
     Raises:
         NotConnected: no router at ``connect``, no bridge in namespace ``name``, or the bridge
@@ -166,6 +187,8 @@ class DroneWrapper:
         command_timeout: float | None = None,
         service_timeout: float = 10.0,
         wait: bool = True,
+        identity: str | None = None,
+        commander: str | None = None,
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
         self.connect = connect or default_connect()
@@ -192,8 +215,11 @@ class DroneWrapper:
         self._subscribers: list[Any] = []
         self._own_session = session is None
         deadline = time.monotonic() + timeout
+        identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
+        self.commander = commander or default_commander(identity)
+        self._attachment = commander_attachment(self.commander)
         if session is None:
-            session = open_client(self.connect, timeout, mode=mode)
+            session = open_client(self.connect, timeout, mode=mode, identity=identity)
         self.session: zenoh.Session = session
         _open_wrappers.add(self)
         try:
@@ -308,7 +334,7 @@ class DroneWrapper:
             self._streamer.link_down()
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
-        self._setpoints.put(codec.encode(target))
+        self._setpoints.put(codec.encode(target), attachment=self._attachment)
 
     def _need(self, latest: Latest[T], what: str) -> T:
         value = latest.value
@@ -801,7 +827,14 @@ class DroneWrapper:
     def _call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
         timeout = self.service_timeout if timeout is None else timeout
         try:
-            return call_service(self.session, service, request, ns=self.ns, timeout=timeout)
+            return call_service(
+                self.session,
+                service,
+                request,
+                ns=self.ns,
+                timeout=timeout,
+                attachment=self._attachment,
+            )
         except ServiceUnavailable:
             key = service.key(self.ns)
             try:
@@ -823,6 +856,23 @@ class DroneWrapper:
         if not ok:
             raise CommandRefused(what, reply.message, getattr(reply, "result", None))
         return reply
+
+    def take_command(self, *, take_over: bool = True, timeout: float | None = None) -> str:
+        """Take this drone's command lease (another operator's too, when ``take_over``): the
+        bridge then obeys only our setpoints and commands. Returns the previous holder.
+
+        Raises:
+            CommandRefused: ``take_over`` is False and someone else holds the lease.
+        """
+        action = "take_over" if take_over else "take"
+        reply = self._call(registry.COMMAND_LEASE, LeaseRequest(action=action), action, timeout)
+        if not reply.granted:
+            raise CommandRefused(action, reply.message)
+        return reply.previous
+
+    def release_command(self, *, timeout: float | None = None) -> None:
+        """Give the command lease back (any authorised operator may then take it)."""
+        self._call(registry.COMMAND_LEASE, LeaseRequest(action="release"), "release", timeout)
 
     def arm(self, *, timeout: float | None = None) -> None:
         """Arm the motors. Raises CommandRefused with the autopilot's reason on refusal.

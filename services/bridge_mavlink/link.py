@@ -4,6 +4,13 @@ URLs as pymavlink takes them: ``udpin:127.0.0.1:14540`` (listen; replies go to w
 ``udpout:HOST:PORT``, ``tcp:HOST:PORT`` (client, reconnects), ``tcpin:127.0.0.1:PORT``, or a
 serial device (``/dev/ttyACM0``) with ``baud``. MAVLink 2 is used for everything we send.
 A network link beyond loopback is a deliberate setting (see :func:`network_exposure`).
+
+With a signing key (``signing_key_file``, made by ``dronewrapper keys mavlink``) every message
+we send is signed (MAVLink 2 signing: SHA-256 over the frame and a 48-bit timestamp in 10 µs
+units since 2015) and every message received must carry a valid signature with a timestamp
+newer than the last one of its stream; unsigned, wrongly signed or replayed messages are
+dropped and counted (``rejected``), except RADIO_STATUS, which radios insert unsigned. A keyed
+link never falls back to MAVLink 1 (it cannot carry a signature).
 """
 
 from __future__ import annotations
@@ -21,8 +28,11 @@ import contextlib
 
 from pymavlink import mavutil
 
+from dronewrapper.security.mavlink_signing import verify_signed_frame
+
 log = logging.getLogger("bridge_mavlink.link")
 
+UNSIGNED_ALLOWED = frozenset({109})  # RADIO_STATUS: inserted by telemetry radios, unsigned
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
 NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
 
@@ -71,11 +81,23 @@ class MavLink:
         url: pymavlink connection string.
         baud: serial baud rate (ignored for network URLs).
         source_system, source_component: our MAVLink ids.
+        signing_key_file: the 32-byte MAVLink 2 signing key (64 hex digits); "" = unsigned.
     """
 
     def __init__(
-        self, url: str, *, baud: int = 57600, source_system: int = 255, source_component: int = 190
+        self,
+        url: str,
+        *,
+        baud: int = 57600,
+        source_system: int = 255,
+        source_component: int = 190,
+        signing_key_file: str = "",
     ) -> None:
+        self.signing_key: bytes | None = None
+        if signing_key_file:
+            from dronewrapper.security.keystore import read_mavlink_key
+
+            self.signing_key = read_mavlink_key(signing_key_file)
         self.url = url
         self.baud = baud
         self.source_system = source_system
@@ -110,6 +132,17 @@ class MavLink:
             conn.mav.robust_parsing = True
         if getattr(conn, "udp_server", False):
             self._track_udp_peers(conn)
+        if self.signing_key is not None:
+            if not conn.mavlink20():
+                conn.close()
+                raise ValueError("MAVLink signing needs MAVLink 2 (MAVLINK20=1), not MAVLink 1")
+            conn.setup_signing(
+                self.signing_key, sign_outgoing=True, allow_unsigned_callback=_allow_unsigned
+            )
+            signing = conn.mav.signing  # PX4's order: a forged frame cannot block the stream
+            conn.mav.check_signature = lambda buf, sysid, compid: verify_signed_frame(
+                signing, buf, sysid, compid
+            )
         self._conn = conn
 
     def _track_udp_peers(self, conn: Any) -> None:
@@ -125,6 +158,15 @@ class MavLink:
                 conn.port.sendto(buf, peer)
 
         conn.write = write
+
+    @property
+    def rejected(self) -> int:
+        """Messages dropped for a missing, wrong or replayed signature (keyed links)."""
+        conn = self._conn
+        if conn is None or self.signing_key is None:
+            return 0
+        signing = conn.mav.signing
+        return int(signing.reject_count)
 
     def close(self) -> None:
         """Close the connection (idempotent)."""
@@ -167,3 +209,8 @@ class MavLink:
                 return False
         self.sent += 1
         return True
+
+
+def _allow_unsigned(_mav: Any, msg_id: int) -> bool:
+    """pymavlink's hook for a message without a valid signature: only RADIO_STATUS passes."""
+    return msg_id in UNSIGNED_ALLOWED

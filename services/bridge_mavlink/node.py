@@ -46,6 +46,7 @@ from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
+from dronewrapper_bridge_mavlink.guard import CommandGuard
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
 from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import (
@@ -134,6 +135,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
     )  # Hz asked with SET_MESSAGE_INTERVAL
     limits: LimitsConfig = msgspec.field(default_factory=LimitsConfig)
+    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
 
     def __post_init__(self) -> None:
         if self.commander_lost_action not in ("hold", "land", "return"):
@@ -166,6 +170,12 @@ class Bridge:
             baud=config.baud,
             source_system=config.source_system,
             source_component=config.source_component,
+            signing_key_file=config.signing_key_file,
+        )
+        self.guard = CommandGuard(
+            enabled=config.command_lease,
+            ttl_s=config.command_lease_ttl_s,
+            on_change=lambda: self.publish_state(force=True),
         )
         self.limits = Limits(**msgspec.structs.asdict(config.limits))
         self.failsafe = Failsafe(
@@ -231,6 +241,7 @@ class Bridge:
         self.node.serve(registry.SET_MODE, self.handle_set_mode)
         self.node.serve(registry.PARAM_GET, self.handle_param_get)
         self.node.serve(registry.PARAM_SET, self.handle_param_set)
+        self.guard.serve(self.node)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(target=self._stream_loop, name="stream", daemon=True),
@@ -499,6 +510,7 @@ class Bridge:
             state.header = Header.now()
             state.connected = self.connected
             state.failsafe = self.failsafe.state
+            state.commander = self.guard.holder()
             return state
 
     def publish_state(self, *, force: bool = False) -> None:
@@ -513,6 +525,7 @@ class Bridge:
             state.system_status,
             state.autopilot,
             state.failsafe,
+            state.commander,
         )
         now = time.monotonic()
         with self._lock:
@@ -574,6 +587,8 @@ class Bridge:
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: validate, remember, forward at once."""
+        if not self.guard.admit_setpoint():
+            return
         now = time.monotonic()
         try:
             kind = validate(target, self.limits)
@@ -789,6 +804,7 @@ class Bridge:
 
     def handle_arming(self, request: CommandBool) -> CommandBoolResult:
         """ARMING: MAV_CMD_COMPONENT_ARM_DISARM; the reply carries the real ack."""
+        self.guard.admit_command("arming")
         self._require_connected()
         result, message = self.command(
             cmds.MAV_CMD_COMPONENT_ARM_DISARM, 1.0 if request.value else 0.0
@@ -797,6 +813,7 @@ class Bridge:
 
     def handle_takeoff(self, request: CommandTOL) -> CommandTOLResult:
         """TAKEOFF: MAV_CMD_NAV_TAKEOFF to ``altitude`` m above the take-off point."""
+        self.guard.admit_command("takeoff")
         autopilot = self._require_connected()
         height = request.altitude
         if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
@@ -829,6 +846,7 @@ class Bridge:
 
     def handle_land(self, request: CommandTOL) -> CommandTOLResult:
         """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
+        self.guard.admit_command("land")
         autopilot = self._require_connected()
         lat, lon = request.latitude, request.longitude
         for name, value, bound in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
@@ -850,6 +868,7 @@ class Bridge:
         priming (a hold at the ground would override its take-off). An entered mode is known
         at once (failsafe, State), not at the next 1 Hz heartbeat.
         """
+        self.guard.admit_command("set_mode")
         autopilot = self._require_connected()
         params = set_mode_params(autopilot, request.custom_mode)  # ValueError lists valid modes
         px4 = autopilot == AUTOPILOT_PX4
@@ -982,6 +1001,7 @@ class Bridge:
         The value is checked against the parameter's type first (float32 range, integer
         ranges, exactness); a value that does not fit is a bad request naming the field.
         """
+        self.guard.admit_command("param_set")
         self._require_connected()
         param_id = self._check_param_id(request.param_id)
         param_values.requested_number(param_id, request.value)  # refuse before any I/O

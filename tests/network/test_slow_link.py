@@ -57,6 +57,7 @@ def test_control_survives_a_slow_link_with_cameras_on(tmp_path, images):
                     "compose/sim_iris.yaml",
                     "--router",
                     endpoint,
+                    "--insecure",  # plain TCP on a test link: transport behaviour, not security
                 ],
             ),
             tmp_path / "graph.log",

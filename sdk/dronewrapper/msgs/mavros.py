@@ -85,6 +85,8 @@ class State(msgspec.Struct, kw_only=True):
             heartbeat (an extension of mavros_msgs/State).
         failsafe: the bridge's failsafe state (``""`` none, ``hold``, ``land``, ``return``),
             an extension so every failsafe transition is visible on this key.
+        commander: who holds the command lease (``""``: nobody, or the lease is off), an
+            extension; a take-over shows here at once.
     """
 
     header: Header = msgspec.field(default_factory=Header)
@@ -96,6 +98,7 @@ class State(msgspec.Struct, kw_only=True):
     system_status: int = 0
     autopilot: str = ""
     failsafe: str = ""
+    commander: str = ""
 
 
 class ExtendedState(msgspec.Struct, kw_only=True):

@@ -19,6 +19,7 @@ from typing import Any, Generic, TypeVar
 
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
+from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import (
     CommandBool,
     CommandBoolResult,
@@ -264,6 +265,9 @@ LAND = Service("{ns}/mavros/cmd/land", CommandTOL, CommandTOLResult, "bridge", "
 SET_MODE = Service("{ns}/mavros/set_mode", SetMode, SetModeResult, "bridge", "change mode")
 PARAM_GET = Service("{ns}/mavros/param/get", ParamGet, ParamGetResult, "bridge", "read param")
 PARAM_SET = Service("{ns}/mavros/param/set", ParamSet, ParamSetResult, "bridge", "write param")
+COMMAND_LEASE = Service(
+    "{ns}/dronewrapper/lease", LeaseRequest, LeaseReply, "bridge", "take or give back the lease"
+)
 
 SIM_WORLD_LOAD = Service(
     "sim/world/load", WorldLoad, WorldState, "sim", "load a scenario's world, or reset it"

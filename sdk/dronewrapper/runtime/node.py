@@ -34,6 +34,7 @@ import zenoh
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.msgs.std import ErrorReply
+from dronewrapper.runtime import caller
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable, zenoh_error_text
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
@@ -277,7 +278,8 @@ class Node:
                 self._note_error(self.decode_errors, where, "undecodable sample", exc)
                 return
             try:
-                callback(msg)
+                with caller.handling(sample.attachment):
+                    callback(msg)
             except Exception as exc:
                 self._note_error(self.callback_errors, where, "callback error", exc)
 
@@ -322,7 +324,8 @@ class Node:
                     raise ServiceError(
                         f"{key}: bad {service.request.__name__} request: {exc}", "bad_request"
                     ) from exc
-                reply = handler(request)
+                with caller.handling(query.attachment):
+                    reply = handler(request)
                 query.reply(key, codec.encode(reply), encoding=reply_encoding)
             except ServiceError as exc:
                 err = ErrorReply(message=exc.message, code=exc.code)
@@ -374,9 +377,11 @@ def call_service(
     *,
     ns: str,
     timeout: float = 5.0,
+    attachment: bytes | None = None,
     **parts: str,
 ) -> Rep:
-    """Request/reply on a plain session (see :meth:`Node.call`)."""
+    """Request/reply on a plain session (see :meth:`Node.call`); ``attachment`` travels with
+    the request (the SDK names its commander there, see :mod:`dronewrapper.runtime.caller`)."""
     if type(request) is not service.request:
         raise TypeError(
             f"{service.template} takes {service.request.__name__}, got {type(request).__name__}"
@@ -395,6 +400,7 @@ def call_service(
             encoding=encoding_for(service.request),
             timeout=max(0.001, deadline - time.monotonic()),
             **SERVICE_QOS,
+            attachment=attachment,
         )
         for reply in replies:
             if reply.ok is not None:

@@ -1,8 +1,10 @@
 """Zenoh session options: the one place where every process's session is configured.
 
 Every process takes the same flags (``--connect``, ``--listen``, ``--mode``, ``--namespace``,
-``--name``) with the same environment fallbacks (``DRONEWRAPPER_CONNECT``, ``..._LISTEN``,
-``..._MODE``, ``..._NAMESPACE``). Multicast scouting is always off: processes find each other
+``--name``, ``--identity``) with the same environment fallbacks (``DRONEWRAPPER_CONNECT``,
+``..._LISTEN``, ``..._MODE``, ``..._NAMESPACE``, ``..._IDENTITY``). An identity (a certificate
+from ``dronewrapper keys``) makes the session speak mutual TLS on ``tls/`` endpoints.
+Multicast scouting is always off: processes find each other
 through a router on explicit endpoints, and local peers then link directly (gossip through the
 router), so images between processes on one machine go peer to peer over shared memory.
 """
@@ -13,6 +15,7 @@ import argparse
 import json
 import os
 from dataclasses import dataclass, field
+from typing import Any
 
 import zenoh
 
@@ -35,6 +38,12 @@ class ZenohOptions:
         namespace: the vehicle namespace that prefixes every key (``drone``, ``drone2`` ...).
         name: the process's name for its liveliness token ``{ns}/alive/{name}``.
         shared_memory: use Zenoh shared memory for large payloads between local processes.
+        identity: a key-store name or a path to NAME.crt (see ``dronewrapper keys``): the
+            certificate shown on ``tls/`` links, checked against the project CA both ways.
+        keys_dir: the key store folder for ``identity`` (default ``$DRONEWRAPPER_KEYS`` or
+            ``~/.config/dronewrapper/keys``).
+        access_control: a Zenoh ``access_control`` section (routers; see
+            ``dronewrapper.security.acl``).
     """
 
     mode: str = "peer"
@@ -43,6 +52,9 @@ class ZenohOptions:
     namespace: str = DEFAULT_NAMESPACE
     name: str = ""
     shared_memory: bool = True
+    identity: str = ""
+    keys_dir: str = ""
+    access_control: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -89,6 +101,12 @@ def add_zenoh_args(parser: argparse.ArgumentParser, *, default_mode: str = "peer
         help=f"vehicle namespace (env {ENV_PREFIX}NAMESPACE, default {DEFAULT_NAMESPACE})",
     )
     group.add_argument("--name", default="", help="process name for the liveliness token")
+    group.add_argument(
+        "--identity",
+        default=None,
+        metavar="NAME",
+        help=f"certificate for tls/ endpoints, from `dronewrapper keys` (env {ENV_PREFIX}IDENTITY)",
+    )
     parser.set_defaults(zenoh_default_mode=default_mode)
     group.add_argument(
         "--no-shm", action="store_true", help="disable Zenoh shared memory for large payloads"
@@ -108,6 +126,7 @@ def options_from_args(args: argparse.Namespace, *, name: str = "") -> ZenohOptio
         namespace=args.namespace or env.get(f"{ENV_PREFIX}NAMESPACE", DEFAULT_NAMESPACE),
         name=args.name or name,
         shared_memory=not args.no_shm,
+        identity=getattr(args, "identity", None) or env.get(f"{ENV_PREFIX}IDENTITY", ""),
     )
 
 
@@ -162,4 +181,11 @@ def zenoh_config(options: ZenohOptions) -> zenoh.Config:
         conf.insert_json5("transport/link/tx/batch_size", str(SLOW_LINK_BATCH_BYTES))
         buffers = {"so_sndbuf": SLOW_LINK_SOCKET_BYTES, "so_rcvbuf": SLOW_LINK_SOCKET_BYTES}
         conf.insert_json5("transport/link/tcp", json.dumps(buffers))
+    if options.identity:
+        from dronewrapper.security.identity import Identity
+
+        identity = Identity.load(options.identity, options.keys_dir or None)
+        conf.insert_json5("transport/link/tls", json.dumps(identity.tls_config()))
+    if options.access_control is not None:
+        conf.insert_json5("access_control", json.dumps(options.access_control))
     return conf

@@ -1,0 +1,174 @@
+"""Only authorised commanders fly the drone, across a real network (network namespaces, root).
+
+The drone's namespace runs a TLS router with access control, the simulated autopilot with a
+MAVLink signing key, the bridge with that key and the command lease, and a ground-truth monitor
+on loopback. From the laptop's namespace, clients with no certificate, a certificate of another
+CA, an observer's, an expired one and a revoked one try every command path, a parameter write,
+a setpoint stream and telemetry forgery: none is obeyed and no forged message is delivered.
+Then an operator flies; a second operator is refused until she takes the lease over.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import subprocess
+import sys
+
+import pytest
+from netns import is_root, two_hosts
+
+from dronewrapper.security.keystore import KeyStore
+from support import REPO, wait_for
+
+pytestmark = pytest.mark.integration
+
+ROUTER_LOCAL = "tcp/127.0.0.1:7447"
+TLS_PORT = 7448
+CLIENT = str(REPO / "tests" / "data" / "security_client.py")
+MONITOR = str(REPO / "tests" / "data" / "security_monitor.py")
+
+
+def _keys(tmp_path, drone_address: str) -> tuple[KeyStore, KeyStore]:
+    store = KeyStore(tmp_path / "keys")
+    store.init()
+    store.issue("drone1", "drone", hosts=[drone_address])
+    for name in ("alice", "carol", "rex"):
+        store.issue(name, "operator")
+    store.issue("olga", "observer")
+    past = dt.datetime.now(dt.timezone.utc) - dt.timedelta(days=3)
+    store.issue("old", "operator", days=1, now=past)
+    store.revoke("rex")
+    store.new_mavlink_key()
+    other = KeyStore(tmp_path / "other_ca")
+    other.init()
+    other.issue("mallory", "operator")
+    return store, other
+
+
+def _client(laptop, *args: str, timeout: float) -> dict:
+    done = subprocess.run(
+        laptop.argv(sys.executable, CLIENT, *args),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=REPO,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def print_summary(results: list[dict], seen: dict) -> None:
+    """The counts, for the record (pytest -s shows them)."""
+    print("\nidentity   connected  attempts  obeyed  refused  no reply (router denied)")
+    for r in results:
+        print(f"{r['identity']:10} {r['connected']!s:9}  {r['attempts']:8}  {r['obeyed']:6}  "
+              f"{r['refused']:7}  {r['no_reply']:8}")  # fmt: skip
+    print(f"drone side: {seen}")
+
+
+def start_drone(spawn, drone, tmp_path, *, router_listen, bridge_set, sim_args) -> list:
+    """Router, simulated autopilot, bridge and the ground-truth monitor in the drone's netns."""
+    py = sys.executable
+    bridge = [arg for item in bridge_set for arg in ("--set", item)]
+    procs = [
+        spawn(drone.argv(py, "-m", "dronewrapper", "router", "--listen", ROUTER_LOCAL,
+                         *router_listen, "--namespace", "drone"), "router"),
+        spawn(drone.argv(py, "-m", "dronewrapper_sim", "--scenario", "empty", "--no-cameras",
+                         "--connect", ROUTER_LOCAL, "--udp-onboard", "14540:0", "--udp-gcs",
+                         "off", *sim_args), "sim"),
+        spawn(drone.argv(py, "-m", "dronewrapper_bridge_mavlink", "--connect", ROUTER_LOCAL,
+                         "--connection", "udpin:127.0.0.1:14540", *bridge), "bridge"),
+    ]  # fmt: skip
+    truth = tmp_path / "truth.json"
+    monitor = spawn(drone.argv(py, MONITOR, ROUTER_LOCAL, str(truth)), "monitor")
+    ready = tmp_path / "truth.json.ready"
+    wait_for(lambda: ready.exists() or not monitor.alive(), 90, interval=0.2, what="monitor")
+    assert ready.exists(), monitor.output()[-2000:]
+    return [*procs, monitor]
+
+
+def test_only_authorised_commanders_fly(tmp_path, spawn):
+    if not is_root():
+        pytest.fail("needs root: it creates network namespaces (CI runs as root)")
+    with two_hosts() as (drone, laptop):
+        store, other = _keys(tmp_path, drone.address)
+        keys, mavkey = str(store.root), str(store.mavlink_key)
+        tls = f"tls/{drone.address}:{TLS_PORT}"
+        procs = start_drone(spawn, drone, tmp_path, router_listen=["--listen", tls,
+                            "--identity", "drone1", "--keys", keys],
+                            bridge_set=["command_lease=true", f"signing_key_file={mavkey}"],
+                            sim_args=["--signing-key", mavkey])  # fmt: skip
+        truth = tmp_path / "truth.json"
+
+        attackers = [
+            ("", keys, tls),  # no certificate
+            ("", keys, f"tcp/{drone.address}:7447"),  # plain tcp: nothing listens off loopback
+            ("mallory", str(other.root), tls),  # another CA
+            ("olga", keys, tls),  # an observer
+            ("old", keys, tls),  # expired
+            ("rex", keys, tls),  # revoked
+        ]
+        results = [_client(laptop, "attack", ep, who, k, timeout=120) for who, k, ep in attackers]
+        procs[-1].stop()  # the monitor writes what it saw
+        seen = json.loads(truth.read_text())
+
+        report = {f"{r['identity']}@{i}": r for i, r in enumerate(results)}
+        assert sum(r["obeyed"] for r in results) == 0, report
+        connected = {r["identity"]: r["connected"] for r in results}
+        assert connected == {"none": False, "mallory": False, "olga": True, "old": False,
+                             "rex": True}, report  # fmt: skip
+        for r in results:
+            if r["connected"]:  # the router denied every call: no reply, not even a refusal
+                assert r["no_reply"] == r["attempts"] - 4 and r["refused"] == 0, json.dumps(r)
+            else:
+                assert r["refused"] == r["attempts"], r
+        assert seen["states"] > 0 and seen["poses"] > 0, seen  # the monitor did watch
+        watched = {r["identity"]: r["states_received"] for r in results if r["connected"]}
+        assert watched["olga"] > 0 and watched["rex"] == 0, watched  # observers watch; revoked not
+        assert seen["forged_states"] == 0 and seen["forged_poses"] == 0, seen
+        assert seen["setpoints"] == 0, seen  # no intruder setpoint reached the drone
+        assert not seen["armed"] and seen["max_z"] < 0.3, seen
+        assert seen["param_after"] == seen["param_before"], seen
+        # no fake bridge answered a parameter read, no forged liveliness token was seen
+        assert seen["param_replies"] > 0 and seen["forged_replies"] == 0, seen
+        assert seen["forged_tokens"] == 0, seen
+        print_summary(results, seen)
+
+        flight = _client(laptop, "fly", tls, keys, timeout=240)
+        assert flight["alice_flew_to"] > 1.3, flight
+        assert flight["commander_after_takeoff"] == "alice", flight
+        assert flight["carol_arm"].startswith("refused") and "alice" in flight["carol_arm"], flight
+        assert flight["z_while_carol_refused"] < 1.8, flight  # carol's 2.5 m setpoints dropped
+        assert flight["carol_took_over_from"] == "alice", flight
+        assert flight["commander_after_take_over"] == "carol", flight
+        assert flight["carol_flew_to"] > 2.2, flight
+        assert flight["alice_land"].startswith("refused"), flight
+        assert flight["landed"], flight
+        for proc in reversed(procs):
+            proc.stop()
+        bridge_log = procs[2].output()
+        assert "command lease taken_over: carol (was alice)" in bridge_log, bridge_log[-2000:]
+
+
+def test_without_security_an_intruder_flies_the_drone(tmp_path, spawn):
+    """The same attack on the unsecured setup (plain tcp, --insecure, no lease, no signing):
+    the issue's measurement, and the proof that the detectors above do detect."""
+    if not is_root():
+        pytest.fail("needs root: it creates network namespaces (CI runs as root)")
+    with two_hosts("u") as (drone, laptop):
+        plain = f"tcp/{drone.address}:7447"
+        procs = start_drone(spawn, drone, tmp_path, router_listen=["--listen", plain,
+                            "--insecure"], bridge_set=[], sim_args=[])  # fmt: skip
+        result = _client(laptop, "attack", plain, "", str(tmp_path), timeout=120)
+        procs[-1].stop()
+        seen = json.loads((tmp_path / "truth.json").read_text())
+        print_summary([result], seen)
+        print(result)
+        for proc in reversed(procs):
+            proc.stop()
+    assert result["connected"] and result["obeyed"] >= 6, result  # param, arm, land, ...
+    assert seen["param_after"] != seen["param_before"], seen
+    assert seen["armed"] and seen["setpoints"] > 0, seen
+    assert seen["forged_states"] > 0 and seen["forged_poses"] > 0, seen
+    assert seen["forged_replies"] > 0 and seen["forged_tokens"] > 0, seen
