@@ -41,6 +41,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
+from dronewrapper.security.guard import CommandGuard
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, FailsafeConfig, Tick
 from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
 from dronewrapper_bridge_tello.replies import Pending, ReplyMatcher, is_ok
@@ -140,6 +141,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     state_rate_hz: float = 2.0  # periodic State (also on change)
     extended_state_rate_hz: float = 4.0
     battery_rate_hz: float = 1.0
+    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     scale: ScaleConfig = msgspec.field(default_factory=ScaleConfig)
 
     def __post_init__(self) -> None:
@@ -168,6 +171,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0")
+        if not self.command_lease_ttl_s > 0:
+            raise ValueError("command_lease_ttl_s must be > 0")
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError("jpeg_quality must be in [1, 100]")
 
@@ -184,6 +189,11 @@ class Bridge:
         self.node = node
         self.config = config
         self.scale = StickScale(**msgspec.structs.asdict(config.scale))
+        self.guard = CommandGuard(
+            enabled=config.command_lease,
+            ttl_s=config.command_lease_ttl_s,
+            on_change=lambda: self.publish_state(force=True),
+        )
         self.failsafe = Failsafe(
             FailsafeConfig(
                 setpoint_timeout=config.setpoint_timeout,
@@ -258,6 +268,7 @@ class Bridge:
         self.node.serve(registry.SET_MODE, self.handle_set_mode)
         self.node.serve(registry.PARAM_GET, self.handle_param_get)
         self.node.serve(registry.PARAM_SET, self.handle_param_set)
+        self.guard.serve(self.node)
         loops = [
             (self._reply_loop, "tello-replies"),
             (self._state_loop, "tello-state"),
@@ -407,11 +418,12 @@ class Bridge:
             system_status=4 if flying else 3,
             autopilot="tello",
             failsafe=self.failsafe.state,
+            commander=self.guard.holder(),
         )
 
     def publish_state(self, *, force: bool = False) -> None:
         msg = self.state_message()
-        key = (msg.connected, msg.armed, msg.guided, msg.mode, msg.failsafe)
+        key = (msg.connected, msg.armed, msg.guided, msg.mode, msg.failsafe, msg.commander)
         now = time.monotonic()
         if (
             force
@@ -432,6 +444,8 @@ class Bridge:
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: validated, then flown by the control loop."""
+        if not self.guard.admit_setpoint():
+            return
         try:
             kind = validate(target, self.scale)
         except SetpointError as exc:
@@ -611,6 +625,7 @@ class Bridge:
     def handle_arming(self, request: CommandBool) -> CommandBoolResult:
         """A Tello has no arming. arm: enter SDK mode (``command``); the motors start with
         take-off. disarm: accepted on the ground (motors are off), refused in flight."""
+        self.guard.admit_command("arming")
         self._require_connected()
         if not request.value:
             if self.telemetry.landed.flying:
@@ -632,6 +647,7 @@ class Bridge:
     def handle_takeoff(self, request: CommandTOL) -> CommandTOLResult:
         """``takeoff`` (waits for the Tello's ok, which comes once it hovers, ~1 m), then
         ``up``/``down`` to ``altitude`` m above the take-off point when one is given."""
+        self.guard.admit_command("takeoff")
         self._require_connected()
         height = request.altitude
         if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 30.0):
@@ -693,6 +709,7 @@ class Bridge:
 
     def handle_land(self, request: CommandTOL) -> CommandTOLResult:
         """``land`` here (waits for the Tello's ok, given once on the ground)."""
+        self.guard.admit_command("land")
         self._require_connected()
         for name, value, bound in (
             ("latitude", request.latitude, 90.0),
@@ -709,6 +726,7 @@ class Bridge:
         """Modes mapped onto Tello commands: OFFBOARD/GUIDED/SDK -> ``command``;
         AUTO.LOITER/HOLD/LOITER/POSCTL/BRAKE -> ``stop`` (hover); AUTO.LAND/LAND -> ``land``;
         EMERGENCY -> ``emergency`` (motors off at once: it falls)."""
+        self.guard.admit_command("set_mode")
         self._require_connected()
         mode = request.custom_mode.strip().upper() if isinstance(request.custom_mode, str) else ""
         if mode not in ALL_MODES:
@@ -759,6 +777,7 @@ class Bridge:
 
     def handle_param_set(self, request: ParamSet) -> ParamSetResult:
         """Only SPEED (cm/s, ``speed x``, 10..100) can be written."""
+        self.guard.admit_command("param_set")
         self._require_connected()
         param_id = self._param_id(request.param_id)
         setter = PARAMS[param_id][1]

@@ -15,6 +15,7 @@ from tello_peer import ScriptedTello
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     MASK_VELOCITY,
@@ -25,21 +26,23 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
     SetMode,
 )
-from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime import ServiceError, call_service
+from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.config import load_config
 from dronewrapper_bridge_tello.node import Bridge, Config
 from support import client_node, wait_for
 
 
 @pytest.fixture
-def tello_and_bridge(router) -> Iterator[tuple[ScriptedTello, Bridge, object]]:
+def tello_and_bridge(router, request) -> Iterator[tuple[ScriptedTello, Bridge, object]]:
     address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
     tello = ScriptedTello(address)
     tello.start()
+    extra = getattr(request, "param", [])
     config = load_config(
         Config,
         None,
-        [f"tello_address={address}", f"local_address={address}", "video=false"],
+        [f"tello_address={address}", f"local_address={address}", "video=false", *extra],
     )
     node = client_node(router, name="bridge_tello")
     user = client_node(router, name="test")
@@ -138,3 +141,23 @@ def test_a_second_bridge_on_the_same_address_fails_loudly(tello_and_bridge):
     with pytest.raises(OSError):
         Bridge(user, bridge.config)
     assert bridge.connected
+
+
+@pytest.mark.parametrize("tello_and_bridge", [["command_lease=true"]], indirect=True)
+def test_command_lease_one_commander_at_a_time(tello_and_bridge):
+    tello, bridge, user = tello_and_bridge
+
+    def call(service, request, who: str):
+        return call_service(
+            user.session, service, request, ns="drone", timeout=30,
+            attachment=commander_attachment(who),
+        )  # fmt: skip
+
+    assert call(registry.TAKEOFF, CommandTOL.takeoff(), "alice").success
+    with pytest.raises(ServiceError, match="holds the command lease"):
+        call(registry.LAND, CommandTOL.land(), "bob")
+    assert tello.flying  # bob's land never reached the Tello
+    taken = call(registry.COMMAND_LEASE, LeaseRequest(action="take_over"), "bob")
+    assert taken.granted and taken.holder == "bob" and taken.previous == "alice"
+    wait_for(lambda: bridge.state_message().commander == "bob", 5, what="State.commander")
+    assert call(registry.LAND, CommandTOL.land(), "bob").success
