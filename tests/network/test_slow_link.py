@@ -17,7 +17,7 @@ import sys
 import time
 
 import pytest
-from netns import DRONE_ADDRESS, is_root, shaped_link
+from shaped_link import DRONE_ADDRESS, is_root, shaped_link
 
 from support import REPO, Process, wait_for
 
