@@ -1,0 +1,147 @@
+"""The Tello's H.264 video: datagrams -> decoded frames (PyAV), newest frame only.
+
+The Tello sends H.264 Annex-B on UDP 11111, each frame cut into datagrams of ``chunk`` (1460)
+bytes, the last one shorter. :class:`FrameAssembler` joins datagrams until a short one ends the
+frame (no parser: it would hold every frame back until the next one starts, +33 ms). A frame
+whose size is a multiple of the chunk has no short datagram; it ends where a datagram starts a
+new access unit (a start code followed by an SPS, PPS, AUD or a slice with first_mb 0).
+:class:`H264Decoder` decodes each frame; corrupt or partial data is counted and skipped, never
+raised. :class:`NewestFrame` is a one-slot mailbox: the publisher takes the newest decoded frame,
+older unpublished ones are dropped (counted), so a slow consumer never builds a backlog (the most
+reported Tello video problem).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import av
+
+# FFmpeg logs every damaged slice at error level; the counts here say it once.
+av.logging.set_level(av.logging.PANIC)
+
+TELLO_CHUNK = 1460
+MAX_FRAME_BYTES = 2_000_000
+
+
+def starts_access_unit(datagram: bytes) -> bool:
+    """True if ``datagram`` begins a new access unit: a start code, then an SPS / PPS / AUD, or
+    a coded slice whose ``first_mb_in_slice`` is 0 (its first bit, ue(v) of 0, is 1)."""
+    if datagram.startswith(b"\x00\x00\x00\x01"):
+        i = 4
+    elif datagram.startswith(b"\x00\x00\x01"):
+        i = 3
+    else:
+        return False
+    if len(datagram) < i + 2:
+        return False
+    nal_type = datagram[i] & 0x1F
+    if nal_type in (7, 8, 9):
+        return True
+    return nal_type in (1, 5) and bool(datagram[i + 1] & 0x80)
+
+
+class FrameAssembler:
+    """Joins video datagrams into whole frames (access units); pure."""
+
+    def __init__(self, chunk: int = TELLO_CHUNK, max_frame_bytes: int = MAX_FRAME_BYTES) -> None:
+        self.chunk = chunk
+        self.max_frame_bytes = max_frame_bytes
+        self.oversized = 0
+        self._parts: list[bytes] = []
+        self._size = 0
+
+    def _take(self) -> bytes:
+        frame = b"".join(self._parts)
+        self._parts, self._size = [], 0
+        return frame
+
+    def feed(self, datagram: bytes) -> list[bytes]:
+        """Add one datagram; returns the frames it completes (usually none or one)."""
+        out = []
+        if self._parts and starts_access_unit(datagram):
+            out.append(self._take())  # the previous frame was a multiple of the chunk
+        self._parts.append(datagram)
+        self._size += len(datagram)
+        if self._size > self.max_frame_bytes:
+            self.oversized += 1
+            self._parts, self._size = [], 0
+        elif len(datagram) < self.chunk:
+            out.append(self._take())
+        return out
+
+
+@dataclass
+class DecodeCounts:
+    """What the decoder has seen: frames decoded, frames (or NAL units) skipped as corrupt."""
+
+    packets: int = 0
+    decoded: int = 0
+    corrupt: int = 0
+
+
+class H264Decoder:
+    """One H.264 decoder (PyAV / libavcodec); corrupt input is counted, never raised."""
+
+    def __init__(self) -> None:
+        self.counts = DecodeCounts()
+        self._codec = self._open()
+
+    @staticmethod
+    def _open() -> Any:
+        codec = av.CodecContext.create("h264", "r")
+        codec.thread_type = "SLICE"  # frame threading would hold frames back
+        return codec
+
+    def decode(self, data: bytes) -> list[Any]:
+        """Decode one access unit (Annex-B bytes); returns the av.VideoFrames it produced."""
+        self.counts.packets += 1
+        try:
+            frames = self._codec.decode(av.Packet(data))
+        except (av.error.FFmpegError, ValueError):
+            self.counts.corrupt += 1
+            return []
+        if not frames and not _has_picture(data):
+            return []
+        self.counts.decoded += len(frames)
+        return list(frames)
+
+
+def _has_picture(data: bytes) -> bool:
+    """True if ``data`` holds a coded slice (NAL types 1 or 5), as opposed to SPS/PPS only."""
+    index = data.find(b"\x00\x00\x01")
+    while index >= 0 and index + 3 < len(data):
+        if data[index + 3] & 0x1F in (1, 5):
+            return True
+        index = data.find(b"\x00\x00\x01", index + 3)
+    return False
+
+
+class NewestFrame:
+    """A one-slot mailbox: ``put`` replaces, ``take`` waits for the newest (thread-safe)."""
+
+    def __init__(self) -> None:
+        self._cond = threading.Condition()
+        self._item: tuple[Any, float] | None = None
+        self.dropped = 0
+
+    def put(self, frame: Any, stamp: float) -> None:
+        with self._cond:
+            if self._item is not None:
+                self.dropped += 1
+            self._item = (frame, stamp)
+            self._cond.notify()
+
+    def take(self, timeout: float) -> tuple[Any, float] | None:
+        """The newest frame and its stamp, or None after ``timeout`` s."""
+        with self._cond:
+            if self._item is None:
+                self._cond.wait(timeout)
+            item, self._item = self._item, None
+            return item
+
+
+log = logging.getLogger("bridge_tello.video")
