@@ -41,13 +41,13 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
+from dronewrapper.security.guard import CommandGuard
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
-from dronewrapper_bridge_mavlink.guard import CommandGuard
 from dronewrapper_bridge_mavlink.link import MavLink, mavutil, network_exposure
 from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import (

@@ -42,6 +42,7 @@ from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
 from dronewrapper.security.guard import CommandGuard
+from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, FailsafeConfig, Tick
 from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
 from dronewrapper_bridge_tello.replies import Pending, ReplyMatcher, is_ok
@@ -805,6 +806,9 @@ def run(node: Node, config: Config) -> int:
         return 1
     threads = bridge.start()
     node.announce()
+    warning = open_wifi_warning()  # a Tello's Wi-Fi is open until a password is set
+    if warning:
+        log.warning("%s", warning)
     log.info(
         "bridge_tello ready: Tello %s:%d, listening on %s (namespace %s)",
         config.tello_address,

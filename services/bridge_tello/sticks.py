@@ -27,6 +27,8 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
+import msgspec
+
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     FRAME_LOCAL_NED,
@@ -116,6 +118,8 @@ def validate(target: PositionTarget, scale: StickScale) -> Kind:
         )
     kind = _KIND[mask]
     p, v = target.position, target.velocity
+    if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
+        raise SetpointError(f"position is required with type_mask {mask}")
     if kind is Kind.POSITION:
         x, y = _finite("position.x", p.x), _finite("position.y", p.y)
         _finite("yaw", target.yaw)

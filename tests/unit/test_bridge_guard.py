@@ -7,7 +7,7 @@ import pytest
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.caller import commander_attachment, handling
-from dronewrapper_bridge_mavlink.guard import CommandGuard
+from dronewrapper.security.guard import CommandGuard
 
 
 class Clock:
