@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     FRAME_LOCAL_NED,
@@ -73,7 +73,7 @@ def test_local_velocity_rotated_into_the_body():
 
 def test_mixed_holds_altitude_on_the_estimate():
     t = velocity(0.3, 0.0, mask=MASK_MIXED)
-    t.position.z = 2.0
+    t.position = Point(z=2.0)
     _, _, vz, _ = body_velocity(t, validate(t, SCALE), (0, 0, 1.8), 0.0, SCALE)
     assert vz == pytest.approx(0.2)
     _, _, vz, _ = body_velocity(t, Kind.MIXED, (0, 0, 0.0), 0.0, SCALE)
@@ -81,8 +81,12 @@ def test_mixed_holds_altitude_on_the_estimate():
 
 
 def test_position_loop_flies_towards_the_target_and_turns_the_short_way():
-    t = PositionTarget(coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION, yaw=-3.0)
-    t.position.x, t.position.y, t.position.z = 0.0, 10.0, 1.0
+    t = PositionTarget(
+        coordinate_frame=FRAME_LOCAL_NED,
+        type_mask=MASK_POSITION,
+        position=Point(x=0.0, y=10.0, z=1.0),
+        yaw=-3.0,
+    )
     vx, vy, vz, yaw_rate = body_velocity(t, validate(t, SCALE), (0, 0, 1), math.pi / 2, SCALE)
     assert vx == pytest.approx(SCALE.position_speed) and abs(vy) < 1e-9  # facing north
     assert vz == pytest.approx(0.0)
@@ -110,9 +114,11 @@ def test_bad_setpoints_are_refused(target, reason):
 
 def test_position_target_bounds():
     t = PositionTarget(coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION)
-    t.position.z = 50.0
+    with pytest.raises(SetpointError, match="position is required"):
+        validate(t, SCALE)  # left out: never the origin
+    t.position = Point(z=50.0)
     with pytest.raises(SetpointError, match="altitude"):
         validate(t, SCALE)
-    t.position.z, t.position.x = 1.0, 500.0
+    t.position = Point(x=500.0, z=1.0)
     with pytest.raises(SetpointError, match="farther"):
         validate(t, SCALE)
