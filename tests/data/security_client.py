@@ -45,8 +45,8 @@ CALLS = [
     ("take_over_lease", registry.COMMAND_LEASE, LeaseRequest(action="take_over")),
     ("set_mode", registry.SET_MODE, SetMode(custom_mode="OFFBOARD")),
     ("arm", registry.ARMING, CommandBool(value=True)),
-    ("takeoff", registry.TAKEOFF, CommandTOL(altitude=2.0)),
-    ("land", registry.LAND, CommandTOL()),
+    ("takeoff", registry.TAKEOFF, CommandTOL.takeoff(2.0)),
+    ("land", registry.LAND, CommandTOL.land()),
     ("disarm", registry.ARMING, CommandBool(value=False)),
 ]
 SETPOINTS = 40  # 2 s at 20 Hz: climb at 1 m/s
