@@ -25,6 +25,7 @@ from dronewrapper.runtime.config import ConfigError
 from dronewrapper.runtime.options import ENV_PREFIX
 from dronewrapper.runtime.service import run_service
 from dronewrapper_sim.config import SimConfig
+from dronewrapper_sim.world.scenario import SCENARIO_NAMES
 
 log = logging.getLogger("sim")
 
@@ -32,7 +33,10 @@ log = logging.getLogger("sim")
 def add_args(parser: argparse.ArgumentParser) -> None:
     """The simulator's own flags (each one sets a SimConfig field)."""
     group = parser.add_argument_group("simulator")
-    group.add_argument("--scenario", help="scenario name or YAML file (default beacon_static)")
+    group.add_argument(
+        "--scenario",
+        help=f"{' | '.join(SCENARIO_NAMES)}, or a YAML file (default beacon_static)",
+    )
     group.add_argument("--instance", type=int, help="vehicle instance N (ports, sysid, ns)")
     group.add_argument("--seed", type=int, help="random seed (default: the scenario's)")
     group.add_argument("--no-cameras", action="store_true", help="do not render cameras")

@@ -113,3 +113,13 @@ def test_echo_into_a_closed_pipe_exits_quietly_and_silence_is_explained(router, 
         finally:
             stop.set()
             thread.join(2)
+
+
+def test_usage_lines_name_the_real_command_and_help_lists_scenarios(spawn):
+    sim = spawn(python_module("dronewrapper", "sim", "--help"), "sim-help")
+    assert sim.proc.wait(30) == 0
+    assert sim.output().startswith("usage: dronewrapper sim ")
+    assert "people_crossing_front" in sim.output() and "beacon_abrupt" in sim.output()
+    bridge = spawn(python_module("dronewrapper_bridge_mavlink", "--help"), "bridge-help")
+    assert bridge.proc.wait(30) == 0
+    assert bridge.output().startswith("usage: python -m dronewrapper_bridge_mavlink ")

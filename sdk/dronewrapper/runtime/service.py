@@ -18,6 +18,7 @@ import argparse
 import logging
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import TypeVar
 
 from dronewrapper.runtime.config import ConfigError, load_config
@@ -34,10 +35,21 @@ def setup_logging(level: str = "INFO") -> None:
     logging.basicConfig(level=level.upper(), format=LOG_FORMAT, datefmt="%H:%M:%S", force=True)
 
 
+def command_line_name(name: str) -> str:
+    """How the user started service ``name``, for ``usage:`` lines: ``python -m PACKAGE`` or
+    ``dronewrapper NAME`` (else just ``name``)."""
+    spec = getattr(sys.modules.get("__main__"), "__spec__", None)
+    package = spec.parent if spec is not None and spec.name.endswith("__main__") else ""
+    if package == "dronewrapper" or (not package and Path(sys.argv[0]).name == "dronewrapper"):
+        return f"dronewrapper {name}"  # the dronewrapper command, or python -m dronewrapper
+    return f"python -m {package}" if package else name
+
+
 def service_parser(name: str, description: str | None, *, default_mode: str = "peer"):
     """An ArgumentParser with the flags every service takes."""
     parser = argparse.ArgumentParser(
-        prog=name, description=(description or "").strip().splitlines()[0] if description else None
+        prog=command_line_name(name),
+        description=(description or "").strip().splitlines()[0] if description else None,
     )
     parser.add_argument("--config", metavar="FILE", help="YAML or JSON config file")
     parser.add_argument(
