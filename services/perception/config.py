@@ -6,6 +6,8 @@ Every field can be set in a YAML/JSON file (``--config``) or on the command line
 
 from __future__ import annotations
 
+import math
+
 import msgspec
 
 from dronewrapper_perception.color_filter import PRESETS, ColorRange
@@ -68,6 +70,10 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         paper_fifo_length: centroids in the paper tracker's FIFO.
         paper_gate_px: the paper tracker ignores detections farther than this from its mean.
         max_detections: detections kept per frame (best first).
+        max_rate_hz: detect on at most this many frames per second of camera time (frame
+            stamps), skipping the frames in between (0 = every frame the loop can take). A
+            slower detection rate leaves CPU to the rest of the graph; the tracker reasons in
+            seconds, so identity holds at any rate (see the README's figures).
         debug_image: publish an annotated JPEG for people to watch.
         debug_jpeg_quality: JPEG quality 1..100 of the debug image.
         stats_period_s: how often counters are logged (s; 0 = never).
@@ -95,6 +101,7 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     paper_fifo_length: int = 5
     paper_gate_px: float = 120.0
     max_detections: int = 50
+    max_rate_hz: float = 0.0
     debug_image: bool = False
     debug_jpeg_quality: int = 80
     stats_period_s: float = 10.0
@@ -121,6 +128,8 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
                 raise ValueError(f"{name} must be in 0..1")
         if self.input_size < 32 or self.input_size % 32:
             raise ValueError("input_size must be a positive multiple of 32")
+        if not (math.isfinite(self.max_rate_hz) and self.max_rate_hz >= 0.0):
+            raise ValueError(f"max_rate_hz={self.max_rate_hz} must be finite and >= 0 (0 = no cap)")
         if self.threads < 1 or self.max_detections < 1 or self.paper_fifo_length < 1:
             raise ValueError("threads, max_detections and paper_fifo_length must be >= 1")
         if not 1 <= self.debug_jpeg_quality <= 100:

@@ -22,6 +22,7 @@ from dronewrapper_perception.frames import BadFrame, compressed_to_bgr, image_to
 from dronewrapper_perception.model_file import ModelFileError
 from dronewrapper_perception.newest import NewestSlot
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
+from dronewrapper_perception.rate_cap import FrameRateCap
 
 log = logging.getLogger("perception")
 
@@ -38,13 +39,15 @@ class Stats:
     received: int = 0
     processed: int = 0
     dropped: int = 0
+    skipped: int = 0
+    """Frames left out by ``max_rate_hz``."""
     bad: Counter[str] = field(default_factory=Counter)
 
     def line(self) -> str:
         bad = ", ".join(f"{k}={v}" for k, v in sorted(self.bad.items())) or "0"
         return (
             f"frames received={self.received} processed={self.processed} "
-            f"dropped(stale)={self.dropped} bad: {bad}"
+            f"dropped(stale)={self.dropped} skipped(rate cap)={self.skipped} bad: {bad}"
         )
 
 
@@ -65,6 +68,7 @@ class PerceptionService:
         node.subscribe(self.topic, self.frames.put, camera=config.camera)
         self.publisher = node.publisher(registry.DETECTIONS)
         self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
+        self.rate_cap = FrameRateCap(config.max_rate_hz)
         self._seen = 0
         self._last_bad_log: dict[str, float] = {}
 
@@ -81,7 +85,8 @@ class PerceptionService:
     def spin_once(self, timeout: float) -> bool:
         """Wait up to ``timeout`` s for a frame newer than the last one; process the newest.
 
-        Returns True if a frame was taken (processed or rejected as bad).
+        Returns True if a frame was taken (processed, skipped by the rate cap or rejected as
+        bad).
         """
         taken = self.frames.take(timeout, newer_than=self._seen)
         if taken is None:
@@ -90,6 +95,10 @@ class PerceptionService:
         self.stats.received = count
         self.stats.dropped += max(0, count - self._seen - 1)
         self._seen = count
+        stamp = msg.header.stamp
+        if math.isfinite(stamp) and not self.rate_cap.admit(stamp):
+            self.stats.skipped += 1
+            return True
         self.handle(msg)
         return True
 

@@ -198,6 +198,13 @@ class Track:
     last_box: np.ndarray
     """The last detected box (cx, cy, w, h)."""
     hits: int = 1
+    born: float = 0.0
+    """Time (s) of the track's first detection."""
+    self_distance: float | None = None
+    """Running mean Bhattacharyya distance of the track's own unoccluded views to its model:
+    how much this person's look varies (walking, turning); the re-identification gate."""
+    appearance_t: float | None = None
+    """Time (s) of the last view blended into ``appearance``."""
 
 
 class KalmanTracker:
@@ -208,7 +215,10 @@ class KalmanTracker:
         motion_gate: squared Mahalanobis distance beyond which a detection cannot match.
         appearance_gate: Bhattacharyya distance beyond which a detection cannot match.
         appearance_weight: 0..1 share of appearance in the matching cost (rest is motion).
-        appearance_rate: how fast a track's histogram follows new, unoccluded views (0..1).
+        appearance_time_constant_s: how fast a track's histogram follows new, unoccluded views:
+            a view seen ``dt`` s after the previous one is blended with weight
+            ``1 - exp(-dt / appearance_time_constant_s)``, so the model adapts at the same pace
+            in seconds whatever the frame rate.
         occlusion_overlap: a detection covered more than this fraction by another detection
             does not update its track's appearance (it is mixed with the other person).
         min_hits: detections a new track needs before its misses are tolerated.
@@ -216,6 +226,11 @@ class KalmanTracker:
             than a coasting track's, so a coasting track cannot steal their detection).
         reid_distance: how far (in box heights, centre to centre) from its predicted or last
             seen box a detection may be re-identified as the coasting target by appearance.
+        reid_self_factor, reid_gate_min: the re-identification appearance gate is
+            ``reid_self_factor`` x the target's own look variation (``Track.self_distance``) plus
+            ``reid_gate_min``, at most ``appearance_gate``: a person standing still in even light
+            is recognised only by a near-identical look, a walking one with more tolerance. A
+            passer-by who merely dresses in similar colours is not taken for the target.
         reid_size_ratio: the re-identified box's height may differ from the track's by at most
             this factor.
         forget_target_s: after this long without the target, its remembered appearance is
@@ -231,28 +246,35 @@ class KalmanTracker:
         motion_gate: float = CHI2_4DOF_99,
         appearance_gate: float = 0.6,
         appearance_weight: float = 0.5,
-        appearance_rate: float = 0.1,
+        appearance_time_constant_s: float = 1.0,
         occlusion_overlap: float = 0.15,
         min_hits: int = 2,
         recent_s: float = 0.25,
         reid_distance: float = 1.5,
         reid_size_ratio: float = 1.5,
+        reid_self_factor: float = 3.0,
+        reid_gate_min: float = 0.15,
         forget_target_s: float = 10.0,
     ) -> None:
+        if appearance_time_constant_s <= 0:
+            raise ValueError("appearance_time_constant_s must be > 0")
         self.max_coast_s = max_coast_s
         self.motion_gate = motion_gate
         self.appearance_gate = appearance_gate
         self.appearance_weight = appearance_weight
-        self.appearance_rate = appearance_rate
+        self.appearance_time_constant_s = appearance_time_constant_s
         self.occlusion_overlap = occlusion_overlap
         self.min_hits = min_hits
         self.recent_s = recent_s
         self.reid_distance = reid_distance
         self.reid_size_ratio = reid_size_ratio
+        self.reid_self_factor = reid_self_factor
+        self.reid_gate_min = reid_gate_min
         self.forget_target_s = forget_target_s
         self.tracks: list[Track] = []
         self.target_id = ""
         self._target_appearance: np.ndarray | None = None
+        self._target_gate = appearance_gate
         self._target_seen = -np.inf
         self._ids = itertools.count(1)
 
@@ -261,7 +283,14 @@ class KalmanTracker:
         self.tracks.clear()
         self.target_id = ""
         self._target_appearance = None
+        self._target_gate = self.appearance_gate
         self._target_seen = -np.inf
+
+    def reid_gate(self, track: Track) -> float:
+        """The appearance distance within which ``track`` is re-identified (see the class)."""
+        variation = track.self_distance if track.self_distance is not None else 0.0
+        gate = self.reid_self_factor * variation + self.reid_gate_min
+        return float(min(self.appearance_gate, gate))
 
     def _cost(self, track: Track, boxes: np.ndarray, dets, features) -> np.ndarray:
         d2 = track.kf.mahalanobis_sq(boxes)
@@ -316,19 +345,21 @@ class KalmanTracker:
                 self._apply(track, j, dets, boxes, features, t)
                 ids[j] = track.track_id
                 unmatched.discard(j)
-        j = self._reidentify_target(unmatched, dets, boxes, features, t)
+        j = self._reidentify_target(unmatched, ids, dets, boxes, features, t)
         if j is not None:
             ids[j] = self.target_id
             unmatched.discard(j)
         for j in sorted(unmatched):
-            feature = features[j] if features is not None else None
+            feature = None if features is None or self._occluded(j, dets) else features[j]
             track = Track(
                 track_id=f"t{next(self._ids)}",
                 kf=BoxKalmanFilter(boxes[j], t),
-                appearance=None if self._occluded(j, dets) else feature,
+                appearance=feature,
+                appearance_t=t if feature is not None else None,
                 class_id=dets[j].class_id,
                 last_seen=t,
                 last_box=boxes[j],
+                born=t,
             )
             self.tracks.append(track)
             ids[j] = track.track_id
@@ -340,13 +371,18 @@ class KalmanTracker:
         ]
         return self._select_target(dets, ids, features, t, image_wh)
 
-    def _reidentify_target(self, unmatched: set[int], dets, boxes, features, t) -> int | None:
+    def _reidentify_target(
+        self, unmatched: set[int], ids: list[str], dets, boxes, features, t
+    ) -> int | None:
         """Give the coasting target track the unoccluded detection that looks most like it.
 
-        Only a detection of the target's class, within ``reid_distance`` box heights of the
+        The detection may be unmatched, or held by a track born after the target was last seen
+        (the target itself, re-detected as somebody new while it came out from behind a
+        passer-by); that young track is then dropped. Only a detection of the target's class, within ``reid_distance`` box heights of the
         track's predicted or last seen centre (a coasting prediction drifts on whatever velocity
-        the camera's motion gave it), of a similar height and within the appearance gate, may be
-        taken; its motion filter restarts from that box (the jump was the camera's, not the
+        the camera's motion gave it), of a similar height, within the target's
+        re-identification gate (:meth:`reid_gate`) and not more like another unseen track, may
+        be taken; its motion filter restarts from that box (the jump was the camera's, not the
         person's velocity). Returns the detection's index, or None.
         """
         track = self._track(self.target_id)
@@ -364,9 +400,19 @@ class KalmanTracker:
                 and offset <= self.reid_distance * height
             )
 
-        candidates = [j for j in sorted(unmatched) if near_and_alike_in_size(j)]
-        best = self._most_alike(track.appearance, candidates, dets, features)
+        young = {
+            j: tr
+            for j, tid in enumerate(ids)
+            if tid and (tr := self._track(tid)) is not None and tr.born > track.last_seen
+        }
+        candidates = [j for j in sorted(unmatched | set(young)) if near_and_alike_in_size(j)]
+        missing = [tr for tr in self.tracks if tr is not track and tr.last_seen != t]
+        best = self._most_alike(
+            track.appearance, self.reid_gate(track), candidates, dets, features, missing
+        )
         if best is not None:
+            if best in young:
+                self.tracks.remove(young[best])
             track.kf = BoxKalmanFilter(boxes[best], t)
             self._apply(track, best, dets, boxes, features, t, measured=False)
         return best
@@ -374,18 +420,34 @@ class KalmanTracker:
     def _track(self, track_id: str) -> Track | None:
         return next((tr for tr in self.tracks if tr.track_id == track_id), None)
 
-    def _most_alike(self, appearance: np.ndarray, candidates, dets, features) -> int | None:
+    def _most_alike(
+        self,
+        appearance: np.ndarray,
+        gate: float,
+        candidates,
+        dets,
+        features,
+        others: Sequence[Track] = (),
+    ) -> int | None:
         """Index of the unoccluded candidate detection nearest ``appearance`` (Bhattacharyya)
-        within the appearance gate, or None."""
+        within ``gate``, or None. A candidate that looks more like one of ``others`` (tracks not
+        seen in this frame: it may be one of them) than like ``appearance`` is left out."""
         if features is None:
             return None
-        best, best_distance = None, self.appearance_gate
+        best, best_distance = None, gate
         for j in candidates:
             if features[j] is None or self._occluded(j, dets):
                 continue
             distance = bhattacharyya(appearance, features[j])
-            if distance <= best_distance:
-                best, best_distance = j, distance
+            if distance > best_distance:
+                continue
+            if any(
+                other.appearance is not None
+                and bhattacharyya(other.appearance, features[j]) < distance
+                for other in others
+            ):
+                continue
+            best, best_distance = j, distance
         return best
 
     def _apply(
@@ -398,14 +460,21 @@ class KalmanTracker:
         track.last_box = boxes[j]
         track.hits += 1
         feature = features[j] if features is not None else None
-        if feature is not None and not self._occluded(j, dets):
-            if track.appearance is None:
-                track.appearance = feature
-            else:
-                mixed = (
-                    1 - self.appearance_rate
-                ) * track.appearance + self.appearance_rate * feature
-                track.appearance = mixed / max(float(mixed.sum()), 1e-12)
+        if feature is None or self._occluded(j, dets):
+            return
+        if track.appearance is None:
+            track.appearance, track.appearance_t = feature, t
+            return
+        distance = bhattacharyya(track.appearance, feature)
+        dt = max(0.0, t - (track.appearance_t if track.appearance_t is not None else t))
+        rate = 1.0 - float(np.exp(-dt / self.appearance_time_constant_s))
+        if track.self_distance is None:
+            track.self_distance = distance
+        else:
+            track.self_distance += max(rate, 0.05) * (distance - track.self_distance)
+        mixed = (1 - rate) * track.appearance + rate * feature
+        track.appearance = mixed / max(float(mixed.sum()), 1e-12)
+        track.appearance_t = t
 
     def _select_target(
         self, dets: Sequence[Detection], ids: list[str], features, t: float, image_wh
@@ -418,6 +487,7 @@ class KalmanTracker:
             track = self._track(self.target_id)
             if track is not None and track.appearance is not None:
                 self._target_appearance = track.appearance  # replaced on update, never mutated
+                self._target_gate = self.reid_gate(track)
             self._target_seen = t
         visible = self.target_id if index is not None else ""
         return TrackingResult(tuple(ids), visible, index)
@@ -428,8 +498,8 @@ class KalmanTracker:
         """A new target's track id ("" = none this frame).
 
         While the lost target's appearance is remembered (seen within ``forget_target_s``), only
-        an unoccluded detection within the appearance gate of it may become the target, the most
-        alike first. Otherwise (the first pick, no appearance, or forgotten): the most prominent
+        an unoccluded detection within its re-identification gate (:meth:`reid_gate`, as it
+        was when last seen) may become the target, the most alike first. Otherwise (the first pick, no appearance, or forgotten): the most prominent
         person (:func:`prominence`: the one the drone looks at), so a person far behind, or
         passing at the side, cannot win on a slightly higher confidence.
         """
@@ -437,7 +507,7 @@ class KalmanTracker:
             return ""
         memory = self._target_appearance
         if memory is not None and t - self._target_seen <= self.forget_target_s:
-            best = self._most_alike(memory, range(len(dets)), dets, features)
+            best = self._most_alike(memory, self._target_gate, range(len(dets)), dets, features)
             return ids[best] if best is not None else ""
         self._target_appearance = None
         return ids[max(range(len(dets)), key=lambda i: prominence(dets[i], image_wh))]
