@@ -5,6 +5,10 @@ person scenarios (and HOG on the static person). Each flight checks that the tar
 within a bound, kept near the image centre (bearing from ground truth) and near the intended
 distance for most of the run, and, in the crossing scenarios, that the drone still points at
 the person named ``target`` (not at a passer-by) at the end.
+
+The crossing scenarios fly as on a drone's busy computer: an unrelated process keeps one of the
+cores busy and perception detects on at most 10 frames a second; the drone must still point at
+the target (within 10 deg, from ground truth) 90 % of the time after acquiring it.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from busy_core import one_core_busy
 from scenario_flight import fly
 
 from dronewrapper_controller.metrics import bearing_error, wrap_angle
@@ -26,10 +31,11 @@ CASES = {
     "beacon_abrupt": ("sim_follow_color", "color", 27, 15, 0.5, 0.5),
     "person_static": ("sim_follow_person", "yolox", 20, 18, 0.8, 0.7),
     "person_moving": ("sim_follow_person", "yolox", 27, 18, 0.6, 0.5),
-    "people_crossing_behind": ("sim_follow_person", "yolox", 27, 18, 0.6, 0.6),
-    "people_crossing_front": ("sim_follow_person", "yolox", 27, 18, 0.5, 0.5),
+    "people_crossing_behind": ("sim_follow_person", "yolox", 27, 18, 0.9, 0.6),
+    "people_crossing_front": ("sim_follow_person", "yolox", 27, 18, 0.9, 0.5),
 }
 CROSSING = ("people_crossing_behind", "people_crossing_front")
+LOADED_DETECT_RATE_HZ = "10"  # crossing flights: perception capped, one core kept busy
 CENTRED = math.radians(10.0)
 
 
@@ -57,7 +63,12 @@ def check_flight(flight, max_acquire, min_centred, min_distance):
 def test_follow(scenario, tmp_path):
     graph, detector, seconds, max_acquire, min_centred, min_distance = CASES[scenario]
     variables = {"detector": detector} if graph == "sim_follow_person" else {}
-    flight = fly(graph, scenario, seconds, tmp_path, variables)
+    if scenario in CROSSING:
+        variables["detect_rate_hz"] = LOADED_DETECT_RATE_HZ
+        with one_core_busy():
+            flight = fly(graph, scenario, seconds, tmp_path, variables)
+    else:
+        flight = fly(graph, scenario, seconds, tmp_path, variables)
     check_flight(flight, max_acquire, min_centred, min_distance)
     if scenario in CROSSING:
         crossings = sum(crossed(s) for s in flight.samples)
