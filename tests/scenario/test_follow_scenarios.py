@@ -14,7 +14,7 @@ import math
 import pytest
 from scenario_flight import fly
 
-from dronewrapper_controller.metrics import bearing_error, wrap_angle
+from dronewrapper_sim.evaluation.metrics import bearing_error, wrap_angle
 
 pytestmark = [pytest.mark.scenario, pytest.mark.timeout(240)]
 
