@@ -110,6 +110,7 @@ class Controller:
         self._next_control = now
         self._next_status = now
         self._seen = 0
+        self._status_shown: str | None = ""
         self._logged_state = ""
         self._ready_deadline = now + config.ready_timeout
         self._takeoff: Takeoff | None = None
@@ -146,14 +147,23 @@ class Controller:
             self._seen = self.detections.count
         if self.commander is not None:
             self.commander.poll(now)
+        if self.phase == DONE:
+            return
+        phase = self._status_phase()
         if now >= self._next_status:
-            self._publish_status()
+            self._publish_status(phase)
             self._next_status = max(self._next_status + self._status_period, now)
+        elif phase != self._status_shown:  # a new phase: say so at once
+            self._publish_status(phase)
 
     def next_wake(self, now: float) -> float:
         """When :meth:`step` must run next at the latest (loop clock, s); new detections wake
         it earlier."""
-        wake = min(self._next_control, self._next_status, now + self._period)
+        wake = self._next_status
+        if self.phase in (TAKEOFF, SERVO):
+            wake = min(wake, self._next_control)
+        else:  # waiting for the bridge or landing: look again every control period
+            wake = min(wake, now + self._period)
         if self.commander is not None:
             wake = min(wake, self.commander.next_due())
         if self.phase == STOPPING:
@@ -256,10 +266,13 @@ class Controller:
         self._next_control = now + self._period
         return True
 
-    def _publish_status(self) -> None:
-        phase = STATUS_PHASE.get(self.phase)
-        if self.phase == STOPPING:
-            phase = None  # the servo's last state, its zero command going out
+    def _status_phase(self) -> str | None:
+        """The state the status reports: the phase's, or None for the servo's own (also while
+        its zero command goes out on the way to a stop)."""
+        return STATUS_PHASE.get(self.phase)
+
+    def _publish_status(self, phase: str | None) -> None:
+        self._status_shown = phase
         status = self.loop.status(self._wall(), state=phase, seq=self._status.count)
         self._status.put(status)
 
