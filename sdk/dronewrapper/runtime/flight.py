@@ -98,10 +98,10 @@ class FlightSequence:
             yield
         try:
             reply = pending.result(self.now)
+        except (ServiceUnavailable, TimeoutError) as exc:  # no answer (before ServiceError,
+            raise FlightError(f"{what}: {exc}") from None  # of which it is a kind)
         except ServiceError as exc:
             raise FlightError(f"{what} refused: {exc.message}") from None
-        except (ServiceUnavailable, TimeoutError) as exc:
-            raise FlightError(f"{what}: {exc}") from None
         accepted = reply.mode_sent if hasattr(reply, "mode_sent") else reply.success
         if not accepted:
             raise FlightError(f"{what} refused: {reply.message or 'no reason given'}")
