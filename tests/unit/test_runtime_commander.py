@@ -12,7 +12,13 @@ from bus_autopilot import BusAutopilot
 
 from dronewrapper.errors import InvalidArgument
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import MASK_VELOCITY, CommandBool, CommandBoolResult, SetMode
+from dronewrapper.msgs.mavros import (
+    MASK_VELOCITY,
+    CommandBool,
+    CommandBoolResult,
+    SetMode,
+    SetModeResult,
+)
 from dronewrapper.runtime import ServiceUnavailable
 from dronewrapper.runtime.commander import Commander, Pending
 from dronewrapper.runtime.fake import FakeBus, FakeNode
@@ -118,11 +124,16 @@ def test_calls_on_the_worker_thread_do_not_block_the_caller():
         gate.wait(10.0)
         return CommandBoolResult(success=True, result=0)
 
-    FakeNode("bridge", bus).serve(registry.ARMING, slow_arming)
+    bridge = FakeNode("bridge", bus)
+    bridge.serve(registry.ARMING, slow_arming)
+    bridge.serve(registry.SET_MODE, lambda _req: SetModeResult(mode_sent=True, result=0))
     c = Commander(node, name="svc", clock=bus.clock, wall=bus.clock)
     try:
         pending = c.call(registry.ARMING, CommandBool(value=True), T0, timeout=5.0)
         assert not pending.done(T0)  # returned while the server still works
+        # a call left waiting never holds up the next one
+        mode = c.call(registry.SET_MODE, SetMode(custom_mode="AUTO.LAND"), T0, timeout=5.0)
+        assert mode._future.result(timeout=10.0).mode_sent and not pending.done(T0)
         gate.set()
         pending._future.result(timeout=10.0)
         assert pending.done(T0) and pending.result(T0).success

@@ -13,7 +13,7 @@ gives that loop three things, each taking the time as an argument:
   expiry (a deadman for free). :meth:`Commander.next_due` says when the loop must wake next.
 - **service calls with a deadline**: :meth:`Commander.call` returns a :class:`Pending` at
   once; the loop polls it (``done(now)``, then ``result(now)``). On a real Node the request
-  waits on one worker thread owned here; on the fake bus it is answered inline.
+  waits on a worker thread owned here; on the fake bus it is answered inline.
 - **the bridge's state** as newest-value holders on the loop's clock: ``state``,
   ``extended``, ``pose``, and :meth:`Commander.ready` (autopilot connected, State fresh,
   landed state and position present).
@@ -48,6 +48,9 @@ Rep = TypeVar("Rep")
 log = logging.getLogger("dronewrapper.commander")
 
 MIN_SETPOINT_RATE_HZ = 20.0
+CALL_WORKERS = 4
+"""Calls under way at once: a call left waiting for a silent server never holds up the next
+one (a landing after a take-off step that got no reply)."""
 STATE_FRESH_S = 3.0
 """The bridge publishes State at >= 1 Hz; older than this means the bridge is gone (as the
 SDK's ``DroneWrapper.is_connected``)."""
@@ -125,7 +128,9 @@ class Commander:
         self._pool = (
             None
             if inline_calls
-            else ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"{node.name}-calls")
+            else ThreadPoolExecutor(
+                max_workers=CALL_WORKERS, thread_name_prefix=f"{node.name}-calls"
+            )
         )
         self.state: Latest[State] = self._latest(registry.STATE, clock)
         self.extended: Latest[ExtendedState] = self._latest(registry.EXTENDED_STATE, clock)

@@ -42,6 +42,9 @@ log = logging.getLogger("dronewrapper.flight")
 
 Steps = Generator[None, None, None]
 
+CALL_TIMEOUT_S = 10.0
+"""The longest wait for one reply (s), as the SDK's ``service_timeout`` default."""
+
 
 class FlightError(RuntimeError):
     """A take-off or landing failed; the message names the step and the autopilot's reason."""
@@ -93,7 +96,8 @@ class FlightSequence:
 
     def _command(self, service: Service[Any, Any], request: Any, what: str) -> Steps:
         """Call ``service`` and wait (yielding) for an accepting reply."""
-        pending = self.commander.call(service, request, self.now, timeout=self._remaining())
+        timeout = min(CALL_TIMEOUT_S, self._remaining())
+        pending = self.commander.call(service, request, self.now, timeout=timeout)
         while not pending.done(self.now):
             yield
         try:
