@@ -10,6 +10,7 @@ test_controller_process.py.
 from __future__ import annotations
 
 import itertools
+import threading
 
 import pytest
 from bus_autopilot import BusAutopilot, drive
@@ -31,7 +32,7 @@ from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config
-from dronewrapper_controller.node import Controller
+from dronewrapper_controller.node import Controller, run
 
 T0 = 1_700_000_000.0  # bus time = Unix time, so frame stamps are real-looking stamps
 DETECTIONS_KEY = registry.DETECTIONS.key("drone")
@@ -278,3 +279,28 @@ def test_a_bad_detections_message_is_counted_and_dropped():
     rig.run(1.0)
     assert rig.node.callback_errors["detections refused"] == 1
     assert rig.stop() == 0
+
+
+def test_a_stop_during_the_takeoff_lands_at_once():
+    rig = Rig(["takeoff.height=3", "on_exit=land"], flying=False)
+    rig.run(1.0)  # climbing
+    assert rig.state() == CONTROLLER_TAKEOFF and 0.5 < rig.autopilot.z < 1.5
+    rig.node.stop()
+    stopped_at = rig.now()
+    assert rig.stop() == 0
+    (called_at,) = [t for t, name in rig.autopilot.calls if name == "land"]
+    assert called_at - stopped_at <= 1 / 20 + 1e-6
+    assert rig.velocity() == []  # never servoed
+
+
+@pytest.mark.parametrize("dry_run", [True, False])
+def test_run_returns_0_soon_after_a_stop(dry_run):
+    """The real-clock loop (``run``) on a fake node: a stop ends it (bounded join, no timing)."""
+    node = FakeNode("controller", FakeBus(start=T0))
+    config = load_config(Config, None, [f"dry_run={str(dry_run).lower()}", "ready_timeout=60"])
+    result: list[int] = []
+    thread = threading.Thread(target=lambda: result.append(run(node, config)), daemon=True)
+    thread.start()
+    node.stop()
+    thread.join(10.0)
+    assert result == [0]
