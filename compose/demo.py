@@ -33,13 +33,13 @@ from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.graph import REPO
 from dronewrapper_compose.launcher import Launcher, LaunchError
 from dronewrapper_controller.config import Config as ControllerConfig
-from dronewrapper_controller.metrics import (
+from dronewrapper_sim.evaluation.metrics import (
     FollowSample,
     FollowSummary,
     colour_intended_distance,
     summarize,
 )
-from dronewrapper_controller.monitor import FollowMonitor
+from dronewrapper_sim.evaluation.monitor import FollowMonitor
 
 GRAPH = REPO / "compose" / "sim_follow_color.yaml"
 CONTROLLER_CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"

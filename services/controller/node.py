@@ -1,14 +1,20 @@
-"""The controller process: detections in, body-velocity commands out through the SDK.
+"""The controller process: detections in, body-velocity commands out, on one loop that never
+blocks.
 
-Subscribes ``{ns}/perception/detections``; commands the aircraft with the DroneWrapper SDK
-embedded on this process's Zenoh session (so setpoints go out on
-``{ns}/mavros/setpoint_raw/local``, re-published at >= 20 Hz by the SDK, each carrying the
-source camera frame's stamp); publishes ``{ns}/controller/status`` at ``status_rate_hz``.
+Subscribes ``{ns}/perception/detections``; commands the aircraft through a
+:class:`~dronewrapper.runtime.commander.Commander` on this process's node (setpoints on
+``{ns}/mavros/setpoint_raw/local``, re-published at 30 Hz by the loop, each carrying the source
+camera frame's stamp; take-off and landing as non-blocking sequences, see
+:mod:`dronewrapper.runtime.flight`); publishes ``{ns}/controller/status`` at
+``status_rate_hz``.
 
-Lifecycle: wait for the bridge -> announce ready -> take off to ``takeoff.height`` (if
-``takeoff.on_start``) -> servo until SIGINT/SIGTERM -> land (``on_exit: land``) or send one
-zero command and stop commanding (``on_exit: stop``). With ``dry_run`` no aircraft is involved:
-announce ready -> servo until stopped, the commands only in the status.
+:class:`Controller` is the life cycle as steps in injected time: wait for the bridge ->
+announce ready -> take off to ``takeoff.height`` (if ``takeoff.on_start``; the servo only
+watches meanwhile) -> servo until stopped -> land (``on_exit: land``) or send a zero command for
+0.2 s and stop commanding (``on_exit: stop``). With ``dry_run`` no aircraft is involved:
+announce ready -> servo until stopped, the commands only in the status. :func:`run` drives it
+on the real clock: it wakes on each new detections message and otherwise at the next control
+period, setpoint or status due, so a stop request is seen within one control period.
 """
 
 from __future__ import annotations
@@ -16,98 +22,48 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-import threading
+import os
 import time
+from collections.abc import Callable
+from typing import Any
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.control import (
-    CONTROLLER_IDLE,
-    CONTROLLER_LANDING,
-    CONTROLLER_TAKEOFF,
-)
+from dronewrapper.msgs.control import CONTROLLER_IDLE, CONTROLLER_LANDING, CONTROLLER_TAKEOFF
 from dronewrapper.msgs.vision import Detections
-from dronewrapper.runtime import Latest, Node, Ratekeeper
+from dronewrapper.runtime import Latest
+from dronewrapper.runtime.commander import Commander
+from dronewrapper.runtime.flight import FlightError, Landing, Takeoff
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop
 
 log = logging.getLogger("controller")
 
+STOP_ZERO_S = 0.2
+"""``on_exit: stop``: how long the zero command is streamed before commanding stops (s)."""
 
-class StatusPublisher:
-    """Publishes the loop's status at a fixed rate on its own thread (also during take-off)."""
-
-    def __init__(self, node: Node, loop: ControlLoop, rate_hz: float) -> None:
-        self.phase: str | None = CONTROLLER_IDLE  # None: the servo's own state
-        self._node = node
-        self._loop = loop
-        self._pub = node.publisher(registry.CONTROLLER_STATUS)
-        self._stop = threading.Event()
-        self._rate_hz = rate_hz
-        self._thread = threading.Thread(target=self._run, name="controller-status", daemon=True)
-
-    def start(self) -> None:
-        self._thread.start()
-
-    def publish_now(self) -> None:
-        self._pub.put(self._loop.status(time.time(), state=self.phase, seq=self._pub.count))
-
-    def _run(self) -> None:
-        rate = Ratekeeper(self._rate_hz, stop=self._stop)
-        while rate.sleep():
-            try:
-                self.publish_now()
-            except Exception as exc:  # closing session at exit
-                log.debug("status publish failed: %s", exc)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(2.0)
+WAIT, TAKEOFF, SERVO, LANDING, STOPPING, DONE = (
+    "wait",
+    "takeoff",
+    "servo",
+    "landing",
+    "stopping",
+    "done",
+)
+STATUS_PHASE = {WAIT: CONTROLLER_IDLE, TAKEOFF: CONTROLLER_TAKEOFF, LANDING: CONTROLLER_LANDING}
+"""The state the status reports in each phase (others: the servo's own state)."""
 
 
-def _open_drone(node: Node):
-    from dronewrapper import DroneWrapper  # the SDK, embedded on this node's session
-
-    # no cameras (the controller reads detections), no connection wait here (done below, so
-    # a stop request can interrupt it), no idle deadman: hover/search commands stay valid.
-    return DroneWrapper(name=node.ns, session=node.session, cameras=(), wait=False)
-
-
-def _run_with_stop(node: Node, what: str, func, timeout: float) -> bool:
-    """Run a blocking SDK call on a worker thread; False if it failed or a stop came first."""
-    result: dict[str, BaseException | None] = {}
-
-    def target() -> None:
-        try:
-            func()
-            result["error"] = None
-        except BaseException as exc:
-            result["error"] = exc
-
-    worker = threading.Thread(target=target, name=f"controller-{what}", daemon=True)
-    worker.start()
-    deadline = time.monotonic() + timeout
-    while worker.is_alive() and time.monotonic() < deadline:
-        if node.stop_event.wait(0.1):
-            return False
-    if worker.is_alive():
-        log.error("%s did not finish within %.0f s", what, timeout)
-        return False
-    if result.get("error") is not None:
-        log.error("%s failed: %s", what, result["error"])
-        return False
-    return True
-
-
-def subscribe_detections(node: Node) -> Latest[Detections]:
-    """The newest usable Detections: non-finite or out-of-range messages are counted in
-    ``node.callback_errors`` under ``detections refused`` and dropped (logged at most every 2 s)."""
-    holder: Latest[Detections] = Latest(name=registry.DETECTIONS.key(node.ns))
+def subscribe_detections(node: Any, clock: Callable[[], float]) -> Latest[Detections]:
+    """The newest usable Detections, aged on ``clock``: non-finite or out-of-range messages are
+    counted in ``node.callback_errors`` under ``detections refused`` and dropped (logged at
+    most every 2 s)."""
+    holder: Latest[Detections] = Latest(name=registry.DETECTIONS.key(node.ns), clock=clock)
     last_log = [-math.inf]
 
     def on_drop(count: int, problem: str) -> None:
         node.callback_errors["detections refused"] += 1
-        now = time.monotonic()
+        now = clock()
         if now - last_log[0] >= 2.0:
             last_log[0] = now
             log.warning("detections refused (%d so far): %s", count, problem)
@@ -116,136 +72,231 @@ def subscribe_detections(node: Node) -> Latest[Detections]:
     return holder
 
 
-class Takeoff:
-    """The SDK's blocking take-off on a worker thread, so the loop can watch meanwhile."""
+class Controller:
+    """The controller's life cycle as non-blocking steps (see the module doc).
 
-    def __init__(self, drone, height: float, timeout: float) -> None:
-        self.error: BaseException | None = None
-        self._thread = threading.Thread(
-            target=self._run, args=(drone, height, timeout), name="controller-takeoff", daemon=True
-        )
-        self._thread.start()
+    Args:
+        node: the process's Node (or a FakeNode); its ``stopping`` starts the shutdown.
+        config: the controller config.
+        commander: commands the aircraft; None for ``dry_run``.
+        now: the loop's monotonic clock now (s).
+        clock: that clock (ages of the detections).
+        wall: Unix time (s), the stamp of the status.
+    """
 
-    def _run(self, drone, height: float, timeout: float) -> None:
-        try:
-            drone.takeoff(h=height, timeout=timeout)
-        except BaseException as exc:
-            self.error = exc
+    def __init__(
+        self,
+        node: Any,
+        config: Config,
+        commander: Commander | None,
+        now: float,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        wall: Callable[[], float] = time.time,
+    ) -> None:
+        if (commander is None) != config.dry_run:
+            raise ValueError("a commander is needed unless dry_run, and none with it")
+        self.node = node
+        self.config = config
+        self.commander = commander
+        self.loop = ControlLoop(config)
+        self.detections = subscribe_detections(node, clock)
+        self.exit_code = 0
+        self.phase = WAIT
+        self._wall = wall
+        self._status = node.publisher(registry.CONTROLLER_STATUS)
+        self._period = 1.0 / config.rate_hz
+        self._status_period = 1.0 / config.status_rate_hz
+        self._next_control = now
+        self._next_status = now
+        self._seen = 0
+        self._status_shown: str | None = ""
+        self._logged_state = ""
+        self._ready_deadline = now + config.ready_timeout
+        self._takeoff: Takeoff | None = None
+        self._landing: Landing | None = None
+        self._stop_commanding_at = math.inf
+        if config.dry_run:
+            log.info("%s dry run: commands are shown in the status, not sent", config.mode)
+            node.announce()
+            self.phase = SERVO
+        else:
+            log.info("%s on %s: waiting for the bridge", config.mode, config.aircraft)
 
     @property
-    def running(self) -> bool:
-        return self._thread.is_alive()
+    def finished(self) -> bool:
+        return self.phase == DONE
 
+    def step(self, now: float) -> None:
+        """Do what is due at ``now`` (loop clock, s); never waits."""
+        if self.node.stopping and self.phase in (WAIT, TAKEOFF, SERVO):
+            self._shut_down(now)
+        if self.phase == WAIT:
+            self._wait_for_bridge(now)
+        elif self.phase == TAKEOFF:
+            self._take_off(now)
+        elif self.phase == SERVO:
+            self._servo(now)
+        elif self.phase == LANDING:
+            self._land(now)
+        elif self.phase == STOPPING and now >= self._stop_commanding_at:
+            assert self.commander is not None
+            self.commander.stop()
+            self.phase = DONE
+        if self.phase not in (TAKEOFF, SERVO):  # detections not read now: not waited for
+            self._seen = self.detections.count
+        if self.commander is not None:
+            self.commander.poll(now)
+        if self.phase == DONE:
+            return
+        phase = self._status_phase()
+        if now >= self._next_status:
+            self._publish_status(phase)
+            self._next_status = max(self._next_status + self._status_period, now)
+        elif phase != self._status_shown:  # a new phase: say so at once
+            self._publish_status(phase)
 
-def servo_until_stopped(
-    node: Node,
-    config: Config,
-    loop: ControlLoop,
-    drone,
-    detections: Latest[Detections],
-    takeoff: Takeoff | None,
-    status: StatusPublisher,
-) -> bool:
-    """Wake on each new detections message (or every control period) and command the drone.
+    def next_wake(self, now: float) -> float:
+        """When :meth:`step` must run next at the latest (loop clock, s); new detections wake
+        it earlier."""
+        wake = self._next_status
+        if self.phase in (TAKEOFF, SERVO):
+            wake = min(wake, self._next_control)
+        else:  # waiting for the bridge or landing: look again every control period
+            wake = min(wake, now + self._period)
+        if self.commander is not None:
+            wake = min(wake, self.commander.next_due())
+        if self.phase == STOPPING:
+            wake = min(wake, self._stop_commanding_at)
+        return wake
 
-    While ``takeoff`` runs the loop only watches (where the target was last seen); False if
-    the take-off failed.
-    """
-    period = 1.0 / config.rate_hz
-    seen = detections.count
-    logged_state = ""
-    while not node.stopping:
+    def wait(self, timeout: float) -> None:
+        """Block up to ``timeout`` s (real time) for a new detections message."""
         with contextlib.suppress(TimeoutError):
-            detections.wait(period, newer_than=seen)
-        seen = detections.count
-        now = time.monotonic()
-        if takeoff is not None:
-            if takeoff.running:
-                loop.servo.observe(now, detections.value, detections.age())
-                continue
-            if takeoff.error is not None:
-                log.error("takeoff failed: %s", takeoff.error)
-                return False
+            self.detections.wait(max(0.0, timeout), newer_than=self._seen)
+
+    # ---- phases ----
+
+    def _wait_for_bridge(self, now: float) -> None:
+        assert self.commander is not None
+        if self.commander.ready():
+            self.node.announce()
+            if self.config.takeoff.on_start:
+                log.info("taking off to %.1f m", self.config.takeoff.height)
+                self._takeoff = Takeoff(
+                    self.commander, self.config.takeoff.height, self.config.takeoff.timeout, now
+                )
+                self.phase = TAKEOFF
+                self._take_off(now)
+            else:
+                self.phase = SERVO
+                self._servo(now)
+        elif now >= self._ready_deadline:
+            log.error(
+                "no bridge ready within %g s: %s",
+                self.config.ready_timeout,
+                self.commander.not_ready_reason(),
+            )
+            self.exit_code = 1
+            self.phase = DONE
+
+    def _take_off(self, now: float) -> None:
+        assert self._takeoff is not None
+        if self._new_input(now):  # taking off, the servo only watches where the target is
+            self.loop.servo.observe(now, self.detections.value, self.detections.age())
+        try:
+            done = self._takeoff.step(now)
+        except FlightError as exc:
+            log.error("takeoff failed: %s", exc)
+            self.exit_code = 1
+            self._shut_down(now)
+            return
+        if done:
             log.info("take-off done")
-            takeoff = None
-            status.phase = None
+            self.phase = SERVO
+            self._next_control = now  # servo at once
+            self._servo(now)
+
+    def _servo(self, now: float) -> None:
+        if not self._new_input(now):
+            return
         try:
-            cmd = loop.tick(now, detections.value, detections.age())
-        except ValueError as exc:  # never die on input: hover on the last command instead
-            node.callback_errors["controller tick"] += 1
+            cmd = self.loop.tick(now, self.detections.value, self.detections.age())
+            if cmd is None or self.commander is None:  # dry run: the status shows it
+                return
+            stamp = cmd.source_stamp if cmd.source_stamp > 0 else None
+            self.commander.set_velocity(cmd.vx, 0.0, cmd.vz, cmd.yaw_rate, now, stamp=stamp)
+        except ValueError as exc:  # never die on input: the last command holds instead
+            self.node.callback_errors["controller tick"] += 1
             log.error("control step failed, command unchanged: %s", exc)
-            continue
-        if cmd is None or drone is None:  # no drone: a dry run, the status shows the command
-            continue
-        stamp = cmd.source_stamp if cmd.source_stamp > 0 else None
-        drone.set_cmd_vel(cmd.vx, 0.0, cmd.vz, cmd.yaw_rate, stamp=stamp)
-        if cmd.state != logged_state:
+            return
+        if cmd.state != self._logged_state:
             log.info("state %s", cmd.state)
-            logged_state = cmd.state
-    return True
+            self._logged_state = cmd.state
 
-
-def shutdown(config: Config, drone, status: StatusPublisher) -> None:
-    """Land and wait, or send a zero command and stop commanding (the bridge then hovers)."""
-    if config.on_exit == "land":
-        status.phase = CONTROLLER_LANDING
-        log.info("landing")
-        try:
-            drone.land(timeout=config.land_timeout)
-        except Exception as exc:
-            log.error("land failed: %s", exc)
-    else:
-        log.info("stopping commands (the bridge holds, then lands after its timeout)")
-        try:
-            drone.set_cmd_vel(0.0, 0.0, 0.0, 0.0)
-            time.sleep(0.2)  # a few zero setpoints go out before the stream stops
-            drone.stop_commanding()
-        except Exception as exc:
-            log.error("stop failed: %s", exc)
-
-
-def run_dry(node: Node, config: Config, loop: ControlLoop, status: StatusPublisher) -> int:
-    """``dry_run``: servo on the detections with no aircraft; commands go only in the status."""
-    log.info("%s dry run: commands are shown in the status, not sent", config.mode)
-    node.announce()
-    status.phase = None
-    detections = node.latest(registry.DETECTIONS)
-    servo_until_stopped(node, config, loop, None, detections, None, status)
-    return 0
-
-
-def run(node: Node, config: Config) -> int:
-    """The controller service (see the module doc)."""
-    loop = ControlLoop(config)
-    status = StatusPublisher(node, loop, config.status_rate_hz)
-    status.start()
-    if config.dry_run:
-        try:
-            return run_dry(node, config, loop, status)
-        finally:
-            status.close()
-    drone = _open_drone(node)
-    try:
-        log.info("%s on %s: waiting for the bridge", config.mode, config.aircraft)
-        if not _run_with_stop(
-            node,
-            "wait for the bridge",
-            lambda: drone.wait_for_connection(config.ready_timeout),
-            config.ready_timeout + 1,
-        ):
-            return 0 if node.stopping else 1
-        node.announce()
-        detections = subscribe_detections(node)
-        takeoff = None
-        if config.takeoff.on_start:
-            status.phase = CONTROLLER_TAKEOFF
-            log.info("taking off to %.1f m", config.takeoff.height)
-            takeoff = Takeoff(drone, config.takeoff.height, config.takeoff.timeout)
+    def _shut_down(self, now: float) -> None:
+        """Land (``on_exit: land``) or stream a zero command briefly and stop commanding."""
+        if self.commander is None or self.phase == WAIT:  # dry run, or nothing commanded yet
+            self.phase = DONE
+        elif self.config.on_exit == "land":
+            log.info("landing")
+            self.phase = LANDING
+            self._landing = Landing(self.commander, self.config.land_timeout, now)
         else:
-            status.phase = None
-        ok = servo_until_stopped(node, config, loop, drone, detections, takeoff, status)
-        shutdown(config, drone, status)
-        return 0 if ok else 1
+            log.info("stopping commands (the bridge holds, then lands after its timeout)")
+            self.phase = STOPPING
+            self.commander.set_velocity(0.0, 0.0, 0.0, 0.0, now)
+            self._stop_commanding_at = now + STOP_ZERO_S
+
+    def _land(self, now: float) -> None:
+        assert self._landing is not None
+        try:
+            if self._landing.step(now):
+                self.phase = DONE
+        except FlightError as exc:
+            log.error("land failed: %s", exc)
+            self.phase = DONE
+
+    def _new_input(self, now: float) -> bool:
+        """True (once) when new detections arrived or a control period passed."""
+        count = self.detections.count
+        if count == self._seen and now < self._next_control:
+            return False
+        self._seen = count
+        self._next_control = now + self._period
+        return True
+
+    def _status_phase(self) -> str | None:
+        """The state the status reports: the phase's, or None for the servo's own (also while
+        its zero command goes out on the way to a stop)."""
+        return STATUS_PHASE.get(self.phase)
+
+    def _publish_status(self, phase: str | None) -> None:
+        self._status_shown = phase
+        status = self.loop.status(self._wall(), state=phase, seq=self._status.count)
+        self._status.put(status)
+
+
+def commander_name() -> str:
+    """Our name on the command lease, as the SDK names it (``$DRONEWRAPPER_COMMANDER``, the
+    identity's name, or ``user@host``)."""
+    from dronewrapper.drone import default_commander
+
+    return default_commander(os.environ.get("DRONEWRAPPER_IDENTITY", ""))
+
+
+def run(node: Any, config: Config) -> int:
+    """The controller service on the real clock (see the module doc); the exit status."""
+    clock = time.monotonic
+    commander = None if config.dry_run else Commander(node, name=commander_name(), clock=clock)
+    try:
+        controller = Controller(node, config, commander, clock(), clock=clock)
+        while True:
+            now = clock()
+            controller.step(now)
+            if controller.finished:
+                return controller.exit_code
+            controller.wait(controller.next_wake(now) - clock())
     finally:
-        status.close()
-        drone.close()
+        if commander is not None:
+            commander.close()

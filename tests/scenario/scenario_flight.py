@@ -22,7 +22,7 @@ from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.launcher import Launcher, build_argv
 from dronewrapper_controller.config import Config as ControllerConfig
-from dronewrapper_controller.metrics import (
+from dronewrapper_sim.evaluation.metrics import (
     TRACKING_STATES,
     FollowSample,
     FollowSummary,
@@ -30,7 +30,7 @@ from dronewrapper_controller.metrics import (
     person_intended_distance,
     summarize,
 )
-from dronewrapper_controller.monitor import FollowMonitor
+from dronewrapper_sim.evaluation.monitor import FollowMonitor
 from dronewrapper_sim.world.scenario import load_scenario
 from support import REPO, free_port
 

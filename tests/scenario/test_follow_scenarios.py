@@ -19,7 +19,7 @@ import pytest
 from busy_core import one_core_busy
 from scenario_flight import fly
 
-from dronewrapper_controller.metrics import bearing_error, wrap_angle
+from dronewrapper_sim.evaluation.metrics import bearing_error, wrap_angle
 
 pytestmark = [pytest.mark.scenario, pytest.mark.timeout(240)]
 

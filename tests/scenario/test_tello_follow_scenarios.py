@@ -15,7 +15,7 @@ from scenario_flight import CENTRED_TOLERANCE, DISTANCE_TOLERANCE, PERSON_BOX, f
 
 from dronewrapper.runtime.config import load_config
 from dronewrapper_controller.config import Config as ControllerConfig
-from dronewrapper_controller.metrics import (
+from dronewrapper_sim.evaluation.metrics import (
     bearing_error,
     colour_intended_distance,
     person_intended_distance,

@@ -1,157 +1,41 @@
-"""The controller node in-process on a real Zenoh router, against a small fake of the bridge.
+"""The controller's life cycle on the fake bus, in injected time (bus seconds, not wall time).
 
-The fake bridge holds the bridge's keys only (State, ExtendedState, pose, the ARMING /
-SET_MODE / LAND services) and records every setpoint; the controller embeds the real SDK.
+The controller (:class:`~dronewrapper_controller.node.Controller`) commands through a
+Commander on a FakeNode; a :class:`~bus_autopilot.BusAutopilot` holds the bridge's keys with a
+simple aircraft. Detections are scheduled at given bus times; every judgement reads bus-time
+stamps, so a loaded machine changes nothing. The real process is tested in
+test_controller_process.py.
 """
 
 from __future__ import annotations
 
 import itertools
-import math
 import threading
-import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 
 import pytest
+from bus_autopilot import BusAutopilot, drive
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import (
     CONTROLLER_HOVER,
+    CONTROLLER_IDLE,
+    CONTROLLER_LANDING,
     CONTROLLER_SEARCH,
     CONTROLLER_TAKEOFF,
     CONTROLLER_TRACKING,
     ControllerStatus,
 )
-from dronewrapper.msgs.geometry import PoseStamped, TwistStamped
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
-    LANDED_STATE_ON_GROUND,
-    MASK_POSITION,
-    MASK_VELOCITY,
-    CommandBoolResult,
-    CommandTOLResult,
-    ExtendedState,
-    PositionTarget,
-    SetModeResult,
-    State,
-)
-from dronewrapper.msgs.sensor import BatteryState
+from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
+from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.config import load_config
+from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config
-from dronewrapper_controller.node import run
-from support import client_node, wait_for
+from dronewrapper_controller.node import Controller, run
 
-
-class FakeBridge:
-    """The bridge's keys with a simple aircraft: position setpoints make it climb at 1 m/s."""
-
-    def __init__(self, endpoint: str, *, flying: bool) -> None:
-        self.node = client_node(endpoint, name="bridge_fake")
-        self.armed = flying
-        self.mode = "OFFBOARD" if flying else "AUTO.LOITER"
-        self.z = 2.0 if flying else 0.0
-        self.z_goal = self.z
-        self.landed = LANDED_STATE_IN_AIR if flying else LANDED_STATE_ON_GROUND
-        self.setpoints: list[tuple[float, PositionTarget]] = []
-        self.z_at_first_velocity: float | None = None  # altitude when the first one arrived
-        self.land_calls = 0
-        self._lock = threading.Lock()
-        self._state = self.node.publisher(registry.STATE)
-        self._ext = self.node.publisher(registry.EXTENDED_STATE)
-        self._pose = self.node.publisher(registry.LOCAL_POSE)
-        self._velocities = [
-            self.node.publisher(registry.VELOCITY_BODY),
-            self.node.publisher(registry.VELOCITY_LOCAL),
-        ]
-        self._battery = self.node.publisher(registry.BATTERY)
-        self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
-        self.node.serve(registry.ARMING, self._arming)
-        self.node.serve(registry.SET_MODE, self._set_mode)
-        self.node.serve(registry.LAND, self._land)
-        self._thread = threading.Thread(target=self._publish_loop, daemon=True)
-        self._thread.start()
-        self.node.announce()
-
-    def _on_setpoint(self, sp: PositionTarget) -> None:
-        with self._lock:
-            self.setpoints.append((time.monotonic(), sp))
-            if sp.type_mask == MASK_VELOCITY and self.z_at_first_velocity is None:
-                self.z_at_first_velocity = self.z
-            if sp.type_mask == MASK_POSITION and self.armed:
-                self.z_goal = sp.position.z
-
-    def _arming(self, req):
-        self.armed = req.value
-        return CommandBoolResult(success=True, result=0)
-
-    def _set_mode(self, req):
-        self.mode = req.custom_mode
-        return SetModeResult(mode_sent=True, result=0)
-
-    def _land(self, _req):
-        self.land_calls += 1
-        self.mode, self.z_goal, self.landed, self.armed = (
-            "AUTO.LAND",
-            0.0,
-            LANDED_STATE_ON_GROUND,
-            False,
-        )
-        self.z = 0.0
-        return CommandTOLResult(success=True, result=0)
-
-    def _publish_loop(self) -> None:
-        while not self.node.stop_event.wait(0.05):
-            now = time.time()
-            with self._lock:
-                self.z += max(-0.05, min(0.05, self.z_goal - self.z))  # 1 m/s at 20 Hz
-                if self.z > 0.1 and self.armed:
-                    self.landed = LANDED_STATE_IN_AIR
-            self._state.put(
-                State(
-                    header=Header(stamp=now),
-                    connected=True,
-                    armed=self.armed,
-                    guided=self.mode == "OFFBOARD",
-                    mode=self.mode,
-                    autopilot="px4",
-                )
-            )
-            self._ext.put(ExtendedState(header=Header(stamp=now), landed_state=self.landed))
-            pose = PoseStamped(header=Header(stamp=now, frame_id="map"))
-            pose.pose.position.z = self.z
-            pose.pose.orientation.w = 1.0
-            self._pose.put(pose)
-            for velocity in self._velocities:
-                velocity.put(TwistStamped(header=Header(stamp=now)))
-            self._battery.put(BatteryState(header=Header(stamp=now), percentage=0.9))
-
-    def velocity_setpoints(self, since: float = 0.0) -> list[PositionTarget]:
-        with self._lock:
-            return [sp for t, sp in self.setpoints if t >= since and sp.type_mask == MASK_VELOCITY]
-
-    def last_command(self) -> tuple[float, float, float] | None:
-        """(vx, vz, yaw_rate) of the newest velocity setpoint, None before the first."""
-        sps = self.velocity_setpoints()
-        return (sps[-1].velocity.x, sps[-1].velocity.z, sps[-1].yaw_rate) if sps else None
-
-    def wait_quiet(self, quiet: float = 0.5, timeout: float = 10.0) -> None:
-        """Wait until no setpoint has arrived for ``quiet`` s (fails if a stream goes on).
-
-        Setpoints already in flight when a stream stops still arrive meanwhile.
-        """
-
-        def silent_for() -> float:
-            with self._lock:
-                last = self.setpoints[-1][0] if self.setpoints else -math.inf
-            return time.monotonic() - last
-
-        wait_for(lambda: silent_for() >= quiet, timeout, what="the setpoint stream to stop")
-
-    def close(self) -> None:
-        self.node.close()
+T0 = 1_700_000_000.0  # bus time = Unix time, so frame stamps are real-looking stamps
+DETECTIONS_KEY = registry.DETECTIONS.key("drone")
 
 
 def blob(x: float, y: float, radius: float) -> Detection2D:
@@ -161,194 +45,262 @@ def blob(x: float, y: float, radius: float) -> Detection2D:
     return Detection2D(bbox=box, circle_radius=radius, id="")
 
 
-class Harness:
-    """The controller's run() on its own thread and node, plus a detections/status client."""
+class Rig:
+    """The controller and an autopilot on one fake bus."""
 
-    def __init__(self, endpoint: str, overrides: list[str]) -> None:
+    def __init__(self, overrides: list[str], *, flying: bool = True, **autopilot) -> None:
+        self.bus = FakeBus(start=T0)
         self.config = load_config(Config, None, ["search_delay=1.0", *overrides])
-        self.node = client_node(endpoint, name="controller")
-        self.client = client_node(endpoint, name="tester")
-        self.detections = self.client.publisher(registry.DETECTIONS)
-        self.statuses: list[ControllerStatus] = []
-        self.client.subscribe(registry.CONTROLLER_STATUS, self.statuses.append)
-        self.exit_code: int | None = None
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
+        self.autopilot = (
+            None if self.config.dry_run else BusAutopilot(self.bus, flying=flying, **autopilot)
+        )
+        self.node = FakeNode("controller", self.bus)
+        clock = self.bus.clock
+        commander = (
+            None
+            if self.config.dry_run
+            else Commander(self.node, name="controller", clock=clock, wall=clock, inline_calls=True)
+        )
+        self.ctl = Controller(self.node, self.config, commander, clock(), clock=clock, wall=clock)
 
-    def _run(self) -> None:
-        self.exit_code = run(self.node, self.config)
+    def now(self) -> float:
+        return self.bus.clock()
 
-    def publish(self, *dets: Detection2D, stamp: float | None = None) -> float:
-        stamp = stamp or time.time()
-        self.detections.put(
-            Detections(
+    def run(self, seconds: float) -> None:
+        """Run for ``seconds`` of bus time (or until the controller finished)."""
+        steppers = [s for s in (self.autopilot, self.ctl) if s is not None]
+        drive(self.bus, self.now() + seconds, *steppers, stop=lambda: self.ctl.finished)
+
+    def feed(self, *dets: Detection2D, seconds: float, hz: float = 20.0) -> list[float]:
+        """Schedule detections (``dets``, maybe none) at ``hz`` from now on; their stamps."""
+        start = self.now()
+        stamps = [start + i / hz for i in range(1, int(seconds * hz) + 1)]
+        for stamp in stamps:
+            msg = Detections(
                 header=Header(stamp=stamp, frame_id="cam_frontal"),
                 detections=list(dets),
                 image_width=640,
                 image_height=480,
                 detector="color",
             )
-        )
-        return stamp
+            self.bus.schedule(stamp, DETECTIONS_KEY, msg)
+        return stamps
+
+    def statuses(self, since: float = 0.0) -> list[ControllerStatus]:
+        key = registry.CONTROLLER_STATUS.key("drone")
+        return [d.msg for d in self.bus.published[key] if d.time >= since]
 
     def state(self) -> str:
-        return self.statuses[-1].state if self.statuses else ""
+        statuses = self.statuses()
+        return statuses[-1].state if statuses else ""
 
-    def stop(self, timeout: float = 20.0) -> int | None:
+    def velocity(self, since: float = 0.0) -> list[tuple[float, PositionTarget]]:
+        assert self.autopilot is not None
+        return [
+            (t, sp) for t, sp in self.autopilot.setpoints(since) if sp.type_mask == MASK_VELOCITY
+        ]
+
+    def last_command(self) -> tuple[float, float, float]:
+        _, sp = self.velocity()[-1]
+        return (sp.velocity.x, sp.velocity.z, sp.yaw_rate)
+
+    def stop(self, seconds: float = 30.0) -> int:
         self.node.stop()
-        self.thread.join(timeout)
-        return self.exit_code
-
-    def close(self) -> None:
-        self.stop()
-        self.node.close()
-        self.client.close()
+        self.run(seconds)
+        assert self.ctl.finished
+        return self.ctl.exit_code
 
 
-@contextmanager
-def feeding(ctl: Harness, *dets: Detection2D, hz: float = 20.0) -> Iterator[list[float]]:
-    """Publish detections (``dets``, maybe none) at ``hz`` on a thread; yields their stamps."""
-    stop = threading.Event()
-    stamps: list[float] = []
+def test_tracks_with_the_frames_stamp_and_right_signs():
+    rig = Rig(["takeoff.on_start=false", "on_exit=stop"])
+    rig.run(0.5)
+    assert rig.node.announced and rig.state() in (CONTROLLER_HOVER, CONTROLLER_SEARCH)
+    stamps = rig.feed(blob(200, 140, 8), seconds=2.0)  # up-left of centre, small (far)
+    rig.run(2.0)
+    tracked = [sp for _, sp in rig.velocity() if sp.header.stamp in stamps]
+    assert len({sp.header.stamp for sp in tracked}) >= 35  # one command per frame
+    last = tracked[-1]
+    assert last.velocity.x > 0  # too far: forward
+    assert last.velocity.y == 0.0  # vy stays 0
+    assert last.velocity.z > 0  # above centre: climb
+    assert last.yaw_rate > 0  # left of centre: turn left (CCW)
+    assert last.velocity.x <= rig.config.follow_color.vx.out_limit
+    status = rig.statuses()[-1]
+    assert status.state == CONTROLLER_TRACKING and status.target_visible
+    assert status.source_stamp in stamps and status.mode == "follow_color"
+    assert rig.stop() == 0
 
-    def run() -> None:
-        while not stop.is_set():
-            stamps.append(ctl.publish(*dets))
-            stop.wait(1.0 / hz)
 
-    thread = threading.Thread(target=run, daemon=True)
+def test_setpoints_repeat_at_30_hz_and_status_at_its_rate():
+    rig = Rig(["takeoff.on_start=false", "on_exit=stop", "status_rate_hz=10"])
+    rig.feed(blob(320, 240, 10), seconds=0.5)
+    rig.run(3.0)
+    times = [t for t, _ in rig.velocity(since=T0 + 1.0)]  # detections stopped: hover, repeated
+    gaps = [b - a for a, b in itertools.pairwise(times)]
+    assert gaps and max(gaps) <= 1 / 30 + 1e-6  # >= 20 Hz, the setpoint contract
+    assert [sp.header.seq for _, sp in rig.autopilot.setpoints()] == list(
+        range(len(rig.autopilot.setpoints()))
+    )
+    stamps = [s.header.stamp for s in rig.statuses()]
+    assert all(b - a == pytest.approx(0.1, abs=1e-6) for a, b in itertools.pairwise(stamps))
+    assert [s.header.seq for s in rig.statuses()] == list(range(len(stamps)))
+
+
+def test_stale_detections_hover_never_search_blind_then_search_right():
+    rig = Rig(["takeoff.on_start=false", "on_exit=stop", "search_yaw_rate=0.4"])
+    rig.run(0.3)
+    rig.feed(blob(600, 240, 20), seconds=0.5)  # target on the right ...
+    rig.run(0.5)
+    assert rig.state() == CONTROLLER_TRACKING
+    rig.run(0.6)  # ... then detections stop (perception died): stale after 0.5 s
+    assert rig.state() == CONTROLLER_HOVER
+    since = rig.now()
+    rig.run(1.5)  # longer than search_delay: still hover, never search blind
+    assert {s.state for s in rig.statuses(since)} == {CONTROLLER_HOVER}
+    assert rig.last_command() == (0.0, 0.0, 0.0)
+    rig.feed(seconds=2.0)  # fresh detections without the target: search to the right (cw)
+    rig.run(2.0)
+    assert rig.state() == CONTROLLER_SEARCH
+    assert rig.last_command() == (0.0, 0.0, pytest.approx(-0.4))
+
+
+def test_stop_sends_zero_for_a_moment_then_nothing_and_never_lands():
+    rig = Rig(["takeoff.on_start=false", "on_exit=stop"])
+    rig.feed(blob(100, 100, 5), seconds=1.0)
+    rig.run(1.0)
+    assert rig.velocity() and rig.last_command() != (0.0, 0.0, 0.0)
+    stopped_at = rig.now()
+    rig.node.stop()
+    rig.run(5.0)
+    assert rig.ctl.finished and rig.ctl.exit_code == 0
+    after = rig.velocity(since=stopped_at)
+    assert after and all(
+        (sp.velocity.x, sp.velocity.z, sp.yaw_rate) == (0, 0, 0) for _, sp in after
+    )
+    assert after[-1][0] <= stopped_at + 0.2 + 1e-6  # the stream stopped after 0.2 s
+    assert rig.autopilot.called("land") == 0
+
+
+def test_stop_is_seen_within_one_control_period_while_servoing():
+    rig = Rig(["takeoff.on_start=false", "on_exit=land", "rate_hz=20"])
+    rig.run(1.0)
+    rig.node.stop()
+    stopped_at = rig.now()
+    rig.run(10.0)
+    (called_at,) = [t for t, name in rig.autopilot.calls if name == "land"]
+    assert called_at - stopped_at <= 1 / 20 + 1e-6
+    assert rig.ctl.exit_code == 0 and not rig.autopilot.armed
+
+
+def test_takes_off_on_start_watching_only_and_lands_on_exit():
+    rig = Rig(["takeoff.height=1.5", "on_exit=land"], flying=False)
+    rig.feed(blob(600, 240, 10), seconds=4.0)  # the target is in view during the climb
+    rig.run(0.2)
+    assert rig.state() == CONTROLLER_TAKEOFF
+    assert [name for _, name in rig.autopilot.calls] == ["set_mode", "arming"]
+    rig.run(3.0)
+    assert rig.autopilot.z >= 1.4 and rig.autopilot.mode == "OFFBOARD"
+    assert rig.state() == CONTROLLER_TRACKING
+    # taking off, the controller only watched: its first velocity command came at the top
+    assert rig.autopilot.z_at_first_velocity >= 1.4 - 1e-6
+    positions = [sp for _, sp in rig.autopilot.setpoints() if sp.type_mask == MASK_POSITION]
+    assert positions[0].position.z == 0.0 and positions[-1].position.z == 1.5
+    assert rig.stop() == 0
+    assert rig.autopilot.called("land") == 1 and not rig.autopilot.armed
+    assert CONTROLLER_LANDING in {s.state for s in rig.statuses()}
+
+
+def test_a_refused_takeoff_stops_the_stream_and_exits_1():
+    rig = Rig(["takeoff.height=1.5", "on_exit=land"], flying=False, refuse={"arming": "no GPS"})
+    rig.run(5.0)
+    assert rig.ctl.finished and rig.ctl.exit_code == 1
+    assert rig.autopilot.called("arming") == 1 and rig.autopilot.z == 0.0
+    assert rig.ctl.commander.target is None  # the hold setpoint no longer streamed
+
+
+def test_a_bridge_that_never_answers_fails_the_takeoff_within_its_timeout():
+    rig = Rig(
+        ["takeoff.height=1.5", "takeoff.timeout=3", "on_exit=land"],
+        flying=False,
+        absent=["set_mode"],
+    )
+    start = rig.now()
+    rig.run(10.0)
+    assert rig.ctl.finished and rig.ctl.exit_code == 1
+    assert rig.now() - start <= 3.5
+
+
+def test_no_bridge_gives_up_after_ready_timeout_with_exit_1():
+    bus = FakeBus(start=T0)
+    node = FakeNode("controller", bus)
+    config = load_config(Config, None, ["ready_timeout=1.5", "takeoff.on_start=false"])
+    commander = Commander(node, name="c", clock=bus.clock, wall=bus.clock, inline_calls=True)
+    ctl = Controller(node, config, commander, bus.clock(), clock=bus.clock, wall=bus.clock)
+    drive(bus, T0 + 10, ctl, stop=lambda: ctl.finished)
+    assert ctl.finished and ctl.exit_code == 1
+    assert bus.clock() == pytest.approx(T0 + 1.5, abs=0.11)
+    statuses = [d.msg.state for d in bus.published[registry.CONTROLLER_STATUS.key("drone")]]
+    assert statuses and set(statuses) == {CONTROLLER_IDLE}
+    assert not node.announced
+
+
+def test_a_stop_while_waiting_for_the_bridge_exits_0_at_once():
+    bus = FakeBus(start=T0)
+    node = FakeNode("controller", bus)
+    config = load_config(Config, None, ["ready_timeout=60"])
+    commander = Commander(node, name="c", clock=bus.clock, wall=bus.clock, inline_calls=True)
+    ctl = Controller(node, config, commander, bus.clock(), clock=bus.clock, wall=bus.clock)
+    drive(bus, T0 + 1.0, ctl)
+    node.stop()
+    drive(bus, T0 + 2.0, ctl, stop=lambda: ctl.finished)
+    assert ctl.finished and ctl.exit_code == 0 and bus.clock() <= T0 + 1.0 + 1 / 20
+
+
+def test_dry_run_shows_commands_and_sends_none():
+    rig = Rig(["mode=follow_color", "dry_run=true"])
+    assert rig.node.announced
+    stamps = rig.feed(blob(520, 200, 15), seconds=1.0)  # right of centre
+    rig.run(1.0)
+    status = rig.statuses()[-1]
+    assert status.state == CONTROLLER_TRACKING and status.source_stamp in stamps
+    assert status.cmd_yaw_rate < 0  # turn right (clockwise, negative)
+    assert status.error_yaw != 0
+    assert rig.bus.published[registry.SETPOINT_RAW_LOCAL.key("drone")] == []
+    assert rig.stop() == 0
+
+
+def test_a_bad_detections_message_is_counted_and_dropped():
+    rig = Rig(["takeoff.on_start=false", "on_exit=stop"])
+    rig.feed(blob(320, 240, 10), seconds=0.5)
+    bad = Detections(
+        header=Header(stamp=float("nan")), detections=[], image_width=640, image_height=480
+    )
+    rig.bus.schedule(rig.now() + 0.26, DETECTIONS_KEY, bad)
+    rig.run(1.0)
+    assert rig.node.callback_errors["detections refused"] == 1
+    assert rig.stop() == 0
+
+
+def test_a_stop_during_the_takeoff_lands_at_once():
+    rig = Rig(["takeoff.height=3", "on_exit=land"], flying=False)
+    rig.run(1.0)  # climbing
+    assert rig.state() == CONTROLLER_TAKEOFF and 0.5 < rig.autopilot.z < 1.5
+    rig.node.stop()
+    stopped_at = rig.now()
+    assert rig.stop() == 0
+    (called_at,) = [t for t, name in rig.autopilot.calls if name == "land"]
+    assert called_at - stopped_at <= 1 / 20 + 1e-6
+    assert rig.velocity() == []  # never servoed
+
+
+@pytest.mark.parametrize("dry_run", [True, False])
+def test_run_returns_0_soon_after_a_stop(dry_run):
+    """The real-clock loop (``run``) on a fake node: a stop ends it (bounded join, no timing)."""
+    node = FakeNode("controller", FakeBus(start=T0))
+    config = load_config(Config, None, [f"dry_run={str(dry_run).lower()}", "ready_timeout=60"])
+    result: list[int] = []
+    thread = threading.Thread(target=lambda: result.append(run(node, config)), daemon=True)
     thread.start()
-    try:
-        yield stamps
-    finally:
-        stop.set()
-        thread.join(5)
-
-
-@pytest.fixture
-def flying_bridge(router):
-    bridge = FakeBridge(router, flying=True)
-    yield bridge
-    bridge.close()
-
-
-def test_tracks_with_the_frames_stamp_and_right_signs(router, flying_bridge):
-    ctl = Harness(router, ["takeoff.on_start=false", "on_exit=stop"])
-    try:
-        wait_for(
-            lambda: ctl.state() == "hover" or ctl.state() == "search", 15, what="controller up"
-        )
-        # blob up-left of centre and small (far), at 20 Hz
-        with feeding(ctl, blob(200, 140, 8)) as stamps:
-
-            def tracked() -> list[PositionTarget]:
-                sps = flying_bridge.velocity_setpoints()
-                found = [sp for sp in sps if sp.header.stamp in stamps]
-                return found if len(found) > 20 else []
-
-            tracked_sps = wait_for(tracked, 20, what="20 setpoints carrying a frame's stamp")
-            status = wait_for(
-                lambda: next(
-                    (s for s in reversed(ctl.statuses) if s.state == CONTROLLER_TRACKING), None
-                ),
-                10,
-                what="a tracking status",
-            )
-        last = tracked_sps[-1]
-        assert last.velocity.x > 0  # too far: forward
-        assert last.velocity.y == 0.0  # vy stays 0
-        assert last.velocity.z > 0  # above centre: climb
-        assert last.yaw_rate > 0  # left of centre: turn left (CCW)
-        assert last.velocity.x <= ctl.config.follow_color.vx.out_limit
-        assert status.target_visible
-        assert status.source_stamp in stamps and status.mode == "follow_color"
-    finally:
-        assert ctl.stop() == 0
-        ctl.close()
-
-
-def test_status_rate_stale_hover_then_search(router, flying_bridge):
-    ctl = Harness(router, ["takeoff.on_start=false", "on_exit=stop", "search_yaw_rate=0.4"])
-    try:
-        wait_for(lambda: len(ctl.statuses) >= 3, 15, what="status")
-        n0 = len(ctl.statuses)
-        wait_for(lambda: len(ctl.statuses) >= n0 + 20, 15, what="20 more statuses")
-        # >= 5 Hz (10 Hz nominal) by the median interval of the publication stamps: robust to
-        # a busy machine stalling the process now and then, not to a slow status thread
-        stamps = [s.header.stamp for s in ctl.statuses[n0:]]
-        gaps = sorted(b - a for a, b in itertools.pairwise(stamps))
-        assert gaps[len(gaps) // 2] <= 1.0 / 5.0, f"median status interval {gaps[len(gaps) // 2]}"
-        n1 = len(ctl.statuses)
-        with feeding(ctl, blob(600, 240, 20)):  # target on the right ...
-            wait_for(
-                lambda: any(s.state == CONTROLLER_TRACKING for s in ctl.statuses[n1:]),
-                10,
-                what="tracking",
-            )
-        # ... then detections stop (perception died)
-        wait_for(lambda: ctl.state() == CONTROLLER_HOVER, 10, what="hover on stale detections")
-        n2 = len(ctl.statuses)
-        time.sleep(1.5)  # longer than search_delay: still hover, never search blind
-        assert {s.state for s in ctl.statuses[n2:]} <= {CONTROLLER_HOVER}
-        assert ctl.state() == CONTROLLER_HOVER
-        wait_for(lambda: flying_bridge.last_command() == (0.0, 0.0, 0.0), 5, what="zero command")
-        # fresh detections without the target: search towards the right (cw)
-        with feeding(ctl):
-            wait_for(lambda: ctl.state() == CONTROLLER_SEARCH, 10, what="search")
-            wait_for(
-                lambda: flying_bridge.last_command() == (0.0, 0.0, pytest.approx(-0.4)),
-                10,
-                what="a clockwise search command",
-            )
-    finally:
-        ctl.close()
-
-
-def test_exit_with_on_exit_stop_sends_zero_and_stops_commanding(router, flying_bridge):
-    ctl = Harness(router, ["takeoff.on_start=false", "on_exit=stop"])
-    try:
-        wait_for(lambda: ctl.statuses, 15, what="status")
-        with feeding(ctl, blob(100, 100, 5)):
-            wait_for(
-                lambda: any(s.state == CONTROLLER_TRACKING for s in ctl.statuses),
-                10,
-                what="tracking",
-            )
-            wait_for(lambda: flying_bridge.velocity_setpoints(), 10, what="setpoints")
-            assert ctl.stop() == 0
-        flying_bridge.wait_quiet()  # nothing streamed any more ...
-        assert flying_bridge.last_command() == (0.0, 0.0, 0.0)  # ... after a zero command
-        assert flying_bridge.land_calls == 0
-    finally:
-        ctl.close()
-
-
-def test_takes_off_on_start_and_lands_on_exit(router):
-    bridge = FakeBridge(router, flying=False)
-    ctl = Harness(router, ["takeoff.height=1.5", "on_exit=land"])
-    try:
-        wait_for(
-            lambda: any(s.state == CONTROLLER_TAKEOFF for s in ctl.statuses), 15, what="takeoff"
-        )
-        wait_for(lambda: bridge.z >= 1.5 - 1e-6, 15, what="climb")
-        wait_for(lambda: ctl.state() in (CONTROLLER_HOVER, CONTROLLER_SEARCH), 15, what="servoing")
-        # taking off, the controller only watches: its first velocity command came at the top
-        # (the SDK's take-off returns within 0.1 m of the 1.5 m goal)
-        wait_for(lambda: bridge.z_at_first_velocity is not None, 10, what="a velocity command")
-        first_z = bridge.z_at_first_velocity
-        assert first_z >= 1.4 - 1e-6, f"velocity commanded at z={first_z:.2f} m, mid-climb"
-        assert bridge.armed and bridge.mode == "OFFBOARD"
-        assert ctl.stop() == 0
-        assert bridge.land_calls == 1 and not bridge.armed
-    finally:
-        ctl.close()
-        bridge.close()
-
-
-def test_no_bridge_gives_up_with_an_error(router):
-    ctl = Harness(router, ["ready_timeout=1.5", "takeoff.on_start=false"])
-    try:
-        ctl.thread.join(15)
-        assert not ctl.thread.is_alive() and ctl.exit_code == 1
-    finally:
-        ctl.close()
+    node.stop()
+    thread.join(10.0)
+    assert result == [0]

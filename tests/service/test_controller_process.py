@@ -1,34 +1,36 @@
-"""The controller as a process: --help, a bad config exits 2, SIGINT exits 0."""
+"""The controller as a process: its command line in-process, and one real process stopped by
+SIGINT (the logic is tested on the fake bus in test_controller_node.py)."""
 
 from __future__ import annotations
 
-import subprocess
+import pytest
 
+import dronewrapper_controller
+from dronewrapper.runtime.service import run_service
+from dronewrapper_controller.config import Config
+from dronewrapper_controller.node import run
 from support import REPO, python_module, wait_for
 
 CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
 
 
-def test_help_names_the_service():
-    out = subprocess.run(
-        python_module("dronewrapper_controller", "--help"),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert out.returncode == 0 and "--config" in out.stdout and "--connect" in out.stdout
+def main(*argv: str) -> int:
+    """What ``python -m dronewrapper_controller ARGV`` runs, in this process."""
+    return run_service("controller", dronewrapper_controller.__doc__, Config, run, list(argv))
 
 
-def test_bad_config_exits_2_naming_the_key(tmp_path):
+def test_help_names_the_flags(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main("--help")
+    out = capsys.readouterr().out
+    assert exit_.value.code == 0 and "--config" in out and "--connect" in out
+
+
+def test_bad_config_exits_2_naming_the_key(tmp_path, capsys):
     bad = tmp_path / "controller.yaml"
     bad.write_text(CONFIG.read_text() + "\nyaw_rat: {kp: 1}\n")
-    out = subprocess.run(
-        python_module("dronewrapper_controller", "--config", str(bad)),
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert out.returncode == 2 and "yaw_rat" in out.stderr
+    assert main("--config", str(bad)) == 2
+    assert "yaw_rat" in capsys.readouterr().err
 
 
 def test_sigint_while_waiting_for_the_bridge_exits_0(router, spawn):

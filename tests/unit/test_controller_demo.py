@@ -8,7 +8,7 @@ import math
 import pytest
 
 from dronewrapper_compose.demo import intended_distance, print_summary, save_plot, status_line
-from dronewrapper_controller.metrics import FollowSample, summarize
+from dronewrapper_sim.evaluation.metrics import FollowSample, summarize
 
 
 def flight(n: int = 60) -> list[FollowSample]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import itertools
 
 import pytest
@@ -15,6 +16,7 @@ GRAPHS = [
     "sim_follow_color",
     "sim_follow_person",
     "px4_real_follow_person",
+    "px4_real_follow_person_secure",
     "webcam_follow_color",
 ]
 
@@ -78,3 +80,12 @@ def test_sim_graphs_pick_the_mode_and_take_a_scenario(name, mode):
     assert argvs["sim"][argvs["sim"].index("--scenario") + 1] == "beacon_abrupt"
     config = load_config(Config, *split_config_args(argvs["controller"]))
     assert config.mode == mode and config.on_exit == "stop"
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "compose").glob("*.yaml")), ids=lambda p: p.stem)
+def test_every_module_a_graph_runs_exists(path):
+    """No graph names a module that is gone (the USB-camera stop-gap, replaced by
+    camera_victure, was still named by the secure PX4 graph)."""
+    modules = [spec.module for spec in load_graph(path).processes if spec.module]
+    missing = [m for m in modules if importlib.util.find_spec(m) is None]
+    assert not missing, f"{path.name} runs modules that do not exist: {missing}"

@@ -149,7 +149,8 @@ class FakePublisher(Generic[T]):
         self.count = 0
         self._bus = bus
 
-    def put(self, msg: T) -> None:
+    def put(self, msg: T, *, attachment: bytes | None = None) -> None:
+        """Deliver ``msg`` now (``attachment`` is accepted as on the real bus, not carried)."""
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
         self.count += 1
@@ -271,6 +272,7 @@ class FakeNode:
         *,
         timeout: float = 5.0,
         ns: str | None = None,
+        attachment: bytes | None = None,
         **parts: str,
     ) -> Rep:
         key = service.key(ns or self.ns, **parts)

@@ -92,11 +92,12 @@ class Publisher(Generic[T]):
         self.count = 0
         self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type), **qos)
 
-    def put(self, msg: T) -> None:
-        """Publish ``msg`` (must be of this publisher's type)."""
+    def put(self, msg: T, *, attachment: bytes | None = None) -> None:
+        """Publish ``msg`` (must be of this publisher's type); ``attachment`` travels with it
+        (see :mod:`dronewrapper.runtime.caller`)."""
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
-        self._pub.put(codec.encode(msg))
+        self._pub.put(codec.encode(msg), attachment=attachment)
         self.count += 1
 
     def watched(self) -> bool:
@@ -357,16 +358,24 @@ class Node:
         *,
         timeout: float = 5.0,
         ns: str | None = None,
+        attachment: bytes | None = None,
         **parts: str,
     ) -> Rep:
-        """Send ``request`` to ``service`` and return the reply.
+        """Send ``request`` to ``service`` and return the reply (``attachment``: see
+        :func:`call_service`).
 
         Raises:
             ServiceError: the server answered with an error reply (its message says why).
             ServiceUnavailable: nobody answered within ``timeout`` seconds.
         """
         return call_service(
-            self.session, service, request, ns=ns or self.ns, timeout=timeout, **parts
+            self.session,
+            service,
+            request,
+            ns=ns or self.ns,
+            timeout=timeout,
+            attachment=attachment,
+            **parts,
         )
 
 

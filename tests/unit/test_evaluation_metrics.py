@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from dronewrapper_controller.metrics import (
+from dronewrapper_sim.evaluation.metrics import (
     FollowSample,
     bearing_error,
     elevation_error,
@@ -74,7 +74,7 @@ def test_closest_to_axis_names_the_object_in_view():
 
 
 def test_intended_distances_from_the_camera_model():
-    from dronewrapper_controller.metrics import (
+    from dronewrapper_sim.evaluation.metrics import (
         colour_intended_distance,
         focal_px,
         person_intended_distance,

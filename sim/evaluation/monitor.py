@@ -2,7 +2,7 @@
 
 Subscribes ``{ns}/sim/ground_truth`` (vehicle pose), ``sim/objects/*/pose`` (every world
 object) and ``{ns}/controller/status``, and samples them at ``rate_hz`` on its own thread into
-:class:`~dronewrapper_controller.metrics.FollowSample` records. Used by ``make demo`` and the
+:class:`~dronewrapper_sim.evaluation.metrics.FollowSample` records. Used by ``make demo`` and the
 scenario tests; not part of the controller process.
 """
 
@@ -18,7 +18,7 @@ from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped
 from dronewrapper.runtime import Latest
 from dronewrapper.telemetry import euler_from_quaternion
-from dronewrapper_controller.metrics import FollowSample
+from dronewrapper_sim.evaluation.metrics import FollowSample
 
 
 def _xyz(msg: PoseStamped, lift: float = 0.0) -> tuple[float, float, float]:
