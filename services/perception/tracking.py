@@ -378,12 +378,13 @@ class KalmanTracker:
 
         The detection may be unmatched, or held by a track born after the target was last seen
         (the target itself, re-detected as somebody new while it came out from behind a
-        passer-by); that young track is then dropped. Only a detection of the target's class, within ``reid_distance`` box heights of the
-        track's predicted or last seen centre (a coasting prediction drifts on whatever velocity
-        the camera's motion gave it), of a similar height, within the target's
-        re-identification gate (:meth:`reid_gate`) and not more like another unseen track, may
-        be taken; its motion filter restarts from that box (the jump was the camera's, not the
-        person's velocity). Returns the detection's index, or None.
+        passer-by); that young track is then dropped. Only a detection of the target's class,
+        within ``reid_distance`` box heights of the track's predicted or last seen centre (a
+        coasting prediction drifts on whatever velocity the camera's motion gave it), of a
+        similar height, within the target's re-identification gate (:meth:`reid_gate`) and not
+        more like another unseen track, may be taken; its motion filter restarts from that box
+        (the jump was the camera's, not the person's velocity). Returns the detection's index,
+        or None.
         """
         track = self._track(self.target_id)
         if track is None or track.last_seen == t or track.appearance is None or features is None:
@@ -499,9 +500,10 @@ class KalmanTracker:
 
         While the lost target's appearance is remembered (seen within ``forget_target_s``), only
         an unoccluded detection within its re-identification gate (:meth:`reid_gate`, as it
-        was when last seen) may become the target, the most alike first. Otherwise (the first pick, no appearance, or forgotten): the most prominent
-        person (:func:`prominence`: the one the drone looks at), so a person far behind, or
-        passing at the side, cannot win on a slightly higher confidence.
+        was when last seen) may become the target, the most alike first. Otherwise (the first
+        pick, no appearance, or forgotten): the most prominent person (:func:`prominence`: the
+        one the drone looks at), so a person far behind, or passing at the side, cannot win on
+        a slightly higher confidence.
         """
         if not dets:
             return ""
