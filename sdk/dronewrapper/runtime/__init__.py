@@ -1,6 +1,6 @@
 """The Zenoh runtime every DroneWrapper process uses (services, simulator, SDK, tools)."""
 
-from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.errors import ServiceError, ServiceTimeout, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import Node, Publisher, call_service, encoding_for, open_session
 from dronewrapper.runtime.options import (
@@ -19,6 +19,7 @@ __all__ = [
     "Publisher",
     "Ratekeeper",
     "ServiceError",
+    "ServiceTimeout",
     "ServiceUnavailable",
     "ZenohOptions",
     "add_zenoh_args",

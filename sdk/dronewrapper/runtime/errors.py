@@ -26,6 +26,16 @@ class ServiceUnavailable(ServiceError):
         super().__init__(message, code="unavailable")
 
 
+class ServiceTimeout(ServiceUnavailable):
+    """Zenoh ended the query at its timeout with no reply: a server that got the request may be
+    busy or stuck (the request may still take effect), or the query reached none at the last
+    moment. A kind of :class:`ServiceUnavailable`, never a refusal."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.code = "timeout"
+
+
 _RUST_SOURCE = re.compile(r"\s*\bat /\S+?\.rs:\d+\.?")
 _BRACKETED_EMPTY = re.compile(r"\[\s*\]")
 

@@ -35,7 +35,12 @@ from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.msgs.std import ErrorReply
 from dronewrapper.runtime import caller
-from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable, zenoh_error_text
+from dronewrapper.runtime.errors import (
+    ServiceError,
+    ServiceTimeout,
+    ServiceUnavailable,
+    zenoh_error_text,
+)
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
 from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
@@ -48,6 +53,9 @@ Rep = TypeVar("Rep")
 log = logging.getLogger("dronewrapper.runtime")
 
 _ERROR_ENCODING = zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(ErrorReply))
+
+ZENOH_QUERY_TIMEOUT = b"Timeout"
+"""The error reply Zenoh itself gives a query whose server did not answer before its timeout."""
 
 ROUTE_WAIT_S = 2.0
 """How long a service call keeps asking again while its query ends at once, unanswered (s).
@@ -367,6 +375,7 @@ class Node:
         Raises:
             ServiceError: the server answered with an error reply (its message says why).
             ServiceUnavailable: nobody answered within ``timeout`` seconds.
+            ServiceTimeout: (a ServiceUnavailable) Zenoh ended the query at its timeout.
         """
         return call_service(
             self.session,
@@ -418,6 +427,11 @@ def call_service(
             try:
                 err = codec.decode(ErrorReply, raw)
             except (msgspec.DecodeError, msgspec.ValidationError):
+                if raw == ZENOH_QUERY_TIMEOUT:
+                    raise ServiceTimeout(
+                        f"no reply from {key} within {timeout:g} s (Zenoh ended the query: "
+                        f"the {service.server or 'server'} is busy, stuck or not running)"
+                    ) from None
                 err = ErrorReply(message=raw.decode("utf-8", "replace"), code="internal")
             raise ServiceError(err.message, err.code)
         if time.monotonic() + 0.05 >= ask_until:
