@@ -1,0 +1,569 @@
+"""The bridge without I/O: MAVLink messages and Zenoh requests in, what to send and publish out.
+
+:class:`BridgeCore` holds everything the bridge knows (the autopilot's state, telemetry, the
+failsafe, pending commands and parameter reads) and is pure: no sockets, no threads, no clock.
+Every entry point takes the time (``now`` monotonic s, ``stamp`` wall-clock s for headers) and
+queues its effects in an :class:`Outbox` that the node takes with :meth:`BridgeCore.take` and
+executes (MAVLink sends, Zenoh samples). Service calls that wait for acknowledgements are
+:mod:`operations` the core advances as messages and time arrive; the node only waits on them.
+The sim's autopilot (sim/px4/autopilot.py) is built the same way.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import math
+from collections.abc import Generator
+from dataclasses import dataclass, field
+from typing import Any
+
+import msgspec
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import SEVERITY_WARNING, ExtendedState, PositionTarget, State
+from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
+from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.sensor import BatteryState
+from dronewrapper.msgs.std import Header
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
+from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
+from dronewrapper_bridge_mavlink.link_gap import gap_report
+from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
+from dronewrapper_bridge_mavlink.operations import Operation, failsafe_action
+from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.sources import AutopilotSources
+from dronewrapper_bridge_mavlink.telemetry import (
+    StatusTextAssembler,
+    Telemetry,
+    battery_from_battery_status,
+    battery_from_sys_status,
+    extended_state,
+    is_autopilot_heartbeat,
+    non_finite_field,
+    state_from_heartbeat,
+)
+
+log = logging.getLogger("bridge_mavlink")
+
+STREAM_GAP_S = 0.5  # s without a setpoint sent: the stream has stopped (priming restarts)
+
+
+@dataclass
+class Outbox:
+    """What the node must do after a core call.
+
+    Attributes:
+        sends: MAVLink messages, as (pymavlink name without ``_send``, field values).
+        samples: (registry topic, message) to publish on Zenoh.
+        peers: UDP addresses replies must go to from now on (the last one wins).
+        errors: names of dropped inputs to count (the node's ``callback_errors``).
+    """
+
+    sends: list[tuple[str, tuple]] = field(default_factory=list)
+    samples: list[tuple[Topic, Any]] = field(default_factory=list)
+    peers: list[Any] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+
+
+class BridgeCore:
+    """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
+
+    def __init__(self, config: Config, now: float = 0.0) -> None:
+        self.config = config
+        self.limits = Limits(**msgspec.structs.asdict(config.limits))
+        self.failsafe = Failsafe(
+            FailsafeConfig(
+                setpoint_timeout=config.setpoint_timeout,
+                commander_lost_timeout=config.commander_lost_timeout,
+                commander_lost_action=config.commander_lost_action,
+            )
+        )
+        self.telemetry = Telemetry()
+        self.freshness = Freshness()
+        self.sources = AutopilotSources()
+        self.statustexts = StatusTextAssembler()
+        self.acks = cmds.AckRouter()
+        self.params: dict[str, tuple[float, int, float]] = {}  # id -> (raw, type, now)
+        self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
+            maxlen=32
+        )
+        self.operations: list[Operation] = []
+        self.command_busy = False  # one COMMAND_LONG exchange at a time
+        self.now, self.stamp = now, 0.0
+        self.out = Outbox()
+        self.autopilot = ""
+        self.target_system = config.target_system
+        self.target_component = config.target_component
+        self.connected = False
+        self.commander = ""  # the command lease's holder, shown on State
+        self.heartbeat_state: State | None = None
+        self.ext = ExtendedState()
+        self.battery: BatteryState | None = None
+        self.rejected_setpoints = 0
+        self.setpoints_sent = 0
+        self.messages_received = 0
+        self._t0 = now
+        self._last_heartbeat = -math.inf
+        self._next_heartbeat_out = -math.inf
+        self._last_state_key: tuple | None = None
+        self._last_state_pub = -math.inf
+        self._last_ext_pub = -math.inf
+        self._last_battery_pub = -math.inf
+        self._last_global_pub = -math.inf
+        self._last_reject_log = -math.inf
+        self._last_send = -math.inf
+        self._stream_since = -math.inf
+        self._rates_round = 0
+        self._next_rates = math.inf
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _at(self, now: float, stamp: float) -> None:
+        self.now, self.stamp = now, stamp
+
+    def take(self) -> Outbox:
+        """The effects queued since the last call (the node executes them)."""
+        out, self.out = self.out, Outbox()
+        return out
+
+    def send(self, name: str, *fields: Any) -> None:
+        """Queue MAVLink message ``name`` (e.g. ``command_long``) with its field values."""
+        self.out.sends.append((name, fields))
+
+    def publish(self, topic: Topic, msg: Any) -> None:
+        """Queue a sample for ``topic``."""
+        self.out.samples.append((topic, msg))
+
+    def target(self) -> tuple[int, int]:
+        """The autopilot's (system, component) to address (system 1 before it is heard)."""
+        return self.target_system or 1, self.target_component
+
+    def start(self, steps: Generator[float, None, Any], now: float, stamp: float) -> Operation:
+        """Begin an operation (its first step runs now; a bad request fails it at once)."""
+        self._at(now, stamp)
+        op = Operation(steps)
+        self.operations.append(op)
+        op.step()
+        self._prune()
+        return op
+
+    def advance(self, now: float, stamp: float) -> None:
+        """Move every pending operation on to ``now``."""
+        self._at(now, stamp)
+        for op in list(self.operations):
+            op.step()
+        self._prune()
+
+    def cancel(self, op: Operation) -> None:
+        """Abandon ``op`` (the node is stopping): its command slot is freed."""
+        op.cancel()
+        self._prune()
+
+    def _prune(self) -> None:
+        for op in [op for op in self.operations if op.done]:
+            self.operations.remove(op)
+            if op.error is not None and op.background:
+                log.error("%s failed: %s", op.name, op.error)
+
+    def require_connected(self) -> str:
+        """The autopilot kind; ServiceError when no heartbeat is heard."""
+        if not self.connected:
+            raise ServiceError("the autopilot is not connected (no heartbeat)", "unavailable")
+        return self.autopilot or AUTOPILOT_PX4
+
+    # ------------------------------------------------------------------ receive side
+
+    def on_mavlink(self, msg: Any, now: float, stamp: float, source: Any = None) -> None:
+        """One received MAVLink message (``source`` its UDP address, None when unknown)."""
+        self._at(now, stamp)
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            return
+        self.messages_received += 1
+        if not self._admit(msg, kind, source):
+            return
+        if kind == "HEARTBEAT":
+            self._on_heartbeat(msg)
+        elif not self.target_system or msg.get_srcSystem() == self.target_system:
+            handler = getattr(self, f"_on_{kind.lower()}", None)
+            if handler is not None:
+                handler(msg)
+        if self.operations:
+            self.advance(now, stamp)
+
+    def _admit(self, msg: Any, kind: str, source: Any) -> bool:
+        """False for a message to drop: from a second autopilot with the same system id, a
+        duplicated datagram, or one older than what was already used (seq / time_boot_ms)."""
+        system = msg.get_srcSystem()
+        verdict = self.sources.check(source, system, self.now)
+        if verdict.flag:
+            self.bridge_text(verdict.flag)
+        if not verdict.accept:
+            return False
+        if source is not None and system == self.target_system:
+            self.out.peers.append(self.sources.owner(system))
+        fresh = self.freshness.check(
+            source,
+            system,
+            msg.get_srcComponent(),
+            msg.get_seq(),
+            kind,
+            boot_ms_of(msg),
+            self.now,
+            bytes(msg.get_msgbuf() or b""),
+        )
+        if not fresh.new:
+            log.debug("dropped %s: %s", kind, fresh.reason)
+            return False
+        bad_field = non_finite_field(kind, msg)
+        if bad_field is not None:
+            self.out.errors.append("mavlink non-finite")
+            log.debug("dropped %s", bad_field)
+            return False
+        return True
+
+    def bridge_text(self, text: str) -> None:
+        """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
+        log.warning("%s", text)
+        self._publish_text(
+            StatusTextMsg(
+                header=Header(stamp=self.stamp, frame_id="bridge"),
+                severity=SEVERITY_WARNING,
+                text=f"bridge: {text}",
+            )
+        )
+
+    def _publish_text(self, text: StatusTextMsg) -> None:
+        if not text.header.stamp:
+            text = msgspec.structs.replace(text, header=Header(stamp=self.stamp))
+        self.recent_texts.append((self.now, text))
+        log.info("autopilot says [%d]: %s", text.severity, text.text)
+        self.publish(registry.STATUSTEXT, text)
+
+    def _on_heartbeat(self, msg: Any) -> None:
+        if not is_autopilot_heartbeat(msg):
+            return
+        if self.target_system and msg.get_srcSystem() != self.target_system:
+            return
+        if not self.target_system:
+            self.target_system = msg.get_srcSystem()
+            self.target_component = msg.get_srcComponent()
+        before, lost_for = self.heartbeat_state, self.now - self._last_heartbeat
+        self._last_heartbeat = self.now
+        state = state_from_heartbeat(msg, self.stamp, failsafe=self.failsafe.state)
+        if state.autopilot != self.autopilot:
+            self.autopilot = state.autopilot
+            log.info(
+                "autopilot %s (system %d, component %d)",
+                self.autopilot,
+                self.target_system,
+                self.target_component,
+            )
+        reconnected = not self.connected
+        self.connected = True
+        self.heartbeat_state = state
+        self._update_failsafe_vehicle()
+        if reconnected:
+            log.info("connected to the autopilot (mode %s)", state.mode)
+            self._rates_round = 0
+            self._next_rates = self.now
+            if before is not None:  # after a link gap: what the autopilot changed meanwhile
+                report = gap_report(before, state, lost_for)
+                if report is not None:
+                    self.bridge_text(report)
+        self.publish_state()
+
+    def _update_failsafe_vehicle(self) -> None:
+        hb = self.heartbeat_state
+        if hb is None:
+            return
+        airborne = is_airborne(self.ext.landed_state, hb.armed)
+        self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+        self._act(self.failsafe.tick(self.now, self.pose()), send=False)
+
+    def _on_attitude(self, msg: Any) -> None:
+        self.telemetry.on_attitude(msg)
+
+    def _on_attitude_quaternion(self, msg: Any) -> None:
+        self.telemetry.on_attitude_quaternion(msg)
+
+    def _on_local_position_ned(self, msg: Any) -> None:
+        pose, local, body = self.telemetry.on_local_position(msg, self.stamp)
+        self.publish(registry.LOCAL_POSE, pose)
+        self.publish(registry.VELOCITY_LOCAL, local)
+        self.publish(registry.VELOCITY_BODY, body)
+
+    def _on_global_position_int(self, msg: Any) -> None:
+        fix = self.telemetry.on_global_position(msg, self.stamp)
+        max_hz = self.config.global_position_max_hz
+        if fix is not None and (max_hz <= 0 or self.now - self._last_global_pub >= 0.9 / max_hz):
+            self._last_global_pub = self.now
+            self.publish(registry.GLOBAL_POSITION, fix)
+
+    def _on_gps_raw_int(self, msg: Any) -> None:
+        self.telemetry.on_gps_raw(msg)
+
+    def _on_home_position(self, msg: Any) -> None:
+        self.telemetry.on_home_position(msg)
+
+    def _on_extended_sys_state(self, msg: Any) -> None:
+        ext = extended_state(msg, self.stamp)
+        changed = (ext.landed_state, ext.vtol_state) != (
+            self.ext.landed_state,
+            self.ext.vtol_state,
+        )
+        self.ext = ext
+        if changed:
+            self._update_failsafe_vehicle()
+            self._last_ext_pub = self.now
+            self.publish(registry.EXTENDED_STATE, ext)
+
+    def _on_sys_status(self, msg: Any) -> None:
+        battery = battery_from_sys_status(msg, self.stamp)
+        known = self.battery is not None and not math.isnan(self.battery.percentage)
+        if not known or not math.isnan(battery.percentage):
+            self.battery = battery
+
+    def _on_battery_status(self, msg: Any) -> None:
+        if msg.id == 0:
+            self.battery = battery_from_battery_status(msg, self.stamp)
+
+    def _on_statustext(self, msg: Any) -> None:
+        for text in self.statustexts.add(msg, self.stamp, self.now):
+            self._publish_text(text)
+
+    def _on_command_ack(self, msg: Any) -> None:
+        target = (getattr(msg, "target_system", 0), getattr(msg, "target_component", 0))
+        ours = (self.config.source_system, self.config.source_component)
+        if target != (0, 0) and target != ours:
+            return  # the answer to a ground station's command (forwarded), not to ours
+        outcome = self.acks.on_ack(int(msg.command), int(msg.result), self.now)
+        log.debug(
+            "COMMAND_ACK %s %s (%s)",
+            cmds.command_name(msg.command),
+            cmds.result_name(msg.result),
+            outcome,
+        )
+
+    def on_command_ack(self, msg: Any, now: float, stamp: float) -> None:
+        """A COMMAND_ACK, bypassing admission (tests of the ack routing)."""
+        self._at(now, stamp)
+        self._on_command_ack(msg)
+        self.advance(now, stamp)
+
+    def _on_param_value(self, msg: Any) -> None:
+        param_id = msg.param_id
+        if isinstance(param_id, bytes | bytearray):
+            param_id = bytes(param_id).decode("ascii", "replace")
+        param_id = param_id.split("\x00", 1)[0]
+        self.params[param_id] = (float(msg.param_value), int(msg.param_type), self.now)
+
+    # ------------------------------------------------------------------ state publication
+
+    def current_state(self) -> State:
+        """State as published now (connected, mode, armed, failsafe, commander ...)."""
+        hb = self.heartbeat_state or State()
+        return msgspec.structs.replace(
+            hb,
+            header=Header(stamp=self.stamp),
+            connected=self.connected,
+            failsafe=self.failsafe.state,
+            commander=self.commander,
+        )
+
+    def publish_state(self, *, force: bool = False) -> None:
+        """Publish State if it changed (or ``force``, or the periodic time has come)."""
+        state = self.current_state()
+        key = (
+            state.connected,
+            state.armed,
+            state.guided,
+            state.manual_input,
+            state.mode,
+            state.system_status,
+            state.autopilot,
+            state.failsafe,
+            state.commander,
+        )
+        due = self.now - self._last_state_pub >= 1.0 / self.config.state_rate_hz
+        if not (force or due or key != self._last_state_key):
+            return
+        self._last_state_key = key
+        self._last_state_pub = self.now
+        self.publish(registry.STATE, state)
+
+    def set_commander(self, commander: str, now: float, stamp: float) -> None:
+        """The command lease's holder (``""``: nobody); State shows it."""
+        self._at(now, stamp)
+        if commander != self.commander:
+            self.commander = commander
+            self.publish_state(force=True)
+
+    def mode_entered(self, mode: str) -> None:
+        """The autopilot accepted a command that puts it in ``mode``: the failsafe and State
+        know it now (the next HEARTBEAT, up to 1 s later, confirms or corrects it)."""
+        hb = self.heartbeat_state
+        if hb is None or hb.mode == mode:
+            return
+        self.heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=is_guided(mode))
+        self._update_failsafe_vehicle()
+        log.info("mode %s (from the accepted command)", mode)
+        self.publish_state()
+
+    # ------------------------------------------------------------------ the stream tick
+
+    def tick(self, now: float, stamp: float) -> None:
+        """The stream loop's tick (>= 20 Hz): our heartbeat, the failsafe's stream and actions,
+        connection supervision, periodic samples, message-rate requests, operations."""
+        self._at(now, stamp)
+        if now >= self._next_heartbeat_out:
+            self._next_heartbeat_out = now + 1.0
+            self.send(
+                "heartbeat",
+                self.config.heartbeat_type,
+                mavlink.MAV_AUTOPILOT_INVALID,
+                0,
+                0,
+                mavlink.MAV_STATE_ACTIVE,
+            )
+        tick = self.failsafe.tick(now, self.pose())
+        if now - self._last_send < 0.5 / self.config.stream_rate_hz:
+            tick.send = None  # just forwarded by the subscriber
+        self._act(tick, send=self.connected)
+        self._periodic()
+        self.advance(now, stamp)
+
+    def _periodic(self) -> None:
+        now = self.now
+        if self.connected and now - self._last_heartbeat > self.config.heartbeat_timeout:
+            self.connected = False
+            log.warning(
+                "no heartbeat for %.1f s: autopilot disconnected", now - self._last_heartbeat
+            )
+        self.publish_state()
+        if now - self._last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
+            self._last_ext_pub = now
+            self.publish(
+                registry.EXTENDED_STATE,
+                msgspec.structs.replace(self.ext, header=Header(stamp=self.stamp)),
+            )
+        if (
+            self.battery is not None
+            and now - self._last_battery_pub >= 1.0 / self.config.battery_rate_hz
+        ):
+            self._last_battery_pub = now
+            self.publish(
+                registry.BATTERY,
+                msgspec.structs.replace(self.battery, header=Header(stamp=self.stamp)),
+            )
+        for text in self.statustexts.flush(now, stamp=self.stamp):
+            self._publish_text(text)
+        if now >= self._next_rates and self.connected:
+            self._request_message_rates()
+            self._rates_round += 1
+            self._next_rates = now + 2.0 if self._rates_round < 3 else math.inf
+
+    def _request_message_rates(self) -> None:
+        """Ask for the message rates we need (fire and forget: re-sent 3 times)."""
+        for name, hz in self.config.message_rates.items():
+            msg_id = getattr(mavlink, f"MAVLINK_MSG_ID_{name}", None)
+            if msg_id is None or hz <= 0:
+                continue
+            self.send(
+                "command_long",
+                *self.target(),
+                mavlink.MAV_CMD_SET_MESSAGE_INTERVAL,
+                0,
+                float(msg_id),
+                1e6 / hz,
+                0,
+                0,
+                0,
+                0,
+                0,
+            )
+
+    # ------------------------------------------------------------------ setpoints
+
+    def on_setpoint(self, target: PositionTarget, now: float, stamp: float) -> None:
+        """A PositionTarget from the commander (already admitted by the command lease):
+        validate, remember, forward at once."""
+        self._at(now, stamp)
+        try:
+            kind = validate(target, self.limits)
+        except SetpointError as exc:
+            self.rejected_setpoints += 1
+            if now - self._last_reject_log >= 2.0:
+                self._last_reject_log = now
+                log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
+            return
+        self.failsafe.on_setpoint(target, kind, now)
+        self._act(self.failsafe.tick(now, self.pose()), send=True)
+
+    def pose(self) -> tuple[tuple[float, float, float], float] | None:
+        """(position ENU m, yaw ENU rad) now, None before the first local position."""
+        position = self.telemetry.position_enu
+        if position is None:
+            return None
+        return (position, self.telemetry.yaw_enu)
+
+    def _act(self, tick: Tick, *, send: bool) -> None:
+        """Act on a failsafe tick: log and publish transitions, send, start its requests."""
+        for transition in tick.transitions:
+            log.warning("failsafe %r -> %r: %s", transition.old, transition.new, transition.reason)
+        for event in tick.events:
+            self.bridge_text(event)
+        if tick.transitions:
+            self.publish_state()
+        if send and tick.send is not None:
+            self._send_setpoint(tick.send)
+        if tick.request:
+            op = self.start(failsafe_action(self, tick.request), self.now, self.stamp)
+            op.background = True
+
+    def _send_setpoint(self, target: PositionTarget) -> None:
+        position = self.telemetry.position_enu
+        try:
+            ned = to_local_ned(
+                target,
+                autopilot=self.autopilot or AUTOPILOT_PX4,
+                yaw_enu=self.telemetry.yaw_enu,
+                z_enu=position[2] if position is not None else 0.0,
+                limits=self.limits,
+            )
+        except SetpointError as exc:  # cannot happen for validated targets; never crash
+            log.error("setpoint conversion failed: %s", exc)
+            return
+        self.send(
+            "set_position_target_local_ned",
+            int((self.now - self._t0) * 1000) & 0xFFFFFFFF,
+            *self.target(),
+            ned.coordinate_frame,
+            ned.type_mask,
+            ned.x,
+            ned.y,
+            ned.z,
+            ned.vx,
+            ned.vy,
+            ned.vz,
+            0.0,
+            0.0,
+            0.0,
+            ned.yaw,
+            ned.yaw_rate,
+        )
+        self.setpoints_sent += 1
+        if self.now - self._last_send > STREAM_GAP_S:
+            self._stream_since = self.now
+        self._last_send = self.now
+
+    def streamed_for(self, now: float) -> float:
+        """Seconds the bridge has been streaming setpoints without a gap (0 if not now)."""
+        if now - self._last_send > STREAM_GAP_S:
+            return 0.0
+        return now - self._stream_since
