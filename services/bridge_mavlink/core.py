@@ -29,10 +29,10 @@ from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import receive
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
-from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
-from dronewrapper_bridge_mavlink.link_gap import gap_report
+from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
 from dronewrapper_bridge_mavlink.operations import Operation, failsafe_action
 from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
@@ -40,12 +40,6 @@ from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
     Telemetry,
-    battery_from_battery_status,
-    battery_from_sys_status,
-    extended_state,
-    is_autopilot_heartbeat,
-    non_finite_field,
-    state_from_heartbeat,
 )
 
 log = logging.getLogger("bridge_mavlink")
@@ -108,18 +102,18 @@ class BridgeCore:
         self.setpoints_sent = 0
         self.messages_received = 0
         self._t0 = now
-        self._last_heartbeat = -math.inf
+        self.last_heartbeat = -math.inf
         self._next_heartbeat_out = -math.inf
         self._last_state_key: tuple | None = None
         self._last_state_pub = -math.inf
-        self._last_ext_pub = -math.inf
+        self.last_ext_pub = -math.inf
         self._last_battery_pub = -math.inf
-        self._last_global_pub = -math.inf
+        self.last_global_pub = -math.inf
         self._last_reject_log = -math.inf
         self._last_send = -math.inf
         self._stream_since = -math.inf
-        self._rates_round = 0
-        self._next_rates = math.inf
+        self.rates_round = 0
+        self.next_rates = math.inf
 
     # ------------------------------------------------------------------ plumbing
 
@@ -185,52 +179,21 @@ class BridgeCore:
         if kind == "BAD_DATA":
             return
         self.messages_received += 1
-        if not self._admit(msg, kind, source):
+        if not receive.admit(self, msg, kind, source):
             return
         if kind == "HEARTBEAT":
-            self._on_heartbeat(msg)
+            receive.on_heartbeat(self, msg)
         elif not self.target_system or msg.get_srcSystem() == self.target_system:
-            handler = getattr(self, f"_on_{kind.lower()}", None)
+            handler = receive.HANDLERS.get(kind)
             if handler is not None:
-                handler(msg)
+                handler(self, msg)
         if self.operations:
             self.advance(now, stamp)
-
-    def _admit(self, msg: Any, kind: str, source: Any) -> bool:
-        """False for a message to drop: from a second autopilot with the same system id, a
-        duplicated datagram, or one older than what was already used (seq / time_boot_ms)."""
-        system = msg.get_srcSystem()
-        verdict = self.sources.check(source, system, self.now)
-        if verdict.flag:
-            self.bridge_text(verdict.flag)
-        if not verdict.accept:
-            return False
-        if source is not None and system == self.target_system:
-            self.out.peers.append(self.sources.owner(system))
-        fresh = self.freshness.check(
-            source,
-            system,
-            msg.get_srcComponent(),
-            msg.get_seq(),
-            kind,
-            boot_ms_of(msg),
-            self.now,
-            bytes(msg.get_msgbuf() or b""),
-        )
-        if not fresh.new:
-            log.debug("dropped %s: %s", kind, fresh.reason)
-            return False
-        bad_field = non_finite_field(kind, msg)
-        if bad_field is not None:
-            self.out.errors.append("mavlink non-finite")
-            log.debug("dropped %s", bad_field)
-            return False
-        return True
 
     def bridge_text(self, text: str) -> None:
         """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
         log.warning("%s", text)
-        self._publish_text(
+        self.publish_text(
             StatusTextMsg(
                 header=Header(stamp=self.stamp, frame_id="bridge"),
                 severity=SEVERITY_WARNING,
@@ -238,47 +201,14 @@ class BridgeCore:
             )
         )
 
-    def _publish_text(self, text: StatusTextMsg) -> None:
+    def publish_text(self, text: StatusTextMsg) -> None:
         if not text.header.stamp:
             text = msgspec.structs.replace(text, header=Header(stamp=self.stamp))
         self.recent_texts.append((self.now, text))
         log.info("autopilot says [%d]: %s", text.severity, text.text)
         self.publish(registry.STATUSTEXT, text)
 
-    def _on_heartbeat(self, msg: Any) -> None:
-        if not is_autopilot_heartbeat(msg):
-            return
-        if self.target_system and msg.get_srcSystem() != self.target_system:
-            return
-        if not self.target_system:
-            self.target_system = msg.get_srcSystem()
-            self.target_component = msg.get_srcComponent()
-        before, lost_for = self.heartbeat_state, self.now - self._last_heartbeat
-        self._last_heartbeat = self.now
-        state = state_from_heartbeat(msg, self.stamp, failsafe=self.failsafe.state)
-        if state.autopilot != self.autopilot:
-            self.autopilot = state.autopilot
-            log.info(
-                "autopilot %s (system %d, component %d)",
-                self.autopilot,
-                self.target_system,
-                self.target_component,
-            )
-        reconnected = not self.connected
-        self.connected = True
-        self.heartbeat_state = state
-        self._update_failsafe_vehicle()
-        if reconnected:
-            log.info("connected to the autopilot (mode %s)", state.mode)
-            self._rates_round = 0
-            self._next_rates = self.now
-            if before is not None:  # after a link gap: what the autopilot changed meanwhile
-                report = gap_report(before, state, lost_for)
-                if report is not None:
-                    self.bridge_text(report)
-        self.publish_state()
-
-    def _update_failsafe_vehicle(self) -> None:
+    def update_failsafe_vehicle(self) -> None:
         hb = self.heartbeat_state
         if hb is None:
             return
@@ -286,82 +216,11 @@ class BridgeCore:
         self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
         self._act(self.failsafe.tick(self.now, self.pose()), send=False)
 
-    def _on_attitude(self, msg: Any) -> None:
-        self.telemetry.on_attitude(msg)
-
-    def _on_attitude_quaternion(self, msg: Any) -> None:
-        self.telemetry.on_attitude_quaternion(msg)
-
-    def _on_local_position_ned(self, msg: Any) -> None:
-        pose, local, body = self.telemetry.on_local_position(msg, self.stamp)
-        self.publish(registry.LOCAL_POSE, pose)
-        self.publish(registry.VELOCITY_LOCAL, local)
-        self.publish(registry.VELOCITY_BODY, body)
-
-    def _on_global_position_int(self, msg: Any) -> None:
-        fix = self.telemetry.on_global_position(msg, self.stamp)
-        max_hz = self.config.global_position_max_hz
-        if fix is not None and (max_hz <= 0 or self.now - self._last_global_pub >= 0.9 / max_hz):
-            self._last_global_pub = self.now
-            self.publish(registry.GLOBAL_POSITION, fix)
-
-    def _on_gps_raw_int(self, msg: Any) -> None:
-        self.telemetry.on_gps_raw(msg)
-
-    def _on_home_position(self, msg: Any) -> None:
-        self.telemetry.on_home_position(msg)
-
-    def _on_extended_sys_state(self, msg: Any) -> None:
-        ext = extended_state(msg, self.stamp)
-        changed = (ext.landed_state, ext.vtol_state) != (
-            self.ext.landed_state,
-            self.ext.vtol_state,
-        )
-        self.ext = ext
-        if changed:
-            self._update_failsafe_vehicle()
-            self._last_ext_pub = self.now
-            self.publish(registry.EXTENDED_STATE, ext)
-
-    def _on_sys_status(self, msg: Any) -> None:
-        battery = battery_from_sys_status(msg, self.stamp)
-        known = self.battery is not None and not math.isnan(self.battery.percentage)
-        if not known or not math.isnan(battery.percentage):
-            self.battery = battery
-
-    def _on_battery_status(self, msg: Any) -> None:
-        if msg.id == 0:
-            self.battery = battery_from_battery_status(msg, self.stamp)
-
-    def _on_statustext(self, msg: Any) -> None:
-        for text in self.statustexts.add(msg, self.stamp, self.now):
-            self._publish_text(text)
-
-    def _on_command_ack(self, msg: Any) -> None:
-        target = (getattr(msg, "target_system", 0), getattr(msg, "target_component", 0))
-        ours = (self.config.source_system, self.config.source_component)
-        if target != (0, 0) and target != ours:
-            return  # the answer to a ground station's command (forwarded), not to ours
-        outcome = self.acks.on_ack(int(msg.command), int(msg.result), self.now)
-        log.debug(
-            "COMMAND_ACK %s %s (%s)",
-            cmds.command_name(msg.command),
-            cmds.result_name(msg.result),
-            outcome,
-        )
-
     def on_command_ack(self, msg: Any, now: float, stamp: float) -> None:
         """A COMMAND_ACK, bypassing admission (tests of the ack routing)."""
         self._at(now, stamp)
-        self._on_command_ack(msg)
+        receive.on_command_ack(self, msg)
         self.advance(now, stamp)
-
-    def _on_param_value(self, msg: Any) -> None:
-        param_id = msg.param_id
-        if isinstance(param_id, bytes | bytearray):
-            param_id = bytes(param_id).decode("ascii", "replace")
-        param_id = param_id.split("\x00", 1)[0]
-        self.params[param_id] = (float(msg.param_value), int(msg.param_type), self.now)
 
     # ------------------------------------------------------------------ state publication
 
@@ -411,7 +270,7 @@ class BridgeCore:
         if hb is None or hb.mode == mode:
             return
         self.heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=is_guided(mode))
-        self._update_failsafe_vehicle()
+        self.update_failsafe_vehicle()
         log.info("mode %s (from the accepted command)", mode)
         self.publish_state()
 
@@ -440,14 +299,14 @@ class BridgeCore:
 
     def _periodic(self) -> None:
         now = self.now
-        if self.connected and now - self._last_heartbeat > self.config.heartbeat_timeout:
+        if self.connected and now - self.last_heartbeat > self.config.heartbeat_timeout:
             self.connected = False
             log.warning(
-                "no heartbeat for %.1f s: autopilot disconnected", now - self._last_heartbeat
+                "no heartbeat for %.1f s: autopilot disconnected", now - self.last_heartbeat
             )
         self.publish_state()
-        if now - self._last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
-            self._last_ext_pub = now
+        if now - self.last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
+            self.last_ext_pub = now
             self.publish(
                 registry.EXTENDED_STATE,
                 msgspec.structs.replace(self.ext, header=Header(stamp=self.stamp)),
@@ -462,11 +321,11 @@ class BridgeCore:
                 msgspec.structs.replace(self.battery, header=Header(stamp=self.stamp)),
             )
         for text in self.statustexts.flush(now, stamp=self.stamp):
-            self._publish_text(text)
-        if now >= self._next_rates and self.connected:
+            self.publish_text(text)
+        if now >= self.next_rates and self.connected:
             self._request_message_rates()
-            self._rates_round += 1
-            self._next_rates = now + 2.0 if self._rates_round < 3 else math.inf
+            self.rates_round += 1
+            self.next_rates = now + 2.0 if self.rates_round < 3 else math.inf
 
     def _request_message_rates(self) -> None:
         """Ask for the message rates we need (fire and forget: re-sent 3 times)."""
