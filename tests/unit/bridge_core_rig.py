@@ -19,7 +19,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
-from dronewrapper.msgs.mavros import MASK_VELOCITY, FRAME_BODY_NED, PositionTarget
+from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore
@@ -68,9 +68,19 @@ class CoreRig:
 
     # ---- the autopilot's side
 
+    def packed(self, msg: Any) -> bytes:
+        """``msg`` as the autopilot's next datagram."""
+        buf = msg.pack(self._to_bridge)
+        self._to_bridge.seq = (self._to_bridge.seq + 1) % 256  # as MAVLink.send counts
+        return buf
+
     def deliver(self, msg: Any, source: Any = ADDRESS) -> None:
         """Send ``msg`` from the autopilot (packed, then decoded as the bridge would)."""
-        (decoded,) = self._decoder.parse_buffer(msg.pack(self._to_bridge))
+        self.deliver_bytes(self.packed(msg), source)
+
+    def deliver_bytes(self, buf: bytes, source: Any = ADDRESS) -> None:
+        """A datagram from the autopilot, as it is."""
+        (decoded,) = self._decoder.parse_buffer(buf)
         self.core.on_mavlink(decoded, self.now, EPOCH + self.now, source)
         self._collect()
 
@@ -134,12 +144,12 @@ class CoreRig:
 
     def run(self, seconds: float, *, stream: bool = False, heartbeat_hz: float = 5.0) -> None:
         """Let ``seconds`` pass in stream ticks (30 Hz), with autopilot heartbeats and, with
-        ``stream``, a commander's setpoint before each tick."""
+        ``stream``, a commander's setpoint before each tick (``heartbeat_hz`` 0: none)."""
         end = self.now + seconds
         period = 1.0 / self.core.config.stream_rate_hz
         while self.now < end - 1e-9:
             self.now = min(end, self.now + period)
-            if self.now >= self._next_heartbeat:
+            if heartbeat_hz > 0 and self.now >= self._next_heartbeat:
                 self._next_heartbeat = self.now + 1.0 / heartbeat_hz
                 self.heartbeat()
             if stream:
