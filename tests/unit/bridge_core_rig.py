@@ -65,6 +65,7 @@ class CoreRig:
         self.sent: list[tuple[float, Any]] = []  # (time, message the core sent)
         self.samples: list[tuple[float, Any, Any]] = []  # (time, topic, message published)
         self._next_heartbeat = self.now
+        self._boot_ms = 0
 
     # ---- the autopilot's side
 
@@ -97,9 +98,11 @@ class CoreRig:
         self.deliver(mavlink.MAVLink_extended_sys_state_message(0, state))
 
     def pose(self, north: float = 0.0, east: float = 0.0, down: float = -5.0) -> None:
+        """LOCAL_POSITION_NED (m, NED) with a rising time_boot_ms."""
+        self._boot_ms = max(self._boot_ms + 1, int((self.now - T0) * 1000))
         self.deliver(
             mavlink.MAVLink_local_position_ned_message(
-                int((self.now - T0) * 1000), north, east, down, 0.0, 0.0, 0.0
+                self._boot_ms, north, east, down, 0.0, 0.0, 0.0
             )
         )
 
