@@ -333,19 +333,9 @@ class BridgeCore:
             msg_id = getattr(mavlink, f"MAVLINK_MSG_ID_{name}", None)
             if msg_id is None or hz <= 0:
                 continue
-            self.send(
-                "command_long",
-                *self.target(),
-                mavlink.MAV_CMD_SET_MESSAGE_INTERVAL,
-                0,
-                float(msg_id),
-                1e6 / hz,
-                0,
-                0,
-                0,
-                0,
-                0,
-            )
+            command = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
+            params = (float(msg_id), 1e6 / hz, 0, 0, 0, 0, 0)  # message id, interval us
+            self.send("command_long", *self.target(), command, 0, *params)
 
     # ------------------------------------------------------------------ setpoints
 

@@ -22,6 +22,7 @@ from dronewrapper.msgs.mavros import PositionTarget, State
 from dronewrapper.runtime import Node, Ratekeeper
 from dronewrapper.security.guard import CommandGuard
 from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink import parameters
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
@@ -173,8 +174,8 @@ class Bridge:
         self._serve(registry.TAKEOFF, ops.takeoff, "takeoff")
         self._serve(registry.LAND, ops.land, "land")
         self._serve(registry.SET_MODE, ops.set_mode, "set_mode")
-        self._serve(registry.PARAM_GET, ops.param_get)
-        self._serve(registry.PARAM_SET, ops.param_set, "param_set")
+        self._serve(registry.PARAM_GET, parameters.param_get)
+        self._serve(registry.PARAM_SET, parameters.param_set, "param_set")
         self.guard.serve(self.node)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),

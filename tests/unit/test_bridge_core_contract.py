@@ -35,6 +35,7 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink import parameters
 
 SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 ARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
@@ -93,7 +94,7 @@ def test_nothing_is_commanded_before_the_autopilot_is_heard():
 
 def test_px4_integer_parameters_are_their_bytes():
     rig = CoreRig().connect()
-    op = rig.call(ops.param_get, ParamGet(param_id="COM_RC_IN_MODE"))
+    op = rig.call(parameters.param_get, ParamGet(param_id="COM_RC_IN_MODE"))
     (request,) = rig.sent_since(-math.inf, "PARAM_REQUEST_READ")
     assert request.param_id == "COM_RC_IN_MODE"
     rig.param("COM_RC_IN_MODE", int_bits(4), INT32)
@@ -102,7 +103,7 @@ def test_px4_integer_parameters_are_their_bytes():
 
 def test_ardupilot_integer_parameters_are_float_values():
     rig = CoreRig(autopilot=ARDUPILOT).connect()
-    op = rig.call(ops.param_get, ParamGet(param_id="FS_THR_ENABLE"))
+    op = rig.call(parameters.param_get, ParamGet(param_id="FS_THR_ENABLE"))
     rig.param("FS_THR_ENABLE", 4.0, INT32)
     assert op.result().value == ParamValue(integer=4, real=0.0, kind="integer")
 
@@ -111,7 +112,8 @@ def test_px4_integer_parameter_set_is_written_as_bytes_and_checked_on_the_echo()
     rig = CoreRig().connect()
     rig.param("COM_RC_IN_MODE", int_bits(1), INT32)  # known type: no read first
     rig.now += 0.01
-    op = rig.call(ops.param_set, ParamSet(param_id="COM_RC_IN_MODE", value=ParamValue(integer=2)))
+    request = ParamSet(param_id="COM_RC_IN_MODE", value=ParamValue(integer=2))
+    op = rig.call(parameters.param_set, request)
     (written,) = rig.sent_since(-math.inf, "PARAM_SET")
     assert written.param_value == int_bits(2) and written.param_type == INT32
     rig.now += 0.01
@@ -121,7 +123,7 @@ def test_px4_integer_parameter_set_is_written_as_bytes_and_checked_on_the_echo()
 
 def test_unanswered_parameter_read_gives_up_after_its_attempts():
     rig = CoreRig(param_attempts=2, param_timeout=0.5).connect()
-    op = rig.call(ops.param_get, ParamGet(param_id="NOPE"))
+    op = rig.call(parameters.param_get, ParamGet(param_id="NOPE"))
     rig.run(1.2)
     assert op.done and not op.result().success
     assert len(rig.sent_since(-math.inf, "PARAM_REQUEST_READ")) == 2
