@@ -93,6 +93,10 @@ class Bridge:
     def rejected_setpoints(self) -> int:
         return self.core.rejected_setpoints
 
+    @property
+    def messages_received(self) -> int:
+        return self.core.messages_received
+
     def current_state(self) -> State:
         """State as published now."""
         with self._cond:

@@ -1,8 +1,8 @@
 """The bridge's logic in-process, over real UDP MAVLink and a real Zenoh router.
 
 The autopilot is a small pymavlink peer in this file (a scripted PX4: DO_SET_MODE acked twice,
-ACCEPTED then the commander's real result, refusals of modes that need RC, arming refusals with
-STATUSTEXT, int32 params as raw bits; or a scripted ArduCopter: one ack, position targets in
+ACCEPTED then the commander's real result, refusals of modes that need RC with STATUSTEXT,
+int32 params as raw bits; or a scripted ArduCopter: one ack, position targets in
 GUIDED override its take-off, disarm 10 s after arming on the ground), so each rule of the
 contract can be checked exactly on the wire. Each rule is tested at the core in given time
 (tests/unit/test_bridge_core*.py); the tests here prove the wiring: threads, sockets, Zenoh
@@ -70,10 +70,6 @@ class FakePX4:
         self.takeoff_overridden = False
         self.armed_at = math.inf
         self.refuse_modes: dict[int, str] = {}  # PX4 custom_mode -> the commander's reason
-        self.mode_acks = 2  # PX4: 2 (receiver + commander); 1: an autopilot that acks once
-        self.mode_changes = True  # False: acks a mode but never enters it
-        self.commander_delay = 0.0  # s between PX4's two DO_SET_MODE acks (11 ms measured)
-        self.commander_acks: list[float] = []  # when each commander (second) ack was sent
         self.heartbeat_every = 10  # ticks of 20 ms (5 Hz keeps tests short; PX4 sends 1 Hz)
         self.conn = mavutil.mavlink_connection(
             f"udpout:127.0.0.1:{bridge_port}", source_system=1, source_component=1
@@ -83,7 +79,6 @@ class FakePX4:
         self.landed_state = 1
         self.position_ned = (0.0, 0.0, 0.0)
         self.yaw_ned = math.pi / 2  # facing east
-        self.refuse_arm = False
         self.heartbeats = True
         self.setpoints: list[tuple[float, object]] = []
         self.commands: list[tuple[float, object]] = []
@@ -198,20 +193,12 @@ class FakePX4:
                 self.send("command_ack", 176, 1)
                 self.send("statustext", 2, f"{refusal}\t".encode())
                 return
-            if self.mode_acks > 1:
-                commander = threading.Timer(self.commander_delay, self._commander_accepts, [wanted])
-                commander.daemon = True
-                commander.start()
-            elif self.mode_changes:
-                self.custom_mode = wanted
+            self.custom_mode = wanted
+            self.send("command_ack", 176, 0)  # the commander's (second) ack
         elif msg.command == 400:
-            if self.refuse_arm:
-                self.send("command_ack", 400, 1)
-                self.send("statustext", 2, b"Arming denied: Resolve system health failures first\t")
-            else:
-                self.armed = msg.param1 == 1
-                self.armed_at = time.monotonic()
-                self.send("command_ack", 400, 0)
+            self.armed = msg.param1 == 1
+            self.armed_at = time.monotonic()
+            self.send("command_ack", 400, 0)
         elif msg.command == 21:
             self.custom_mode = 9 if self.autopilot == 3 else AUTO_LAND
             self.send("command_ack", 21, 0)
@@ -224,14 +211,6 @@ class FakePX4:
             self.send("command_ack", msg.command, 0)
         else:
             self.send("command_ack", msg.command, 3)
-
-    def _commander_accepts(self, mode: int) -> None:
-        if self._stop.is_set():
-            return
-        if self.mode_changes:
-            self.custom_mode = mode
-        self.commander_acks.append(time.monotonic())
-        self.send("command_ack", 176, 0)
 
     def commands_named(self, command: int) -> list:
         return [m for _, m in list(self.commands) if m.command == command]
