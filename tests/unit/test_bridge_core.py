@@ -21,13 +21,22 @@ from bridge_core_rig import (
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool, CommandTOL, SetMode
+from dronewrapper.msgs.mavros import (
+    MASK_POSITION,
+    CommandBool,
+    CommandTOL,
+    ParamSet,
+    ParamValue,
+    SetMode,
+)
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink import parameters
 
 SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 NAV_LAND = mavlink.MAV_CMD_NAV_LAND
 AUTO_RTL = (4 << 16) | (5 << 24)
+REAL32, INT32 = mavlink.MAV_PARAM_TYPE_REAL32, mavlink.MAV_PARAM_TYPE_INT32
 
 
 def test_unknown_mode_lists_the_valid_ones():
@@ -182,3 +191,23 @@ def test_hold_is_at_the_pose_where_the_velocity_command_expired():
     rig.run(1.0)
     hold = rig.setpoints(mask=MASK_POSITION)[0]
     assert (hold.x, hold.y, hold.z) == (1.0, 1.0, -5.0) and hold.coordinate_frame == 1
+
+
+@pytest.mark.parametrize(
+    ("param", "param_type", "value", "named"),
+    [
+        ("MPC_XY_VEL_MAX", REAL32, ParamValue(integer=2**64 - 1), "value.integer=1844674407"),
+        ("MPC_XY_VEL_MAX", REAL32, ParamValue(real=1e39), "beyond the float32 range"),
+        ("COM_RC_IN_MODE", INT32, ParamValue(integer=2**31), "value.integer=2147483648 outside"),
+        ("COM_RC_IN_MODE", INT32, ParamValue(real=1.5), "integer parameter"),
+    ],
+)
+def test_param_set_out_of_its_type_is_a_bad_request_and_writes_nothing(
+    param, param_type, value, named
+):
+    rig = CoreRig().connect()
+    rig.param(param, 1.0, param_type)  # its type is known
+    with pytest.raises(ValueError, match=named) as err:
+        rig.call(parameters.param_set, ParamSet(param_id=param, value=value)).result()
+    assert param in str(err.value)
+    assert rig.sent_since(-math.inf, "PARAM_SET") == []
