@@ -82,7 +82,8 @@ class BridgeCore:
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
-        self.params: dict[str, tuple[float, int, float]] = {}  # id -> (raw, type, now)
+        self.params: dict[str, tuple[float, int, int]] = {}  # id -> (raw, type, arrival no.)
+        self.param_values_received = 0  # PARAM_VALUEs so far: orders them against our sends
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
             maxlen=32
         )

@@ -42,12 +42,12 @@ def param_exchange(
 ) -> Generator[float, None, tuple[float, int] | None]:
     """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""
     for _ in range(core.config.param_attempts):
-        sent_at = core.now
+        sent_after = core.param_values_received  # only a PARAM_VALUE arriving later answers
         send()
-        deadline = sent_at + core.config.param_timeout
+        deadline = core.now + core.config.param_timeout
         while True:
             entry = core.params.get(param_id)
-            if entry is not None and entry[2] >= sent_at:
+            if entry is not None and entry[2] > sent_after:
                 return entry[0], entry[1]
             if core.now >= deadline:
                 break

@@ -178,7 +178,12 @@ def on_param_value(core: BridgeCore, msg: Any) -> None:
     if isinstance(param_id, bytes | bytearray):
         param_id = bytes(param_id).decode("ascii", "replace")
     param_id = param_id.split("\x00", 1)[0]
-    core.params[param_id] = (float(msg.param_value), int(msg.param_type), core.now)
+    core.param_values_received += 1
+    core.params[param_id] = (
+        float(msg.param_value),
+        int(msg.param_type),
+        core.param_values_received,
+    )
 
 
 HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {

@@ -111,7 +111,6 @@ def test_ardupilot_integer_parameters_are_float_values():
 def test_px4_integer_parameter_set_is_written_as_bytes_and_checked_on_the_echo():
     rig = CoreRig().connect()
     rig.param("COM_RC_IN_MODE", int_bits(1), INT32)  # known type: no read first
-    rig.now += 0.01
     request = ParamSet(param_id="COM_RC_IN_MODE", value=ParamValue(integer=2))
     op = rig.call(parameters.param_set, request)
     (written,) = rig.sent_since(-math.inf, "PARAM_SET")
@@ -119,6 +118,18 @@ def test_px4_integer_parameter_set_is_written_as_bytes_and_checked_on_the_echo()
     rig.now += 0.01
     rig.param("COM_RC_IN_MODE", int_bits(2), INT32)
     assert op.result().success and op.result().value.integer == 2
+
+
+def test_a_parameter_of_unknown_type_is_read_then_written_and_checked_on_the_echo():
+    rig = CoreRig().connect()
+    request = ParamSet(param_id="MPC_XY_VEL_MAX", value=ParamValue(real=5.0))
+    op = rig.call(parameters.param_set, request)
+    assert rig.sent_since(-math.inf, "PARAM_SET") == []  # its type first
+    rig.param("MPC_XY_VEL_MAX", 12.0, mavlink.MAV_PARAM_TYPE_REAL32)
+    (written,) = rig.sent_since(-math.inf, "PARAM_SET")
+    assert not op.done, "the value read is not the echo of the write"
+    rig.param("MPC_XY_VEL_MAX", written.param_value, mavlink.MAV_PARAM_TYPE_REAL32)
+    assert op.result().success and op.result().value.real == 5.0
 
 
 def test_unanswered_parameter_read_gives_up_after_its_attempts():
