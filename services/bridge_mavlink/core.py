@@ -88,6 +88,7 @@ class BridgeCore:
             maxlen=32
         )
         self.operations: list[Operation] = []
+        self.operations_finished = 0  # so far: a waiting caller looks when this changes
         self.command_busy = False  # one COMMAND_LONG exchange at a time
         self.now, self.stamp = now, 0.0
         self.out = Outbox()
@@ -162,6 +163,7 @@ class BridgeCore:
     def _prune(self) -> None:
         for op in [op for op in self.operations if op.done]:
             self.operations.remove(op)
+            self.operations_finished += 1
             if op.error is not None and op.background:
                 log.error("%s failed: %s", op.name, op.error)
 
@@ -173,7 +175,7 @@ class BridgeCore:
 
     # ------------------------------------------------------------------ receive side
 
-    def on_mavlink(self, msg: Any, now: float, stamp: float, source: Any = None) -> None:
+    def on_mavlink(self, msg: Any, source: Any, now: float, stamp: float) -> None:
         """One received MAVLink message (``source`` its UDP address, None when unknown)."""
         self._at(now, stamp)
         kind = msg.get_type()

@@ -64,7 +64,7 @@ class Bridge:
             ttl_s=config.command_lease_ttl_s,
             on_change=self._lease_changed,
         )
-        self._cond = threading.Condition()  # guards the core; notified after MAVLink input
+        self._cond = threading.Condition()  # guards the core; notified when an operation ends
         self._publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
 
     # ---- what the core knows, for tests and tools
@@ -105,11 +105,14 @@ class Bridge:
     # ---- feeding the core
 
     def _feed(self, call: Callable[..., Any], *args: Any) -> Any:
-        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox."""
+        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox;
+        service calls waiting on their operations are woken when one has finished."""
         with self._cond:
+            finished = self.core.operations_finished
             result = call(*args, time.monotonic(), time.time())
             out = self.core.take()
-            self._cond.notify_all()
+            if self.core.operations_finished != finished:
+                self._cond.notify_all()
         self._execute(out)
         return result
 
@@ -135,25 +138,20 @@ class Bridge:
                     self.core.cancel(op)
                 break
             with self._cond:
+                if op.done:  # ended by another thread's input (checked under the lock)
+                    break
                 wait = op.wake_at - time.monotonic()
                 self._cond.wait(min(max(wait, 0.001), MAX_WAIT_S))
             self._feed(self.core.advance)
         return op.result()
 
-    def handle_mavlink(self, msg: Any, stamp: float, now: float, source: Any = None) -> None:
-        """One received MAVLink message (``stamp`` wall s, ``now`` monotonic s)."""
-        with self._cond:
-            self.core.on_mavlink(msg, now, stamp, source)
-            out = self.core.take()
-            self._cond.notify_all()
-        self._execute(out)
+    def handle_mavlink(self, msg: Any, source: Any = None) -> None:
+        """One received MAVLink message (``source``: the UDP address it came from, or None)."""
+        self._feed(self.core.on_mavlink, msg, source)
 
     def _on_command_ack(self, msg: Any, stamp: float, now: float) -> None:
         """A COMMAND_ACK straight to the ack routing (as tests/integration use it)."""
-        with self._cond:
-            self.core.on_command_ack(msg, now, stamp)
-            out = self.core.take()
-        self._execute(out)
+        self._feed(lambda *_: self.core.on_command_ack(msg, now, stamp))
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: admitted by the lease, then the core's."""
@@ -254,7 +252,7 @@ class Bridge:
             if self.gcs is not None and msg.get_type() != "BAD_DATA":
                 self.gcs.from_autopilot(bytes(msg.get_msgbuf()))
             try:
-                self.handle_mavlink(msg, time.time(), time.monotonic(), self.link.last_source)
+                self.handle_mavlink(msg, self.link.last_source)
             except Exception:
                 self.node.callback_errors["mavlink"] += 1
                 log.exception("error handling %s", msg.get_type())

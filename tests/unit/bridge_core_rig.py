@@ -82,7 +82,7 @@ class CoreRig:
     def deliver_bytes(self, buf: bytes, source: Any = ADDRESS) -> None:
         """A datagram from the autopilot, as it is."""
         (decoded,) = self._decoder.parse_buffer(buf)
-        self.core.on_mavlink(decoded, self.now, EPOCH + self.now, source)
+        self.core.on_mavlink(decoded, source, self.now, EPOCH + self.now)
         self._collect()
 
     def heartbeat(self) -> None:
