@@ -139,10 +139,14 @@ class BridgeCore:
         """The autopilot's (system, component) to address (system 1 before it is heard)."""
         return self.target_system or 1, self.target_component
 
-    def start(self, steps: Generator[float, None, Any], now: float, stamp: float) -> Operation:
-        """Begin an operation (its first step runs now; a bad request fails it at once)."""
+    def start(
+        self, steps: Generator[float, None, Any], now: float, stamp: float, *, background=False
+    ) -> Operation:
+        """Begin an operation (its first step runs now; a bad request fails it at once);
+        ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
         self._at(now, stamp)
         op = Operation(steps)
+        op.background = background
         self.operations.append(op)
         op.step()
         self._prune()
@@ -375,8 +379,7 @@ class BridgeCore:
         if send and tick.send is not None:
             self._send_setpoint(tick.send)
         if tick.request:
-            op = self.start(failsafe_action(self, tick.request), self.now, self.stamp)
-            op.background = True
+            self.start(failsafe_action(self, tick.request), self.now, self.stamp, background=True)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
         position = self.telemetry.position_enu
@@ -391,24 +394,10 @@ class BridgeCore:
         except SetpointError as exc:  # cannot happen for validated targets; never crash
             log.error("setpoint conversion failed: %s", exc)
             return
-        self.send(
-            "set_position_target_local_ned",
-            int((self.now - self._t0) * 1000) & 0xFFFFFFFF,
-            *self.target(),
-            ned.coordinate_frame,
-            ned.type_mask,
-            ned.x,
-            ned.y,
-            ned.z,
-            ned.vx,
-            ned.vy,
-            ned.vz,
-            0.0,
-            0.0,
-            0.0,
-            ned.yaw,
-            ned.yaw_rate,
-        )
+        boot_ms = int((self.now - self._t0) * 1000) & 0xFFFFFFFF  # our time_boot_ms
+        kinematics = (ned.x, ned.y, ned.z, ned.vx, ned.vy, ned.vz, 0.0, 0.0, 0.0)  # no accel
+        fields = (ned.coordinate_frame, ned.type_mask, *kinematics, ned.yaw, ned.yaw_rate)
+        self.send("set_position_target_local_ned", boot_ms, *self.target(), *fields)
         self.setpoints_sent += 1
         if self.now - self._last_send > STREAM_GAP_S:
             self._stream_since = self.now

@@ -149,9 +149,10 @@ class Bridge:
         """One received MAVLink message (``source``: the UDP address it came from, or None)."""
         self._feed(self.core.on_mavlink, msg, source)
 
-    def _on_command_ack(self, msg: Any, stamp: float, now: float) -> None:
-        """A COMMAND_ACK straight to the ack routing (as tests/integration use it)."""
-        self._feed(lambda *_: self.core.on_command_ack(msg, now, stamp))
+    def _on_command_ack(self, msg: Any, _stamp: float = 0.0, _now: float = 0.0) -> None:
+        """A COMMAND_ACK straight to the ack routing, at the bridge's own time (the signature
+        tests/integration/test_gcs_forwarding.py uses)."""
+        self._feed(self.core.on_command_ack, msg)
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: admitted by the lease, then the core's."""
