@@ -24,48 +24,30 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-MAV_CMD_NAV_LAND = 21
-MAV_CMD_NAV_TAKEOFF = 22
-MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
-MAV_CMD_DO_SET_MODE = 176
-MAV_CMD_COMPONENT_ARM_DISARM = 400
-MAV_CMD_SET_MESSAGE_INTERVAL = 511
-MAV_CMD_REQUEST_MESSAGE = 512
+from pymavlink.dialects.v20 import common as mavlink
+from pymavlink.dialects.v20.common import (
+    MAV_RESULT_ACCEPTED,
+    MAV_RESULT_IN_PROGRESS,
+)
 
-MAV_RESULT_ACCEPTED = 0
-MAV_RESULT_FAILED = 4
-MAV_RESULT_IN_PROGRESS = 5
-RESULT_NO_ACK = -1
+RESULT_NO_ACK = -1  # not a MAV_RESULT: no COMMAND_ACK arrived
 
-RESULT_NAMES = {
-    0: "ACCEPTED",
-    1: "TEMPORARILY_REJECTED",
-    2: "DENIED",
-    3: "UNSUPPORTED",
-    4: "FAILED",
-    5: "IN_PROGRESS",
-    6: "CANCELLED",
-    RESULT_NO_ACK: "NO_ACK",
-}
-COMMAND_NAMES = {
-    MAV_CMD_NAV_LAND: "NAV_LAND",
-    MAV_CMD_NAV_TAKEOFF: "NAV_TAKEOFF",
-    MAV_CMD_NAV_RETURN_TO_LAUNCH: "NAV_RETURN_TO_LAUNCH",
-    MAV_CMD_DO_SET_MODE: "DO_SET_MODE",
-    MAV_CMD_COMPONENT_ARM_DISARM: "COMPONENT_ARM_DISARM",
-    MAV_CMD_SET_MESSAGE_INTERVAL: "SET_MESSAGE_INTERVAL",
-    MAV_CMD_REQUEST_MESSAGE: "REQUEST_MESSAGE",
-}
+
+def _enum_name(enum: str, value: int, prefix: str) -> str | None:
+    entry = mavlink.enums[enum].get(value)
+    return entry.name.removeprefix(prefix) if entry is not None else None
 
 
 def result_name(result: int) -> str:
     """MAV_RESULT as text (``ACCEPTED``, ``DENIED`` ..., ``NO_ACK`` when none arrived)."""
-    return RESULT_NAMES.get(result, f"RESULT_{result}")
+    if result == RESULT_NO_ACK:
+        return "NO_ACK"
+    return _enum_name("MAV_RESULT", result, "MAV_RESULT_") or f"RESULT_{result}"
 
 
 def command_name(command: int) -> str:
     """MAV_CMD as text."""
-    return COMMAND_NAMES.get(command, f"MAV_CMD_{command}")
+    return _enum_name("MAV_CMD", command, "MAV_CMD_") or f"MAV_CMD_{command}"
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from dronewrapper.security.mavlink_signing import verify_signed_frame
 
 log = logging.getLogger("bridge_mavlink.link")
 
-UNSIGNED_ALLOWED = frozenset({109})  # RADIO_STATUS: inserted by telemetry radios, unsigned
+UNSIGNED_ALLOWED = frozenset({mavutil.mavlink.MAVLINK_MSG_ID_RADIO_STATUS})  # radios add it
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
 NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
 

@@ -8,23 +8,14 @@ the last one heard before the gap, and every difference is named.
 
 from __future__ import annotations
 
-from dronewrapper.msgs.mavros import State
+from pymavlink.dialects.v20 import common as mavlink
 
-MAV_STATE_NAMES = {
-    0: "UNINIT",
-    1: "BOOT",
-    2: "CALIBRATING",
-    3: "STANDBY",
-    4: "ACTIVE",
-    5: "CRITICAL",
-    6: "EMERGENCY",
-    7: "POWEROFF",
-    8: "FLIGHT_TERMINATION",
-}
+from dronewrapper.msgs.mavros import State
 
 
 def _status(value: int) -> str:
-    return MAV_STATE_NAMES.get(value, str(value))
+    entry = mavlink.enums["MAV_STATE"].get(value)
+    return entry.name.removeprefix("MAV_STATE_") if entry is not None else str(value)
 
 
 def gap_changes(before: State, after: State) -> list[str]:

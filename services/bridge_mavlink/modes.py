@@ -10,12 +10,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from pymavlink.dialects.v20.common import (
+    MAV_AUTOPILOT_ARDUPILOTMEGA,
+    MAV_AUTOPILOT_PX4,
+    MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+)
+
 AUTOPILOT_PX4 = "px4"
 AUTOPILOT_ARDUPILOT = "ardupilotmega"
 
-MAV_AUTOPILOT_ARDUPILOTMEGA = 3
-MAV_AUTOPILOT_PX4 = 12
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 
 # PX4 main modes and AUTO sub modes (px4_custom_mode.h), names as MAVROS spells them.
 PX4_MODES: dict[str, tuple[int, int]] = {

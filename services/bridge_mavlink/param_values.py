@@ -13,18 +13,20 @@ from __future__ import annotations
 import math
 import struct
 
+from pymavlink.dialects.v20 import common as mavlink
+from pymavlink.dialects.v20.common import MAV_PARAM_TYPE_REAL32
+
 from dronewrapper.msgs.mavros import PARAM_INTEGER, PARAM_REAL, ParamValue
 
-MAV_PARAM_TYPE_REAL32 = 9
-INTEGER_PARAM_TYPES = frozenset({1, 2, 3, 4, 5, 6})  # UINT8 .. INT32
 INTEGER_RANGES = {  # MAV_PARAM_TYPE -> (min, max) it can hold
-    1: (0, 2**8 - 1),
-    2: (-(2**7), 2**7 - 1),
-    3: (0, 2**16 - 1),
-    4: (-(2**15), 2**15 - 1),
-    5: (0, 2**32 - 1),
-    6: (-(2**31), 2**31 - 1),
+    mavlink.MAV_PARAM_TYPE_UINT8: (0, 2**8 - 1),
+    mavlink.MAV_PARAM_TYPE_INT8: (-(2**7), 2**7 - 1),
+    mavlink.MAV_PARAM_TYPE_UINT16: (0, 2**16 - 1),
+    mavlink.MAV_PARAM_TYPE_INT16: (-(2**15), 2**15 - 1),
+    mavlink.MAV_PARAM_TYPE_UINT32: (0, 2**32 - 1),
+    mavlink.MAV_PARAM_TYPE_INT32: (-(2**31), 2**31 - 1),
 }
+INTEGER_PARAM_TYPES = frozenset(INTEGER_RANGES)  # UINT8 .. INT32
 FLOAT32_MAX = 3.4028234663852886e38
 FLOAT32_EXACT_INT = 2**24  # every integer up to this magnitude is exact in a float32
 ARDUPILOT_EXACT_INT = FLOAT32_EXACT_INT  # ArduPilot sends integers as float values

@@ -29,7 +29,13 @@ def _autopilot_heartbeat(conn, timeout: float):
     last peer that spoke to it)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        conn.mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS, 8, 0, 0, 4)
+        conn.mav.heartbeat_send(
+            mavutil.mavlink.MAV_TYPE_GCS,
+            mavutil.mavlink.MAV_AUTOPILOT_INVALID,
+            0,
+            0,
+            mavutil.mavlink.MAV_STATE_ACTIVE,
+        )
         msg = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=1.0)
         if msg is not None and msg.get_srcComponent() == 1:
             return msg

@@ -14,6 +14,13 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from pymavlink.dialects.v20.common import (
+    MAV_AUTOPILOT_INVALID,
+    MAV_MODE_FLAG_MANUAL_INPUT_ENABLED,
+    MAV_MODE_FLAG_SAFETY_ARMED,
+    MAV_TYPE_GCS,
+)
+
 from dronewrapper.msgs.geometry import PoseStamped, Quaternion, TwistStamped
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
@@ -42,10 +49,6 @@ from dronewrapper_bridge_mavlink.frames import (
 )
 from dronewrapper_bridge_mavlink.modes import autopilot_kind, is_guided, mode_name
 
-MAV_AUTOPILOT_INVALID = 8
-MAV_TYPE_GCS = 6
-MAV_MODE_FLAG_SAFETY_ARMED = 128
-MAV_MODE_FLAG_MANUAL_INPUT_ENABLED = 64
 UINT16_MAX = 65535
 GPS_FIX_TYPE_3D = 3
 

@@ -15,7 +15,7 @@ from test_bridge_node import make_rig
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point
-from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_POSITION, PositionTarget, SetMode
+from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_POSITION, PositionTarget
 from support import wait_for
 
 GUIDED, LOITER, LAND = 4, 5, 9
@@ -44,25 +44,6 @@ def test_paper_listing_takes_off_lands_on_arducopter(ardu_rig, router):
     yaw_rates = {round(m.yaw_rate, 3) for _, m in fake.setpoints if m.type_mask != MASK_POSITION}
     assert yaw_rates == {-1.0}  # ENU +1 rad/s (counter-clockwise) is NED -1 rad/s
     assert bridge.failsafe.state == ""
-
-
-def test_guided_while_flying_is_not_pinned_to_its_pose(ardu_rig):
-    """set_mode('GUIDED') in the air: no 3 s hold at the pose, and the mode is known at once."""
-    bridge, fake, user = ardu_rig
-    fake.armed, fake.landed_state, fake.position_ned = True, 2, (3.0, 1.0, -5.0)
-    fake.armed_at = time.monotonic()
-    fake.heartbeat_every = 50  # 1 Hz, like ArduCopter
-    states: list = []
-    user.subscribe(registry.STATE, states.append)
-    wait_for(lambda: bridge.failsafe.airborne and bridge.failsafe.mode == "LOITER", 10)
-    reply = user.call(registry.SET_MODE, SetMode(custom_mode="GUIDED"), timeout=10)
-    answered = time.monotonic()
-    assert reply.mode_sent and reply.result == 0, reply
-    wait_for(lambda: any(s.mode == "GUIDED" for s in states), 5, what="GUIDED published")
-    assert time.monotonic() - answered < 0.5  # from the ack, not the next 1 Hz heartbeat
-    time.sleep(3.5)
-    assert fake.setpoints == [] and fake.custom_mode == GUIDED
-    assert bridge.failsafe.state == "" and not bridge.failsafe.engaged
 
 
 def test_scripted_arducopter_disarms_when_its_take_off_is_overridden(ardu_rig):

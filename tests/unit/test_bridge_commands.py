@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
-from dronewrapper_bridge_mavlink.commands import (
+from pymavlink.dialects.v20.common import (
     MAV_CMD_COMPONENT_ARM_DISARM,
     MAV_CMD_DO_SET_MODE,
     MAV_RESULT_ACCEPTED,
+    MAV_RESULT_DENIED,
     MAV_RESULT_IN_PROGRESS,
+    MAV_RESULT_TEMPORARILY_REJECTED,
+)
+
+from dronewrapper_bridge_mavlink.commands import (
     RESULT_NO_ACK,
     AckRouter,
     PendingCommand,
@@ -14,8 +19,8 @@ from dronewrapper_bridge_mavlink.commands import (
     result_name,
 )
 
-TEMPORARILY_REJECTED = 1
-DENIED = 2
+TEMPORARILY_REJECTED = MAV_RESULT_TEMPORARILY_REJECTED
+DENIED = MAV_RESULT_DENIED
 
 
 def pending(command=MAV_CMD_DO_SET_MODE, attempts=3, timeout=1.0, expected_acks=1):

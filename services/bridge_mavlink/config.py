@@ -1,0 +1,93 @@
+"""bridge_mavlink configuration (strict: an unknown key is an error naming it; see README.md)."""
+
+from __future__ import annotations
+
+import math
+
+import msgspec
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
+
+DEFAULT_MESSAGE_RATES = {
+    "LOCAL_POSITION_NED": 50.0,
+    "ATTITUDE_QUATERNION": 50.0,
+    "GLOBAL_POSITION_INT": 10.0,
+    "EXTENDED_SYS_STATE": 5.0,
+    "SYS_STATUS": 2.0,
+    "BATTERY_STATUS": 1.0,
+    "GPS_RAW_INT": 2.0,
+    "HOME_POSITION": 0.5,
+}
+
+
+class LimitsConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Setpoint bounds (see setpoints.Limits): m, m/s, rad/s."""
+
+    max_distance: float = 10_000.0
+    min_altitude: float = -1_000.0
+    max_altitude: float = 10_000.0
+    max_horizontal_speed: float = 20.0
+    max_vertical_speed: float = 10.0
+    max_yaw_rate: float = 2.0 * math.pi
+    mixed_altitude_gain: float = 1.0
+    mixed_max_climb: float = 1.5
+
+
+class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """bridge_mavlink configuration (units in the names' docs; see README.md)."""
+
+    connection: str = "udpin:127.0.0.1:14540"  # pymavlink URL; loopback unless set otherwise
+    baud: int = 57600  # serial only
+    source_system: int = 255  # our MAVLink system id
+    source_component: int = 191  # our MAVLink component id (onboard computer; QGC is 190)
+    heartbeat_type: int = mavlink.MAV_TYPE_GCS  # our HEARTBEAT's type (GCS: PX4 sends STATUSTEXT)
+    target_system: int = 0  # autopilot system id; 0 = the first autopilot heard
+    target_component: int = 1
+    heartbeat_timeout: float = 3.0  # s without heartbeat -> State.connected false
+    stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded
+    offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
+    final_ack_timeout: float = 1.0  # s to wait for PX4's second (real) DO_SET_MODE ack
+    mode_confirm_timeout: float = 2.5  # s for HEARTBEAT to show a mode acked only once
+    setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
+    commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
+    commander_lost_action: str = "land"  # hold | land | return
+    command_attempts: int = 5  # sends of a COMMAND_LONG before giving up
+    command_ack_timeout: float = 0.6  # s to wait for each COMMAND_ACK
+    param_attempts: int = 5
+    param_timeout: float = 0.6  # s per PARAM_REQUEST_READ / PARAM_SET attempt
+    reason_wait: float = 0.5  # s to wait for a STATUSTEXT explaining a refusal
+    state_rate_hz: float = 2.0  # periodic State (also on change)
+    extended_state_rate_hz: float = 4.0  # periodic ExtendedState (also on change)
+    battery_rate_hz: float = 2.0
+    global_position_max_hz: float = 10.0
+    message_rates: dict[str, float] = msgspec.field(
+        default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
+    )  # Hz asked with SET_MESSAGE_INTERVAL
+    limits: LimitsConfig = msgspec.field(default_factory=LimitsConfig)
+    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
+    gcs_url: str = ""  # udp:HOST:PORT of a ground station (QGC 14550) to forward MAVLink to
+    gcs_over_zenoh: bool = False  # also forward on {ns}/mavlink/* (dronewrapper mavlink-forward)
+
+    def __post_init__(self) -> None:
+        if self.commander_lost_action not in ("hold", "land", "return"):
+            raise ValueError(
+                f"commander_lost_action must be hold, land or return, "
+                f"got {self.commander_lost_action!r}"
+            )
+        if not 0 < self.setpoint_timeout < self.commander_lost_timeout:
+            raise ValueError("need 0 < setpoint_timeout < commander_lost_timeout")
+        if self.stream_rate_hz < 20.0:
+            raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
+        for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0")
+        if self.command_attempts < 1 or self.param_attempts < 1:
+            raise ValueError("command_attempts and param_attempts must be >= 1")
+        if self.gcs_url:
+            parse_gcs_url(self.gcs_url)  # raises ValueError naming the expected form
+        for name in ("final_ack_timeout", "mode_confirm_timeout"):
+            if not 0 < getattr(self, name) <= 30:
+                raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")

@@ -1,0 +1,410 @@
+"""The bridge without I/O: MAVLink messages and Zenoh requests in, what to send and publish out.
+
+:class:`BridgeCore` holds everything the bridge knows (the autopilot's state, telemetry, the
+failsafe, pending commands and parameter reads) and is pure: no sockets, no threads, no clock.
+Every entry point takes the time (``now`` monotonic s, ``stamp`` wall-clock s for headers) and
+queues its effects in an :class:`Outbox` that the node takes with :meth:`BridgeCore.take` and
+executes (MAVLink sends, Zenoh samples). Service calls that wait for acknowledgements are
+:mod:`operations` the core advances as messages and time arrive; the node only waits on them.
+The sim's autopilot (sim/px4/autopilot.py) is built the same way.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import math
+from collections.abc import Generator
+from dataclasses import dataclass, field
+from typing import Any
+
+import msgspec
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import SEVERITY_WARNING, ExtendedState, PositionTarget, State
+from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
+from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.sensor import BatteryState
+from dronewrapper.msgs.std import Header
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import receive
+from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
+from dronewrapper_bridge_mavlink.freshness import Freshness
+from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
+from dronewrapper_bridge_mavlink.operations import Operation, failsafe_action
+from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.sources import AutopilotSources
+from dronewrapper_bridge_mavlink.telemetry import (
+    StatusTextAssembler,
+    Telemetry,
+)
+
+log = logging.getLogger("bridge_mavlink")
+
+STREAM_GAP_S = 0.5  # s without a setpoint sent: the stream has stopped (priming restarts)
+
+
+@dataclass
+class Outbox:
+    """What the node must do after a core call.
+
+    Attributes:
+        sends: MAVLink messages, as (pymavlink name without ``_send``, field values).
+        samples: (registry topic, message) to publish on Zenoh.
+        peers: UDP addresses replies must go to from now on (the last one wins).
+        errors: names of dropped inputs to count (the node's ``callback_errors``).
+    """
+
+    sends: list[tuple[str, tuple]] = field(default_factory=list)
+    samples: list[tuple[Topic, Any]] = field(default_factory=list)
+    peers: list[Any] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+
+
+class BridgeCore:
+    """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
+
+    def __init__(self, config: Config, now: float = 0.0) -> None:
+        self.config = config
+        self.limits = Limits(**msgspec.structs.asdict(config.limits))
+        self.failsafe = Failsafe(
+            FailsafeConfig(
+                setpoint_timeout=config.setpoint_timeout,
+                commander_lost_timeout=config.commander_lost_timeout,
+                commander_lost_action=config.commander_lost_action,
+            )
+        )
+        self.telemetry = Telemetry()
+        self.freshness = Freshness()
+        self.sources = AutopilotSources()
+        self.statustexts = StatusTextAssembler()
+        self.acks = cmds.AckRouter()
+        self.params: dict[str, tuple[float, int, int]] = {}  # id -> (raw, type, arrival no.)
+        self.param_values_received = 0  # PARAM_VALUEs so far: orders them against our sends
+        self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
+            maxlen=32
+        )
+        self.operations: list[Operation] = []
+        self.operations_finished = 0  # so far: a waiting caller looks when this changes
+        self.command_busy = False  # one COMMAND_LONG exchange at a time
+        self.now, self.stamp = now, 0.0
+        self.out = Outbox()
+        self.autopilot = ""
+        self.target_system = config.target_system
+        self.target_component = config.target_component
+        self.connected = False
+        self.commander = ""  # the command lease's holder, shown on State
+        self.heartbeat_state: State | None = None
+        self.ext = ExtendedState()
+        self.battery: BatteryState | None = None
+        self.rejected_setpoints = 0
+        self.setpoints_sent = 0
+        self.messages_received = 0
+        self._t0 = now
+        self.last_heartbeat = -math.inf
+        self._next_heartbeat_out = -math.inf
+        self._last_state_key: tuple | None = None
+        self._last_state_pub = -math.inf
+        self.last_ext_pub = -math.inf
+        self._last_battery_pub = -math.inf
+        self.last_global_pub = -math.inf
+        self._last_reject_log = -math.inf
+        self._last_send = -math.inf
+        self._stream_since = -math.inf
+        self.rates_round = 0
+        self.next_rates = math.inf
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _at(self, now: float, stamp: float) -> None:
+        self.now, self.stamp = now, stamp
+
+    def take(self) -> Outbox:
+        """The effects queued since the last call (the node executes them)."""
+        out, self.out = self.out, Outbox()
+        return out
+
+    def send(self, name: str, *fields: Any) -> None:
+        """Queue MAVLink message ``name`` (e.g. ``command_long``) with its field values."""
+        self.out.sends.append((name, fields))
+
+    def publish(self, topic: Topic, msg: Any) -> None:
+        """Queue a sample for ``topic``."""
+        self.out.samples.append((topic, msg))
+
+    def target(self) -> tuple[int, int]:
+        """The autopilot's (system, component) to address (system 1 before it is heard)."""
+        return self.target_system or 1, self.target_component
+
+    def start(
+        self, steps: Generator[float, None, Any], now: float, stamp: float, *, background=False
+    ) -> Operation:
+        """Begin an operation (its first step runs now; a bad request fails it at once);
+        ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
+        self._at(now, stamp)
+        op = Operation(steps)
+        op.background = background
+        self.operations.append(op)
+        op.step()
+        self._prune()
+        return op
+
+    def advance(self, now: float, stamp: float) -> None:
+        """Move every pending operation on to ``now``."""
+        self._at(now, stamp)
+        for op in list(self.operations):
+            op.step()
+        self._prune()
+
+    def cancel(self, op: Operation) -> None:
+        """Abandon ``op`` (the node is stopping): its command slot is freed."""
+        op.cancel()
+        self._prune()
+
+    def _prune(self) -> None:
+        for op in [op for op in self.operations if op.done]:
+            self.operations.remove(op)
+            self.operations_finished += 1
+            if op.error is not None and op.background:
+                log.error("%s failed: %s", op.name, op.error)
+
+    def require_connected(self) -> str:
+        """The autopilot kind; ServiceError when no heartbeat is heard."""
+        if not self.connected:
+            raise ServiceError("the autopilot is not connected (no heartbeat)", "unavailable")
+        return self.autopilot or AUTOPILOT_PX4
+
+    # ------------------------------------------------------------------ receive side
+
+    def on_mavlink(self, msg: Any, source: Any, now: float, stamp: float) -> None:
+        """One received MAVLink message (``source`` its UDP address, None when unknown)."""
+        self._at(now, stamp)
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            return
+        self.messages_received += 1
+        if not receive.admit(self, msg, kind, source):
+            return
+        if kind == "HEARTBEAT":
+            receive.on_heartbeat(self, msg)
+        elif not self.target_system or msg.get_srcSystem() == self.target_system:
+            handler = receive.HANDLERS.get(kind)
+            if handler is not None:
+                handler(self, msg)
+        if self.operations:
+            self.advance(now, stamp)
+
+    def bridge_text(self, text: str) -> None:
+        """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
+        log.warning("%s", text)
+        self.publish_text(
+            StatusTextMsg(
+                header=Header(stamp=self.stamp, frame_id="bridge"),
+                severity=SEVERITY_WARNING,
+                text=f"bridge: {text}",
+            )
+        )
+
+    def publish_text(self, text: StatusTextMsg) -> None:
+        if not text.header.stamp:
+            text = msgspec.structs.replace(text, header=Header(stamp=self.stamp))
+        self.recent_texts.append((self.now, text))
+        log.info("autopilot says [%d]: %s", text.severity, text.text)
+        self.publish(registry.STATUSTEXT, text)
+
+    def update_failsafe_vehicle(self) -> None:
+        hb = self.heartbeat_state
+        if hb is None:
+            return
+        airborne = is_airborne(self.ext.landed_state, hb.armed)
+        self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+        self._act(self.failsafe.tick(self.now, self.pose()), send=False)
+
+    def on_command_ack(self, msg: Any, now: float, stamp: float) -> None:
+        """A COMMAND_ACK, bypassing admission (tests of the ack routing)."""
+        self._at(now, stamp)
+        receive.on_command_ack(self, msg)
+        self.advance(now, stamp)
+
+    # ------------------------------------------------------------------ state publication
+
+    def current_state(self) -> State:
+        """State as published now (connected, mode, armed, failsafe, commander ...)."""
+        hb = self.heartbeat_state or State()
+        return msgspec.structs.replace(
+            hb,
+            header=Header(stamp=self.stamp),
+            connected=self.connected,
+            failsafe=self.failsafe.state,
+            commander=self.commander,
+        )
+
+    def publish_state(self, *, force: bool = False) -> None:
+        """Publish State if it changed (or ``force``, or the periodic time has come)."""
+        state = self.current_state()
+        key = (
+            state.connected,
+            state.armed,
+            state.guided,
+            state.manual_input,
+            state.mode,
+            state.system_status,
+            state.autopilot,
+            state.failsafe,
+            state.commander,
+        )
+        due = self.now - self._last_state_pub >= 1.0 / self.config.state_rate_hz
+        if not (force or due or key != self._last_state_key):
+            return
+        self._last_state_key = key
+        self._last_state_pub = self.now
+        self.publish(registry.STATE, state)
+
+    def set_commander(self, commander: str, now: float, stamp: float) -> None:
+        """The command lease's holder (``""``: nobody); State shows it."""
+        self._at(now, stamp)
+        if commander != self.commander:
+            self.commander = commander
+            self.publish_state(force=True)
+
+    def mode_entered(self, mode: str) -> None:
+        """The autopilot accepted a command that puts it in ``mode``: the failsafe and State
+        know it now (the next HEARTBEAT, up to 1 s later, confirms or corrects it)."""
+        hb = self.heartbeat_state
+        if hb is None or hb.mode == mode:
+            return
+        self.heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=is_guided(mode))
+        self.update_failsafe_vehicle()
+        log.info("mode %s (from the accepted command)", mode)
+        self.publish_state()
+
+    # ------------------------------------------------------------------ the stream tick
+
+    def tick(self, now: float, stamp: float) -> None:
+        """The stream loop's tick (>= 20 Hz): our heartbeat, the failsafe's stream and actions,
+        connection supervision, periodic samples, message-rate requests, operations."""
+        self._at(now, stamp)
+        if now >= self._next_heartbeat_out:
+            self._next_heartbeat_out = now + 1.0
+            self.send(
+                "heartbeat",
+                self.config.heartbeat_type,
+                mavlink.MAV_AUTOPILOT_INVALID,
+                0,
+                0,
+                mavlink.MAV_STATE_ACTIVE,
+            )
+        tick = self.failsafe.tick(now, self.pose())
+        if now - self._last_send < 0.5 / self.config.stream_rate_hz:
+            tick.send = None  # just forwarded by the subscriber
+        self._act(tick, send=self.connected)
+        self._periodic()
+        self.advance(now, stamp)
+
+    def _periodic(self) -> None:
+        now = self.now
+        if self.connected and now - self.last_heartbeat > self.config.heartbeat_timeout:
+            self.connected = False
+            log.warning(
+                "no heartbeat for %.1f s: autopilot disconnected", now - self.last_heartbeat
+            )
+        self.publish_state()
+        if now - self.last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
+            self.last_ext_pub = now
+            self.publish(
+                registry.EXTENDED_STATE,
+                msgspec.structs.replace(self.ext, header=Header(stamp=self.stamp)),
+            )
+        if (
+            self.battery is not None
+            and now - self._last_battery_pub >= 1.0 / self.config.battery_rate_hz
+        ):
+            self._last_battery_pub = now
+            self.publish(
+                registry.BATTERY,
+                msgspec.structs.replace(self.battery, header=Header(stamp=self.stamp)),
+            )
+        for text in self.statustexts.flush(now, stamp=self.stamp):
+            self.publish_text(text)
+        if now >= self.next_rates and self.connected:
+            self._request_message_rates()
+            self.rates_round += 1
+            self.next_rates = now + 2.0 if self.rates_round < 3 else math.inf
+
+    def _request_message_rates(self) -> None:
+        """Ask for the message rates we need (fire and forget: re-sent 3 times)."""
+        for name, hz in self.config.message_rates.items():
+            msg_id = getattr(mavlink, f"MAVLINK_MSG_ID_{name}", None)
+            if msg_id is None or hz <= 0:
+                continue
+            command = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
+            params = (float(msg_id), 1e6 / hz, 0, 0, 0, 0, 0)  # message id, interval us
+            self.send("command_long", *self.target(), command, 0, *params)
+
+    # ------------------------------------------------------------------ setpoints
+
+    def on_setpoint(self, target: PositionTarget, now: float, stamp: float) -> None:
+        """A PositionTarget from the commander (already admitted by the command lease):
+        validate, remember, forward at once."""
+        self._at(now, stamp)
+        try:
+            kind = validate(target, self.limits)
+        except SetpointError as exc:
+            self.rejected_setpoints += 1
+            if now - self._last_reject_log >= 2.0:
+                self._last_reject_log = now
+                log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
+            return
+        self.failsafe.on_setpoint(target, kind, now)
+        self._act(self.failsafe.tick(now, self.pose()), send=True)
+
+    def pose(self) -> tuple[tuple[float, float, float], float] | None:
+        """(position ENU m, yaw ENU rad) now, None before the first local position."""
+        position = self.telemetry.position_enu
+        if position is None:
+            return None
+        return (position, self.telemetry.yaw_enu)
+
+    def _act(self, tick: Tick, *, send: bool) -> None:
+        """Act on a failsafe tick: log and publish transitions, send, start its requests."""
+        for transition in tick.transitions:
+            log.warning("failsafe %r -> %r: %s", transition.old, transition.new, transition.reason)
+        for event in tick.events:
+            self.bridge_text(event)
+        if tick.transitions:
+            self.publish_state()
+        if send and tick.send is not None:
+            self._send_setpoint(tick.send)
+        if tick.request:
+            self.start(failsafe_action(self, tick.request), self.now, self.stamp, background=True)
+
+    def _send_setpoint(self, target: PositionTarget) -> None:
+        position = self.telemetry.position_enu
+        try:
+            ned = to_local_ned(
+                target,
+                autopilot=self.autopilot or AUTOPILOT_PX4,
+                yaw_enu=self.telemetry.yaw_enu,
+                z_enu=position[2] if position is not None else 0.0,
+                limits=self.limits,
+            )
+        except SetpointError as exc:  # cannot happen for validated targets; never crash
+            log.error("setpoint conversion failed: %s", exc)
+            return
+        boot_ms = int((self.now - self._t0) * 1000) & 0xFFFFFFFF  # our time_boot_ms
+        kinematics = (ned.x, ned.y, ned.z, ned.vx, ned.vy, ned.vz, 0.0, 0.0, 0.0)  # no accel
+        fields = (ned.coordinate_frame, ned.type_mask, *kinematics, ned.yaw, ned.yaw_rate)
+        self.send("set_position_target_local_ned", boot_ms, *self.target(), *fields)
+        self.setpoints_sent += 1
+        if self.now - self._last_send > STREAM_GAP_S:
+            self._stream_since = self.now
+        self._last_send = self.now
+
+    def streamed_for(self, now: float) -> float:
+        """Seconds the bridge has been streaming setpoints without a gap (0 if not now)."""
+        if now - self._last_send > STREAM_GAP_S:
+            return 0.0
+        return now - self._stream_since

@@ -1,0 +1,316 @@
+"""Service calls that wait for the autopilot, as pure operations the core advances.
+
+Each operation is a generator over a :class:`~dronewrapper_bridge_mavlink.core.BridgeCore`:
+it reads ``core.now`` (set by the caller of every core entry point), queues sends on the core,
+and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes it
+whenever a message or a tick arrives, so every wait is a loop that re-checks its condition.
+Its return value is the service reply; an exception it raises (``ValueError`` for a bad
+request, ``ServiceError``) is the call's error. No sockets, threads or clock here: the node
+waits on :attr:`Operation.done`.
+
+The rules they carry: a take-off while flying does nothing; PX4's OFFBOARD is asked for only
+after > ``offboard_prime_s`` of streaming; PX4's DO_SET_MODE is answered by its second ack (a
+refusal with the autopilot's STATUSTEXT reason), and a mode acked only once must show in
+HEARTBEAT; PX4 integer parameters travel as their bytes (param_values.py).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Generator
+from typing import TYPE_CHECKING, Any
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    SEVERITY_WARNING,
+    CommandBool,
+    CommandBoolResult,
+    CommandTOL,
+    CommandTOLResult,
+    SetMode,
+    SetModeResult,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
+from dronewrapper_bridge_mavlink.modes import (
+    AUTOPILOT_ARDUPILOT,
+    AUTOPILOT_PX4,
+    GUIDED_MODE,
+    HOLD_MODE,
+    LAND_MODE,
+    RETURN_MODE,
+    set_mode_params,
+)
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core import BridgeCore
+
+log = logging.getLogger("bridge_mavlink")
+
+Steps = Generator[float, None, Any]
+ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
+
+
+class Operation:
+    """One running operation: :meth:`step` resumes it; ``reply`` or ``error`` once done."""
+
+    def __init__(self, steps: Steps) -> None:
+        self._steps = steps
+        self.name = getattr(steps, "__name__", "operation")
+        self.done = False
+        self.reply: Any = None
+        self.error: BaseException | None = None
+        self.wake_at = -math.inf  # when it asked to be resumed at the latest
+        self.background = False  # started by the bridge itself: nobody waits for it
+
+    def step(self) -> None:
+        """Run until its next wait (or its end)."""
+        if self.done:
+            return
+        try:
+            self.wake_at = next(self._steps)
+        except StopIteration as stop:
+            self.done, self.reply = True, stop.value
+        except Exception as exc:  # the call's error (ValueError: a bad request)
+            self.done, self.error = True, exc
+
+    def cancel(self) -> None:
+        """Stop it where it waits (its cleanup runs: a command slot is released)."""
+        self._steps.close()
+        if not self.done:
+            self.done, self.error = True, ServiceError("the bridge is stopping", "unavailable")
+
+    def result(self) -> Any:
+        """The reply; raises the operation's error."""
+        if self.error is not None:
+            raise self.error
+        return self.reply
+
+
+# ---------------------------------------------------------------- commands
+
+
+def exchange(
+    core: BridgeCore, command: int, *params: float, expected_acks: int = 1
+) -> Generator[float, None, tuple[cmds.PendingCommand, str]]:
+    """Send a COMMAND_LONG and wait for its final ack (the second of ``expected_acks`` = 2,
+    see commands.py): the finished command and an explanation (with the autopilot's
+    STATUSTEXT reason for a refusal). One exchange at a time, none before late duplicate acks
+    of the same command id have passed."""
+    config = core.config
+    pending = cmds.PendingCommand(
+        cmds.command_long(command, *params),
+        attempts=config.command_attempts,
+        ack_timeout=config.command_ack_timeout,
+        expected_acks=expected_acks,
+        final_ack_timeout=config.final_ack_timeout,
+    )
+    while core.command_busy or core.now < core.acks.quiet_until(command):
+        yield core.now + 0.05 if core.command_busy else core.acks.quiet_until(command)
+    core.command_busy = True
+    started = core.now
+    core.acks.register(pending)
+    try:
+        while True:
+            msg = pending.due(core.now)
+            if msg is not None:
+                fields = (msg.command, msg.confirmation, *msg.params)
+                core.send("command_long", *core.target(), *fields)
+            if pending.finished(core.now):
+                break
+            yield pending.wake_at(core.now)
+    finally:
+        core.acks.release(pending, core.now)
+        core.command_busy = False
+    name = cmds.command_name(command)
+    if pending.result == ACCEPTED:
+        return pending, f"{name} accepted"
+    if pending.result == cmds.RESULT_NO_ACK:
+        return pending, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
+    reason = yield from reason_since(core, started)
+    text = f"{name} refused: {cmds.result_name(pending.result)}"
+    return pending, f"{text} ({reason})" if reason else text
+
+
+def reason_since(core: BridgeCore, started: float) -> Generator[float, None, str]:
+    """The autopilot's warnings since ``started``, waiting up to ``reason_wait`` s for one."""
+    deadline = core.now + core.config.reason_wait
+    while True:
+        texts = [
+            text.text
+            for at, text in core.recent_texts
+            if at >= started - 0.05
+            and text.severity <= SEVERITY_WARNING
+            and text.header.frame_id != "bridge"
+        ]
+        if texts or core.now >= deadline:
+            return "; ".join(texts)
+        yield deadline
+
+
+def command(core: BridgeCore, command: int, *params: float) -> Generator[float, None, tuple]:
+    """:func:`exchange` for a command acked once: (MAV_RESULT, explanation)."""
+    pending, message = yield from exchange(core, command, *params)
+    return pending.result, message
+
+
+def arming(core: BridgeCore, request: CommandBool) -> Steps:
+    """ARMING: MAV_CMD_COMPONENT_ARM_DISARM; the reply carries the real ack."""
+    core.require_connected()
+    result, message = yield from command(
+        core, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1.0 if request.value else 0.0
+    )
+    return CommandBoolResult(success=result == ACCEPTED, result=result, message=message)
+
+
+def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
+    """TAKEOFF: MAV_CMD_NAV_TAKEOFF to ``altitude`` m above the take-off point; while flying
+    it does nothing (a second take-off must not send the vehicle to a new height)."""
+    autopilot = core.require_connected()
+    height = request.altitude
+    if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
+        raise ValueError(f"altitude must be in (0, 1000] m or NaN, got {height!r}")
+    yaw = request.yaw
+    if not (math.isnan(yaw) or math.isfinite(yaw)):
+        raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
+    if core.ext.landed_state == LANDED_STATE_IN_AIR:
+        return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
+    yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
+    if autopilot == AUTOPILOT_ARDUPILOT:
+        altitude = height if not math.isnan(height) else 2.5
+    elif math.isnan(height):
+        altitude = math.nan
+    else:
+        altitude = core.telemetry.takeoff_altitude_amsl(height)
+    core.failsafe.on_mode_requested("AUTO.TAKEOFF", core.now)
+    core.failsafe.on_mode_requested(HOLD_MODE[autopilot], core.now)
+    core.failsafe.on_takeoff_requested(core.now)  # no priming, no hold into the climb
+    result, message = yield from command(
+        core,
+        mavlink.MAV_CMD_NAV_TAKEOFF,
+        request.min_pitch,
+        0,
+        0,
+        yaw_deg,
+        math.nan,
+        math.nan,
+        altitude,
+    )
+    if result == ACCEPTED and autopilot == AUTOPILOT_PX4:
+        core.mode_entered("AUTO.TAKEOFF")  # ArduCopter climbs in GUIDED itself
+    if not math.isnan(height) and math.isnan(altitude):
+        message += " (no home altitude known: the autopilot's default take-off altitude)"
+    return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
+
+
+def land(core: BridgeCore, request: CommandTOL) -> Steps:
+    """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
+    autopilot = core.require_connected()
+    lat, lon = request.latitude, request.longitude
+    for name, value, bound in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
+        if not math.isnan(value) and not (math.isfinite(value) and abs(value) <= bound):
+            raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
+    core.failsafe.on_mode_requested(LAND_MODE[autopilot], core.now)
+    result, message = yield from command(
+        core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan
+    )
+    if result == ACCEPTED:
+        core.mode_entered(LAND_MODE[autopilot])  # not ~1 s later from the heartbeat
+    return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
+
+
+def failsafe_action(core: BridgeCore, action: str) -> Steps:
+    """The failsafe's own request (``land`` or ``return``); nobody waits for it."""
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    mode = LAND_MODE[autopilot] if action == "land" else RETURN_MODE[autopilot]
+    core.failsafe.on_mode_requested(mode, core.now)
+    if action == "land":
+        nan = math.nan
+        result, message = yield from command(
+            core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, nan, nan, nan, nan
+        )
+    else:
+        result, message = yield from command(core, mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH)
+    if result == ACCEPTED:
+        core.mode_entered(mode)
+        log.warning("failsafe %s: accepted by the autopilot", action)
+    else:
+        log.error("failsafe %s refused: %s", action, message)
+    return result
+
+
+# ---------------------------------------------------------------- modes
+
+
+def set_mode(core: BridgeCore, request: SetMode) -> Steps:
+    """SET_MODE by name; replies once the autopilot has really entered or refused it.
+
+    PX4: OFFBOARD is preceded by > offboard_prime_s of streaming (priming); DO_SET_MODE is
+    acknowledged twice and the second ack (the commander's) is the answer, a refusal with
+    PX4's STATUSTEXT reason; with no second ack the mode must show in HEARTBEAT within
+    mode_confirm_timeout. ArduPilot: one ack, and ACCEPTED means the mode is entered; no
+    priming (a hold at the ground would override its take-off). An entered mode is known
+    at once (failsafe, State), not at the next 1 Hz heartbeat.
+    """
+    autopilot = core.require_connected()
+    params = set_mode_params(autopilot, request.custom_mode)  # ValueError lists valid modes
+    px4 = autopilot == AUTOPILOT_PX4
+    primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
+    if primed:
+        yield from prime(core)
+    core.failsafe.on_mode_requested(params.name, core.now)
+    pending, message = yield from exchange(
+        core,
+        mavlink.MAV_CMD_DO_SET_MODE,
+        params.param1,
+        params.param2,
+        params.param3,
+        expected_acks=2 if px4 else 1,
+    )
+    result = pending.result
+    if result == ACCEPTED and not pending.confirmed:
+        timeout = core.config.mode_confirm_timeout
+        deadline = core.now + timeout
+        while shown_mode(core) != params.name and core.now < deadline:
+            yield deadline
+        seen = shown_mode(core)
+        if seen == params.name:
+            message += " (confirmed by HEARTBEAT)"
+        else:
+            result = mavlink.MAV_RESULT_FAILED
+            message = (
+                f"DO_SET_MODE {params.name}: acknowledged once, but the autopilot is still "
+                f"in {seen or 'an unknown mode'} after {timeout:g} s"
+            )
+    if result == ACCEPTED:
+        core.mode_entered(params.name)
+    # the stream goes on only if the bridge holds OFFBOARD now
+    core.failsafe.end_priming(core.now, engage=primed and result == ACCEPTED)
+    return SetModeResult(mode_sent=result == ACCEPTED, result=result, message=message)
+
+
+def shown_mode(core: BridgeCore) -> str:
+    """The mode the last HEARTBEAT showed (or an accepted command set), "" before any."""
+    return core.heartbeat_state.mode if core.heartbeat_state else ""
+
+
+def prime(core: BridgeCore) -> Generator[float, None, None]:
+    """Stream for > ``offboard_prime_s`` before OFFBOARD: the fresh setpoint, else a hold at
+    the current pose (streamed by the core's tick). ServiceError when it cannot."""
+    need = core.config.offboard_prime_s
+    if core.streamed_for(core.now) >= need:
+        return
+    if core.pose() is None and core.failsafe.fresh_target(core.now) is None:
+        raise ServiceError(
+            "cannot enter OFFBOARD: no local position to hold and no setpoint stream", "refused"
+        )
+    core.failsafe.start_priming(core.now, need + 2.0)
+    deadline = core.now + need + 2.0
+    while core.streamed_for(core.now) < need:
+        if core.now >= deadline:
+            raise ServiceError("could not stream setpoints before OFFBOARD", "refused")
+        yield deadline
