@@ -7,7 +7,6 @@ SET_MODE / LAND services) and records every setpoint; the controller embeds the 
 from __future__ import annotations
 
 import itertools
-import math
 import threading
 import time
 from collections.abc import Iterator
@@ -23,135 +22,14 @@ from dronewrapper.msgs.control import (
     CONTROLLER_TRACKING,
     ControllerStatus,
 )
-from dronewrapper.msgs.geometry import PoseStamped, TwistStamped
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
-    LANDED_STATE_ON_GROUND,
-    MASK_POSITION,
-    MASK_VELOCITY,
-    CommandBoolResult,
-    CommandTOLResult,
-    ExtendedState,
-    PositionTarget,
-    SetModeResult,
-    State,
-)
-from dronewrapper.msgs.sensor import BatteryState
+from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
 from dronewrapper.runtime.config import load_config
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.node import run
+from fake_bridge import FakeBridge
 from support import client_node, wait_for
-
-
-class FakeBridge:
-    """The bridge's keys with a simple aircraft: position setpoints make it climb at 1 m/s."""
-
-    def __init__(self, endpoint: str, *, flying: bool) -> None:
-        self.node = client_node(endpoint, name="bridge_fake")
-        self.armed = flying
-        self.mode = "OFFBOARD" if flying else "AUTO.LOITER"
-        self.z = 2.0 if flying else 0.0
-        self.z_goal = self.z
-        self.landed = LANDED_STATE_IN_AIR if flying else LANDED_STATE_ON_GROUND
-        self.setpoints: list[tuple[float, PositionTarget]] = []
-        self.z_at_first_velocity: float | None = None  # altitude when the first one arrived
-        self.land_calls = 0
-        self._lock = threading.Lock()
-        self._state = self.node.publisher(registry.STATE)
-        self._ext = self.node.publisher(registry.EXTENDED_STATE)
-        self._pose = self.node.publisher(registry.LOCAL_POSE)
-        self._velocities = [
-            self.node.publisher(registry.VELOCITY_BODY),
-            self.node.publisher(registry.VELOCITY_LOCAL),
-        ]
-        self._battery = self.node.publisher(registry.BATTERY)
-        self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
-        self.node.serve(registry.ARMING, self._arming)
-        self.node.serve(registry.SET_MODE, self._set_mode)
-        self.node.serve(registry.LAND, self._land)
-        self._thread = threading.Thread(target=self._publish_loop, daemon=True)
-        self._thread.start()
-        self.node.announce()
-
-    def _on_setpoint(self, sp: PositionTarget) -> None:
-        with self._lock:
-            self.setpoints.append((time.monotonic(), sp))
-            if sp.type_mask == MASK_VELOCITY and self.z_at_first_velocity is None:
-                self.z_at_first_velocity = self.z
-            if sp.type_mask == MASK_POSITION and self.armed:
-                self.z_goal = sp.position.z
-
-    def _arming(self, req):
-        self.armed = req.value
-        return CommandBoolResult(success=True, result=0)
-
-    def _set_mode(self, req):
-        self.mode = req.custom_mode
-        return SetModeResult(mode_sent=True, result=0)
-
-    def _land(self, _req):
-        self.land_calls += 1
-        self.mode, self.z_goal, self.landed, self.armed = (
-            "AUTO.LAND",
-            0.0,
-            LANDED_STATE_ON_GROUND,
-            False,
-        )
-        self.z = 0.0
-        return CommandTOLResult(success=True, result=0)
-
-    def _publish_loop(self) -> None:
-        while not self.node.stop_event.wait(0.05):
-            now = time.time()
-            with self._lock:
-                self.z += max(-0.05, min(0.05, self.z_goal - self.z))  # 1 m/s at 20 Hz
-                if self.z > 0.1 and self.armed:
-                    self.landed = LANDED_STATE_IN_AIR
-            self._state.put(
-                State(
-                    header=Header(stamp=now),
-                    connected=True,
-                    armed=self.armed,
-                    guided=self.mode == "OFFBOARD",
-                    mode=self.mode,
-                    autopilot="px4",
-                )
-            )
-            self._ext.put(ExtendedState(header=Header(stamp=now), landed_state=self.landed))
-            pose = PoseStamped(header=Header(stamp=now, frame_id="map"))
-            pose.pose.position.z = self.z
-            pose.pose.orientation.w = 1.0
-            self._pose.put(pose)
-            for velocity in self._velocities:
-                velocity.put(TwistStamped(header=Header(stamp=now)))
-            self._battery.put(BatteryState(header=Header(stamp=now), percentage=0.9))
-
-    def velocity_setpoints(self, since: float = 0.0) -> list[PositionTarget]:
-        with self._lock:
-            return [sp for t, sp in self.setpoints if t >= since and sp.type_mask == MASK_VELOCITY]
-
-    def last_command(self) -> tuple[float, float, float] | None:
-        """(vx, vz, yaw_rate) of the newest velocity setpoint, None before the first."""
-        sps = self.velocity_setpoints()
-        return (sps[-1].velocity.x, sps[-1].velocity.z, sps[-1].yaw_rate) if sps else None
-
-    def wait_quiet(self, quiet: float = 0.5, timeout: float = 10.0) -> None:
-        """Wait until no setpoint has arrived for ``quiet`` s (fails if a stream goes on).
-
-        Setpoints already in flight when a stream stops still arrive meanwhile.
-        """
-
-        def silent_for() -> float:
-            with self._lock:
-                last = self.setpoints[-1][0] if self.setpoints else -math.inf
-            return time.monotonic() - last
-
-        wait_for(lambda: silent_for() >= quiet, timeout, what="the setpoint stream to stop")
-
-    def close(self) -> None:
-        self.node.close()
 
 
 def blob(x: float, y: float, radius: float) -> Detection2D:
