@@ -2,6 +2,9 @@
 
 Frames and units follow MAVROS: local ENU, body FLU, SI units, radians. Bridges convert to what
 the aircraft speaks (NED/FRD for MAVLink); no user sees NED.
+
+The MAVLink values below are MAVROS's message constants, written here because the SDK does not
+depend on pymavlink; tests/unit/test_msgs_mavlink_constants.py pins each to pymavlink's.
 """
 
 from __future__ import annotations
