@@ -82,6 +82,8 @@ def published_topics(paths: list[Path]) -> dict[str, set[str]]:
     """Registry topic names -> the files (relative) that declare a publisher of them."""
     found: dict[str, set[str]] = defaultdict(set)
     for file in _files(paths):
+        if "ublisher(" not in file.read_text():
+            continue  # no declaration to look at: skip the tokenizer
         src = _code(file)
         for call in _CALL.finditer(src):
             args = _arguments(src, call.end())
