@@ -36,6 +36,7 @@ from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 CLK_TCK = os.sysconf("SC_CLK_TCK")
@@ -60,12 +61,6 @@ PX4_RATES = [
     ("EXTENDED_SYS_STATE", 5),
     ("HEARTBEAT", 1),
 ]
-
-
-def free_port(kind: int) -> int:
-    with socket.socket(socket.AF_INET, kind) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def cpu_seconds(pid: int) -> float:

@@ -32,6 +32,7 @@ from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
@@ -41,12 +42,6 @@ CASES = [
     ("colour", "sim_follow_color", "beacon_static", "color"),
     ("yolox", "sim_follow_person", "person_static", "yolox"),
 ]
-
-
-def free_port(kind: int = socket.SOCK_STREAM) -> int:
-    with socket.socket(socket.AF_INET, kind) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def in_process(scenario_name: str, detector: str, frames: int) -> dict[str, object]:

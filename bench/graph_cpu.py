@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from bench.common import print_table, write_results
+from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 GRAPHS = [
@@ -24,12 +25,6 @@ GRAPHS = [
     ("sim_follow_person", "person_moving"),
 ]
 TICKS = os.sysconf("SC_CLK_TCK")
-
-
-def free_port(kind: int = socket.SOCK_STREAM) -> int:
-    with socket.socket(socket.AF_INET, kind) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def cpu_seconds(pid: int) -> float:

@@ -110,9 +110,9 @@ def bench_compute(runs: int) -> dict[str, object]:
 
 def publisher_main(endpoint: str, fps: float, duration: float) -> int:
     """The camera stand-in process: 640x480 frames with a moving red disc at ``fps``."""
+    from dronewrapper.images import bgr_to_image
     from dronewrapper.msgs import registry
     from dronewrapper.runtime import Node, Ratekeeper, ZenohOptions
-    from dronewrapper_perception.frames import bgr_to_image
 
     base = colour_frame()
     options = ZenohOptions(mode="peer", connect=[endpoint], name="bench_camera")

@@ -34,17 +34,12 @@ from dronewrapper import DroneWrapper
 from dronewrapper.msgs import Image, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper_compose.ports import free_port
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil
 
 NS = "bench_sdk"
-
-
-def _free_port(kind: int = socket.SOCK_STREAM) -> int:
-    with socket.socket(socket.AF_INET, kind) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class FakeAutopilot:
@@ -152,8 +147,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--calls", type=int, default=20000)
     args = parser.parse_args(argv)
 
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
-    udp_port = _free_port(socket.SOCK_DGRAM)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    udp_port = free_port(socket.SOCK_DGRAM)
     stop, ready = threading.Event(), threading.Event()
     router = threading.Thread(
         target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True

@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 from bench.common import print_table, write_results
+from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 TICKS = os.sysconf("SC_CLK_TCK")
@@ -120,7 +121,7 @@ class Pilot:
 def process_cpu(seconds: float, cameras: bool) -> dict[str, float]:
     from dronewrapper.router import router_options, run_router
 
-    router = f"tcp/127.0.0.1:{_free_port()}"
+    router = f"tcp/127.0.0.1:{free_port()}"
     stop, ready = threading.Event(), threading.Event()
     threading.Thread(
         target=run_router, args=(router_options([router]), stop, ready), daemon=True
@@ -158,12 +159,6 @@ def process_cpu(seconds: float, cameras: bool) -> dict[str, float]:
         proc.wait(15)
         stop.set()
     return {"idle_cpu_percent": idle, "flying_cpu_percent": flying, "altitude_m": altitude}
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def main(argv: list[str] | None = None) -> int:

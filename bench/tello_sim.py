@@ -28,7 +28,8 @@ import time
 from pathlib import Path
 
 from bench.common import percentiles, print_table, write_results
-from bench.sim_physics import _free_port, cpu_percent
+from bench.sim_physics import cpu_percent
+from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -87,7 +88,7 @@ def _window(pid: int, client: Client, seconds: float) -> dict[str, float]:
 def process_cpu(seconds: float, render_scale: float) -> dict[str, dict[str, float]]:
     from dronewrapper.router import router_options, run_router
 
-    router = f"tcp/127.0.0.1:{_free_port()}"
+    router = f"tcp/127.0.0.1:{free_port()}"
     stop, ready = threading.Event(), threading.Event()
     threading.Thread(
         target=run_router, args=(router_options([router]), stop, ready), daemon=True

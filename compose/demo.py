@@ -32,6 +32,7 @@ from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.graph import REPO
 from dronewrapper_compose.launcher import Launcher, LaunchError
+from dronewrapper_compose.ports import free_port
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_sim.evaluation.metrics import (
     FollowSample,
@@ -45,13 +46,6 @@ GRAPH = REPO / "compose" / "sim_follow_color.yaml"
 CONTROLLER_CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
 CENTRED_TOLERANCE = math.radians(10.0)
 DISTANCE_TOLERANCE = 1.5
-
-
-def free_port(kind: int = socket.SOCK_STREAM) -> int:
-    """A port free on 127.0.0.1 now (TCP by default)."""
-    with socket.socket(socket.AF_INET, kind) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def intended_distance(scenario_name: str) -> float:

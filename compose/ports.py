@@ -34,9 +34,12 @@ def port_in_use(kind: str, port: int, host: str = "127.0.0.1") -> bool:
     return False
 
 
-def free_port(kind: str, host: str = "127.0.0.1") -> int:
-    """A port of ``kind`` that is free on ``host`` right now."""
-    with socket.socket(socket.AF_INET, PORT_KINDS[kind]) as sock:
+def free_port(kind: str | int = "tcp", host: str = "127.0.0.1") -> int:
+    """A port of ``kind`` that is free on ``host`` right now: the project's one copy (graphs,
+    tests, benchmarks). ``kind`` is ``"tcp"``/``"udp"`` or ``socket.SOCK_STREAM``/``SOCK_DGRAM``.
+    """
+    socktype = PORT_KINDS[kind] if isinstance(kind, str) else kind
+    with socket.socket(socket.AF_INET, socktype) as sock:
         sock.bind((host, 0))
         return sock.getsockname()[1]
 

@@ -20,11 +20,11 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink
 
+# PX4 custom modes (main mode << 16 | sub mode << 24; see sim/px4/modes.py)
 OFFBOARD = 6 << 16
 AUTO_LOITER = (4 << 16) | (3 << 24)
 AUTO_RTL = (4 << 16) | (5 << 24)
-ARMED = 128
-MAV_CMD_SET_MESSAGE_INTERVAL = 511
+ARMED = mavlink.MAV_MODE_FLAG_SAFETY_ARMED
 # What the bridge may send that does not make the aircraft do anything.
 PASSIVE = frozenset({"HEARTBEAT", "PARAM_REQUEST_READ"})
 
@@ -152,7 +152,11 @@ class AutopilotPeer:
                     )
                 )
         elif kind == "COMMAND_LONG":
-            result = 0 if msg.command == MAV_CMD_SET_MESSAGE_INTERVAL else 3
+            result = (
+                mavlink.MAV_RESULT_ACCEPTED
+                if msg.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
+                else mavlink.MAV_RESULT_UNSUPPORTED
+            )
             self.send(mavlink.MAVLink_command_ack_message(msg.command, result, 0, 0, 0, 0))
 
     def actuating(self, since: float = 0.0) -> list[object]:
@@ -162,7 +166,10 @@ class AutopilotPeer:
         for at, msg in list(self.received):
             if at < since or msg.get_type() in PASSIVE:
                 continue
-            if msg.get_type() == "COMMAND_LONG" and msg.command == MAV_CMD_SET_MESSAGE_INTERVAL:
+            if (
+                msg.get_type() == "COMMAND_LONG"
+                and msg.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
+            ):
                 continue
             out.append(msg)
         return out

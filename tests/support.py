@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -17,6 +16,7 @@ from typing import TypeVar
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_compose.launcher import die_with_parent
+from dronewrapper_compose.ports import free_port
 
 T = TypeVar("T")
 
@@ -24,13 +24,6 @@ REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
 YOLOX_NANO = ASSETS / "models" / "yolox_nano.onnx"
 SPRITES = ASSETS / "sprites"
-
-
-def free_port(kind: int = socket.SOCK_STREAM) -> int:
-    """A port that is free on 127.0.0.1 right now (TCP by default, UDP with SOCK_DGRAM)."""
-    with socket.socket(socket.AF_INET, kind) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def free_endpoint() -> str:

@@ -29,6 +29,7 @@ from dronewrapper.health import (
     StreamLog,
     bandwidth_advice,
     clock_advice,
+    describe_stream,
     judge_stream,
 )
 from dronewrapper.msgs import codec
@@ -217,10 +218,7 @@ def run_doctor(
             say(*describe_drone(ns, processes, heard.latest))
         for health in stream_findings(heard):
             if health.verdict != OK or health.expected_hz > 0:
-                rate = f"{health.rate_hz:.1f} Hz" if health.rate_hz else "-"
-                age = f", newest {health.age_s:.2f} s old" if health.age_s < 1e9 else ""
-                detail = f" ({health.note})" if health.note else ""
-                say(health.verdict, f"{health.key}: {rate}{age}{detail}")
+                say(health.verdict, describe_stream(health))
         skews = [s for log in heard.logs.values() for s in log.skews]
         say(*clock_advice(skews))
         if bandwidth:

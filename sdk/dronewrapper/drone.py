@@ -34,7 +34,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
-import msgspec
 import numpy as np
 import zenoh
 
@@ -68,6 +67,7 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
@@ -207,7 +207,8 @@ class DroneWrapper:
         self.land_on_exit = land_on_exit
         self.compressed_images = compressed_images
         self.service_timeout = service_timeout
-        self.decode_errors: collections.Counter[str] = collections.Counter()
+        self.sample_errors = SampleErrors(log)
+        self.decode_errors: collections.Counter[str] = self.sample_errors.decode
         self._closed = False
         self._warned_grounded = False
         self._stale_after: dict[str, float] = {}
@@ -292,20 +293,10 @@ class DroneWrapper:
         self, topic: Topic[T], callback: Callable[[T], None], **parts: str
     ) -> zenoh.Subscriber:
         key = topic.key(self.ns, **parts)
-        decoder = codec.decoder(topic.type)
+        deliver = decoding(topic.type, callback, self.sample_errors)
 
         def on_sample(sample: zenoh.Sample) -> None:
-            try:
-                msg = decoder.decode(sample.payload.to_bytes())
-            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
-                self.decode_errors[key] += 1
-                if self.decode_errors[key] == 1:
-                    log.warning("undecodable %s on %s: %s", topic.type.__name__, key, exc)
-                return
-            try:
-                callback(msg)
-            except Exception:  # never let an exception reach Zenoh's receive thread
-                log.exception("handling %s failed", key)
+            deliver(key, sample.payload.to_bytes(), sample.attachment)
 
         # Direct callbacks (no Python thread per subscriber): the handler is tiny (decode and
         # store), and no non-daemon thread is left to block interpreter exit before our atexit

@@ -3,7 +3,9 @@
 Each sample's key is looked up in the registry to find its type; images print as a summary
 (size, encoding, stamp) rather than their bytes. When nothing arrives for a few seconds, echo says
 so on stderr, with the keys that are being published nearby; a closed output pipe
-(``dronewrapper echo ... | head``) ends it quietly.
+(``dronewrapper echo ... | head``) ends it quietly. Every few seconds and at the end, echo says on
+stderr each key's measured rate and newest sample's age against the rate the registry declares
+for it (:func:`dronewrapper.health.describe_stream`), and when a key goes stale.
 """
 
 from __future__ import annotations
@@ -20,12 +22,72 @@ from typing import Any, TextIO
 import msgspec
 import zenoh
 
+from dronewrapper.health import (
+    StreamHealth,
+    StreamLog,
+    describe_stream,
+    is_stale,
+    judge_stream,
+    stale_after,
+)
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import TOPICS, topic_for_key
 from dronewrapper.msgs.sensor import CompressedImage, Image
 
 QUIET_AFTER_S = 3.0
 """Seconds without a sample after which echo says that nothing arrives."""
+RATES_EVERY_S = 10.0
+"""Seconds between two reports of each key's rate and age (stderr)."""
+ARRIVALS_KEPT = 64
+"""Arrivals kept per key to measure its rate (the newest ones)."""
+
+
+class RateWatch:
+    """Arrival times per key, judged against the registry's rates (pure; time passed in).
+
+    ``add`` records a sample's arrival (monotonic s); ``report`` gives one line per key
+    (:func:`describe_stream`); ``newly_stale`` names the keys that went stale since last asked.
+    """
+
+    def __init__(self) -> None:
+        self.logs: dict[str, StreamLog] = {}
+        self._stale: set[str] = set()
+
+    def add(self, key: str, arrival: float, size: int) -> None:
+        log = self.logs.setdefault(key, StreamLog())
+        log.add(arrival, None, size)
+        if len(log.arrivals) > 2 * ARRIVALS_KEPT:
+            del log.arrivals[:-ARRIVALS_KEPT]
+        self._stale.discard(key)
+
+    def health(self, now: float) -> list[StreamHealth]:
+        return [
+            judge_stream(key, declared_rate(key), log, now)
+            for key, log in sorted(self.logs.items())
+        ]
+
+    def report(self, now: float) -> list[str]:
+        return [describe_stream(health) for health in self.health(now)]
+
+    def newly_stale(self, now: float) -> list[str]:
+        """Lines for the keys whose newest sample became stale since the last call."""
+        lines = []
+        for key, log in sorted(self.logs.items()):
+            rate = declared_rate(key)
+            age = now - log.arrivals[-1]
+            if key not in self._stale and is_stale(rate, age):
+                self._stale.add(key)
+                lines.append(
+                    f"{key} is stale: nothing for {age:.1f} s (declared {rate:g} Hz, stale "
+                    f"after {stale_after(rate):g} s)"
+                )
+        return lines
+
+
+def declared_rate(key: str) -> float:
+    """The registry's rate for a concrete key (Hz; 0 for event streams and unknown keys)."""
+    topic = topic_for_key(key)
+    return topic.rate_hz if topic is not None else 0.0
 
 
 def keyexpr_problem(keyexpr: str) -> str | None:
@@ -108,20 +170,25 @@ def echo(
     stop: threading.Event | None = None,
     out: TextIO = sys.stdout,
     quiet_after_s: float = QUIET_AFTER_S,
+    rates_every_s: float = RATES_EVERY_S,
     notice: Callable[[str], None] = lambda text: print(
         f"dronewrapper echo: {text}", file=sys.stderr
     ),
 ) -> int:
     """Print samples on ``keyexpr`` until ``count`` printed, ``duration`` s passed, ``stop``, or
-    the output is closed. Returns the number printed."""
+    the output is closed; every ``rates_every_s`` (0: never) and at the end, ``notice`` each
+    key's rate and age against the registry. Returns the number printed."""
     stop = stop or threading.Event()
     printed = 0
     lock = threading.Lock()
+    rates = RateWatch()
 
     def on_sample(sample: zenoh.Sample) -> None:
         nonlocal printed
-        line = format_sample(str(sample.key_expr), sample.payload.to_bytes())
+        key, payload = str(sample.key_expr), sample.payload.to_bytes()
+        line = format_sample(key, payload)
         with lock:
+            rates.add(key, time.monotonic(), len(payload))
             if stop.is_set() or (count and printed >= count):
                 return
             try:
@@ -137,6 +204,7 @@ def echo(
     started = time.monotonic()
     deadline = started + duration if duration > 0 else math.inf
     noticed = quiet_after_s <= 0
+    next_rates = started + rates_every_s if rates_every_s > 0 else math.inf
     try:
         while not stop.wait(0.1):
             now = time.monotonic()
@@ -145,6 +213,17 @@ def echo(
             if not noticed and printed == 0 and now - started >= quiet_after_s:
                 noticed = True
                 notice(silence_notice(keyexpr, now - started, published_keys(session, 1.0)))
+            with lock:
+                lines = rates.newly_stale(now)
+                if now >= next_rates:
+                    next_rates = now + rates_every_s
+                    lines += rates.report(now)
+            for line in lines:
+                notice(line)
     finally:
         sub.undeclare()
+    if rates_every_s > 0:
+        with lock:
+            for line in rates.report(time.monotonic()):
+                notice(line)
     return printed

@@ -10,6 +10,7 @@ guessing.
 from __future__ import annotations
 
 import itertools
+import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -22,10 +23,22 @@ CLOCK_SKEW_WARN_S = 0.25
 """Stamps further than this from our clock point at unsynchronised clocks (or a slow link)."""
 
 
+STALE_PERIODS = 5.0
+"""A stream is stale after this many of its registry periods without a sample..."""
+STALE_FLOOR_S = 0.5
+"""...but never sooner than this (s), so jitter on a fast stream is not staleness."""
+
+
 def stale_after(rate_hz: float) -> float:
-    """Seconds after which a value of a stream with this nominal rate is stale: five missed
-    periods, but never less than half a second (0 Hz: event streams never go stale -> inf)."""
-    return max(0.5, 5.0 / rate_hz) if rate_hz > 0 else float("inf")
+    """Seconds after which a value of a stream with this registry rate is stale: the one
+    freshness rule (the SDK's getters, ``dronewrapper echo`` and ``doctor``). Five missed
+    periods, but never less than half a second; 0 Hz (event streams) never goes stale -> inf."""
+    return max(STALE_FLOOR_S, STALE_PERIODS / rate_hz) if rate_hz > 0 else float("inf")
+
+
+def is_stale(rate_hz: float, age_s: float) -> bool:
+    """Whether a value ``age_s`` seconds old on a stream of registry rate ``rate_hz`` is stale."""
+    return age_s > stale_after(rate_hz)
 
 
 @dataclass
@@ -81,13 +94,23 @@ def judge_stream(key: str, expected_hz: float, log: StreamLog, end: float) -> St
         elif rate < RATE_SLACK * expected_hz:
             verdict = WARN
             notes.append(f"{rate:.1f} Hz, expected >= {expected_hz:g} Hz")
-        elif age > max(1.0, 3.0 / expected_hz):
+        elif is_stale(expected_hz, age):
             verdict = WARN
-            notes.append(f"stopped {age:.1f} s ago")
+            notes.append(f"stopped {age:.1f} s ago (stale after {stale_after(expected_hz):g} s)")
     if skew is not None and abs(skew) > CLOCK_SKEW_WARN_S:
         verdict = WARN if verdict == OK else verdict
         notes.append(f"stamps {skew * 1000:+.0f} ms from this clock")
     return StreamHealth(key, rate, expected_hz, age, skew, verdict, "; ".join(notes))
+
+
+def describe_stream(health: StreamHealth) -> str:
+    """One line on a stream: measured rate and newest sample's age against the registry rate,
+    and what is wrong if anything (``dronewrapper echo`` and ``doctor``)."""
+    rate = f"{health.rate_hz:.1f} Hz" if health.rate_hz else "-"
+    declared = f"declared {health.expected_hz:g} Hz" if health.expected_hz > 0 else "event-driven"
+    age = f", newest {health.age_s:.2f} s old" if math.isfinite(health.age_s) else ""
+    detail = f": {health.note}" if health.note else ""
+    return f"{health.key}: {rate} ({declared}){age}{detail}"
 
 
 def clock_advice(skews_s: Sequence[float]) -> tuple[str, str]:

@@ -1,9 +1,13 @@
-"""Camera messages as BGR numpy arrays (OpenCV channel order), the newest frame only.
+"""Camera messages as BGR numpy arrays (OpenCV channel order): the one decoder of the project.
 
-Both ways: messages to arrays (subscribers) and arrays to messages (camera publishers such as
-camera_victure). Raw images (``sensor_msgs/Image``) are converted with numpy alone. JPEG/PNG
-compressed images (for Wi-Fi links) are encoded and decoded with OpenCV, imported only when
-needed, so the SDK itself depends on numpy alone.
+Both ways: messages to arrays (the SDK, perception, tools) and arrays to messages (camera
+publishers such as camera_victure). Raw images (``sensor_msgs/Image``) are converted with numpy
+alone. JPEG/PNG compressed images (for Wi-Fi links) are encoded and decoded with OpenCV, imported
+only when needed, so the SDK itself depends on numpy alone.
+
+Shapes: every decoded frame is ``uint8`` (height, width, 3) in BGR order, whatever the encoding;
+``mono8`` is replicated into the three channels, alpha is dropped. A bad frame raises
+:class:`BadFrame`, whose ``reason`` is a short key a service can count.
 """
 
 from __future__ import annotations
@@ -16,35 +20,60 @@ from dronewrapper.errors import DroneError
 from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.msgs.std import Header
 
-_CHANNELS = {"bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4, "mono8": 1, "8UC3": 3, "8UC1": 1}
+CHANNELS = {"bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4, "mono8": 1, "8uc3": 3, "8uc1": 1}
+"""Raw encodings understood (lower case; matched case-insensitively) and their channel counts."""
 
 
-def image_to_bgr(msg: Image) -> np.ndarray:
-    """A writable ``uint8`` array of shape (height, width, 3) in BGR order (mono8: (h, w)).
+class BadFrame(DroneError, ValueError):
+    """A frame that cannot be used; ``reason`` is a short counter key.
 
-    Handles row padding (``step`` > width * channels) and converts rgb8/rgba8/bgra8 to BGR.
+    Reasons: ``empty`` (no bytes), ``bad_size`` (geometry and byte count disagree),
+    ``encoding`` (unknown raw encoding), ``undecodable`` (compressed bytes OpenCV refuses).
+    Services add their own (perception: ``bad_stamp``, ``processing_error``).
+    """
+
+    def __init__(self, reason: str, message: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+def image_to_bgr(msg: Image, *, copy: bool = True) -> np.ndarray:
+    """A ``uint8`` array of shape (height, width, 3) in BGR order.
+
+    Handles row padding (``step`` > width * channels), converts rgb8/rgba8/bgra8 to BGR and
+    replicates mono8 into three channels. With ``copy=False`` an unpadded bgr8 frame comes back
+    as a read-only view of the message bytes (no copy); otherwise the array is a writable copy.
 
     Raises:
-        DroneError: unknown encoding, or ``data`` shorter than ``height * step``.
+        BadFrame: empty data, unknown encoding, or ``data`` not ``height * step`` bytes.
     """
-    channels = _CHANNELS.get(msg.encoding)
+    if not msg.data:
+        raise BadFrame("empty", "image with empty data")
+    if msg.width <= 0 or msg.height <= 0:
+        raise BadFrame("bad_size", f"image size {msg.width}x{msg.height} is not positive")
+    encoding = msg.encoding.lower()
+    channels = CHANNELS.get(encoding)
     if channels is None:
-        raise DroneError(f"unsupported image encoding {msg.encoding!r} (expected bgr8)")
+        known = ", ".join(CHANNELS)
+        raise BadFrame("encoding", f"unknown image encoding {msg.encoding!r} (known: {known})")
     row = msg.width * channels
     step = msg.step or row
-    if msg.height <= 0 or msg.width <= 0 or step < row or len(msg.data) < msg.height * step:
-        raise DroneError(
-            f"malformed image: {msg.width}x{msg.height} {msg.encoding} step {msg.step}, "
-            f"{len(msg.data)} bytes"
+    if step < row or len(msg.data) != step * msg.height:
+        raise BadFrame(
+            "bad_size",
+            f"malformed image: {msg.width}x{msg.height} {msg.encoding} needs "
+            f"{row * msg.height} bytes (step {step}), got {len(msg.data)}",
         )
-    flat = np.frombuffer(msg.data, dtype=np.uint8, count=msg.height * step)
-    pixels = flat.reshape(msg.height, step)[:, :row]
-    if channels == 1:
-        return pixels.reshape(msg.height, msg.width).copy()
+    pixels = np.frombuffer(msg.data, np.uint8).reshape(msg.height, step)[:, :row]
     pixels = pixels.reshape(msg.height, msg.width, channels)
-    if msg.encoding in ("rgb8", "rgba8"):
-        return np.array(pixels[:, :, 2::-1], order="C")
-    return np.array(pixels[:, :, :3], order="C")
+    if channels == 1:
+        return np.repeat(pixels, 3, axis=2)
+    if encoding in ("rgb8", "rgba8"):
+        return np.ascontiguousarray(pixels[:, :, 2::-1])
+    bgr = pixels[:, :, :3]
+    if copy:
+        return np.array(bgr, order="C")
+    return bgr if step == row and channels == 3 else np.ascontiguousarray(bgr)
 
 
 def jpeg_decoder() -> Any:
@@ -74,15 +103,19 @@ def has_jpeg_decoder() -> bool:
 
 
 def compressed_to_bgr(msg: CompressedImage) -> np.ndarray:
-    """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` array (needs OpenCV).
+    """Decode a JPEG/PNG CompressedImage to a BGR ``uint8`` (height, width, 3) array (needs
+    OpenCV).
 
     Raises:
-        DroneError: OpenCV is not installed, or the bytes do not decode.
+        DroneError: OpenCV is not installed.
+        BadFrame: empty data, or bytes OpenCV cannot decode.
     """
+    if not msg.data:
+        raise BadFrame("empty", "compressed image with empty data")
     cv2 = jpeg_decoder()
     image = cv2.imdecode(np.frombuffer(msg.data, dtype=np.uint8), cv2.IMREAD_COLOR)
-    if image is None:
-        raise DroneError(f"cannot decode a {len(msg.data)}-byte {msg.format!r} image")
+    if image is None or image.size == 0:
+        raise BadFrame("undecodable", f"cannot decode a {len(msg.data)}-byte {msg.format!r} image")
     return image
 
 

@@ -24,6 +24,8 @@ import threading
 import time
 from collections.abc import Callable
 
+import msgspec
+
 from dronewrapper.msgs.mavros import PositionTarget
 
 log = logging.getLogger("dronewrapper.streamer")
@@ -146,7 +148,8 @@ class SetpointStreamer:
         if not self.link_ok:
             self.withheld += 1
             return
-        target.header.seq = self.published
+        header = msgspec.structs.replace(target.header, seq=self.published)
+        target = msgspec.structs.replace(target, header=header)
         try:
             self._publish(target)
         except Exception as exc:  # a closed session at exit, a transient transport error

@@ -1,6 +1,7 @@
 """The perception process: camera frames in, Detections out, always on the newest frame.
 
-A Zenoh subscriber stores each decoded camera message in a one-slot holder (``NewestSlot``);
+A Zenoh subscriber stores each decoded camera message in a one-slot holder (the runtime's
+``Latest``);
 the main loop takes the newest one and skips any that arrived meanwhile (counted as dropped), so a
 slow detector never builds a queue and latency never grows. Each processed frame gives one
 Detections message carrying the frame's own stamp. Bad frames are counted by reason, logged
@@ -15,12 +16,11 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 
+from dronewrapper.images import BadFrame, compressed_to_bgr, image_to_bgr
 from dronewrapper.msgs import CompressedImage, Header, Image, registry
-from dronewrapper.runtime import Node
+from dronewrapper.runtime import Latest, Node
 from dronewrapper_perception.config import Config
-from dronewrapper_perception.frames import BadFrame, compressed_to_bgr, image_to_bgr
 from dronewrapper_perception.model_file import ModelFileError
-from dronewrapper_perception.newest import NewestSlot
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
 from dronewrapper_perception.rate_cap import FrameRateCap
 
@@ -64,8 +64,8 @@ class PerceptionService:
         self.pipeline = pipeline or Pipeline(config)
         self.stats = Stats()
         self.topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
-        self.frames: NewestSlot[Image | CompressedImage] = NewestSlot()
-        node.subscribe(self.topic, self.frames.put, camera=config.camera)
+        self.frames: Latest[Image | CompressedImage] = Latest(name="camera frames")
+        node.subscribe(self.topic, self.frames.update, camera=config.camera)
         self.publisher = node.publisher(registry.DETECTIONS)
         self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
         self.rate_cap = FrameRateCap(config.max_rate_hz)
@@ -106,7 +106,10 @@ class PerceptionService:
         """Decode, process and publish one frame (bad frames are counted and skipped)."""
         start = time.perf_counter()
         try:
-            bgr = compressed_to_bgr(msg) if isinstance(msg, CompressedImage) else image_to_bgr(msg)
+            if isinstance(msg, CompressedImage):
+                bgr = compressed_to_bgr(msg)
+            else:
+                bgr = image_to_bgr(msg, copy=False)
         except BadFrame as exc:
             self._bad(exc)
             return

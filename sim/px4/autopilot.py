@@ -21,43 +21,22 @@ from dronewrapper_sim import frames
 from dronewrapper_sim.battery import Battery, motor_current
 from dronewrapper_sim.dynamics import GRAVITY, QuadParams, QuadState, WindModel, step
 from dronewrapper_sim.px4 import modes, offboard, telemetry
-from dronewrapper_sim.px4.commander import (
-    ACCEPTED,
-    DENIED,
-    FAILED,
-    FORCE_MAGIC,
-    TEMPORARILY_REJECTED,
-    UNSUPPORTED,
-    Commander,
-    StatusText,
-)
+from dronewrapper_sim.px4.commander import FORCE_MAGIC, Commander, StatusText
 from dronewrapper_sim.px4.flight_control import Gains, PositionController
 from dronewrapper_sim.px4.params import ParamStore
 
 log = logging.getLogger("sim.autopilot")
 
-MAV_TYPE_QUADROTOR = 2
-MAV_TYPE_GCS = 6
-MAV_AUTOPILOT_PX4 = 12
-BASE_MODE = 29  # custom mode enabled | stabilize | guided | auto, as PX4 SITL reports it
-MAV_MODE_FLAG_SAFETY_ARMED = 128
-MAV_STATE_STANDBY, MAV_STATE_ACTIVE, MAV_STATE_CRITICAL = 3, 4, 5
+BASE_MODE = (  # 29, as PX4 SITL reports it
+    mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+    | mavlink.MAV_MODE_FLAG_STABILIZE_ENABLED
+    | mavlink.MAV_MODE_FLAG_GUIDED_ENABLED
+    | mavlink.MAV_MODE_FLAG_AUTO_ENABLED
+)
 GCS_HEARTBEAT_TIMEOUT_S = 3.0
 PARAMS_PER_POLL = 20
 STATUSTEXT_LEN = 50
 PX4_VERSION = (1, 17, 0)
-
-# MAV_CMD
-CMD_NAV_RETURN_TO_LAUNCH = 20
-CMD_NAV_LAND = 21
-CMD_NAV_TAKEOFF = 22
-CMD_DO_SET_MODE = 176
-CMD_COMPONENT_ARM_DISARM = 400
-CMD_GET_HOME_POSITION = 410
-CMD_GET_MESSAGE_INTERVAL = 510
-CMD_SET_MESSAGE_INTERVAL = 511
-CMD_REQUEST_MESSAGE = 512
-CMD_REQUEST_AUTOPILOT_CAPABILITIES = 520
 
 _SENSORS = (
     1
@@ -241,7 +220,7 @@ class Autopilot:
         return target_system in (0, self.sysid)
 
     def _on_heartbeat(self, link: LinkState, msg) -> None:
-        if msg.type == MAV_TYPE_GCS:
+        if msg.type == mavlink.MAV_TYPE_GCS:
             link.gcs_heartbeat_at = self.time_s
 
     def _on_set_position_target_local_ned(self, link: LinkState, msg) -> None:
@@ -275,8 +254,8 @@ class Autopilot:
         if not self._for_us(msg.target_system):
             return []
         result = self._set_mode_from(msg.base_mode, *modes.decode(msg.custom_mode))
-        ack = self._ack(CMD_DO_SET_MODE, result, msg)
-        return [ack, self._ack(CMD_DO_SET_MODE, result, msg)]
+        ack = self._ack(mavlink.MAV_CMD_DO_SET_MODE, result, msg)
+        return [ack, self._ack(mavlink.MAV_CMD_DO_SET_MODE, result, msg)]
 
     def _on_command_long(self, link: LinkState, msg) -> list:
         if not self._for_us(msg.target_system) or msg.target_component not in (0, 1):
@@ -336,58 +315,64 @@ class Autopilot:
 
     def _set_mode_from(self, base_mode: float, main: float, sub: float) -> int:
         if not all(math.isfinite(v) for v in (base_mode, main, sub)):
-            return DENIED
-        if not int(base_mode) & modes.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
-            return DENIED
+            return mavlink.MAV_RESULT_DENIED
+        if not int(base_mode) & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+            return mavlink.MAV_RESULT_DENIED
         mode = modes.from_main_sub(int(main), int(sub))
         if mode is None:
-            return TEMPORARILY_REJECTED
+            return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
         return self.commander.set_mode(mode, self.time_s, self.state)
 
     def _command(self, link: LinkState, msg, command: int, p: list[float]) -> list:
         now, state, cmd = self.time_s, self.state, self.commander
         replies: list = []
-        if command == CMD_COMPONENT_ARM_DISARM:
+        if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
             force = math.isfinite(p[1]) and int(p[1]) == FORCE_MAGIC
             if p[0] == 1.0:
                 result = cmd.arm(now, state, force)
             elif p[0] == 0.0:
                 result = cmd.disarm(now, state, force)
             else:
-                result = DENIED
-        elif command == CMD_DO_SET_MODE:
+                result = mavlink.MAV_RESULT_DENIED
+        elif command == mavlink.MAV_CMD_DO_SET_MODE:
             # PX4 acks twice: its MAVLink receiver at once with ACCEPTED ("received"), then
             # the commander with the real result (a refusal for a mode it cannot enter)
             result = self._set_mode_from(p[0], p[1], p[2])
-            return [self._ack(command, ACCEPTED, msg), self._ack(command, result, msg)]
-        elif command == CMD_NAV_TAKEOFF:
+            return [
+                self._ack(command, mavlink.MAV_RESULT_ACCEPTED, msg),
+                self._ack(command, result, msg),
+            ]
+        elif command == mavlink.MAV_CMD_NAV_TAKEOFF:
             altitude = p[6] - self.config.home_alt_m if math.isfinite(p[6]) else math.nan
             result = cmd.takeoff(now, state, altitude)
-        elif command == CMD_NAV_LAND:
+        elif command == mavlink.MAV_CMD_NAV_LAND:
             result = cmd.set_mode(modes.Mode.LAND, now, state)
-        elif command == CMD_NAV_RETURN_TO_LAUNCH:
+        elif command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH:
             result = cmd.set_mode(modes.Mode.RTL, now, state)
-        elif command == CMD_SET_MESSAGE_INTERVAL:
+        elif command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
             ok = math.isfinite(p[0]) and link.scheduler.set_interval(int(p[0]), p[1], now)
-            result = ACCEPTED if ok else FAILED
-        elif command == CMD_GET_MESSAGE_INTERVAL:
+            result = mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_FAILED
+        elif command == mavlink.MAV_CMD_GET_MESSAGE_INTERVAL:
             msgid = int(p[0]) if math.isfinite(p[0]) else -1
             interval = link.scheduler.interval_us(msgid)
             replies.append(mavlink.MAVLink_message_interval_message(msgid, interval))
-            result = ACCEPTED
-        elif command in (CMD_REQUEST_MESSAGE, CMD_REQUEST_AUTOPILOT_CAPABILITIES):
+            result = mavlink.MAV_RESULT_ACCEPTED
+        elif command in (
+            mavlink.MAV_CMD_REQUEST_MESSAGE,
+            mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES,
+        ):
             msgid = telemetry.AUTOPILOT_VERSION
-            if command == CMD_REQUEST_MESSAGE:
+            if command == mavlink.MAV_CMD_REQUEST_MESSAGE:
                 msgid = int(p[0]) if math.isfinite(p[0]) else -1
             builder = self._builders.get(msgid)
-            result = ACCEPTED if builder else DENIED
+            result = mavlink.MAV_RESULT_ACCEPTED if builder else mavlink.MAV_RESULT_DENIED
             if builder:
                 replies.append(builder())
-        elif command == CMD_GET_HOME_POSITION:
+        elif command == mavlink.MAV_CMD_GET_HOME_POSITION:
             replies.append(self._msg_home_position())
-            result = ACCEPTED
+            result = mavlink.MAV_RESULT_ACCEPTED
         else:
-            result = UNSUPPORTED
+            result = mavlink.MAV_RESULT_UNSUPPORTED
         return [self._ack(command, result, msg), *replies]
 
     # ---- outgoing ----
@@ -447,12 +432,17 @@ class Autopilot:
 
     def msg_heartbeat(self) -> mavlink.MAVLink_message:
         cmd = self.commander
-        base = BASE_MODE | (MAV_MODE_FLAG_SAFETY_ARMED if cmd.armed else 0)
-        status = MAV_STATE_ACTIVE if cmd.armed else MAV_STATE_STANDBY
+        base = BASE_MODE | (mavlink.MAV_MODE_FLAG_SAFETY_ARMED if cmd.armed else 0)
+        status = mavlink.MAV_STATE_ACTIVE if cmd.armed else mavlink.MAV_STATE_STANDBY
         if cmd.failsafe:
-            status = MAV_STATE_CRITICAL
+            status = mavlink.MAV_STATE_CRITICAL
         return mavlink.MAVLink_heartbeat_message(
-            MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, base, cmd.nav_mode.custom_mode, status, 3
+            mavlink.MAV_TYPE_QUADROTOR,
+            mavlink.MAV_AUTOPILOT_PX4,
+            base,
+            cmd.nav_mode.custom_mode,
+            status,
+            3,
         )
 
     def _msg_sys_status(self):
@@ -560,20 +550,20 @@ class Autopilot:
         target = self.commander.target
         mask = 0
         pos_ned = frames.enu_to_ned(*target.position)
-        for i, bit in enumerate((offboard.IGNORE_PX, offboard.IGNORE_PY, offboard.IGNORE_PZ)):
+        for i, bit in enumerate(offboard.IGNORE_POSITION):
             if not math.isfinite(pos_ned[i]):
                 mask |= bit
         vel_ned = frames.enu_to_ned(*self.controller.velocity_setpoint)
-        mask |= offboard.IGNORE_AFX | offboard.IGNORE_AFY | offboard.IGNORE_AFZ
+        mask |= sum(offboard.IGNORE_ACCELERATION)
         yaw = frames.yaw_enu_to_ned(target.yaw) if math.isfinite(target.yaw) else math.nan
         if not math.isfinite(yaw):
-            mask |= offboard.IGNORE_YAW
+            mask |= mavlink.POSITION_TARGET_TYPEMASK_YAW_IGNORE
         yaw_rate = -target.yaw_rate if math.isfinite(target.yaw_rate) else math.nan
         if not math.isfinite(yaw_rate):
-            mask |= offboard.IGNORE_YAW_RATE
+            mask |= mavlink.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
         return mavlink.MAVLink_position_target_local_ned_message(
             self._boot_ms,
-            offboard.MAV_FRAME_LOCAL_NED,
+            mavlink.MAV_FRAME_LOCAL_NED,
             mask,
             *pos_ned,
             *vel_ned,

@@ -26,6 +26,8 @@ import math
 from dataclasses import dataclass
 from enum import IntEnum
 
+from pymavlink.dialects.v20 import common as mavlink
+
 from dronewrapper_sim.dynamics import QuadState
 from dronewrapper_sim.px4.flight_control import NAN, Target
 from dronewrapper_sim.px4.modes import Mode
@@ -33,16 +35,8 @@ from dronewrapper_sim.px4.offboard import OffboardSetpoint
 from dronewrapper_sim.px4.params import ParamStore
 
 # MAV_RESULT
-ACCEPTED = 0
-TEMPORARILY_REJECTED = 1
-DENIED = 2
-UNSUPPORTED = 3
-FAILED = 4
 
 # MAV_SEVERITY
-CRITICAL = 2
-WARNING = 4
-INFO = 6
 
 ARM_DENIED = "Arming denied: Resolve system health failures first"
 FORCE_MAGIC = 21196  # COMPONENT_ARM_DISARM param2 that forces arm/disarm
@@ -51,11 +45,11 @@ FORCE_MAGIC = 21196  # COMPONENT_ARM_DISARM param2 that forces arm/disarm
 class LandedState(IntEnum):
     """MAV_LANDED_STATE."""
 
-    UNDEFINED = 0
-    ON_GROUND = 1
-    IN_AIR = 2
-    TAKEOFF = 3
-    LANDING = 4
+    UNDEFINED = mavlink.MAV_LANDED_STATE_UNDEFINED
+    ON_GROUND = mavlink.MAV_LANDED_STATE_ON_GROUND
+    IN_AIR = mavlink.MAV_LANDED_STATE_IN_AIR
+    TAKEOFF = mavlink.MAV_LANDED_STATE_TAKEOFF
+    LANDING = mavlink.MAV_LANDED_STATE_LANDING
 
 
 # PX4's human names of the navigation states (used in its messages)
@@ -145,7 +139,10 @@ class Commander:
     def _reject_mode_text(self, mode: Mode, now: float) -> None:
         if now - self._last_reject_text > 1.0:
             self._last_reject_text = now
-            self._say(CRITICAL, f"Switching to {_NAV_NAMES[mode]} is currently not available")
+            self._say(
+                mavlink.MAV_SEVERITY_CRITICAL,
+                f"Switching to {_NAV_NAMES[mode]} is currently not available",
+            )
 
     @property
     def landed_state(self) -> LandedState:
@@ -163,13 +160,13 @@ class Commander:
     def arm(self, now: float, state: QuadState, force: bool = False) -> int:
         """COMPONENT_ARM_DISARM param1 = 1."""
         if self.armed:
-            return ACCEPTED
+            return mavlink.MAV_RESULT_ACCEPTED
         if not force and not self._can_run(self.user_mode, now):
-            self._say(CRITICAL, ARM_DENIED)
-            return TEMPORARILY_REJECTED
+            self._say(mavlink.MAV_SEVERITY_CRITICAL, ARM_DENIED)
+            return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
         if not force and self.user_mode in (Mode.LAND, Mode.RTL):
-            self._say(CRITICAL, ARM_DENIED)
-            return TEMPORARILY_REJECTED
+            self._say(mavlink.MAV_SEVERITY_CRITICAL, ARM_DENIED)
+            return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
         self.armed = True
         self.armed_at = now
         self.landed_at = now
@@ -177,31 +174,31 @@ class Commander:
         self.takeoff_started_at = None
         self.home = (state.x, state.y, state.z)
         self.home_yaw = state.yaw
-        self._say(INFO, "Armed by external command")
+        self._say(mavlink.MAV_SEVERITY_INFO, "Armed by external command")
         self._enter(self.nav_mode, state, now)
-        return ACCEPTED
+        return mavlink.MAV_RESULT_ACCEPTED
 
     def disarm(self, now: float, state: QuadState, force: bool = False, reason: str = "") -> int:
         """COMPONENT_ARM_DISARM param1 = 0 (refused in the air unless forced)."""
         if not self.armed:
-            return ACCEPTED
+            return mavlink.MAV_RESULT_ACCEPTED
         if not self.landed and not force:
-            self._say(CRITICAL, "Disarming denied: not landed")
-            return TEMPORARILY_REJECTED
+            self._say(mavlink.MAV_SEVERITY_CRITICAL, "Disarming denied: not landed")
+            return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
         self.armed = False
         self.failsafe = False
-        self._say(INFO, reason or "Disarmed by external command")
+        self._say(mavlink.MAV_SEVERITY_INFO, reason or "Disarmed by external command")
         if self.user_mode in (Mode.LAND, Mode.RTL) and self._mode_before_auto is not None:
             self.user_mode = self._mode_before_auto
         self._mode_before_auto = None
         self._enter(self.user_mode, state, now)
-        return ACCEPTED
+        return mavlink.MAV_RESULT_ACCEPTED
 
     def set_mode(self, mode: Mode, now: float, state: QuadState) -> int:
         """DO_SET_MODE / SET_MODE: change the user-intended mode."""
         if self.armed and not self._can_run(mode, now):
             self._reject_mode_text(mode, now)
-            return TEMPORARILY_REJECTED
+            return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
         if mode in (Mode.LAND, Mode.RTL) and self.user_mode not in (Mode.LAND, Mode.RTL):
             self._mode_before_auto = self.user_mode
         elif mode not in (Mode.LAND, Mode.RTL):
@@ -211,14 +208,14 @@ class Commander:
         if mode is Mode.TAKEOFF:
             self._takeoff_z = self.home[2] + self.params["MIS_TAKEOFF_ALT"]
         self._enter(mode, state, now)
-        return ACCEPTED
+        return mavlink.MAV_RESULT_ACCEPTED
 
     def takeoff(self, now: float, state: QuadState, altitude_above_home: float = NAN) -> int:
         """NAV_TAKEOFF: AUTO.TAKEOFF to ``altitude_above_home`` (m) or MIS_TAKEOFF_ALT."""
         result = self.set_mode(Mode.TAKEOFF, now, state)
-        if result == ACCEPTED and math.isfinite(altitude_above_home):
+        if result == mavlink.MAV_RESULT_ACCEPTED and math.isfinite(altitude_above_home):
             self._takeoff_z = self.home[2] + altitude_above_home
-        if result == ACCEPTED and self._takeoff_z < state.z:
+        if result == mavlink.MAV_RESULT_ACCEPTED and self._takeoff_z < state.z:
             self._takeoff_z = state.z
         return result
 
@@ -256,7 +253,7 @@ class Commander:
                 self.landed = False
                 self.taken_off_since_arming = True
                 self._contact_since = None
-                self._say(INFO, "Takeoff detected")
+                self._say(mavlink.MAV_SEVERITY_INFO, "Takeoff detected")
             return
         resting = state.on_ground or (state.z < 0.03 and abs(state.vz) < 0.1)
         if resting:
@@ -265,7 +262,7 @@ class Commander:
             if now - self._contact_since >= self.params["LNDMC_TRIG_TIME"]:
                 self.landed, self.landed_at = True, now
                 self.takeoff_started_at = None
-                self._say(INFO, "Landing detected")
+                self._say(mavlink.MAV_SEVERITY_INFO, "Landing detected")
         else:
             self._contact_since = None
 
@@ -285,7 +282,7 @@ class Commander:
         available = self.offboard_available(now)
         if not available and not self.failsafe:
             self.failsafe = True
-            self._say(CRITICAL, "Failsafe activated")
+            self._say(mavlink.MAV_SEVERITY_CRITICAL, "Failsafe activated")
             self._enter(self._fallback_mode(), state, now)
         elif available and self.failsafe:
             self.failsafe = False  # not latched: OFFBOARD is still what the user wants
@@ -306,12 +303,14 @@ class Commander:
             self._rtl_phase = "done"
         elif dist <= self.params["RTL_MIN_DIST"]:
             self._rtl_phase = "land"
-            self._say(INFO, "RTL: land at destination")
+            self._say(mavlink.MAV_SEVERITY_INFO, "RTL: land at destination")
         else:
             self._rtl_z = max(state.z, hz + self.params["RTL_RETURN_ALT"])
             self._rtl_phase = "climb"
             alt = self._rtl_z - hz
-            self._say(INFO, f"RTL: start return at {alt:.0f} m above destination")
+            self._say(
+                mavlink.MAV_SEVERITY_INFO, f"RTL: start return at {alt:.0f} m above destination"
+            )
 
     def _land_speed(self, height: float) -> float:
         p = self.params
@@ -418,7 +417,7 @@ class Commander:
             if now - self._rtl_wait_since < p["RTL_LAND_DELAY"]:
                 return Target(position=(hx, hy, descend_z), yaw=state.yaw, **limits)
             self._rtl_phase = phase = "land"
-            self._say(INFO, "RTL: land at destination")
+            self._say(mavlink.MAV_SEVERITY_INFO, "RTL: land at destination")
         if phase == "land":
             return self._land_target(hx, hy, self._hold[3], state)
         return Target(idle=True)

@@ -25,8 +25,6 @@ SUB_AUTO_LAND = 6
 SUB_AUTO_FOLLOW_TARGET = 8
 SUB_AUTO_PRECLAND = 9
 
-MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
-
 
 class Mode(Enum):
     """A PX4 navigation mode: value = (main mode, sub mode)."""

@@ -13,22 +13,28 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from pymavlink.dialects.v20 import common as mavlink
+
 from dronewrapper_sim.frames import rotate_by_yaw, yaw_ned_to_enu
 
-MAV_FRAME_LOCAL_NED = 1
-MAV_FRAME_LOCAL_OFFSET_NED = 7
-MAV_FRAME_BODY_NED = 8
-MAV_FRAME_BODY_OFFSET_NED = 9
-MAV_FRAME_BODY_FRD = 12
-SUPPORTED_FRAMES = (MAV_FRAME_LOCAL_NED, MAV_FRAME_BODY_NED)
+SUPPORTED_FRAMES = (mavlink.MAV_FRAME_LOCAL_NED, mavlink.MAV_FRAME_BODY_NED)
 
-IGNORE_PX, IGNORE_PY, IGNORE_PZ = 1, 2, 4
-IGNORE_VX, IGNORE_VY, IGNORE_VZ = 8, 16, 32
-IGNORE_AFX, IGNORE_AFY, IGNORE_AFZ = 64, 128, 256
-FORCE = 512
-IGNORE_YAW = 1024
-IGNORE_YAW_RATE = 2048
-IGNORE_ALL = 0xFFF & ~FORCE
+IGNORE_ALL = 0xFFF & ~mavlink.POSITION_TARGET_TYPEMASK_FORCE_SET
+IGNORE_POSITION = (
+    mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE,
+    mavlink.POSITION_TARGET_TYPEMASK_Y_IGNORE,
+    mavlink.POSITION_TARGET_TYPEMASK_Z_IGNORE,
+)
+IGNORE_VELOCITY = (
+    mavlink.POSITION_TARGET_TYPEMASK_VX_IGNORE,
+    mavlink.POSITION_TARGET_TYPEMASK_VY_IGNORE,
+    mavlink.POSITION_TARGET_TYPEMASK_VZ_IGNORE,
+)
+IGNORE_ACCELERATION = (
+    mavlink.POSITION_TARGET_TYPEMASK_AX_IGNORE,
+    mavlink.POSITION_TARGET_TYPEMASK_AY_IGNORE,
+    mavlink.POSITION_TARGET_TYPEMASK_AZ_IGNORE,
+)
 
 NAN = float("nan")
 
@@ -93,25 +99,25 @@ def parse(
         return Refusal("every field ignored by the type mask")
     bad = 0
     p = []
-    for bit, value in zip((IGNORE_PX, IGNORE_PY, IGNORE_PZ), pos_ned, strict=False):
+    for bit, value in zip(IGNORE_POSITION, pos_ned, strict=False):
         v, b = _pick(type_mask, bit, value)
         p.append(v)
         bad += b
     v_ned = []
-    for bit, value in zip((IGNORE_VX, IGNORE_VY, IGNORE_VZ), vel_ned, strict=False):
+    for bit, value in zip(IGNORE_VELOCITY, vel_ned, strict=False):
         v, b = _pick(type_mask, bit, value)
         v_ned.append(v)
         bad += b
     a_ned = []
-    for bit, value in zip((IGNORE_AFX, IGNORE_AFY, IGNORE_AFZ), acc_ned, strict=False):
+    for bit, value in zip(IGNORE_ACCELERATION, acc_ned, strict=False):
         v, b = _pick(type_mask, bit, value)
         a_ned.append(v)
         bad += b
-    yaw, b = _pick(type_mask, IGNORE_YAW, yaw_ned)
+    yaw, b = _pick(type_mask, mavlink.POSITION_TARGET_TYPEMASK_YAW_IGNORE, yaw_ned)
     bad += b
-    yaw_rate, b = _pick(type_mask, IGNORE_YAW_RATE, yaw_rate_ned)
+    yaw_rate, b = _pick(type_mask, mavlink.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE, yaw_rate_ned)
     bad += b
-    if frame == MAV_FRAME_BODY_NED:
+    if frame == mavlink.MAV_FRAME_BODY_NED:
         # heading frame: x forward, y right, z down; rotate the horizontal part by the yaw
         v_ned[0], v_ned[1] = rotate_by_yaw(v_ned[0], v_ned[1], current_yaw_ned)
         a_ned[0], a_ned[1] = rotate_by_yaw(a_ned[0], a_ned[1], current_yaw_ned)

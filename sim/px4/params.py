@@ -12,8 +12,7 @@ import math
 import struct
 from dataclasses import dataclass
 
-MAV_PARAM_TYPE_INT32 = 6
-MAV_PARAM_TYPE_REAL32 = 9
+from pymavlink.dialects.v20 import common as mavlink
 
 INT32 = "INT32"
 FLOAT = "FLOAT"
@@ -149,7 +148,11 @@ class ParamStore:
 
     def type_of(self, name: str) -> int:
         """The MAV_PARAM_TYPE of ``name``."""
-        return MAV_PARAM_TYPE_INT32 if _BY_NAME[name].type == INT32 else MAV_PARAM_TYPE_REAL32
+        return (
+            mavlink.MAV_PARAM_TYPE_INT32
+            if _BY_NAME[name].type == INT32
+            else mavlink.MAV_PARAM_TYPE_REAL32
+        )
 
     def wire_value(self, name: str) -> float:
         """The float carried in PARAM_VALUE (int32 params as raw bits)."""

@@ -13,10 +13,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-MSG_HEARTBEAT = 0
-MSG_RADIO_STATUS = 109
-MSG_SETUP_SIGNING = 256
-UNSIGNED_ALWAYS = frozenset({MSG_HEARTBEAT, MSG_RADIO_STATUS})
+from pymavlink.dialects.v20 import common as mavlink
+
+UNSIGNED_ALWAYS = frozenset({mavlink.MAVLINK_MSG_ID_HEARTBEAT, mavlink.MAVLINK_MSG_ID_RADIO_STATUS})
 KEY_BYTES = 32
 
 

@@ -409,7 +409,19 @@ def test_ground_station_mode_switch_not_fought(rig):
         assert hb is not None, "no heartbeat on the GCS link"
         main, sub = 4, 3  # AUTO.LOITER
         for _ in range(3):
-            gcs.mav.command_long_send(hb.get_srcSystem(), 1, 176, 0, 1, main, sub, 0, 0, 0, 0)
+            gcs.mav.command_long_send(
+                hb.get_srcSystem(),
+                1,
+                mavutil.mavlink.MAV_CMD_DO_SET_MODE,
+                0,
+                1,
+                main,
+                sub,
+                0,
+                0,
+                0,
+                0,
+            )
             if gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=2):
                 break
         wait_for(lambda: rig.state.value.mode == "AUTO.LOITER", 10, what="pilot's AUTO.LOITER")

@@ -23,7 +23,9 @@ AUTO_LOITER, OFFBOARD = (4, 3), (6, 0)  # PX4 (main, sub)
 def gcs_set_mode(gcs, main_sub: tuple[int, int]) -> None:
     """DO_SET_MODE from a ground station (retried until acked: UDP)."""
     for confirmation in range(5):
-        gcs.mav.command_long_send(1, 1, 176, confirmation, 1, *main_sub, 0, 0, 0, 0)
+        gcs.mav.command_long_send(
+            1, 1, mavutil.mavlink.MAV_CMD_DO_SET_MODE, confirmation, 1, *main_sub, 0, 0, 0, 0
+        )
         if gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=2):
             return
     raise AssertionError(f"no ack for DO_SET_MODE {main_sub}")

@@ -64,7 +64,7 @@ def test_alive_and_doctor_name_the_drone_and_what_is_wrong(router, spawn):
             assert f"ok   router {router} reachable" in out
             assert "warn drone/mavros/local_position/pose:" in out
             assert "expected >= 30 Hz" in out
-            assert "FAIL drone/mavros/battery: - (nothing arrived" in out
+            assert "FAIL drone/mavros/battery: - (declared 1 Hz): nothing arrived" in out
             assert "ok   drone/mavros/state" in out
             assert "Mbit/s through the router" in out
         finally:

@@ -7,8 +7,8 @@ import time
 import cv2
 import pytest
 
+from dronewrapper.images import bgr_to_image
 from dronewrapper.msgs import Detections, registry
-from dronewrapper_perception.frames import bgr_to_image
 from support import ASSETS, YOLOX_NANO, client_node, python_module, wait_for
 
 pytestmark = pytest.mark.integration

@@ -13,16 +13,15 @@ import time
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
 from dronewrapper_sim.px4 import params
 from dronewrapper_sim.px4.modes import Mode
 from support import python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
-MASK_VELOCITY = 1991
-MASK_POSITION = 3064
-FRAME_LOCAL_NED = 1
-FRAME_BODY_NED = 8
+FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
+FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
 
 class MavClient:
@@ -265,7 +264,9 @@ def test_full_px4_offboard_sequence(spawn, router, clients):
     assert acks(mode_acks) == [mavlink.MAV_RESULT_ACCEPTED] * 2
     assert mode_acks[0].get_seq() != mode_acks[1].get_seq()
     t_deny = time.monotonic()
-    assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_TEMPORARILY_REJECTED]
+    assert acks(onboard.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)) == [
+        mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+    ]
     gcs.wait_msg("STATUSTEXT", lambda m: "Arming denied" in m.text, 10, t_deny)
     assert onboard.texts() == []  # a companion (non-GCS) link gets no STATUSTEXT
 
@@ -275,7 +276,9 @@ def test_full_px4_offboard_sequence(spawn, router, clients):
     wait_for(lambda: onboard.last_setpoint_sent > t_stream, 10, what="the setpoint stream")
     time.sleep(1.2)
     assert acks(onboard.set_mode(Mode.OFFBOARD)) == [mavlink.MAV_RESULT_ACCEPTED] * 2
-    assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_ACCEPTED]
+    assert acks(onboard.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)) == [
+        mavlink.MAV_RESULT_ACCEPTED
+    ]
     onboard.wait_heartbeat(lambda m: m.base_mode & 128, 6)
     wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -4.0, 20, what="climb to 4 m")
     assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_IN_AIR
@@ -361,7 +364,9 @@ def test_offboard_loss_failsafe_and_unlatched_return(spawn, router, clients):
     wait_for(lambda: onboard.last_setpoint_sent > t_stream, 10, what="the setpoint stream")
     time.sleep(1.2)
     assert acks(onboard.set_mode(Mode.OFFBOARD)) == [mavlink.MAV_RESULT_ACCEPTED] * 2
-    assert acks(onboard.command(400, 1)) == [mavlink.MAV_RESULT_ACCEPTED]
+    assert acks(onboard.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)) == [
+        mavlink.MAV_RESULT_ACCEPTED
+    ]
     wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -2.5, 20, what="climb")
     onboard.stream()
     time.sleep(0.5)
@@ -445,24 +450,47 @@ def test_params_intervals_and_bad_input(spawn, router, clients):
     # simulator that steps in bursts moves them by a step or two, never from one to the other)
     assert 28 <= median_interval_ms(onboard, "LOCAL_POSITION_NED") <= 44
     lpn_id = mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED
-    assert acks(onboard.command(511, lpn_id, 20_000)) == [mavlink.MAV_RESULT_ACCEPTED]
+    assert acks(onboard.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, lpn_id, 20_000)) == [
+        mavlink.MAV_RESULT_ACCEPTED
+    ]
     assert 16 <= median_interval_ms(onboard, "LOCAL_POSITION_NED") <= 26
-    assert acks(onboard.command(511, 0, 100_000)) == [mavlink.MAV_RESULT_FAILED]
+    assert acks(onboard.command(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0, 100_000)) == [
+        mavlink.MAV_RESULT_FAILED
+    ]
     t = time.monotonic()
-    onboard.command(510, lpn_id)
+    onboard.command(mavlink.MAV_CMD_GET_MESSAGE_INTERVAL, lpn_id)
     assert onboard.wait_msg("MESSAGE_INTERVAL", timeout=10, t0=t).interval_us == 20_000
 
     # bad MAVLink: unknown command, wrong target, frame 9, NaN fields, garbage bytes
     assert acks(onboard.command(4242)) == [mavlink.MAV_RESULT_UNSUPPORTED]
     t = time.monotonic()
-    onboard.send(mavlink.MAVLink_command_long_message(9, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0))
+    onboard.send(
+        mavlink.MAVLink_command_long_message(
+            9, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0, 1, 0, 0, 0, 0, 0, 0
+        )
+    )
     onboard.sync()  # handled (and any ACK for it received) before the read is answered
     assert onboard.since(t, "COMMAND_ACK") == []
     assert not onboard.armed()
     t = time.monotonic()
     onboard.send(
         mavlink.MAVLink_set_position_target_local_ned_message(
-            0, 1, 1, 9, MASK_VELOCITY, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0
+            0,
+            1,
+            1,
+            mavlink.MAV_FRAME_BODY_OFFSET_NED,
+            MASK_VELOCITY,
+            0,
+            0,
+            0,
+            1,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
         )
     )
     onboard.wait_msg("STATUSTEXT", lambda m: "coordinate frame 9" in m.text, 10, t)

@@ -25,6 +25,7 @@ import zenoh
 from dronewrapper.msgs import Twist, Vector3, codec, registry
 from dronewrapper.msgs.control import CONTROLLER_TRACKING
 from dronewrapper.runtime import ZenohOptions, open_session
+from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
@@ -68,14 +69,6 @@ RECORDINGS = {
         start_when=("person1", -5.0, -4.0),
     ),
 }
-
-
-def _free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _wait_tracking(session: zenoh.Session, timeout: float) -> None:
@@ -126,7 +119,7 @@ def _steer(session: zenoh.Session, stop: threading.Event) -> None:
 
 def make(name: str) -> Path:
     spec = RECORDINGS[name]
-    port = _free_port()
+    port = free_port()
     router = f"tcp/127.0.0.1:{port}"
     out = DATA / f"{name}.mcap"
     bin_ = REPO / ".venv" / "bin" / "dronewrapper"

@@ -1,9 +1,9 @@
 """A station served on a free loopback port, over a real Zenoh router, with a stand-in bridge.
 
-The stand-in is a real Zenoh node in namespace ``drone`` named ``bridge_test`` (so the station
-discovers it by its liveliness token): it publishes State, ExtendedState, the local pose and a
-simulated object's pose, and answers the arming, set-mode and land services as a bridge would,
-refusing what an autopilot would refuse, with a reason.
+The stand-in is the shared fake bridge (tests/fake_bridge.py), flying in OFFBOARD at ``POSE``
+in namespace ``drone`` named ``bridge_test`` (the station discovers it by its liveliness
+token): it publishes the bridge's telemetry and a simulated object's pose, and answers the
+bridge's services as a bridge would, refusing what an autopilot would refuse, with a reason.
 """
 
 from __future__ import annotations
@@ -11,83 +11,22 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-import threading
 import urllib.error
 import urllib.request
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
-from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point, Pose, PoseStamped
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
-    LANDED_STATE_ON_GROUND,
-    CommandBool,
-    CommandBoolResult,
-    CommandTOL,
-    CommandTOLResult,
-    ExtendedState,
-    SetMode,
-    SetModeResult,
-    State,
-)
-from dronewrapper.msgs.std import Header
-from dronewrapper.runtime.node import Node
 from dronewrapper_ground_station.access import Access
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.fleet import Fleet
 from dronewrapper_ground_station.server import WebServer
+from fake_bridge import FakeBridge
 from support import client_node, wait_for
 
 TOKEN = "operator-token-0123456789"
 POSE = (1.0, 2.0, 3.0)
-
-
-@dataclass
-class FakeBridge:
-    """The stand-in bridge's state (changed by its services)."""
-
-    node: Node
-    armed: bool = True
-    mode: str = "OFFBOARD"
-    landed_state: int = LANDED_STATE_IN_AIR
-    requests: list[Any] = field(default_factory=list)
-
-    def arming(self, req: CommandBool) -> CommandBoolResult:
-        self.requests.append(req)
-        if not req.value and self.landed_state == LANDED_STATE_IN_AIR:
-            return CommandBoolResult(success=False, result=4, message="disarming denied in flight")
-        self.armed = req.value
-        return CommandBoolResult(success=True, result=0)
-
-    def set_mode(self, req: SetMode) -> SetModeResult:
-        self.requests.append(req)
-        if req.custom_mode not in ("OFFBOARD", "AUTO.LOITER", "AUTO.LAND"):
-            return SetModeResult(
-                mode_sent=False, result=4, message=f"unknown mode {req.custom_mode}"
-            )
-        self.mode = req.custom_mode
-        return SetModeResult(mode_sent=True, result=0)
-
-    def land(self, req: CommandTOL) -> CommandTOLResult:
-        self.requests.append(req)
-        self.landed_state, self.armed, self.mode = LANDED_STATE_ON_GROUND, False, "AUTO.LAND"
-        return CommandTOLResult(success=True, result=0)
-
-    def publish_forever(self, stop: threading.Event) -> None:
-        state = self.node.publisher(registry.STATE)
-        extended = self.node.publisher(registry.EXTENDED_STATE)
-        pose = self.node.publisher(registry.LOCAL_POSE)
-        target = self.node.publisher(registry.SIM_OBJECT_POSE, name="target")
-        x, y, z = POSE
-        while not stop.wait(0.05):
-            now = Header(stamp=0.0)
-            state.put(State(connected=True, armed=self.armed, mode=self.mode, autopilot="px4"))
-            extended.put(ExtendedState(landed_state=self.landed_state))
-            pose.put(PoseStamped(header=now, pose=Pose(position=Point(x=x, y=y, z=z))))
-            target.put(PoseStamped(pose=Pose(position=Point(x=5.0, y=-1.0, z=0.0))))
 
 
 @dataclass
@@ -127,15 +66,9 @@ class StationEnv:
 def station_env(router: str, **config: Any) -> Iterator[StationEnv]:
     """The stand-in bridge and a station (token ``TOKEN``) on ``router``."""
     cfg = Config(port=0, command_timeout=5.0, **config)
-    stop = threading.Event()
-    with client_node(router, name="bridge_test") as bridge_node:
-        bridge = FakeBridge(bridge_node)
-        bridge_node.serve(registry.ARMING, bridge.arming)
-        bridge_node.serve(registry.SET_MODE, bridge.set_mode)
-        bridge_node.serve(registry.LAND, bridge.land)
-        publisher = threading.Thread(target=bridge.publish_forever, args=(stop,), daemon=True)
-        publisher.start()
-        bridge_node.announce()
+    target = {"target": (5.0, -1.0, 0.0)}
+    bridge = FakeBridge(router, flying=True, position=POSE, objects=target, name="bridge_test")
+    try:
         with client_node(router, name="station") as station_node:
             fleet = Fleet(station_node.session, cfg)
             server = WebServer(create_app(fleet, cfg, Access(TOKEN)), "127.0.0.1", 0)
@@ -147,10 +80,10 @@ def station_env(router: str, **config: Any) -> Iterator[StationEnv]:
                 wait_for(lambda: fleet.objects.snapshot(), 10, what="object poses")
                 yield StationEnv(server.start(), fleet, bridge, cfg)
             finally:
-                stop.set()
-                publisher.join(2)
                 server.stop()
                 fleet.close()
+    finally:
+        bridge.close()
 
 
 def assert_close(a: float, b: float, tol: float = 1e-6) -> None:

@@ -10,12 +10,12 @@ from contextlib import contextmanager
 import cv2
 import numpy as np
 
+from dronewrapper.images import bgr_to_image
 from dronewrapper.msgs import CompressedImage, Detections, Header, Image, registry
 from dronewrapper.runtime.config import load_config
 from dronewrapper_perception.color_filter import RED
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.detectors import ColorDetector
-from dronewrapper_perception.frames import bgr_to_image
 from dronewrapper_perception.node import PerceptionService
 from dronewrapper_perception.pipeline import Pipeline
 from support import client_node, wait_for

@@ -7,11 +7,11 @@ import time
 
 import numpy as np
 import pytest
-from test_sdk_drone import FakeBridge
 
 from dronewrapper import CommandRefused, InvalidArgument, NotConnected
 from dronewrapper.aio import Drone
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, MAV_RESULT_DENIED
+from fake_bridge import FakeBridge
 from support import wait_for
 
 

@@ -129,9 +129,7 @@ def test_bad_setpoints_refused_with_reason(target, reason):
 
 
 def test_unused_fields_may_be_nan():
-    target = vel(vx=1.0)
-    target.position = Point(x=math.nan)
-    target.yaw = math.inf
+    target = msgspec.structs.replace(vel(vx=1.0), position=Point(x=math.nan), yaw=math.inf)
     assert validate(target) is Kind.VELOCITY
 
 

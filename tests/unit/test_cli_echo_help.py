@@ -1,7 +1,14 @@
 """The echo command's pure helpers: key-expression hints, nearby keys, the silence notice, and
 Zenoh errors shown as one line."""
 
-from dronewrapper.echo import keyexpr_problem, light_key_families, nearby, silence_notice
+from dronewrapper.echo import (
+    ARRIVALS_KEPT,
+    RateWatch,
+    keyexpr_problem,
+    light_key_families,
+    nearby,
+    silence_notice,
+)
 from dronewrapper.runtime.errors import zenoh_error_text
 
 
@@ -44,3 +51,24 @@ def test_zenoh_errors_lose_their_rust_source_paths():
     assert ".rs" not in text and "/root/" not in text
     assert text.endswith("Cannot assign requested address (os error 99)]")
     assert "\n" not in zenoh_error_text(ValueError("a\nb  at /x/y.rs:1."))
+
+
+def test_echo_watches_each_key_against_its_declared_rate():
+    """Rates and ages against the registry, and one notice when a key goes stale."""
+    watch = RateWatch()
+    pose, text = "drone/mavros/local_position/pose", "drone/mavros/statustext/recv"
+    for i in range(200):
+        watch.add(pose, 100.0 + i / 30, 120)
+    watch.add(text, 100.0, 40)
+    last = 100.0 + 199 / 30
+    assert len(watch.logs[pose].arrivals) <= 2 * ARRIVALS_KEPT  # bounded
+    report = watch.report(last + 0.05)
+    assert report[0].startswith(f"{pose}: 30.0 Hz (declared 30 Hz), newest 0.05 s old")
+    assert report[1].startswith(f"{text}: - (event-driven)")
+    assert watch.newly_stale(last + 0.4) == []
+    stale = watch.newly_stale(last + 0.6)
+    assert stale == [f"{pose} is stale: nothing for 0.6 s (declared 30 Hz, stale after 0.5 s)"]
+    assert watch.newly_stale(last + 5.0) == []  # said once
+    watch.add(pose, last + 5.0, 120)
+    assert watch.newly_stale(last + 5.1) == []  # fresh again
+    assert "stale" in watch.newly_stale(last + 6.0)[0]  # and stale again, said again

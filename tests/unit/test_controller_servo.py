@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import msgspec
 import pytest
 
 from dronewrapper.msgs.control import CONTROLLER_HOVER, CONTROLLER_SEARCH, CONTROLLER_TRACKING
@@ -163,8 +164,7 @@ def test_untracked_detections_use_the_best_first():
 
 
 def test_malformed_frame_size_is_not_a_target():
-    msg = frame(1.0, box(40, 120, 20, 20, radius=9))
-    msg.image_width = 0
+    msg = msgspec.structs.replace(frame(1.0, box(40, 120, 20, 20, radius=9)), image_width=0)
     cmd = Servo(colour_config()).step(0.0, msg, age=0.0)
     assert cmd.state != CONTROLLER_TRACKING and (cmd.vx, cmd.vz) == (0, 0)
 

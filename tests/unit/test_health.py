@@ -10,8 +10,11 @@ from dronewrapper.health import (
     StreamLog,
     bandwidth_advice,
     clock_advice,
+    describe_stream,
+    is_stale,
     judge_stream,
     median_rate,
+    stale_after,
 )
 from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.registry import LOCAL_POSE, STATE
@@ -92,3 +95,27 @@ def test_describe_drone_says_kind_mode_battery_and_link():
     )
     assert describe_drone("drone", ["bridge_tello"], {})[0] == FAIL
     assert describe_drone("laptop", ["station"], {})[0] == OK
+
+
+def test_one_freshness_rule_from_the_declared_rate():
+    """Stale after five registry periods, never sooner than 0.5 s; event streams never."""
+    assert stale_after(LOCAL_POSE.rate_hz) == 0.5  # 30 Hz: the floor
+    assert stale_after(STATE.rate_hz) == pytest.approx(5.0)  # 1 Hz: five periods
+    assert stale_after(0.0) == float("inf")
+    assert not is_stale(30.0, 0.4) and is_stale(30.0, 0.6)
+    assert not is_stale(0.0, 1e9)
+    # doctor judges a stream stopped by the same rule
+    fresh = judge_stream("drone/mavros/state", 1.0, log_of([0.0, 1.0, 2.0]), 6.9)
+    assert fresh.verdict == OK
+    stopped = judge_stream("drone/mavros/state", 1.0, log_of([0.0, 1.0, 2.0]), 7.1)
+    assert stopped.verdict == WARN and "stale after 5 s" in stopped.note
+
+
+def test_a_stream_is_described_against_its_declared_rate():
+    log = log_of([i / 30 for i in range(30)])
+    line = describe_stream(judge_stream(LOCAL_POSE.key("drone"), 30.0, log, 29 / 30 + 0.1))
+    assert line == ("drone/mavros/local_position/pose: 30.0 Hz (declared 30 Hz), newest 0.10 s old")
+    text = describe_stream(judge_stream("drone/mavros/statustext/recv", 0.0, log_of([1.0]), 3.0))
+    assert text == "drone/mavros/statustext/recv: - (event-driven), newest 2.00 s old"
+    slow = describe_stream(judge_stream("drone/mavros/battery", 1.0, StreamLog(), 2.0))
+    assert slow == "drone/mavros/battery: - (declared 1 Hz): nothing arrived (expected >= 1 Hz)"

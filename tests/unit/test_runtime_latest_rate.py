@@ -76,3 +76,21 @@ def test_ratekeeper_counts_lag_and_does_not_burst():
 def test_ratekeeper_rejects_bad_rates():
     with pytest.raises(ValueError):
         Ratekeeper(0)
+
+
+def test_take_returns_newest_with_its_number():
+    """The newest-frame policy (perception): only the newest is taken, skipped ones countable."""
+    slot: Latest[str] = Latest()
+    assert slot.take(0.01, newer_than=0) is None
+    for name in ("a", "b", "c"):
+        slot.update(name)
+    assert slot.take(0.01, newer_than=0) == (3, "c")  # a and b were dropped
+    assert slot.take(0.01, newer_than=3) is None  # nothing newer
+    slot.update("d")
+    assert slot.take(0.01, newer_than=3) == (4, "d")
+
+
+def test_take_wakes_when_a_value_arrives():
+    slot: Latest[int] = Latest()
+    threading.Timer(0.05, slot.update, args=(7,)).start()
+    assert slot.take(10.0, newer_than=0) == (1, 7)

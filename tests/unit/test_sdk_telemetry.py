@@ -7,7 +7,16 @@ import math
 import numpy as np
 import pytest
 
-from dronewrapper.msgs import NavSatFix, PoseStamped, Quaternion, TwistStamped
+from dronewrapper.msgs import (
+    NavSatFix,
+    Point,
+    Pose,
+    PoseStamped,
+    Quaternion,
+    Twist,
+    TwistStamped,
+    Vector3,
+)
 from dronewrapper.telemetry import (
     euler_from_quaternion,
     global_of,
@@ -49,14 +58,13 @@ def test_non_unit_quaternion_does_not_raise():
 
 
 def test_arrays_from_messages():
-    pose = PoseStamped()
-    pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = 1.0, 2.0, 3.0
-    pose.pose.orientation = quaternion(0.0, 0.0, 0.7)
+    pose = PoseStamped(
+        pose=Pose(position=Point(x=1.0, y=2.0, z=3.0), orientation=quaternion(0.0, 0.0, 0.7))
+    )
     assert isinstance(position_of(pose), np.ndarray)
     assert position_of(pose).tolist() == [1.0, 2.0, 3.0]
     assert orientation_of(pose) == pytest.approx([0.0, 0.0, 0.7])
-    twist = TwistStamped()
-    twist.twist.linear.x, twist.twist.linear.y, twist.twist.angular.z = 0.5, -0.25, 0.9
+    twist = TwistStamped(twist=Twist(linear=Vector3(x=0.5, y=-0.25), angular=Vector3(z=0.9)))
     assert linear_of(twist).tolist() == [0.5, -0.25, 0.0]
     assert yaw_rate_of(twist) == 0.9
     fix = NavSatFix(latitude=40.3, longitude=-3.7, altitude=650.0)

@@ -12,13 +12,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper_sim.dynamics import QuadParams, QuadState
 from dronewrapper_sim.px4 import modes, offboard, params, telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
-from dronewrapper_sim.px4.commander import (
-    ACCEPTED,
-    ARM_DENIED,
-    TEMPORARILY_REJECTED,
-    Commander,
-    LandedState,
-)
+from dronewrapper_sim.px4.commander import ARM_DENIED, Commander, LandedState
 from dronewrapper_sim.px4.modes import Mode
 
 DT = 1.0 / 250.0
@@ -64,11 +58,11 @@ def test_int32_params_travel_as_raw_bits():
     wire = store.wire_value("SYS_AUTOSTART")
     assert wire != 10040.0 and wire == pytest.approx(1.4069e-41, rel=1e-3)
     assert params.float_bits_to_int32(wire) == 10040
-    assert store.type_of("SYS_AUTOSTART") == params.MAV_PARAM_TYPE_INT32
-    assert store.type_of("COM_OF_LOSS_T") == params.MAV_PARAM_TYPE_REAL32
+    assert store.type_of("SYS_AUTOSTART") == mavlink.MAV_PARAM_TYPE_INT32
+    assert store.type_of("COM_OF_LOSS_T") == mavlink.MAV_PARAM_TYPE_REAL32
     assert store.wire_value("COM_OF_LOSS_T") == 1.0
     bits = params.int32_to_float_bits(3)
-    assert store.from_wire("NAV_RCL_ACT", bits, params.MAV_PARAM_TYPE_INT32) == 3
+    assert store.from_wire("NAV_RCL_ACT", bits, mavlink.MAV_PARAM_TYPE_INT32) == 3
     with pytest.raises(ValueError):
         store.set("COM_OF_LOSS_T", math.nan)
     with pytest.raises(KeyError):
@@ -142,35 +136,37 @@ def velocity_sp(vz_up: float = 0.0) -> offboard.OffboardSetpoint:
 
 def test_offboard_mode_accepted_disarmed_but_arming_refused_without_stream():
     cmd = Commander(params.ParamStore(), ground())
-    assert cmd.set_mode(Mode.OFFBOARD, 0.0, ground()) == ACCEPTED
+    assert cmd.set_mode(Mode.OFFBOARD, 0.0, ground()) == mavlink.MAV_RESULT_ACCEPTED
     assert cmd.nav_mode is Mode.OFFBOARD
-    assert cmd.arm(0.1, ground()) == TEMPORARILY_REJECTED
+    assert cmd.arm(0.1, ground()) == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
     assert [t.text for t in cmd.drain_texts()] == [ARM_DENIED]
     assert not cmd.armed
     for i in range(5):
         cmd.on_setpoint(velocity_sp(), 0.2 + 0.05 * i)
-    assert cmd.arm(0.5, ground()) == ACCEPTED
+    assert cmd.arm(0.5, ground()) == mavlink.MAV_RESULT_ACCEPTED
     assert cmd.armed
 
 
 def test_arming_rules_for_other_modes():
     cmd = Commander(params.ParamStore(), ground())
-    assert cmd.set_mode(Mode.POSCTL, 0.0, ground()) == ACCEPTED  # disarmed: always accepted
-    assert cmd.arm(0.0, ground()) == TEMPORARILY_REJECTED  # needs RC
-    assert cmd.arm(0.0, ground(), force=True) == ACCEPTED
+    assert (
+        cmd.set_mode(Mode.POSCTL, 0.0, ground()) == mavlink.MAV_RESULT_ACCEPTED
+    )  # disarmed: always accepted
+    assert cmd.arm(0.0, ground()) == mavlink.MAV_RESULT_TEMPORARILY_REJECTED  # needs RC
+    assert cmd.arm(0.0, ground(), force=True) == mavlink.MAV_RESULT_ACCEPTED
     cmd2 = Commander(params.ParamStore(), ground())
     assert cmd2.nav_mode is Mode.LOITER  # boots in Hold
-    assert cmd2.arm(0.0, ground()) == ACCEPTED
+    assert cmd2.arm(0.0, ground()) == mavlink.MAV_RESULT_ACCEPTED
     # armed: switching to a mode that cannot run is refused
-    assert cmd2.set_mode(Mode.OFFBOARD, 0.5, ground()) == TEMPORARILY_REJECTED
-    assert cmd2.set_mode(Mode.POSCTL, 0.5, ground()) == TEMPORARILY_REJECTED
+    assert cmd2.set_mode(Mode.OFFBOARD, 0.5, ground()) == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+    assert cmd2.set_mode(Mode.POSCTL, 0.5, ground()) == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
     texts = [t.text for t in cmd2.drain_texts()]
     assert "Switching to Offboard is currently not available" in texts
 
 
 def test_preflight_auto_disarm_after_com_disarm_prflt():
     cmd = Commander(params.ParamStore(), ground())
-    assert cmd.arm(0.0, ground()) == ACCEPTED
+    assert cmd.arm(0.0, ground()) == mavlink.MAV_RESULT_ACCEPTED
     t = 0.0
     while cmd.armed and t < 20.0:
         t += 0.01
@@ -184,9 +180,9 @@ def test_disarm_refused_in_the_air_unless_forced():
     cmd.arm(0.0, ground())
     cmd.update(1.0, flying())  # take-off detected
     assert not cmd.landed
-    assert cmd.disarm(1.1, flying()) == TEMPORARILY_REJECTED
+    assert cmd.disarm(1.1, flying()) == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
     assert cmd.armed
-    assert cmd.disarm(1.2, flying(), force=True) == ACCEPTED
+    assert cmd.disarm(1.2, flying(), force=True) == mavlink.MAV_RESULT_ACCEPTED
 
 
 def streaming_flight(cmd: Commander, until: float, t: float = 0.0, period: float = 0.05):
@@ -278,7 +274,7 @@ def test_landing_detection_and_disarm_then_user_mode_restored():
     cmd.set_mode(Mode.OFFBOARD, 0.0, ground())
     cmd.arm(0.0, ground())
     t = streaming_flight(cmd, 2.0)
-    assert cmd.set_mode(Mode.LAND, t, flying()) == ACCEPTED
+    assert cmd.set_mode(Mode.LAND, t, flying()) == mavlink.MAV_RESULT_ACCEPTED
     cmd.update(t + 0.01, flying(z=2.0))
     assert cmd.landed_state is LandedState.LANDING
     touchdown = t + 1.0
@@ -431,7 +427,7 @@ def test_params_read_list_set_over_mavlink():
     client = Client(ap)
     value = client.send(mavlink.MAVLink_param_request_read_message(1, 1, b"COM_OF_LOSS_T", -1))[0]
     assert value.param_id == "COM_OF_LOSS_T" and value.param_value == 1.0
-    assert value.param_type == params.MAV_PARAM_TYPE_REAL32
+    assert value.param_type == mavlink.MAV_PARAM_TYPE_REAL32
     by_index = client.send(mavlink.MAVLink_param_request_read_message(1, 1, b"", 0))[0]
     assert by_index.param_id == "SYS_AUTOSTART" and by_index.param_index == 0
     assert params.float_bits_to_int32(by_index.param_value) == 10040

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import pytest
+from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper_sim.px4.signing import MSG_HEARTBEAT, MSG_RADIO_STATUS, SigningPolicy
+from dronewrapper_sim.px4.signing import SigningPolicy
 
 KEY_A, KEY_B = bytes(range(32)), bytes(range(1, 33))
 
@@ -24,7 +25,9 @@ def test_first_key_unsigned_then_only_signed_never_armed():
 
 def test_only_heartbeat_and_radio_status_may_stay_unsigned():
     policy = SigningPolicy(KEY_A)
-    assert policy.allow_unsigned(MSG_HEARTBEAT) and policy.allow_unsigned(MSG_RADIO_STATUS)
+    assert policy.allow_unsigned(mavlink.MAVLINK_MSG_ID_HEARTBEAT) and policy.allow_unsigned(
+        mavlink.MAVLINK_MSG_ID_RADIO_STATUS
+    )
     assert not policy.allow_unsigned(76)  # COMMAND_LONG
     assert not policy.allow_unsigned(256)  # SETUP_SIGNING once a key is set
     with pytest.raises(ValueError, match="32 bytes"):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import msgspec
 import pytest
 
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -73,7 +74,7 @@ def test_local_velocity_rotated_into_the_body():
 
 def test_mixed_holds_altitude_on_the_estimate():
     t = velocity(0.3, 0.0, mask=MASK_MIXED)
-    t.position = Point(z=2.0)
+    t = msgspec.structs.replace(t, position=Point(z=2.0))
     _, _, vz, _ = body_velocity(t, validate(t, SCALE), (0, 0, 1.8), 0.0, SCALE)
     assert vz == pytest.approx(0.2)
     _, _, vz, _ = body_velocity(t, Kind.MIXED, (0, 0, 0.0), 0.0, SCALE)
@@ -116,9 +117,9 @@ def test_position_target_bounds():
     t = PositionTarget(coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION)
     with pytest.raises(SetpointError, match="position is required"):
         validate(t, SCALE)  # left out: never the origin
-    t.position = Point(z=50.0)
+    t = msgspec.structs.replace(t, position=Point(z=50.0))
     with pytest.raises(SetpointError, match="altitude"):
         validate(t, SCALE)
-    t.position = Point(x=500.0, z=1.0)
+    t = msgspec.structs.replace(t, position=Point(x=500.0, z=1.0))
     with pytest.raises(SetpointError, match="farther"):
         validate(t, SCALE)

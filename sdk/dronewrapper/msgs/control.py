@@ -15,7 +15,7 @@ CONTROLLER_SEARCH = "search"  # target lost for longer than the search delay: tu
 CONTROLLER_LANDING = "landing"
 
 
-class ControllerStatus(msgspec.Struct, kw_only=True):
+class ControllerStatus(msgspec.Struct, kw_only=True, frozen=True):
     """Published by the controller at >= 5 Hz.
 
     Attributes:

@@ -11,6 +11,8 @@ import msgspec
 from dronewrapper.msgs.std import Header
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class Point(msgspec.Struct, kw_only=True):
     """A position in metres."""
 
@@ -19,6 +21,8 @@ class Point(msgspec.Struct, kw_only=True):
     z: float = 0.0
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class Vector3(msgspec.Struct, kw_only=True):
     """A free vector (velocity in m/s, angular rate in rad/s, ...)."""
 
@@ -27,7 +31,7 @@ class Vector3(msgspec.Struct, kw_only=True):
     z: float = 0.0
 
 
-class Quaternion(msgspec.Struct, kw_only=True):
+class Quaternion(msgspec.Struct, kw_only=True, frozen=True):
     """A unit quaternion (Hamilton convention, x y z w as in ROS); identity by default."""
 
     x: float = 0.0
@@ -36,6 +40,8 @@ class Quaternion(msgspec.Struct, kw_only=True):
     w: float = 1.0
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class Pose(msgspec.Struct, kw_only=True):
     """Position (m) and orientation of a body in a frame."""
 
@@ -43,13 +49,15 @@ class Pose(msgspec.Struct, kw_only=True):
     orientation: Quaternion = msgspec.field(default_factory=Quaternion)
 
 
-class PoseStamped(msgspec.Struct, kw_only=True):
+class PoseStamped(msgspec.Struct, kw_only=True, frozen=True):
     """A stamped pose: vehicle pose in local ENU (``map``) for MAVROS-equivalent keys."""
 
     header: Header = msgspec.field(default_factory=Header)
     pose: Pose = msgspec.field(default_factory=Pose)
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class Twist(msgspec.Struct, kw_only=True):
     """Linear velocity (m/s) and angular velocity (rad/s)."""
 
@@ -57,7 +65,7 @@ class Twist(msgspec.Struct, kw_only=True):
     angular: Vector3 = msgspec.field(default_factory=Vector3)
 
 
-class TwistStamped(msgspec.Struct, kw_only=True):
+class TwistStamped(msgspec.Struct, kw_only=True, frozen=True):
     """A stamped twist; ``header.frame_id`` says the frame (``base_link`` FLU or ``map`` ENU)."""
 
     header: Header = msgspec.field(default_factory=Header)

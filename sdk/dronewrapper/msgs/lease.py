@@ -5,7 +5,7 @@ from __future__ import annotations
 import msgspec
 
 
-class LeaseRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class LeaseRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Take, or give back, the command lease of one drone.
 
     The commander is the request's ``commander`` attachment (the SDK's name), not a field.
@@ -16,7 +16,7 @@ class LeaseRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     action: str = "take"
 
 
-class LeaseReply(msgspec.Struct, kw_only=True):
+class LeaseReply(msgspec.Struct, kw_only=True, frozen=True):
     """``granted`` iff the action was done; ``holder`` is the commander holding it now."""
 
     granted: bool = False

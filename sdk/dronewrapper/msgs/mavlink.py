@@ -7,7 +7,7 @@ import msgspec
 from dronewrapper.msgs.std import Header
 
 
-class MavlinkFrames(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class MavlinkFrames(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Whole MAVLink frames (v1 or v2, signed or not) exactly as they crossed the link, oldest
     first; a batch of a few milliseconds, so 400 frames/s are not 400 Zenoh messages.
 

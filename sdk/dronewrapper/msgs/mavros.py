@@ -2,6 +2,9 @@
 
 Frames and units follow MAVROS: local ENU, body FLU, SI units, radians. Bridges convert to what
 the aircraft speaks (NED/FRD for MAVLink); no user sees NED.
+
+The MAVLink values below are MAVROS's message constants, written here because the SDK does not
+depend on pymavlink; tests/unit/test_msgs_mavlink_constants.py pins each to pymavlink's.
 """
 
 from __future__ import annotations
@@ -71,6 +74,8 @@ SEVERITY_INFO = 6
 SEVERITY_DEBUG = 7
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class State(msgspec.Struct, kw_only=True):
     """Autopilot state (mavros_msgs/State).
 
@@ -101,7 +106,7 @@ class State(msgspec.Struct, kw_only=True):
     commander: str = ""
 
 
-class ExtendedState(msgspec.Struct, kw_only=True):
+class ExtendedState(msgspec.Struct, kw_only=True, frozen=True):
     """Extended state (mavros_msgs/ExtendedState); ``landed_state`` is a LANDED_STATE_* value."""
 
     header: Header = msgspec.field(default_factory=Header)
@@ -109,7 +114,7 @@ class ExtendedState(msgspec.Struct, kw_only=True):
     landed_state: int = LANDED_STATE_UNDEFINED
 
 
-class PositionTarget(msgspec.Struct, kw_only=True):
+class PositionTarget(msgspec.Struct, kw_only=True, frozen=True):
     """A setpoint (mavros_msgs/PositionTarget) in the DroneWrapper's ENU/FLU conventions.
 
     ``coordinate_frame`` is FRAME_LOCAL_NED (1) for local targets and FRAME_BODY_NED (8) for
@@ -132,7 +137,7 @@ class PositionTarget(msgspec.Struct, kw_only=True):
     yaw_rate: float = 0.0
 
 
-class StatusText(msgspec.Struct, kw_only=True):
+class StatusText(msgspec.Struct, kw_only=True, frozen=True):
     """A text message from the autopilot (mavros_msgs/StatusText); severity is MAV_SEVERITY."""
 
     header: Header = msgspec.field(default_factory=Header)
@@ -144,7 +149,7 @@ PARAM_INTEGER = "integer"
 PARAM_REAL = "real"
 
 
-class ParamValue(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class ParamValue(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """A parameter value (mavros_msgs/ParamValue): ``integer`` for integers, else ``real``.
 
     ``kind`` (our addition: ``integer``, ``real``, or empty when unknown) says which field
@@ -189,14 +194,14 @@ def _check_nan_or_within(owner: str, name: str, value: float, bound: float, unit
         raise ValueError(f"{owner}.{name} must be NaN or within ±{bound:g} {unit}, got {value!r}")
 
 
-class CommandBool(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class CommandBool(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Arming request (mavros_msgs/CommandBool): ``value`` True arms, False disarms (required:
     an empty request arms nothing)."""
 
     value: bool
 
 
-class CommandBoolResult(msgspec.Struct, kw_only=True):
+class CommandBoolResult(msgspec.Struct, kw_only=True, frozen=True):
     """Arming reply: ``success`` iff the autopilot accepted; ``result`` is MAV_RESULT."""
 
     success: bool = False
@@ -207,7 +212,7 @@ class CommandBoolResult(msgspec.Struct, kw_only=True):
 MAX_TOL_ALTITUDE = 10_000.0  # m: bound on CommandTOL.altitude (services narrow it further)
 
 
-class CommandTOL(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class CommandTOL(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Take-off / land request (mavros_msgs/CommandTOL); every field is required.
 
     ``altitude`` is the height above the take-off point in metres for take-off (NaN: the
@@ -246,7 +251,7 @@ class CommandTOL(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         )
 
 
-class CommandTOLResult(msgspec.Struct, kw_only=True):
+class CommandTOLResult(msgspec.Struct, kw_only=True, frozen=True):
     """Take-off / land reply: ``success`` iff accepted; ``result`` is MAV_RESULT."""
 
     success: bool = False
@@ -254,7 +259,7 @@ class CommandTOLResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class SetMode(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class SetMode(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Mode request (mavros_msgs/SetMode): ``custom_mode`` is a mode name (``OFFBOARD``,
     ``AUTO.LOITER``, ``AUTO.LAND``, ``POSCTL``, ``GUIDED``, ``LAND`` ...), required;
     ``base_mode`` must be 0 (MAVROS's "use custom_mode"; the bridge sets the base mode)."""
@@ -272,7 +277,7 @@ class SetMode(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             )
 
 
-class SetModeResult(msgspec.Struct, kw_only=True):
+class SetModeResult(msgspec.Struct, kw_only=True, frozen=True):
     """Mode reply: ``mode_sent`` iff the autopilot acknowledged the change as accepted."""
 
     mode_sent: bool = False
@@ -280,13 +285,13 @@ class SetModeResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class ParamGet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class ParamGet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Parameter read request (mavros_msgs/ParamGet); ``param_id`` is required."""
 
     param_id: str
 
 
-class ParamGetResult(msgspec.Struct, kw_only=True):
+class ParamGetResult(msgspec.Struct, kw_only=True, frozen=True):
     """Parameter read reply."""
 
     success: bool = False
@@ -294,7 +299,7 @@ class ParamGetResult(msgspec.Struct, kw_only=True):
     message: str = ""
 
 
-class ParamSet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class ParamSet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Parameter write request (mavros_msgs/ParamSet); both fields are required (an empty
     ``value`` would write 0). ``value.real`` must be finite; the bridge checks the range
     against the parameter's type (float32, int32)."""
@@ -307,7 +312,7 @@ class ParamSet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError(f"ParamSet.value.real must be finite, got {self.value.real!r}")
 
 
-class ParamSetResult(msgspec.Struct, kw_only=True):
+class ParamSetResult(msgspec.Struct, kw_only=True, frozen=True):
     """Parameter write reply: ``value`` is what the autopilot reports after the write."""
 
     success: bool = False

@@ -24,6 +24,8 @@ POWER_SUPPLY_STATUS_CHARGING = 1
 POWER_SUPPLY_STATUS_DISCHARGING = 2
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class NavSatStatus(msgspec.Struct, kw_only=True):
     """GNSS fix status (``status`` is one of the NAVSAT_STATUS_* constants)."""
 
@@ -31,6 +33,8 @@ class NavSatStatus(msgspec.Struct, kw_only=True):
     service: int = 1  # SERVICE_GPS
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class NavSatFix(msgspec.Struct, kw_only=True):
     """Global position: WGS-84 latitude/longitude in degrees, altitude in metres (AMSL)."""
 
@@ -43,7 +47,7 @@ class NavSatFix(msgspec.Struct, kw_only=True):
     position_covariance_type: int = COVARIANCE_TYPE_UNKNOWN
 
 
-class BatteryState(msgspec.Struct, kw_only=True):
+class BatteryState(msgspec.Struct, kw_only=True, frozen=True):
     """Battery state. ``percentage`` is a fraction 0..1 on every aircraft (NaN if unknown)."""
 
     header: Header = msgspec.field(default_factory=Header)
@@ -56,7 +60,7 @@ class BatteryState(msgspec.Struct, kw_only=True):
     present: bool = True
 
 
-class Image(msgspec.Struct, kw_only=True):
+class Image(msgspec.Struct, kw_only=True, frozen=True):
     """An uncompressed image (sensor_msgs/Image).
 
     ``encoding`` is ``bgr8`` (OpenCV channel order) unless it says otherwise; ``step`` is the row
@@ -76,7 +80,7 @@ class Image(msgspec.Struct, kw_only=True):
     data: memoryview = msgspec.field(default_factory=lambda: memoryview(b""))
 
 
-class CompressedImage(msgspec.Struct, kw_only=True):
+class CompressedImage(msgspec.Struct, kw_only=True, frozen=True):
     """A compressed image (sensor_msgs/CompressedImage); ``format`` is ``jpeg`` or ``png``.
 
     ``data`` decodes as a zero-copy, read-only ``memoryview`` (publishers may pass ``bytes``).
@@ -87,7 +91,7 @@ class CompressedImage(msgspec.Struct, kw_only=True):
     data: memoryview = msgspec.field(default_factory=lambda: memoryview(b""))
 
 
-class CameraInfo(msgspec.Struct, kw_only=True):
+class CameraInfo(msgspec.Struct, kw_only=True, frozen=True):
     """Intrinsics of the frames a camera publishes (sensor_msgs/CameraInfo, ROS 2 names).
 
     Published alongside each frame with the frame's ``header`` (same stamp and seq), for the
@@ -113,7 +117,7 @@ class CameraInfo(msgspec.Struct, kw_only=True):
     p: list[float] = msgspec.field(default_factory=lambda: [0.0] * 12)
 
 
-class CameraStatus(msgspec.Struct, kw_only=True):
+class CameraStatus(msgspec.Struct, kw_only=True, frozen=True):
     """What a camera service is doing, published about once a second.
 
     Attributes:

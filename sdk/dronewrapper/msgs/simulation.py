@@ -5,7 +5,7 @@ from __future__ import annotations
 import msgspec
 
 
-class WorldLoad(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class WorldLoad(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Load a scenario's world into a running simulator: its objects (beacon, people) start
     again from their scripted beginnings; the aircraft stays where it is.
 
@@ -17,11 +17,11 @@ class WorldLoad(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     scenario: str
 
 
-class WorldQuery(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class WorldQuery(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Ask a simulator which world it runs (no fields)."""
 
 
-class WorldState(msgspec.Struct, kw_only=True):
+class WorldState(msgspec.Struct, kw_only=True, frozen=True):
     """The world a simulator runs.
 
     Attributes:

@@ -11,6 +11,8 @@ import time
 import msgspec
 
 
+# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
+# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
 class Header(msgspec.Struct, kw_only=True):
     """ROS std_msgs/Header: when and in which frame the data was true.
 
@@ -31,7 +33,7 @@ class Header(msgspec.Struct, kw_only=True):
         return cls(stamp=time.time(), frame_id=frame_id, seq=seq)
 
 
-class ErrorReply(msgspec.Struct, kw_only=True):
+class ErrorReply(msgspec.Struct, kw_only=True, frozen=True):
     """Payload of a service's error reply: the request was malformed or could not be served.
 
     Attributes:

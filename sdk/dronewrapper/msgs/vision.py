@@ -11,21 +11,21 @@ import msgspec
 from dronewrapper.msgs.std import Header
 
 
-class Point2D(msgspec.Struct, kw_only=True):
+class Point2D(msgspec.Struct, kw_only=True, frozen=True):
     """A point in image pixels."""
 
     x: float = 0.0
     y: float = 0.0
 
 
-class Pose2D(msgspec.Struct, kw_only=True):
+class Pose2D(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/Pose2D: position (px) and rotation (rad, 0 for axis-aligned boxes)."""
 
     position: Point2D = msgspec.field(default_factory=Point2D)
     theta: float = 0.0
 
 
-class BoundingBox2D(msgspec.Struct, kw_only=True):
+class BoundingBox2D(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/BoundingBox2D: centre and full size in pixels."""
 
     center: Pose2D = msgspec.field(default_factory=Pose2D)
@@ -33,20 +33,20 @@ class BoundingBox2D(msgspec.Struct, kw_only=True):
     size_y: float = 0.0
 
 
-class ObjectHypothesis(msgspec.Struct, kw_only=True):
+class ObjectHypothesis(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/ObjectHypothesis: class name (``person``, ``red`` ...) and score 0..1."""
 
     class_id: str = ""
     score: float = 0.0
 
 
-class ObjectHypothesisWithPose(msgspec.Struct, kw_only=True):
+class ObjectHypothesisWithPose(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/ObjectHypothesisWithPose (the 3-D pose is not estimated, so it is omitted)."""
 
     hypothesis: ObjectHypothesis = msgspec.field(default_factory=ObjectHypothesis)
 
 
-class Detection2D(msgspec.Struct, kw_only=True):
+class Detection2D(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/Detection2D plus ``circle_radius``.
 
     Attributes:
@@ -62,7 +62,7 @@ class Detection2D(msgspec.Struct, kw_only=True):
     circle_radius: float = 0.0
 
 
-class Detections(msgspec.Struct, kw_only=True):
+class Detections(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/Detection2DArray for one processed frame, plus what a follower needs.
 
     Attributes:

@@ -37,6 +37,7 @@ import zenoh
 
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 
@@ -175,8 +176,9 @@ class FakeNode:
         self.clock = bus.clock
         self.log = logging.getLogger(name)
         self.stop_event = threading.Event()
-        self.decode_errors: Counter[str] = Counter()
-        self.callback_errors: Counter[str] = Counter()
+        self.sample_errors = SampleErrors(self.log, clock=self.clock)
+        self.decode_errors: Counter[str] = self.sample_errors.decode
+        self.callback_errors: Counter[str] = self.sample_errors.callback
         self.announced = False
         self.session = None  # no Zenoh session: code that needs one cannot run here
 
@@ -228,21 +230,8 @@ class FakeNode:
         **parts: str,
     ) -> _Subscription:
         keyexpr = key or topic.key(self.ns, **parts)
-        dec = codec.decoder(topic.type)
-
-        def on_payload(where: str, payload: bytes) -> None:
-            try:
-                msg = dec.decode(payload)
-            except (msgspec.DecodeError, msgspec.ValidationError):
-                self.decode_errors[where] += 1
-                return
-            try:
-                callback(msg)
-            except Exception:
-                self.callback_errors[where] += 1
-                self.log.exception("callback error on %s", where)
-
-        return self.bus.subscribe(keyexpr, on_payload)
+        deliver = decoding(topic.type, callback, self.sample_errors)
+        return self.bus.subscribe(keyexpr, lambda where, payload: deliver(where, payload, None))
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)

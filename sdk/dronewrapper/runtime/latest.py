@@ -1,7 +1,9 @@
 """Inputs read as "latest value + age": what every actuating loop consumes.
 
 A subscriber callback calls :meth:`Latest.update`; loops read :meth:`Latest.fresh` so a stale
-input never drives an actuator.
+input never drives an actuator. The same slot is the newest-frame policy of a slow consumer
+(perception): :meth:`Latest.take` returns the newest item with its number, so the reader knows
+exactly how many it skipped.
 """
 
 from __future__ import annotations
@@ -69,3 +71,18 @@ class Latest(Generic[T]):
                     raise TimeoutError(f"no {what} within {timeout:g} s")
                 self._cond.wait(remaining)
             return self._value  # type: ignore[return-value]
+
+    def take(self, timeout: float, newer_than: int) -> tuple[int, T] | None:
+        """Wait up to ``timeout`` s for a value whose number is above ``newer_than``.
+
+        Returns:
+            (its number, the value) read atomically, or None on timeout. Numbers start at 1.
+        """
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while self.count <= newer_than:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return None
+                self._cond.wait(remaining)
+            return self.count, self._value  # type: ignore[return-value]

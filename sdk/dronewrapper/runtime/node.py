@@ -35,6 +35,7 @@ from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.msgs.std import ErrorReply
 from dronewrapper.runtime import caller
+from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import (
     ServiceError,
     ServiceTimeout,
@@ -145,10 +146,10 @@ class Node:
         self.ns = self.options.namespace
         self.log = logging.getLogger(self.name)
         self.stop_event = threading.Event()
-        self.decode_errors: Counter[str] = Counter()
-        self.callback_errors: Counter[str] = Counter()
+        self.sample_errors = SampleErrors(self.log)
+        self.decode_errors: Counter[str] = self.sample_errors.decode
+        self.callback_errors: Counter[str] = self.sample_errors.callback
         self._linger = linger
-        self._last_error_log: dict[str, float] = {}
         self._declared: list[Any] = []
         self._token: Any = None
         self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
@@ -255,13 +256,6 @@ class Node:
         self._declared.append(pub)
         return pub
 
-    def _note_error(self, counter: Counter[str], key: str, what: str, exc: BaseException) -> None:
-        counter[key] += 1
-        now = time.monotonic()
-        if now - self._last_error_log.get(key + what, -1e9) >= 5.0:
-            self._last_error_log[key + what] = now
-            self.log.warning("%s on %s (%d so far): %s", what, key, counter[key], exc)
-
     def subscribe(
         self,
         topic: Topic[T],
@@ -277,20 +271,10 @@ class Node:
         callback are counted in ``callback_errors`` and logged; neither ends the subscription.
         """
         keyexpr = key or topic.key(self.ns, **parts)
-        dec = codec.decoder(topic.type)
+        deliver = decoding(topic.type, callback, self.sample_errors)
 
         def on_sample(sample: zenoh.Sample) -> None:
-            where = str(sample.key_expr)
-            try:
-                msg = dec.decode(sample.payload.to_bytes())
-            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
-                self._note_error(self.decode_errors, where, "undecodable sample", exc)
-                return
-            try:
-                with caller.handling(sample.attachment):
-                    callback(msg)
-            except Exception as exc:
-                self._note_error(self.callback_errors, where, "callback error", exc)
+            deliver(str(sample.key_expr), sample.payload.to_bytes(), sample.attachment)
 
         sub = self.session.declare_subscriber(keyexpr, on_sample)
         self._declared.append(sub)
