@@ -39,10 +39,13 @@ SOURCES: dict[str, list[Path]] = {
 }
 """Where each process the registry names lives."""
 COMMANDS_THROUGH_THE_SDK = {"controller"}
-"""Processes that embed the SDK (``DroneWrapper``) and publish setpoints through it."""
+"""Processes that publish setpoints through the SDK (its ``Commander`` or ``DroneWrapper``)."""
+SDK_COMMANDERS = ("Commander(", "DroneWrapper(")
 
 _CALL = re.compile(r"(?:declare_publisher|[Pp]ublisher)\(")
 _ALIAS = re.compile(r"\b([a-z_]\w*) = (?:registry\.)?([A-Z][A-Z0-9_]+)\b")
+_TUPLE = re.compile(r"^([A-Z][A-Z0-9_]*) = \(([^)]*)\)", re.MULTILINE)
+_LOOP = re.compile(r"\s*for ([a-z_]\w*) in ([A-Z][A-Z0-9_]*)\b")
 
 
 def _files(paths: list[Path]) -> list[Path]:
@@ -85,9 +88,17 @@ def published_topics(paths: list[Path]) -> dict[str, set[str]]:
         if "ublisher(" not in file.read_text():
             continue  # no declaration to look at: skip the tokenizer
         src = _code(file)
+        tuples = {
+            name: set(re.findall(r"\b[A-Z][A-Z0-9_]+\b", items))
+            for name, items in _TUPLE.findall(src)
+        }
         for call in _CALL.finditer(src):
             args = _arguments(src, call.end())
             names = set(re.findall(r"\b[A-Z][A-Z0-9_]+\b", args))
+            # ``{t: node.publisher(t) for t in PUBLISHED}``: the module's tuple of topics
+            loop = _LOOP.match(src, call.end() + len(args))
+            if loop and re.search(rf"\b{loop.group(1)}\b", args):
+                names |= tuples.get(loop.group(2), set())
             before = src[max(0, call.start() - 300) : call.start()]
             names |= {
                 name for var, name in _ALIAS.findall(before) if re.search(rf"\b{var}\b", args)
@@ -115,7 +126,7 @@ def test_each_declared_publisher_declares_the_topic(name, process):
     if name in PUBLISHED[process]:
         return
     paths = SOURCES[process]
-    uses_sdk = any("DroneWrapper(" in _code(f) for f in _files(paths))
+    uses_sdk = any(c in _code(f) for f in _files(paths) for c in SDK_COMMANDERS)
     assert process in COMMANDS_THROUGH_THE_SDK and uses_sdk and name in PUBLISHED["sdk"], (
         f"the registry says {process} publishes {name} ({TOPICS[name].template}), "
         f"but no publisher of it is declared in {[str(p.relative_to(REPO)) for p in paths]}"
