@@ -8,14 +8,16 @@ import signal
 import socket
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TypeVar
 
-from dronewrapper.router import router_options, run_router
+import zenoh
+
+from dronewrapper.router import router_options
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.options import zenoh_config
 from dronewrapper_compose.launcher import die_with_parent
 
 T = TypeVar("T")
@@ -40,20 +42,20 @@ def free_endpoint() -> str:
 
 @contextlib.contextmanager
 def zenoh_router(endpoint: str | None = None) -> Iterator[str]:
-    """Run a real Zenoh router (a router-mode session) on a loopback endpoint."""
+    """Run a real Zenoh router (a router-mode session, as ``dronewrapper router`` opens) on a
+    loopback endpoint.
+
+    Opened with no scouting delay: with multicast scouting off there is nothing to scout, and
+    Zenoh's default delay would add 0.5 s to every test that starts a router.
+    """
     endpoint = endpoint or free_endpoint()
-    stop, ready = threading.Event(), threading.Event()
-    thread = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
-    thread.start()
-    if not ready.wait(10):
-        raise RuntimeError(f"router on {endpoint} did not start")
+    conf = zenoh_config(router_options([endpoint]))
+    conf.insert_json5("scouting/delay", "0")
+    session = zenoh.open(conf)
     try:
         yield endpoint
     finally:
-        stop.set()
-        thread.join(10)
+        session.close()
 
 
 def client_node(endpoint: str, name: str = "test", namespace: str = "drone", **kw) -> Node:
