@@ -32,6 +32,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
     State,
 )
+from dronewrapper.msgs.simulation import WorldState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.node import Node
 from dronewrapper_ground_station.access import Access
@@ -124,8 +125,9 @@ class StationEnv:
 
 
 @contextlib.contextmanager
-def station_env(router: str, **config: Any) -> Iterator[StationEnv]:
-    """The stand-in bridge and a station (token ``TOKEN``) on ``router``."""
+def station_env(router: str, *, simulator: bool = False, **config: Any) -> Iterator[StationEnv]:
+    """The stand-in bridge and a station (token ``TOKEN``) on ``router``; with ``simulator``,
+    the stand-in also answers the simulator's world query (the page asks for it)."""
     cfg = Config(port=0, command_timeout=5.0, **config)
     stop = threading.Event()
     with client_node(router, name="bridge_test") as bridge_node:
@@ -133,6 +135,9 @@ def station_env(router: str, **config: Any) -> Iterator[StationEnv]:
         bridge_node.serve(registry.ARMING, bridge.arming)
         bridge_node.serve(registry.SET_MODE, bridge.set_mode)
         bridge_node.serve(registry.LAND, bridge.land)
+        if simulator:
+            world = WorldState(scenario="beacon_static", objects=["target"], available=["empty"])
+            bridge_node.serve(registry.SIM_WORLD, lambda _: world)
         publisher = threading.Thread(target=bridge.publish_forever, args=(stop,), daemon=True)
         publisher.start()
         bridge_node.announce()
