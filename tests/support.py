@@ -58,9 +58,15 @@ def zenoh_router(endpoint: str | None = None) -> Iterator[str]:
         session.close()
 
 
-def client_node(endpoint: str, name: str = "test", namespace: str = "drone", **kw) -> Node:
-    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers)."""
-    options = ZenohOptions(mode="peer", connect=[endpoint], namespace=namespace, name=name)
+def client_node(
+    endpoint: str, name: str = "test", namespace: str = "drone", *, mode: str = "peer", **kw
+) -> Node:
+    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers).
+
+    ``mode="client"`` opens at once; a peer waits Zenoh's scouting delay (0.5 s) whenever
+    other peers are already on the router.
+    """
+    options = ZenohOptions(mode=mode, connect=[endpoint], namespace=namespace, name=name)
     return Node(name, options, handle_signals=False, **kw)
 
 

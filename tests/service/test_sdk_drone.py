@@ -63,7 +63,7 @@ class FakeBridge:
     def __init__(
         self, endpoint: str, ns: str = "drone", *, connected: bool = True, autopilot: str = "px4"
     ) -> None:
-        self.node = client_node(endpoint, name="bridge_fake", namespace=ns)
+        self.node = client_node(endpoint, name="bridge_fake", namespace=ns, mode="client")
         self.connected = connected
         self.autopilot = autopilot
         self.climb_to: float | None = None  # a TAKEOFF command's altitude (ArduPilot, Tello)
@@ -236,7 +236,7 @@ def bridge(router) -> Iterator[FakeBridge]:
 
 @pytest.fixture
 def drone(router, bridge) -> Iterator[DroneWrapper]:
-    with DroneWrapper("drone", router, timeout=10, mode="peer") as wrapper:
+    with DroneWrapper("drone", router, timeout=10) as wrapper:
         yield wrapper
 
 
@@ -339,7 +339,7 @@ def test_takeoff_streams_then_offboard_then_arms_and_returns_at_altitude(drone, 
 def test_takeoff_sequence_follows_the_autopilot(router, autopilot, expected):
     fake = FakeBridge(router, autopilot=autopilot)
     try:
-        with DroneWrapper("drone", router, timeout=10, mode="peer") as drone:
+        with DroneWrapper("drone", router, timeout=10) as drone:
             drone.takeoff(h=1.0, timeout=20)
             assert fake.calls == expected
             assert drone.get_position()[2] >= 0.9
@@ -402,7 +402,7 @@ def test_images_are_bgr_arrays_of_the_newest_frame(drone, bridge):
 def test_context_manager_stops_commanding_on_exception(router, bridge):
     with (
         pytest.raises(RuntimeError, match="app bug"),
-        DroneWrapper("drone", router, timeout=10, mode="peer") as drone,
+        DroneWrapper("drone", router, timeout=10) as drone,
     ):
         drone.set_cmd_vel(vx=0.5)
         raise RuntimeError("app bug")
@@ -412,7 +412,7 @@ def test_context_manager_stops_commanding_on_exception(router, bridge):
 
 
 def test_land_on_exit_lands_when_flying(router, bridge):
-    with DroneWrapper("drone", router, timeout=10, mode="peer", land_on_exit=True) as drone:
+    with DroneWrapper("drone", router, timeout=10, land_on_exit=True) as drone:
         drone.takeoff(h=0.6, timeout=20)
         wait_for(drone.is_flying, 10, what="in air")
     assert bridge.calls[-1] == "land"
@@ -423,8 +423,8 @@ def test_two_drones_by_namespace_do_not_cross_talk(router):
     one, two = FakeBridge(router, "drone1"), FakeBridge(router, "drone2")
     try:
         with (
-            DroneWrapper("drone1", router, mode="peer") as d1,
-            DroneWrapper("drone2", router, mode="peer") as d2,
+            DroneWrapper("drone1", router) as d1,
+            DroneWrapper("drone2", router) as d2,
         ):
             assert list_drones(router) == ["drone1", "drone2"]
             d1.set_cmd_vel(vx=1.0)
@@ -506,9 +506,9 @@ def test_constructor_waits_for_every_stream_and_names_a_missing_one(router):
     fake.silent.add(registry.BATTERY.key("drone"))
     try:
         with pytest.raises(NotConnected, match=r"nothing arrived on: battery state \(drone/mavros"):
-            DroneWrapper("drone", router, timeout=3, mode="peer")
+            DroneWrapper("drone", router, timeout=3)
         fake.silent.clear()
-        with DroneWrapper("drone", router, timeout=10, mode="peer") as drone:
+        with DroneWrapper("drone", router, timeout=10) as drone:
             # right after the constructor, every getter has a value (no NoData race)
             assert drone.get_battery() == pytest.approx(0.8)
             assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
@@ -593,7 +593,7 @@ def test_cameras_are_subscribed_only_when_read(drone, bridge):
 
 def test_explicitly_refused_cameras_stay_refused(router, bridge):
     with (
-        DroneWrapper("drone", router, timeout=10, mode="peer", cameras=()) as drone,
+        DroneWrapper("drone", router, timeout=10, cameras=()) as drone,
         pytest.raises(NoData, match="was not requested"),
     ):
         drone.get_frontal_image()
