@@ -130,7 +130,7 @@ def station_env(router: str, *, simulator: bool = False, **config: Any) -> Itera
     the stand-in also answers the simulator's world query (the page asks for it)."""
     cfg = Config(port=0, command_timeout=5.0, **config)
     stop = threading.Event()
-    with client_node(router, name="bridge_test") as bridge_node:
+    with client_node(router, name="bridge_test", mode="client") as bridge_node:
         bridge = FakeBridge(bridge_node)
         bridge_node.serve(registry.ARMING, bridge.arming)
         bridge_node.serve(registry.SET_MODE, bridge.set_mode)
@@ -141,7 +141,7 @@ def station_env(router: str, *, simulator: bool = False, **config: Any) -> Itera
         publisher = threading.Thread(target=bridge.publish_forever, args=(stop,), daemon=True)
         publisher.start()
         bridge_node.announce()
-        with client_node(router, name="station") as station_node:
+        with client_node(router, name="station", mode="client") as station_node:
             fleet = Fleet(station_node.session, cfg)
             server = WebServer(create_app(fleet, cfg, Access(TOKEN)), "127.0.0.1", 0)
             try:

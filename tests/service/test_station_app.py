@@ -34,7 +34,7 @@ def env(router):
 
 @pytest.fixture
 def bus(router):
-    with client_node(router, name="test_probe") as node:
+    with client_node(router, name="test_probe", mode="client") as node:
         yield node
 
 
