@@ -112,3 +112,14 @@ def test_image_throttle_keeps_the_mean_rate_without_bursts():
     assert len(kept) == 18
     assert all(b - a == 5 for a, b in itertools.pairwise(kept))
     assert throttle.keep(registry.LOCAL_POSE.key(), 10.0)  # not a camera: always kept
+
+
+def test_a_publisher_is_watched_while_a_subscription_matches():
+    bus = FakeBus()
+    camera, viewer = FakeNode("camera", bus), FakeNode("viewer", bus)
+    pub = camera.publisher(registry.IMAGE_RAW, camera="cam_frontal")
+    assert not pub.watched()
+    sub = viewer.subscribe(registry.IMAGE_RAW, lambda m: None, key="*/*/image_raw")
+    assert pub.watched()
+    sub.undeclare()
+    assert not pub.watched()

@@ -108,6 +108,11 @@ class FakeBus:
             if sub.active and sub.keyexpr.intersects(ke):
                 sub.on_payload(key, payload)
 
+    def matched(self, key: str) -> bool:
+        """True while at least one active subscription matches ``key``."""
+        ke = zenoh.KeyExpr(key)
+        return any(sub.active and sub.keyexpr.intersects(ke) for sub in list(self._subs))
+
     def schedule(self, at: float, key: str, msg: Any) -> None:
         """Queue ``msg`` (a message Struct or encoded bytes) for delivery at bus time ``at``."""
         payload = msg if isinstance(msg, bytes | bytearray) else codec.encode(msg)
@@ -155,6 +160,11 @@ class FakePublisher(Generic[T]):
         self.count += 1
         self._bus.published[self.key].append(Delivered(self._bus.clock(), msg))
         self._bus.put(self.key, codec.encode(msg))
+
+    def watched(self) -> bool:
+        """True while a subscriber on the bus matches this key (as the real one's matching
+        status)."""
+        return self._bus.matched(self.key)
 
     def undeclare(self) -> None:
         pass
