@@ -19,6 +19,7 @@ from dronewrapper.msgs import (
 from dronewrapper.record.capture import ImageThrottle
 from dronewrapper.record.replayer import ReplayClock
 from dronewrapper.runtime import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.caller import commander_attachment, current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 
@@ -123,3 +124,18 @@ def test_a_publisher_is_watched_while_a_subscription_matches():
     assert pub.watched()
     sub.undeclare()
     assert not pub.watched()
+
+
+def test_a_call_carries_its_commander_to_the_handler():
+    bus = FakeBus()
+    server, client = FakeNode("bridge", bus), FakeNode("sdk", bus)
+    asked = []
+
+    def arm(req: CommandBool) -> CommandBoolResult:
+        asked.append(current_commander())
+        return CommandBoolResult(success=True)
+
+    server.serve(registry.ARMING, arm)
+    client.call(registry.ARMING, CommandBool(value=True), attachment=commander_attachment("ada"))
+    client.call(registry.ARMING, CommandBool(value=True))
+    assert asked == ["ada", ""]

@@ -37,6 +37,7 @@ import zenoh
 
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime import caller
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 
@@ -261,13 +262,14 @@ class FakeNode:
     def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str):
         key = service.key(self.ns, **parts)
 
-        def answer(payload: bytes) -> Rep:
+        def answer(payload: bytes, attachment: bytes | None = None) -> Rep:
             try:
                 request = codec.decode(service.request, payload)
             except (msgspec.DecodeError, msgspec.ValidationError) as exc:
                 raise ServiceError(f"{key}: bad request: {exc}", "bad_request") from exc
             try:
-                return handler(request)
+                with caller.handling(attachment):  # who asks, as the real node records it
+                    return handler(request)
             except ValueError as exc:
                 raise ServiceError(f"{key}: {exc}", "bad_request") from exc
 
@@ -281,11 +283,14 @@ class FakeNode:
         *,
         timeout: float = 5.0,
         ns: str | None = None,
+        attachment: bytes | None = None,
         **parts: str,
     ) -> Rep:
+        """Ask the node serving ``service`` on the bus, synchronously; ``attachment`` as the
+        real call's (e.g. :func:`~dronewrapper.runtime.caller.commander_attachment`)."""
         key = service.key(ns or self.ns, **parts)
         answer = self.bus._services.get(key)
         if answer is None:
             raise ServiceUnavailable(f"no reply from {key}: nothing serves it on the fake bus")
-        reply = answer(codec.encode(request))
+        reply = answer(codec.encode(request), attachment)
         return codec.decode(service.reply, codec.encode(reply))
