@@ -87,6 +87,10 @@ class FakeBus:
 
     ``published`` keeps, per concrete key, every message published by a node (decoded), with
     the bus time; ``schedule`` queues payloads to be delivered later by :meth:`step`.
+
+    A service that runs its own threads (a camera's reader, a bridge's link loops) may publish
+    from them: each message is delivered on the publishing thread, as a real session's direct
+    callbacks are. ``schedule``/``step``/``run_until`` belong to one thread, the test's.
     """
 
     def __init__(self, start: float = 0.0, clock: FakeClock | None = None) -> None:
