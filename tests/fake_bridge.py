@@ -73,7 +73,7 @@ class FakeBridge:
         objects: dict[str, tuple[float, float, float]] | None = None,
         name: str = "bridge_fake",
     ) -> None:
-        self.node = client_node(endpoint, name=name, namespace=ns)
+        self.node = client_node(endpoint, name=name, namespace=ns, mode="client")
         self.connected = connected
         self.autopilot = autopilot
         self.x, self.y, self.z = position

@@ -7,14 +7,16 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TypeVar
 
-from dronewrapper.router import router_options, run_router
+import zenoh
+
+from dronewrapper.router import router_options
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.options import zenoh_config
 from dronewrapper_compose.launcher import die_with_parent
 from dronewrapper_compose.ports import free_port
 
@@ -33,25 +35,31 @@ def free_endpoint() -> str:
 
 @contextlib.contextmanager
 def zenoh_router(endpoint: str | None = None) -> Iterator[str]:
-    """Run a real Zenoh router (a router-mode session) on a loopback endpoint."""
+    """Run a real Zenoh router (a router-mode session, as ``dronewrapper router`` opens) on a
+    loopback endpoint.
+
+    Opened with no scouting delay: with multicast scouting off there is nothing to scout, and
+    Zenoh's default delay would add 0.5 s to every test that starts a router.
+    """
     endpoint = endpoint or free_endpoint()
-    stop, ready = threading.Event(), threading.Event()
-    thread = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
-    thread.start()
-    if not ready.wait(10):
-        raise RuntimeError(f"router on {endpoint} did not start")
+    conf = zenoh_config(router_options([endpoint]))
+    conf.insert_json5("scouting/delay", "0")
+    session = zenoh.open(conf)
     try:
         yield endpoint
     finally:
-        stop.set()
-        thread.join(10)
+        session.close()
 
 
-def client_node(endpoint: str, name: str = "test", namespace: str = "drone", **kw) -> Node:
-    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers)."""
-    options = ZenohOptions(mode="peer", connect=[endpoint], namespace=namespace, name=name)
+def client_node(
+    endpoint: str, name: str = "test", namespace: str = "drone", *, mode: str = "peer", **kw
+) -> Node:
+    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers).
+
+    ``mode="client"`` opens at once; a peer waits Zenoh's scouting delay (0.5 s) whenever
+    other peers are already on the router.
+    """
+    options = ZenohOptions(mode=mode, connect=[endpoint], namespace=namespace, name=name)
     return Node(name, options, handle_signals=False, **kw)
 
 

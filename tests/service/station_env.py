@@ -17,6 +17,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.simulation import WorldState
 from dronewrapper_ground_station.access import Access
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
@@ -63,13 +65,17 @@ class StationEnv:
 
 
 @contextlib.contextmanager
-def station_env(router: str, **config: Any) -> Iterator[StationEnv]:
-    """The stand-in bridge and a station (token ``TOKEN``) on ``router``."""
+def station_env(router: str, *, simulator: bool = False, **config: Any) -> Iterator[StationEnv]:
+    """The stand-in bridge and a station (token ``TOKEN``) on ``router``; with ``simulator``,
+    the stand-in also answers the simulator's world query (the page asks for it)."""
     cfg = Config(port=0, command_timeout=5.0, **config)
     target = {"target": (5.0, -1.0, 0.0)}
     bridge = FakeBridge(router, flying=True, position=POSE, objects=target, name="bridge_test")
+    if simulator:
+        world = WorldState(scenario="beacon_static", objects=["target"], available=["empty"])
+        bridge.node.serve(registry.SIM_WORLD, lambda _: world)
     try:
-        with client_node(router, name="station") as station_node:
+        with client_node(router, name="station", mode="client") as station_node:
             fleet = Fleet(station_node.session, cfg)
             server = WebServer(create_app(fleet, cfg, Access(TOKEN)), "127.0.0.1", 0)
             try:

@@ -28,7 +28,7 @@ def run(coroutine):
 
 def test_connect_getters_and_setpoints_pass_through(router, bridge):
     async def main():
-        async with Drone("drone", router, timeout=10, mode="peer") as drone:
+        async with Drone("drone", router, timeout=10) as drone:
             assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
             assert drone.get_battery() == pytest.approx(0.8)
             assert drone.sync.is_connected()
@@ -52,7 +52,7 @@ def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(router, bridg
             ticks += 1
 
     async def main():
-        async with Drone("drone", router, timeout=10, mode="peer") as drone:
+        async with Drone("drone", router, timeout=10) as drone:
             task = asyncio.create_task(ticker())
             await drone.takeoff(h=1.0, timeout=20)
             climbed = drone.get_position()[2]
@@ -67,7 +67,7 @@ def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(router, bridg
 
 def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(router, bridge):
     async def main():
-        async with Drone("drone", router, timeout=10, mode="peer") as drone:
+        async with Drone("drone", router, timeout=10) as drone:
             positions = []
             async for position in drone.position():
                 positions.append(position)
@@ -85,7 +85,7 @@ def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(router, bridge)
 
 def test_frames_iterator_gives_bgr_arrays(router, bridge):
     async def main():
-        async with Drone("drone", router, timeout=10, mode="peer") as drone:
+        async with Drone("drone", router, timeout=10) as drone:
             frames = drone.frames("frontal")
             stop = asyncio.Event()
 
@@ -110,7 +110,7 @@ def test_errors_are_the_sync_ones(router, bridge):
     bridge.refuse_arming = "Arming denied: preflight checks failed"
 
     async def main():
-        async with Drone("drone", router, timeout=10, mode="peer") as drone:
+        async with Drone("drone", router, timeout=10) as drone:
             with pytest.raises(InvalidArgument):
                 drone.set_cmd_vel(vx=float("nan"))
             with pytest.raises(CommandRefused) as info:
@@ -123,7 +123,7 @@ def test_errors_are_the_sync_ones(router, bridge):
 
 def test_no_bridge_is_the_same_clear_error(router):
     async def main():
-        await Drone("drone", router, timeout=1.0, mode="peer").connect()
+        await Drone("drone", router, timeout=1.0).connect()
 
     with pytest.raises(NotConnected, match="no bridge"):
         run(main())
@@ -131,7 +131,7 @@ def test_no_bridge_is_the_same_clear_error(router):
 
 def test_blocking_members_are_never_passed_through_unawaited(router, bridge):
     async def main():
-        async with Drone("drone", router, timeout=10, mode="peer") as drone:
+        async with Drone("drone", router, timeout=10) as drone:
             assert asyncio.iscoroutinefunction(Drone.takeoff)
             wait_for(lambda: drone.get_state() is not None, 5, what="state")
             with pytest.raises(RuntimeError, match="not connected"):

@@ -34,7 +34,7 @@ def env(router):
 
 @pytest.fixture
 def bus(router):
-    with client_node(router, name="test_probe") as node:
+    with client_node(router, name="test_probe", mode="client") as node:
         yield node
 
 
@@ -163,10 +163,14 @@ def test_objects_and_their_teleop(env: StationEnv, bus) -> None:
     status, objects, _ = env.http("GET", "/api/objects")
     assert status == 200 and objects["target"]["x"] == 5.0
     cmd = bus.latest(registry.SIM_OBJECT_CMD_VEL, name="target")
-    time.sleep(0.3)  # the probe's subscription reaches the router
     path = "/api/objects/target/velocity"
-    assert env.http("POST", path, {"east": 1.0, "north": -0.5})[0] == 200
-    twist = cmd.wait(5)
+    # the same command again until the probe's new subscription hears one (no fixed sleep)
+    wait_for(
+        lambda: env.http("POST", path, {"east": 1.0, "north": -0.5})[0] == 200 and cmd.value,
+        10,
+        what="the object's velocity command",
+    )
+    twist = cmd.value
     speed = env.config.object_speed
     assert (twist.linear.x, twist.linear.y) == (speed, -0.5 * speed)
     assert env.http("POST", path, {"east": 2.0, "north": 0})[0] == 400

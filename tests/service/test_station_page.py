@@ -5,8 +5,6 @@ test_station_browser.py."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.by import By
@@ -32,15 +30,24 @@ navigator.getGamepads = () => [window.fakePad];
 
 @pytest.fixture
 def env(router):
-    with station_env(router) as env:
+    with station_env(router, simulator=True) as env:  # its world shown, not a 503 logged
         yield env
 
 
-@pytest.fixture
-def driver(tmp_path: Path):
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory: pytest.TempPathFactory):
+    """One Chromium for the module (starting one takes seconds); each test's station listens
+    on a new port, so no page state (storage, cookies) is shared between tests."""
     rules = f"--host-resolver-rules=MAP {OTHER_NAME} 127.0.0.1"
-    with chromium(tmp_path / "profile", extra_flags=[rules]) as driver:
+    with chromium(tmp_path_factory.mktemp("chromium") / "profile", extra_flags=[rules]) as driver:
         yield driver
+
+
+@pytest.fixture
+def driver(browser):
+    console_errors(browser)  # drop what an earlier test's page logged
+    yield browser
+    browser.get("about:blank")  # the page stops polling its station before that one closes
 
 
 def _open(driver, env: StationEnv, host: str = "127.0.0.1", query: str = "") -> None:

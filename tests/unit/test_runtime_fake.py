@@ -19,6 +19,7 @@ from dronewrapper.msgs import (
 from dronewrapper.record.capture import ImageThrottle
 from dronewrapper.record.replayer import ReplayClock
 from dronewrapper.runtime import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.caller import commander_attachment, current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 
@@ -112,3 +113,29 @@ def test_image_throttle_keeps_the_mean_rate_without_bursts():
     assert len(kept) == 18
     assert all(b - a == 5 for a, b in itertools.pairwise(kept))
     assert throttle.keep(registry.LOCAL_POSE.key(), 10.0)  # not a camera: always kept
+
+
+def test_a_publisher_is_watched_while_a_subscription_matches():
+    bus = FakeBus()
+    camera, viewer = FakeNode("camera", bus), FakeNode("viewer", bus)
+    pub = camera.publisher(registry.IMAGE_RAW, camera="cam_frontal")
+    assert not pub.watched()
+    sub = viewer.subscribe(registry.IMAGE_RAW, lambda m: None, key="*/*/image_raw")
+    assert pub.watched()
+    sub.undeclare()
+    assert not pub.watched()
+
+
+def test_a_call_carries_its_commander_to_the_handler():
+    bus = FakeBus()
+    server, client = FakeNode("bridge", bus), FakeNode("sdk", bus)
+    asked = []
+
+    def arm(req: CommandBool) -> CommandBoolResult:
+        asked.append(current_commander())
+        return CommandBoolResult(success=True)
+
+    server.serve(registry.ARMING, arm)
+    client.call(registry.ARMING, CommandBool(value=True), attachment=commander_attachment("ada"))
+    client.call(registry.ARMING, CommandBool(value=True))
+    assert asked == ["ada", ""]

@@ -37,6 +37,7 @@ import zenoh
 
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime import caller
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
@@ -87,6 +88,10 @@ class FakeBus:
 
     ``published`` keeps, per concrete key, every message published by a node (decoded), with
     the bus time; ``schedule`` queues payloads to be delivered later by :meth:`step`.
+
+    A service that runs its own threads (a camera's reader, a bridge's link loops) may publish
+    from them: each message is delivered on the publishing thread, as a real session's direct
+    callbacks are. ``schedule``/``step``/``run_until`` belong to one thread, the test's.
     """
 
     def __init__(self, start: float = 0.0, clock: FakeClock | None = None) -> None:
@@ -108,6 +113,11 @@ class FakeBus:
         for sub in list(self._subs):
             if sub.active and sub.keyexpr.intersects(ke):
                 sub.on_payload(key, payload)
+
+    def matched(self, key: str) -> bool:
+        """True while at least one active subscription matches ``key``."""
+        ke = zenoh.KeyExpr(key)
+        return any(sub.active and sub.keyexpr.intersects(ke) for sub in list(self._subs))
 
     def schedule(self, at: float, key: str, msg: Any) -> None:
         """Queue ``msg`` (a message Struct or encoded bytes) for delivery at bus time ``at``."""
@@ -157,6 +167,11 @@ class FakePublisher(Generic[T]):
         self.count += 1
         self._bus.published[self.key].append(Delivered(self._bus.clock(), msg))
         self._bus.put(self.key, codec.encode(msg))
+
+    def watched(self) -> bool:
+        """True while a subscriber on the bus matches this key (as the real one's matching
+        status)."""
+        return self._bus.matched(self.key)
 
     def undeclare(self) -> None:
         pass
@@ -241,13 +256,14 @@ class FakeNode:
     def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str):
         key = service.key(self.ns, **parts)
 
-        def answer(payload: bytes) -> Rep:
+        def answer(payload: bytes, attachment: bytes | None = None) -> Rep:
             try:
                 request = codec.decode(service.request, payload)
             except (msgspec.DecodeError, msgspec.ValidationError) as exc:
                 raise ServiceError(f"{key}: bad request: {exc}", "bad_request") from exc
             try:
-                return handler(request)
+                with caller.handling(attachment):  # who asks, as the real node records it
+                    return handler(request)
             except ValueError as exc:
                 raise ServiceError(f"{key}: {exc}", "bad_request") from exc
 
@@ -264,9 +280,11 @@ class FakeNode:
         attachment: bytes | None = None,
         **parts: str,
     ) -> Rep:
+        """Ask the node serving ``service`` on the bus, synchronously; ``attachment`` as the
+        real call's (e.g. :func:`~dronewrapper.runtime.caller.commander_attachment`)."""
         key = service.key(ns or self.ns, **parts)
         answer = self.bus._services.get(key)
         if answer is None:
             raise ServiceUnavailable(f"no reply from {key}: nothing serves it on the fake bus")
-        reply = answer(codec.encode(request))
+        reply = answer(codec.encode(request), attachment)
         return codec.decode(service.reply, codec.encode(reply))
