@@ -203,11 +203,13 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         return _ok({"ok": True})
 
     async def world(_: Request) -> Response:
+        # No simulator is the normal case of a real aircraft: a 200 that says so (the page
+        # polls this; an error status would be logged by every browser as a failure)
         try:
             state = await asyncio.to_thread(fleet.objects.world)
         except ServiceUnavailable as exc:
-            return _error(503, f"no simulator answers: {exc}")
-        return _ok(msgspec.to_builtins(state))
+            return _ok({"simulator": False, "message": f"no simulator answers: {exc}"})
+        return _ok({"simulator": True, **msgspec.to_builtins(state)})
 
     async def world_load(request: Request) -> Response:
         refused = _operator_check(request)

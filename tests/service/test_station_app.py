@@ -179,7 +179,8 @@ def test_objects_and_their_teleop(env: StationEnv, bus) -> None:
 
 
 def test_world_of_the_simulator_is_shown_and_loaded(env: StationEnv, bus) -> None:
-    assert env.http("GET", "/api/world")[0] == 503  # no simulator answers yet
+    status, reply, _ = env.http("GET", "/api/world")  # no simulator answers yet: said, no error
+    assert status == 200 and reply["simulator"] is False and "no simulator" in reply["message"]
     loaded: list[str] = []
 
     def load(request: WorldLoad) -> WorldState:
@@ -193,7 +194,7 @@ def test_world_of_the_simulator_is_shown_and_loaded(env: StationEnv, bus) -> Non
     status, world = wait_for(
         lambda: (r := env.http("GET", "/api/world"))[0] == 200 and r[:2], 10, what="world"
     )
-    assert world["scenario"] == "empty" and world["available"] == ["empty"]
+    assert world["simulator"] and world["scenario"] == "empty" and world["available"] == ["empty"]
     status, reply, _ = env.http("POST", "/api/world", {"scenario": "beacon_static"})
     assert status == 200 and reply["ok"] and reply["scenario"] == "beacon_static"
     status, reply, _ = env.http("POST", "/api/world", {"scenario": "../etc/passwd"})

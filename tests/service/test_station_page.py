@@ -59,6 +59,18 @@ def _open(driver, env: StationEnv, host: str = "127.0.0.1", query: str = "") -> 
     )
 
 
+def test_a_real_aircraft_without_simulator_is_said_without_an_error(router, driver) -> None:
+    """No simulator answers the world query (a real aircraft): the page says so and the
+    browser logs no failed request."""
+    with station_env(router) as env:
+        _open(driver, env)
+        hidden = "return document.getElementById('scenario-select').hidden"
+        wait_for(lambda: driver.execute_script(hidden), 20, what="the world query answered")
+        assert driver.find_element(By.ID, "world-state").text == "no simulator"
+        assert console_errors(driver) == []
+        driver.get("about:blank")
+
+
 def test_observer_page_is_read_only(env: StationEnv, driver, router) -> None:
     probe = client_node(router, name="probe")
     setpoints = probe.latest(registry.SETPOINT_RAW_LOCAL)

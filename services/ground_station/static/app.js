@@ -52,8 +52,8 @@ async function command(name, body = {}) {
 async function refreshWorld() {
   const r = await fetch("/api/world");
   const sel = $("scenario-select");
-  if (!r.ok) { $("world-state").textContent = "no simulator"; sel.hidden = true; return null; }
-  const world = await r.json();
+  const world = r.ok ? await r.json() : { simulator: false };
+  if (!world.simulator) { $("world-state").textContent = "no simulator"; sel.hidden = true; return null; }
   sel.hidden = false;
   if (sel.dataset.sig !== world.available.join()) {
     sel.replaceChildren(...world.available.map((n) => { const o = document.createElement("option"); o.value = o.textContent = n; return o; }));
