@@ -83,6 +83,12 @@ def test_session_config_is_explicit_and_loopback():
     assert conf.get_json("connect/endpoints") == '["tcp/127.0.0.1:7447"]'
 
 
+def test_a_router_opens_without_waiting_to_scout():
+    """Nothing to scout with multicast off: a router (every graph starts one) opens at once."""
+    conf = zenoh_config(ZenohOptions(mode="router", listen=["tcp/127.0.0.1:7447"]))
+    assert conf.get_json("scouting/delay") == "0"
+
+
 @pytest.mark.parametrize(
     "kwargs", [{"mode": "mesh"}, {"namespace": "a/b"}, {"connect": ["localhost"]}]
 )

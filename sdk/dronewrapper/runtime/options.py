@@ -172,7 +172,10 @@ def zenoh_config(options: ZenohOptions) -> zenoh.Config:
     connect = [] if options.mode == "router" and not options.connect else options.connect
     conf.insert_json5("connect/endpoints", json.dumps(connect))
     conf.insert_json5("scouting/multicast/enabled", "false")
-    if options.mode != "router":
+    if options.mode == "router":
+        # nothing to scout with multicast off: do not wait Zenoh's default 0.5 s at open
+        conf.insert_json5("scouting/delay", "0")
+    else:
         # keep trying the router in the background instead of failing the process
         conf.insert_json5("connect/exit_on_failure", "false")
     conf.insert_json5("transport/shared_memory/enabled", json.dumps(options.shared_memory))
