@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import math
-
 import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
+from dronewrapper_bridge_mavlink.setpoints import Limits
 
 DEFAULT_MESSAGE_RATES = {
     "LOCAL_POSITION_NED": 50.0,
@@ -19,19 +19,6 @@ DEFAULT_MESSAGE_RATES = {
     "GPS_RAW_INT": 2.0,
     "HOME_POSITION": 0.5,
 }
-
-
-class LimitsConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
-    """Setpoint bounds (see setpoints.Limits): m, m/s, rad/s."""
-
-    max_distance: float = 10_000.0
-    min_altitude: float = -1_000.0
-    max_altitude: float = 10_000.0
-    max_horizontal_speed: float = 20.0
-    max_vertical_speed: float = 10.0
-    max_yaw_rate: float = 2.0 * math.pi
-    mixed_altitude_gain: float = 1.0
-    mixed_max_climb: float = 1.5
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -64,7 +51,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     message_rates: dict[str, float] = msgspec.field(
         default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
     )  # Hz asked with SET_MESSAGE_INTERVAL
-    limits: LimitsConfig = msgspec.field(default_factory=LimitsConfig)
+    limits: Limits = msgspec.field(default_factory=Limits)
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
@@ -72,13 +59,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     gcs_over_zenoh: bool = False  # also forward on {ns}/mavlink/* (dronewrapper mavlink-forward)
 
     def __post_init__(self) -> None:
-        if self.commander_lost_action not in ("hold", "land", "return"):
-            raise ValueError(
-                f"commander_lost_action must be hold, land or return, "
-                f"got {self.commander_lost_action!r}"
-            )
-        if not 0 < self.setpoint_timeout < self.commander_lost_timeout:
-            raise ValueError("need 0 < setpoint_timeout < commander_lost_timeout")
+        self.failsafe_config()  # raises ValueError naming a bad timeout or action
         if self.stream_rate_hz < 20.0:
             raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
         for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
@@ -91,3 +72,11 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         for name in ("final_ack_timeout", "mode_confirm_timeout"):
             if not 0 < getattr(self, name) <= 30:
                 raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")
+
+    def failsafe_config(self) -> FailsafeConfig:
+        """The failsafe's settings, from this config's flat keys (validated there)."""
+        return FailsafeConfig(
+            setpoint_timeout=self.setpoint_timeout,
+            commander_lost_timeout=self.commander_lost_timeout,
+            commander_lost_action=self.commander_lost_action,
+        )

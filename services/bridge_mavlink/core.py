@@ -31,11 +31,11 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import receive
 from dronewrapper_bridge_mavlink.config import Config
-from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, Tick, is_airborne
+from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
 from dronewrapper_bridge_mavlink.operations import Operation, failsafe_action
-from dronewrapper_bridge_mavlink.setpoints import Limits, SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.setpoints import SetpointError, to_local_ned, validate
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
@@ -69,14 +69,8 @@ class BridgeCore:
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
         self.config = config
-        self.limits = Limits(**msgspec.structs.asdict(config.limits))
-        self.failsafe = Failsafe(
-            FailsafeConfig(
-                setpoint_timeout=config.setpoint_timeout,
-                commander_lost_timeout=config.commander_lost_timeout,
-                commander_lost_action=config.commander_lost_action,
-            )
-        )
+        self.limits = config.limits
+        self.failsafe = Failsafe(config.failsafe_config())
         self.telemetry = Telemetry()
         self.freshness = Freshness()
         self.sources = AutopilotSources()

@@ -50,9 +50,9 @@ class Kind(Enum):
     MIXED = "mixed"
 
 
-@dataclass(frozen=True)
-class Limits:
-    """Bounds on accepted setpoints (m, m/s, rad/s). Beyond them a setpoint is refused."""
+class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Bounds on accepted setpoints (m, m/s, rad/s). Beyond them a setpoint is refused. Also
+    the ``limits`` section of the bridge's config, as is."""
 
     max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
     min_altitude: float = -1_000.0  # ENU z, m
@@ -62,6 +62,9 @@ class Limits:
     max_yaw_rate: float = 2.0 * math.pi  # rad/s
     mixed_altitude_gain: float = 1.0  # 1/s, ArduPilot mixed control: vz = gain * altitude error
     mixed_max_climb: float = 1.5  # m/s, clamp of that vz
+
+
+DEFAULT_LIMITS = Limits()
 
 
 @dataclass(frozen=True)
@@ -98,7 +101,7 @@ def _finite(name: str, value: float) -> float:
     return float(value)
 
 
-def validate(target: PositionTarget, limits: Limits = Limits()) -> Kind:
+def validate(target: PositionTarget, limits: Limits = DEFAULT_LIMITS) -> Kind:
     """The control ``target`` asks for, or SetpointError saying what is wrong with it."""
     mask, frame = target.type_mask, target.coordinate_frame
     if mask not in _KIND_FOR_MASK:
@@ -161,7 +164,7 @@ def to_local_ned(
     autopilot: str,
     yaw_enu: float,
     z_enu: float,
-    limits: Limits = Limits(),
+    limits: Limits = DEFAULT_LIMITS,
 ) -> LocalNedTarget:
     """The SET_POSITION_TARGET_LOCAL_NED fields for a valid ``target`` (see :func:`validate`).
 

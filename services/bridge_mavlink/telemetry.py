@@ -21,7 +21,15 @@ from pymavlink.dialects.v20.common import (
     MAV_TYPE_GCS,
 )
 
-from dronewrapper.msgs.geometry import PoseStamped, Quaternion, TwistStamped
+from dronewrapper.msgs.geometry import (
+    Point,
+    Pose,
+    PoseStamped,
+    Quaternion,
+    Twist,
+    TwistStamped,
+    Vector3,
+)
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     VTOL_STATE_UNDEFINED,
@@ -34,6 +42,7 @@ from dronewrapper.msgs.sensor import (
     NAVSAT_STATUS_FIX,
     BatteryState,
     NavSatFix,
+    NavSatStatus,
 )
 from dronewrapper.msgs.std import Header
 from dronewrapper_bridge_mavlink.frames import (
@@ -120,6 +129,11 @@ def _quat_msg(q: Quat) -> Quaternion:
     return Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])
 
 
+def _xyz(v: tuple[float, float, float]) -> dict[str, float]:
+    """A 3-vector as the x, y, z fields of a Point or Vector3."""
+    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
+
+
 @dataclass
 class Telemetry:
     """The latest attitude / fix, and the conversions that need them.
@@ -170,19 +184,20 @@ class Telemetry:
         position = ned_to_enu((msg.x, msg.y, msg.z))
         velocity = ned_to_enu((msg.vx, msg.vy, msg.vz))
         self.position_enu, self.velocity_enu = position, velocity
-        pose = PoseStamped(header=self._header(FRAME_MAP, stamp, "pose"))
-        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = position
-        pose.pose.orientation = _quat_msg(self.attitude)
-
-        local = TwistStamped(header=self._header(FRAME_MAP, stamp, "vlocal"))
-        local.twist.linear.x, local.twist.linear.y, local.twist.linear.z = velocity
         rates_enu = rotate(self.attitude, self.rates_flu)
-        local.twist.angular.x, local.twist.angular.y, local.twist.angular.z = rates_enu
-
-        body = TwistStamped(header=self._header(FRAME_BASE_LINK, stamp, "vbody"))
+        pose = PoseStamped(
+            header=self._header(FRAME_MAP, stamp, "pose"),
+            pose=Pose(position=Point(**_xyz(position)), orientation=_quat_msg(self.attitude)),
+        )
+        local = TwistStamped(
+            header=self._header(FRAME_MAP, stamp, "vlocal"),
+            twist=Twist(linear=Vector3(**_xyz(velocity)), angular=Vector3(**_xyz(rates_enu))),
+        )
         vb = rotate_inverse(self.attitude, velocity)
-        body.twist.linear.x, body.twist.linear.y, body.twist.linear.z = vb
-        body.twist.angular.x, body.twist.angular.y, body.twist.angular.z = self.rates_flu
+        body = TwistStamped(
+            header=self._header(FRAME_BASE_LINK, stamp, "vbody"),
+            twist=Twist(linear=Vector3(**_xyz(vb)), angular=Vector3(**_xyz(self.rates_flu))),
+        )
         return pose, local, body
 
     def on_gps_raw(self, msg: Any) -> None:
@@ -202,13 +217,14 @@ class Telemetry:
             return None
         if self.home_amsl is None:
             self.home_amsl = (msg.alt - msg.relative_alt) / 1e3
-        fix = NavSatFix(header=self._header(FRAME_BASE_LINK, stamp, "global"))
-        fix.status.status = NAVSAT_STATUS_FIX
-        fix.latitude = msg.lat / 1e7
-        fix.longitude = msg.lon / 1e7
-        fix.altitude = msg.alt / 1e3
-        fix.position_covariance_type = COVARIANCE_TYPE_UNKNOWN
-        return fix
+        return NavSatFix(
+            header=self._header(FRAME_BASE_LINK, stamp, "global"),
+            status=NavSatStatus(status=NAVSAT_STATUS_FIX),
+            latitude=msg.lat / 1e7,
+            longitude=msg.lon / 1e7,
+            altitude=msg.alt / 1e3,
+            position_covariance_type=COVARIANCE_TYPE_UNKNOWN,
+        )
 
     def takeoff_altitude_amsl(self, height: float) -> float:
         """AMSL altitude (m) of ``height`` m above the take-off point (NaN if unknown)."""

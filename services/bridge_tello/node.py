@@ -88,27 +88,6 @@ PARAMS: dict[str, tuple[str, tuple[str, float, float] | None]] = {
 _NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
 
 
-class ScaleConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
-    """Velocity -> stick calibration and setpoint bounds (see sticks.StickScale)."""
-
-    horizontal: float = 100.0  # stick units per m/s
-    vertical: float = 100.0  # stick units per m/s
-    yaw: float = 57.0  # stick units per rad/s
-    max_stick: int = 100
-    max_horizontal_speed: float = 3.0  # m/s, setpoints beyond are refused
-    max_vertical_speed: float = 2.0
-    max_yaw_rate: float = 2.0 * math.pi
-    max_distance: float = 100.0  # m, position targets
-    min_altitude: float = 0.0
-    max_altitude: float = 30.0
-    kp_xy: float = 0.8  # 1/s, position loop
-    kp_z: float = 1.0
-    kp_yaw: float = 1.5
-    position_speed: float = 0.6  # m/s
-    position_climb: float = 0.5  # m/s
-    position_yaw_rate: float = 1.0  # rad/s
-
-
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """bridge_tello configuration (units in the names' docs; see README.md)."""
 
@@ -144,19 +123,12 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     battery_rate_hz: float = 1.0
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
-    scale: ScaleConfig = msgspec.field(default_factory=ScaleConfig)
+    scale: StickScale = msgspec.field(default_factory=StickScale)
 
     def __post_init__(self) -> None:
-        if self.commander_lost_action not in ("hold", "land"):
-            raise ValueError(
-                f"commander_lost_action must be hold or land, got {self.commander_lost_action!r}"
-            )
-        if not 0 < self.setpoint_timeout < self.commander_lost_timeout:
-            raise ValueError("need 0 < setpoint_timeout < commander_lost_timeout")
+        self.failsafe_config()  # raises ValueError naming a bad timeout or action
         if not 20.0 <= self.rc_rate_hz <= 50.0:
             raise ValueError(f"rc_rate_hz must be in [20, 50], got {self.rc_rate_hz}")
-        if not 0 < self.keepalive_s < 15.0:
-            raise ValueError("keepalive_s must be in (0, 15): the Tello lands after 15 s")
         if self.velocity_frame not in ("reference", "body_frd"):
             raise ValueError(
                 f"velocity_frame must be reference or body_frd, got {self.velocity_frame!r}"
@@ -165,8 +137,6 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError("reference_yaw_deg must be in [-360, 360]")
         if self.height_source not in ("h", "tof"):
             raise ValueError(f"height_source must be h or tof, got {self.height_source!r}")
-        if not 1 <= self.scale.max_stick <= 100:
-            raise ValueError("scale.max_stick must be in [1, 100]")
         if self.command_attempts < 1:
             raise ValueError("command_attempts must be >= 1")
         for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
@@ -176,6 +146,15 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError("command_lease_ttl_s must be > 0")
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError("jpeg_quality must be in [1, 100]")
+
+    def failsafe_config(self) -> FailsafeConfig:
+        """The failsafe's settings, from this config's flat keys (validated there)."""
+        return FailsafeConfig(
+            setpoint_timeout=self.setpoint_timeout,
+            commander_lost_timeout=self.commander_lost_timeout,
+            commander_lost_action=self.commander_lost_action,
+            keepalive_s=self.keepalive_s,
+        )
 
 
 def _number(text: str) -> float | None:
@@ -189,20 +168,13 @@ class Bridge:
     def __init__(self, node: Node, config: Config) -> None:
         self.node = node
         self.config = config
-        self.scale = StickScale(**msgspec.structs.asdict(config.scale))
+        self.scale = config.scale
         self.guard = CommandGuard(
             enabled=config.command_lease,
             ttl_s=config.command_lease_ttl_s,
             on_change=lambda: self.publish_state(force=True),
         )
-        self.failsafe = Failsafe(
-            FailsafeConfig(
-                setpoint_timeout=config.setpoint_timeout,
-                commander_lost_timeout=config.commander_lost_timeout,
-                commander_lost_action=config.commander_lost_action,
-                keepalive_s=config.keepalive_s,
-            )
-        )
+        self.failsafe = Failsafe(config.failsafe_config())
         self.telemetry = Telemetry(
             velocity_frame=config.velocity_frame,
             reference_yaw=math.radians(config.reference_yaw_deg),

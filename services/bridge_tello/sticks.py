@@ -24,7 +24,6 @@ Controls accepted (type_mask, coordinate_frame), validated like bridge_mavlink's
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from enum import Enum
 
 import msgspec
@@ -63,9 +62,9 @@ _FRAMES = {
 }
 
 
-@dataclass(frozen=True)
-class StickScale:
-    """Calibration and limits of the velocity -> stick mapping.
+class StickScale(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Calibration and limits of the velocity -> stick mapping (also the ``scale`` section of
+    the bridge's config, as is).
 
     Attributes:
         horizontal: stick units per m/s forward/sideways (100 ~ 1 m/s on a Tello).
@@ -95,6 +94,10 @@ class StickScale:
     position_speed: float = 0.6
     position_climb: float = 0.5
     position_yaw_rate: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.max_stick <= 100:
+            raise ValueError("scale.max_stick must be in [1, 100]")
 
 
 def _finite(name: str, value: float) -> float:

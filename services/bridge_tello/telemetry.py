@@ -24,7 +24,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from dronewrapper.msgs.geometry import PoseStamped, Quaternion, TwistStamped
+from dronewrapper.msgs.geometry import (
+    Point,
+    Pose,
+    PoseStamped,
+    Quaternion,
+    Twist,
+    TwistStamped,
+    Vector3,
+)
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_LANDING,
@@ -53,6 +61,11 @@ def velocity_enu(
         cos, sin = math.cos(reference_yaw), math.sin(reference_yaw)
         return (cos * a + sin * b, sin * a - cos * b, -c)
     return rotate(q, (a, -b, -c))  # body FRD -> FLU, then into ENU
+
+
+def _xyz(v: tuple[float, float, float]) -> dict[str, float]:
+    """A 3-vector as the x, y, z fields of a Point or Vector3."""
+    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
 
 
 @dataclass
@@ -198,17 +211,21 @@ class Telemetry:
     def messages(self, stamp: float) -> tuple[PoseStamped, TwistStamped, TwistStamped]:
         """(pose ENU in ``odom``, velocity_local ENU, velocity_body FLU) of the latest state."""
         position = self.position_enu or (0.0, 0.0, 0.0)
-        pose = PoseStamped(header=self._header(FRAME_ODOM, stamp, "pose"))
-        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = position
         x, y, z, w = self.attitude
-        pose.pose.orientation = Quaternion(x=x, y=y, z=z, w=w)
-        local = TwistStamped(header=self._header(FRAME_ODOM, stamp, "vlocal"))
-        local.twist.linear.x, local.twist.linear.y, local.twist.linear.z = self.velocity
-        local.twist.angular.z = self._yaw_rate
-        body = TwistStamped(header=self._header(FRAME_BASE_LINK, stamp, "vbody"))
+        pose = PoseStamped(
+            header=self._header(FRAME_ODOM, stamp, "pose"),
+            pose=Pose(position=Point(**_xyz(position)), orientation=Quaternion(x=x, y=y, z=z, w=w)),
+        )
+        yaw_rate = Vector3(z=self._yaw_rate)  # yaw rate only (the Tello sends no body rates)
+        local = TwistStamped(
+            header=self._header(FRAME_ODOM, stamp, "vlocal"),
+            twist=Twist(linear=Vector3(**_xyz(self.velocity)), angular=yaw_rate),
+        )
         vb = rotate_inverse(self.attitude, self.velocity)
-        body.twist.linear.x, body.twist.linear.y, body.twist.linear.z = vb
-        body.twist.angular.z = self._yaw_rate  # yaw rate only (the Tello sends no body rates)
+        body = TwistStamped(
+            header=self._header(FRAME_BASE_LINK, stamp, "vbody"),
+            twist=Twist(linear=Vector3(**_xyz(vb)), angular=yaw_rate),
+        )
         return pose, local, body
 
     def battery_message(self, stamp: float) -> BatteryState:

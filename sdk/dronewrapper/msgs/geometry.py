@@ -11,9 +11,7 @@ import msgspec
 from dronewrapper.msgs.std import Header
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class Point(msgspec.Struct, kw_only=True):
+class Point(msgspec.Struct, frozen=True, kw_only=True):
     """A position in metres."""
 
     x: float = 0.0
@@ -21,9 +19,7 @@ class Point(msgspec.Struct, kw_only=True):
     z: float = 0.0
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class Vector3(msgspec.Struct, kw_only=True):
+class Vector3(msgspec.Struct, frozen=True, kw_only=True):
     """A free vector (velocity in m/s, angular rate in rad/s, ...)."""
 
     x: float = 0.0
@@ -40,9 +36,7 @@ class Quaternion(msgspec.Struct, kw_only=True, frozen=True):
     w: float = 1.0
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class Pose(msgspec.Struct, kw_only=True):
+class Pose(msgspec.Struct, frozen=True, kw_only=True):
     """Position (m) and orientation of a body in a frame."""
 
     position: Point = msgspec.field(default_factory=Point)
@@ -56,9 +50,7 @@ class PoseStamped(msgspec.Struct, kw_only=True, frozen=True):
     pose: Pose = msgspec.field(default_factory=Pose)
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class Twist(msgspec.Struct, kw_only=True):
+class Twist(msgspec.Struct, frozen=True, kw_only=True):
     """Linear velocity (m/s) and angular velocity (rad/s)."""
 
     linear: Vector3 = msgspec.field(default_factory=Vector3)

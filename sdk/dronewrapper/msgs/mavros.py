@@ -74,9 +74,7 @@ SEVERITY_INFO = 6
 SEVERITY_DEBUG = 7
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class State(msgspec.Struct, kw_only=True):
+class State(msgspec.Struct, frozen=True, kw_only=True):
     """Autopilot state (mavros_msgs/State).
 
     Attributes:

@@ -24,18 +24,14 @@ POWER_SUPPLY_STATUS_CHARGING = 1
 POWER_SUPPLY_STATUS_DISCHARGING = 2
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class NavSatStatus(msgspec.Struct, kw_only=True):
+class NavSatStatus(msgspec.Struct, frozen=True, kw_only=True):
     """GNSS fix status (``status`` is one of the NAVSAT_STATUS_* constants)."""
 
     status: int = NAVSAT_STATUS_NO_FIX
     service: int = 1  # SERVICE_GPS
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class NavSatFix(msgspec.Struct, kw_only=True):
+class NavSatFix(msgspec.Struct, frozen=True, kw_only=True):
     """Global position: WGS-84 latitude/longitude in degrees, altitude in metres (AMSL)."""
 
     header: Header = msgspec.field(default_factory=Header)

@@ -11,9 +11,7 @@ import time
 import msgspec
 
 
-# Not frozen yet: services/bridge_mavlink (node.py current_state/_publish_text, telemetry.py) and
-# bridge_tello/telemetry.py still fill it in place; freeze it once they build it whole.
-class Header(msgspec.Struct, kw_only=True):
+class Header(msgspec.Struct, frozen=True, kw_only=True):
     """ROS std_msgs/Header: when and in which frame the data was true.
 
     Attributes:
