@@ -131,6 +131,18 @@ def test_bad_frames_are_counted_and_skipped():
     assert service.stats.processed == 1 and service.stats.received == 5
 
 
+def test_max_rate_hz_detects_on_frames_of_that_rate_by_their_stamps():
+    """A 30 fps camera, perception capped at 10 fps: one frame in three is processed, chosen by
+    the frames' stamps (so the same ones on any machine), the others counted as skipped."""
+    service, bus, received = fake_service(max_rate_hz=10.0)
+    for n in range(30):
+        bus.schedule(n / 30, RAW, disc_msg(n / 30))
+        deliver(service, bus)
+    stamps = [m.header.stamp for m in received()]
+    assert stamps == [n / 30 for n in range(0, 30, 3)]
+    assert service.stats.skipped == 20 and service.stats.processed == 10
+
+
 def test_compressed_frames_and_debug_image():
     service, bus, received = fake_service(compressed=True, debug_image=True)
     jpeg = cv2.imencode(".jpg", red_disc_frame())[1].tobytes()
