@@ -12,7 +12,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 NOT_BENCHMARKS = {"__init__", "__main__", "common", "budget", "suggest", "quick"}
-"""Helpers, and `quick` (the self-benchmark: `dronewrapper bench --quick`), not part of `make bench`."""
+"""Helpers, and `quick` (`dronewrapper bench --quick`): not part of `make bench`."""
 
 
 def main(argv: list[str]) -> int:

@@ -61,8 +61,10 @@ class PerceptionService:
         self.pipeline = pipeline or Pipeline(config)
         self.stats = Stats()
         self.topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
-        self.frames: NewestSlot[Image | CompressedImage] = NewestSlot()
-        node.subscribe(self.topic, self.frames.put, camera=config.camera)
+        self.frames: NewestSlot[tuple[float, Image | CompressedImage]] = NewestSlot()
+        node.subscribe(
+            self.topic, lambda msg: self.frames.put((time.time(), msg)), camera=config.camera
+        )
         self.publisher = node.publisher(registry.DETECTIONS)
         self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
         self._seen = 0
@@ -86,15 +88,16 @@ class PerceptionService:
         taken = self.frames.take(timeout, newer_than=self._seen)
         if taken is None:
             return False
-        count, msg = taken
+        count, (arrival, msg) = taken
         self.stats.received = count
         self.stats.dropped += max(0, count - self._seen - 1)
         self._seen = count
-        self.handle(msg)
+        self.handle(msg, queue_time=time.time() - arrival)
         return True
 
-    def handle(self, msg: Image | CompressedImage) -> None:
-        """Decode, process and publish one frame (bad frames are counted and skipped)."""
+    def handle(self, msg: Image | CompressedImage, queue_time: float = 0.0) -> None:
+        """Decode, process and publish one frame (bad frames are counted and skipped);
+        ``queue_time`` (s, frame arrival -> now) is reported in the Detections."""
         start = time.perf_counter()
         try:
             bgr = compressed_to_bgr(msg) if isinstance(msg, CompressedImage) else image_to_bgr(msg)
@@ -113,16 +116,17 @@ class PerceptionService:
             self._bad(BadFrame("processing_error", f"{type(exc).__name__}: {exc}"))
             return
         self.stats.processed += 1
-        self.publisher.put(
-            to_message(
-                result,
-                stamp=header.stamp,
-                frame_id=frame_id,
-                detector=self.pipeline.detector_name,
-                seq=self.stats.processed,
-                extra_time=decode_time,
-            )
+        detections = to_message(
+            result,
+            stamp=header.stamp,
+            frame_id=frame_id,
+            detector=self.pipeline.detector_name,
+            seq=self.stats.processed,
+            extra_time=decode_time,
         )
+        detections.queue_time = max(0.0, queue_time)
+        detections.decode_time = decode_time
+        self.publisher.put(detections)
         if self.debug is not None:
             jpeg = encode_jpeg(annotate(bgr, result), self.config.debug_jpeg_quality)
             self.debug.put(
