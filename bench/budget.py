@@ -33,7 +33,7 @@ class Stage:
 STAGES: tuple[Stage, ...] = (
     Stage("render", "render / capture", False),
     Stage("publish_image", "publish frame (copy + encode + put)", True),
-    Stage("transport_image", "transport frame", True),
+    Stage("transport_image", "transport frame (+ simulator waits)", True),
     Stage("queue", "perception queue wait", True),
     Stage("decode", "decode frame", True),
     Stage("compute", "compute (detect + track)", False),
@@ -51,7 +51,7 @@ class FrameTimes:
 
     Attributes:
         stamp: the frame's capture stamp (render start).
-        image_arrival: the frame reached a subscriber in another process.
+        image_arrival: the frame reached perception (Detections.receive_time).
         detections_arrival: its Detections reached the probe.
         processing: Detections.processing_time (decode + detect + track).
         queue: Detections.queue_time (arrival at perception -> processing starts); NaN if

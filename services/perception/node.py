@@ -92,12 +92,16 @@ class PerceptionService:
         self.stats.received = count
         self.stats.dropped += max(0, count - self._seen - 1)
         self._seen = count
-        self.handle(msg, queue_time=time.time() - arrival)
+        self.handle(msg, received=arrival)
         return True
 
-    def handle(self, msg: Image | CompressedImage, queue_time: float = 0.0) -> None:
+    def handle(self, msg: Image | CompressedImage, received: float = 0.0) -> None:
         """Decode, process and publish one frame (bad frames are counted and skipped);
-        ``queue_time`` (s, frame arrival -> now) is reported in the Detections."""
+        ``received`` (Unix time the frame arrived, 0 = now) and the wait since are reported in
+        the Detections."""
+        now = time.time()
+        received = received or now
+        queue_time = now - received
         start = time.perf_counter()
         try:
             bgr = compressed_to_bgr(msg) if isinstance(msg, CompressedImage) else image_to_bgr(msg)
@@ -124,6 +128,7 @@ class PerceptionService:
             seq=self.stats.processed,
             extra_time=decode_time,
         )
+        detections.receive_time = received
         detections.queue_time = max(0.0, queue_time)
         detections.decode_time = decode_time
         self.publisher.put(detections)

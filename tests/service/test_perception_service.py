@@ -84,6 +84,7 @@ def test_raw_frames_give_detections_with_source_stamp(router):
         # the latency budget's timing fields (s): decode is part of the processing time
         assert 0.0 <= msg.decode_time <= msg.processing_time < 10.0
         assert 0.0 <= msg.queue_time < 10.0
+        assert 0.0 < msg.receive_time - time.time() + 60.0 < 60.0  # Unix time, in the past
 
 
 def test_bad_frames_are_counted_and_skipped(router):
