@@ -4,12 +4,13 @@ The model of one frame's latency, from what ``bench.quick`` measured on this com
 
     latency = render/capture + middleware + wait for the detector + detect
 
-Perception always takes the newest frame (``services/perception/newest.py``), so frames never
-queue: a detector run at ``fps`` below what it can do waits, on average, half a camera period
-for the next frame (a whole one at worst); a detector kept busy all the time (``fps`` x detect
-time close to 1) makes the newest frame wait for the run in progress, half a detection on
-average (a whole one at worst). So p50 ~ render + middleware p50 + detect p50 + average wait and
-p99 ~ render + middleware p99 + detect p99 + worst wait.
+Perception always takes the newest frame as soon as it is free
+(``services/perception/newest.py``), so frames never queue: a detector with time to spare
+(``fps`` x detect time well under 1) takes each frame it uses on arrival, and only a slow
+detection (p99) running past the next frame it wants delays that one; a detector kept busy all
+the time makes the newest frame wait for the run in progress, half a detection on average (a
+whole one at worst). So p50 ~ render + middleware p50 + detect p50 + average wait and p99 ~
+render + middleware p99 + detect p99 + worst wait.
 
 The detector's rate is bounded by the CPU it may use (``cpu_budget``: cores, e.g. 0.5 = half of
 one core, so the rest of the graph keeps its share) and by the camera's rate, and is never
@@ -73,8 +74,10 @@ def estimate(
     fps = min(fps, camera_fps, 1.0 / speed.p50_s)
     busy = fps * speed.p50_s
     saturated = busy >= SATURATED
-    period = 1.0 / camera_fps
-    wait_avg, wait_worst = (speed.p50_s / 2, speed.p99_s) if saturated else (period / 2, period)
+    if saturated:
+        wait_avg, wait_worst = speed.p50_s / 2, speed.p99_s
+    else:
+        wait_avg, wait_worst = 0.0, max(0.0, speed.p99_s - 1.0 / fps)
     p50 = render_s + middleware_p50_s + speed.p50_s + wait_avg
     p99 = render_s + middleware_p99_s + speed.p99_s + wait_worst
     return Estimate(speed.input_size, fps, p50 * 1e3, p99 * 1e3, busy, saturated)
