@@ -91,3 +91,23 @@ def test_growth_compares_first_and_last_window():
     assert growth([], []).first_n == 0
     with pytest.raises(ValueError):
         growth([1.0], [])
+
+
+def test_the_mavlink_relay_reads_setpoints_from_real_datagrams():
+    import math as m
+
+    from pymavlink.dialects.v20 import common as mavlink2
+
+    from bench.latency_budget import parse_setpoint, setpoint_key
+
+    link = mavlink2.MAVLink(None, srcSystem=1, srcComponent=191)
+    # body vx 1.2 m/s at a 30 degree heading -> local north/east; up 0.3; yaw rate 0.4 CCW
+    north, east = 1.2 * m.cos(m.radians(30)), 1.2 * m.sin(m.radians(30))
+    msg = mavlink2.MAVLink_set_position_target_local_ned_message(
+        1234, 1, 1, 1, 3527, 0, 0, 0, north, east, -0.3, 0, 0, 0, 0, -0.4
+    )
+    datagram = msg.pack(link)
+    assert parse_setpoint(datagram) == pytest.approx(setpoint_key(1.2, 0.0, 0.3, 0.4), abs=1e-6)
+    heartbeat = mavlink2.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(link)
+    assert parse_setpoint(heartbeat) is None
+    assert parse_setpoint(b"\x00\x01") is None
