@@ -2,9 +2,9 @@
 transport floor and follow-person latency budget in about a minute, and detector settings that
 meet a latency target.
 
-1. YOLOX-Nano ``detect()`` on a 640x480 photo with the execution providers asked for
-   (``--providers``, as the perception config's ``providers``), at each input size the model
-   accepts (a static-shape model: its own size only).
+1. YOLOX ``detect()`` (``--model``, default YOLOX-Nano) on a 640x480 photo with the execution
+   providers asked for (``--providers``, as the perception config's ``providers``), at each
+   input size the model accepts (a static-shape model: its own size only).
 2. A 640x480 image's round trip to another process: plain Zenoh (the floor) and through our
    runtime, in the same run.
 3. The follow-person graph (simulator, bridge, perception with YOLOX on the CPU, controller)
@@ -12,7 +12,7 @@ meet a latency target.
 4. The suggestion: the largest input and the detector rate that meet ``--target-ms``
    (glass-to-setpoint p50) within ``--cpu-budget`` cores (see :mod:`bench.suggest`).
 
-    python -m bench.quick [--target-ms 60] [--providers auto] [--seconds 15] [--skip-graph]
+    python -m bench.quick [--target-ms 60] [--providers auto] [--model M.onnx] [--seconds 15]
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import logging
 import math
 import sys
 import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -31,16 +32,18 @@ from bench.suggest import DetectorSpeed, suggest
 
 DETECTOR_RUNS = 30
 SIZES = (416, 320, 256)
+MODEL = Path(__file__).resolve().parents[1] / "assets" / "models" / "yolox_nano.onnx"
 
 
-def detector_speeds(providers: list[str], threads: int) -> tuple[list[DetectorSpeed], list[str]]:
-    """YOLOX-Nano detect() time at each input size the model takes; the providers it ran on."""
+def detector_speeds(
+    providers: list[str], threads: int, model: Path
+) -> tuple[list[DetectorSpeed], list[str]]:
+    """YOLOX ``detect()`` time at each input size the model takes; the providers it ran on."""
     from bench.latency_budget import ASSETS
     from dronewrapper_perception.yolox import YoloxDetector
 
     photo = cv2.imread(str(ASSETS / "images" / "vtest_f0550.png"))
     frame = cv2.resize(photo, (640, 480)) if photo is not None else np.zeros((480, 640, 3), "u1")
-    model = ASSETS / "models" / "yolox_nano.onnx"
     first = YoloxDetector(model, providers=providers or None, threads=threads)
     detectors = [first]
     if first.input_size == SIZES[0]:  # the model may fix its input size: then only that one
@@ -84,6 +87,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="execution providers for the detector test: cpu, cuda, tensorrt, "
                              "auto (comma-separated)")  # fmt: skip
     parser.add_argument("--threads", type=int, default=2, help="CPU threads per inference")
+    parser.add_argument("--model", type=Path, default=MODEL,
+                        help="YOLOX ONNX model to time (e.g. yolox_s.onnx)")  # fmt: skip
     parser.add_argument("--cpu-budget", type=float, default=1.0,
                         help="cores the detector may use (default 1)")  # fmt: skip
     parser.add_argument("--camera-fps", type=float, default=30.0)
@@ -101,9 +106,10 @@ def main(argv: list[str] | None = None) -> int:
     providers = [p.strip() for p in args.providers.split(",") if p.strip()]
 
     print("1/3 detector speed ...", flush=True)
-    speeds, active = detector_speeds(providers, args.threads)
+    speeds, active = detector_speeds(providers, args.threads, args.model)
     print_table(
-        f"YOLOX-Nano detect() on 640x480, {args.threads} threads, on {', '.join(active)} (ms)",
+        f"{args.model.name} detect() on 640x480, {args.threads} CPU threads, on "
+        f"{', '.join(active)} (ms)",
         ["input px", "p50", "p99"],
         [[s.input_size, s.p50_s * 1e3, s.p99_s * 1e3] for s in speeds],
     )
@@ -120,6 +126,7 @@ def main(argv: list[str] | None = None) -> int:
 
     result: dict[str, object] = {
         "providers": active,
+        "model": str(args.model),
         "detector": [vars(s) for s in speeds],
         "transport": rtt,
     }
