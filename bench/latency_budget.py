@@ -80,10 +80,12 @@ def render_and_publish(scenario_name: str, frames: int) -> dict[str, dict[str, f
     renderer = Renderer(world, PinholeCamera(cam.width, cam.height, math.radians(cam.hfov_deg)),
                         ASSETS / "sprites")  # fmt: skip
     quat = np.array([0.0, 0.0, 0.0, 1.0])
-    position = np.array([0.0, 0.0, 2.0])
     render_s, publish_s = [], []
-    for _ in range(frames):
+    for k in range(frames):
         world.step(1.0 / cam.rate_hz)
+        # a hovering drone never holds exactly still: a new pose each frame, as in flight (the
+        # renderer caches the background of an unchanged pose, which would time 10x too fast)
+        position = np.array([0.0, 0.0, 2.0 + 0.002 * math.sin(k)])
         t0 = time.perf_counter()
         image = renderer.render(FRONTAL, position, quat)
         t1 = time.perf_counter()
