@@ -32,7 +32,7 @@ class Stage:
 
 STAGES: tuple[Stage, ...] = (
     Stage("render", "render / capture", False),
-    Stage("publish_image", "publish frame (copy + encode + put)", True),
+    Stage("publish_image", "publish frame (encode + copy to SHM)", True),
     Stage("transport_image", "transport frame (+ simulator waits)", True),
     Stage("queue", "perception queue wait", True),
     Stage("decode", "decode frame", True),
