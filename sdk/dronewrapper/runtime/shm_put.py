@@ -30,8 +30,9 @@ MIN_BYTES = 64 * 1024
 """Smaller payloads go the ordinary way (Zenoh's own shared-memory threshold is 3 kB; below
 this size the saved copy is worth less than the allocation)."""
 
-POOL_BYTES = 64 * 1024 * 1024
-"""Shared memory a process's provider may hold (about 70 frames of 640x480 bgr8 in flight)."""
+POOL_BYTES = 32 * 1024 * 1024
+"""Shared memory a process's provider may hold (RAM-backed, touched as used): 35 frames of
+640x480 bgr8 in flight, 11 of 1280x720."""
 
 _EMPTY_DATA_TAIL = b"\xa4data\xc4\x00"  # "data" -> bin8 of length 0
 _BIN32 = b"\xc6"
