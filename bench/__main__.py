@@ -11,7 +11,8 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-NOT_BENCHMARKS = {"__init__", "__main__", "common"}
+NOT_BENCHMARKS = {"__init__", "__main__", "common", "budget", "suggest", "quick"}
+"""Helpers, and `quick` (`dronewrapper bench --quick`): not part of `make bench`."""
 
 
 def main(argv: list[str]) -> int:

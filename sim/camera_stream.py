@@ -25,9 +25,10 @@ log = logging.getLogger("sim")
 class _WatchedPublisher:
     """A Zenoh publisher that knows whether any subscriber matches it."""
 
-    def __init__(self, session: zenoh.Session, key: str, msg_type: type) -> None:
+    def __init__(self, session: zenoh.Session, key: str, msg_type: type, shm=None) -> None:
         self.key = key
         self.count = 0
+        self._shm = shm  # the node's ShmWriter: frames written straight into shared memory
         self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type))
 
     def watched(self) -> bool:
@@ -37,7 +38,8 @@ class _WatchedPublisher:
             return False
 
     def put(self, msg: Any) -> None:
-        self._pub.put(codec.encode(msg))
+        payload = self._shm.payload(msg) if self._shm is not None else None
+        self._pub.put(codec.encode(msg) if payload is None else payload)
         self.count += 1
 
     def undeclare(self) -> None:
@@ -75,7 +77,10 @@ class CameraStreamer(threading.Thread):
         ns = node.ns
         self._raw = {
             m.name: _WatchedPublisher(
-                node.session, registry.IMAGE_RAW.key(ns, camera=m.name), Image
+                node.session,
+                registry.IMAGE_RAW.key(ns, camera=m.name),
+                Image,
+                getattr(node, "shm_writer", None),
             )
             for m in mounts
         }
@@ -120,7 +125,7 @@ class CameraStreamer(threading.Thread):
                     width=width,
                     encoding="bgr8",
                     step=width * 3,
-                    data=image.tobytes(),
+                    data=memoryview(np.ascontiguousarray(image)).cast("B"),  # no copy
                 )
             )
         if want_jpeg:

@@ -13,6 +13,7 @@
     dronewrapper replay FILE.mcap [--rate R] [...]   a recording back on the bus
     dronewrapper foxglove [KEYEXPR...] [--port P]    the live bus to Foxglove (WebSocket)
     dronewrapper mavlink-forward [--udp HOST:PORT]   a drone's MAVLink for QGroundControl (UDP)
+    dronewrapper bench --quick [--target-ms MS]      this computer's speed, settings to use (stack)
     dronewrapper --version                           the installed version
 
 ``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
@@ -242,6 +243,28 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
     return 0
 
 
+def _bench(argv: Sequence[str]) -> int:
+    """``bench --quick [...]``: the self-benchmark; ``bench [NAME...]``: the full benchmarks.
+
+    They are scripts in the repository's ``bench/`` (beside ``compose/``), run from there."""
+    import subprocess
+    from pathlib import Path
+
+    try:
+        import dronewrapper_compose
+    except ModuleNotFoundError:
+        print("dronewrapper bench: needs the on-board stack; run `make setup`", file=sys.stderr)
+        return 2
+    repo = Path(dronewrapper_compose.__file__).resolve().parents[1]
+    if not (repo / "bench" / "quick.py").is_file():
+        print(f"dronewrapper bench: no bench/ beside {repo / 'compose'}", file=sys.stderr)
+        return 2
+    quick = "--quick" in argv
+    module = "bench.quick" if quick else "bench"
+    rest = [a for a in argv if a != "--quick"] if quick else list(argv)
+    return subprocess.call([sys.executable, "-m", module, *rest], cwd=repo)
+
+
 def _keys(argv: Sequence[str]) -> int:
     try:
         from dronewrapper.security.keys_cli import main as keys_main
@@ -270,6 +293,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "doctor": _doctor,
         "keys": _keys,
         "mavlink-forward": _mavlink_forward,
+        "bench": _bench,
     }
     if command in local:
         return local[command](rest)

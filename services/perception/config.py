@@ -11,6 +11,7 @@ import math
 import msgspec
 
 from dronewrapper_perception.color_filter import PRESETS, ColorRange
+from dronewrapper_perception.providers import check_names
 from dronewrapper_perception.tracking import TRACKERS
 from dronewrapper_perception.yolox import class_ids_for
 
@@ -63,8 +64,11 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         classes: COCO class names kept by YOLOX (``person``, ``car``, ``horse``...).
         threads: CPU threads for one YOLOX inference.
         thread_spinning: let onnxruntime threads busy-wait (faster only on idle, dedicated cores).
-        providers: onnxruntime execution providers in order (``tensorrt``, ``cuda``, ``auto``
-            or full names); a list or one comma-separated string; empty = CPU.
+        providers: onnxruntime execution providers in order (``cpu``, ``cuda``, ``tensorrt``,
+            ``auto`` or full names); a list or one comma-separated string; empty = CPU. One that
+            cannot be had is skipped with a warning saying why (the CPU runs the model).
+        providers_strict: refuse to start instead of falling back to the CPU when a requested
+            GPU provider cannot be had (``auto``: when none can).
         tracker: ``kalman`` (motion + appearance) | ``paper`` (the paper's FIFO) | ``none``.
         max_coast_s: seconds a Kalman track survives without detections.
         paper_fifo_length: centroids in the paper tracker's FIFO.
@@ -96,6 +100,7 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     threads: int = 2
     thread_spinning: bool = False
     providers: list[str] | str = msgspec.field(default_factory=list)
+    providers_strict: bool = False
     tracker: str = "kalman"
     max_coast_s: float = 2.0
     paper_fifo_length: int = 5
@@ -135,6 +140,10 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         if not 1 <= self.debug_jpeg_quality <= 100:
             raise ValueError("debug_jpeg_quality must be in 1..100")
         class_ids_for(self.classes)  # unknown class names fail here
+        try:
+            check_names(self.provider_list())
+        except ValueError as exc:
+            raise ValueError(f"providers: {exc}") from exc
 
     def provider_list(self) -> list[str]:
         """``providers`` as a list of names (a string is split at commas)."""

@@ -101,6 +101,7 @@ def build_detector(config: Config) -> Detector:
             threads=config.threads,
             checksum=config.checksum,
             spinning=config.thread_spinning,
+            strict_providers=config.providers_strict,
         )
     from dronewrapper_perception.hog import HogDetector
 

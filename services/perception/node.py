@@ -64,8 +64,10 @@ class PerceptionService:
         self.pipeline = pipeline or Pipeline(config)
         self.stats = Stats()
         self.topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
-        self.frames: Latest[Image | CompressedImage] = Latest(name="camera frames")
-        node.subscribe(self.topic, self.frames.update, camera=config.camera)
+        self.frames: Latest[tuple[float, Image | CompressedImage]] = Latest(name="camera frames")
+        node.subscribe(
+            self.topic, lambda msg: self.frames.update((time.time(), msg)), camera=config.camera
+        )
         self.publisher = node.publisher(registry.DETECTIONS)
         self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
         self.rate_cap = FrameRateCap(config.max_rate_hz)
@@ -91,7 +93,7 @@ class PerceptionService:
         taken = self.frames.take(timeout, newer_than=self._seen)
         if taken is None:
             return False
-        count, msg = taken
+        count, (arrival, msg) = taken
         self.stats.received = count
         self.stats.dropped += max(0, count - self._seen - 1)
         self._seen = count
@@ -99,11 +101,16 @@ class PerceptionService:
         if math.isfinite(stamp) and not self.rate_cap.admit(stamp):
             self.stats.skipped += 1
             return True
-        self.handle(msg)
+        self.handle(msg, received=arrival)
         return True
 
-    def handle(self, msg: Image | CompressedImage) -> None:
-        """Decode, process and publish one frame (bad frames are counted and skipped)."""
+    def handle(self, msg: Image | CompressedImage, received: float = 0.0) -> None:
+        """Decode, process and publish one frame (bad frames are counted and skipped);
+        ``received`` (Unix time the frame arrived, 0 = now) and the wait since are reported in
+        the Detections."""
+        now = time.time()
+        received = received or now
+        queue_time = now - received
         start = time.perf_counter()
         try:
             if isinstance(msg, CompressedImage):
@@ -125,16 +132,18 @@ class PerceptionService:
             self._bad(BadFrame("processing_error", f"{type(exc).__name__}: {exc}"))
             return
         self.stats.processed += 1
-        self.publisher.put(
-            to_message(
-                result,
-                stamp=header.stamp,
-                frame_id=frame_id,
-                detector=self.pipeline.detector_name,
-                seq=self.stats.processed,
-                extra_time=decode_time,
-            )
+        detections = to_message(
+            result,
+            stamp=header.stamp,
+            frame_id=frame_id,
+            detector=self.pipeline.detector_name,
+            seq=self.stats.processed,
+            extra_time=decode_time,
         )
+        detections.receive_time = received
+        detections.queue_time = max(0.0, queue_time)
+        detections.decode_time = decode_time
+        self.publisher.put(detections)
         if self.debug is not None:
             jpeg = encode_jpeg(annotate(bgr, result), self.config.debug_jpeg_quality)
             self.debug.put(

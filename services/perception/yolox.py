@@ -20,6 +20,13 @@ import numpy as np
 
 from dronewrapper_perception.detection import Detection
 from dronewrapper_perception.model_file import ModelFileError, check_model_file
+from dronewrapper_perception.providers import (
+    ALIASES,
+    ProviderError,
+    choose_providers,
+    dropped_at_start,
+    refusal,
+)
 
 __all__ = [
     "COCO_CLASSES",
@@ -52,11 +59,7 @@ COCO_CLASSES: tuple[str, ...] = (
 STRIDES = (8, 16, 32)
 LETTERBOX_FILL = 114
 
-PROVIDER_ALIASES = {
-    "cpu": "CPUExecutionProvider",
-    "cuda": "CUDAExecutionProvider",
-    "tensorrt": "TensorrtExecutionProvider",
-}
+PROVIDER_ALIASES = ALIASES
 
 
 def class_ids_for(names: Iterable[str], all_names: Sequence[str] = COCO_CLASSES) -> list[int]:
@@ -214,29 +217,9 @@ def decode_outputs(
 
 
 def resolve_providers(requested: Sequence[str] | None, available: Sequence[str]) -> list[str]:
-    """onnxruntime execution providers to use, always ending with the CPU one.
-
-    ``None`` or empty: CPU only. ``["auto"]``: TensorRT, then CUDA, when present. Otherwise
-    names (``cuda``, ``tensorrt``, ``cpu`` or full provider names) in order of preference;
-    the ones not present in this onnxruntime build are skipped with a warning.
-    """
-    if not requested:
-        return ["CPUExecutionProvider"]
-    wanted: list[str] = []
-    for name in requested:
-        if name.lower() == "auto":
-            wanted += ["TensorrtExecutionProvider", "CUDAExecutionProvider"]
-        else:
-            wanted.append(PROVIDER_ALIASES.get(name.lower(), name))
-    chosen = []
-    for provider in wanted:
-        if provider in available and provider not in chosen:
-            chosen.append(provider)
-        elif provider not in available and requested != ["auto"]:
-            log.warning("execution provider %s is not available here; skipping it", provider)
-    if "CPUExecutionProvider" not in chosen:
-        chosen.append("CPUExecutionProvider")
-    return chosen
+    """onnxruntime execution providers to use, always ending with the CPU one (see
+    :mod:`dronewrapper_perception.providers`; the ones not in this build are left out)."""
+    return list(choose_providers(requested, available).providers)
 
 
 class YoloxDetector:
@@ -249,8 +232,11 @@ class YoloxDetector:
         score_threshold: minimum ``obj * cls`` score, 0..1.
         nms_threshold: IoU above which a lower-scored box of the same class is dropped.
         classes: COCO class names to keep (empty = all); default people only.
-        providers: onnxruntime execution providers (``cuda``, ``tensorrt``, ``auto``...);
-            None = CPU.
+        providers: onnxruntime execution providers (``cpu``, ``cuda``, ``tensorrt``, ``auto``
+            or full names); None = CPU. One that cannot be had is left out with a warning
+            saying why, and the model runs on the CPU.
+        strict_providers: refuse (ProviderError) instead of falling back to the CPU when a
+            requested GPU provider cannot be had (``auto``: when none can).
         threads: CPU threads for one inference.
         checksum: expected sha256 of the model file; verified when given.
         spinning: let onnxruntime's worker threads busy-wait between operators. Off by
@@ -272,6 +258,7 @@ class YoloxDetector:
         threads: int = 2,
         checksum: str = "",
         spinning: bool = False,
+        strict_providers: bool = False,
     ) -> None:
         import onnxruntime as ort
 
@@ -288,9 +275,14 @@ class YoloxDetector:
         options.add_session_config_entry(
             "session.intra_op.allow_spinning", "1" if spinning else "0"
         )
-        self.providers = resolve_providers(providers, ort.get_available_providers())
+        available = ort.get_available_providers()
+        choice = choose_providers(providers, available)
+        if choice.missing and strict_providers and not choice.auto:
+            raise ProviderError(refusal(choice, [], available))
+        if choice.missing:
+            log.warning("%s; running YOLOX without it", choice.fallback_reason(available))
         try:
-            self.session = ort.InferenceSession(str(path), options, providers=self.providers)
+            self.session = ort.InferenceSession(str(path), options, providers=choice.providers)
         except (
             ort.capi.onnxruntime_pybind11_state.InvalidProtobuf,
             ort.capi.onnxruntime_pybind11_state.InvalidGraph,
@@ -298,6 +290,17 @@ class YoloxDetector:
         ) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise ModelFileError(f"{path} is not an ONNX model (ONNX Runtime: {reason})") from exc
+        self.providers = list(self.session.get_providers())
+        """The providers the session really runs on, best first (the CPU last)."""
+        for provider in dropped_at_start(choice, self.providers):
+            log.warning(
+                "execution provider %s is in this onnxruntime build but could not start "
+                "(no GPU, driver or CUDA/TensorRT libraries?); running YOLOX without it",
+                provider,
+            )
+        if strict_providers and (reason := refusal(choice, self.providers, available)):
+            raise ProviderError(reason)
+        log.info("YOLOX runs on %s", ", ".join(self.providers))
         model_input = self.session.get_inputs()[0]
         self.input_name = model_input.name
         shape = model_input.shape

@@ -110,6 +110,10 @@ def test_raw_frames_give_detections_with_source_stamp(router):
         assert abs(target.bbox.center.position.y - 80) < 2
         assert abs(target.circle_radius - 30) < 3
         assert service.stats.processed >= 2 and not service.stats.bad
+        # the latency budget's timing fields (s): decode is part of the processing time
+        assert 0.0 <= msg.decode_time <= msg.processing_time < 10.0
+        assert 0.0 <= msg.queue_time < 10.0
+        assert 0.0 < msg.receive_time - time.time() + 60.0 < 60.0  # Unix time, in the past
 
 
 def test_bad_frames_are_counted_and_skipped():

@@ -72,6 +72,12 @@ class Detections(msgspec.Struct, kw_only=True, frozen=True):
         detector: ``color``, ``yolox`` or ``hog``.
         target_id: ``id`` of the detection chosen as the followed target, "" when none.
         processing_time: seconds spent on this frame (decode + detect + track).
+        receive_time: when the frame reached perception (s, Unix time like ``header.stamp``);
+            0 from publishers that do not measure it.
+        queue_time: seconds the frame waited in perception (arrival -> processing starts);
+            0 from publishers that do not measure it.
+        decode_time: seconds of ``processing_time`` spent decoding the frame to pixels; 0 from
+            publishers that do not measure it.
     """
 
     header: Header = msgspec.field(default_factory=Header)
@@ -81,6 +87,9 @@ class Detections(msgspec.Struct, kw_only=True, frozen=True):
     detector: str = ""
     target_id: str = ""
     processing_time: float = 0.0
+    receive_time: float = 0.0
+    queue_time: float = 0.0
+    decode_time: float = 0.0
 
     def target(self) -> Detection2D | None:
         """The followed detection, or None."""

@@ -46,6 +46,7 @@ from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
 from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
 from dronewrapper.runtime.shm import remove_stale_segments
+from dronewrapper.runtime.shm_put import ShmWriter
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -93,12 +94,22 @@ def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Sessi
 
 
 class Publisher(Generic[T]):
-    """A typed publisher on one concrete key."""
+    """A typed publisher on one concrete key; images go through ``shm`` (written straight into
+    shared memory, see :mod:`dronewrapper.runtime.shm_put`) when given."""
 
-    def __init__(self, session: zenoh.Session, key: str, msg_type: type[T], **qos: Any) -> None:
+    def __init__(
+        self,
+        session: zenoh.Session,
+        key: str,
+        msg_type: type[T],
+        *,
+        shm: ShmWriter | None = None,
+        **qos: Any,
+    ) -> None:
         self.key = key
         self.type = msg_type
         self.count = 0
+        self._shm = shm
         self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type), **qos)
 
     def put(self, msg: T, *, attachment: bytes | None = None) -> None:
@@ -106,7 +117,8 @@ class Publisher(Generic[T]):
         (see :mod:`dronewrapper.runtime.caller`)."""
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
-        self._pub.put(codec.encode(msg), attachment=attachment)
+        payload = self._shm.payload(msg) if self._shm is not None else None
+        self._pub.put(codec.encode(msg) if payload is None else payload, attachment=attachment)
         self.count += 1
 
     def watched(self) -> bool:
@@ -156,6 +168,8 @@ class Node:
         self._closed = False
         self._old_handlers: dict[int, Any] = {}
         self._parent_pid = os.getppid()
+        self.shm_writer = ShmWriter() if self.options.shared_memory else None
+        """Writes large messages (images) straight into Zenoh shared memory; None when off."""
         if handle_signals and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
                 self._old_handlers[sig] = signal.signal(sig, self._on_signal)
@@ -252,7 +266,10 @@ class Node:
         :mod:`dronewrapper.runtime.qos`); ``qos`` overrides single options.
         """
         options = {**qos_for(topic), **(qos or {})}
-        pub = Publisher(self.session, key or topic.key(self.ns, **parts), topic.type, **options)
+        shm = self.shm_writer if "data" in getattr(topic.type, "__struct_fields__", ()) else None
+        pub = Publisher(
+            self.session, key or topic.key(self.ns, **parts), topic.type, shm=shm, **options
+        )
         self._declared.append(pub)
         return pub
 
