@@ -5,8 +5,9 @@ The model of one frame's latency, from what ``bench.quick`` measured on this com
     latency = render/capture + middleware + wait for the detector + detect
 
 Perception always takes the newest frame as soon as it is free (the runtime's ``Latest``),
-detecting on at most ``max_rate_hz`` of them a second, so frames never queue: a detector with time to spare
-(``fps`` x detect time well under 1) takes each frame it uses on arrival, and only a slow
+detecting on at most ``max_rate_hz`` of them a second, so frames never queue: a detector with
+time to spare (``fps`` x detect time well under 1) takes each frame it uses on arrival, and only
+a slow
 detection (p99) running past the next frame it wants delays that one; a detector kept busy all
 the time makes the newest frame wait for the run in progress, half a detection on average (a
 whole one at worst). So p50 ~ render + middleware p50 + detect p50 + average wait and p99 ~
