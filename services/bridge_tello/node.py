@@ -15,6 +15,7 @@ import threading
 import time
 
 import msgspec
+import numpy as np
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
@@ -566,7 +567,7 @@ class Bridge:
                     width=width,
                     encoding="bgr8",
                     step=width * 3,
-                    data=image.tobytes(),
+                    data=memoryview(np.ascontiguousarray(image)).cast("B"),  # no copy
                 )
             )
             self.frames_published += 1
