@@ -20,10 +20,13 @@ from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 GRAPHS = [
-    ("sim_iris", "empty"),
-    ("sim_follow_color", "beacon_smooth"),
-    ("sim_follow_person", "person_moving"),
+    ("sim_iris", "empty", {}),
+    ("sim_follow_color", "beacon_smooth", {}),
+    ("sim_follow_person", "people_crossing_front", {"detect_rate_hz": "0"}),
+    ("sim_follow_person", "people_crossing_front", {"detect_rate_hz": "10"}),
 ]
+"""(graph, scenario, graph variables): the person app detecting on every frame it can, then
+at its default of 10 detections a second."""
 TICKS = os.sysconf("SC_CLK_TCK")
 
 
@@ -36,7 +39,13 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICKS  # utime, stime (fields 14, 15)
 
 
-def measure(graph: str, scenario: str, seconds: float, settle: float) -> dict[str, float]:
+def measure(
+    graph: str,
+    scenario: str,
+    seconds: float,
+    settle: float,
+    extra: dict[str, str] | None = None,
+) -> dict[str, float]:
     from dronewrapper_compose.launcher import Launcher
 
     variables = {
@@ -44,6 +53,7 @@ def measure(graph: str, scenario: str, seconds: float, settle: float) -> dict[st
         "onboard_port": str(free_port(socket.SOCK_DGRAM)),
         "gcs_port": str(free_port(socket.SOCK_DGRAM)),
         "on_exit": "stop",
+        **(extra or {}),
     }
     log_path = REPO / "out" / "bench" / f"graph_cpu_{graph}.log"
     log_path.parent.mkdir(parents=True, exist_ok=True)
@@ -77,12 +87,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--settle", type=float, default=15.0, help="wait after start (s)")
     args = parser.parse_args(argv)
     results, rows = {}, []
-    for graph, scenario in GRAPHS:
-        usage = measure(graph, scenario, args.seconds, args.settle)
+    for graph, scenario, extra in GRAPHS:
+        usage = measure(graph, scenario, args.seconds, args.settle, extra)
         total = sum(usage.values())
-        results[graph] = {"scenario": scenario, "cpu_percent": usage, "total_percent": total}
+        settings = " ".join(f"{k}={v}" for k, v in extra.items())
+        name = f"{graph} {settings}".strip()
+        results[name] = {"scenario": scenario, "cpu_percent": usage, "total_percent": total}
         detail = ", ".join(f"{n} {v:.0f}" for n, v in usage.items())
-        rows.append([graph, scenario, total, detail])
+        rows.append([name, scenario, total, detail])
     print_table(
         f"CPU of each graph (% of one core; this machine has {os.cpu_count()} cores)",
         ["graph", "scenario", "total %", "per process %"],

@@ -16,6 +16,8 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 
+import msgspec
+
 from dronewrapper.images import BadFrame, compressed_to_bgr, image_to_bgr
 from dronewrapper.msgs import CompressedImage, Header, Image, registry
 from dronewrapper.runtime import Latest, Node
@@ -140,10 +142,14 @@ class PerceptionService:
             seq=self.stats.processed,
             extra_time=decode_time,
         )
-        detections.receive_time = received
-        detections.queue_time = max(0.0, queue_time)
-        detections.decode_time = decode_time
-        self.publisher.put(detections)
+        self.publisher.put(
+            msgspec.structs.replace(
+                detections,
+                receive_time=received,
+                queue_time=max(0.0, queue_time),
+                decode_time=decode_time,
+            )
+        )
         if self.debug is not None:
             jpeg = encode_jpeg(annotate(bgr, result), self.config.debug_jpeg_quality)
             self.debug.put(

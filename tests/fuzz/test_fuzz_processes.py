@@ -16,6 +16,7 @@ import math
 import socket
 import time
 
+import msgspec
 import pytest
 from autopilot_peer import AutopilotPeer
 from bridge_rig import Collected
@@ -121,7 +122,7 @@ def fuzz_graph(user, peer: AutopilotPeer, procs: dict) -> None:
     @given(bad=bad_setpoint(), frames=detections(), image=bad_image())
     def published_garbage(bad: Bad, frames, image: bytes) -> None:
         user.session.put(registry.SETPOINT_RAW_LOCAL.key("drone"), bad.payload)
-        frames.detector = "fuzz"  # not perception's
+        frames = msgspec.structs.replace(frames, detector="fuzz")  # not perception's
         user.session.put(registry.DETECTIONS.key("drone"), codec.encode(frames))
         user.session.put(registry.IMAGE_RAW.key("drone", camera="cam_frontal"), image)
 
