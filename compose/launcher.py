@@ -6,6 +6,9 @@ Every line a process prints is prefixed with its name. On Ctrl-C, SIGTERM or aft
 ``--duration`` it stops the processes in reverse order (SIGINT, then SIGKILL after a grace
 period) and closes the router. Exit status: 0 when every process started and stopped cleanly,
 1 when a process died or failed to become ready, 2 for a bad graph file or bad flags.
+
+Size: over 400 lines: a process's whole life in a graph (start in order, readiness, prefixed
+logs, ordered stop, exit status) is one concern; the graph file's schema is ``graph.py``.
 """
 
 from __future__ import annotations

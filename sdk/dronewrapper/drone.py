@@ -16,6 +16,10 @@ Getters read the newest message already received (no network round trip) and rai
 :class:`~dronewrapper.errors.NoData` if none has arrived yet. Blocking calls take timeouts and
 raise :class:`~dronewrapper.errors.Timeout`, :class:`~dronewrapper.errors.CommandRefused` (with the
 autopilot's reason) or :class:`~dronewrapper.errors.NotConnected`.
+
+Size: over 400 lines on purpose: this is the paper's API, one class a user reads top to bottom
+(getters, setpoints, commands, parameters); its plumbing lives in ``telemetry``, ``setpoints``,
+``streamer`` and the runtime.
 """
 
 from __future__ import annotations

@@ -4,6 +4,9 @@ Threads: replies (command socket -> :class:`ReplyMatcher`), state (state strings
 keys), control at ``rc_rate_hz`` (failsafe, ``rc`` sticks, keep-alive, link supervision,
 periodic State), video (datagrams -> decoder -> newest frame) and its publisher, plus the
 Node's service workers (commands wait for the Tello's reply).
+
+Size: about 800 lines, the debt of this file: its logic still sits beside its I/O. It needs the
+split bridge_mavlink had (a pure core taking replies, state strings and time; a thin node).
 """
 
 from __future__ import annotations

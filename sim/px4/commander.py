@@ -18,6 +18,9 @@ Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
   activated" and the fallback (COM_OBL_RC_ACT, and NAV_RCL_ACT when that needs RC): RTL by
   default; not latched: the vehicle is back in OFFBOARD as soon as setpoints resume;
 - after a disarm, a LAND or RTL intention reverts to the mode intended before it.
+
+Size: over 400 lines: PX4's mode and arming rules are one state machine, each rule next to the
+PX4 behaviour it reproduces.
 """
 
 from __future__ import annotations
