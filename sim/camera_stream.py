@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 import zenoh
 
+from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.sensor import CompressedImage, Image
-from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, encoding_for
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 
@@ -115,25 +115,10 @@ class CameraStreamer(threading.Thread):
         self.render_s += time.perf_counter() - started
         seq = self.frames[mount.name]
         self.frames[mount.name] = seq + 1
-        header = Header(stamp=stamp, frame_id=mount.name, seq=seq)
-        height, width = image.shape[:2]
         if want_raw:
-            raw.put(
-                Image(
-                    header=header,
-                    height=height,
-                    width=width,
-                    encoding="bgr8",
-                    step=width * 3,
-                    data=memoryview(np.ascontiguousarray(image)).cast("B"),  # no copy
-                )
-            )
+            raw.put(bgr_to_image(image, stamp, mount.name, seq))  # a view: no copy
         if want_jpeg:
-            import cv2
-
-            ok, buf = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
-            if ok:
-                jpeg.put(CompressedImage(header=header, format="jpeg", data=buf.tobytes()))
+            jpeg.put(bgr_to_jpeg(image, stamp, mount.name, seq, self.jpeg_quality))
 
     def close(self) -> None:
         for pub in [*self._raw.values(), *self._jpeg.values()]:

@@ -129,11 +129,6 @@ def _quat_msg(q: Quat) -> Quaternion:
     return Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])
 
 
-def _xyz(v: tuple[float, float, float]) -> dict[str, float]:
-    """A 3-vector as the x, y, z fields of a Point or Vector3."""
-    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
-
-
 @dataclass
 class Telemetry:
     """The latest attitude / fix, and the conversions that need them.
@@ -187,16 +182,16 @@ class Telemetry:
         rates_enu = rotate(self.attitude, self.rates_flu)
         pose = PoseStamped(
             header=self._header(FRAME_MAP, stamp, "pose"),
-            pose=Pose(position=Point(**_xyz(position)), orientation=_quat_msg(self.attitude)),
+            pose=Pose(position=Point.of(position), orientation=_quat_msg(self.attitude)),
         )
         local = TwistStamped(
             header=self._header(FRAME_MAP, stamp, "vlocal"),
-            twist=Twist(linear=Vector3(**_xyz(velocity)), angular=Vector3(**_xyz(rates_enu))),
+            twist=Twist(linear=Vector3.of(velocity), angular=Vector3.of(rates_enu)),
         )
         vb = rotate_inverse(self.attitude, velocity)
         body = TwistStamped(
             header=self._header(FRAME_BASE_LINK, stamp, "vbody"),
-            twist=Twist(linear=Vector3(**_xyz(vb)), angular=Vector3(**_xyz(self.rates_flu))),
+            twist=Twist(linear=Vector3.of(vb), angular=Vector3.of(self.rates_flu)),
         )
         return pose, local, body
 

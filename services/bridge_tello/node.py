@@ -18,8 +18,8 @@ import threading
 import time
 
 import msgspec
-import numpy as np
 
+from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -42,7 +42,6 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
-from dronewrapper.msgs.sensor import CompressedImage, Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node, Ratekeeper, ServiceError
 from dronewrapper.security.guard import CommandGuard
@@ -560,30 +559,12 @@ class Bridge:
             except Exception:
                 self.decoder.counts.corrupt += 1
                 continue
-            height, width = image.shape[:2]
-            header = Header(stamp=stamp, frame_id="cam_frontal", seq=seq)
-            seq += 1
-            self.pub_image.put(
-                Image(
-                    header=header,
-                    height=height,
-                    width=width,
-                    encoding="bgr8",
-                    step=width * 3,
-                    data=memoryview(np.ascontiguousarray(image)).cast("B"),  # no copy
-                )
-            )
-            self.frames_published += 1
+            self.pub_image.put(bgr_to_image(image, stamp, "cam_frontal", seq))  # a view: no copy
             if self._jpeg_wanted():
-                import cv2
-
-                ok, buf = cv2.imencode(
-                    ".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, self.config.jpeg_quality]
-                )
-                if ok:
-                    self.pub_jpeg.put(
-                        CompressedImage(header=header, format="jpeg", data=buf.tobytes())
-                    )
+                jpeg = bgr_to_jpeg(image, stamp, "cam_frontal", seq, self.config.jpeg_quality)
+                self.pub_jpeg.put(jpeg)
+            seq += 1
+            self.frames_published += 1
 
     # ------------------------------------------------------------------ services
 

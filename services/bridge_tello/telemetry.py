@@ -63,11 +63,6 @@ def velocity_enu(
     return rotate(q, (a, -b, -c))  # body FRD -> FLU, then into ENU
 
 
-def _xyz(v: tuple[float, float, float]) -> dict[str, float]:
-    """A 3-vector as the x, y, z fields of a Point or Vector3."""
-    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
-
-
 @dataclass
 class LandedTracker:
     """The landed state, from the bridge's commands and the drone's motion.
@@ -214,17 +209,17 @@ class Telemetry:
         x, y, z, w = self.attitude
         pose = PoseStamped(
             header=self._header(FRAME_ODOM, stamp, "pose"),
-            pose=Pose(position=Point(**_xyz(position)), orientation=Quaternion(x=x, y=y, z=z, w=w)),
+            pose=Pose(position=Point.of(position), orientation=Quaternion(x=x, y=y, z=z, w=w)),
         )
         yaw_rate = Vector3(z=self._yaw_rate)  # yaw rate only (the Tello sends no body rates)
         local = TwistStamped(
             header=self._header(FRAME_ODOM, stamp, "vlocal"),
-            twist=Twist(linear=Vector3(**_xyz(self.velocity)), angular=yaw_rate),
+            twist=Twist(linear=Vector3.of(self.velocity), angular=yaw_rate),
         )
         vb = rotate_inverse(self.attitude, self.velocity)
         body = TwistStamped(
             header=self._header(FRAME_BASE_LINK, stamp, "vbody"),
-            twist=Twist(linear=Vector3(**_xyz(vb)), angular=yaw_rate),
+            twist=Twist(linear=Vector3.of(vb), angular=yaw_rate),
         )
         return pose, local, body
 

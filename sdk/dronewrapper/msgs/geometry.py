@@ -18,6 +18,11 @@ class Point(msgspec.Struct, frozen=True, kw_only=True):
     y: float = 0.0
     z: float = 0.0
 
+    @classmethod
+    def of(cls, xyz: tuple[float, float, float]) -> Point:
+        """The Point with ``xyz`` as its (x, y, z)."""
+        return cls(x=float(xyz[0]), y=float(xyz[1]), z=float(xyz[2]))
+
 
 class Vector3(msgspec.Struct, frozen=True, kw_only=True):
     """A free vector (velocity in m/s, angular rate in rad/s, ...)."""
@@ -25,6 +30,11 @@ class Vector3(msgspec.Struct, frozen=True, kw_only=True):
     x: float = 0.0
     y: float = 0.0
     z: float = 0.0
+
+    @classmethod
+    def of(cls, xyz: tuple[float, float, float]) -> Vector3:
+        """The Vector3 with ``xyz`` as its (x, y, z)."""
+        return cls(x=float(xyz[0]), y=float(xyz[1]), z=float(xyz[2]))
 
 
 class Quaternion(msgspec.Struct, kw_only=True, frozen=True):
