@@ -116,7 +116,6 @@ class SetpointStreamer:
         with self._cond:
             if self.link_ok:
                 return
-            self.link_ok = True
             age = now - self._set_at
             if self._target is not None and age > self.expiry:
                 log.warning(
@@ -127,6 +126,9 @@ class SetpointStreamer:
                 )
                 self._target = None
                 self.dropped_after_gap += 1
+            # Last: a reader that sees the link up (without taking the lock) also sees the
+            # stale command already dropped.
+            self.link_ok = True
             self._cond.notify_all()
 
     def stop(self) -> None:

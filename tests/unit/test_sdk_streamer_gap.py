@@ -3,6 +3,7 @@ unreachable, and a command older than the expiry is never resent when it returns
 
 from __future__ import annotations
 
+import logging
 import time
 
 import pytest
@@ -41,6 +42,31 @@ def test_a_stale_command_is_dropped_when_the_link_returns():
         s.set(velocity_target(0.2, 0, 0, 0, stamp=2.0))  # a new command goes out at once
         assert sent[-1].velocity.x == 0.2
     finally:
+        s.close()
+
+
+def test_the_link_reads_up_only_after_the_stale_command_is_dropped():
+    """Readers poll ``link_ok`` without the lock: the moment it reads True, the stale command
+    is already gone (observed from inside link_up, where the drop is logged)."""
+    s = streamer([])
+    seen: list[tuple[bool, int]] = []
+
+    class Observe(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            if "back" in record.getMessage():  # link_up's warning
+                seen.append((s.link_ok, s.dropped_after_gap))
+
+    handler = Observe()
+    logger = logging.getLogger("dronewrapper.streamer")
+    logger.addHandler(handler)
+    try:
+        s.set(velocity_target(1.0, 0, 0, 0, stamp=1.0))
+        s.link_down()
+        s.link_up(now=time.monotonic() + 0.6)
+        assert seen and not any(up for up, _ in seen), seen  # still down while deciding
+        assert s.link_ok and s.dropped_after_gap == 1
+    finally:
+        logger.removeHandler(handler)
         s.close()
 
 
