@@ -68,7 +68,9 @@ def in_process(scenario_name: str, detector: str, frames: int) -> dict[str, obje
     mode = "follow_color" if detector == "color" else "follow_person"
     servo = Servo(
         load_config(
-            ControllerConfig, REPO / "services/controller/config/iris_sim.yaml", [f"mode={mode}"]
+            ControllerConfig,
+            REPO / "services/dronewrapper_controller/config/iris_sim.yaml",
+            [f"mode={mode}"],
         )
     )
     decoder = codec.decoder(Detections)

@@ -20,7 +20,7 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink
 
-# PX4 custom modes (main mode << 16 | sub mode << 24; see sim/px4/modes.py)
+# PX4 custom modes (main mode << 16 | sub mode << 24; see sim/dronewrapper_sim/px4/modes.py)
 OFFBOARD = 6 << 16
 AUTO_LOITER = (4 << 16) | (3 << 24)
 AUTO_RTL = (4 << 16) | (5 << 24)

@@ -255,7 +255,7 @@ def _bench(argv: Sequence[str]) -> int:
     except ModuleNotFoundError:
         print("dronewrapper bench: needs the on-board stack; run `make setup`", file=sys.stderr)
         return 2
-    repo = Path(dronewrapper_compose.__file__).resolve().parents[1]
+    repo = Path(dronewrapper_compose.__file__).resolve().parents[2]
     if not (repo / "bench" / "quick.py").is_file():
         print(f"dronewrapper bench: no bench/ beside {repo / 'compose'}", file=sys.stderr)
         return 2

@@ -1,7 +1,6 @@
 """The camera_victure service in this process, on the fake bus (one test on a real Zenoh
 router): a real video file, the test pattern, truncated and damaged files, calibration, and
-start-up errors (a fake V4L2 capture stands in for a device). Replaces the stop-gap
-compose/usb_camera.py's test."""
+start-up errors (a fake V4L2 capture stands in for a device)."""
 
 from __future__ import annotations
 
@@ -24,7 +23,7 @@ from dronewrapper_camera_victure.pattern import read_counter
 from support import ASSETS, REPO, client_node, wait_for
 
 VIDEO = ASSETS / "video" / "vtest.avi"
-CALIBRATION = REPO / "services" / "camera_victure" / "config" / "victure_640x480.yaml"
+CALIBRATION = REPO / "services" / "dronewrapper_camera_victure" / "config" / "victure_640x480.yaml"
 
 
 class Running:

@@ -11,7 +11,7 @@ from dronewrapper_controller.config import Config
 from dronewrapper_controller.node import run
 from support import REPO, python_module, wait_for
 
-CONFIG = REPO / "services" / "controller" / "config" / "iris_sim.yaml"
+CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml"
 
 
 def main(*argv: str) -> int:

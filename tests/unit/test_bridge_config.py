@@ -11,7 +11,9 @@ from dronewrapper_bridge_mavlink.__main__ import _configure
 from dronewrapper_bridge_mavlink.link import network_exposure
 from dronewrapper_bridge_mavlink.node import Config
 
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "services" / "bridge_mavlink" / "config"
+CONFIG_DIR = (
+    Path(__file__).resolve().parents[2] / "services" / "dronewrapper_bridge_mavlink" / "config"
+)
 
 
 def test_defaults_match_the_contract():

@@ -298,7 +298,9 @@ def test_missing_calibration_file_is_named(tmp_path):
 def test_the_shipped_config_and_calibration_load():
     from support import REPO
 
-    config = load_config(Config, REPO / "services/camera_victure/config/victure.yaml", [])
+    config = load_config(
+        Config, REPO / "services/dronewrapper_camera_victure/config/victure.yaml", []
+    )
     assert (config.source_kind, config.rotate, config.pixel_format) == ("device", 180, "MJPG")
     cal = load_calibration(REPO / config.calibration_file)
     assert (cal.width, cal.height) == (config.width, config.height)

@@ -6,7 +6,7 @@ Every entry point takes the time (``now`` monotonic s, ``stamp`` wall-clock s fo
 queues its effects in an :class:`Outbox` that the node takes with :meth:`BridgeCore.take` and
 executes (MAVLink sends, Zenoh samples). Service calls that wait for acknowledgements are
 :mod:`operations` the core advances as messages and time arrive; the node only waits on them.
-The sim's autopilot (sim/px4/autopilot.py) is built the same way.
+The sim's autopilot (sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
 
 Size: just over 400 lines: the core's entry points and its outbox; the handlers are in
 ``receive``, the waiting service calls in ``operations``, parameters in ``parameters``.

@@ -2,6 +2,6 @@
 
 :mod:`metrics` (pure): bearing, elevation and distance to the target and a flight summary;
 :mod:`monitor`: records a flight from ``{ns}/sim/ground_truth``, the world objects' poses and
-the controller's status. Used by ``make demo`` (``compose/demo.py``), the scenario tests and
-the benchmarks; the controller process imports none of it.
+the controller's status. Used by ``make demo`` (``dronewrapper_compose.demo``), the scenario
+tests and the benchmarks; the controller process imports none of it.
 """

@@ -1,7 +1,8 @@
 """Scenarios: the strict YAML schema of a simulated world, and loading by name or path.
 
 A scenario fixes where the vehicle starts, the GPS home, the wind, the camera settings and the
-objects (a red beacon, people) with their motion. Files live in ``sim/scenarios/NAME.yaml``.
+objects (a red beacon, people) with their motion. Files live in
+``sim/dronewrapper_sim/scenarios/NAME.yaml``.
 Positions are local ENU (m, x east, y north, z up, origin at the take-off point); angles in rad
 unless the field name says ``_deg``.
 """
@@ -39,7 +40,7 @@ __all__ = [
 ]
 
 SCENARIOS_DIR = Path(__file__).resolve().parents[1] / "scenarios"
-"""Where the named scenario files are (``sim/scenarios``)."""
+"""Where the named scenario files are (``sim/dronewrapper_sim/scenarios``)."""
 
 SCENARIO_NAMES: tuple[str, ...] = (
     "beacon_static",

@@ -30,8 +30,8 @@ from typing import Any
 
 import msgspec
 
-REPO = Path(__file__).resolve().parents[1]
-GRAPH_DIR = Path(__file__).resolve().parent
+REPO = Path(__file__).resolve().parents[2]
+GRAPH_DIR = Path(__file__).resolve().parents[1]  # compose/: the graph files
 _VAR = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)(?::-([^}]*))?\}")
 _NAME = re.compile(r"[A-Za-z0-9_\-]+")
 
