@@ -13,7 +13,8 @@ from autopilot_peer import AutopilotPeer
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet
 from dronewrapper.runtime import Node, ServiceError, ServiceUnavailable
-from dronewrapper_bridge_mavlink.node import Bridge, Config
+from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.node import Bridge
 from support import client_node, free_port, wait_for
 
 

@@ -8,7 +8,8 @@ forwards setpoints at >= 20 Hz with the failsafe contract of docs/design.md.
 import argparse
 
 from dronewrapper.runtime.service import run_service
-from dronewrapper_bridge_mavlink.node import Config, run
+from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.node import run
 
 
 def _add_args(parser: argparse.ArgumentParser) -> None:

@@ -295,4 +295,4 @@ def run(node: Node, config: Config) -> int:
     return 0
 
 
-__all__ = ["Bridge", "Config", "canonical_mode", "run"]
+__all__ = ["Bridge", "canonical_mode", "run"]

@@ -8,8 +8,8 @@ import pytest
 
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_bridge_mavlink.__main__ import _configure
+from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.link import network_exposure
-from dronewrapper_bridge_mavlink.node import Config
 
 CONFIG_DIR = (
     Path(__file__).resolve().parents[2] / "services" / "dronewrapper_bridge_mavlink" / "config"

@@ -3,7 +3,8 @@
 A service's ``__main__`` is three lines::
 
     from dronewrapper.runtime.service import run_service
-    from dronewrapper_perception.node import Config, run
+    from dronewrapper_perception.config import Config
+    from dronewrapper_perception.node import run
     raise SystemExit(run_service("perception", __doc__, Config, run))
 
 ``run_service`` parses the common flags (Zenoh flags, ``--config FILE``, ``--set KEY=VALUE``,
