@@ -138,7 +138,7 @@ def encode_latency(frames: int = 300) -> dict[str, dict[str, float]]:
     import cv2
     import numpy as np
 
-    from dronewrapper_sim.frames import quat_from_euler
+    from dronewrapper.rotations import quat_from_rpy
     from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera
     from dronewrapper_sim.render.renderer import Renderer
     from dronewrapper_sim.tello.config import TelloConfig
@@ -162,7 +162,7 @@ def encode_latency(frames: int = 300) -> dict[str, dict[str, float]]:
         yaw = 0.6 * math.sin(i / 30)
         t0 = time.perf_counter()
         image = renderer.render(
-            FRONTAL, np.array([0.0, 0.0, 1.0]), np.array(quat_from_euler(0.0, 0.0, yaw))
+            FRONTAL, np.array([0.0, 0.0, 1.0]), np.array(quat_from_rpy(0.0, 0.0, yaw))
         )
         image = cv2.resize(image, (960, 720), interpolation=cv2.INTER_LINEAR)
         t1 = time.perf_counter()

@@ -7,12 +7,11 @@ positive from east.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from dronewrapper.msgs.geometry import PoseStamped, Quaternion, TwistStamped
 from dronewrapper.msgs.sensor import NavSatFix
+from dronewrapper.rotations import rpy_from_quat
 
 
 def euler_from_quaternion(q: Quaternion) -> tuple[float, float, float]:
@@ -20,12 +19,7 @@ def euler_from_quaternion(q: Quaternion) -> tuple[float, float, float]:
 
     Pitch is clamped to +-pi/2 when the quaternion is not exactly unit length.
     """
-    x, y, z, w = q.x, q.y, q.z, q.w
-    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    sin_pitch = max(-1.0, min(1.0, 2.0 * (w * y - z * x)))
-    pitch = math.asin(sin_pitch)
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return roll, pitch, yaw
+    return rpy_from_quat((q.x, q.y, q.z, q.w))
 
 
 def position_of(msg: PoseStamped) -> np.ndarray:

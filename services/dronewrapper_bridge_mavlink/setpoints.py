@@ -14,17 +14,18 @@ Accepted controls (type_mask, coordinate_frame):
   with a vertical-speed command proportional to the altitude error.
 
 Anything else, NaN/inf in a used field or values outside :class:`Limits` is refused with a
-reason (:class:`SetpointError`).
+reason (:class:`SetpointError`), by the rules every bridge shares
+(:mod:`dronewrapper.setpoint_limits`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import Enum
 
 import msgspec
 
+from dronewrapper import setpoint_limits
 from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -34,20 +35,9 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
+from dronewrapper.setpoint_limits import Kind, SetpointError
 from dronewrapper_bridge_mavlink.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
-
-
-class SetpointError(ValueError):
-    """A PositionTarget the bridge refuses; the message says why."""
-
-
-class Kind(Enum):
-    """Which of DESIGN's controls a target is."""
-
-    POSITION = "position"
-    VELOCITY = "velocity"
-    MIXED = "mixed"
 
 
 class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
@@ -83,72 +73,10 @@ class LocalNedTarget:
     yaw_rate: float = 0.0
 
 
-_FRAMES_FOR_MASK = {
-    MASK_POSITION: (FRAME_LOCAL_NED,),
-    MASK_VELOCITY: (FRAME_BODY_NED, FRAME_LOCAL_NED),
-    MASK_MIXED: (FRAME_BODY_NED, FRAME_LOCAL_NED),
-}
-_KIND_FOR_MASK = {
-    MASK_POSITION: Kind.POSITION,
-    MASK_VELOCITY: Kind.VELOCITY,
-    MASK_MIXED: Kind.MIXED,
-}
-
-
-def _finite(name: str, value: float) -> float:
-    if not isinstance(value, int | float) or not math.isfinite(value):
-        raise SetpointError(f"{name} must be a finite number, got {value!r}")
-    return float(value)
-
-
 def validate(target: PositionTarget, limits: Limits = DEFAULT_LIMITS) -> Kind:
-    """The control ``target`` asks for, or SetpointError saying what is wrong with it."""
-    mask, frame = target.type_mask, target.coordinate_frame
-    if mask not in _KIND_FOR_MASK:
-        raise SetpointError(
-            f"type_mask {mask} is not supported; use {MASK_POSITION} (position + yaw), "
-            f"{MASK_VELOCITY} (velocity + yaw rate) or {MASK_MIXED} (vx, vy, altitude z, yaw rate)"
-        )
-    if frame not in _FRAMES_FOR_MASK[mask]:
-        allowed = " or ".join(str(f) for f in _FRAMES_FOR_MASK[mask])
-        raise SetpointError(
-            f"coordinate_frame {frame} is not valid with type_mask {mask}: use {allowed}"
-        )
-    kind = _KIND_FOR_MASK[mask]
-    p, v = target.position, target.velocity
-    if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
-        raise SetpointError(f"position is required with type_mask {mask}")
-    if kind is Kind.POSITION:
-        x, y = _finite("position.x", p.x), _finite("position.y", p.y)
-        z = _finite("position.z", p.z)
-        _finite("yaw", target.yaw)
-        if abs(x) > limits.max_distance or abs(y) > limits.max_distance:
-            raise SetpointError(
-                f"position ({x:g}, {y:g}) is farther than {limits.max_distance:g} m from the origin"
-            )
-        _check_altitude(z, limits)
-        return kind
-    vx, vy = _finite("velocity.x", v.x), _finite("velocity.y", v.y)
-    vz = _finite("velocity.z", v.z)
-    yaw_rate = _finite("yaw_rate", target.yaw_rate)
-    if math.hypot(vx, vy) > limits.max_horizontal_speed:
-        raise SetpointError(
-            f"horizontal speed {math.hypot(vx, vy):g} m/s exceeds {limits.max_horizontal_speed:g}"
-        )
-    if abs(vz) > limits.max_vertical_speed:
-        raise SetpointError(f"vertical speed {vz:g} m/s exceeds {limits.max_vertical_speed:g}")
-    if abs(yaw_rate) > limits.max_yaw_rate:
-        raise SetpointError(f"yaw_rate {yaw_rate:g} rad/s exceeds {limits.max_yaw_rate:g}")
-    if kind is Kind.MIXED:
-        _check_altitude(_finite("position.z", p.z), limits)
-    return kind
-
-
-def _check_altitude(z: float, limits: Limits) -> None:
-    if not limits.min_altitude <= z <= limits.max_altitude:
-        raise SetpointError(
-            f"altitude z={z:g} m is outside [{limits.min_altitude:g}, {limits.max_altitude:g}]"
-        )
+    """The control ``target`` asks for, or SetpointError saying what is wrong with it (the
+    rules every bridge shares: :mod:`dronewrapper.setpoint_limits`)."""
+    return setpoint_limits.validate(target, limits)
 
 
 def _horizontal_enu(target: PositionTarget, yaw_enu: float) -> tuple[float, float]:
@@ -221,3 +149,16 @@ def hold_target(position_enu: tuple[float, float, float], yaw_enu: float) -> Pos
 def is_velocity_control(kind: Kind) -> bool:
     """True for controls that command a velocity (they expire into a position hold)."""
     return kind is not Kind.POSITION
+
+
+__all__ = [
+    "DEFAULT_LIMITS",
+    "Kind",
+    "Limits",
+    "LocalNedTarget",
+    "SetpointError",
+    "hold_target",
+    "is_velocity_control",
+    "to_local_ned",
+    "validate",
+]

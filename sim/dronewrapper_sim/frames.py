@@ -4,7 +4,7 @@ Pure functions on plain floats (fast for one vehicle, no numpy overhead):
 - local ENU (x east, y north, z up) <-> local NED (x north, y east, z down);
 - Euler angles FLU->ENU (roll, pitch, yaw; yaw counter-clockwise from east) <->
   FRD->NED (roll, pitch, yaw; yaw clockwise from north);
-- quaternions (x, y, z, w) from ZYX Euler angles;
+- angle wrapping and quaternions: :mod:`dronewrapper.rotations`;
 - local north/east offsets (m) <-> WGS-84 latitude/longitude (degrees) around a home point
   (azimuthal equidistant projection, as PX4's map projection; exact enough for kilometres).
 """
@@ -13,13 +13,9 @@ from __future__ import annotations
 
 import math
 
+from dronewrapper.rotations import wrap_pi
+
 EARTH_RADIUS_M = 6_371_000.0
-TWO_PI = 2.0 * math.pi
-
-
-def wrap_pi(angle: float) -> float:
-    """``angle`` (rad) wrapped to [-pi, pi)."""
-    return (angle + math.pi) % TWO_PI - math.pi
 
 
 def enu_to_ned(x: float, y: float, z: float) -> tuple[float, float, float]:
@@ -54,19 +50,6 @@ def euler_flu_enu_to_frd_ned(roll: float, pitch: float, yaw: float) -> tuple[flo
 def rates_flu_to_frd(p: float, q: float, r: float) -> tuple[float, float, float]:
     """Body angular rates FLU (rad/s) -> FRD (rad/s)."""
     return p, -q, -r
-
-
-def quat_from_euler(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
-    """Quaternion (x, y, z, w) of the ZYX rotation R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    )
 
 
 def rotate_by_yaw(x: float, y: float, yaw: float) -> tuple[float, float]:

@@ -22,11 +22,11 @@ import time
 from pathlib import Path
 from typing import Any
 
+from dronewrapper.rotations import quat_from_rpy
 from dronewrapper.runtime import Node
 from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
-from dronewrapper_sim.frames import quat_from_euler
 from dronewrapper_sim.mavlink_io import MavlinkUdpLink, default_endpoints, parse_udp_spec
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.px4 import telemetry
@@ -145,7 +145,7 @@ class SimRunner:
 
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.autopilot.state
-        return PoseSnapshot((s.x, s.y, s.z), quat_from_euler(s.roll, s.pitch, s.yaw), time.time())
+        return PoseSnapshot((s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), time.time())
 
     def describe(self) -> str:
         """One line saying what runs where."""

@@ -14,8 +14,8 @@ import numpy as np
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist
 from dronewrapper.msgs.simulation import WorldLoad, WorldState
+from dronewrapper.rotations import quat_from_rpy
 from dronewrapper.runtime import Node, ServiceError
-from dronewrapper_sim.frames import quat_from_euler
 from dronewrapper_sim.pose_snapshot import PoseSnapshot, pose_msg
 from dronewrapper_sim.world.scenario import SCENARIO_NAMES, load_scenario
 
@@ -97,7 +97,7 @@ class WorldTopics:
             if pub is None:
                 continue
             x, y, z = (float(v) for v in obj.position)
-            snap = PoseSnapshot((x, y, z), quat_from_euler(0.0, 0.0, float(obj.yaw)), stamp)
+            snap = PoseSnapshot((x, y, z), quat_from_rpy(0.0, 0.0, float(obj.yaw)), stamp)
             pub.put(pose_msg(snap, seq=pub.count))
 
     def _teleop_callback(self, name: str) -> Callable[[Twist], None]:

@@ -19,7 +19,8 @@ import pytest
 from busy_core import one_core_busy
 from scenario_flight import fly
 
-from dronewrapper_sim.evaluation.metrics import bearing_error, wrap_angle
+from dronewrapper.rotations import wrap_pi
+from dronewrapper_sim.evaluation.metrics import bearing_error
 
 pytestmark = [pytest.mark.scenario, pytest.mark.timeout(240)]
 
@@ -43,7 +44,7 @@ def crossed(sample) -> bool:
     """A passer-by is within 5 deg of the target's bearing (in front of or behind it)."""
     target = sample.bearing
     return any(
-        abs(wrap_angle(bearing_error(sample.vehicle, sample.yaw, pos) - target)) < math.radians(5)
+        abs(wrap_pi(bearing_error(sample.vehicle, sample.yaw, pos) - target)) < math.radians(5)
         for pos in sample.others.values()
     )
 

@@ -13,6 +13,7 @@ import random
 import pytest
 from scenario_flight import CENTRED_TOLERANCE, DISTANCE_TOLERANCE, PERSON_BOX, fly
 
+from dronewrapper.rotations import wrap_pi
 from dronewrapper.runtime.config import load_config
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_sim.evaluation.metrics import (
@@ -20,7 +21,6 @@ from dronewrapper_sim.evaluation.metrics import (
     colour_intended_distance,
     person_intended_distance,
     summarize,
-    wrap_angle,
 )
 from dronewrapper_sim.tello.config import TelloConfig
 from dronewrapper_sim.tello.params import camera_hfov_rad
@@ -87,7 +87,7 @@ def test_tello_follow(scenario, tmp_path):
         # the last quarter (as the Iris test judges identity)
         crossings = sum(
             any(
-                abs(wrap_angle(bearing_error(x.vehicle, x.yaw, pos) - x.bearing)) < math.radians(5)
+                abs(wrap_pi(bearing_error(x.vehicle, x.yaw, pos) - x.bearing)) < math.radians(5)
                 for pos in x.others.values()
             )
             for x in flight.samples

@@ -6,12 +6,12 @@ import math
 
 import pytest
 
+from dronewrapper.rotations import wrap_pi
 from dronewrapper_sim.evaluation.metrics import (
     FollowSample,
     bearing_error,
     elevation_error,
     summarize,
-    wrap_angle,
 )
 
 
@@ -22,7 +22,7 @@ def test_bearing_error_signs_and_wrap():
     assert bearing_error((0, 0), math.radians(179), (-5, -0.1)) == pytest.approx(
         math.radians(2.146), abs=1e-3
     )
-    assert wrap_angle(3 * math.pi) == pytest.approx(-math.pi)
+    assert wrap_pi(3 * math.pi) == pytest.approx(-math.pi)
 
 
 def test_elevation_error():

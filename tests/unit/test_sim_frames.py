@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from dronewrapper.rotations import quat_from_rpy
 from dronewrapper_sim import frames
 from dronewrapper_sim.battery import Battery, motor_current
 from dronewrapper_sim.dynamics import GRAVITY
@@ -36,7 +37,7 @@ def test_euler_flu_to_frd_signs():
 
 
 def test_quaternion_of_a_yaw_and_the_thrust_axis():
-    x, y, z, w = frames.quat_from_euler(0.0, 0.0, math.pi / 2)
+    x, y, z, w = quat_from_rpy(0.0, 0.0, math.pi / 2)
     assert (x, y) == (0.0, 0.0)
     assert z == pytest.approx(math.sqrt(0.5))
     assert w == pytest.approx(math.sqrt(0.5))

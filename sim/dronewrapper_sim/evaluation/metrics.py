@@ -18,18 +18,15 @@ from collections.abc import Sequence
 import msgspec
 import numpy as np
 
+from dronewrapper.rotations import wrap_pi
+
 TRACKING_STATES = ("tracking", "hover", "search")  # the controller is servoing (after take-off)
-
-
-def wrap_angle(angle: float) -> float:
-    """``angle`` wrapped to [-pi, pi) (rad)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def bearing_error(vehicle_xy: Sequence[float], yaw: float, target_xy: Sequence[float]) -> float:
     """Angle from the heading ``yaw`` to the target, horizontal (rad, + = target on the left)."""
     dx, dy = target_xy[0] - vehicle_xy[0], target_xy[1] - vehicle_xy[1]
-    return wrap_angle(math.atan2(dy, dx) - yaw)
+    return wrap_pi(math.atan2(dy, dx) - yaw)
 
 
 def elevation_error(vehicle: Sequence[float], aim: Sequence[float]) -> float:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.rotations import quat_from_rpy
 from dronewrapper_sim import frames
 from dronewrapper_sim.battery import Battery, motor_current
 from dronewrapper_sim.dynamics import GRAVITY, QuadParams, QuadState, WindModel, step
@@ -496,7 +497,7 @@ class Autopilot:
 
     def _msg_attitude_quaternion(self):
         s = self.state
-        x, y, z, w = frames.quat_from_euler(*self._euler_ned())
+        x, y, z, w = quat_from_rpy(*self._euler_ned())
         p, q, r = frames.rates_flu_to_frd(s.p, s.q, s.r)
         return mavlink.MAVLink_attitude_quaternion_message(
             self._boot_ms, w, x, y, z, p, q, r, [0.0, 0.0, 0.0, 0.0]

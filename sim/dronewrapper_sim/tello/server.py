@@ -19,9 +19,9 @@ import time
 from dataclasses import replace
 from typing import Any
 
+from dronewrapper.rotations import quat_from_rpy
 from dronewrapper.runtime import Node
 from dronewrapper_sim.dynamics import WindModel
-from dronewrapper_sim.frames import quat_from_euler
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.tello.config import TelloConfig
 from dronewrapper_sim.tello.flight import TelloFlight
@@ -205,7 +205,7 @@ class TelloServer:
 
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.flight.state
-        return PoseSnapshot((s.x, s.y, s.z), quat_from_euler(s.roll, s.pitch, s.yaw), time.time())
+        return PoseSnapshot((s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), time.time())
 
     def close(self) -> None:
         """Stop the video thread and close the socket."""

@@ -1,0 +1,127 @@
+"""Which of the three controls a PositionTarget asks for, and whether a bridge may fly it.
+
+Every bridge refuses the same things in the same words before anything reaches an aircraft:
+a type_mask other than the three controls of docs/design.md, a coordinate_frame that control
+does not take, a missing position, NaN/inf/bool in a used field, and values beyond the
+bridge's bounds. The bounds are any object with the fields of :class:`Bounds` (bridge_mavlink's
+``Limits``, bridge_tello's ``StickScale``), in ENU metres, m/s and rad/s.
+
+==========  ==========================  ===========================================
+type_mask   coordinate_frame            fields checked
+==========  ==========================  ===========================================
+3064        FRAME_LOCAL_NED (1)         position x, y, z (ENU m), yaw
+1991        FRAME_BODY_NED (8) or 1     velocity vx, vy, vz, yaw_rate
+1987        FRAME_BODY_NED (8) or 1     velocity vx, vy, vz, yaw_rate; position z
+==========  ==========================  ===========================================
+"""
+
+from __future__ import annotations
+
+import math
+from enum import Enum
+from typing import Protocol
+
+import msgspec
+
+from dronewrapper.msgs.mavros import (
+    FRAME_BODY_NED,
+    FRAME_LOCAL_NED,
+    MASK_MIXED,
+    MASK_POSITION,
+    MASK_VELOCITY,
+    PositionTarget,
+)
+
+
+class SetpointError(ValueError):
+    """A PositionTarget a bridge refuses; the message says why."""
+
+
+class Kind(Enum):
+    """Which of docs/design.md's controls a target is."""
+
+    POSITION = "position"
+    VELOCITY = "velocity"
+    MIXED = "mixed"
+
+
+class Bounds(Protocol):
+    """What a bridge accepts (m from the local origin, ENU m, m/s, rad/s)."""
+
+    @property
+    def max_distance(self) -> float: ...  # |x| and |y| of position targets
+    @property
+    def min_altitude(self) -> float: ...  # ENU z
+    @property
+    def max_altitude(self) -> float: ...
+    @property
+    def max_horizontal_speed(self) -> float: ...  # norm of (vx, vy)
+    @property
+    def max_vertical_speed(self) -> float: ...
+    @property
+    def max_yaw_rate(self) -> float: ...
+
+
+KIND_OF_MASK = {MASK_POSITION: Kind.POSITION, MASK_VELOCITY: Kind.VELOCITY, MASK_MIXED: Kind.MIXED}
+FRAMES_OF_MASK = {
+    MASK_POSITION: (FRAME_LOCAL_NED,),
+    MASK_VELOCITY: (FRAME_BODY_NED, FRAME_LOCAL_NED),
+    MASK_MIXED: (FRAME_BODY_NED, FRAME_LOCAL_NED),
+}
+
+
+def finite_field(name: str, value: object) -> float:
+    """``value`` as a float if it is a finite number (not a bool), else SetpointError."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise SetpointError(f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def validate(target: PositionTarget, bounds: Bounds) -> Kind:
+    """The control ``target`` asks for, or SetpointError saying what is wrong with it."""
+    mask, frame = target.type_mask, target.coordinate_frame
+    if mask not in KIND_OF_MASK:
+        raise SetpointError(
+            f"type_mask {mask} is not supported; use {MASK_POSITION} (position + yaw), "
+            f"{MASK_VELOCITY} (velocity + yaw rate) or {MASK_MIXED} (vx, vy, altitude z, yaw rate)"
+        )
+    if frame not in FRAMES_OF_MASK[mask]:
+        allowed = " or ".join(str(f) for f in FRAMES_OF_MASK[mask])
+        raise SetpointError(
+            f"coordinate_frame {frame} is not valid with type_mask {mask}: use {allowed}"
+        )
+    kind = KIND_OF_MASK[mask]
+    p, v = target.position, target.velocity
+    if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
+        raise SetpointError(f"position is required with type_mask {mask}")
+    if kind is Kind.POSITION:
+        x, y = finite_field("position.x", p.x), finite_field("position.y", p.y)
+        z = finite_field("position.z", p.z)
+        finite_field("yaw", target.yaw)
+        if abs(x) > bounds.max_distance or abs(y) > bounds.max_distance:
+            raise SetpointError(
+                f"position ({x:g}, {y:g}) is farther than {bounds.max_distance:g} m from the origin"
+            )
+        _check_altitude(z, bounds)
+        return kind
+    vx, vy = finite_field("velocity.x", v.x), finite_field("velocity.y", v.y)
+    vz = finite_field("velocity.z", v.z)
+    yaw_rate = finite_field("yaw_rate", target.yaw_rate)
+    if math.hypot(vx, vy) > bounds.max_horizontal_speed:
+        raise SetpointError(
+            f"horizontal speed {math.hypot(vx, vy):g} m/s exceeds {bounds.max_horizontal_speed:g}"
+        )
+    if abs(vz) > bounds.max_vertical_speed:
+        raise SetpointError(f"vertical speed {vz:g} m/s exceeds {bounds.max_vertical_speed:g}")
+    if abs(yaw_rate) > bounds.max_yaw_rate:
+        raise SetpointError(f"yaw_rate {yaw_rate:g} rad/s exceeds {bounds.max_yaw_rate:g}")
+    if kind is Kind.MIXED:
+        _check_altitude(finite_field("position.z", p.z), bounds)
+    return kind
+
+
+def _check_altitude(z: float, bounds: Bounds) -> None:
+    if not bounds.min_altitude <= z <= bounds.max_altitude:
+        raise SetpointError(
+            f"altitude z={z:g} m is outside [{bounds.min_altitude:g}, {bounds.max_altitude:g}]"
+        )
