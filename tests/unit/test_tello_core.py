@@ -191,6 +191,7 @@ def test_replies_are_matched_to_their_command():
     rig.run(0.35)
     assert rig.commands().count("speed 50") == 2
     rig.reply_now("ok")  # the first send's ok, after the retry
+    rig.delays["battery?"] = 0.3  # the next command's answer comes after the stray ok
     second = rig.start(ops.param_get, ParamGet(param_id="BATTERY"))
     rig.run(0.1)
     rig.reply_now("ok")  # the second send's ok: still speed 50's, not battery?'s
