@@ -26,7 +26,9 @@ from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import Outbox, TelloCore
+from dronewrapper_bridge_tello.failsafe import Failsafe
 from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
+from dronewrapper_bridge_tello.telemetry import Telemetry
 from dronewrapper_bridge_tello.video import FrameAssembler, H264Decoder, NewestFrame
 
 log = logging.getLogger("bridge_tello")
@@ -78,12 +80,25 @@ class Bridge:
 
     # ---- what the core knows, for tests and tools
 
-    def __getattr__(self, name: str) -> Any:
-        """The core's state (``connected``, ``sdk_mode``, ``telemetry``, ``failsafe``,
-        ``rejected_setpoints`` ...), read-only from here."""
-        if name in _CORE_VIEWS:
-            return getattr(self.core, name)
-        raise AttributeError(name)
+    @property
+    def connected(self) -> bool:
+        return self.core.connected
+
+    @property
+    def sdk_mode(self) -> bool:
+        return self.core.sdk_mode
+
+    @property
+    def telemetry(self) -> Telemetry:
+        return self.core.telemetry
+
+    @property
+    def failsafe(self) -> Failsafe:
+        return self.core.failsafe
+
+    @property
+    def rejected_setpoints(self) -> int:
+        return self.core.rejected_setpoints
 
     def state_message(self) -> State:
         """The State the bridge publishes now."""
@@ -248,23 +263,6 @@ class Bridge:
                 self.pub_jpeg.put(jpeg)
             seq += 1
             self.frames_published += 1
-
-
-_CORE_VIEWS = frozenset(
-    (
-        "connected",
-        "sdk_mode",
-        "streaming",
-        "telemetry",
-        "failsafe",
-        "matcher",
-        "rejected_setpoints",
-        "malformed_states",
-        "states_received",
-        "rc_sent",
-        "last_sticks",
-    )
-)
 
 
 def run(node: Node, config: Config) -> int:
