@@ -1,4 +1,8 @@
-"""The failsafe contract of docs/design.md as a pure state machine (time is injected, monotonic s).
+"""The failsafe contract of docs/design.md for a MAVLink autopilot (pure; time injected, s).
+
+The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
+config's shape) is the shared :mod:`dronewrapper.runtime.command_lease`; this module adds what
+is MAVLink's: the guided mode, priming, and never fighting the pilot.
 
 What the bridge streams to the autopilot each tick, and when it acts on its own:
 
@@ -42,39 +46,39 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     PositionTarget,
 )
+from dronewrapper.runtime.command_lease import (
+    ACTIONS,
+    HOLD,
+    LAND,
+    NONE,
+    RETURN,
+    CommandLease,
+    LeaseConfig,
+    Transition,
+)
 from dronewrapper_bridge_mavlink.modes import holds_on_the_ground, is_guided
 from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
 
-NONE, HOLD, LAND, RETURN = "", "hold", "land", "return"
-ACTIONS = (HOLD, LAND, RETURN)
+__all__ = [
+    "ACTIONS",
+    "HOLD",
+    "LAND",
+    "NONE",
+    "RETURN",
+    "Failsafe",
+    "FailsafeConfig",
+    "Tick",
+    "Transition",
+    "is_airborne",
+]
 
 
 @dataclass(frozen=True)
-class FailsafeConfig:
-    """Timeouts (s) and what to do when the commander is lost (``hold``, ``land``, ``return``)."""
+class FailsafeConfig(LeaseConfig):
+    """The lease's timeouts (s) and lost action (``hold``, ``land``, ``return``), and how long a
+    mode change the bridge asked for counts as expected (s)."""
 
-    setpoint_timeout: float = 0.5
-    commander_lost_timeout: float = 5.0
-    commander_lost_action: str = LAND
-    expected_mode_window: float = 15.0  # s a bridge-requested mode change counts as expected
-
-    def __post_init__(self) -> None:
-        if self.commander_lost_action not in ACTIONS:
-            raise ValueError(
-                f"commander_lost_action must be one of {', '.join(ACTIONS)}, "
-                f"got {self.commander_lost_action!r}"
-            )
-        if not 0 < self.setpoint_timeout < self.commander_lost_timeout:
-            raise ValueError("need 0 < setpoint_timeout < commander_lost_timeout")
-
-
-@dataclass(frozen=True)
-class Transition:
-    """A failsafe state change (``old`` -> ``new``) and why."""
-
-    old: str
-    new: str
-    reason: str
+    expected_mode_window: float = 15.0
 
 
 @dataclass
@@ -101,46 +105,34 @@ def is_airborne(landed_state: int, armed: bool) -> bool:
     return landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF, LANDED_STATE_LANDING)
 
 
-class Failsafe:
+class Failsafe(CommandLease[Kind]):
     """The bridge's setpoint stream and failsafe state (see module docstring)."""
 
+    config: FailsafeConfig
+
     def __init__(self, config: FailsafeConfig = FailsafeConfig()) -> None:
-        self.config = config
-        self.state = NONE
+        super().__init__(config)
         self.mode = ""
         self.armed = False
         self.airborne = False
         self.pilot_override = False
-        self.engaged = False
-        self._target: PositionTarget | None = None
-        self._kind: Kind | None = None
-        self._last_setpoint = -math.inf
         self._guided_since = -math.inf
         self._hold: PositionTarget | None = None
         self._prime_until = -math.inf
         self._requested: dict[str, float] = {}
-        self._pending: list[Transition] = []
         self._events: list[str] = []
 
     # ---- inputs ----
 
     def on_setpoint(self, target: PositionTarget, kind: Kind, now: float) -> None:
         """A valid setpoint arrived from a commander."""
-        self._target, self._kind, self._last_setpoint = target, kind, now
         if is_guided(self.mode) and not self.pilot_override:
             self.engaged = True
-        if self.state == HOLD:
-            self._set(NONE, "fresh setpoint")
-
-    def setpoint_age(self, now: float) -> float:
-        """Seconds since the last valid setpoint (inf if none)."""
-        return now - self._last_setpoint
+        self.take_setpoint(target, kind, now)
 
     def fresh_target(self, now: float) -> PositionTarget | None:
         """The latest setpoint if it is fresh, else None."""
-        if self._target is not None and self.setpoint_age(now) <= self.config.setpoint_timeout:
-            return self._target
-        return None
+        return self.target if self.is_fresh(now) else None
 
     def on_mode_requested(self, mode: str, now: float) -> None:
         """The bridge itself asked for ``mode`` (a service call or a failsafe action)."""
@@ -148,7 +140,7 @@ class Failsafe:
         if is_guided(mode):
             self.pilot_override = False
             if self.state in (LAND, RETURN):
-                self._set(NONE, f"{mode} requested")
+                self.set_state(NONE, f"{mode} requested")
 
     def on_takeoff_requested(self, now: float) -> None:
         """The autopilot flies its own take-off now: the bridge stays out until commanded
@@ -193,10 +185,10 @@ class Failsafe:
                     "not switching back"
                 )
             if left_guided and self.state == HOLD:
-                self._set(NONE, f"the autopilot is in {mode}")
+                self.set_state(NONE, f"the autopilot is in {mode}")
         self.mode, self.airborne = mode, airborne
         if self.armed and not armed and self.state != NONE:
-            self._set(NONE, "disarmed")
+            self.set_state(NONE, "disarmed")
         self.armed = armed
 
     def _expected(self, mode: str, now: float) -> bool:
@@ -205,16 +197,11 @@ class Failsafe:
 
     # ---- output ----
 
-    def _set(self, new: str, reason: str) -> None:
-        if new != self.state:
-            self._pending.append(Transition(self.state, new, reason))
-            self.state = new
-
     def _hold_here(self, pose: tuple[tuple[float, float, float], float] | None) -> None:
         if self._hold is not None:
             return
-        if self._kind is Kind.POSITION and self._target is not None:
-            self._hold = self._target
+        if self.kind is Kind.POSITION and self.target is not None:
+            self._hold = self.target
         elif pose is not None:
             self._hold = hold_target(pose[0], pose[1])
 
@@ -233,22 +220,18 @@ class Failsafe:
         ):
             self._hold_here(pose)
             out.send = self._hold
-            if in_control and self.state == NONE and self.armed:
-                self._set(HOLD, f"no setpoint for {self.config.setpoint_timeout:g} s")
+            if in_control and self.armed:
+                self.hold()
         elif in_control and self.state in (LAND, RETURN):
             self._hold_here(pose)  # until the autopilot has switched mode
             out.send = self._hold
-        lost_for = now - max(self._last_setpoint, self._guided_since, self._prime_until)
-        if (
-            in_control
-            and self.airborne
-            and self.state in (NONE, HOLD)
-            and lost_for > self.config.commander_lost_timeout
-            and self.config.commander_lost_action != HOLD
-        ):
-            action = self.config.commander_lost_action
-            self._set(action, f"commander lost: no setpoint for {lost_for:.1f} s")
+        action = self.commander_lost(
+            now,
+            in_control=in_control and self.airborne,
+            since=max(self._guided_since, self._prime_until),
+        )
+        if action:
             out.request = action
-        out.transitions, self._pending = self._pending, []
+        out.transitions = self.transitions()
         out.events, self._events = self._events, []
         return out

@@ -9,7 +9,8 @@ sticks, and keeps DESIGN.md's failsafe contract.
 import argparse
 
 from dronewrapper.runtime.service import run_service
-from dronewrapper_bridge_tello.node import Config, run
+from dronewrapper_bridge_tello.config import Config
+from dronewrapper_bridge_tello.node import run
 
 
 def _add_args(parser: argparse.ArgumentParser) -> None:

@@ -1,5 +1,9 @@
 """The failsafe contract of DESIGN.md for a Tello, as a pure state machine (time injected).
 
+The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
+config's shape) is the shared :mod:`dronewrapper.runtime.command_lease`; this module adds what
+is the Tello's: the repeated stop and the keep-alive.
+
 A Tello has no flight modes to fight over and hovers by itself on its optical-flow sensor when
 the sticks are centred, so the contract is simpler than bridge_mavlink's:
 
@@ -21,43 +25,37 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from dronewrapper.msgs.mavros import PositionTarget
+from dronewrapper.runtime.command_lease import (
+    HOLD,
+    LAND,
+    NONE,
+    CommandLease,
+    LeaseConfig,
+    Transition,
+)
 from dronewrapper_bridge_tello.sticks import Kind
 
-NONE, HOLD, LAND = "", "hold", "land"
 ACTIONS = (HOLD, LAND)
+__all__ = ["ACTIONS", "HOLD", "LAND", "NONE", "Failsafe", "FailsafeConfig", "Tick", "Transition"]
 
 
 @dataclass(frozen=True)
-class FailsafeConfig:
-    """Timeouts (s) and the commander-lost action (``land`` or ``hold``)."""
+class FailsafeConfig(LeaseConfig):
+    """The lease's timeouts (s) and lost action (``land`` or ``hold``: a Tello has no return),
+    how long the stop is repeated (s) and the keep-alive period (s, under the Tello's 15 s)."""
 
-    setpoint_timeout: float = 0.5
-    commander_lost_timeout: float = 5.0
-    commander_lost_action: str = LAND
+    ACTIONS: ClassVar[tuple[str, ...]] = ACTIONS
+
     stop_repeat_s: float = 0.5
     keepalive_s: float = 3.0
 
     def __post_init__(self) -> None:
-        if self.commander_lost_action not in ACTIONS:
-            raise ValueError(
-                f"commander_lost_action must be one of {', '.join(ACTIONS)}, "
-                f"got {self.commander_lost_action!r}"
-            )
-        if not 0 < self.setpoint_timeout < self.commander_lost_timeout:
-            raise ValueError("need 0 < setpoint_timeout < commander_lost_timeout")
+        super().__post_init__()
         if not 0 < self.keepalive_s < 15.0:
             raise ValueError("keepalive_s must be in (0, 15): the Tello lands after 15 s")
-
-
-@dataclass(frozen=True)
-class Transition:
-    """A failsafe state change (``old`` -> ``new``) and why."""
-
-    old: str
-    new: str
-    reason: str
 
 
 @dataclass
@@ -77,64 +75,46 @@ class Tick:
     transitions: list[Transition] = field(default_factory=list)
 
 
-class Failsafe:
+class Failsafe(CommandLease[Kind]):
     """The bridge's stick stream and failsafe state (see module docstring)."""
 
+    config: FailsafeConfig
+
     def __init__(self, config: FailsafeConfig = FailsafeConfig()) -> None:
-        self.config = config
-        self.state = NONE
+        super().__init__(config)
         self.flying = False
-        self.engaged = False
-        self._target: tuple[PositionTarget, Kind] | None = None
-        self._last_setpoint = -math.inf
-        self._stale_since = -math.inf
         self._last_sent = -math.inf
-        self._pending: list[Transition] = []
 
     # ---- inputs ----
 
     def on_setpoint(self, target: PositionTarget, kind: Kind, now: float) -> None:
         """A valid setpoint arrived from a commander."""
-        self._target, self._last_setpoint = (target, kind), now
         if self.flying:
             self.engaged = True
-        if self.state == HOLD:
-            self._set(NONE, "fresh setpoint")
+        self.take_setpoint(target, kind, now)
 
     def on_flying(self, flying: bool) -> None:
         """Whether the Tello is flying (take-off, in the air, landing)."""
         if self.flying and not flying:
             self.engaged = False
-            if self.state != NONE:
-                self._set(NONE, "landed")
+            self.set_state(NONE, "landed")
         self.flying = flying
 
     def on_takeoff_or_land(self) -> None:
         """A take-off or land command: the drone flies it; no commander is steering."""
-        self.engaged = False
-        self._target = None
-        self._last_setpoint = -math.inf
+        self.forget_setpoint()
 
     def on_sent(self, now: float) -> None:
         """The bridge sent a command to the Tello (any: it resets the Tello's 15 s timer)."""
         self._last_sent = now
 
-    def setpoint_age(self, now: float) -> float:
-        """Seconds since the last valid setpoint (inf if none)."""
-        return now - self._last_setpoint
-
     def fresh(self, now: float) -> tuple[PositionTarget, Kind] | None:
-        """The latest setpoint if fresh, else None."""
-        if self._target is not None and self.setpoint_age(now) <= self.config.setpoint_timeout:
-            return self._target
+        """The latest setpoint (and its kind) if fresh, else None."""
+        if self.is_fresh(now) and self.target is not None and self.kind is not None:
+            return self.target, self.kind
         return None
 
     # ---- output ----
-
-    def _set(self, new: str, reason: str) -> None:
-        if new != self.state:
-            self._pending.append(Transition(self.state, new, reason))
-            self.state = new
 
     def tick(self, now: float) -> Tick:
         """Decide this tick (``now`` monotonic s)."""
@@ -143,24 +123,14 @@ class Failsafe:
         cfg = self.config
         if fresh is not None:
             out.fly = fresh
-            self._stale_since = -math.inf
-        elif self._target is not None:
-            if self._stale_since == -math.inf:
-                self._stale_since = self._last_setpoint + cfg.setpoint_timeout
-            if now - self._stale_since <= cfg.stop_repeat_s:
-                out.stop = True
-            if self.flying and self.state == NONE:
-                self._set(HOLD, f"no setpoint for {cfg.setpoint_timeout:g} s: rc 0 0 0 0, hover")
-        if (
-            self.flying
-            and self.engaged
-            and self.state in (NONE, HOLD)
-            and self.setpoint_age(now) > cfg.commander_lost_timeout
-            and cfg.commander_lost_action == LAND
-        ):
-            self._set(LAND, f"commander lost: no setpoint for {self.setpoint_age(now):.1f} s")
+        elif self.target is not None:
+            if now - self.stale_at() <= cfg.stop_repeat_s:
+                out.stop = True  # a real stop, repeated: UDP may lose one
+            if self.flying:
+                self.hold(": rc 0 0 0 0, hover")
+        if self.commander_lost(now, in_control=self.flying and self.engaged) == LAND:
             out.request = LAND
         if self.flying and out.fly is None and now - self._last_sent >= cfg.keepalive_s:
             out.stop = True  # keep-alive
-        out.transitions, self._pending = self._pending, []
+        out.transitions = self.transitions()
         return out

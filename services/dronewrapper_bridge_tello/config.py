@@ -1,0 +1,79 @@
+"""bridge_tello configuration (strict: an unknown key is an error naming it; see README.md)."""
+
+from __future__ import annotations
+
+import math
+
+import msgspec
+
+from dronewrapper_bridge_tello.failsafe import FailsafeConfig
+from dronewrapper_bridge_tello.sticks import StickScale
+
+
+class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """bridge_tello configuration (units in the names' docs; see README.md)."""
+
+    tello_address: str = "192.168.10.1"  # the Tello (a simulated one: 127.0.0.1)
+    command_port: int = 8889
+    local_address: str = "0.0.0.0"  # where our three sockets bind
+    local_command_port: int = 0  # 0: any
+    state_port: int = 8890
+    video_port: int = 11111
+    video: bool = True  # streamon and publish cam_frontal/image_raw
+    compressed: bool = False  # also publish JPEG on image_raw/compressed (else only on request)
+    jpeg_quality: int = 80
+    video_chunk: int = 1460  # bytes of a full video datagram (a shorter one ends a frame)
+    velocity_frame: str = "reference"  # reference | body_frd: the frame of vgx, vgy, vgz
+    reference_yaw_deg: float = 0.0  # ENU yaw of the Tello's power-on heading (0: local +x)
+    velocity_unit: float = 0.1  # m/s per vg* unit (the Tello sends dm/s)
+    height_source: str = "h"  # h | tof
+    tof_ground_cm: float = 10.0  # tof reading on the ground
+    rc_rate_hz: float = 20.0  # rc stream while commanded
+    setpoint_timeout: float = 0.5  # s: setpoints expire -> rc 0 0 0 0 (hover)
+    commander_lost_timeout: float = 5.0  # s without setpoint while flying -> action
+    commander_lost_action: str = "land"  # land | hold
+    keepalive_s: float = 3.0  # s without any command while flying -> rc 0 0 0 0
+    command_timeout: float = 1.0  # s to wait for the reply to a quick command
+    command_attempts: int = 3
+    takeoff_timeout: float = 20.0  # s: the Tello replies ok once the take-off is over
+    land_timeout: float = 20.0
+    move_timeout: float = 15.0  # s: up/down after take-off
+    link_timeout: float = 1.5  # s without a state string -> disconnected
+    reconnect_s: float = 1.0  # s between 'command' attempts while disconnected
+    state_rate_hz: float = 2.0  # periodic State (also on change)
+    extended_state_rate_hz: float = 4.0
+    battery_rate_hz: float = 1.0
+    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    scale: StickScale = msgspec.field(default_factory=StickScale)
+
+    def __post_init__(self) -> None:
+        self.failsafe_config()  # raises ValueError naming a bad timeout or action
+        if not 20.0 <= self.rc_rate_hz <= 50.0:
+            raise ValueError(f"rc_rate_hz must be in [20, 50], got {self.rc_rate_hz}")
+        if self.velocity_frame not in ("reference", "body_frd"):
+            raise ValueError(
+                f"velocity_frame must be reference or body_frd, got {self.velocity_frame!r}"
+            )
+        if not (math.isfinite(self.reference_yaw_deg) and abs(self.reference_yaw_deg) <= 360):
+            raise ValueError("reference_yaw_deg must be in [-360, 360]")
+        if self.height_source not in ("h", "tof"):
+            raise ValueError(f"height_source must be h or tof, got {self.height_source!r}")
+        if self.command_attempts < 1:
+            raise ValueError("command_attempts must be >= 1")
+        for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0")
+        if not self.command_lease_ttl_s > 0:
+            raise ValueError("command_lease_ttl_s must be > 0")
+        if not 1 <= self.jpeg_quality <= 100:
+            raise ValueError("jpeg_quality must be in [1, 100]")
+
+    def failsafe_config(self) -> FailsafeConfig:
+        """The failsafe's settings, from this config's flat keys (validated there)."""
+        return FailsafeConfig(
+            setpoint_timeout=self.setpoint_timeout,
+            commander_lost_timeout=self.commander_lost_timeout,
+            commander_lost_action=self.commander_lost_action,
+            keepalive_s=self.keepalive_s,
+        )

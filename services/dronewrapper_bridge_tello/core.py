@@ -1,0 +1,315 @@
+"""The Tello bridge without I/O: replies, state strings, requests in; SDK commands, samples out.
+
+:class:`TelloCore` holds everything the bridge knows (link and SDK mode, telemetry, the
+failsafe, the reply FIFO, pending operations) and is pure: no sockets, no threads, no clock.
+Every entry point takes the time (``now`` monotonic s, ``stamp`` wall-clock s for headers) and
+queues its effects in an :class:`Outbox` (SDK command strings for the Tello's command port,
+Zenoh samples) that the node takes with :meth:`TelloCore.take` and executes. Service calls
+that wait for the Tello (take-off, land, retried commands) are :mod:`operations` the core
+advances as replies, state strings and ticks arrive; the node only waits on them. Shaped like
+bridge_mavlink's core.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Generator
+from dataclasses import dataclass, field
+from typing import Any
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_LANDING,
+    LANDED_STATE_ON_GROUND,
+    LANDED_STATE_TAKEOFF,
+    ExtendedState,
+    PositionTarget,
+    State,
+    StatusText,
+)
+from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.std import Header
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_tello import operations as ops
+from dronewrapper_bridge_tello.config import Config
+from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
+from dronewrapper_bridge_tello.operations import Operation
+from dronewrapper_bridge_tello.replies import ReplyMatcher
+from dronewrapper_bridge_tello.state import StateError, parse_state
+from dronewrapper_bridge_tello.sticks import (
+    STOP,
+    SetpointError,
+    Sticks,
+    body_velocity,
+    rc_command,
+    sticks_from_flu,
+    validate,
+)
+from dronewrapper_bridge_tello.telemetry import Telemetry
+
+log = logging.getLogger("bridge_tello")
+
+SEVERITY_WARNING = 4
+SEVERITY_INFO = 6
+
+
+@dataclass
+class Outbox:
+    """What the node must do after a core call.
+
+    Attributes:
+        sends: SDK command strings for the Tello (``command``, ``rc 0 0 0 0`` ...), in order.
+        samples: (registry topic, message) to publish on Zenoh.
+    """
+
+    sends: list[str] = field(default_factory=list)
+    samples: list[tuple[Topic, Any]] = field(default_factory=list)
+
+
+class TelloCore:
+    """The bridge's logic and state (see module docstring)."""
+
+    def __init__(self, config: Config, now: float = 0.0) -> None:
+        self.config = config
+        self.scale = config.scale
+        self.failsafe = Failsafe(config.failsafe_config())
+        self.telemetry = Telemetry(
+            velocity_frame=config.velocity_frame,
+            reference_yaw=math.radians(config.reference_yaw_deg),
+            velocity_unit=config.velocity_unit,
+            height_source=config.height_source,
+            tof_ground_cm=config.tof_ground_cm,
+        )
+        self.matcher = ReplyMatcher()
+        self.operations: list[Operation] = []
+        self.operations_finished = 0  # so far: a waiting caller looks when this changes
+        self.command_busy = False  # one command exchange at a time (replies carry no ids)
+        self.now, self.stamp = now, 0.0
+        self.out = Outbox()
+        self.connected = False
+        self.sdk_mode = False
+        self.streaming = False
+        self.commander = ""  # the command lease's holder, shown on State
+        self.malformed_states = 0
+        self.states_received = 0
+        self.rc_sent = 0
+        self.rejected_setpoints = 0
+        self.last_sticks: Sticks = STOP
+        self._connect_op: Operation | None = None
+        self._land_op: Operation | None = None
+        self._last_state_at = -math.inf
+        self._last_reconnect = -math.inf
+        self._last_state_key: tuple | None = None
+        self._last_state_pub = -math.inf
+        self._last_ext_pub = -math.inf
+        self._last_ext_value = -1
+        self._last_battery_pub = -math.inf
+        self._last_reject_log = -math.inf
+
+    # ------------------------------------------------------------------ plumbing
+
+    def _at(self, now: float, stamp: float) -> None:
+        self.now, self.stamp = now, stamp
+
+    def take(self) -> Outbox:
+        """The effects queued since the last call (the node executes them)."""
+        out, self.out = self.out, Outbox()
+        return out
+
+    def send(self, text: str) -> None:
+        """Queue an SDK command for the Tello (any command resets its 15 s timer)."""
+        self.out.sends.append(text)
+        self.failsafe.on_sent(self.now)
+
+    def publish(self, topic: Topic, msg: Any) -> None:
+        """Queue a sample for ``topic``."""
+        self.out.samples.append((topic, msg))
+
+    def start(
+        self, steps: Generator[float, None, Any], now: float, stamp: float, *, background=False
+    ) -> Operation:
+        """Begin an operation (its first step runs now; a bad request fails it at once);
+        ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
+        self._at(now, stamp)
+        op = Operation(steps, background=background)
+        self.operations.append(op)
+        op.step()
+        self._prune()
+        return op
+
+    def advance(self, now: float, stamp: float) -> None:
+        """Move every pending operation on to ``now``."""
+        self._at(now, stamp)
+        for op in list(self.operations):
+            op.step()
+        self._prune()
+
+    def cancel(self, op: Operation) -> None:
+        """Abandon ``op`` (the node is stopping): its command slot is freed."""
+        op.cancel()
+        self._prune()
+
+    def _prune(self) -> None:
+        for op in [op for op in self.operations if op.done]:
+            self.operations.remove(op)
+            self.operations_finished += 1
+            if op.error is not None and op.background:
+                log.error("%s failed: %s", op.name, op.error)
+
+    def require_connected(self) -> None:
+        """ServiceError when no state string is arriving."""
+        if not self.connected:
+            raise ServiceError("the Tello is not connected (no state string)", "unavailable")
+
+    # ------------------------------------------------------------------ the Tello's side
+
+    def on_reply(self, text: str, now: float, stamp: float) -> None:
+        """One datagram on the command socket (a reply, matched to the command it answers)."""
+        self._at(now, stamp)
+        if self.matcher.on_reply(text.strip(), now) is None:
+            log.debug("reply %r matched no command", text)
+        self.advance(now, stamp)
+
+    def on_state(self, data: bytes, now: float, stamp: float) -> None:
+        """One state datagram: telemetry samples, landed state, connection."""
+        self._at(now, stamp)
+        try:
+            state = parse_state(data)
+        except StateError as exc:
+            self.malformed_states += 1
+            if self.malformed_states <= 3 or self.malformed_states % 100 == 0:
+                log.warning("malformed state string (%d so far): %s", self.malformed_states, exc)
+            return
+        self.states_received += 1
+        self._last_state_at = now
+        if not self.connected:
+            log.info("Tello connected (state strings arriving)")
+        self.connected = True
+        self.telemetry.on_state(state, now)
+        self.failsafe.on_flying(self.telemetry.landed.flying)
+        pose, local, body = self.telemetry.messages(stamp)
+        self.publish(registry.LOCAL_POSE, pose)
+        self.publish(registry.VELOCITY_LOCAL, local)
+        self.publish(registry.VELOCITY_BODY, body)
+        self._periodic()
+        if self.operations:
+            self.advance(now, stamp)
+
+    def _periodic(self) -> None:
+        now, landed = self.now, self.telemetry.landed.state
+        if landed != self._last_ext_value or now - self._last_ext_pub >= (
+            1.0 / self.config.extended_state_rate_hz
+        ):
+            self._last_ext_value, self._last_ext_pub = landed, now
+            self.publish(
+                registry.EXTENDED_STATE,
+                ExtendedState(header=Header(stamp=self.stamp), landed_state=landed),
+            )
+        if now - self._last_battery_pub >= 1.0 / self.config.battery_rate_hz:
+            self._last_battery_pub = now
+            self.publish(registry.BATTERY, self.telemetry.battery_message(self.stamp))
+        self.publish_state()
+
+    # ------------------------------------------------------------------ state publication
+
+    def state_message(self) -> State:
+        """The State the bridge publishes now."""
+        flying = self.telemetry.landed.flying
+        return State(
+            header=Header(stamp=self.stamp),
+            connected=self.connected,
+            armed=flying,
+            guided=self.connected and self.sdk_mode,
+            manual_input=False,
+            mode="SDK" if self.sdk_mode else "",
+            system_status=4 if flying else 3,
+            autopilot="tello",
+            failsafe=self.failsafe.state,
+            commander=self.commander,
+        )
+
+    def publish_state(self, *, force: bool = False) -> None:
+        """Publish State if it changed (or ``force``, or the periodic time has come)."""
+        msg = self.state_message()
+        key = (msg.connected, msg.armed, msg.guided, msg.mode, msg.failsafe, msg.commander)
+        due = self.now - self._last_state_pub >= 1.0 / self.config.state_rate_hz
+        if force or due or key != self._last_state_key:
+            self._last_state_key, self._last_state_pub = key, self.now
+            self.publish(registry.STATE, msg)
+
+    def set_commander(self, commander: str, now: float, stamp: float) -> None:
+        """The command lease's holder (``""``: nobody); State shows it."""
+        self._at(now, stamp)
+        if commander != self.commander:
+            self.commander = commander
+            self.publish_state(force=True)
+
+    def text(self, severity: int, text: str) -> None:
+        """Publish a StatusText of the bridge's own."""
+        header = Header(stamp=self.stamp, frame_id="bridge")
+        self.publish(registry.STATUSTEXT, StatusText(header=header, severity=severity, text=text))
+
+    # ------------------------------------------------------------------ setpoints and control
+
+    def on_setpoint(self, target: PositionTarget, now: float, stamp: float) -> None:
+        """A PositionTarget from the commander (already admitted by the command lease):
+        validated, then flown by the tick."""
+        self._at(now, stamp)
+        try:
+            kind = validate(target, self.scale)
+        except SetpointError as exc:
+            self.rejected_setpoints += 1
+            if now - self._last_reject_log >= 2.0:
+                self._last_reject_log = now
+                log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
+            return
+        self.failsafe.on_setpoint(target, kind, now)
+
+    def tick(self, now: float, stamp: float) -> None:
+        """The control tick (``rc_rate_hz``): link supervision, the failsafe, the sticks or the
+        stop, keep-alive, the failsafe's landing, reconnection, periodic State, operations."""
+        self._at(now, stamp)
+        if self.connected and now - self._last_state_at > self.config.link_timeout:
+            self.connected = False
+            self.sdk_mode = False
+            log.warning("Tello link lost: no state string for %.1f s", now - self._last_state_at)
+        tick = self.failsafe.tick(now)
+        self._report(tick)
+        sticks = self._sticks(tick)
+        landed = self.telemetry.landed.state
+        maneuvering = landed in (LANDED_STATE_TAKEOFF, LANDED_STATE_LANDING)
+        if sticks is not None and not maneuvering and landed != LANDED_STATE_ON_GROUND:
+            self.send(rc_command(sticks))
+            self.last_sticks = sticks
+            self.rc_sent += 1
+        if tick.request == LAND and (self._land_op is None or self._land_op.done):
+            self._land_op = self.start(ops.failsafe_land(self), now, stamp, background=True)
+        if (not self.connected or not self.sdk_mode) and (
+            now - self._last_reconnect >= self.config.reconnect_s
+        ):
+            self._last_reconnect = now
+            if self._connect_op is None or self._connect_op.done:
+                self._connect_op = self.start(ops.connect(self), now, stamp, background=True)
+        self.publish_state()
+        self.advance(now, stamp)
+
+    def _sticks(self, tick: Tick) -> Sticks | None:
+        """The sticks of the fresh setpoint, a stop, or None (send nothing)."""
+        if tick.fly is not None:
+            target, kind = tick.fly
+            position = self.telemetry.position_enu or (0.0, 0.0, 0.0)
+            vx, vy, vz, yaw_rate = body_velocity(
+                target, kind, position, self.telemetry.yaw_enu, self.scale
+            )
+            return sticks_from_flu(vx, vy, vz, yaw_rate, self.scale)
+        return STOP if tick.stop else None
+
+    def _report(self, tick: Tick) -> None:
+        for t in tick.transitions:
+            level = logging.WARNING if t.new else logging.INFO
+            log.log(level, "failsafe %r -> %r: %s", t.old, t.new, t.reason)
+            severity = SEVERITY_WARNING if t.new else SEVERITY_INFO
+            self.text(severity, f"bridge: failsafe {t.new or 'none'}: {t.reason}")
+        if tick.transitions:
+            self.publish_state(force=True)

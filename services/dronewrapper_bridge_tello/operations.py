@@ -1,0 +1,369 @@
+"""Service calls that wait for the Tello, as pure operations the core advances.
+
+Each operation is a generator over a :class:`~dronewrapper_bridge_tello.core.TelloCore`: it
+reads ``core.now`` (set by the caller of every core entry point), queues SDK commands on the
+core, and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes
+it whenever a reply, a state string or a tick arrives, so every wait is a loop that re-checks
+its condition. Its return value is the service reply; an exception it raises (``ValueError``
+for a bad request, ``ServiceError``) is the call's error. No sockets, threads or clock here
+(bridge_mavlink's operations.py is built the same way).
+
+The rules they carry: one command in flight at a time (the Tello's replies carry no ids); a
+quick command is re-sent after ``command_timeout`` up to ``command_attempts`` times, and after a
+retried or unanswered one its stray replies get 0.3 s to arrive so a late ``ok`` is never taken
+for the next command's answer; ``takeoff`` and ``land`` are sent once and wait for the Tello's
+``ok``; a take-off while flying does nothing; a take-off whose ``ok`` was lost is confirmed by
+the height; ``error ...`` replies are refusals with the Tello's text.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import re
+from collections.abc import Generator
+from typing import TYPE_CHECKING, Any
+
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    LANDED_STATE_ON_GROUND,
+    CommandBool,
+    CommandBoolResult,
+    CommandTOL,
+    CommandTOLResult,
+    ParamGet,
+    ParamGetResult,
+    ParamSet,
+    ParamSetResult,
+    ParamValue,
+    SetMode,
+    SetModeResult,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_tello.replies import Pending, is_ok
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_tello.core import TelloCore
+
+log = logging.getLogger("bridge_tello")
+
+Steps = Generator[float, None, Any]
+
+MAV_RESULT_ACCEPTED = 0
+MAV_RESULT_DENIED = 2
+RESULT_NO_REPLY = -1
+BUSY_POLL_S = 0.05  # s between looks at a busy command slot
+SETTLE_S = 0.3  # s stray replies of a retried or unanswered command may take
+
+SDK_MODES = ("OFFBOARD", "GUIDED", "SDK")
+HOVER_MODES = ("AUTO.LOITER", "HOLD", "LOITER", "POSCTL", "BRAKE")
+LAND_MODES = ("AUTO.LAND", "LAND")
+EMERGENCY_MODES = ("EMERGENCY",)
+ALL_MODES = SDK_MODES + HOVER_MODES + LAND_MODES + EMERGENCY_MODES
+
+# param id -> (read command, settable with "<command> <value>" in [lo, hi] or None)
+PARAMS: dict[str, tuple[str, tuple[str, float, float] | None]] = {
+    "SPEED": ("speed?", ("speed", 10.0, 100.0)),  # cm/s of the move commands
+    "BATTERY": ("battery?", None),  # %
+    "FLIGHT_TIME": ("time?", None),  # s of motor time
+    "HEIGHT": ("height?", None),  # dm
+    "TOF": ("tof?", None),  # mm
+    "BARO": ("baro?", None),  # m
+    "WIFI_SNR": ("wifi?", None),
+    "SDK_VERSION": ("sdk?", None),
+}
+_NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
+
+
+class Operation:
+    """One running operation: :meth:`step` resumes it; ``reply`` or ``error`` once done."""
+
+    def __init__(self, steps: Steps, *, background: bool = False) -> None:
+        self._steps = steps
+        self.name = getattr(steps, "__name__", "operation")
+        self.background = background  # started by the bridge itself: nobody waits for it
+        self.done = False
+        self.reply: Any = None
+        self.error: BaseException | None = None
+        self.wake_at = -math.inf  # when it asked to be resumed at the latest
+
+    def step(self) -> None:
+        """Run until its next wait (or its end)."""
+        if self.done:
+            return
+        try:
+            self.wake_at = next(self._steps)
+        except StopIteration as stop:
+            self.done, self.reply = True, stop.value
+        except Exception as exc:  # the call's error (ValueError: a bad request)
+            self.done, self.error = True, exc
+
+    def cancel(self) -> None:
+        """Stop it where it waits (its cleanup runs: the command slot is released)."""
+        self._steps.close()
+        if not self.done:
+            self.done, self.error = True, ServiceError("the bridge is stopping", "unavailable")
+
+    def result(self) -> Any:
+        """The reply; raises the operation's error."""
+        if self.error is not None:
+            raise self.error
+        return self.reply
+
+
+# ---------------------------------------------------------------- commands
+
+
+def exchange(
+    core: TelloCore, text: str, *, timeout: float = 0.0, attempts: int = 0
+) -> Generator[float, None, str | None]:
+    """Send ``text`` and wait for its reply, re-sending it after ``timeout`` s (default
+    ``command_timeout``) up to ``attempts`` times (default ``command_attempts``); the reply,
+    or None when none came."""
+    config = core.config
+    pending = Pending(
+        text,
+        timeout=timeout or config.command_timeout,
+        attempts=attempts or config.command_attempts,
+    )
+    while core.command_busy:
+        yield core.now + BUSY_POLL_S
+    core.command_busy = True
+    try:
+        while True:
+            if pending.due(core.now):
+                core.matcher.sent(pending, core.now)
+                core.send(text)
+            if pending.finished(core.now):
+                break
+            yield pending.wake_at(core.now)
+        if pending.sent > 1 or pending.reply is None:
+            # give stray replies to the other sends their time, then forget them
+            settle = core.now + min(SETTLE_S, config.command_timeout)
+            while core.now < settle and core.matcher.waiting():
+                yield settle
+    finally:
+        core.matcher.forget(pending)
+        core.command_busy = False
+    if pending.reply is None:
+        log.warning("%r: no reply after %d attempt(s)", text, pending.sent)
+    elif not is_ok(pending.reply) and not text.endswith("?"):
+        log.warning("%r -> %r", text, pending.reply)
+    return pending.reply
+
+
+def result_of(reply: str | None, what: str) -> tuple[int, str]:
+    """(result, message) of a reply: 0 accepted, 2 refused with the Tello's text, -1 none."""
+    if reply is None:
+        return RESULT_NO_REPLY, f"{what}: no reply from the Tello"
+    if is_ok(reply):
+        return MAV_RESULT_ACCEPTED, f"{what} accepted"
+    return MAV_RESULT_DENIED, f"{what} refused by the Tello: {reply}"
+
+
+def connect(core: TelloCore) -> Steps:
+    """``command`` until ``ok`` (SDK mode), then ``streamon`` for the video (the bridge's own)."""
+    reply = yield from exchange(core, "command", attempts=1)
+    if reply is None or not is_ok(reply):
+        return False
+    if not core.sdk_mode:
+        log.info("Tello in SDK mode")
+    core.sdk_mode = True
+    if core.config.video:
+        reply = yield from exchange(core, "streamon")
+        core.streaming = reply is not None and is_ok(reply)
+    core.publish_state(force=True)
+    return True
+
+
+def arming(core: TelloCore, request: CommandBool) -> Steps:
+    """A Tello has no arming. arm: enter SDK mode (``command``); the motors start with
+    take-off. disarm: accepted on the ground (motors are off), refused in flight."""
+    core.require_connected()
+    if not request.value:
+        if core.telemetry.landed.flying:
+            return CommandBoolResult(
+                success=False,
+                result=MAV_RESULT_DENIED,
+                message="a flying Tello cannot disarm: land (or set_mode EMERGENCY)",
+            )
+        return CommandBoolResult(
+            success=True, result=0, message="a Tello has no arming: motors are off"
+        )
+    reply = yield from exchange(core, "command")
+    result, message = result_of(reply, "command (SDK mode)")
+    if result == 0:
+        core.sdk_mode = True
+        message = "a Tello has no arming: SDK mode confirmed, the motors start with take-off"
+    return CommandBoolResult(success=result == 0, result=result, message=message)
+
+
+def takeoff(core: TelloCore, request: CommandTOL) -> Steps:
+    """``takeoff`` (waits for the Tello's ok, which comes once it hovers, ~1 m), then
+    ``up``/``down`` to ``altitude`` m above the take-off point when one is given. While
+    flying it does nothing (a second take-off must not move the drone)."""
+    core.require_connected()
+    height = request.altitude
+    if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 30.0):
+        raise ValueError(f"altitude must be in (0, 30] m or NaN, got {height!r}")
+    if core.telemetry.landed.state == LANDED_STATE_IN_AIR:
+        return CommandTOLResult(success=True, result=0, message="already flying")
+    core.telemetry.reset_position()
+    core.telemetry.landed.on_takeoff_sent()
+    core.failsafe.on_takeoff_or_land()
+    core.publish_state(force=True)
+    reply = yield from exchange(core, "takeoff", timeout=core.config.takeoff_timeout, attempts=1)
+    result, message = result_of(reply, "takeoff")
+    if reply is None and (core.telemetry.position_enu or (0, 0, 0))[2] > 0.3:
+        result, message = 0, "takeoff: reply lost, but the Tello is in the air"
+    core.telemetry.landed.on_takeoff_done(result == 0)
+    core.publish_state(force=True)
+    if result != 0 or math.isnan(height):
+        return CommandTOLResult(success=result == 0, result=result, message=message)
+    z = yield from settled_height(core)
+    error_cm = (height - z) * 100.0
+    log.info("take-off done at %.2f m; %.2f m asked", z, height)
+    # the SDK's moves are 20-500 cm: correct only errors beyond 8 cm (a 20 cm move for a
+    # smaller error would overshoot by more than it corrects)
+    if abs(error_cm) > 8.0:
+        verb = "up" if error_cm > 0 else "down"
+        cm = round(min(500.0, max(20.0, abs(error_cm))))
+        move = f"{verb} {cm}"
+        reply = yield from exchange(core, move, timeout=core.config.move_timeout, attempts=1)
+        move_result, move_message = result_of(reply, move)
+        message += f"; {move_message}"
+        if move_result != 0:
+            return CommandTOLResult(success=False, result=move_result, message=message)
+    return CommandTOLResult(success=True, result=0, message=message)
+
+
+def settled_height(core: TelloCore, timeout: float = 3.0) -> Generator[float, None, float]:
+    """The height (m) once the climb has stopped: the take-off ``ok`` may come while the
+    Tello still rises the last centimetres. Settled = two state strings in a row with
+    |vz| < 0.1 m/s; gives up after ``timeout`` s."""
+    deadline = core.now + timeout
+    calm, seen = 0, core.states_received
+    while core.now < deadline and calm < 2:
+        yield deadline
+        if core.states_received != seen:
+            seen = core.states_received
+            calm = calm + 1 if abs(core.telemetry.velocity[2]) < 0.1 else 0
+    return (core.telemetry.position_enu or (0.0, 0.0, 0.0))[2]
+
+
+def landing(core: TelloCore) -> Generator[float, None, str | None]:
+    """``land``, once, waiting for the Tello's ok (given on the ground); the reply or None."""
+    core.telemetry.landed.on_land_sent()
+    core.failsafe.on_takeoff_or_land()
+    core.publish_state(force=True)
+    reply = yield from exchange(core, "land", timeout=core.config.land_timeout, attempts=1)
+    core.telemetry.landed.on_land_done(reply is not None and is_ok(reply))
+    core.publish_state(force=True)
+    return reply
+
+
+def land(core: TelloCore, request: CommandTOL) -> Steps:
+    """``land`` here (waits for the Tello's ok, given once on the ground)."""
+    core.require_connected()
+    for name, value, bound in (
+        ("latitude", request.latitude, 90.0),
+        ("longitude", request.longitude, 180.0),
+    ):
+        if not math.isnan(value) and not (math.isfinite(value) and abs(value) <= bound):
+            raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
+    if core.telemetry.landed.state == LANDED_STATE_ON_GROUND:
+        return CommandTOLResult(success=True, result=0, message="already on the ground")
+    result, message = result_of((yield from landing(core)), "land")
+    return CommandTOLResult(success=result == 0, result=result, message=message)
+
+
+def failsafe_land(core: TelloCore) -> Steps:
+    """The failsafe's landing (commander lost); nobody waits for it."""
+    reply = yield from landing(core)
+    if reply is not None and is_ok(reply):
+        log.warning("failsafe land: done")
+    else:
+        log.error("failsafe land: %s", reply or "no reply")
+    return reply
+
+
+# ---------------------------------------------------------------- modes and parameters
+
+
+def set_mode(core: TelloCore, request: SetMode) -> Steps:
+    """Modes mapped onto Tello commands: OFFBOARD/GUIDED/SDK -> ``command``;
+    AUTO.LOITER/HOLD/LOITER/POSCTL/BRAKE -> ``stop`` (hover); AUTO.LAND/LAND -> ``land``;
+    EMERGENCY -> ``emergency`` (motors off at once: it falls)."""
+    core.require_connected()
+    mode = request.custom_mode.strip().upper() if isinstance(request.custom_mode, str) else ""
+    if mode not in ALL_MODES:
+        raise ValueError(
+            f"custom_mode {request.custom_mode[:40]!r} is not a Tello mode; "
+            f"valid: {', '.join(ALL_MODES)}"
+        )
+    if mode in SDK_MODES:
+        reply = yield from exchange(core, "command")
+        if reply is not None and is_ok(reply):
+            core.sdk_mode = True
+    elif mode in HOVER_MODES:
+        core.failsafe.on_takeoff_or_land()
+        reply = yield from exchange(core, "stop")
+    elif mode in LAND_MODES:
+        if core.telemetry.landed.state == LANDED_STATE_ON_GROUND:
+            return SetModeResult(mode_sent=True, result=0, message="already on the ground")
+        reply = yield from landing(core)
+    else:
+        reply = yield from exchange(core, "emergency", attempts=1)
+        core.telemetry.landed.on_emergency()
+    result, message = result_of(
+        reply, f"{mode} ({'emergency' if mode in EMERGENCY_MODES else 'mapped'})"
+    )
+    return SetModeResult(mode_sent=result == 0, result=result, message=message)
+
+
+def param_id_of(param_id: Any) -> str:
+    """The known parameter id (upper case); ValueError listing the known ones."""
+    if not isinstance(param_id, str) or param_id.upper() not in PARAMS:
+        shown = param_id[:40] if isinstance(param_id, str) else param_id
+        raise ValueError(f"param_id {shown!r} is not a Tello parameter; known: {', '.join(PARAMS)}")
+    return param_id.upper()
+
+
+def number_in(text: str) -> float | None:
+    """The first number in a reply (``100.0``, ``87``, ``-3``), None if there is none."""
+    match = _NUMBER.search(text)
+    return float(match.group()) if match else None
+
+
+def param_get(core: TelloCore, request: ParamGet) -> Steps:
+    """Read commands (``speed?``, ``battery?`` ...) as parameters (numbers only)."""
+    core.require_connected()
+    param_id = param_id_of(request.param_id)
+    reply = yield from exchange(core, PARAMS[param_id][0])
+    if reply is None:
+        return ParamGetResult(success=False, message=f"{param_id}: no reply from the Tello")
+    value = number_in(reply)
+    if value is None:
+        return ParamGetResult(success=False, message=f"{param_id}: the Tello said {reply!r}")
+    return ParamGetResult(success=True, value=ParamValue.of(value), message=reply)
+
+
+def param_set(core: TelloCore, request: ParamSet) -> Steps:
+    """Only SPEED (cm/s, ``speed x``, 10..100) can be written."""
+    core.require_connected()
+    param_id = param_id_of(request.param_id)
+    setter = PARAMS[param_id][1]
+    if setter is None:
+        return ParamSetResult(success=False, message=f"{param_id} is read-only on a Tello")
+    value = float(request.value.as_number())
+    verb, low, high = setter
+    if not (math.isfinite(value) and low <= value <= high):
+        raise ValueError(
+            f"value: {param_id} (real or integer) must be in [{low:g}, {high:g}], got {value!r}"
+        )
+    command = f"{verb} {round(value)}"
+    reply = yield from exchange(core, command)
+    result, message = result_of(reply, command)
+    return ParamSetResult(
+        success=result == 0, value=ParamValue.of(float(round(value))), message=message
+    )

@@ -1,0 +1,116 @@
+"""The command lease every bridge shares (dronewrapper.runtime.command_lease), in given time."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import pytest
+
+from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper.runtime.command_lease import (
+    HOLD,
+    LAND,
+    NONE,
+    RETURN,
+    CommandLease,
+    LeaseConfig,
+    Transition,
+)
+from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig as MavlinkFailsafeConfig
+from dronewrapper_bridge_tello.failsafe import FailsafeConfig as TelloFailsafeConfig
+
+TARGET = PositionTarget(
+    coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=1.0)
+)
+
+
+def steered(config: LeaseConfig | None = None, at: float = 10.0) -> CommandLease[str]:
+    lease: CommandLease[str] = CommandLease(config or LeaseConfig())
+    lease.take_setpoint(TARGET, "velocity", at)
+    lease.engaged = True
+    return lease
+
+
+def test_fresh_until_setpoint_timeout_then_stale():
+    lease = steered()
+    assert lease.is_fresh(10.5) and not lease.is_fresh(10.51)
+    assert lease.target is TARGET and lease.kind == "velocity"
+    assert lease.setpoint_age(11.0) == pytest.approx(1.0) and lease.stale_at() == 10.5
+
+
+def test_no_setpoint_is_never_fresh():
+    lease: CommandLease[str] = CommandLease(LeaseConfig())
+    assert not lease.is_fresh(0.0) and lease.setpoint_age(0.0) == math.inf
+    assert lease.commander_lost(100.0, in_control=True) == LAND  # in control, nothing came
+    lease = CommandLease(LeaseConfig())
+    assert lease.commander_lost(100.0, in_control=False) == ""
+
+
+def test_hold_then_a_fresh_setpoint_ends_it():
+    lease = steered()
+    lease.hold(": hover")
+    assert lease.state == HOLD
+    lease.hold()  # once
+    lease.take_setpoint(TARGET, "velocity", 11.0)
+    assert lease.state == NONE
+    assert lease.transitions() == [
+        Transition(NONE, HOLD, "no setpoint for 0.5 s: hover"),
+        Transition(HOLD, NONE, "fresh setpoint"),
+    ]
+    assert lease.transitions() == []
+
+
+@pytest.mark.parametrize("action", [LAND, RETURN])
+def test_commander_lost_after_its_timeout_once(action):
+    lease = steered(LeaseConfig(commander_lost_action=action))
+    assert lease.commander_lost(15.0, in_control=True) == ""  # exactly 5 s: not yet
+    assert lease.commander_lost(15.01, in_control=True) == action
+    assert lease.state == action
+    assert lease.commander_lost(16.0, in_control=True) == ""  # issued once
+    (transition,) = lease.transitions()
+    assert transition.new == action and "commander lost" in transition.reason
+
+
+def test_commander_lost_counts_from_since_and_needs_control():
+    lease = steered()
+    assert lease.commander_lost(20.0, in_control=False) == ""
+    assert lease.commander_lost(20.0, in_control=True, since=16.0) == ""  # 4 s since then
+    assert lease.commander_lost(21.5, in_control=True, since=16.0) == LAND
+
+
+def test_hold_action_never_acts():
+    lease = steered(LeaseConfig(commander_lost_action=HOLD))
+    assert lease.commander_lost(1e6, in_control=True) == "" and lease.state == NONE
+
+
+def test_forget_setpoint_drops_it_and_the_engagement():
+    lease = steered()
+    lease.forget_setpoint()
+    assert lease.target is None and not lease.engaged and not lease.is_fresh(10.0)
+    assert lease.last_setpoint == -math.inf
+
+
+def test_config_is_checked_and_names_the_problem():
+    with pytest.raises(ValueError, match="commander_lost_action"):
+        LeaseConfig(commander_lost_action="panic")
+    with pytest.raises(ValueError, match="setpoint_timeout < commander_lost_timeout"):
+        LeaseConfig(setpoint_timeout=6.0)
+    with pytest.raises(ValueError, match="setpoint_timeout"):
+        LeaseConfig(setpoint_timeout=math.nan)
+
+
+def test_each_bridge_narrows_the_actions_it_can_fly():
+    @dataclass(frozen=True)
+    class NoReturn(LeaseConfig):
+        ACTIONS: ClassVar[tuple[str, ...]] = (HOLD, LAND)
+
+    with pytest.raises(ValueError, match="one of hold, land"):
+        NoReturn(commander_lost_action=RETURN)
+    with pytest.raises(ValueError, match="one of hold, land,"):
+        TelloFailsafeConfig(commander_lost_action=RETURN)  # a Tello has no return
+    assert MavlinkFailsafeConfig(commander_lost_action=RETURN).commander_lost_action == RETURN
+    assert isinstance(TelloFailsafeConfig(), LeaseConfig)
+    assert isinstance(MavlinkFailsafeConfig(), LeaseConfig)
