@@ -31,13 +31,14 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.operation import Operation
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import receive
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
-from dronewrapper_bridge_mavlink.operations import Operation, failsafe_action
+from dronewrapper_bridge_mavlink.operations import failsafe_action
 from dronewrapper_bridge_mavlink.setpoints import SetpointError, to_local_ned, validate
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
@@ -142,8 +143,7 @@ class BridgeCore:
         """Begin an operation (its first step runs now; a bad request fails it at once);
         ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
         self._at(now, stamp)
-        op = Operation(steps)
-        op.background = background
+        op = Operation(steps, background=background)
         self.operations.append(op)
         op.step()
         self._prune()

@@ -6,7 +6,7 @@ and yields the time (monotonic s) it wants to be resumed at the latest; the core
 whenever a message or a tick arrives, so every wait is a loop that re-checks its condition.
 Its return value is the service reply; an exception it raises (``ValueError`` for a bad
 request, ``ServiceError``) is the call's error. No sockets, threads or clock here: the node
-waits on :attr:`Operation.done`.
+waits on :attr:`dronewrapper.runtime.operation.Operation.done`.
 
 The rules they carry: a take-off while flying does nothing; PX4's OFFBOARD is asked for only
 after > ``offboard_prime_s`` of streaming; PX4's DO_SET_MODE is answered by its second ack (a
@@ -19,7 +19,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Generator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -34,6 +34,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.modes import (
@@ -51,44 +52,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("bridge_mavlink")
 
-Steps = Generator[float, None, Any]
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
-
-
-class Operation:
-    """One running operation: :meth:`step` resumes it; ``reply`` or ``error`` once done."""
-
-    def __init__(self, steps: Steps) -> None:
-        self._steps = steps
-        self.name = getattr(steps, "__name__", "operation")
-        self.done = False
-        self.reply: Any = None
-        self.error: BaseException | None = None
-        self.wake_at = -math.inf  # when it asked to be resumed at the latest
-        self.background = False  # started by the bridge itself: nobody waits for it
-
-    def step(self) -> None:
-        """Run until its next wait (or its end)."""
-        if self.done:
-            return
-        try:
-            self.wake_at = next(self._steps)
-        except StopIteration as stop:
-            self.done, self.reply = True, stop.value
-        except Exception as exc:  # the call's error (ValueError: a bad request)
-            self.done, self.error = True, exc
-
-    def cancel(self) -> None:
-        """Stop it where it waits (its cleanup runs: a command slot is released)."""
-        self._steps.close()
-        if not self.done:
-            self.done, self.error = True, ServiceError("the bridge is stopping", "unavailable")
-
-    def result(self) -> Any:
-        """The reply; raises the operation's error."""
-        if self.error is not None:
-            raise self.error
-        return self.reply
 
 
 # ---------------------------------------------------------------- commands

@@ -31,10 +31,10 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.operation import Operation
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
-from dronewrapper_bridge_tello.operations import Operation
 from dronewrapper_bridge_tello.replies import ReplyMatcher
 from dronewrapper_bridge_tello.state import StateError, parse_state
 from dronewrapper_bridge_tello.sticks import (

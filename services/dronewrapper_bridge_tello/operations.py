@@ -39,7 +39,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
-from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.operation import Steps
 from dronewrapper_bridge_tello.replies import Pending, is_ok
 
 if TYPE_CHECKING:
@@ -47,7 +47,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("bridge_tello")
 
-Steps = Generator[float, None, Any]
 
 MAV_RESULT_ACCEPTED = 0
 MAV_RESULT_DENIED = 2
@@ -73,42 +72,6 @@ PARAMS: dict[str, tuple[str, tuple[str, float, float] | None]] = {
     "SDK_VERSION": ("sdk?", None),
 }
 _NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
-
-
-class Operation:
-    """One running operation: :meth:`step` resumes it; ``reply`` or ``error`` once done."""
-
-    def __init__(self, steps: Steps, *, background: bool = False) -> None:
-        self._steps = steps
-        self.name = getattr(steps, "__name__", "operation")
-        self.background = background  # started by the bridge itself: nobody waits for it
-        self.done = False
-        self.reply: Any = None
-        self.error: BaseException | None = None
-        self.wake_at = -math.inf  # when it asked to be resumed at the latest
-
-    def step(self) -> None:
-        """Run until its next wait (or its end)."""
-        if self.done:
-            return
-        try:
-            self.wake_at = next(self._steps)
-        except StopIteration as stop:
-            self.done, self.reply = True, stop.value
-        except Exception as exc:  # the call's error (ValueError: a bad request)
-            self.done, self.error = True, exc
-
-    def cancel(self) -> None:
-        """Stop it where it waits (its cleanup runs: the command slot is released)."""
-        self._steps.close()
-        if not self.done:
-            self.done, self.error = True, ServiceError("the bridge is stopping", "unavailable")
-
-    def result(self) -> Any:
-        """The reply; raises the operation's error."""
-        if self.error is not None:
-            raise self.error
-        return self.reply
 
 
 # ---------------------------------------------------------------- commands

@@ -16,9 +16,9 @@ from tello_peer import STATE
 
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper.runtime.operation import Operation
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import TelloCore
-from dronewrapper_bridge_tello.operations import Operation
 
 T0 = 1000.0  # monotonic s at the rig's start
 EPOCH = 1.7e9  # wall-clock s added to the monotonic time for stamps

@@ -1,0 +1,60 @@
+"""A service call that waits on an aircraft, as a generator a bridge's pure core resumes.
+
+An operation's generator queues what it sends on its core and yields the time (monotonic s) at
+which it wants to be resumed at the latest; the core resumes it whenever a message, a reply or a
+tick arrives, so every wait re-checks its condition. Its return value is the service reply; an
+exception it raises (``ValueError`` for a bad request, ``ServiceError``) is the call's error.
+Both bridges' cores (bridge_mavlink, bridge_tello) run their calls this way; the node only
+waits on :attr:`Operation.done`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Generator
+from typing import Any
+
+from dronewrapper.runtime.errors import ServiceError
+
+Steps = Generator[float, None, Any]
+"""An operation's body: yields wake-up times (monotonic s), returns the reply."""
+
+
+class Operation:
+    """One running operation: :meth:`step` resumes it; ``reply`` or ``error`` once done.
+
+    ``background``: started by the bridge itself (a failsafe landing, a reconnection), so
+    nobody waits for it and its error is only logged.
+    """
+
+    def __init__(self, steps: Steps, *, background: bool = False) -> None:
+        self._steps = steps
+        self.name = getattr(steps, "__name__", "operation")
+        self.background = background
+        self.done = False
+        self.reply: Any = None
+        self.error: BaseException | None = None
+        self.wake_at = -math.inf  # when it asked to be resumed at the latest
+
+    def step(self) -> None:
+        """Run until its next wait (or its end)."""
+        if self.done:
+            return
+        try:
+            self.wake_at = next(self._steps)
+        except StopIteration as stop:
+            self.done, self.reply = True, stop.value
+        except Exception as exc:  # the call's error (ValueError: a bad request)
+            self.done, self.error = True, exc
+
+    def cancel(self) -> None:
+        """Stop it where it waits (its cleanup runs: a command slot is released)."""
+        self._steps.close()
+        if not self.done:
+            self.done, self.error = True, ServiceError("the bridge is stopping", "unavailable")
+
+    def result(self) -> Any:
+        """The reply; raises the operation's error."""
+        if self.error is not None:
+            raise self.error
+        return self.reply
