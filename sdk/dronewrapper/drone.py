@@ -175,8 +175,10 @@ class DroneWrapper:
         node: a runtime ``Node``, or a ``FakeNode`` on the fake bus (tests), to talk through
             instead of a session; it is not closed by :meth:`close`. ``connect``, ``mode`` and
             ``session`` are then ignored.
-        clock, sleep: the monotonic clock (s) the getters' ages and the blocking calls'
-            deadlines are measured on, and how those calls wait (injected time in tests).
+        clock, sleep: the monotonic clock (s) of the getters' ages and of the deadlines of
+            takeoff(), land() and the polling waits (wait_for, wait_for_altitude ...), and
+            how those calls wait: injected time in tests (the connection and image waits
+            block on arrivals, in real time).
 
     Raises:
         NotConnected: no router at ``connect``, no bridge in namespace ``name``, or the bridge

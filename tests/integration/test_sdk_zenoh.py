@@ -10,7 +10,6 @@ tests/service/test_sdk_drone.py and test_sdk_aio.py.
 
 from __future__ import annotations
 
-import asyncio
 import itertools
 import subprocess
 import sys
@@ -20,7 +19,6 @@ from collections.abc import Iterator
 import pytest
 
 from dronewrapper import DroneWrapper, NoData, NotConnected, list_drones
-from dronewrapper.aio import Drone
 from dronewrapper.msgs import PositionTarget, registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, MASK_POSITION
 from fake_bridge import FakeBridge
@@ -178,15 +176,3 @@ def test_cameras_are_subscribed_only_when_read(drone, bridge):
     with pytest.raises(NoData, match="no image received yet"):
         drone.get_frontal_image()
     wait_for(lambda: publisher.matching_status.matching, 10, what="a camera subscriber")
-
-
-def run(coroutine):
-    return asyncio.run(asyncio.wait_for(coroutine, 60))
-
-
-def test_aio_no_bridge_is_the_same_clear_error(router):
-    async def main():
-        await Drone("drone", router, timeout=1.0).connect()
-
-    with pytest.raises(NotConnected, match="no bridge"):
-        run(main())

@@ -1,8 +1,8 @@
 """The asyncio API mirrors the sync one, on the fake bus (tests/bus_autopilot.py SdkRig).
 
 Its blocking calls run on a worker thread while the event loop keeps running; telemetry comes
-as async iterators of the newest values. The "no bridge" error over a real router is in
-tests/integration/test_sdk_zenoh.py.
+as async iterators of the newest values. The constructor's diagnoses over a real router are
+in tests/integration/test_sdk_zenoh.py.
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from bus_autopilot import REFUSED, TELEMETRY_PERIOD_S, SdkRig
 
-from dronewrapper import CommandRefused, InvalidArgument
+from dronewrapper import CommandRefused, InvalidArgument, NotConnected
 from dronewrapper.aio import Drone
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, MASK_VELOCITY
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import Header
-from dronewrapper.runtime.fake import FakeNode
+from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 
 def run(coroutine):
@@ -132,6 +132,16 @@ def test_errors_are_the_sync_ones(rig):
 
     refusal = run(main())
     assert refusal.result == REFUSED and "preflight" in str(refusal)
+
+
+def test_no_bridge_is_the_same_clear_error():
+    bus = FakeBus()  # nobody publishes: the constructor waits (briefly) in vain
+
+    async def main():
+        await Drone(node=FakeNode("app", bus), timeout=0.05).connect()
+
+    with pytest.raises(NotConnected, match=r"no bridge for drone 'drone'.*nothing published"):
+        run(main())
 
 
 def test_blocking_members_are_never_passed_through_unawaited(rig):
