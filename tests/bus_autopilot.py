@@ -1,14 +1,17 @@
 """A bridge's keys on the fake bus, in injected time, for tests of what commands an aircraft.
 
-:class:`BusAutopilot` serves SET_MODE, ARMING, TAKEOFF and LAND on a
-:class:`~dronewrapper.runtime.fake.FakeNode` and publishes State, ExtendedState and the local
-pose each time it is ticked. Its aircraft climbs or sinks at 1 m/s towards the height of the
+:class:`BusAutopilot` serves SET_MODE, ARMING, TAKEOFF, LAND, PARAM_GET and PARAM_SET on a
+:class:`~dronewrapper.runtime.fake.FakeNode` and publishes State, ExtendedState, the local
+pose, the velocities and the battery each time it is ticked (and a status text with each
+refusal). Its aircraft climbs or sinks at 1 m/s towards the height of the
 newest position setpoint (PX4 OFFBOARD) or of a TAKEOFF request while armed; LAND puts it on
 the ground, disarmed. It is not the bridge (tests/service/test_bridge_* test that): only enough
 of its contract for a commander's logic, with every request recorded in ``calls``.
 
 :func:`drive` runs steppers (anything with ``step(now)`` and ``next_wake(now)``) and the
 autopilot on the bus until a given time, delivering scheduled messages in order.
+:class:`SdkRig` is the user's :class:`~dronewrapper.drone.DroneWrapper` on that bus, its
+blocking calls waiting in bus time.
 """
 
 from __future__ import annotations
@@ -16,8 +19,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable
 
+from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Quaternion
+from dronewrapper.msgs.geometry import (
+    Point,
+    Pose,
+    PoseStamped,
+    Quaternion,
+    Twist,
+    TwistStamped,
+    Vector3,
+)
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -25,15 +37,25 @@ from dronewrapper.msgs.mavros import (
     CommandBoolResult,
     CommandTOLResult,
     ExtendedState,
+    ParamGetResult,
+    ParamSetResult,
+    ParamValue,
     PositionTarget,
     SetModeResult,
     State,
+    StatusText,
 )
+from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
+T0 = 1_700_000_000.0
+"""Bus time the rigs start at (s, Unix time)."""
 TELEMETRY_PERIOD_S = 0.05  # 20 Hz, the real bridge's pose rate is higher; enough here
 CLIMB_RATE = 1.0  # m/s
+REFUSED = 4  # MAV_RESULT_FAILED, the result code of every refusal
+YAW_RATE = 0.25  # rad/s, the body yaw rate it reports
+BATTERY = 0.8  # the charge it reports (fraction)
 
 
 class BusAutopilot:
@@ -46,6 +68,7 @@ class BusAutopilot:
         refuse: service name (``set_mode``, ``arming``, ``takeoff``, ``land``) -> the reason
             given when refusing it.
         absent: services not served at all (a call gets no reply).
+        x: the east position it reports (m; the take-off point is at x, 0, 0).
     """
 
     def __init__(
@@ -57,8 +80,10 @@ class BusAutopilot:
         refuse: dict[str, str] | None = None,
         absent: Iterable[str] = (),
         ns: str = "drone",
+        x: float = 0.0,
     ) -> None:
         self.bus = bus
+        self.x = x
         self.node = FakeNode("bridge_fake", bus, ns=ns)
         self.autopilot = autopilot
         self.connected = True
@@ -68,18 +93,26 @@ class BusAutopilot:
         self.z_goal = self.z
         self.landed = LANDED_STATE_IN_AIR if flying else LANDED_STATE_ON_GROUND
         self.calls: list[tuple[float, str]] = []
+        self.requests: list = []  # every service request, as received
         self.refuse = refuse or {}
         self.z_at_first_velocity: float | None = None
+        self.params: dict[str, ParamValue] = {"MPC_XY_VEL_MAX": ParamValue(real=12.0)}
         self._last_tick: float | None = None
         self._state = self.node.publisher(registry.STATE)
         self._ext = self.node.publisher(registry.EXTENDED_STATE)
         self._pose = self.node.publisher(registry.LOCAL_POSE)
+        self._velocity_body = self.node.publisher(registry.VELOCITY_BODY)
+        self._velocity_local = self.node.publisher(registry.VELOCITY_LOCAL)
+        self._battery = self.node.publisher(registry.BATTERY)
+        self._text = self.node.publisher(registry.STATUSTEXT)
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
         handlers: dict[str, tuple[registry.Service, Callable]] = {
             "set_mode": (registry.SET_MODE, self._set_mode),
             "arming": (registry.ARMING, self._arming),
             "takeoff": (registry.TAKEOFF, self._takeoff),
             "land": (registry.LAND, self._land),
+            "param_get": (registry.PARAM_GET, self._param_get),
+            "param_set": (registry.PARAM_SET, self._param_set),
         }
         for name, (service, handler) in handlers.items():
             if name not in absent:
@@ -87,39 +120,57 @@ class BusAutopilot:
 
     # ---- the services ----
 
-    def _refused(self, name: str) -> str:
+    def _refused(self, name: str, request) -> str:
+        """Record the call; the reason it is refused for ("": accepted), said as a text too."""
         self.calls.append((self.bus.clock(), name))
-        return self.refuse.get(name, "")
+        self.requests.append(request)
+        reason = self.refuse.get(name, "")
+        if reason:
+            self.say(reason)
+        return reason
+
+    def say(self, text: str) -> None:
+        """Publish an autopilot text message now."""
+        self._text.put(StatusText(header=Header(stamp=self.bus.clock()), text=text))
 
     def _set_mode(self, req) -> SetModeResult:
-        reason = self._refused("set_mode")
+        reason = self._refused("set_mode", req)
         if reason:
-            return SetModeResult(mode_sent=False, result=4, message=reason)
+            return SetModeResult(mode_sent=False, result=REFUSED, message=reason)
         self.mode = req.custom_mode
         return SetModeResult(mode_sent=True, result=0)
 
     def _arming(self, req) -> CommandBoolResult:
-        reason = self._refused("arming")
+        reason = self._refused("arming", req)
         if reason:
-            return CommandBoolResult(success=False, result=4, message=reason)
+            return CommandBoolResult(success=False, result=REFUSED, message=reason)
         self.armed = req.value
         return CommandBoolResult(success=True, result=0)
 
     def _takeoff(self, req) -> CommandTOLResult:
-        reason = self._refused("takeoff")
+        reason = self._refused("takeoff", req)
         if reason:
-            return CommandTOLResult(success=False, result=4, message=reason)
+            return CommandTOLResult(success=False, result=REFUSED, message=reason)
         self.armed = True
         self.z_goal = req.altitude
         return CommandTOLResult(success=True, result=0)
 
-    def _land(self, _req) -> CommandTOLResult:
-        reason = self._refused("land")
+    def _land(self, req) -> CommandTOLResult:
+        reason = self._refused("land", req)
         if reason:
-            return CommandTOLResult(success=False, result=4, message=reason)
+            return CommandTOLResult(success=False, result=REFUSED, message=reason)
         self.mode, self.z, self.z_goal = "AUTO.LAND", 0.0, 0.0
         self.landed, self.armed = LANDED_STATE_ON_GROUND, False
         return CommandTOLResult(success=True, result=0)
+
+    def _param_get(self, req) -> ParamGetResult:
+        if req.param_id not in self.params:
+            return ParamGetResult(success=False, message=f"no parameter {req.param_id}")
+        return ParamGetResult(success=True, value=self.params[req.param_id])
+
+    def _param_set(self, req) -> ParamSetResult:
+        self.params[req.param_id] = req.value
+        return ParamSetResult(success=True, value=req.value)
 
     def _on_setpoint(self, sp: PositionTarget) -> None:
         if sp.type_mask == MASK_POSITION:
@@ -151,8 +202,12 @@ class BusAutopilot:
             )
         )
         self._ext.put(ExtendedState(header=header, landed_state=self.landed))
-        pose = Pose(position=Point(z=self.z), orientation=Quaternion(w=1.0))
+        pose = Pose(position=Point(x=self.x, z=self.z), orientation=Quaternion(w=1.0))
         self._pose.put(PoseStamped(header=Header(stamp=now, frame_id="map"), pose=pose))
+        turning = Twist(angular=Vector3(z=YAW_RATE))
+        self._velocity_body.put(TwistStamped(header=header, twist=turning))
+        self._velocity_local.put(TwistStamped(header=header))
+        self._battery.put(BatteryState(header=header, percentage=BATTERY))
 
     def next_wake(self, now: float) -> float:
         return (self._last_tick if self._last_tick is not None else now) + TELEMETRY_PERIOD_S
@@ -189,3 +244,53 @@ def drive(bus: FakeBus, until: float, *steppers, stop: Callable[[], bool] = lamb
             bus.step()
         else:
             bus.clock.advance_to(wake)
+
+
+class SdkRig:
+    """A :class:`DroneWrapper` on the fake bus with a :class:`BusAutopilot` behind it: its
+    blocking calls (take-off, landing, ``wait_for``) move the bus time, ticking the aircraft
+    and running what :meth:`at` scheduled, instead of sleeping; the getters' ages are bus time
+    too. Its setpoint stream repeats on its own thread (tests/unit/test_sdk_streamer* test
+    that); a new setpoint goes out at once.
+
+    ``autopilot`` takes :class:`BusAutopilot`'s arguments; ``drone`` DroneWrapper's
+    (:meth:`options`); ``open_drone=False`` leaves ``drone`` None (an aio Drone opens one).
+    """
+
+    def __init__(self, autopilot: dict | None = None, *, open_drone: bool = True, **drone) -> None:
+        self.bus = FakeBus(start=T0)
+        self.pilot = BusAutopilot(self.bus, **{"flying": False, **(autopilot or {})})
+        self.node = FakeNode("app", self.bus)
+        self._actions: list[tuple[float, Callable[[], None]]] = []
+        self.drone = DroneWrapper("drone", **self.options(**drone)) if open_drone else None
+        self.run(TELEMETRY_PERIOD_S)  # the first telemetry is in
+
+    def options(self, **drone) -> dict:
+        """DroneWrapper's arguments for a wrapper on this bus, in its time."""
+        return {
+            "node": self.node,
+            "clock": self.bus.clock,
+            "sleep": self.run,
+            "wait": False,
+            **drone,
+        }
+
+    def at(self, delay: float, action: Callable[[], None]) -> None:
+        """Run ``action`` once ``delay`` s of bus time have passed (while a call blocks)."""
+        self._actions.append((self.bus.clock() + delay, action))
+
+    def step(self, now: float) -> None:
+        due = [a for a in self._actions if a[0] <= now]
+        self._actions = [a for a in self._actions if a[0] > now]
+        for _, action in due:
+            action()
+
+    def next_wake(self, now: float) -> float:
+        return min((t for t, _ in self._actions), default=math.inf)
+
+    def run(self, seconds: float) -> None:
+        """Move the bus ``seconds`` on, ticking the aircraft."""
+        drive(self.bus, self.bus.clock() + seconds, self, self.pilot)
+
+    def close(self) -> None:
+        self.drone.close()

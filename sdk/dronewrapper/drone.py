@@ -29,7 +29,6 @@ import collections
 import contextlib
 import getpass
 import logging
-import math
 import os
 import socket
 import time
@@ -41,7 +40,7 @@ from typing import Any, TypeVar
 import numpy as np
 import zenoh
 
-from dronewrapper import images, setpoints, telemetry
+from dronewrapper import flying, images, setpoints, telemetry
 from dronewrapper.discovery import (
     BRIDGE_PREFIX,
     alive_services,
@@ -49,7 +48,14 @@ from dronewrapper.discovery import (
     default_connect,
     open_client,
 )
-from dronewrapper.errors import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper.errors import (
+    CommandRefused,
+    DroneError,
+    InvalidArgument,
+    NoData,
+    NotConnected,
+    Timeout,
+)
 from dronewrapper.health import stale_after
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.lease import LeaseRequest
@@ -60,7 +66,6 @@ from dronewrapper.msgs.mavros import (
     MASK_MIXED,
     MASK_POSITION,
     CommandBool,
-    CommandTOL,
     ParamGet,
     ParamSet,
     ParamValue,
@@ -71,8 +76,10 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.commander import STATE_FRESH_S
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.flight import Landing, Takeoff
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
 from dronewrapper.runtime.options import is_local_endpoint
@@ -85,11 +92,6 @@ log = logging.getLogger("dronewrapper")
 
 CAMERAS = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
 """Camera short names accepted by the image methods, and their key names."""
-
-ARDUPILOT = ("ardupilotmega", "ardupilot")
-TELLO = ("tello",)
-STATE_FRESH_S = 3.0
-"""The bridge publishes State at >= 1 Hz; older than this means the bridge is gone."""
 
 TELEMETRY_READ_BY_GETTERS = (
     ("extended state", "_extended"),
@@ -170,6 +172,13 @@ class DroneWrapper:
             NAME.crt, see ``dronewrapper keys``; env ``DRONEWRAPPER_IDENTITY``).
         commander: our name on the command lease (default: the identity's name, or
             ``user@host``); the bridge obeys one commander at a time, see take_command().
+        node: a runtime ``Node``, or a ``FakeNode`` on the fake bus (tests), to talk through
+            instead of a session; it is not closed by :meth:`close`. ``connect``, ``mode`` and
+            ``session`` are then ignored.
+        clock, sleep: the monotonic clock (s) of the getters' ages and of the deadlines of
+            takeoff(), land() and the polling waits (wait_for, wait_for_altitude ...), and
+            how those calls wait: injected time in tests (the connection and image waits
+            block on arrivals, in real time).
 
     Raises:
         NotConnected: no router at ``connect``, no bridge in namespace ``name``, or the bridge
@@ -193,11 +202,14 @@ class DroneWrapper:
         wait: bool = True,
         identity: str | None = None,
         commander: str | None = None,
+        node: Any = None,
+        clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], Any] = time.sleep,
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
         self.connect = connect or default_connect()
         if compressed_images is None:
-            remote = session is None and not is_local_endpoint(self.connect)
+            remote = session is None and node is None and not is_local_endpoint(self.connect)
             compressed_images = remote and images.has_jpeg_decoder()
             if remote and not compressed_images:
                 log.warning(
@@ -211,28 +223,39 @@ class DroneWrapper:
         self.land_on_exit = land_on_exit
         self.compressed_images = compressed_images
         self.service_timeout = service_timeout
-        self.sample_errors = SampleErrors(log)
+        self.sample_errors = SampleErrors(log) if node is None else node.sample_errors
         self.decode_errors: collections.Counter[str] = self.sample_errors.decode
         self._closed = False
         self._warned_grounded = False
         self._stale_after: dict[str, float] = {}
         self._stale_warned: set[str] = set()
         self._subscribers: list[Any] = []
-        self._own_session = session is None
+        self._node = node
+        self._clock, self._sleep = clock, sleep
+        self._own_session = session is None and node is None
         deadline = time.monotonic() + timeout
         identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
         self.commander = commander or default_commander(identity)
         self._attachment = commander_attachment(self.commander)
-        if session is None:
+        if node is not None:
+            session = node.session
+        elif session is None:
             session = open_client(self.connect, timeout, mode=mode, identity=identity)
         self.session: zenoh.Session = session
         _open_wrappers.add(self)
         try:
             self._declare_inputs(cameras)
-            self._setpoints = session.declare_publisher(
-                registry.SETPOINT_RAW_LOCAL.key(self.ns),
-                encoding=encoding_for(PositionTarget),
-                **qos_for(registry.SETPOINT_RAW_LOCAL),
+            self._declare_setpoints()
+            self._aircraft = flying.WrapperAircraft(
+                self.ns,
+                state=self._state,
+                extended=self._extended,
+                pose=self._pose,
+                status_texts=self.status_texts,
+                set_target=self._command_setpoint,
+                stop=self.stop_commanding,
+                ask=self._ask,
+                wall=time.time,
             )
             self._streamer = SetpointStreamer(
                 self._publish_setpoint,
@@ -241,9 +264,13 @@ class DroneWrapper:
                 name=f"{self.ns}-setpoints",
             )
             self._bridge_matched = False
-            self._matching = self._setpoints.declare_matching_listener(
-                zenoh.handlers.Callback(self._on_setpoint_matching, indirect=False)
-            )  # a direct callback: no thread to block interpreter exit (see _subscribe)
+            self._matching = (
+                None
+                if node is not None
+                else self._setpoints.declare_matching_listener(
+                    zenoh.handlers.Callback(self._on_setpoint_matching, indirect=False)
+                )  # a direct callback: no thread to block interpreter exit (see _subscribe)
+            )
             if wait:
                 self.wait_for_connection(max(0.0, deadline - time.monotonic()))
         except BaseException:
@@ -271,6 +298,16 @@ class DroneWrapper:
             self._camera_holder(camera)
         self._images_declared = True
 
+    def _declare_setpoints(self) -> None:
+        if self._node is not None:  # a typed publisher (the runtime's)
+            self._setpoints = self._node.publisher(registry.SETPOINT_RAW_LOCAL)
+        else:
+            self._setpoints = self.session.declare_publisher(
+                registry.SETPOINT_RAW_LOCAL.key(self.ns),
+                encoding=encoding_for(PositionTarget),
+                **qos_for(registry.SETPOINT_RAW_LOCAL),
+            )
+
     def _camera_holder(self, camera: str) -> Latest[Any] | None:
         """The newest-frame holder of ``camera``, subscribing now if cameras are lazy; None if
         the camera was not requested."""
@@ -296,6 +333,10 @@ class DroneWrapper:
     def _subscribe(
         self, topic: Topic[T], callback: Callable[[T], None], **parts: str
     ) -> zenoh.Subscriber:
+        if self._node is not None:
+            subscriber = self._node.subscribe(topic, callback, **parts)
+            self._subscribers.append(subscriber)
+            return subscriber
         key = topic.key(self.ns, **parts)
         deliver = decoding(topic.type, callback, self.sample_errors)
 
@@ -311,7 +352,7 @@ class DroneWrapper:
         return subscriber
 
     def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
-        holder: Latest[T] = Latest(name=topic.key(self.ns, **parts))
+        holder: Latest[T] = Latest(name=topic.key(self.ns, **parts), clock=self._clock)
         self._subscribe(topic, holder.update, **parts)
         self._stale_after[holder.name] = stale_after(topic.rate_hz)
         return holder
@@ -329,7 +370,8 @@ class DroneWrapper:
             self._streamer.link_down()
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
-        self._setpoints.put(codec.encode(target), attachment=self._attachment)
+        message = target if self._node is not None else codec.encode(target)
+        self._setpoints.put(message, attachment=self._attachment)
 
     def _need(self, latest: Latest[T], what: str) -> T:
         value = latest.value
@@ -474,12 +516,15 @@ class DroneWrapper:
         return state
 
     def _diagnose(self, timeout: float) -> str:
-        info = self.session.info
-        linked = bool(list(info.routers_zid()) or list(info.peers_zid()))
-        try:
-            keys = alive_services(self.session, "*", timeout=1.0) if linked else set()
-        except Exception:
-            keys = set()
+        if self._node is not None:  # on a node's bus: linked, no liveliness to look at
+            linked = True
+        else:
+            info = self.session.info
+            linked = bool(list(info.routers_zid()) or list(info.peers_zid()))
+        keys: set[str] = set()
+        if linked and self._node is None:
+            with contextlib.suppress(Exception):
+                keys = alive_services(self.session, "*", timeout=1.0)
         state = self._state.value
         return connection_problem(
             self.ns,
@@ -621,7 +666,7 @@ class DroneWrapper:
         Raises:
             Timeout: still false after ``timeout`` seconds (the message names ``what``).
         """
-        deadline = time.monotonic() + timeout
+        deadline = self._clock() + timeout
         while True:
             try:
                 value = predicate()
@@ -629,9 +674,9 @@ class DroneWrapper:
                 value = None
             if _satisfied(value):
                 return value
-            if time.monotonic() >= deadline:
+            if self._clock() >= deadline:
                 raise Timeout(f"timed out after {timeout:g} s waiting for {what}")
-            time.sleep(interval)
+            self._sleep(interval)
 
     def wait_for_altitude(
         self, z: float, timeout: float = 30.0, *, tolerance: float = 0.1
@@ -819,31 +864,40 @@ class DroneWrapper:
 
     # ------------------------------------------------------------------ services
 
+    def _ask(self, service: Service[Any, T], request: Any, timeout: float) -> T:
+        """One request/reply; raises the runtime's ServiceError / ServiceUnavailable."""
+        if self._node is not None:
+            return self._node.call(service, request, timeout=timeout, attachment=self._attachment)
+        return call_service(
+            self.session, service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
+        )
+
     def _call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
         timeout = self.service_timeout if timeout is None else timeout
         try:
-            return call_service(
-                self.session,
-                service,
-                request,
-                ns=self.ns,
-                timeout=timeout,
-                attachment=self._attachment,
-            )
+            return self._ask(service, request, timeout)
         except ServiceUnavailable:
-            key = service.key(self.ns)
+            raise self._no_reply(what, service.key(self.ns), timeout) from None
+        except ServiceError as exc:
+            raise CommandRefused(what, exc.message) from None
+
+    def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
+        """A call nobody answered: Timeout if a bridge is alive (slow or stuck), else
+        NotConnected (none running)."""
+        if self._node is not None:  # the fake bus has no liveliness: a fresh State says alive
+            alive = self._state.fresh(STATE_FRESH_S) is not None
+        else:
             try:
                 names = sorted(alive_services(self.session, self.ns, timeout=1.0))
             except Exception:
                 names = []
-            if any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names):
-                raise Timeout(f"{what}: no reply from {key} within {timeout:g} s") from None
-            raise NotConnected(
-                f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
-                f"drone {self.ns!r} on {self.connect}"
-            ) from None
-        except ServiceError as exc:
-            raise CommandRefused(what, exc.message) from None
+            alive = any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names)
+        if alive:
+            return Timeout(f"{what}: no reply from {key} within {timeout:g} s")
+        return NotConnected(
+            f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
+            f"drone {self.ns!r} on {self.connect}"
+        )
 
     def _command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
         reply = self._call(service, request, what, timeout)
@@ -938,7 +992,7 @@ class DroneWrapper:
         Idempotent: returns at once when already flying. PX4: streams a hold setpoint, enters
         OFFBOARD, arms, then streams a position setpoint ``h`` m above the start point (which
         keeps being streamed after the return). ArduPilot: GUIDED, arm, TAKEOFF command.
-        Tello: TAKEOFF command.
+        Tello: TAKEOFF command. The steps are the runtime's (:mod:`dronewrapper.flying`).
 
         Raises:
             CommandRefused: a step was refused (the autopilot's reason is in the message), or
@@ -949,84 +1003,10 @@ class DroneWrapper:
         h = setpoints.finite("h", h)
         if h <= 0:
             raise InvalidArgument(f"h must be > 0 m, got {h}")
-        deadline = time.monotonic() + timeout
-        state = self._require_connected("takeoff")
-        if self.is_flying():
-            pose = self._pose.value
-            now_z = float(pose.pose.position.z) if pose is not None else math.nan
-            log.warning(
-                "takeoff(h=%g): drone %r is already flying (z=%.2f m), so this does nothing; "
-                "use set_cmd_pos(z=...) or set_cmd_mix(z=...) to change altitude",
-                h,
-                self.ns,
-                now_z,
-            )
-            return
-        start = self._pose.value
-        if start is None:
-            raise NoData(f"takeoff: no local position on {self._pose.name}: cannot take off")
-        x, y, z0 = (float(v) for v in telemetry.position_of(start))
-        yaw = float(telemetry.orientation_of(start)[2])
-        extended = self._extended.value
-        on_ground = extended is None or extended.landed_state == LANDED_STATE_ON_GROUND
-        # h above the point it takes off from; when caught mid-landing, h above the origin
-        # (the take-off point of the local frame)
-        target_z = (z0 if on_ground else 0.0) + h
-        autopilot = state.autopilot.lower()
-        expected_mode = ""
-        log.info("takeoff: drone %r to %.2f m (%s)", self.ns, target_z, autopilot or "?")
-        now = time.time()
-        if autopilot in ARDUPILOT:
-            self.set_mode("GUIDED")
-            self.arm()
-            log.info("takeoff: armed in GUIDED, climbing")
-            self._command(registry.TAKEOFF, CommandTOL.takeoff(h, yaw), "takeoff")
-            expected_mode = "GUIDED"
-        elif autopilot in TELLO:
-            self._command(registry.TAKEOFF, CommandTOL.takeoff(h), "takeoff")
-            log.info("takeoff: the Tello took off, climbing")
-        else:  # PX4 and the PX4-like simulator: OFFBOARD with a setpoint stream
-            self._command_setpoint(setpoints.position_target(x, y, z0, yaw, stamp=now))
-            try:
-                self.set_mode("OFFBOARD")
-                self.arm()
-            except BaseException:
-                self.stop_commanding()
-                raise
-            log.info("takeoff: armed in OFFBOARD, climbing")
-            self._command_setpoint(setpoints.position_target(x, y, target_z, yaw, stamp=now))
-            expected_mode = "OFFBOARD"
-        self._wait_climb(target_z, deadline, timeout, tolerance, expected_mode)
-        log.info("takeoff: reached %.2f m", target_z)
-
-    def _wait_climb(
-        self, target_z: float, deadline: float, timeout: float, tolerance: float, mode: str
-    ) -> None:
-        seen_armed = seen_mode = False
-        while True:
-            state = self._state.value
-            if state is not None:
-                seen_armed |= state.armed
-                seen_mode |= not mode or state.mode == mode
-                if seen_armed and not state.armed:
-                    raise CommandRefused("takeoff", f"the autopilot disarmed{self._last_text()}")
-                if seen_mode and mode and state.mode != mode:
-                    raise CommandRefused(
-                        "takeoff", f"the autopilot left {mode} for {state.mode}{self._last_text()}"
-                    )
-            pose = self._pose.value
-            if pose is not None and pose.pose.position.z >= target_z - tolerance:
-                return
-            if time.monotonic() >= deadline:
-                raise Timeout(
-                    f"takeoff: altitude {target_z:.2f} m not reached within {timeout:g} s "
-                    f"(now {self._altitude_text()}, mode {state.mode if state else '?'}, "
-                    f"armed {state.armed if state else '?'})"
-                )
-            time.sleep(0.02)
-
-    def _last_text(self) -> str:
-        return f" ({self.status_texts[-1].text})" if self.status_texts else ""
+        now = self._clock()
+        self._require_connected("takeoff")
+        kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
+        self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs))
 
     def land(self, *, timeout: float = 60.0) -> None:
         """Land where the drone is and return when it is on the ground and disarmed.
@@ -1037,32 +1017,9 @@ class DroneWrapper:
             CommandRefused: the autopilot refused to land (its reason is in the message).
             Timeout: not on the ground and disarmed within ``timeout`` seconds.
         """
-        deadline = time.monotonic() + timeout
-        state = self._require_connected("land")
-        extended = self._extended.value
-        on_ground = extended is not None and extended.landed_state == LANDED_STATE_ON_GROUND
-        self.stop_commanding()
-        if on_ground and not state.armed:
-            return
-        self._command(registry.LAND, CommandTOL.land(), "land")
-        log.info("land: drone %r landing from %s", self.ns, self._altitude_text())
+        now = self._clock()
+        self._require_connected("land")
+        self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout))
 
-        def landed() -> bool:
-            ext, st = self._extended.value, self._state.value
-            return bool(
-                ext is not None
-                and ext.landed_state == LANDED_STATE_ON_GROUND
-                and st is not None
-                and not st.armed
-            )
-
-        try:
-            self.wait_for(landed, max(0.0, deadline - time.monotonic()), "landing")
-            log.info("land: drone %r on the ground and disarmed", self.ns)
-        except Timeout:
-            ext, st = self._extended.value, self._state.value
-            raise Timeout(
-                f"land: not on the ground and disarmed within {timeout:g} s (now "
-                f"{self._altitude_text()}, landed_state {ext.landed_state if ext else '?'}, "
-                f"armed {st.armed if st else '?'})"
-            ) from None
+    def _fly(self, sequence: Takeoff | Landing) -> None:
+        flying.fly(sequence, clock=self._clock, sleep=self._sleep, no_reply=self._no_reply)

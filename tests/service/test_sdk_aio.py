@@ -1,80 +1,96 @@
-"""The asyncio API mirrors the sync one over the same fake PX4-like bridge (real Zenoh)."""
+"""The asyncio API mirrors the sync one, on the fake bus (tests/bus_autopilot.py SdkRig).
+
+Its blocking calls run on a worker thread while the event loop keeps running; telemetry comes
+as async iterators of the newest values. The constructor's diagnoses over a real router are
+in tests/integration/test_sdk_zenoh.py.
+"""
 
 from __future__ import annotations
 
 import asyncio
-import time
 
 import numpy as np
 import pytest
+from bus_autopilot import REFUSED, TELEMETRY_PERIOD_S, SdkRig
 
 from dronewrapper import CommandRefused, InvalidArgument, NotConnected
 from dronewrapper.aio import Drone
-from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, MAV_RESULT_DENIED
-from fake_bridge import FakeBridge
-from support import wait_for
-
-
-@pytest.fixture
-def bridge(router):
-    fake = FakeBridge(router)
-    yield fake
-    fake.close()
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, MASK_VELOCITY
+from dronewrapper.msgs.sensor import Image
+from dronewrapper.msgs.std import Header
+from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 
 def run(coroutine):
     return asyncio.run(asyncio.wait_for(coroutine, 60))
 
 
-def test_connect_getters_and_setpoints_pass_through(router, bridge):
+@pytest.fixture
+def rig():
+    return SdkRig(open_drone=False)
+
+
+async def feed(rig: SdkRig, stop: asyncio.Event) -> None:
+    """Tick the aircraft from the event loop (so each value arrives on the loop's thread)."""
+    while not stop.is_set():
+        rig.run(TELEMETRY_PERIOD_S)
+        await asyncio.sleep(0)
+
+
+def test_connect_getters_and_setpoints_pass_through(rig):
     async def main():
-        async with Drone("drone", router, timeout=10) as drone:
+        async with Drone(**rig.options()) as drone:
+            rig.run(TELEMETRY_PERIOD_S)
             assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
             assert drone.get_battery() == pytest.approx(0.8)
             assert drone.sync.is_connected()
-            t0 = time.monotonic()
             drone.set_cmd_vel(vx=0.5)  # plain call, never awaited
-            await asyncio.sleep(0.5)
             drone.stop_commanding()
-            return t0
 
-    t0 = run(main())
-    assert len(bridge.setpoints_since(t0)) >= 5
+    run(main())
+    first = rig.pilot.setpoints()[0][1]
+    assert first.type_mask == MASK_VELOCITY and first.velocity.x == 0.5
 
 
-def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(router, bridge):
-    ticks = 0
-
-    async def ticker():
-        nonlocal ticks
-        while True:
-            await asyncio.sleep(0.05)
-            ticks += 1
+def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(rig):
+    """Each wait of the blocking take-off and landing (on the worker thread) asks the event
+    loop to run a step and waits for it: a loop blocked by the call would never answer."""
+    answered = 0
 
     async def main():
-        async with Drone("drone", router, timeout=10) as drone:
-            task = asyncio.create_task(ticker())
+        loop = asyncio.get_running_loop()
+
+        def sleep_while_the_loop_runs(seconds: float) -> None:
+            nonlocal answered
+            asyncio.run_coroutine_threadsafe(asyncio.sleep(0), loop).result(timeout=30)
+            answered += 1
+            rig.run(seconds)
+
+        options = rig.options(sleep=sleep_while_the_loop_runs)
+        async with Drone(**options) as drone:
+            rig.run(TELEMETRY_PERIOD_S)
             await drone.takeoff(h=1.0, timeout=20)
             climbed = drone.get_position()[2]
             await drone.land(timeout=20)
-            task.cancel()
             return climbed
 
     assert run(main()) >= 0.9
-    assert ticks >= 10  # the event loop ran while the drone climbed and landed
-    assert bridge.calls[:2] == ["set_mode OFFBOARD", "arming True"] and bridge.calls[-1] == "land"
+    assert answered >= 10  # the loop ran at each of the climb's waits
+    names = [name for _, name in rig.pilot.calls]
+    assert names == ["set_mode", "arming", "land"]
 
 
-def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(router, bridge):
+def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(rig):
     async def main():
-        async with Drone("drone", router, timeout=10) as drone:
-            positions = []
-            async for position in drone.position():
-                positions.append(position)
-                if len(positions) == 5:
-                    break
+        async with Drone(**rig.options()) as drone:
+            stop = asyncio.Event()
+            feeder = asyncio.create_task(feed(rig, stop))
+            positions = [p async for p in _take(drone.position(), 5)]
             states = [s async for s in _take(drone.landed_state(), 3)]
             batteries = [b async for b in _take(drone.battery(), 2)]
+            stop.set()
+            await feeder
             return positions, states, batteries
 
     positions, states, batteries = run(main())
@@ -83,22 +99,18 @@ def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(router, bridge)
     assert batteries == [pytest.approx(0.8)] * 2
 
 
-def test_frames_iterator_gives_bgr_arrays(router, bridge):
+def test_frames_iterator_gives_bgr_arrays(rig):
+    camera = FakeNode("camera", rig.bus).publisher(registry.IMAGE_RAW, camera="cam_frontal")
+    image = np.full((24, 32, 3), 7, np.uint8)
+
     async def main():
-        async with Drone("drone", router, timeout=10) as drone:
+        async with Drone(**rig.options()) as drone:
             frames = drone.frames("frontal")
-            stop = asyncio.Event()
-
-            async def feed():
-                image = np.full((24, 32, 3), 7, np.uint8)
-                while not stop.is_set():
-                    bridge.publish_image(image, time.time())
-                    await asyncio.sleep(0.05)
-
-            feeder = asyncio.create_task(feed())
-            frame = await anext(frames)
-            stop.set()
-            await feeder
+            first = asyncio.ensure_future(anext(frames))
+            await asyncio.sleep(0)  # subscribed
+            header = Header(stamp=rig.bus.clock())
+            camera.put(Image(header=header, height=24, width=32, step=96, data=image.tobytes()))
+            frame = await first
             await frames.aclose()
             return frame
 
@@ -106,11 +118,12 @@ def test_frames_iterator_gives_bgr_arrays(router, bridge):
     assert frame.shape == (24, 32, 3) and int(frame[0, 0, 0]) == 7
 
 
-def test_errors_are_the_sync_ones(router, bridge):
-    bridge.refuse_arming = "Arming denied: preflight checks failed"
+def test_errors_are_the_sync_ones(rig):
+    rig.pilot.refuse["arming"] = "Arming denied: preflight checks failed"
 
     async def main():
-        async with Drone("drone", router, timeout=10) as drone:
+        async with Drone(**rig.options()) as drone:
+            rig.run(TELEMETRY_PERIOD_S)
             with pytest.raises(InvalidArgument):
                 drone.set_cmd_vel(vx=float("nan"))
             with pytest.raises(CommandRefused) as info:
@@ -118,22 +131,25 @@ def test_errors_are_the_sync_ones(router, bridge):
             return info.value
 
     refusal = run(main())
-    assert refusal.result == MAV_RESULT_DENIED and "preflight" in str(refusal)
+    assert refusal.result == REFUSED and "preflight" in str(refusal)
 
 
-def test_no_bridge_is_the_same_clear_error(router):
+def test_no_bridge_is_the_same_clear_error():
+    bus = FakeBus()  # nobody publishes: the constructor waits (briefly) in vain
+
     async def main():
-        await Drone("drone", router, timeout=1.0).connect()
+        await Drone(node=FakeNode("app", bus), timeout=0.05).connect()
 
-    with pytest.raises(NotConnected, match="no bridge"):
+    with pytest.raises(NotConnected, match=r"no bridge for drone 'drone'.*nothing published"):
         run(main())
 
 
-def test_blocking_members_are_never_passed_through_unawaited(router, bridge):
+def test_blocking_members_are_never_passed_through_unawaited(rig):
     async def main():
-        async with Drone("drone", router, timeout=10) as drone:
+        async with Drone(**rig.options()) as drone:
             assert asyncio.iscoroutinefunction(Drone.takeoff)
-            wait_for(lambda: drone.get_state() is not None, 5, what="state")
+            with pytest.raises(AttributeError):
+                drone.__getattr__("takeoff")  # the sync one is never handed out
             with pytest.raises(RuntimeError, match="not connected"):
                 Drone().sync  # noqa: B018
             return drone.ns

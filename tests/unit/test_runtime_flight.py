@@ -2,13 +2,23 @@
 
 from __future__ import annotations
 
+import logging
+
 import pytest
 from bus_autopilot import BusAutopilot, drive
 
 from dronewrapper.msgs.mavros import MASK_POSITION
 from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper.runtime.flight import FlightError, FlightSequence, Landing, Takeoff
+from dronewrapper.runtime.flight import (
+    FlightError,
+    FlightSequence,
+    Landing,
+    NoReply,
+    StepRefused,
+    Takeoff,
+    TooLate,
+)
 
 T0 = 1_700_000_000.0
 PERIOD = 0.02  # s between the loop's wakes
@@ -73,33 +83,41 @@ def test_ardupilot_and_tello_take_off_by_command(autopilot, calls):
     assert pilot.setpoints() == []  # no setpoint stream needed
 
 
-def test_already_flying_does_nothing():
+def test_already_flying_does_nothing_and_says_so(caplog):
     _, pilot, c = rig(flying=True)
     seq = Takeoff(c, 3.0, 10.0, T0)
-    assert seq.step(T0) and pilot.calls == [] and c.target is None
+    with caplog.at_level(logging.WARNING, logger="dronewrapper.flight"):
+        assert seq.step(T0) and pilot.calls == [] and c.target is None
+    (warning,) = caplog.records
+    assert "already flying (z=2.00 m), so this does nothing" in warning.message
 
 
 def test_a_refused_arming_names_the_reason_and_stops_the_hold_stream():
     _, _, c = rig(refuse={"arming": "Arming denied: no GPS"})
     seq = Takeoff(c, 2.0, 10.0, T0)
-    with pytest.raises(FlightError, match="arming refused: Arming denied: no GPS"):
+    with pytest.raises(FlightError, match=r"arming refused \(result 4\): Arming denied: no GPS"):
         seq.step(T0)
     assert seq.done and c.target is None and seq.step(T0 + 1)
 
 
 def test_a_missing_server_fails_the_step_naming_it():
     _, _, c = rig(absent=["set_mode"])
-    with pytest.raises(FlightError, match="set_mode OFFBOARD: no reply from drone/mavros/set_mode"):
+    with pytest.raises(
+        NoReply, match="set_mode OFFBOARD: no reply from drone/mavros/set_mode"
+    ) as e:
         Takeoff(c, 2.0, 10.0, T0).step(T0)
+    assert e.value.key == "drone/mavros/set_mode" and e.value.timeout == 10.0
 
 
 def test_disarming_or_leaving_offboard_during_the_climb_fails():
     bus, pilot, c = rig()
     loop = Loop(c, Takeoff(c, 5.0, 20.0, T0))
     fly(bus, pilot, loop, 1.0)
+    pilot.say("Failsafe: battery critical")
     pilot.armed = False  # e.g. a failsafe on the autopilot
     fly(bus, pilot, loop, 1.0)
-    assert loop.error is not None and "disarmed" in str(loop.error)
+    assert isinstance(loop.error, StepRefused) and loop.error.command == "takeoff"
+    assert "the autopilot disarmed (Failsafe: battery critical)" in str(loop.error)
 
     bus, pilot, c = rig()
     loop = Loop(c, Takeoff(c, 5.0, 20.0, T0))
@@ -113,7 +131,7 @@ def test_the_climb_times_out_on_the_loop_clock():
     bus, pilot, c = rig()
     loop = Loop(c, Takeoff(c, 10.0, 3.0, T0))  # 10 m at 1 m/s cannot take 3 s
     fly(bus, pilot, loop, 10.0)
-    assert loop.error is not None and "not reached within 3 s" in str(loop.error)
+    assert isinstance(loop.error, TooLate) and "not reached within 3 s" in str(loop.error)
     assert bus.clock() - T0 == pytest.approx(3.0, abs=PERIOD + 1e-6)
 
 
@@ -130,7 +148,7 @@ def test_landing_on_the_ground_disarmed_calls_nothing_and_a_refusal_is_named():
     _, pilot, c = rig()
     assert Landing(c, 10.0, T0).step(T0) and pilot.calls == []
     _, _, c = rig(flying=True, refuse={"land": "not now"})
-    with pytest.raises(FlightError, match="land refused: not now"):
+    with pytest.raises(FlightError, match=r"land refused \(result 4\): not now"):
         Landing(c, 10.0, T0).step(T0)
 
 

@@ -15,8 +15,9 @@ gives that loop three things, each taking the time as an argument:
   once; the loop polls it (``done(now)``, then ``result(now)``). On a real Node the request
   waits on a worker thread owned here; on the fake bus it is answered inline.
 - **the bridge's state** as newest-value holders on the loop's clock: ``state``,
-  ``extended``, ``pose``, and :meth:`Commander.ready` (autopilot connected, State fresh,
-  landed state and position present).
+  ``extended``, ``pose``, ``status_text`` (the autopilot's newest text), and
+  :meth:`Commander.ready` (autopilot connected, State fresh, landed state and position
+  present).
 
 Every setpoint and request carries the ``commander=NAME`` attachment, as the SDK's do, so a
 bridge with the command lease on knows who sends it. Units: seconds (``now``: the loop's
@@ -37,7 +38,7 @@ import msgspec
 from dronewrapper import setpoints
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import PoseStamped
-from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State
+from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State, StatusText
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.latest import Latest
@@ -135,6 +136,7 @@ class Commander:
         self.state: Latest[State] = self._latest(registry.STATE, clock)
         self.extended: Latest[ExtendedState] = self._latest(registry.EXTENDED_STATE, clock)
         self.pose: Latest[PoseStamped] = self._latest(registry.LOCAL_POSE, clock)
+        self.status_text: Latest[StatusText] = self._latest(registry.STATUSTEXT, clock)
 
     def _latest(self, topic: registry.Topic[Any], clock: Callable[[], float]) -> Latest[Any]:
         holder: Latest[Any] = Latest(name=topic.key(self.ns), clock=clock)
@@ -156,6 +158,11 @@ class Commander:
             and self.extended.value is not None
             and self.pose.value is not None
         )
+
+    def last_status_text(self) -> str:
+        """The autopilot's newest text message ("" before the first), to name a failure."""
+        text = self.status_text.value
+        return text.text if text is not None else ""
 
     def not_ready_reason(self) -> str:
         """What :meth:`ready` still misses, in words naming the keys."""

@@ -1,19 +1,25 @@
-"""Take-off and landing as steps a service's loop drives (never blocking), on a Commander.
+"""Take-off and landing as steps a loop drives (never blocking): the one implementation.
 
-The same sequences as the SDK's blocking ``DroneWrapper.takeoff`` / ``land`` (docs/design.md),
-written as generators that yield while they wait, so a loop calls ``step(now)`` once per wake
-and keeps watching its inputs (and its stop request) meanwhile:
+Written once, as generators that yield while they wait, and driven two ways: a service's loop
+(the controller, on a :class:`~dronewrapper.runtime.commander.Commander`) calls ``step(now)``
+once per wake and keeps watching its inputs and its stop request meanwhile; the SDK's blocking
+``DroneWrapper.takeoff`` / ``land`` call ``step`` until done (:mod:`dronewrapper.flying`).
+The sequences (docs/design.md):
 
 - take-off, PX4 and the PX4-like simulator: stream a hold setpoint at the current pose, enter
   OFFBOARD, arm, stream a position setpoint ``height`` m above the start, wait for the climb;
-  ArduPilot: GUIDED, arm, TAKEOFF; Tello: TAKEOFF. Already flying: done at once (a warning).
-  The climb fails when the autopilot disarms or leaves the mode it was put in.
+  ArduPilot: GUIDED, arm, TAKEOFF; Tello: TAKEOFF. Already flying: done at once, with a
+  warning that says so. The climb fails when the autopilot disarms or leaves the mode it was
+  put in.
 - landing: stop streaming, call LAND (unless on the ground and disarmed), wait until on the
   ground and disarmed.
 
-A step that is refused, a call without a reply, or a deadline passed ends the sequence with a
-:class:`FlightError` naming what failed. Time: the loop's monotonic clock (s); heights in
-metres in the local ENU frame (z up, origin at the take-off point).
+A failure ends the sequence with a :class:`FlightError` of one kind: :class:`StepRefused`
+(the autopilot's or the bridge's reason), :class:`NoReply` (a call nobody answered),
+:class:`TooLate` (the deadline passed; the message names the altitude, mode and arming),
+:class:`NotReady` (no connected autopilot) or :class:`NoPosition` (nothing to start from).
+Time: the driver's monotonic clock (s); heights in metres in the local ENU frame (z up,
+origin at the take-off point).
 """
 
 from __future__ import annotations
@@ -21,10 +27,9 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Generator
-from typing import Any
+from typing import Any, Protocol
 
 from dronewrapper import setpoints, telemetry
-from dronewrapper.drone import ARDUPILOT, TELLO
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -32,15 +37,20 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_TAKEOFF,
     CommandBool,
     CommandTOL,
+    PositionTarget,
     SetMode,
+    State,
 )
 from dronewrapper.msgs.registry import Service
-from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 
 log = logging.getLogger("dronewrapper.flight")
 
 Steps = Generator[None, None, None]
+
+ARDUPILOT = ("ardupilotmega", "ardupilot")
+TELLO = ("tello",)
+"""``State.autopilot`` names that take off by command (the rest: PX4-like, by setpoints)."""
 
 CALL_TIMEOUT_S = 10.0
 """The longest wait for one reply (s), as the SDK's ``service_timeout`` default."""
@@ -50,20 +60,83 @@ class FlightError(RuntimeError):
     """A take-off or landing failed; the message names the step and the autopilot's reason."""
 
 
+class StepRefused(FlightError):
+    """A step was refused (or the autopilot gave up the climb): ``command``, ``reason`` and
+    ``result`` (the MAV_RESULT code; None when the bridge itself rejected the request)."""
+
+    def __init__(self, command: str, reason: str, result: int | None = None) -> None:
+        code = "" if result is None else f" (result {result})"
+        super().__init__(f"{command} refused{code}: {reason or 'no reason given'}")
+        self.command = command
+        self.reason = reason
+        self.result = result
+
+
+class NoReply(FlightError):
+    """Nobody answered ``command`` on ``key`` within ``timeout`` s."""
+
+    def __init__(self, command: str, key: str, timeout: float, detail: str) -> None:
+        super().__init__(f"{command}: {detail}")
+        self.command = command
+        self.key = key
+        self.timeout = timeout
+
+
+class TooLate(FlightError):
+    """The sequence's deadline passed before the altitude or the ground was reached."""
+
+
+class NotReady(FlightError):
+    """Nothing to start from: no connected autopilot."""
+
+
+class NoPosition(NotReady):
+    """No local position has arrived, so there is no point to take off from."""
+
+
+class Aircraft(Protocol):
+    """What the sequences read and command: :class:`~dronewrapper.runtime.commander.Commander`
+    on a service's loop, ``dronewrapper.flying.WrapperAircraft`` in the SDK."""
+
+    ns: str
+    state: Any  # Latest[State]: ``.value``
+    extended: Any  # Latest[ExtendedState]
+    pose: Any  # Latest[PoseStamped]: ``.value``, ``.name``
+
+    def wall(self) -> float: ...
+    def connected_state(self) -> State | None: ...
+    def not_ready_reason(self) -> str: ...
+    def last_status_text(self) -> str: ...
+    def set(self, target: PositionTarget, now: float) -> None: ...
+    def stop(self) -> None: ...
+    def call(
+        self, service: Service[Any, Any], request: Any, now: float, *, timeout: float, what: str
+    ) -> Any: ...  # a Pending: ``done(now)``, ``result(now)``
+
+
 class FlightSequence:
     """A generator of steps with an overall deadline; :meth:`step` advances it.
 
     ``done`` is True once it finished; ``error`` holds the :class:`FlightError` if it failed
-    (``step`` raises it once, then keeps returning True).
+    (``step`` raises it once, then keeps returning True). ``call_timeout`` (s) bounds each
+    service call; None: :data:`CALL_TIMEOUT_S`, capped by what is left of the deadline.
     """
 
     what = "sequence"
 
-    def __init__(self, commander: Commander, timeout: float, now: float) -> None:
+    def __init__(
+        self,
+        aircraft: Aircraft,
+        timeout: float,
+        now: float,
+        *,
+        call_timeout: float | None = None,
+    ) -> None:
         if not (math.isfinite(timeout) and timeout > 0):
             raise ValueError(f"{self.what} timeout must be > 0 s, got {timeout!r}")
-        self.commander = commander
+        self.commander = aircraft
         self.timeout = timeout
+        self.call_timeout = call_timeout
         self.deadline = now + timeout
         self.now = now
         self.done = False
@@ -96,19 +169,28 @@ class FlightSequence:
 
     def _command(self, service: Service[Any, Any], request: Any, what: str) -> Steps:
         """Call ``service`` and wait (yielding) for an accepting reply."""
-        timeout = min(CALL_TIMEOUT_S, self._remaining())
-        pending = self.commander.call(service, request, self.now, timeout=timeout)
+        c = self.commander
+        timeout = self.call_timeout or min(CALL_TIMEOUT_S, self._remaining())
+        pending = c.call(service, request, self.now, timeout=timeout, what=what)
         while not pending.done(self.now):
             yield
         try:
             reply = pending.result(self.now)
         except (ServiceUnavailable, TimeoutError) as exc:  # no answer (before ServiceError,
-            raise FlightError(f"{what}: {exc}") from None  # of which it is a kind)
+            raise NoReply(what, service.key(c.ns), timeout, str(exc)) from None  # its kind)
         except ServiceError as exc:
-            raise FlightError(f"{what} refused: {exc.message}") from None
+            raise StepRefused(what, exc.message) from None
         accepted = reply.mode_sent if hasattr(reply, "mode_sent") else reply.success
         if not accepted:
-            raise FlightError(f"{what} refused: {reply.message or 'no reason given'}")
+            raise StepRefused(what, reply.message, getattr(reply, "result", None))
+
+    def _altitude_text(self) -> str:
+        pose = self.commander.pose.value
+        return "no position" if pose is None else f"z={pose.pose.position.z:.2f} m"
+
+    def _last_text(self) -> str:
+        text = self.commander.last_status_text()
+        return f" ({text})" if text else ""
 
 
 class Takeoff(FlightSequence):
@@ -118,12 +200,13 @@ class Takeoff(FlightSequence):
 
     def __init__(
         self,
-        commander: Commander,
+        aircraft: Aircraft,
         height: float,
         timeout: float,
         now: float,
         *,
         tolerance: float = 0.1,
+        call_timeout: float | None = None,
     ) -> None:
         height = setpoints.finite("height", height)
         if height <= 0:
@@ -131,22 +214,28 @@ class Takeoff(FlightSequence):
         self.height = height
         self.tolerance = tolerance
         self.target_z = math.nan
-        super().__init__(commander, timeout, now)
+        super().__init__(aircraft, timeout, now, call_timeout=call_timeout)
 
     def _run(self) -> Steps:
         c = self.commander
         state = c.connected_state()
         if state is None:
-            raise FlightError(f"takeoff: {c.not_ready_reason()}")
+            raise NotReady(f"takeoff: {c.not_ready_reason()}")
         extended, start = c.extended.value, c.pose.value
         if extended is not None and extended.landed_state in (
             LANDED_STATE_IN_AIR,
             LANDED_STATE_TAKEOFF,
         ):
-            log.warning("takeoff: drone %r is already flying, so this does nothing", c.ns)
+            log.warning(
+                "takeoff(h=%g): drone %r is already flying (%s), so this does nothing; "
+                "use set_cmd_pos(z=...) or set_cmd_mix(z=...) to change altitude",
+                self.height,
+                c.ns,
+                self._altitude_text(),
+            )
             return
         if start is None:
-            raise FlightError(f"takeoff: no local position on {c.pose.name}")
+            raise NoPosition(f"takeoff: no local position on {c.pose.name}: cannot take off")
         x, y, z0 = (float(v) for v in telemetry.position_of(start))
         yaw = float(telemetry.orientation_of(start)[2])
         on_ground = extended is None or extended.landed_state == LANDED_STATE_ON_GROUND
@@ -156,13 +245,17 @@ class Takeoff(FlightSequence):
         log.info("takeoff: drone %r to %.2f m (%s)", c.ns, self.target_z, autopilot or "?")
         stamp = c.wall()
         if autopilot in ARDUPILOT:
-            yield from self._command(registry.SET_MODE, SetMode(custom_mode="GUIDED"), "GUIDED")
+            yield from self._command(
+                registry.SET_MODE, SetMode(custom_mode="GUIDED"), "set_mode GUIDED"
+            )
             yield from self._command(registry.ARMING, CommandBool(value=True), "arming")
+            log.info("takeoff: armed in GUIDED, climbing")
             takeoff = CommandTOL.takeoff(self.height, yaw)
             yield from self._command(registry.TAKEOFF, takeoff, "takeoff")
             mode = "GUIDED"
         elif autopilot in TELLO:
             yield from self._command(registry.TAKEOFF, CommandTOL.takeoff(self.height), "takeoff")
+            log.info("takeoff: the Tello took off, climbing")
             mode = ""
         else:  # PX4 and the PX4-like simulator: OFFBOARD with a setpoint stream
             c.set(setpoints.position_target(x, y, z0, yaw, stamp=stamp), self.now)
@@ -171,12 +264,14 @@ class Takeoff(FlightSequence):
                     registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), "set_mode OFFBOARD"
                 )
                 yield from self._command(registry.ARMING, CommandBool(value=True), "arming")
-            except FlightError:
+            except GeneratorExit:  # abandoned by its loop: whatever streams now is not ours
+                raise
+            except BaseException:  # refused, unanswered, or interrupted (Ctrl-C in the SDK)
                 c.stop()
                 raise
+            log.info("takeoff: armed in OFFBOARD, climbing")
             c.set(setpoints.position_target(x, y, self.target_z, yaw, stamp=stamp), self.now)
             mode = "OFFBOARD"
-        log.info("takeoff: armed, climbing")
         yield from self._climb(mode)
         log.info("takeoff: reached %.2f m", self.target_z)
 
@@ -189,17 +284,19 @@ class Takeoff(FlightSequence):
                 seen_armed |= state.armed
                 seen_mode |= not mode or state.mode == mode
                 if seen_armed and not state.armed:
-                    raise FlightError("takeoff: the autopilot disarmed during the climb")
+                    raise StepRefused("takeoff", f"the autopilot disarmed{self._last_text()}")
                 if seen_mode and mode and state.mode != mode:
-                    raise FlightError(f"takeoff: the autopilot left {mode} for {state.mode}")
+                    raise StepRefused(
+                        "takeoff", f"the autopilot left {mode} for {state.mode}{self._last_text()}"
+                    )
             pose = c.pose.value
             if pose is not None and pose.pose.position.z >= self.target_z - self.tolerance:
                 return
             if self.now >= self.deadline:
-                z = f"{pose.pose.position.z:.2f} m" if pose is not None else "unknown"
-                raise FlightError(
+                raise TooLate(
                     f"takeoff: altitude {self.target_z:.2f} m not reached within "
-                    f"{self.timeout:g} s (now {z})"
+                    f"{self.timeout:g} s (now {self._altitude_text()}, mode "
+                    f"{state.mode if state else '?'}, armed {state.armed if state else '?'})"
                 )
             yield
 
@@ -215,10 +312,15 @@ class Landing(FlightSequence):
         if self._landed():
             return
         yield from self._command(registry.LAND, CommandTOL.land(), "land")
-        log.info("land: drone %r landing", c.ns)
+        log.info("land: drone %r landing from %s", c.ns, self._altitude_text())
         while not self._landed():
             if self.now >= self.deadline:
-                raise FlightError(f"land: not on the ground and disarmed within {self.timeout:g} s")
+                ext, state = c.extended.value, c.state.value
+                raise TooLate(
+                    f"land: not on the ground and disarmed within {self.timeout:g} s (now "
+                    f"{self._altitude_text()}, landed_state {ext.landed_state if ext else '?'}, "
+                    f"armed {state.armed if state else '?'})"
+                )
             yield
         log.info("land: drone %r on the ground and disarmed", c.ns)
 

@@ -18,6 +18,8 @@ from dronewrapper.runtime import ServiceUnavailable
 from dronewrapper.runtime.node import ROUTE_WAIT_S
 from support import client_node
 
+pytestmark = pytest.mark.integration
+
 
 def test_a_call_waits_for_a_server_that_starts_a_moment_later(router):
     with client_node(router, name="user") as user, client_node(router, name="server") as server:

@@ -16,6 +16,8 @@ from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamValue
 from dronewrapper.runtime import ServiceTimeout, ServiceUnavailable
 from support import client_node
 
+pytestmark = pytest.mark.integration
+
 
 def test_a_reply_later_than_the_timeout_is_a_timeout_not_a_refusal(router):
     release = threading.Event()
