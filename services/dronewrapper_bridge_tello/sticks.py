@@ -24,42 +24,19 @@ Controls accepted (type_mask, coordinate_frame), validated like bridge_mavlink's
 from __future__ import annotations
 
 import math
-from enum import Enum
 
 import msgspec
 
+from dronewrapper import setpoint_limits
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
     FRAME_LOCAL_NED,
-    MASK_MIXED,
-    MASK_POSITION,
-    MASK_VELOCITY,
     PositionTarget,
 )
+from dronewrapper.setpoint_limits import Kind, SetpointError
 from dronewrapper_bridge_tello.frames import Vec3, enu_to_heading_flu, wrap_pi
 
 Sticks = tuple[int, int, int, int]
 STOP: Sticks = (0, 0, 0, 0)
-
-
-class SetpointError(ValueError):
-    """A PositionTarget the bridge refuses; the message says why."""
-
-
-class Kind(Enum):
-    """Which of DESIGN's controls a target is."""
-
-    POSITION = "position"
-    VELOCITY = "velocity"
-    MIXED = "mixed"
-
-
-_KIND = {MASK_POSITION: Kind.POSITION, MASK_VELOCITY: Kind.VELOCITY, MASK_MIXED: Kind.MIXED}
-_FRAMES = {
-    MASK_POSITION: (FRAME_LOCAL_NED,),
-    MASK_VELOCITY: (FRAME_BODY_NED, FRAME_LOCAL_NED),
-    MASK_MIXED: (FRAME_BODY_NED, FRAME_LOCAL_NED),
-}
 
 
 class StickScale(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
@@ -100,59 +77,10 @@ class StickScale(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_field
             raise ValueError("scale.max_stick must be in [1, 100]")
 
 
-def _finite(name: str, value: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SetpointError(f"{name} must be a finite number, got {value!r}")
-    return float(value)
-
-
 def validate(target: PositionTarget, scale: StickScale) -> Kind:
-    """The control ``target`` asks for, or SetpointError saying what is wrong with it."""
-    mask, frame = target.type_mask, target.coordinate_frame
-    if mask not in _KIND:
-        raise SetpointError(
-            f"type_mask {mask} is not supported; use {MASK_POSITION} (position + yaw), "
-            f"{MASK_VELOCITY} (velocity + yaw rate) or {MASK_MIXED} (vx, vy, altitude z, yaw rate)"
-        )
-    if frame not in _FRAMES[mask]:
-        allowed = " or ".join(str(f) for f in _FRAMES[mask])
-        raise SetpointError(
-            f"coordinate_frame {frame} is not valid with type_mask {mask}: {allowed}"
-        )
-    kind = _KIND[mask]
-    p, v = target.position, target.velocity
-    if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
-        raise SetpointError(f"position is required with type_mask {mask}")
-    if kind is Kind.POSITION:
-        x, y = _finite("position.x", p.x), _finite("position.y", p.y)
-        _finite("yaw", target.yaw)
-        if abs(x) > scale.max_distance or abs(y) > scale.max_distance:
-            raise SetpointError(
-                f"position ({x:g}, {y:g}) is farther than {scale.max_distance:g} m from the origin"
-            )
-        _altitude(_finite("position.z", p.z), scale)
-        return kind
-    vx, vy = _finite("velocity.x", v.x), _finite("velocity.y", v.y)
-    vz = _finite("velocity.z", v.z)
-    yaw_rate = _finite("yaw_rate", target.yaw_rate)
-    if math.hypot(vx, vy) > scale.max_horizontal_speed:
-        raise SetpointError(
-            f"horizontal speed {math.hypot(vx, vy):g} m/s exceeds {scale.max_horizontal_speed:g}"
-        )
-    if abs(vz) > scale.max_vertical_speed:
-        raise SetpointError(f"vertical speed {vz:g} m/s exceeds {scale.max_vertical_speed:g}")
-    if abs(yaw_rate) > scale.max_yaw_rate:
-        raise SetpointError(f"yaw_rate {yaw_rate:g} rad/s exceeds {scale.max_yaw_rate:g}")
-    if kind is Kind.MIXED:
-        _altitude(_finite("position.z", p.z), scale)
-    return kind
-
-
-def _altitude(z: float, scale: StickScale) -> None:
-    if not scale.min_altitude <= z <= scale.max_altitude:
-        raise SetpointError(
-            f"altitude z={z:g} m is outside [{scale.min_altitude:g}, {scale.max_altitude:g}]"
-        )
+    """The control ``target`` asks for, or SetpointError saying what is wrong with it (the
+    rules every bridge shares: :mod:`dronewrapper.setpoint_limits`)."""
+    return setpoint_limits.validate(target, scale)
 
 
 def _clamp(value: float, limit: float) -> float:
@@ -208,3 +136,16 @@ def rc_command(sticks: Sticks) -> str:
     """The SDK text for ``sticks``."""
     a, b, c, d = sticks
     return f"rc {a} {b} {c} {d}"
+
+
+__all__ = [
+    "STOP",
+    "Kind",
+    "SetpointError",
+    "StickScale",
+    "Sticks",
+    "body_velocity",
+    "rc_command",
+    "sticks_from_flu",
+    "validate",
+]

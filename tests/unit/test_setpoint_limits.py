@@ -100,3 +100,16 @@ def test_a_bridge_config_section_is_bounds():
     assert validate(velocity(19.0), Limits()) is Kind.VELOCITY
     with pytest.raises(SetpointError, match="horizontal speed"):
         validate(velocity(21.0), Limits())
+
+
+def test_both_bridges_refuse_in_the_same_words():
+    from dronewrapper_bridge_mavlink import setpoints as mavlink_setpoints
+    from dronewrapper_bridge_tello import sticks as tello_sticks
+    from dronewrapper_bridge_tello.sticks import StickScale
+
+    for bad in (velocity(True), velocity(math.nan), velocity(yaw_rate=9.0)):
+        with pytest.raises(SetpointError) as by_mavlink:
+            mavlink_setpoints.validate(bad, Limits())
+        with pytest.raises(SetpointError) as by_tello:
+            tello_sticks.validate(bad, StickScale())
+        assert str(by_mavlink.value) == str(by_tello.value)
