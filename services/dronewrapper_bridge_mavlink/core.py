@@ -17,7 +17,6 @@ from __future__ import annotations
 import collections
 import logging
 import math
-from collections.abc import Generator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,7 +30,7 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Operation
+from dronewrapper.runtime.operation import Operation, Operations, Steps
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import receive
 from dronewrapper_bridge_mavlink.config import Config
@@ -85,8 +84,7 @@ class BridgeCore:
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
             maxlen=32
         )
-        self.operations: list[Operation] = []
-        self.operations_finished = 0  # so far: a waiting caller looks when this changes
+        self.operations = Operations(log)
         self.command_busy = False  # one COMMAND_LONG exchange at a time
         self.now, self.stamp = now, 0.0
         self.out = Outbox()
@@ -137,36 +135,20 @@ class BridgeCore:
         """The autopilot's (system, component) to address (system 1 before it is heard)."""
         return self.target_system or 1, self.target_component
 
-    def start(
-        self, steps: Generator[float, None, Any], now: float, stamp: float, *, background=False
-    ) -> Operation:
+    def start(self, steps: Steps, now: float, stamp: float, *, background=False) -> Operation:
         """Begin an operation (its first step runs now; a bad request fails it at once);
         ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
         self._at(now, stamp)
-        op = Operation(steps, background=background)
-        self.operations.append(op)
-        op.step()
-        self._prune()
-        return op
+        return self.operations.start(steps, background=background)
 
     def advance(self, now: float, stamp: float) -> None:
         """Move every pending operation on to ``now``."""
         self._at(now, stamp)
-        for op in list(self.operations):
-            op.step()
-        self._prune()
+        self.operations.advance()
 
     def cancel(self, op: Operation) -> None:
         """Abandon ``op`` (the node is stopping): its command slot is freed."""
-        op.cancel()
-        self._prune()
-
-    def _prune(self) -> None:
-        for op in [op for op in self.operations if op.done]:
-            self.operations.remove(op)
-            self.operations_finished += 1
-            if op.error is not None and op.background:
-                log.error("%s failed: %s", op.name, op.error)
+        self.operations.cancel(op)
 
     def require_connected(self) -> str:
         """The autopilot kind; ServiceError when no heartbeat is heard."""

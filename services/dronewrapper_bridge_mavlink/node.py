@@ -14,12 +14,12 @@ import logging
 import sys
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, State
 from dronewrapper.runtime import Node, Ratekeeper
+from dronewrapper.runtime.core_driver import CoreDriver
 from dronewrapper.security.guard import CommandGuard
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink import parameters
@@ -41,7 +41,6 @@ PUBLISHED = (
     registry.BATTERY,
     registry.STATUSTEXT,
 )
-MAX_WAIT_S = 0.05  # a waiting service call looks at its operation at least this often
 
 
 class Bridge:
@@ -64,7 +63,7 @@ class Bridge:
             ttl_s=config.command_lease_ttl_s,
             on_change=self._lease_changed,
         )
-        self._cond = threading.Condition()  # guards the core; notified when an operation ends
+        self.driver = CoreDriver(self.core, self._execute, node.stop_event)
         self._publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
 
     # ---- what the core knows, for tests and tools
@@ -99,22 +98,10 @@ class Bridge:
 
     def current_state(self) -> State:
         """State as published now."""
-        with self._cond:
+        with self.driver.cond:
             return self.core.current_state()
 
     # ---- feeding the core
-
-    def _feed(self, call: Callable[..., Any], *args: Any) -> Any:
-        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox;
-        service calls waiting on their operations are woken when one has finished."""
-        with self._cond:
-            finished = self.core.operations_finished
-            result = call(*args, time.monotonic(), time.time())
-            out = self.core.take()
-            if self.core.operations_finished != finished:
-                self._cond.notify_all()
-        self._execute(out)
-        return result
 
     def _execute(self, out: Outbox) -> None:
         for peer in out.peers:
@@ -127,43 +114,27 @@ class Bridge:
             self.node.callback_errors[error] += 1
 
     def _lease_changed(self) -> None:
-        self._feed(self.core.set_commander, self.guard.holder())
-
-    def _call(self, steps: Callable[[BridgeCore, Any], ops.Steps], request: Any) -> Any:
-        """Start an operation and wait (bounded by its own timeouts) for its reply."""
-        op = self._feed(self.core.start, steps(self.core, request))
-        while not op.done:
-            if self.node.stop_event.is_set():
-                with self._cond:
-                    self.core.cancel(op)
-                break
-            with self._cond:
-                if op.done:  # ended by another thread's input (checked under the lock)
-                    break
-                wait = op.wake_at - time.monotonic()
-                self._cond.wait(min(max(wait, 0.001), MAX_WAIT_S))
-            self._feed(self.core.advance)
-        return op.result()
+        self.driver.feed(self.core.set_commander, self.guard.holder())
 
     def handle_mavlink(self, msg: Any, source: Any = None) -> None:
         """One received MAVLink message (``source``: the UDP address it came from, or None)."""
-        self._feed(self.core.on_mavlink, msg, source)
+        self.driver.feed(self.core.on_mavlink, msg, source)
 
     def _on_command_ack(self, msg: Any, _stamp: float = 0.0, _now: float = 0.0) -> None:
         """A COMMAND_ACK straight to the ack routing, at the bridge's own time (the signature
         tests/integration/test_gcs_forwarding.py uses)."""
-        self._feed(self.core.on_command_ack, msg)
+        self.driver.feed(self.core.on_command_ack, msg)
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: admitted by the lease, then the core's."""
         if self.guard.admit_setpoint():
-            self._feed(self.core.on_setpoint, target)
+            self.driver.feed(self.core.on_setpoint, target)
 
     def _serve(self, service: Any, steps: Any, guarded: str = "") -> None:
         def handle(request: Any) -> Any:
             if guarded:
                 self.guard.admit_command(guarded)
-            return self._call(steps, request)
+            return self.driver.call(steps(self.core, request))
 
         self.node.serve(service, handle)
 
@@ -193,7 +164,7 @@ class Bridge:
             )
         for thread in threads:
             thread.start()
-        with self._cond:
+        with self.driver.cond:
             self.core.publish_state(force=True)
             out = self.core.take()
         self._execute(out)
@@ -262,9 +233,9 @@ class Bridge:
         rate = Ratekeeper(self.config.stream_rate_hz, stop=self.node.stop_event)
         while rate.sleep():
             try:
-                with self._cond:
+                with self.driver.cond:
                     self.core.commander = self.guard.holder()  # a lease can time out silently
-                self._feed(self.core.tick)
+                self.driver.feed(self.core.tick)
             except Exception:
                 self.node.callback_errors["stream"] += 1
                 log.exception("stream loop error")

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Generator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,7 +30,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Operation
+from dronewrapper.runtime.operation import Operation, Operations, Steps
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
@@ -82,8 +81,7 @@ class TelloCore:
             tof_ground_cm=config.tof_ground_cm,
         )
         self.matcher = ReplyMatcher()
-        self.operations: list[Operation] = []
-        self.operations_finished = 0  # so far: a waiting caller looks when this changes
+        self.operations = Operations(log)
         self.command_busy = False  # one command exchange at a time (replies carry no ids)
         self.now, self.stamp = now, 0.0
         self.out = Outbox()
@@ -126,36 +124,20 @@ class TelloCore:
         """Queue a sample for ``topic``."""
         self.out.samples.append((topic, msg))
 
-    def start(
-        self, steps: Generator[float, None, Any], now: float, stamp: float, *, background=False
-    ) -> Operation:
+    def start(self, steps: Steps, now: float, stamp: float, *, background=False) -> Operation:
         """Begin an operation (its first step runs now; a bad request fails it at once);
         ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
         self._at(now, stamp)
-        op = Operation(steps, background=background)
-        self.operations.append(op)
-        op.step()
-        self._prune()
-        return op
+        return self.operations.start(steps, background=background)
 
     def advance(self, now: float, stamp: float) -> None:
         """Move every pending operation on to ``now``."""
         self._at(now, stamp)
-        for op in list(self.operations):
-            op.step()
-        self._prune()
+        self.operations.advance()
 
     def cancel(self, op: Operation) -> None:
         """Abandon ``op`` (the node is stopping): its command slot is freed."""
-        op.cancel()
-        self._prune()
-
-    def _prune(self) -> None:
-        for op in [op for op in self.operations if op.done]:
-            self.operations.remove(op)
-            self.operations_finished += 1
-            if op.error is not None and op.background:
-                log.error("%s failed: %s", op.name, op.error)
+        self.operations.cancel(op)
 
     def require_connected(self) -> None:
         """ServiceError when no state string is arriving."""

@@ -21,6 +21,7 @@ from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, State
 from dronewrapper.runtime import Node, Ratekeeper
+from dronewrapper.runtime.core_driver import CoreDriver
 from dronewrapper.security.guard import CommandGuard
 from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_tello import operations as ops
@@ -42,7 +43,6 @@ PUBLISHED = (
     registry.BATTERY,
     registry.STATUSTEXT,
 )
-MAX_WAIT_S = 0.05  # a waiting service call looks at its operation at least this often
 
 
 class Bridge:
@@ -69,7 +69,7 @@ class Bridge:
             ),
             video=config.video,
         )
-        self._cond = threading.Condition()  # guards the core; notified when an operation ends
+        self.driver = CoreDriver(self.core, self._execute, node.stop_event)
         self._publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
         self.pub_image = node.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         self.pub_jpeg = node.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
@@ -102,22 +102,10 @@ class Bridge:
 
     def state_message(self) -> State:
         """The State the bridge publishes now."""
-        with self._cond:
+        with self.driver.cond:
             return self.core.state_message()
 
     # ---- feeding the core
-
-    def _feed(self, call: Callable[..., Any], *args: Any) -> Any:
-        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox;
-        service calls waiting on their operations are woken when one has finished."""
-        with self._cond:
-            finished = self.core.operations_finished
-            result = call(*args, time.monotonic(), time.time())
-            out = self.core.take()
-            if self.core.operations_finished != finished:
-                self._cond.notify_all()
-        self._execute(out)
-        return result
 
     def _execute(self, out: Outbox) -> None:
         for text in out.sends:
@@ -129,34 +117,18 @@ class Bridge:
             self._publishers[topic].put(msg)
 
     def _lease_changed(self) -> None:
-        self._feed(self.core.set_commander, self.guard.holder())
-
-    def _call(self, steps: Callable[[TelloCore, Any], ops.Steps], request: Any) -> Any:
-        """Start an operation and wait (bounded by its own timeouts) for its reply."""
-        op = self._feed(self.core.start, steps(self.core, request))
-        while not op.done:
-            if self.node.stop_event.is_set():
-                with self._cond:
-                    self.core.cancel(op)
-                break
-            with self._cond:
-                if op.done:  # ended by another thread's input (checked under the lock)
-                    break
-                wait = op.wake_at - time.monotonic()
-                self._cond.wait(min(max(wait, 0.001), MAX_WAIT_S))
-            self._feed(self.core.advance)
-        return op.result()
+        self.driver.feed(self.core.set_commander, self.guard.holder())
 
     def on_setpoint(self, target: PositionTarget) -> None:
         """A PositionTarget from a commander: admitted by the lease, then the core's."""
         if self.guard.admit_setpoint():
-            self._feed(self.core.on_setpoint, target)
+            self.driver.feed(self.core.on_setpoint, target)
 
     def _serve(self, service: Any, steps: Any, guarded: str = "") -> None:
         def handle(request: Any) -> Any:
             if guarded:
                 self.guard.admit_command(guarded)
-            return self._call(steps, request)
+            return self.driver.call(steps(self.core, request))
 
         self.node.serve(service, handle)
 
@@ -182,14 +154,14 @@ class Bridge:
         threads = [threading.Thread(target=f, args=a, name=n, daemon=True) for f, a, n in loops]
         for thread in threads:
             thread.start()
-        self._feed(lambda now, stamp: self.core.publish_state(force=True))
+        self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
         return threads
 
     def _on_reply(self, data: bytes) -> None:
-        self._feed(self.core.on_reply, data.decode("utf-8", "replace"))
+        self.driver.feed(self.core.on_reply, data.decode("utf-8", "replace"))
 
     def _on_state(self, data: bytes) -> None:
-        self._feed(self.core.on_state, data)
+        self.driver.feed(self.core.on_state, data)
 
     def _receive_loop(self, sock: Any, handle: Callable[[bytes], None], what: str) -> None:
         """Every datagram of ``sock`` to ``handle`` (errors counted under ``what``)."""
@@ -213,9 +185,9 @@ class Bridge:
         rate = Ratekeeper(self.config.rc_rate_hz, stop=self.node.stop_event)
         while rate.sleep():
             try:
-                with self._cond:
+                with self.driver.cond:
                     self.core.commander = self.guard.holder()  # a lease can time out silently
-                self._feed(self.core.tick)
+                self.driver.feed(self.core.tick)
             except Exception:
                 self.node.callback_errors["control"] += 1
                 log.exception("control loop error")

@@ -10,6 +10,7 @@ waits on :attr:`Operation.done`.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Generator
 from typing import Any
@@ -58,3 +59,45 @@ class Operation:
         if self.error is not None:
             raise self.error
         return self.reply
+
+
+class Operations:
+    """A pure core's running operations: started, resumed together, pruned when done.
+
+    ``finished`` counts the operations ended so far: a node that feeds the core notices an
+    ending by this count changing, and wakes the service calls waiting on them.
+    """
+
+    def __init__(self, log: logging.Logger) -> None:
+        self.pending: list[Operation] = []
+        self.finished = 0
+        self._log = log
+
+    def __len__(self) -> int:
+        return len(self.pending)
+
+    def start(self, steps: Steps, *, background: bool = False) -> Operation:
+        """Begin an operation: its first step runs now (a bad request fails it at once)."""
+        op = Operation(steps, background=background)
+        self.pending.append(op)
+        op.step()
+        self._prune()
+        return op
+
+    def advance(self) -> None:
+        """Resume every pending operation once (the core has moved its time on)."""
+        for op in list(self.pending):
+            op.step()
+        self._prune()
+
+    def cancel(self, op: Operation) -> None:
+        """Abandon ``op`` (the node is stopping): its cleanup runs."""
+        op.cancel()
+        self._prune()
+
+    def _prune(self) -> None:
+        for op in [op for op in self.pending if op.done]:
+            self.pending.remove(op)
+            self.finished += 1
+            if op.error is not None and op.background:
+                self._log.error("%s failed: %s", op.name, op.error)
