@@ -1,5 +1,5 @@
-"""The test tiers' rule, enforced: unit and service tests open no real Zenoh session and no
-network socket.
+"""The test tiers' rule, enforced: unit and service tests open no real Zenoh session, no
+network socket and start no process.
 
 - ``tests/unit``: pure logic, milliseconds.
 - ``tests/service``: one process's logic on the fake bus (``dronewrapper.runtime.fake``
@@ -8,7 +8,8 @@ network socket.
 
 A tier's ``conftest.py`` wraps each test's setup, call and teardown in :meth:`TierGuard.watching`:
 while it runs, ``zenoh.open`` (which the runtime's ``Node``, the SDK and the test router all go
-through) and the tier's forbidden calls on an IPv4/IPv6 socket (service: any; unit: those that
+through), starting a process with the tests' ``support.Process`` (the ``spawn`` fixture's) and
+the tier's forbidden calls on an IPv4/IPv6 socket (service: any; unit: those that
 talk, ``connect``/``sendto``, as binding a loopback port to probe it is the port allocator's
 logic) fail the test with a message naming the tier it belongs in. A violation on another
 thread (a service's own thread opening a session) is remembered and fails the test at the end
@@ -26,14 +27,18 @@ from typing import Any
 import pytest
 import zenoh
 
+import support
+
 _WHERE = (
     "a wiring test (real router, session, socket, process) belongs in tests/integration; "
     "a logic test runs on the fake bus (dronewrapper.runtime.fake FakeBus/FakeNode, injected "
     "time) or on a pure core (tests/unit/bridge_core_rig.py)"
 )
 DEFINITIONS = {
-    "unit": "tests/unit is pure logic (no session, no network)",
-    "service": "tests/service is one process's logic on the fake bus (no session, no network)",
+    "unit": "tests/unit is pure logic (no session, no network, no process)",
+    "service": (
+        "tests/service is one process's logic on the fake bus (no session, no network, no process)"
+    ),
 }
 _INET = (socket.AF_INET, socket.AF_INET6)
 NETWORK = ("bind", "connect", "connect_ex", "sendto")  # any use of a network socket
@@ -67,9 +72,14 @@ class TierGuard:
         def no_session(*_args: Any, **_kwargs: Any) -> None:
             forbid("opened a real Zenoh session (zenoh.open)")
 
+        def no_process(_process: Any, argv: Any, *_args: Any, **_kwargs: Any) -> None:
+            forbid(f"started a process ({' '.join(map(str, argv))})")
+
         with contextlib.ExitStack() as undo:
             undo.callback(setattr, zenoh, "open", zenoh.open)
             zenoh.open = no_session
+            undo.callback(setattr, support.Process, "__init__", support.Process.__init__)
+            support.Process.__init__ = no_process
             for name in self.sockets:
                 undo.callback(_restore, name, socket.socket.__dict__.get(name))
                 setattr(socket.socket, name, _network_guarded(name, forbid))

@@ -17,6 +17,7 @@ import zenoh
 from tier_guard import NETWORK, TRAFFIC, TierGuard, run_phase
 
 from dronewrapper.runtime import Node, ZenohOptions
+from support import Process
 
 TESTS = Path(__file__).resolve().parents[1]
 Failed = pytest.fail.Exception
@@ -84,6 +85,16 @@ def test_unit_tier_lets_a_port_be_probed_but_refuses_traffic():
         udp.bind(("127.0.0.1", 0))  # the port allocator's probe
         with pytest.raises(Failed, match=r"socket\.sendto"):
             udp.sendto(b"x", udp.getsockname())
+
+
+def test_a_process_is_refused_before_it_starts(tmp_path):
+    log = tmp_path / "never.log"
+    before = Process.__init__  # this test's own guard
+    guard = TierGuard("service", sockets=NETWORK)
+    with guard.watching("t::proc"), pytest.raises(Failed, match=r"started a process \(true x\)"):
+        Process(["true", "x"], log)
+    assert not log.exists()  # refused before its log was even opened
+    assert Process.__init__ is before
 
 
 def test_a_session_opened_on_another_thread_fails_the_phase():
