@@ -118,3 +118,14 @@ def run_phase(guard: TierGuard, item: pytest.Item) -> Iterator[None]:
     if seen:
         pytest.fail(seen[0], pytrace=False)
     return result
+
+
+def refusing(guard: TierGuard, name: str, what: str) -> Any:
+    """A fixture called ``name`` that fails the test asking for it, saying ``what`` it wanted
+    and where such a test belongs (a tier's conftest shadows ``router``/``spawn`` with it)."""
+
+    @pytest.fixture(name=name)
+    def refused(request: pytest.FixtureRequest) -> None:
+        pytest.fail(guard.message(request.node.nodeid, what), pytrace=False)
+
+    return refused

@@ -1,13 +1,16 @@
-"""The unit tier's rule: pure logic, in milliseconds; a test that opens a real Zenoh session or
-talks on a network socket (connect, sendto) fails, naming the tier it belongs in (see
-tests/tier_guard.py)."""
+"""The unit tier's rule: pure logic, in milliseconds; a test that opens a real Zenoh session,
+talks on a network socket (connect, sendto) or starts a process fails, naming the tier it
+belongs in (see tests/tier_guard.py)."""
 
 from __future__ import annotations
 
 import pytest
-from tier_guard import TRAFFIC, TierGuard, run_phase
+from tier_guard import TRAFFIC, TierGuard, refusing, run_phase
 
 GUARD = TierGuard("unit", sockets=TRAFFIC)
+
+router = refusing(GUARD, "router", "asks for a real Zenoh router (the router fixture)")
+spawn = refusing(GUARD, "spawn", "asks to start processes (the spawn fixture)")
 
 
 @pytest.hookimpl(wrapper=True)

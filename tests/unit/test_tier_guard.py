@@ -97,6 +97,19 @@ def test_a_process_is_refused_before_it_starts(tmp_path):
     assert Process.__init__ is before
 
 
+@pytest.mark.parametrize(
+    ("fixture", "what"),
+    [("router", "asks for a real Zenoh router"), ("spawn", "asks to start processes")],
+)
+def test_the_router_and_spawn_fixtures_are_refused_naming_the_tier(request, fixture, what):
+    with pytest.raises(Failed) as failure:
+        request.getfixturevalue(fixture)  # this tier's conftest shadows the shared one
+    text = str(failure.value)
+    assert text.startswith(f"{request.node.nodeid} {what}")
+    assert "belongs in tests/integration" in text
+    assert hasattr(load_conftest("service"), fixture)  # the service tier shadows it too
+
+
 def test_a_session_opened_on_another_thread_fails_the_phase():
     """A service's own thread opening a session: the thread swallows the failure, the phase
     still fails with the guard's message."""
