@@ -6,14 +6,16 @@ network socket and start no process.
   FakeBus/FakeNode), in injected time.
 - ``tests/integration``: real processes and sessions on a loopback router, real sockets.
 
-A tier's ``conftest.py`` wraps each test's setup, call and teardown in :meth:`TierGuard.watching`:
+A tier's ``conftest.py`` wraps each test's setup, call and teardown, and the import of each test
+module, in :meth:`TierGuard.watching`:
 while it runs, ``zenoh.open`` (which the runtime's ``Node``, the SDK and the test router all go
 through), starting a process with the tests' ``support.Process`` (the ``spawn`` fixture's) and
 the tier's forbidden calls on an IPv4/IPv6 socket (service: any; unit: those that
 talk, ``connect``/``sendto``, as binding a loopback port to probe it is the port allocator's
 logic) fail the test with a message naming the tier it belongs in. A violation on another
 thread (a service's own thread opening a session) is remembered and fails the test at the end
-of that phase.
+of that phase. The tier's conftest also shadows the ``router`` and ``spawn`` fixtures with ones
+that fail at once (:func:`refusing`).
 """
 
 from __future__ import annotations
@@ -118,6 +120,16 @@ def run_phase(guard: TierGuard, item: pytest.Item) -> Iterator[None]:
     if seen:
         pytest.fail(seen[0], pytrace=False)
     return result
+
+
+def collect(guard: TierGuard, collector: pytest.Collector) -> Iterator[pytest.CollectReport]:
+    """The body of a ``pytest_make_collect_report`` wrapper hook: a test module's import-time
+    code runs guarded; a violation it swallowed fails its collection."""
+    with guard.watching(collector.nodeid) as seen:
+        report = yield
+    if seen and report.passed:
+        report.outcome, report.longrepr = "failed", seen[0]
+    return report
 
 
 def refusing(guard: TierGuard, name: str, what: str) -> Any:

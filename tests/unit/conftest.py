@@ -5,7 +5,7 @@ belongs in (see tests/tier_guard.py)."""
 from __future__ import annotations
 
 import pytest
-from tier_guard import TRAFFIC, TierGuard, refusing, run_phase
+from tier_guard import TRAFFIC, TierGuard, collect, refusing, run_phase
 
 GUARD = TierGuard("unit", sockets=TRAFFIC)
 
@@ -26,3 +26,8 @@ def pytest_runtest_call(item):
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_teardown(item, nextitem):
     return (yield from run_phase(GUARD, item))
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_make_collect_report(collector):
+    return (yield from collect(GUARD, collector))

@@ -137,13 +137,13 @@ def test_a_failure_the_violation_led_to_is_reported_as_the_violation():
 
 
 @pytest.mark.parametrize(("tier", "sockets"), [("unit", TRAFFIC), ("service", NETWORK)])
-@pytest.mark.parametrize("phase", ["setup", "call", "teardown"])
+@pytest.mark.parametrize("phase", ["runtest_setup", "runtest_call", "runtest_teardown"])
 def test_each_tiers_conftest_guards_every_phase(tier, sockets, phase):
     conftest = load_conftest(tier)
     before = zenoh.open  # this test's own guard
     assert (conftest.GUARD.tier, conftest.GUARD.sockets) == (tier, sockets)
-    hook = getattr(conftest, f"pytest_runtest_{phase}")
-    args = (Item(f"tests/{tier}/test_x.py::test_y"),) + ((None,) if phase == "teardown" else ())
+    hook = getattr(conftest, f"pytest_{phase}")
+    args = (Item(f"tests/{tier}/test_x.py::test_y"),) + ((None,) if "teardown" in phase else ())
     wrapped = hook(*args)
     next(wrapped)
     with pytest.raises(Failed) as failure:
@@ -152,3 +152,18 @@ def test_each_tiers_conftest_guards_every_phase(tier, sockets, phase):
     with pytest.raises(Failed):
         wrapped.throw(failure.value)
     assert zenoh.open is before
+
+
+@pytest.mark.parametrize("tier", ["unit", "service"])
+def test_each_tiers_conftest_fails_a_module_whose_import_opens_a_session(tier):
+    """Collection (a test module's import-time code) is guarded too, even where the module
+    swallows the failure."""
+    hook = load_conftest(tier).pytest_make_collect_report(Item(f"tests/{tier}/test_x.py"))
+    next(hook)
+    with contextlib.suppress(Failed):
+        zenoh.open(zenoh.Config())
+    report = pytest.CollectReport(f"tests/{tier}/test_x.py", "passed", None, [])
+    with pytest.raises(StopIteration) as done:
+        hook.send(report)
+    assert done.value.value is report and report.failed
+    assert str(report.longrepr).startswith(f"tests/{tier}/test_x.py opened a real Zenoh session")
