@@ -5,7 +5,7 @@
 pose, the velocities and the battery each time it is ticked (and a status text with each
 refusal). Its aircraft climbs or sinks at 1 m/s towards the height of the
 newest position setpoint (PX4 OFFBOARD) or of a TAKEOFF request while armed; LAND puts it on
-the ground, disarmed. It is not the bridge (tests/service/test_bridge_* test that): only enough
+the ground, disarmed. It is not the bridge (tests/integration/test_bridge_* test that): only enough
 of its contract for a commander's logic, with every request recorded in ``calls``.
 
 :func:`drive` runs steppers (anything with ``step(now)`` and ``next_wake(now)``) and the

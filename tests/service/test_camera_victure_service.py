@@ -1,101 +1,24 @@
-"""The camera_victure service in this process, on the fake bus (one test on a real Zenoh
-router): a real video file, the test pattern, truncated and damaged files, calibration, and
-start-up errors (a fake V4L2 capture stands in for a device)."""
+"""The camera_victure service in this process, on the fake bus: a real video file, the test
+pattern, truncated and damaged files, calibration, and start-up errors (a fake V4L2 capture
+stands in for a device). The same service on a real Zenoh router (the wiring):
+tests/integration/test_camera_victure_router.py."""
 
 from __future__ import annotations
 
 import random
-import threading
 import time
 
 import numpy as np
 import pytest
 from camera_fake import EXPOSURE_AGE_S, FakeCapture
+from camera_running import CALIBRATION, VIDEO, Running
 
 from dronewrapper.images import compressed_to_bgr, image_to_bgr
 from dronewrapper.msgs import registry
-from dronewrapper.runtime.config import load_config
-from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_camera_victure.calibration import load_calibration, transformed
-from dronewrapper_camera_victure.config import Config
-from dronewrapper_camera_victure.node import run, transform_of
+from dronewrapper_camera_victure.node import transform_of
 from dronewrapper_camera_victure.pattern import read_counter
-from support import ASSETS, REPO, client_node, wait_for
-
-VIDEO = ASSETS / "video" / "vtest.avi"
-CALIBRATION = REPO / "services" / "dronewrapper_camera_victure" / "config" / "victure_640x480.yaml"
-
-
-class Running:
-    """``run(node, config)`` on a thread, with a tester node subscribed to what it publishes:
-    on the fake bus (no network: every frame published is received), or on a real Zenoh
-    router when ``router`` is given."""
-
-    def __init__(self, overrides: list[str], factory=None, *, router: str = "") -> None:
-        self.config = load_config(Config, None, overrides)
-        self.router = router
-        if router:
-            self.tester = client_node(router, name="tester", mode="client")
-            self.node = client_node(router, name="camera_victure", mode="client")
-        else:
-            bus = FakeBus()
-            self.tester, self.node = FakeNode("tester", bus), FakeNode("camera_victure", bus)
-        camera = self.config.camera
-        self.raw: list = []
-        self.tester.subscribe(registry.IMAGE_RAW, self.raw.append, camera=camera)
-        self.jpeg = self.tester.latest(registry.IMAGE_COMPRESSED, camera=camera)
-        self.info = self.tester.latest(registry.CAMERA_INFO, camera=camera)
-        self.status = self.tester.latest(registry.CAMERA_STATUS, camera=camera)
-        self.result: list[int] = []
-        kwargs = {"factory": factory} if factory else {}
-        self.thread = threading.Thread(
-            target=lambda: self.result.append(run(self.node, self.config, **kwargs)), daemon=True
-        )
-
-    def __enter__(self) -> Running:
-        if self.router:
-            time.sleep(0.2)  # let the subscriptions reach the router before frames flow
-        self.thread.start()
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.node.stop()
-        self.thread.join(15)
-        self.node.close()
-        self.tester.close()
-
-    def wait_status(self, predicate, timeout: float, what: str):
-        """The first CameraStatus that satisfies ``predicate``."""
-        wait_for(
-            lambda: self.status.value is not None and predicate(self.status.value),
-            timeout,
-            what=what,
-        )
-        return self.status.value
-
-
-def test_publishes_stamped_bgr_frames_and_jpeg(router):
-    """The moved stop-gap test: a real video file, raw and JPEG, like the simulator's, on a
-    real router (the wiring; the other tests run on the fake bus)."""
-    overrides = [f"source={VIDEO}", "jpeg=true"]
-    with Running(overrides, router=router) as cam:
-        wait_for(lambda: len(cam.raw) >= 5 and cam.jpeg.count >= 5, 20, what="frames")
-        img = cam.raw[-1]
-        assert img.encoding == "bgr8" and img.step == img.width * 3
-        assert (img.width, img.height) == (768, 576)
-        pixels = image_to_bgr(img)
-        assert pixels.std() > 5  # a real picture, not a blank buffer
-        assert img.header.stamp > 1e9 and img.header.frame_id == "cam_frontal"
-        assert cam.jpeg.value.data[:2] == b"\xff\xd8"
-        seqs = [m.header.seq for m in cam.raw]
-        stamps = [m.header.stamp for m in cam.raw]
-        assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
-        assert stamps == sorted(stamps)
-        # at its own rate (10 fps): capture stamps 0.1 s apart on average (as fast as
-        # possible would be a few ms; a loaded machine may stretch it, never shrink it)
-        span = (stamps[-1] - stamps[0]) / (seqs[-1] - seqs[0])
-        assert 0.08 < span < 0.3
-    assert cam.result == [0]
+from support import wait_for
 
 
 def test_a_file_played_once_as_fast_as_possible_loses_no_frame():

@@ -1,5 +1,6 @@
-"""The controller as a process: its command line in-process, and one real process stopped by
-SIGINT (the logic is tested on the fake bus in test_controller_node.py)."""
+"""The controller's command line, in-process (the logic is tested on the fake bus in
+test_controller_node.py; a real process stopped by SIGINT in
+tests/integration/test_controller_sigint.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import dronewrapper_controller
 from dronewrapper.runtime.service import run_service
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.node import run
-from support import REPO, python_module, wait_for
+from support import REPO
 
 CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml"
 
@@ -31,15 +32,3 @@ def test_bad_config_exits_2_naming_the_key(tmp_path, capsys):
     bad.write_text(CONFIG.read_text() + "\nyaw_rat: {kp: 1}\n")
     assert main("--config", str(bad)) == 2
     assert "yaw_rat" in capsys.readouterr().err
-
-
-def test_sigint_while_waiting_for_the_bridge_exits_0(router, spawn):
-    proc = spawn(
-        python_module(
-            "dronewrapper_controller", "--config", str(CONFIG), "--connect", router,
-            "--set", "ready_timeout=60",
-        ),
-        name="controller",
-    )  # fmt: skip
-    wait_for(lambda: "waiting for the bridge" in proc.output(), 30, what="controller start")
-    assert proc.stop() == 0

@@ -1,18 +1,16 @@
 """The perception service in-process: frames in, Detections out.
 
 Its logic runs on the fake bus in bus time (frames delivered when scheduled, the newest-frame
-policy judged by message stamps); one test on a real Zenoh router proves the wiring."""
+policy judged by message stamps); tests/integration/test_perception_router.py proves the wiring
+on a real Zenoh router."""
 
 from __future__ import annotations
 
 import math
-import threading
-import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 
 import cv2
 import numpy as np
+from perception_frames import disc_msg, red_disc_frame
 
 from dronewrapper.images import bgr_to_image
 from dronewrapper.msgs import CompressedImage, Detections, Header, Image, registry
@@ -23,18 +21,6 @@ from dronewrapper_perception.config import Config
 from dronewrapper_perception.detectors import ColorDetector
 from dronewrapper_perception.node import PerceptionService
 from dronewrapper_perception.pipeline import Pipeline
-from support import client_node, wait_for
-
-
-def red_disc_frame(cx: int = 200, cy: int = 150, r: int = 30) -> np.ndarray:
-    img = np.full((240, 320, 3), (80, 120, 70), np.uint8)
-    cv2.circle(img, (cx, cy), r, (0, 0, 230), -1)
-    return img
-
-
-def disc_msg(stamp: float, cx: int = 200, cy: int = 150) -> Image:
-    return bgr_to_image(red_disc_frame(cx, cy), stamp, "cam_frontal")
-
 
 RAW = registry.IMAGE_RAW.key("drone", camera="cam_frontal")
 COMPRESSED = registry.IMAGE_COMPRESSED.key("drone", camera="cam_frontal")
@@ -58,62 +44,6 @@ def deliver(service: PerceptionService, bus: FakeBus) -> None:
     while bus.step():
         pass
     service.spin_once(0.0)
-
-
-@contextmanager
-def running_service(router: str, pipeline_factory=None, **settings) -> Iterator:
-    """A PerceptionService spinning in a thread, plus a camera/test node on the same router."""
-    config = load_config(Config, data=settings)
-    with client_node(router, name="perception") as pnode, client_node(router, name="cam") as cam:
-        pipeline = pipeline_factory(config) if pipeline_factory else None
-        service = PerceptionService(pnode, config, pipeline)
-        received: list[tuple[float, Detections]] = []
-        cam.subscribe(registry.DETECTIONS, lambda m: received.append((time.time(), m)))
-        thread = threading.Thread(target=service.spin, daemon=True)
-        thread.start()
-        try:
-            yield service, cam, received
-        finally:
-            pnode.stop()
-            thread.join(10)
-            assert not thread.is_alive()
-
-
-def publish_until_received(pub, make_msg, received, count: int = 1, timeout: float = 20.0):
-    """Publish frames every 50 ms until ``count`` detections arrived (discovery takes a moment)."""
-
-    def done():
-        if len(received) >= count:
-            return True
-        pub.put(make_msg())
-        return False
-
-    wait_for(done, timeout, interval=0.05, what=f"{count} Detections")
-
-
-def test_raw_frames_give_detections_with_source_stamp(router):
-    with running_service(router) as (service, cam, received):
-        pub = cam.publisher(registry.IMAGE_RAW, camera="cam_frontal")
-        publish_until_received(
-            pub, lambda: bgr_to_image(red_disc_frame(), 1000.0, "cam_frontal"), received
-        )
-        stamp = 1700000000.25
-        before = len(received)
-        pub.put(bgr_to_image(red_disc_frame(100, 80), stamp, "cam_frontal"))
-        wait_for(lambda: any(m.header.stamp == stamp for _, m in received[before:]), 10)
-        msg = next(m for _, m in received[before:] if m.header.stamp == stamp)
-        assert msg.header.frame_id == "cam_frontal"
-        assert (msg.image_width, msg.image_height, msg.detector) == (320, 240, "color")
-        target = msg.target()
-        assert target is not None
-        assert abs(target.bbox.center.position.x - 100) < 2
-        assert abs(target.bbox.center.position.y - 80) < 2
-        assert abs(target.circle_radius - 30) < 3
-        assert service.stats.processed >= 2 and not service.stats.bad
-        # the latency budget's timing fields (s): decode is part of the processing time
-        assert 0.0 <= msg.decode_time <= msg.processing_time < 10.0
-        assert 0.0 <= msg.queue_time < 10.0
-        assert 0.0 < msg.receive_time - time.time() + 60.0 < 60.0  # Unix time, in the past
 
 
 def test_bad_frames_are_counted_and_skipped():
