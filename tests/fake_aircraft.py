@@ -2,10 +2,11 @@
 
 :class:`FakeAircraft` declares on a node (a real :class:`~dronewrapper.runtime.node.Node` or a
 :class:`~dronewrapper.runtime.fake.FakeNode`, whichever is given) what a bridge publishes and
-serves: State, ExtendedState, the local pose, the velocities, the battery and status texts (a
-frontal camera and simulated objects' poses when asked); the ARMING, SET_MODE, TAKEOFF, LAND,
-PARAM_GET and PARAM_SET services. It has no thread and reads no clock but the one it is given:
-:meth:`FakeAircraft.tick` moves it to ``now`` and publishes its telemetry stamped ``now``.
+serves: State, ExtendedState, the local pose, the velocities, the battery and status texts
+(simulated objects' poses, and a camera's image key declared but silent, when asked); the
+ARMING, SET_MODE, TAKEOFF, LAND, PARAM_GET and PARAM_SET services. It has no thread and reads
+no clock but the one it is given: :meth:`FakeAircraft.tick` moves it to ``now`` and publishes
+its telemetry stamped ``now``.
 
 The aircraft: while armed it climbs or sinks at ``climb_rate`` toward its goal altitude, the
 newest of a TAKEOFF request's and (in OFFBOARD or GUIDED) a position setpoint's; velocity
@@ -24,9 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Twist, TwistStamped, Vector3
@@ -35,7 +34,6 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_ON_GROUND,
     MASK_POSITION,
     MASK_VELOCITY,
-    MAV_RESULT_DENIED,
     SEVERITY_CRITICAL,
     CommandBool,
     CommandBoolResult,
@@ -53,11 +51,15 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
-from dronewrapper.msgs.sensor import BatteryState, Image
+from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 
+if TYPE_CHECKING:
+    from dronewrapper.runtime.fake import FakeNode
+    from dronewrapper.runtime.node import Node
+
 REFUSED = 4
-"""MAV_RESULT_FAILED: the result code of every refusal but disarming in flight (DENIED)."""
+"""MAV_RESULT_FAILED: the result code of every refusal."""
 GUIDED_MODES = ("OFFBOARD", "GUIDED")
 """The modes that follow position setpoints (PX4, ArduPilot); State.guided in them."""
 IN_AIR_ABOVE_M = 0.1
@@ -83,7 +85,7 @@ class FakeAircraft:
         ground_mode: the mode it starts in on the ground.
         modes: the modes SET_MODE accepts (``unknown mode NAME`` for another); None: any.
         offboard_needs_stream: refuse OFFBOARD until a setpoint has arrived (as PX4 does).
-        camera: publish frontal images under this camera name (:meth:`publish_image`).
+        camera: declare the image stream of this camera (``pub_image``; nothing is sent).
         objects: simulated object poses (name -> x, y, z in m, ENU) published each tick.
         refuse: service name (``set_mode``, ``arming``, ``takeoff``, ``land``) -> the reason
             given when refusing it (a dict the tests may change).
@@ -92,7 +94,7 @@ class FakeAircraft:
 
     def __init__(
         self,
-        node: Any,
+        node: Node | FakeNode,
         clock: Callable[[], float],
         *,
         flying: bool = False,
@@ -131,7 +133,6 @@ class FakeAircraft:
         self.params: dict[str, ParamValue] = {"MPC_XY_VEL_MAX": ParamValue(real=12.0)}
         self.objects = dict(objects or {})
         self.silent: set[str] = set()  # keys of streams left out
-        self.paused = False  # publish nothing (a stalled link)
         self._last_tick: float | None = None
         self._state = node.publisher(registry.STATE)
         self._ext = node.publisher(registry.EXTENDED_STATE)
@@ -198,8 +199,7 @@ class FakeAircraft:
         in_flight = not req.value and self.in_air
         reason = self._command("arming", req, "disarming denied in flight" if in_flight else "")
         if reason:
-            result = MAV_RESULT_DENIED if in_flight else REFUSED
-            return CommandBoolResult(success=False, result=result, message=reason)
+            return CommandBoolResult(success=False, result=REFUSED, message=reason)
         self.armed = req.value
         return CommandBoolResult(success=True, result=0)
 
@@ -260,8 +260,7 @@ class FakeAircraft:
         dt = 0.0 if self._last_tick is None else max(0.0, now - self._last_tick)
         self._last_tick = now
         self.move(dt)
-        if not self.paused:
-            self.publish(now)
+        self.publish(now)
 
     def publish(self, now: float) -> None:
         """Publish the telemetry, stamped ``now``, but the streams in ``silent``."""
@@ -290,10 +289,3 @@ class FakeAircraft:
         for name, (x, y, z) in self.objects.items():
             pose = Pose(position=Point(x=x, y=y, z=z))
             self._object_poses[name].put(PoseStamped(header=header, pose=pose))
-
-    def publish_image(self, image: np.ndarray, stamp: float) -> None:
-        """Publish a BGR frame (height x width x 3, uint8) on the camera, stamped ``stamp``."""
-        h, w, _ = image.shape
-        self.pub_image.put(
-            Image(header=Header(stamp=stamp), height=h, width=w, step=w * 3, data=image.tobytes())
-        )

@@ -1,11 +1,12 @@
 """The toy aircraft (tests/fake_aircraft.py) on a real Zenoh router, ticked by its own thread.
 
 :class:`FakeBridge` is a :class:`~fake_aircraft.FakeAircraft` on a client session: telemetry
-at 20 Hz stamped with wall-clock time, a frontal camera, simulated objects' poses, PX4's and
-ArduPilot's modes only, a climb and a landing at 4 m/s, OFFBOARD only once a setpoint stream
-has arrived. It records every setpoint with its monotonic arrival time. It lets the SDK, the
-controller and the ground station tests check their side of the contract on the wire (order of
-calls, keys, masks, rates, error messages) in a fraction of a second per test.
+at 20 Hz stamped with wall-clock time, a silent frontal camera key (the SDK subscribes on
+demand), simulated objects' poses, PX4's and ArduPilot's modes only, a climb and a landing at
+4 m/s, OFFBOARD only once a setpoint stream has arrived. It records every setpoint with its
+monotonic arrival time. It lets the SDK, the controller and the ground station tests check
+their side of the contract on the wire (order of calls, keys, masks, rates, error messages) in
+a fraction of a second per test.
 """
 
 from __future__ import annotations
