@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+import zenoh
+
 from dronewrapper.discovery import alive_services
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.delivery import decoding
@@ -35,9 +37,11 @@ def subscribe_keyed(
 
     if node.session is None:  # a FakeNode: its bus
         return node.bus.subscribe(keyexpr, deliver)
-    return node.session.declare_subscriber(
-        keyexpr, lambda s: deliver(str(s.key_expr), s.payload.to_bytes(), s.attachment)
+    # a direct callback (decode and store only): no Python thread for this subscriber
+    handler = zenoh.handlers.Callback(
+        lambda s: deliver(str(s.key_expr), s.payload.to_bytes(), s.attachment), indirect=False
     )
+    return node.session.declare_subscriber(keyexpr, handler)
 
 
 def alive_keys(node: Any) -> set[str]:
