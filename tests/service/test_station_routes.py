@@ -14,7 +14,14 @@ from asgi_driver import WebSocketRefused
 from station_rig import REMOTE, TARGET, TOKEN, StationRig, X
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool, CommandTOL, SetMode, State
+from dronewrapper.msgs.mavros import (
+    MASK_POSITION,
+    CommandBool,
+    CommandTOL,
+    PositionTarget,
+    SetMode,
+    State,
+)
 from dronewrapper.msgs.sensor import CompressedImage
 from dronewrapper.msgs.simulation import WorldLoad, WorldState
 from dronewrapper.msgs.std import Header
@@ -267,6 +274,18 @@ def _teleop(**sticks: float) -> str:
     return json.dumps({"type": "teleop", "ns": "drone", **sticks})
 
 
+def _sent(rig: StationRig, velocity: bool, what: str) -> PositionTarget:
+    """The newest setpoint once it is a velocity (or a position) one: the page's messages are
+    handled on the app's thread."""
+
+    def newest() -> PositionTarget | None:
+        setpoints = rig.pilot.setpoints()
+        sp = setpoints[-1][1] if setpoints else None
+        return sp if sp is not None and (sp.type_mask != MASK_POSITION) == velocity else None
+
+    return wait_for(newest, 5, what=what)
+
+
 def test_telemetry_socket_pushes_snapshots(rig: StationRig) -> None:
     with rig.websocket("/ws/telemetry") as ws:
         first, second = _telemetry(ws), _telemetry(ws)
@@ -283,16 +302,14 @@ def test_teleop_streams_velocity_and_release_holds(rig: StationRig) -> None:
     link = rig.link
     with rig.websocket("/ws/telemetry") as ws:
         ws.send(_teleop(forward=0.5, left=0, up=0, turn=-1))
-        wait_for(lambda: link.deadman.active, 5, what="teleop")
-        sp = rig.setpoint()
-        assert sp.type_mask != MASK_POSITION
+        sp = _sent(rig, velocity=True, what="velocity setpoints")
         _close(sp.velocity.x, 0.5 * limits.horizontal)
         _close(sp.yaw_rate, -limits.yaw_rate)
+        assert link.deadman.active
         ws.send(json.dumps({"type": "teleop_release", "ns": "drone"}))
-        wait_for(lambda: not link.deadman.active, 5, what="release")
-        sp = rig.setpoint()
-        assert sp.type_mask == MASK_POSITION
+        sp = _sent(rig, velocity=False, what="a hold on release")
         assert (sp.position.x, sp.position.y, sp.position.z) == POSE
+        assert not link.deadman.active
 
 
 def test_teleop_not_renewed_expires_into_a_hold(rig: StationRig) -> None:
@@ -300,8 +317,8 @@ def test_teleop_not_renewed_expires_into_a_hold(rig: StationRig) -> None:
     timeout = rig.config.teleop.timeout
     with rig.websocket("/ws/telemetry") as ws:
         ws.send(_teleop(forward=1, left=0, up=0, turn=0))
-        wait_for(lambda: link.deadman.active, 5, what="teleop")
-        renewed = rig.bus.clock()
+        _sent(rig, velocity=True, what="velocity setpoints")
+        renewed = rig.bus.clock()  # the bus stood still since the message
         rig.run(timeout * 0.9)
         rig.fleet.check_deadmen()  # the process loop's periodic check
         assert link.deadman.active and rig.setpoint().type_mask != MASK_POSITION
@@ -316,7 +333,8 @@ def test_closing_the_page_holds_the_drone(rig: StationRig) -> None:
     link = rig.link
     with rig.websocket("/ws/telemetry") as ws:
         ws.send(_teleop(forward=0, left=1, up=0, turn=0))
-        wait_for(lambda: link.deadman.active, 5, what="teleop")
+        _sent(rig, velocity=True, what="velocity setpoints")
+        assert link.deadman.active
     assert not link.deadman.active  # the handler ended with the page
     assert rig.setpoint().type_mask == MASK_POSITION
 
@@ -368,7 +386,7 @@ def test_video_is_latest_only_one_frame_in_flight(rig: StationRig) -> None:
     pub = camera.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
     assert not pub.watched()  # nobody watches: the sim would not even encode
     with rig.websocket("/ws/video/drone/frontal") as ws:
-        assert pub.watched()
+        wait_for(pub.watched, 5, what="the station to subscribe once the socket is accepted")
         pub.put(_frame(1))
         header, jpeg = _unpack(ws.recv(timeout=5))
         assert header["ns"] == "drone" and header["camera"] == "frontal"
