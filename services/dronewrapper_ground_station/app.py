@@ -329,7 +329,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                     "seq": frame.seq,
                     "stamp": frame.stamp,
                     "sent": time.time(),
-                    "held": time.monotonic() - frame.received,
+                    "held": link.clock() - frame.received,
                 }
                 acked.clear()
                 await ws.send_bytes(pack(frame, json.dumps(header).encode()))

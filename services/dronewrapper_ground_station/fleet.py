@@ -1,11 +1,9 @@
 """The bus side of the station: the drones online, their telemetry, video and commands.
 
-Commands go through the DroneWrapper SDK (one wrapper per drone on the station's session);
-telemetry, video, detections, the controller's status and the simulator's topics are
-subscribed by their registry topics. Nothing here spells a key.
-
-Size: just over 400 lines: the station's view of each drone (discovery, telemetry, video,
-commands) in one place the web app reads.
+Everything goes through the station's runtime Node (a FakeNode on the fake bus in tests):
+commands through the DroneWrapper SDK (one wrapper per drone on that node); telemetry, video,
+detections, the controller's status and the simulator's topics are subscribed by their
+registry topics. Nothing here spells a key.
 """
 
 from __future__ import annotations
@@ -17,19 +15,16 @@ import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-import msgspec
-import zenoh
-
 from dronewrapper import DroneWrapper
-from dronewrapper.discovery import BRIDGE_PREFIX, alive_services, services_by_namespace
-from dronewrapper.msgs import codec, registry
+from dronewrapper.discovery import BRIDGE_PREFIX, services_by_namespace
+from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
 from dronewrapper.runtime.latest import Latest
-from dronewrapper.runtime.node import call_service, encoding_for
 from dronewrapper_ground_station import snapshot
+from dronewrapper_ground_station.bus import DroneNode, alive_keys, subscribe_keyed
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.frames import FrameSlot
 from dronewrapper_ground_station.requests import VelocityCommand
@@ -56,85 +51,42 @@ TELEMETRY: tuple[tuple[str, Topic[Any], Callable[[Any], dict[str, Any]]], ...] =
 )
 
 
-class Subscriptions:
-    """Typed subscriptions on a shared session, undeclared together."""
-
-    def __init__(self, session: zenoh.Session) -> None:
-        self.session = session
-        self.decode_errors: collections.Counter[str] = collections.Counter()
-        self._declared: list[Any] = []
-
-    def subscribe(self, topic: Topic[T], key: str, callback: Callable[[str, T], None]) -> Any:
-        """Call ``callback(key, msg)`` for every decodable sample on ``key``."""
-        decoder = codec.decoder(topic.type)
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            where = str(sample.key_expr)
-            try:
-                msg = decoder.decode(sample.payload.to_bytes())
-            except (msgspec.DecodeError, msgspec.ValidationError) as exc:
-                self.decode_errors[where] += 1
-                if self.decode_errors[where] == 1:
-                    log.warning("undecodable %s on %s: %s", topic.type.__name__, where, exc)
-                return
-            try:
-                callback(where, msg)
-            except Exception:  # never let an exception reach Zenoh's thread
-                log.exception("handling %s failed", where)
-
-        # direct callbacks, as the SDK's: decode and store only, no thread per subscriber
-        handler = zenoh.handlers.Callback(on_sample, indirect=False)
-        sub = self.session.declare_subscriber(key, handler)
-        self._declared.append(sub)
-        return sub
-
-    def undeclare(self, entity: Any) -> None:
-        if entity in self._declared:
-            self._declared.remove(entity)
-        entity.undeclare()
-
-    def close(self) -> None:
-        for entity in reversed(self._declared):
-            try:
-                entity.undeclare()
-            except Exception as exc:  # the session is already closed
-                log.debug("undeclare: %s", exc)
-        self._declared.clear()
-
-
 class DroneLink:
     """One drone as the station sees it: telemetry holders, video slots, commands.
 
     Args:
-        session: the station's Zenoh session (shared by every drone).
+        node: the station's runtime Node (shared by every drone), or a FakeNode in tests.
         ns: the drone's namespace.
         config: the station config.
-        clock: monotonic clock (s), injectable.
+        clock: monotonic clock (s) of the ages and the dead-man, injectable.
+        sleep: how the blocking commands (take-off, landing) wait, injectable.
     """
 
     def __init__(
         self,
-        session: zenoh.Session,
+        node: Any,
         ns: str,
         config: Config,
+        *,
         clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], Any] = time.sleep,
     ) -> None:
         self.ns = ns
         self.config = config
         self.clock = clock
         self.services: list[str] = []
         self.online = True
-        self._subs = Subscriptions(session)
+        self._node = node
+        self._subs: list[Any] = []
         self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {}
         for name, topic, fields in TELEMETRY:
             holder: Latest[Any] = Latest(name=topic.key(ns), clock=clock)
-            self._subs.subscribe(topic, topic.key(ns), lambda _k, m, h=holder: h.update(m))
+            self._subscribe(topic, holder.update)
             self._latest[name] = (holder, topic.rate_hz, fields)
         self.status_texts: collections.deque[dict[str, Any]] = collections.deque(maxlen=50)
-        self._subs.subscribe(
+        self._subscribe(
             registry.STATUSTEXT,
-            registry.STATUSTEXT.key(ns),
-            lambda _k, m: self.status_texts.append(snapshot.status_text_entry(m)),
+            lambda m: self.status_texts.append(snapshot.status_text_entry(m)),
         )
         self.slots = {camera: FrameSlot() for camera in CAMERAS}
         self._video_subs: dict[str, Any] = {}
@@ -142,7 +94,14 @@ class DroneLink:
         self.deadman = DeadMan(config.teleop.timeout)
         self._command_lock = threading.Lock()
         self.last_command: dict[str, Any] | None = None
-        self.drone = DroneWrapper(ns, session=session, cameras=(), wait=False)
+        self.drone = DroneWrapper(
+            ns, node=DroneNode(node, ns), cameras=(), wait=False, clock=clock, sleep=sleep
+        )
+
+    def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
+        sub = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
+        self._subs.append(sub)
+        return sub
 
     # ---- telemetry
 
@@ -186,11 +145,10 @@ class DroneLink:
         slot = self.slots[camera]
         with self._video_lock:
             if camera not in self._video_subs:
-                topic = registry.IMAGE_COMPRESSED
-                self._video_subs[camera] = self._subs.subscribe(
-                    topic,
-                    topic.key(self.ns, camera=key_name),
-                    lambda _k, m: slot.put(m.header.stamp, bytes(m.data), self.clock()),
+                self._video_subs[camera] = self._subscribe(
+                    registry.IMAGE_COMPRESSED,
+                    lambda m: slot.put(m.header.stamp, bytes(m.data), self.clock()),
+                    camera=key_name,
                 )
         return slot
 
@@ -199,7 +157,9 @@ class DroneLink:
         with self._video_lock:
             slot = self.slots[camera]
             if slot.listeners == 0 and camera in self._video_subs:
-                self._subs.undeclare(self._video_subs.pop(camera))
+                sub = self._video_subs.pop(camera)
+                self._subs.remove(sub)
+                sub.undeclare()
 
     # ---- commands (blocking: run them on a worker thread)
 
@@ -273,7 +233,7 @@ class DroneLink:
 
     def close(self) -> None:
         self.drone.close()
-        self._subs.close()
+        _undeclare(self._subs)
 
 
 class SimObjects:
@@ -282,15 +242,13 @@ class SimObjects:
     WORLD_NS = registry.DEFAULT_NAMESPACE
     """The world's keys (``sim/...``) belong to no vehicle; the namespace is not used."""
 
-    def __init__(self, session: zenoh.Session, clock: Callable[[], float] = time.monotonic):
-        self.session = session
+    def __init__(self, node: Any, clock: Callable[[], float] = time.monotonic) -> None:
+        self.node = node
         self.clock = clock
-        self._subs = Subscriptions(session)
         self._poses: dict[str, tuple[dict[str, Any], float]] = {}
         self._publishers: dict[str, Any] = {}
-        self._subs.subscribe(
-            registry.SIM_OBJECT_POSE, registry.SIM_OBJECT_POSE.wildcard(), self._on_pose
-        )
+        topic = registry.SIM_OBJECT_POSE
+        self._subs = [subscribe_keyed(node, topic, topic.wildcard(), self._on_pose)]
 
     def _on_pose(self, key: str, msg: Any) -> None:
         parts = registry.SIM_OBJECT_POSE.match(key)
@@ -313,11 +271,8 @@ class SimObjects:
         pub = self._publishers.get(name)
         if pub is None:
             topic = registry.SIM_OBJECT_CMD_VEL
-            pub = self.session.declare_publisher(
-                topic.key(name=name), encoding=encoding_for(topic.type)
-            )
-            self._publishers[name] = pub
-        pub.put(codec.encode(Twist(linear=Vector3(x=east, y=north, z=0.0))))
+            pub = self._publishers[name] = self.node.publisher(topic, key=topic.key(name=name))
+        pub.put(Twist(linear=Vector3(x=east, y=north, z=0.0)))
 
     def world(self, timeout: float = 3.0) -> WorldState:
         """The simulator's world (scenario, objects, loadable scenarios).
@@ -325,9 +280,7 @@ class SimObjects:
         Raises:
             ServiceUnavailable: no simulator answers (a real aircraft, or none running).
         """
-        return call_service(
-            self.session, registry.SIM_WORLD, WorldQuery(), ns=self.WORLD_NS, timeout=timeout
-        )
+        return self.node.call(registry.SIM_WORLD, WorldQuery(), ns=self.WORLD_NS, timeout=timeout)
 
     def load(self, scenario: str, timeout: float = 10.0) -> WorldState:
         """Load scenario ``scenario``'s world (the running one again: reset its objects).
@@ -337,46 +290,52 @@ class SimObjects:
             ServiceUnavailable: no simulator answers.
         """
         request = WorldLoad(scenario=scenario)
-        return call_service(
-            self.session, registry.SIM_WORLD_LOAD, request, ns=self.WORLD_NS, timeout=timeout
-        )
+        return self.node.call(registry.SIM_WORLD_LOAD, request, ns=self.WORLD_NS, timeout=timeout)
 
     def close(self) -> None:
-        for pub in self._publishers.values():
-            try:
-                pub.undeclare()
-            except Exception as exc:
-                log.debug("undeclare: %s", exc)
-        self._subs.close()
+        _undeclare([*self._subs, *self._publishers.values()])
 
 
 class Fleet:
     """Every drone the station shows, found by their bridges' liveliness tokens.
 
     Args:
-        session: the station's Zenoh session.
+        node: the station's runtime Node, or a FakeNode on the fake bus (tests).
         config: the station config (``namespaces`` fixes the list; empty: discover).
+        clock: monotonic clock (s) of ages and dead-men; sleep: how blocking commands wait
+            (both injected in tests: bus time).
     """
 
-    def __init__(self, session: zenoh.Session, config: Config) -> None:
-        self.session = session
+    def __init__(
+        self,
+        node: Any,
+        config: Config,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], Any] = time.sleep,
+    ) -> None:
+        self.node = node
         self.config = config
+        self.clock = clock
+        self._sleep = sleep
         self.links: dict[str, DroneLink] = {}
-        self.objects = SimObjects(session)
+        self.objects = SimObjects(node, clock)
         self._lock = threading.Lock()
         for ns in config.namespaces:
-            self.links[ns] = DroneLink(session, ns, config)
+            self.links[ns] = self._link(ns)
+
+    def _link(self, ns: str) -> DroneLink:
+        return DroneLink(self.node, ns, self.config, clock=self.clock, sleep=self._sleep)
 
     def discover(self) -> None:
         """List the processes alive now; add new drones, mark vanished ones offline."""
-        keys = alive_services(self.session, "*", timeout=1.0)
-        by_ns = services_by_namespace(keys)
+        by_ns = services_by_namespace(alive_keys(self.node))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
             if ns not in self.links and has_bridge and not self.config.namespaces:
                 log.info("drone online: %s (%s)", ns, ", ".join(names))
                 with self._lock:
-                    self.links[ns] = DroneLink(self.session, ns, self.config)
+                    self.links[ns] = self._link(ns)
         for ns, link in self.links.items():
             link.services = by_ns.get(ns, [])
             link.online = any(name.startswith(BRIDGE_PREFIX) for name in link.services)
@@ -405,3 +364,13 @@ class Fleet:
         for link in self.links.values():
             link.close()
         self.objects.close()
+
+
+def _undeclare(entities: list[Any]) -> None:
+    """Undeclare each of ``entities`` (newest first), whatever became of the session."""
+    for entity in reversed(entities):
+        try:
+            entity.undeclare()
+        except Exception as exc:  # the session is already closed
+            log.debug("undeclare: %s", exc)
+    entities.clear()

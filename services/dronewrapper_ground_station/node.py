@@ -47,7 +47,7 @@ def operator_token(config: Config) -> str:
 def run(node: Node, config: Config) -> int:
     """Serve the station until SIGINT/SIGTERM."""
     token = operator_token(config)
-    fleet = Fleet(node.session, config)
+    fleet = Fleet(node, config)
     server = WebServer(create_app(fleet, config, Access(token)), config.host, config.port)
     discovery = threading.Thread(
         target=_discover_forever,

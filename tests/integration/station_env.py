@@ -76,7 +76,7 @@ def station_env(router: str, *, simulator: bool = False, **config: Any) -> Itera
         bridge.node.serve(registry.SIM_WORLD, lambda _: world)
     try:
         with client_node(router, name="station", mode="client") as station_node:
-            fleet = Fleet(station_node.session, cfg)
+            fleet = Fleet(station_node, cfg)
             server = WebServer(create_app(fleet, cfg, Access(TOKEN)), "127.0.0.1", 0)
             try:
                 wait_for(lambda: fleet.discover() or "drone" in fleet.links, 10, what="discovery")

@@ -36,7 +36,7 @@ import msgspec
 import zenoh
 
 from dronewrapper.msgs import codec
-from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.runtime import caller
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
@@ -101,6 +101,9 @@ class FakeBus:
         self._queue: list[tuple[float, int, str, bytes]] = []
         self._seq = itertools.count()
         self._services: dict[str, Callable[[bytes], Any]] = {}
+        self.tokens: set[str] = set()
+        """The liveliness tokens declared on the bus (``{ns}/alive/{name}``, see
+        :meth:`FakeNode.announce`)."""
 
     def subscribe(self, keyexpr: str, on_payload: Callable[[str, bytes], None]) -> _Subscription:
         sub = _Subscription(keyexpr, on_payload)
@@ -221,10 +224,20 @@ class FakeNode:
             pass
 
     def announce(self) -> None:
+        """Declare the liveliness token ``{ns}/alive/{name}`` on the bus (until :meth:`close`)."""
         self.announced = True
+        self.bus.tokens.add(ALIVE.key(self.ns, service=self.name))
+
+    def alive_services(self, ns: str = "*") -> set[str]:
+        """The liveliness keys (``ns/alive/name``) on the bus now, in ``ns`` or all (the fake
+        bus's counterpart of :func:`dronewrapper.discovery.alive_services`)."""
+        wanted = zenoh.KeyExpr(ALIVE.wildcard(ns))
+        return {key for key in self.bus.tokens if wanted.intersects(zenoh.KeyExpr(key))}
 
     def close(self) -> None:
         self.stop_event.set()
+        if self.announced:
+            self.bus.tokens.discard(ALIVE.key(self.ns, service=self.name))
 
     def publisher(
         self,

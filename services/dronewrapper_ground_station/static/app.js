@@ -55,11 +55,16 @@ async function refreshWorld() {
   const world = r.ok ? await r.json() : { simulator: false };
   if (!world.simulator) { $("world-state").textContent = "no simulator"; sel.hidden = true; return null; }
   sel.hidden = false;
-  if (sel.dataset.sig !== world.available.join()) {
+  const rebuilt = sel.dataset.sig !== world.available.join();
+  if (rebuilt) {
     sel.replaceChildren(...world.available.map((n) => { const o = document.createElement("option"); o.value = o.textContent = n; return o; }));
     sel.dataset.sig = world.available.join();
   }
-  sel.value = world.scenario;
+  // show the running scenario when it changes, never undo an operator's pick on each poll
+  if (rebuilt || sel.dataset.running !== world.scenario) {
+    sel.value = world.scenario;
+    sel.dataset.running = world.scenario;
+  }
   $("world-state").textContent = `running ${world.scenario} (${world.objects.length} objects)`;
   return world;
 }
