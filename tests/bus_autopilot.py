@@ -66,6 +66,7 @@ class BusAutopilot(FakeAircraft):
             refuse=refuse,
             absent=absent,
         )
+        self.node.announce()  # its liveliness token, as a real bridge's
 
     def next_wake(self, now: float) -> float:
         return (self._last_tick if self._last_tick is not None else now) + TELEMETRY_PERIOD_S

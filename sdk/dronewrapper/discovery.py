@@ -12,7 +12,7 @@ import zenoh
 
 from dronewrapper.errors import NotConnected
 from dronewrapper.msgs.registry import ALIVE, STATE
-from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.node import alive_services, open_session
 from dronewrapper.runtime.options import (
     DEFAULT_ROUTER,
     ENV_PREFIX,
@@ -28,15 +28,6 @@ def default_connect() -> str:
     value = os.environ.get(f"{ENV_PREFIX}CONNECT", "")
     first = next((part.strip() for part in value.split(",") if part.strip()), "")
     return first or DEFAULT_ROUTER
-
-
-def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:
-    """The concrete liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
-    keys = set()
-    for reply in session.liveliness().get(ALIVE.wildcard(ns), timeout=timeout):
-        if reply.ok is not None:
-            keys.add(str(reply.ok.key_expr))
-    return keys
 
 
 def services_by_namespace(keys: set[str]) -> dict[str, list[str]]:

@@ -264,13 +264,14 @@ class DroneWrapper:
                 name=f"{self.ns}-setpoints",
             )
             self._bridge_matched = False
-            self._matching = (
-                None
-                if node is not None
-                else self._setpoints.declare_matching_listener(
-                    zenoh.handlers.Callback(self._on_setpoint_matching, indirect=False)
-                )  # a direct callback: no thread to block interpreter exit (see _subscribe)
-            )
+            if node is not None:
+                self._matching = self._setpoints.on_matching(self._on_setpoint_matching)
+            else:  # a direct callback: no thread to block interpreter exit (see _subscribe)
+                self._matching = self._setpoints.declare_matching_listener(
+                    zenoh.handlers.Callback(
+                        lambda status: self._on_setpoint_matching(status.matching), indirect=False
+                    )
+                )
             if wait:
                 self.wait_for_connection(max(0.0, deadline - time.monotonic()))
         except BaseException:
@@ -300,7 +301,8 @@ class DroneWrapper:
 
     def _declare_setpoints(self) -> None:
         if self._node is not None:  # a typed publisher (the runtime's)
-            self._setpoints = self._node.publisher(registry.SETPOINT_RAW_LOCAL)
+            key = registry.SETPOINT_RAW_LOCAL.key(self.ns)
+            self._setpoints = self._node.publisher(registry.SETPOINT_RAW_LOCAL, key=key)
         else:
             self._setpoints = self.session.declare_publisher(
                 registry.SETPOINT_RAW_LOCAL.key(self.ns),
@@ -334,7 +336,7 @@ class DroneWrapper:
         self, topic: Topic[T], callback: Callable[[T], None], **parts: str
     ) -> zenoh.Subscriber:
         if self._node is not None:
-            subscriber = self._node.subscribe(topic, callback, **parts)
+            subscriber = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
             self._subscribers.append(subscriber)
             return subscriber
         key = topic.key(self.ns, **parts)
@@ -357,13 +359,13 @@ class DroneWrapper:
         self._stale_after[holder.name] = stale_after(topic.rate_hz)
         return holder
 
-    def _on_setpoint_matching(self, status: Any) -> None:
+    def _on_setpoint_matching(self, matching: bool) -> None:
         """The bridge's setpoint subscriber became (un)reachable: a link gap (router restart,
         lost Wi-Fi) withholds setpoints, and a command that went stale meanwhile is not resent
         (see SetpointStreamer). "Unreachable" counts only after it was reachable once."""
         if self._closed:
             return
-        if status.matching:
+        if matching:
             self._bridge_matched = True
             self._streamer.link_up()
         elif self._bridge_matched:
@@ -516,15 +518,15 @@ class DroneWrapper:
         return state
 
     def _diagnose(self, timeout: float) -> str:
-        if self._node is not None:  # on a node's bus: linked, no liveliness to look at
+        if self._node is not None and self._node.session is None:  # the fake bus: in process
             linked = True
         else:
             info = self.session.info
             linked = bool(list(info.routers_zid()) or list(info.peers_zid()))
         keys: set[str] = set()
-        if linked and self._node is None:
+        if linked:
             with contextlib.suppress(Exception):
-                keys = alive_services(self.session, "*", timeout=1.0)
+                keys = self._alive_services("*")
         state = self._state.value
         return connection_problem(
             self.ns,
@@ -867,7 +869,9 @@ class DroneWrapper:
     def _ask(self, service: Service[Any, T], request: Any, timeout: float) -> T:
         """One request/reply; raises the runtime's ServiceError / ServiceUnavailable."""
         if self._node is not None:
-            return self._node.call(service, request, timeout=timeout, attachment=self._attachment)
+            return self._node.call(
+                service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
+            )
         return call_service(
             self.session, service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
         )
@@ -884,20 +888,23 @@ class DroneWrapper:
     def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
         """A call nobody answered: Timeout if a bridge is alive (slow or stuck), else
         NotConnected (none running)."""
-        if self._node is not None:  # the fake bus has no liveliness: a fresh State says alive
-            alive = self._state.fresh(STATE_FRESH_S) is not None
-        else:
-            try:
-                names = sorted(alive_services(self.session, self.ns, timeout=1.0))
-            except Exception:
-                names = []
-            alive = any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names)
+        try:
+            names = sorted(self._alive_services(self.ns))
+        except Exception:
+            names = []
+        alive = any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names)
         if alive:
             return Timeout(f"{what}: no reply from {key} within {timeout:g} s")
         return NotConnected(
             f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
             f"drone {self.ns!r} on {self.connect}"
         )
+
+    def _alive_services(self, ns: str) -> set[str]:
+        """The liveliness keys present in ``ns`` ("*": all), through the node when given."""
+        if self._node is not None:
+            return self._node.alive_services(ns, timeout=1.0)
+        return alive_services(self.session, ns, timeout=1.0)
 
     def _command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
         reply = self._call(service, request, what, timeout)

@@ -1,8 +1,6 @@
-"""How the station reaches the bus: through a runtime ``Node``, or a ``FakeNode`` in tests.
-
-The two share the surface a service uses (subscribe, publisher, call ...); the little here
-covers what that surface lacks for the station: a wildcard subscription that hands over each
-sample's key, the liveliness tokens present, and a view of the node in one drone's namespace.
+"""A wildcard subscription that hands over each sample's key, on a runtime ``Node`` or a
+``FakeNode`` (the one thing the station needs that their shared surface lacks: a world
+object's name is only in its key).
 """
 
 from __future__ import annotations
@@ -12,7 +10,6 @@ from typing import Any, TypeVar
 
 import zenoh
 
-from dronewrapper.discovery import alive_services
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.delivery import decoding
 
@@ -42,35 +39,3 @@ def subscribe_keyed(
         lambda s: deliver(str(s.key_expr), s.payload.to_bytes(), s.attachment), indirect=False
     )
     return node.session.declare_subscriber(keyexpr, handler)
-
-
-def alive_keys(node: Any) -> set[str]:
-    """The liveliness keys (``{ns}/alive/{name}``) present now: the router's, or the fake
-    bus's tokens."""
-    if node.session is None:  # a FakeNode
-        return node.alive_services("*")
-    return alive_services(node.session, "*", timeout=1.0)
-
-
-class DroneNode:
-    """The station's node seen from one drone's namespace, for that drone's DroneWrapper.
-
-    ``DroneWrapper(node=...)`` keys its subscriptions, setpoints and service calls in the
-    node's own namespace; the station's node serves many drones, so this view fills in the
-    drone's namespace and forwards everything else.
-    """
-
-    def __init__(self, node: Any, ns: str) -> None:
-        self.node = node
-        self.ns = ns
-        self.session = node.session
-        self.sample_errors = node.sample_errors
-
-    def subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
-        return self.node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
-
-    def publisher(self, topic: Topic[T], **parts: str) -> Any:
-        return self.node.publisher(topic, key=topic.key(self.ns, **parts))
-
-    def call(self, service: Any, request: Any, **options: Any) -> Any:
-        return self.node.call(service, request, **{**options, "ns": self.ns})

@@ -24,7 +24,7 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
-from dronewrapper_ground_station.bus import DroneNode, alive_keys, subscribe_keyed
+from dronewrapper_ground_station.bus import subscribe_keyed
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.frames import FrameSlot
 from dronewrapper_ground_station.requests import VelocityCommand
@@ -94,9 +94,7 @@ class DroneLink:
         self.deadman = DeadMan(config.teleop.timeout)
         self._command_lock = threading.Lock()
         self.last_command: dict[str, Any] | None = None
-        self.drone = DroneWrapper(
-            ns, node=DroneNode(node, ns), cameras=(), wait=False, clock=clock, sleep=sleep
-        )
+        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False, clock=clock, sleep=sleep)
 
     def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
         sub = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
@@ -329,7 +327,7 @@ class Fleet:
 
     def discover(self) -> None:
         """List the processes alive now; add new drones, mark vanished ones offline."""
-        by_ns = services_by_namespace(alive_keys(self.node))
+        by_ns = services_by_namespace(self.node.alive_services("*"))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
             if ns not in self.links and has_bridge and not self.config.namespaces:

@@ -176,6 +176,9 @@ class FakePublisher(Generic[T]):
         status)."""
         return self._bus.matched(self.key)
 
+    def on_matching(self, callback: Callable[[bool], None]) -> None:
+        """The fake bus has no link to lose: ``callback`` is never called."""
+
     def undeclare(self) -> None:
         pass
 
@@ -228,7 +231,7 @@ class FakeNode:
         self.announced = True
         self.bus.tokens.add(ALIVE.key(self.ns, service=self.name))
 
-    def alive_services(self, ns: str = "*") -> set[str]:
+    def alive_services(self, ns: str = "*", timeout: float = 0.0) -> set[str]:
         """The liveliness keys (``ns/alive/name``) on the bus now, in ``ns`` or all (the fake
         bus's counterpart of :func:`dronewrapper.discovery.alive_services`)."""
         wanted = zenoh.KeyExpr(ALIVE.wildcard(ns))

@@ -131,6 +131,12 @@ class Publisher(Generic[T]):
         except zenoh.ZError:
             return False
 
+    def on_matching(self, callback: Callable[[bool], None]) -> Any:
+        """Call ``callback(matching)`` whenever subscribers start or stop matching this key
+        (a direct callback: keep it short); returns the listener (``undeclare()`` it)."""
+        handler = zenoh.handlers.Callback(lambda s: callback(s.matching), indirect=False)
+        return self._pub.declare_matching_listener(handler)
+
     def undeclare(self) -> None:
         self._pub.undeclare()
 
@@ -231,6 +237,10 @@ class Node:
             self._token = self.session.liveliness().declare_token(
                 ALIVE.key(self.ns, service=self.name)
             )
+
+    def alive_services(self, ns: str = "*", timeout: float = 1.0) -> set[str]:
+        """The liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
+        return alive_services(self.session, ns, timeout)
 
     def close(self) -> None:
         """Withdraw the token, undeclare everything and close the session (idempotent)."""
@@ -390,6 +400,15 @@ class Node:
             attachment=attachment,
             **parts,
         )
+
+
+def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:
+    """The concrete liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
+    keys = set()
+    for reply in session.liveliness().get(ALIVE.wildcard(ns), timeout=timeout):
+        if reply.ok is not None:
+            keys.add(str(reply.ok.key_expr))
+    return keys
 
 
 def call_service(
