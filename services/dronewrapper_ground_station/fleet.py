@@ -24,7 +24,6 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
-from dronewrapper_ground_station.bus import subscribe_keyed
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.frames import FrameSlot
 from dronewrapper_ground_station.requests import VelocityCommand
@@ -246,7 +245,7 @@ class SimObjects:
         self._poses: dict[str, tuple[dict[str, Any], float]] = {}
         self._publishers: dict[str, Any] = {}
         topic = registry.SIM_OBJECT_POSE
-        self._subs = [subscribe_keyed(node, topic, topic.wildcard(), self._on_pose)]
+        self._subs = [node.subscribe(topic, self._on_pose, key=topic.wildcard(), keyed=True)]
 
     def _on_pose(self, key: str, msg: Any) -> None:
         parts = registry.SIM_OBJECT_POSE.match(key)

@@ -55,9 +55,16 @@ class SampleErrors:
             self.log.warning("%s on %s (%d so far): %s", what, key, counter[key], exc)
 
 
-def decoding(message_type: type[T], callback: Callable[[T], None], errors: SampleErrors) -> Deliver:
+def decoding(
+    message_type: type[T],
+    callback: Callable[..., None],
+    errors: SampleErrors,
+    *,
+    keyed: bool = False,
+) -> Deliver:
     """A ``deliver(key, payload, attachment)`` that decodes ``payload`` as ``message_type``
-    and calls ``callback(msg)``; failures are counted and logged in ``errors``."""
+    and calls ``callback(msg)`` (``callback(key, msg)`` when ``keyed``: for a wildcard whose
+    matches differ by key); failures are counted and logged in ``errors``."""
     decoder = codec.decoder(message_type)
 
     def deliver(key: str, payload: bytes, attachment: Any = None) -> None:
@@ -68,7 +75,10 @@ def decoding(message_type: type[T], callback: Callable[[T], None], errors: Sampl
             return
         try:
             with caller.handling(attachment):
-                callback(msg)
+                if keyed:
+                    callback(key, msg)
+                else:
+                    callback(msg)
         except Exception as exc:  # never let an exception reach Zenoh's receive thread
             errors.note(errors.callback, "callback error", key, exc)
 

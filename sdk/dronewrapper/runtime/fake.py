@@ -258,10 +258,11 @@ class FakeNode:
         callback: Callable[[T], None],
         *,
         key: str | None = None,
+        keyed: bool = False,
         **parts: str,
     ) -> _Subscription:
         keyexpr = key or topic.key(self.ns, **parts)
-        deliver = decoding(topic.type, callback, self.sample_errors)
+        deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
         return self.bus.subscribe(keyexpr, lambda where, payload: deliver(where, payload, None))
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:

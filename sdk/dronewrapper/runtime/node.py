@@ -292,16 +292,18 @@ class Node:
         callback: Callable[[T], None],
         *,
         key: str | None = None,
+        keyed: bool = False,
         **parts: str,
     ) -> zenoh.Subscriber:
         """Call ``callback(msg)`` for every decodable sample on ``topic``.
 
-        ``key`` may be a key expression with wildcards instead of this node's namespace.
+        ``key`` may be a key expression with wildcards instead of this node's namespace;
+        ``keyed``: call ``callback(key, msg)`` with each sample's concrete key instead.
         Undecodable samples are counted in ``decode_errors`` and logged; exceptions in the
         callback are counted in ``callback_errors`` and logged; neither ends the subscription.
         """
         keyexpr = key or topic.key(self.ns, **parts)
-        deliver = decoding(topic.type, callback, self.sample_errors)
+        deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
 
         def on_sample(sample: zenoh.Sample) -> None:
             deliver(str(sample.key_expr), sample.payload.to_bytes(), sample.attachment)
