@@ -216,8 +216,9 @@ class VirtualClock(Clock):
 
 
 class _Worker(threading.Thread):
-    """A thread of a service under a :class:`VirtualClock`: counted from ``start``, its
-    ``join`` from another worker waits in virtual time."""
+    """A thread of a service under a :class:`VirtualClock`: counted from ``start``, alive
+    until its target has returned (``finished``), its ``join`` from another worker in virtual
+    time."""
 
     def __init__(self, clock: VirtualClock, target: Callable[[], object], name: str) -> None:
         super().__init__(target=target, name=name, daemon=True)
@@ -242,6 +243,9 @@ class _Worker(threading.Thread):
                 self.finished = True
                 self._clock._workers.discard(self)
                 self._clock._cv.notify_all()
+
+    def is_alive(self) -> bool:
+        return not self.finished and super().is_alive()
 
     def join(self, timeout: float | None = None) -> None:
         if threading.current_thread() in self._clock._workers:
