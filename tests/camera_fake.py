@@ -4,15 +4,15 @@ It behaves like a UVC camera behind OpenCV's V4L2 backend: the pixel format is c
 then the nearest size that format offers, then the nearest rate; ``get`` reads back what was
 granted; ``read`` blocks for a frame period like a device, and frames carry a driver timestamp
 (``CAP_PROP_POS_MSEC``, monotonic ms) 50 ms before the read. ``busy`` opens but gives no frames,
-as a device another program streams from.
+as a device another program streams from. Its time is ``clock``'s (the real clocks, or the
+virtual time the service under test runs in).
 """
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper_camera_victure import sources
 
 EXPOSURE_AGE_S = 0.05
@@ -25,7 +25,10 @@ VICTURE_MODES = {
 
 
 class FakeCapture:
-    def __init__(self, modes=None, *, opened: bool = True, busy: bool = False) -> None:
+    def __init__(
+        self, modes=None, *, opened: bool = True, busy: bool = False, clock: Clock = REAL
+    ) -> None:
+        self.clock = clock
         self.modes = modes or VICTURE_MODES
         self.opened = opened
         self.busy = busy
@@ -76,9 +79,9 @@ class FakeCapture:
         self.reads += 1
         if self.busy or self.released:
             return False, None
-        time.sleep(1.0 / self.fps)
-        self.read_walls[self.reads] = time.time()
-        self._read_mono = time.monotonic()
+        self.clock.sleep(1.0 / self.fps)
+        self.read_walls[self.reads] = self.clock.time()
+        self._read_mono = self.clock.monotonic()
         return True, np.full((self.height, self.width, 3), self.reads % 256, np.uint8)
 
     def release(self) -> None:

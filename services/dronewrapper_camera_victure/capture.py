@@ -9,13 +9,13 @@ and :class:`~dronewrapper_camera_victure.sources.SourceUnavailable` when it may 
 from __future__ import annotations
 
 import os
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper_camera_victure import sources
 from dronewrapper_camera_victure.config import Config
 from dronewrapper_camera_victure.pattern import render_pattern
@@ -46,12 +46,14 @@ class Grab:
 
 
 class PatternSource:
-    """The generated test pattern at ``config.fps`` (see :mod:`pattern`)."""
+    """The generated test pattern at ``config.fps`` (see :mod:`pattern`), stamped by
+    ``clock``."""
 
     kind = "pattern"
 
-    def __init__(self, config: Config) -> None:
+    def __init__(self, config: Config, clock: Clock = REAL) -> None:
         self.config = config
+        self.clock = clock
         self.description = "pattern"
         self.mode = Mode(config.width or 640, config.height or 480, config.fps, "pattern")
         self.pace_hz = config.fps
@@ -67,9 +69,9 @@ class PatternSource:
 
     def read(self) -> Grab:
         """The next pattern frame, stamped when it is complete (its capture time)."""
-        frame = render_pattern(self.mode.width, self.mode.height, self._counter, time.time())
+        frame = render_pattern(self.mode.width, self.mode.height, self._counter, self.clock.time())
         self._counter += 1
-        return Grab(frame, time.time())
+        return Grab(frame, self.clock.time())
 
     def rewind(self) -> None:
         pass
@@ -79,10 +81,14 @@ class PatternSource:
 
 
 class OpenCVSource:
-    """A V4L2 device, a video file or a network stream through OpenCV (see the module doc)."""
+    """A V4L2 device, a video file or a network stream through OpenCV (see the module doc);
+    reads stamped and start-up waits timed by ``clock``."""
 
-    def __init__(self, config: Config, factory: Factory = opencv_factory) -> None:
+    def __init__(
+        self, config: Config, factory: Factory = opencv_factory, clock: Clock = REAL
+    ) -> None:
         self.config = config
+        self.clock = clock
         self.kind = config.source_kind
         self.factory = factory
         self.description = (
@@ -127,12 +133,12 @@ class OpenCVSource:
         return self.mode
 
     def _first_frame(self, what: str) -> Grab:
-        deadline = time.monotonic() + self.config.open_timeout
-        while time.monotonic() < deadline:
+        deadline = self.clock.monotonic() + self.config.open_timeout
+        while self.clock.monotonic() < deadline:
             grab = self.read()
             if grab.frame is not None:
                 return grab
-            time.sleep(0.05)
+            self.clock.sleep(0.05)
         self.release()
         raise SourceError(
             f"camera {what} gives no frames within {self.config.open_timeout:g} s "
@@ -177,9 +183,9 @@ class OpenCVSource:
             grab, self._pending = self._pending, None
             return grab
         if self._cap is None:
-            return Grab(None, time.time())
+            return Grab(None, self.clock.time())
         ok, frame = self._cap.read()
-        wall, mono = time.time(), time.monotonic()
+        wall, mono = self.clock.time(), self.clock.monotonic()
         if not ok or frame is None:
             return Grab(None, wall, ended=self.kind == "file")
         stamp = wall
@@ -199,8 +205,8 @@ class OpenCVSource:
         self._pending = None
 
 
-def make_source(config: Config, factory: Factory = opencv_factory):
-    """The source ``config`` names."""
+def make_source(config: Config, factory: Factory = opencv_factory, clock: Clock = REAL):
+    """The source ``config`` names, on ``clock``."""
     if config.source_kind == "pattern":
-        return PatternSource(config)
-    return OpenCVSource(config, factory)
+        return PatternSource(config, clock)
+    return OpenCVSource(config, factory, clock)

@@ -11,12 +11,14 @@ goes on ``{ns}/{camera}/camera_status`` every ``status_period``.
 Start-up: a missing or busy device, an unsupported mode, a missing file or a bad calibration is
 a clear error naming it, exit 2. A stream that is not up yet is retried (state
 ``connecting``). The process announces itself ready after its first published frame.
+
+Time (stamps, pacing, periods, timeouts, backoff) is read and waited on only through the
+injected ``clock`` (the real clocks by default; tests run the service in virtual time).
 """
 
 from __future__ import annotations
 
 import logging
-import time
 
 import numpy as np
 
@@ -25,6 +27,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.sensor import CameraInfo, CameraStatus
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper_camera_victure.calibration import (
     CalibrationError,
     Intrinsics,
@@ -65,9 +68,16 @@ class CameraService:
         CalibrationError: the calibration file is missing or malformed.
     """
 
-    def __init__(self, node: Node, config: Config, factory: Factory = opencv_factory) -> None:
+    def __init__(
+        self,
+        node: Node,
+        config: Config,
+        factory: Factory = opencv_factory,
+        clock: Clock = REAL,
+    ) -> None:
         self.node = node
         self.config = config
+        self.clock = clock
         self.transform = transform_of(config)
         self.calibration = (
             load_calibration(config.calibration_file) if config.calibration_file else None
@@ -80,13 +90,13 @@ class CameraService:
             node.publisher(registry.CAMERA_INFO, camera=camera) if self.calibration else None
         )
         self.status_pub = node.publisher(registry.CAMERA_STATUS, camera=camera)
-        self.source = make_source(config, factory)
-        self.slot = FrameSlot()
+        self.source = make_source(config, factory, clock)
+        self.slot = FrameSlot(clock)
         self.reader: Reader | None = None
         self.published = 0
         self.dropped = 0
         self._taken = 0
-        self._status_at = time.monotonic()
+        self._status_at = clock.monotonic()
         self._published_at_status = 0
         self._fps_measured = 0.0
         self._status_count = 0
@@ -112,7 +122,12 @@ class CameraService:
                 fmt = c.pixel_format or "(default format)"
                 log.info("requested %dx%d %s @%g fps", c.width, c.height, fmt, c.fps)
         self.reader = Reader(
-            self.source, self.config, self.slot, self.node.stop_event, opened=opened
+            self.source,
+            self.config,
+            self.slot,
+            self.node.stop_event,
+            opened=opened,
+            clock=self.clock,
         )
         self.reader.start()
 
@@ -208,7 +223,9 @@ class CameraService:
         assert self.reader is not None
         stats = self.reader.stats
         return CameraStatus(
-            header=Header.now(self.config.camera, self._status_count),
+            header=Header(
+                stamp=self.clock.time(), frame_id=self.config.camera, seq=self._status_count
+            ),
             source=self.source.description,
             state=stats.state,
             width=stats.mode.width,
@@ -232,7 +249,7 @@ class CameraService:
             self._status_count += 1
 
     def _maybe_status(self) -> None:
-        now = time.monotonic()
+        now = self.clock.monotonic()
         elapsed = now - self._status_at
         if elapsed < self.config.status_period:
             return
@@ -254,11 +271,11 @@ class CameraService:
         )
 
 
-def run(node: Node, config: Config, factory: Factory = opencv_factory) -> int:
+def run(node: Node, config: Config, factory: Factory = opencv_factory, clock: Clock = REAL) -> int:
     """The camera service (see the module doc). Exit 0 on a stop or the end of a file played
     once, 2 for a source or calibration that cannot be used, 1 when reading failed unexpectedly."""
     try:
-        service = CameraService(node, config, factory)
+        service = CameraService(node, config, factory, clock)
         service.start()
     except (SourceError, CalibrationError) as exc:
         log.error("%s", exc)

@@ -9,18 +9,21 @@ A stream or device that fails ``max_read_failures`` reads in a row, or gives not
 ``read_timeout`` s, is lost: it is released and opened again with exponential backoff
 (``retry_initial`` doubling to ``retry_max``); the state and counters go into the service's
 CameraStatus. A failed read the source recovers from counts as a corrupt frame.
+
+Time is read and waited on only through the injected clock (``dronewrapper.runtime.clock``), so
+tests run the reader, pacing and backoff included, in virtual time.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
-import time
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper_camera_victure.capture import Grab
 from dronewrapper_camera_victure.config import Config
 from dronewrapper_camera_victure.sources import Mode, SourceError, SourceUnavailable
@@ -40,9 +43,10 @@ class Captured:
 
 
 class FrameSlot:
-    """Thread-safe one-slot holder of the newest captured frame."""
+    """Thread-safe one-slot holder of the newest captured frame (waits on ``clock``)."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Clock = REAL) -> None:
+        self._clock = clock
         self._cond = threading.Condition()
         self._item: Captured | None = None
         self._taken = True
@@ -53,7 +57,7 @@ class FrameSlot:
         previous frame was taken or the event is set (lossless hand-over)."""
         with self._cond:
             while wait_taken is not None and not self._taken and not wait_taken.is_set():
-                self._cond.wait(0.1)
+                self._clock.wait_for(self._cond, lambda: self._taken or wait_taken.is_set(), 0.1)
             self._item = item
             self._taken = False
             self.count += 1
@@ -65,13 +69,9 @@ class FrameSlot:
         Returns:
             (its number, the frame), or None on timeout.
         """
-        deadline = time.monotonic() + timeout
         with self._cond:
-            while self.count <= newer_than:
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    return None
-                self._cond.wait(remaining)
+            if not self._clock.wait_for(self._cond, lambda: self.count > newer_than, timeout):
+                return None
             self._taken = True
             self._cond.notify_all()
             return self.count, self._item  # type: ignore[return-value]
@@ -122,16 +122,26 @@ def to_bgr(frame: np.ndarray) -> np.ndarray | None:
     return None
 
 
-class Reader(threading.Thread):
-    """Reads ``source`` into ``slot`` until ``stop`` is set or a file played once ends.
+class Reader:
+    """Reads ``source`` into ``slot`` on its own thread until ``stop`` is set or a file played
+    once ends.
 
-    ``opened``: the source was already opened (by the service, at start-up).
+    ``opened``: the source was already opened (by the service, at start-up). ``clock``: what it
+    reads the time from and waits on (the real clocks unless a test gives another).
     """
 
     def __init__(
-        self, source, config: Config, slot: FrameSlot, stop: threading.Event, *, opened: bool
+        self,
+        source,
+        config: Config,
+        slot: FrameSlot,
+        stop: threading.Event,
+        *,
+        opened: bool,
+        clock: Clock = REAL,
     ) -> None:
-        super().__init__(name="camera-reader", daemon=True)
+        self.clock = clock
+        self._thread = clock.thread(self.run, "camera-reader")
         self.source = source
         self.config = config
         self.slot = slot
@@ -145,9 +155,19 @@ class Reader(threading.Thread):
         self._backoff = Backoff(config.retry_initial, config.retry_max)
         self._lossless = source.kind == "file" and not config.realtime
         self._failures = 0
-        self._last_frame = time.monotonic()
+        self._last_frame = clock.monotonic()
         self._pass_frames = 0
         self._due = 0.0
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def is_alive(self) -> bool:
+        return self._thread.is_alive()
+
+    def join(self, timeout: float | None = None) -> None:
+        """Wait up to ``timeout`` s (on the clock) for the reading thread to end."""
+        self._thread.join(timeout)
 
     def run(self) -> None:
         try:
@@ -173,7 +193,7 @@ class Reader(threading.Thread):
         except (SourceError, SourceUnavailable) as exc:
             self.stats.open_failures += 1
             self._error(str(exc))
-            self.stop.wait(self._backoff.next())
+            self.clock.wait(self.stop, self._backoff.next())
             return False
         if self._ever_opened:
             self.stats.reconnects += 1
@@ -183,7 +203,7 @@ class Reader(threading.Thread):
         self._ever_opened = True
         self._opened = True
         self._failures = 0
-        self._last_frame = time.monotonic()
+        self._last_frame = self.clock.monotonic()
         self._due = 0.0
         self.stats.state = STREAMING
         return True
@@ -193,18 +213,18 @@ class Reader(threading.Thread):
         self.source.release()
         self._opened = False
         self.stats.state = RECONNECTING
-        self.stop.wait(self._backoff.next())
+        self.clock.wait(self.stop, self._backoff.next())
 
     def _pace(self) -> None:
         """Sleep until the next frame is due at the source's own rate (files, pattern)."""
         if not self.source.pace_hz:
             return
         period = 1.0 / self.source.pace_hz
-        now = time.monotonic()
+        now = self.clock.monotonic()
         if self._due == 0.0 or now - self._due > period:
             self._due = now  # first frame, or fell behind: no burst to catch up
         elif self._due > now:
-            self.stop.wait(self._due - now)
+            self.clock.wait(self.stop, self._due - now)
         self._due += period
 
     def _read_one(self) -> bool:
@@ -218,7 +238,7 @@ class Reader(threading.Thread):
             self.stats.bad_frames += 1
         if frame is None:
             self._failures += 1
-            silent = time.monotonic() - self._last_frame
+            silent = self.clock.monotonic() - self._last_frame
             if self._failures >= self.config.max_read_failures:
                 self._lost(f"{self._failures} failed reads in a row")
             elif silent >= self.config.read_timeout:
@@ -228,7 +248,7 @@ class Reader(threading.Thread):
             self.stats.corrupt_frames += self._failures  # failed reads it recovered from
             self._failures = 0
         self._backoff.reset()
-        self._last_frame = time.monotonic()
+        self._last_frame = self.clock.monotonic()
         number = self.stats.frames_captured
         self.stats.frames_captured += 1
         self._pass_frames += 1
@@ -253,12 +273,12 @@ class Reader(threading.Thread):
             log.info("end of %s", self.source.description)
             return False
         if empty:  # nothing decodable in the whole file: do not spin on it
-            self.stop.wait(self._backoff.next())
+            self.clock.wait(self.stop, self._backoff.next())
         try:
             self.source.rewind()
         except (SourceError, SourceUnavailable) as exc:  # the file vanished meanwhile
             self._opened = False
             self.stats.open_failures += 1
             self._error(str(exc))
-            self.stop.wait(self._backoff.next())
+            self.clock.wait(self.stop, self._backoff.next())
         return True

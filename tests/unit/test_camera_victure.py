@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from camera_fake import FakeCapture
 
+from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_camera_victure import sources
 from dronewrapper_camera_victure.calibration import (
@@ -336,15 +337,28 @@ def test_slot_keeps_only_the_newest():
 
 
 def test_lossless_slot_waits_until_taken():
-    slot, stop = FrameSlot(), threading.Event()
+    clock = VirtualClock()
+    slot, stop = FrameSlot(clock), threading.Event()
     slot.put(_captured(0), wait_taken=stop)
-    second = threading.Thread(target=lambda: slot.put(_captured(1), wait_taken=stop))
+    second = clock.thread(lambda: slot.put(_captured(1), wait_taken=stop), "second")
     second.start()
-    second.join(0.3)
-    assert second.is_alive()  # blocked: frame 0 not taken yet
-    assert slot.take(1.0, 0)[1].number == 0
-    second.join(2.0)
-    assert slot.take(1.0, 1)[1].number == 1
+    clock.run_for(5.0)
+    assert not second.finished  # blocked: frame 0 not taken yet, 5 s (virtual) on
+    assert slot.take(0.0, 0)[1].number == 0
+    clock.run_until(lambda: second.finished, 1.0, "frame 1 handed over once 0 was taken")
+    assert slot.take(0.0, 1)[1].number == 1
+
+
+def test_lossless_slot_gives_up_waiting_on_stop():
+    clock = VirtualClock()
+    slot, stop = FrameSlot(clock), threading.Event()
+    slot.put(_captured(0), wait_taken=stop)
+    second = clock.thread(lambda: slot.put(_captured(1), wait_taken=stop), "second")
+    second.start()
+    clock.run_for(1.0)
+    stop.set()
+    clock.run_until(lambda: second.finished, 1.0, "the put to give up")
+    assert slot.take(0.0, 0)[0] == 2  # frame 0 replaced, not taken
 
 
 def test_backoff_doubles_to_the_maximum_and_resets():
