@@ -24,6 +24,9 @@ test: setup lint
 test-unit: setup
 	$(BIN)/python -m pytest -q tests/unit $(ARGS)
 
+test-fast: setup  # the unit and service tiers: no sockets, no processes, injected time
+	$(BIN)/python -m pytest -q tests/unit tests/service $(ARGS)
+
 bench: setup
 	$(BIN)/python -m bench $(ARGS)
 
