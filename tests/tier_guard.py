@@ -141,3 +141,33 @@ def refusing(guard: TierGuard, name: str, what: str) -> Any:
         pytest.fail(guard.message(request.node.nodeid, what), pytrace=False)
 
     return refused
+
+
+def conftest_hooks(guard: TierGuard) -> dict[str, Any]:
+    """Everything a tier's conftest declares, by name: the guarded phases and collection, and
+    the ``router`` / ``spawn`` fixtures refused (``globals().update(conftest_hooks(GUARD))``)."""
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_runtest_setup(item):
+        return (yield from run_phase(guard, item))
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_runtest_call(item):
+        return (yield from run_phase(guard, item))
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_runtest_teardown(item, nextitem):
+        return (yield from run_phase(guard, item))
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_make_collect_report(collector):
+        return (yield from collect(guard, collector))
+
+    return {
+        "router": refusing(guard, "router", "asks for a real Zenoh router (the router fixture)"),
+        "spawn": refusing(guard, "spawn", "asks to start processes (the spawn fixture)"),
+        "pytest_runtest_setup": pytest_runtest_setup,
+        "pytest_runtest_call": pytest_runtest_call,
+        "pytest_runtest_teardown": pytest_runtest_teardown,
+        "pytest_make_collect_report": pytest_make_collect_report,
+    }

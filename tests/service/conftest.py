@@ -4,30 +4,7 @@ belongs in (see tests/tier_guard.py)."""
 
 from __future__ import annotations
 
-import pytest
-from tier_guard import NETWORK, TierGuard, collect, refusing, run_phase
+from tier_guard import NETWORK, TierGuard, conftest_hooks
 
 GUARD = TierGuard("service", sockets=NETWORK)
-
-router = refusing(GUARD, "router", "asks for a real Zenoh router (the router fixture)")
-spawn = refusing(GUARD, "spawn", "asks to start processes (the spawn fixture)")
-
-
-@pytest.hookimpl(wrapper=True)
-def pytest_runtest_setup(item):
-    return (yield from run_phase(GUARD, item))
-
-
-@pytest.hookimpl(wrapper=True)
-def pytest_runtest_call(item):
-    return (yield from run_phase(GUARD, item))
-
-
-@pytest.hookimpl(wrapper=True)
-def pytest_runtest_teardown(item, nextitem):
-    return (yield from run_phase(GUARD, item))
-
-
-@pytest.hookimpl(wrapper=True)
-def pytest_make_collect_report(collector):
-    return (yield from collect(GUARD, collector))
+globals().update(conftest_hooks(GUARD))  # the guarded hooks and the refused fixtures
