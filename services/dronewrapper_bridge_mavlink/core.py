@@ -30,7 +30,7 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Operation, Operations, Steps
+from dronewrapper.runtime.core_driver import PureCore
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import receive
 from dronewrapper_bridge_mavlink.config import Config
@@ -67,10 +67,11 @@ class Outbox:
     errors: list[str] = field(default_factory=list)
 
 
-class BridgeCore:
+class BridgeCore(PureCore):
     """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
+        super().__init__(now, Outbox, log)
         self.config = config
         self.limits = config.limits
         self.failsafe = Failsafe(config.failsafe_config())
@@ -84,10 +85,6 @@ class BridgeCore:
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
             maxlen=32
         )
-        self.operations = Operations(log)
-        self.command_busy = False  # one COMMAND_LONG exchange at a time
-        self.now, self.stamp = now, 0.0
-        self.out = Outbox()
         self.autopilot = ""
         self.target_system = config.target_system
         self.target_component = config.target_component
@@ -115,40 +112,13 @@ class BridgeCore:
 
     # ------------------------------------------------------------------ plumbing
 
-    def _at(self, now: float, stamp: float) -> None:
-        self.now, self.stamp = now, stamp
-
-    def take(self) -> Outbox:
-        """The effects queued since the last call (the node executes them)."""
-        out, self.out = self.out, Outbox()
-        return out
-
     def send(self, name: str, *fields: Any) -> None:
         """Queue MAVLink message ``name`` (e.g. ``command_long``) with its field values."""
         self.out.sends.append((name, fields))
 
-    def publish(self, topic: Topic, msg: Any) -> None:
-        """Queue a sample for ``topic``."""
-        self.out.samples.append((topic, msg))
-
     def target(self) -> tuple[int, int]:
         """The autopilot's (system, component) to address (system 1 before it is heard)."""
         return self.target_system or 1, self.target_component
-
-    def start(self, steps: Steps, now: float, stamp: float, *, background=False) -> Operation:
-        """Begin an operation (its first step runs now; a bad request fails it at once);
-        ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
-        self._at(now, stamp)
-        return self.operations.start(steps, background=background)
-
-    def advance(self, now: float, stamp: float) -> None:
-        """Move every pending operation on to ``now``."""
-        self._at(now, stamp)
-        self.operations.advance()
-
-    def cancel(self, op: Operation) -> None:
-        """Abandon ``op`` (the node is stopping): its command slot is freed."""
-        self.operations.cancel(op)
 
     def require_connected(self) -> str:
         """The autopilot kind; ServiceError when no heartbeat is heard."""

@@ -30,7 +30,8 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Operation, Operations, Steps
+from dronewrapper.runtime.core_driver import PureCore
+from dronewrapper.runtime.operation import Operation
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
@@ -66,10 +67,11 @@ class Outbox:
     samples: list[tuple[Topic, Any]] = field(default_factory=list)
 
 
-class TelloCore:
+class TelloCore(PureCore):
     """The bridge's logic and state (see module docstring)."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
+        super().__init__(now, Outbox, log)
         self.config = config
         self.scale = config.scale
         self.failsafe = Failsafe(config.failsafe_config())
@@ -81,10 +83,6 @@ class TelloCore:
             tof_ground_cm=config.tof_ground_cm,
         )
         self.matcher = ReplyMatcher()
-        self.operations = Operations(log)
-        self.command_busy = False  # one command exchange at a time (replies carry no ids)
-        self.now, self.stamp = now, 0.0
-        self.out = Outbox()
         self.connected = False
         self.sdk_mode = False
         self.streaming = False
@@ -107,37 +105,10 @@ class TelloCore:
 
     # ------------------------------------------------------------------ plumbing
 
-    def _at(self, now: float, stamp: float) -> None:
-        self.now, self.stamp = now, stamp
-
-    def take(self) -> Outbox:
-        """The effects queued since the last call (the node executes them)."""
-        out, self.out = self.out, Outbox()
-        return out
-
     def send(self, text: str) -> None:
         """Queue an SDK command for the Tello (any command resets its 15 s timer)."""
         self.out.sends.append(text)
         self.failsafe.on_sent(self.now)
-
-    def publish(self, topic: Topic, msg: Any) -> None:
-        """Queue a sample for ``topic``."""
-        self.out.samples.append((topic, msg))
-
-    def start(self, steps: Steps, now: float, stamp: float, *, background=False) -> Operation:
-        """Begin an operation (its first step runs now; a bad request fails it at once);
-        ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
-        self._at(now, stamp)
-        return self.operations.start(steps, background=background)
-
-    def advance(self, now: float, stamp: float) -> None:
-        """Move every pending operation on to ``now``."""
-        self._at(now, stamp)
-        self.operations.advance()
-
-    def cancel(self, op: Operation) -> None:
-        """Abandon ``op`` (the node is stopping): its command slot is freed."""
-        self.operations.cancel(op)
 
     def require_connected(self) -> None:
         """ServiceError when no state string is arriving."""

@@ -8,34 +8,17 @@ import threading
 
 import pytest
 
-from dronewrapper.runtime.core_driver import CoreDriver
+from dronewrapper.runtime.core_driver import CoreDriver, PureCore
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.runtime.operation import Operations, Steps
+from dronewrapper.runtime.operation import Steps
 
 
-class EchoCore:
-    """Answers an operation when told; queues every input in its outbox."""
+class EchoCore(PureCore):
+    """Answers an operation when told; queues every input in its outbox (a list)."""
 
     def __init__(self) -> None:
-        self.operations = Operations(logging.getLogger("test"))
-        self.out: list = []
+        super().__init__(0.0, list, logging.getLogger("test"))
         self.answer: str | None = None
-        self.now = 0.0
-
-    def take(self) -> list:
-        out, self.out = self.out, []
-        return out
-
-    def start(self, steps: Steps, now: float, stamp: float):
-        self.now = now
-        return self.operations.start(steps)
-
-    def advance(self, now: float, stamp: float) -> None:
-        self.now = now
-        self.operations.advance()
-
-    def cancel(self, op) -> None:
-        self.operations.cancel(op)
 
     def on_input(self, text: str, now: float, stamp: float) -> str:
         self.out.append((text, now, stamp))

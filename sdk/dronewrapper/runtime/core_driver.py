@@ -1,4 +1,5 @@
-"""The thin node's half of a pure bridge core: feed it under one lock, execute its effects.
+"""What a pure bridge core shares (:class:`PureCore`), and the thin node's side of it
+(:class:`CoreDriver`: feed the core under one lock, execute its effects).
 
 A bridge's core (bridge_mavlink's ``BridgeCore``, bridge_tello's ``TelloCore``) takes inputs
 with the time as arguments and queues what to send and publish in an outbox. :class:`CoreDriver`
@@ -10,26 +11,63 @@ waiting on the lock's condition until the operation ends, asks to be resumed, or
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, Generic, Protocol, TypeVar
+from typing import Any, Generic, TypeVar
 
+from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.operation import Operation, Operations, Steps
 
 MAX_WAIT_S = 0.05
 """A waiting service call looks at its operation at least this often (s)."""
 
 
-class PureCore(Protocol):
-    """What a bridge core offers its driver (time passed in: monotonic s, Unix s)."""
+class PureCore:
+    """What every bridge's pure core shares: the time of the input being handled (``now``,
+    monotonic s; ``stamp``, Unix s), the outbox of effects the node executes after each call,
+    and the running operations (service calls that wait on the aircraft).
 
-    operations: Operations
+    Args:
+        now: where the core's time starts (monotonic s).
+        outbox: makes an empty outbox (the core's own ``Outbox`` dataclass).
+        log: where a background operation's failure is logged.
+    """
 
-    def take(self) -> Any: ...  # the effects queued since the last call
-    def start(self, steps: Steps, now: float, stamp: float) -> Operation: ...
-    def advance(self, now: float, stamp: float) -> None: ...
-    def cancel(self, op: Operation) -> None: ...
+    def __init__(self, now: float, outbox: Callable[[], Any], log: logging.Logger) -> None:
+        self.now, self.stamp = now, 0.0
+        self._outbox = outbox
+        self.out = outbox()
+        self.operations = Operations(log)
+        self.command_busy = False  # one command exchange with the aircraft at a time
+
+    def _at(self, now: float, stamp: float) -> None:
+        self.now, self.stamp = now, stamp
+
+    def take(self) -> Any:
+        """The effects queued since the last call (the node executes them)."""
+        out, self.out = self.out, self._outbox()
+        return out
+
+    def publish(self, topic: Topic, msg: Any) -> None:
+        """Queue a sample for ``topic``."""
+        self.out.samples.append((topic, msg))
+
+    def start(self, steps: Steps, now: float, stamp: float, *, background=False) -> Operation:
+        """Begin an operation (its first step runs now; a bad request fails it at once);
+        ``background``: the bridge's own, nobody waits for it (its failure is logged)."""
+        self._at(now, stamp)
+        return self.operations.start(steps, background=background)
+
+    def advance(self, now: float, stamp: float) -> None:
+        """Move every pending operation on to ``now``."""
+        self._at(now, stamp)
+        self.operations.advance()
+
+    def cancel(self, op: Operation) -> None:
+        """Abandon ``op`` (the node is stopping): its cleanup runs (a command slot is freed)."""
+        self.operations.cancel(op)
 
 
 C = TypeVar("C", bound=PureCore)
