@@ -71,7 +71,8 @@ class BridgeCore(PureCore):
     """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
-        super().__init__(now, Outbox, log)
+        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
+        super().__init__(now, Outbox, log, lease_ttl_s=lease_ttl_s)
         self.config = config
         self.limits = config.limits
         self.failsafe = Failsafe(config.failsafe_config())
@@ -89,7 +90,6 @@ class BridgeCore(PureCore):
         self.target_system = config.target_system
         self.target_component = config.target_component
         self.connected = False
-        self.commander = ""  # the command lease's holder, shown on State
         self.heartbeat_state: State | None = None
         self.ext = ExtendedState()
         self.battery: BatteryState | None = None
@@ -212,13 +212,6 @@ class BridgeCore(PureCore):
         self._last_state_pub = self.now
         self.publish(registry.STATE, state)
 
-    def set_commander(self, commander: str, now: float, stamp: float) -> None:
-        """The command lease's holder (``""``: nobody); State shows it."""
-        self._at(now, stamp)
-        if commander != self.commander:
-            self.commander = commander
-            self.publish_state(force=True)
-
     def mode_entered(self, mode: str) -> None:
         """The autopilot accepted a command that puts it in ``mode``: the failsafe and State
         know it now (the next HEARTBEAT, up to 1 s later, confirms or corrects it)."""
@@ -250,6 +243,7 @@ class BridgeCore(PureCore):
         if now - self._last_send < 0.5 / self.config.stream_rate_hz:
             tick.send = None  # just forwarded by the subscriber
         self._act(tick, send=self.connected)
+        self.show_commander()
         self._periodic()
         self.advance(now, stamp)
 
@@ -295,10 +289,12 @@ class BridgeCore(PureCore):
 
     # ------------------------------------------------------------------ setpoints
 
-    def on_setpoint(self, target: PositionTarget, now: float, stamp: float) -> None:
-        """A PositionTarget from the commander (already admitted by the command lease):
-        validate, remember, forward at once."""
+    def on_setpoint(self, target: PositionTarget, commander: str, now: float, stamp: float) -> None:
+        """A PositionTarget from ``commander``: refused unless the lease admits it, then
+        validated, remembered and forwarded at once."""
         self._at(now, stamp)
+        if not self.admit_setpoint(commander):
+            return
         try:
             kind = validate(target, self.limits)
         except SetpointError as exc:

@@ -1,11 +1,12 @@
 """The bridge process: MAVLink autopilot <-> MAVROS-equivalent Zenoh keys (see README.md).
 
-Only I/O here: the link, the Zenoh declarations, the threads and the clock. Everything the
-bridge decides is in :class:`~dronewrapper_bridge_mavlink.core.BridgeCore` (pure, time as an
-argument); the node feeds it under one lock and executes what it returns. Threads: a receive
-loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe stream, our
-heartbeat, periodic samples), Zenoh callbacks (setpoints forwarded at once) and the Node's
-service workers, which start an operation in the core and wait until it is done.
+Only I/O here: the link, the ground-station forwarding, the threads. Everything the bridge
+decides (the commander lease included) is in :class:`~dronewrapper_bridge_mavlink.core.BridgeCore`
+(pure, time as an argument); the wiring every bridge shares (driver, publishers, services,
+setpoints, tick loop) is :class:`~dronewrapper.runtime.bridge_node.BridgeNode`. Threads: a
+receive loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
+stream, our heartbeat, periodic samples), Zenoh callbacks (setpoints forwarded at once) and the
+Node's service workers, which start an operation in the core and wait until it is done.
 """
 
 from __future__ import annotations
@@ -17,10 +18,9 @@ import time
 from typing import Any
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import PositionTarget, State
-from dronewrapper.runtime import Node, Ratekeeper
-from dronewrapper.runtime.core_driver import CoreDriver
-from dronewrapper.security.guard import CommandGuard
+from dronewrapper.msgs.mavros import State
+from dronewrapper.runtime import Node
+from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink import parameters
 from dronewrapper_bridge_mavlink.config import Config
@@ -41,15 +41,23 @@ PUBLISHED = (
     registry.BATTERY,
     registry.STATUSTEXT,
 )
+SERVICES = {
+    registry.ARMING: ops.arming,
+    registry.TAKEOFF: ops.takeoff,
+    registry.LAND: ops.land,
+    registry.SET_MODE: ops.set_mode,
+    registry.PARAM_GET: parameters.param_get,
+    registry.PARAM_SET: parameters.param_set,
+}
 
 
-class Bridge:
+class Bridge(BridgeNode[BridgeCore]):
     """The core wired to one Node and one MAVLink link."""
 
     def __init__(self, node: Node, config: Config, link: MavLink | None = None) -> None:
-        self.node = node
+        publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
+        super().__init__(node, BridgeCore(config, time.monotonic()), publishers, log)
         self.config = config
-        self.core = BridgeCore(config, time.monotonic())
         self.gcs: GcsForwarder | None = None  # ground-station forwarding, made at start()
         self.link = link or MavLink(
             config.connection,
@@ -58,13 +66,6 @@ class Bridge:
             source_component=config.source_component,
             signing_key_file=config.signing_key_file,
         )
-        self.guard = CommandGuard(
-            enabled=config.command_lease,
-            ttl_s=config.command_lease_ttl_s,
-            on_change=self._lease_changed,
-        )
-        self.driver = CoreDriver(self.core, self._execute, node.stop_event)
-        self._publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
 
     # ---- what the core knows, for tests and tools
 
@@ -103,18 +104,13 @@ class Bridge:
 
     # ---- feeding the core
 
-    def _execute(self, out: Outbox) -> None:
+    def send(self, out: Outbox) -> None:
         for peer in out.peers:
             self.link.peer = peer
         for name, fields in out.sends:
             self.link.send(name, *fields)
-        for topic, msg in out.samples:
-            self._publishers[topic].put(msg)
         for error in out.errors:
             self.node.callback_errors[error] += 1
-
-    def _lease_changed(self) -> None:
-        self.driver.feed(self.core.set_commander, self.guard.holder())
 
     def handle_mavlink(self, msg: Any, source: Any = None) -> None:
         """One received MAVLink message (``source``: the UDP address it came from, or None)."""
@@ -125,35 +121,20 @@ class Bridge:
         tests/integration/test_gcs_forwarding.py uses)."""
         self.driver.feed(self.core.on_command_ack, msg)
 
-    def on_setpoint(self, target: PositionTarget) -> None:
-        """A PositionTarget from a commander: admitted by the lease, then the core's."""
-        if self.guard.admit_setpoint():
-            self.driver.feed(self.core.on_setpoint, target)
-
-    def _serve(self, service: Any, steps: Any, guarded: str = "") -> None:
-        def handle(request: Any) -> Any:
-            if guarded:
-                self.guard.admit_command(guarded)
-            return self.driver.call(steps(self.core, request))
-
-        self.node.serve(service, handle)
-
     # ---- lifecycle
 
     def start(self) -> list[threading.Thread]:
         """Open the link, subscribe, serve, and start the loops (returns the threads)."""
         self._open_link()
-        self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
-        self._serve(registry.ARMING, ops.arming, "arming")
-        self._serve(registry.TAKEOFF, ops.takeoff, "takeoff")
-        self._serve(registry.LAND, ops.land, "land")
-        self._serve(registry.SET_MODE, ops.set_mode, "set_mode")
-        self._serve(registry.PARAM_GET, parameters.param_get)
-        self._serve(registry.PARAM_SET, parameters.param_set, "param_set")
-        self.guard.serve(self.node)
+        self.serve(SERVICES)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
-            threading.Thread(target=self._stream_loop, name="stream", daemon=True),
+            threading.Thread(
+                target=self.tick_loop,
+                args=(self.config.stream_rate_hz, "stream"),
+                name="stream",
+                daemon=True,
+            ),
         ]
         self.gcs = self._make_gcs_forwarder()
         if self.gcs is not None:
@@ -164,10 +145,7 @@ class Bridge:
             )
         for thread in threads:
             thread.start()
-        with self.driver.cond:
-            self.core.publish_state(force=True)
-            out = self.core.take()
-        self._execute(out)
+        self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
         return threads
 
     def _make_gcs_forwarder(self) -> GcsForwarder | None:
@@ -228,17 +206,6 @@ class Bridge:
             except Exception:
                 self.node.callback_errors["mavlink"] += 1
                 log.exception("error handling %s", msg.get_type())
-
-    def _stream_loop(self) -> None:
-        rate = Ratekeeper(self.config.stream_rate_hz, stop=self.node.stop_event)
-        while rate.sleep():
-            try:
-                with self.driver.cond:
-                    self.core.commander = self.guard.holder()  # a lease can time out silently
-                self.driver.feed(self.core.tick)
-            except Exception:
-                self.node.callback_errors["stream"] += 1
-                log.exception("stream loop error")
 
 
 def run(node: Node, config: Config) -> int:

@@ -71,7 +71,8 @@ class TelloCore(PureCore):
     """The bridge's logic and state (see module docstring)."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
-        super().__init__(now, Outbox, log)
+        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
+        super().__init__(now, Outbox, log, lease_ttl_s=lease_ttl_s)
         self.config = config
         self.scale = config.scale
         self.failsafe = Failsafe(config.failsafe_config())
@@ -86,7 +87,6 @@ class TelloCore(PureCore):
         self.connected = False
         self.sdk_mode = False
         self.streaming = False
-        self.commander = ""  # the command lease's holder, shown on State
         self.malformed_states = 0
         self.states_received = 0
         self.rc_sent = 0
@@ -191,13 +191,6 @@ class TelloCore(PureCore):
             self._last_state_key, self._last_state_pub = key, self.now
             self.publish(registry.STATE, msg)
 
-    def set_commander(self, commander: str, now: float, stamp: float) -> None:
-        """The command lease's holder (``""``: nobody); State shows it."""
-        self._at(now, stamp)
-        if commander != self.commander:
-            self.commander = commander
-            self.publish_state(force=True)
-
     def text(self, severity: int, text: str) -> None:
         """Publish a StatusText of the bridge's own."""
         header = Header(stamp=self.stamp, frame_id="bridge")
@@ -205,10 +198,12 @@ class TelloCore(PureCore):
 
     # ------------------------------------------------------------------ setpoints and control
 
-    def on_setpoint(self, target: PositionTarget, now: float, stamp: float) -> None:
-        """A PositionTarget from the commander (already admitted by the command lease):
-        validated, then flown by the tick."""
+    def on_setpoint(self, target: PositionTarget, commander: str, now: float, stamp: float) -> None:
+        """A PositionTarget from ``commander``: refused unless the lease admits it, then
+        validated and flown by the tick."""
         self._at(now, stamp)
+        if not self.admit_setpoint(commander):
+            return
         try:
             kind = validate(target, self.scale)
         except SetpointError as exc:
@@ -229,6 +224,7 @@ class TelloCore(PureCore):
             log.warning("Tello link lost: no state string for %.1f s", now - self._last_state_at)
         tick = self.failsafe.tick(now)
         self._report(tick)
+        self.show_commander()
         sticks = self._sticks(tick)
         landed = self.telemetry.landed.state
         maneuvering = landed in (LANDED_STATE_TAKEOFF, LANDED_STATE_LANDING)

@@ -1,8 +1,9 @@
 """The bridge process: a Tello (SDK 2.0 over UDP) <-> MAVROS-equivalent Zenoh keys (README.md).
 
-Only I/O here: the three sockets, the Zenoh declarations, the threads and the clock. Everything
-the bridge decides is in :class:`~dronewrapper_bridge_tello.core.TelloCore` (pure, time as an
-argument); the node feeds it under one lock and executes what it returns. Threads: replies
+Only I/O here: the three sockets, the video, the threads. Everything the bridge decides (the
+commander lease included) is in :class:`~dronewrapper_bridge_tello.core.TelloCore` (pure, time
+as an argument); the wiring every bridge shares (driver, publishers, services, setpoints, tick
+loop) is :class:`~dronewrapper.runtime.bridge_node.BridgeNode`. Threads: replies
 (command socket -> core), state (state strings -> core), control at ``rc_rate_hz`` (the core's
 tick: failsafe, ``rc`` sticks, keep-alive, link supervision, periodic State), video (datagrams
 -> decoder -> newest frame) and its publisher, plus the Node's service workers, which start an
@@ -19,10 +20,9 @@ from typing import Any
 
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import PositionTarget, State
-from dronewrapper.runtime import Node, Ratekeeper
-from dronewrapper.runtime.core_driver import CoreDriver
-from dronewrapper.security.guard import CommandGuard
+from dronewrapper.msgs.mavros import State
+from dronewrapper.runtime import Node
+from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
@@ -43,21 +43,24 @@ PUBLISHED = (
     registry.BATTERY,
     registry.STATUSTEXT,
 )
+SERVICES = {
+    registry.ARMING: ops.arming,
+    registry.TAKEOFF: ops.takeoff,
+    registry.LAND: ops.land,
+    registry.SET_MODE: ops.set_mode,
+    registry.PARAM_GET: ops.param_get,
+    registry.PARAM_SET: ops.param_set,
+}
 
 
-class Bridge:
+class Bridge(BridgeNode[TelloCore]):
     """The core wired to one Node and one Tello (its three sockets open at construction:
     ``OSError`` when an address is taken)."""
 
     def __init__(self, node: Node, config: Config) -> None:
-        self.node = node
+        publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
+        super().__init__(node, TelloCore(config, time.monotonic()), publishers, log)
         self.config = config
-        self.core = TelloCore(config, time.monotonic())
-        self.guard = CommandGuard(
-            enabled=config.command_lease,
-            ttl_s=config.command_lease_ttl_s,
-            on_change=self._lease_changed,
-        )
         self.link = TelloLink(
             TelloAddress(
                 tello_address=config.tello_address,
@@ -69,8 +72,6 @@ class Bridge:
             ),
             video=config.video,
         )
-        self.driver = CoreDriver(self.core, self._execute, node.stop_event)
-        self._publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
         self.pub_image = node.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         self.pub_jpeg = node.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
         self.assembler = FrameAssembler(chunk=config.video_chunk)
@@ -107,47 +108,22 @@ class Bridge:
 
     # ---- feeding the core
 
-    def _execute(self, out: Outbox) -> None:
+    def send(self, out: Outbox) -> None:
         for text in out.sends:
             try:
                 self.link.send(text)
             except OSError as exc:
                 log.warning("cannot send %r: %s", text, exc)
-        for topic, msg in out.samples:
-            self._publishers[topic].put(msg)
-
-    def _lease_changed(self) -> None:
-        self.driver.feed(self.core.set_commander, self.guard.holder())
-
-    def on_setpoint(self, target: PositionTarget) -> None:
-        """A PositionTarget from a commander: admitted by the lease, then the core's."""
-        if self.guard.admit_setpoint():
-            self.driver.feed(self.core.on_setpoint, target)
-
-    def _serve(self, service: Any, steps: Any, guarded: str = "") -> None:
-        def handle(request: Any) -> Any:
-            if guarded:
-                self.guard.admit_command(guarded)
-            return self.driver.call(steps(self.core, request))
-
-        self.node.serve(service, handle)
 
     # ---- lifecycle
 
     def start(self) -> list[threading.Thread]:
         """Subscribe, serve, and start the loops (returns the threads)."""
-        self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
-        self._serve(registry.ARMING, ops.arming, "arming")
-        self._serve(registry.TAKEOFF, ops.takeoff, "takeoff")
-        self._serve(registry.LAND, ops.land, "land")
-        self._serve(registry.SET_MODE, ops.set_mode, "set_mode")
-        self._serve(registry.PARAM_GET, ops.param_get)
-        self._serve(registry.PARAM_SET, ops.param_set, "param_set")
-        self.guard.serve(self.node)
+        self.serve(SERVICES)
         loops = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),
             (self._receive_loop, (self.link.state, self._on_state, "state"), "tello-state"),
-            (self._control_loop, (), "tello-control"),
+            (self.tick_loop, (self.config.rc_rate_hz, "control"), "tello-control"),
         ]
         if self.config.video:
             loops += [(self._video_loop, (), "tello-video"), (self._image_loop, (), "tello-images")]
@@ -180,17 +156,6 @@ class Bridge:
             except Exception:
                 self.node.callback_errors[what] += 1
                 log.exception("error handling a %s datagram", what)
-
-    def _control_loop(self) -> None:
-        rate = Ratekeeper(self.config.rc_rate_hz, stop=self.node.stop_event)
-        while rate.sleep():
-            try:
-                with self.driver.cond:
-                    self.core.commander = self.guard.holder()  # a lease can time out silently
-                self.driver.feed(self.core.tick)
-            except Exception:
-                self.node.callback_errors["control"] += 1
-                log.exception("control loop error")
 
     # ---- video
 

@@ -20,6 +20,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper.runtime.bridge_node import COMMANDS
 from dronewrapper.runtime.operation import Operation
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
@@ -36,6 +37,7 @@ REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
 T0 = 1000.0  # monotonic s at the rig's start
 EPOCH = 1.7e9  # wall-clock s added to the monotonic time for stamps
 ADDRESS = ("127.0.0.1", 14580)
+USER = "user"  # the commander of the rig's setpoints and requests
 
 
 def int_bits(value: int) -> float:
@@ -135,15 +137,21 @@ class CoreRig:
         for topic, msg in out.samples:
             self.samples.append((self.now, topic, msg))
 
-    def setpoint(self, target: PositionTarget | None = None) -> None:
-        self.core.on_setpoint(target or velocity(), self.now, EPOCH + self.now)
+    def setpoint(self, target: PositionTarget | None = None, commander: str = USER) -> None:
+        self.core.on_setpoint(target or velocity(), commander, self.now, EPOCH + self.now)
         self._collect()
 
-    def call(self, steps: Any, request: Any) -> Operation:
-        """Start a service operation (``operations.takeoff`` ...) now."""
-        op = self.core.start(steps(self.core, request), self.now, EPOCH + self.now)
+    def call(self, steps: Any, request: Any, commander: str = USER) -> Operation:
+        """A service request (``operations.takeoff`` ...) from ``commander`` now, as the node
+        hands it to the core (a command service's request goes through the lease)."""
+        what = steps.__name__ if steps.__name__ in COMMANDS.values() else ""
+        op = self.core.request(steps(self.core, request), commander, what, self.now, self.stamp)
         self._collect()
         return op
+
+    @property
+    def stamp(self) -> float:
+        return EPOCH + self.now
 
     def run(self, seconds: float, *, stream: bool = False, heartbeat_hz: float = 5.0) -> None:
         """Let ``seconds`` pass in stream ticks (30 Hz), with autopilot heartbeats and, with

@@ -16,6 +16,7 @@ from tello_peer import STATE
 
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper.runtime.bridge_node import COMMANDS
 from dronewrapper.runtime.operation import Operation
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import TelloCore
@@ -23,6 +24,7 @@ from dronewrapper_bridge_tello.core import TelloCore
 T0 = 1000.0  # monotonic s at the rig's start
 EPOCH = 1.7e9  # wall-clock s added to the monotonic time for stamps
 DT = 0.005  # s per rig step
+USER = "user"  # the commander of the rig's setpoints and requests
 
 
 def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float = 0.0):
@@ -123,31 +125,41 @@ class TelloRig:
         self.run(5.0, until=lambda: self.core.connected and self.core.sdk_mode)
         assert self.core.connected and self.core.sdk_mode
 
-    def start(self, steps: Callable[[TelloCore, Any], Any], request: Any = None) -> Operation:
-        """Start a service operation now (what a service call does)."""
-        args = (self.core,) if request is None else (self.core, request)
-        op = self.core.start(steps(*args), self.now, self.now + EPOCH)
+    def start(
+        self, steps: Callable[..., Any], request: Any = None, commander: str = USER
+    ) -> Operation:
+        """Start a service operation now, as the node hands a request from ``commander`` to the
+        core (a command service's request goes through the lease; no request: the bridge's
+        own operation)."""
+        if request is None:
+            op = self.core.start(steps(self.core), self.now, self.now + EPOCH)
+        else:
+            what = steps.__name__ if steps.__name__ in COMMANDS.values() else ""
+            steps = steps(self.core, request)
+            op = self.core.request(steps, commander, what, self.now, self.now + EPOCH)
         self.collect()
         return op
 
-    def call(self, steps: Callable[[TelloCore, Any], Any], request: Any = None, limit=60.0):
+    def call(self, steps: Callable[..., Any], request: Any = None, limit=60.0, commander=USER):
         """A service call: start the operation and run until it is done; its reply."""
-        op = self.start(steps, request)
+        op = self.start(steps, request, commander)
         self.run(limit, until=lambda: op.done)
         assert op.done, f"{op.name} still running after {limit} s"
         return op.result()
 
-    def setpoint(self, target: PositionTarget) -> None:
-        self.core.on_setpoint(target, self.now, self.now + EPOCH)
+    def setpoint(self, target: PositionTarget, commander: str = USER) -> None:
+        self.core.on_setpoint(target, commander, self.now, self.now + EPOCH)
         self.collect()
 
-    def stream(self, target: PositionTarget, seconds: float, hz: float = 20.0) -> None:
+    def stream(
+        self, target: PositionTarget, seconds: float, hz: float = 20.0, commander: str = USER
+    ) -> None:
         """Publish ``target`` at ``hz`` for ``seconds``."""
         end, next_at = self.now + seconds, self.now
         while self.now < end:
             if self.now >= next_at:
                 next_at += 1.0 / hz
-                self.setpoint(target)
+                self.setpoint(target, commander)
             self.step()
 
     # ---- what the Tello received

@@ -21,6 +21,7 @@ from bridge_core_rig import (
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     MASK_POSITION,
     CommandBool,
@@ -157,11 +158,44 @@ def test_commander_lost_lands_once_and_never_re_requests_offboard():
     assert states.index("hold") < states.index("land")
 
 
-def test_the_command_lease_holder_is_shown_on_state():
-    rig = CoreRig().connect()
-    rig.core.set_commander("app-1", rig.now, 0.0)
+def test_the_command_lease_refuses_a_non_holder_until_it_takes_over():
+    rig = CoreRig(command_lease=True).connect(mode=OFFBOARD, armed=True, flying=True)
+    rig.setpoint(velocity(1.0), commander="alice")
+    assert rig.state().commander == "alice"
+    since, streamed = rig.now, len(rig.setpoints())
+    rig.setpoint(velocity(-1.0), commander="bob")
+    assert len(rig.setpoints()) == streamed  # not forwarded
+    assert rig.core.failsafe.target.velocity.x == 1.0
+    refused = {
+        ops.arming: CommandBool(value=True),
+        ops.takeoff: CommandTOL.takeoff(2.0),
+        ops.land: CommandTOL.land(),
+        ops.set_mode: SetMode(custom_mode="AUTO.LAND"),
+    }
+    for steps, request in refused.items():
+        op = rig.call(steps, request, commander="bob")
+        with pytest.raises(ServiceError, match="'alice' holds the command lease") as error:
+            op.result()
+        assert error.value.code == "lease", steps.__name__
+    assert rig.sent_since(since, "COMMAND_LONG") == []
+    assert rig.core.lease.refused_commands == 4 and rig.core.lease.refused_setpoints == 1
+    reply = rig.core.on_lease_request(LeaseRequest(action="take_over"), "bob", rig.now, rig.stamp)
     rig._collect()
-    assert rig.state().commander == "app-1"
+    assert (reply.granted, reply.previous) == (True, "alice")
+    assert rig.state().commander == "bob"
+    rig.setpoint(velocity(-1.0), commander="bob")
+    assert len(rig.setpoints()) == streamed + 1
+    rig.call(ops.arming, CommandBool(value=False), commander="bob")
+    assert len(rig.commands(mavlink.MAV_CMD_COMPONENT_ARM_DISARM)) == 1
+    rig.setpoint(velocity(1.0), commander="alice")  # alice must take it over in turn
+    assert len(rig.setpoints()) == streamed + 1
+
+
+def test_without_the_command_lease_every_commander_is_obeyed():
+    rig = CoreRig().connect(mode=OFFBOARD, armed=True, flying=True)
+    rig.setpoint(velocity(1.0), commander="alice")
+    rig.setpoint(velocity(-1.0), commander="bob")
+    assert len(rig.setpoints()) == 2 and rig.state().commander == ""
 
 
 def test_ardupilot_guided_while_flying_is_not_pinned_to_its_pose():

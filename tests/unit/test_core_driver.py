@@ -1,5 +1,6 @@
-"""The node side of a pure core: inputs fed under one lock with the time, effects executed
-after it, and a service call waiting on its operation until it ends or the node stops."""
+"""What every bridge core shares: inputs fed under one lock with the time, effects executed
+after it, a service call waiting on its operation until it ends or the node stops, and the
+commander lease applied in the core (holder only, take-over, lapse, off)."""
 
 from __future__ import annotations
 
@@ -8,17 +9,27 @@ import threading
 
 import pytest
 
+from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.runtime.core_driver import CoreDriver, PureCore
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.operation import Steps
 
 
 class EchoCore(PureCore):
-    """Answers an operation when told; queues every input in its outbox (a list)."""
+    """Answers an operation when told; queues every input in its outbox (a list), and the
+    commander shown on each State it publishes."""
 
-    def __init__(self) -> None:
-        super().__init__(0.0, list, logging.getLogger("test"))
+    def __init__(self, lease_ttl_s: float | None = None) -> None:
+        super().__init__(0.0, list, logging.getLogger("test"), lease_ttl_s=lease_ttl_s)
         self.answer: str | None = None
+        self.states: list[str] = []
+
+    def publish_state(self, *, force: bool = False) -> None:
+        self.states.append(self.commander)
+
+    def on_setpoint(self, commander: str, now: float, stamp: float) -> bool:
+        self._at(now, stamp)
+        return self.admit_setpoint(commander)
 
     def on_input(self, text: str, now: float, stamp: float) -> str:
         self.out.append((text, now, stamp))
@@ -95,3 +106,54 @@ def test_a_bad_request_fails_at_once_and_a_background_failure_is_logged(caplog):
     with caplog.at_level(logging.ERROR, logger="test"):
         core.operations.start(refuse(), background=True)
     assert "refuse failed: altitude must be > 0" in caplog.text
+
+
+def command(core: EchoCore, commander: str, now: float, what: str = "arming"):
+    """A command request from ``commander`` at ``now``: its operation (done at once)."""
+
+    def steps() -> Steps:
+        return "ran"
+        yield 0.0
+
+    return core.request(steps(), commander, what, now, now)
+
+
+def test_the_lease_off_obeys_everyone():
+    core = EchoCore()
+    assert core.on_setpoint("alice", 1.0, 1.0) and core.on_setpoint("bob", 1.0, 1.0)
+    assert command(core, "bob", 2.0).result() == "ran"
+    assert core.on_lease_request(LeaseRequest(action="take"), "bob", 3.0, 3.0).granted
+    assert core.commander == "" and core.states == []
+
+
+def test_the_lease_obeys_its_holder_until_taken_over_or_lapsed():
+    core = EchoCore(lease_ttl_s=10.0)
+    assert core.on_setpoint("alice", 100.0, 0.0)
+    assert core.states == ["alice"]  # State shows the new holder at once
+    assert not core.on_setpoint("carol", 101.0, 0.0)
+    refused = command(core, "carol", 101.0)
+    with pytest.raises(ServiceError, match="'alice' holds the command lease") as error:
+        refused.result()
+    assert error.value.code == "lease" and refused.name == "_refused"
+    assert command(core, "carol", 101.0, what="").result() == "ran"  # a read is never refused
+    assert not core.on_lease_request(LeaseRequest(action="take"), "carol", 102.0, 0.0).granted
+    reply = core.on_lease_request(LeaseRequest(action="take_over"), "carol", 102.0, 0.0)
+    assert (reply.granted, reply.holder, reply.previous) == (True, "carol", "alice")
+    assert core.states == ["alice", "carol"]
+    assert (core.lease.refused_setpoints, core.lease.refused_commands) == (1, 1)
+    assert not core.on_setpoint("alice", 103.0, 0.0)
+    core._at(112.0, 0.0)  # carol silent for the ttl: the lease lapses
+    core.show_commander()
+    assert core.states[-1] == ""
+    assert core.on_setpoint("alice", 112.0, 0.0) and core.commander == "alice"
+    with pytest.raises(ValueError, match="action"):
+        core.on_lease_request(LeaseRequest(action="steal"), "alice", 113.0, 0.0)
+    assert core.on_lease_request(LeaseRequest(action="release"), "alice", 113.0, 0.0).granted
+    assert core.commander == ""
+
+
+def test_commands_without_a_name_are_one_anonymous_commander():
+    core = EchoCore(lease_ttl_s=10.0)
+    assert core.on_setpoint("", 1.0, 0.0)  # e.g. the on-board controller (no attachment)
+    assert core.commander == "anonymous"
+    assert not core.on_setpoint("alice", 2.0, 0.0)

@@ -8,7 +8,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.router import InsecureEndpoint, check_endpoints, is_loopback, router_options
 from dronewrapper.runtime import caller
 from dronewrapper.security.acl import access_control, acl_rules
-from dronewrapper.security.lease import CommandLease
+from dronewrapper.security.lease import CommanderLease
 
 
 @pytest.mark.parametrize(
@@ -76,7 +76,7 @@ def test_policy_is_deny_by_default_and_binds_names():
 
 
 def test_lease_one_commander_at_a_time():
-    lease = CommandLease(ttl_s=5.0)
+    lease = CommanderLease(ttl_s=5.0)
     assert lease.admit("alice", 0.0).event == "acquired"
     assert lease.admit("alice", 1.0).accepted
     refused = lease.admit("carol", 2.0)
@@ -94,7 +94,7 @@ def test_lease_one_commander_at_a_time():
     assert lease.release("alice", 9.3).event == "released"
     assert lease.current(9.4) == ""
     with pytest.raises(ValueError):
-        CommandLease(ttl_s=0)
+        CommanderLease(ttl_s=0)
 
 
 def test_caller_attachment_round_trip():

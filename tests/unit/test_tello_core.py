@@ -12,6 +12,7 @@ import pytest
 from tello_core_rig import TelloRig, velocity
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -274,11 +275,42 @@ def test_land_on_the_ground_sends_nothing():
     assert rig.commands() == ["command"]
 
 
-def test_state_shows_the_commander_and_malformed_states_are_counted():
-    rig = TelloRig()
-    rig.connect()
-    rig.core.set_commander("alice", rig.now, rig.now)
+def test_the_command_lease_refuses_a_non_holder_until_it_takes_over():
+    rig = flying_rig(command_lease=True)  # the rig's commander took off: it holds the lease
+    holder = rig.core.commander
+    assert holder and rig.published(registry.STATE)[-1].commander == holder
+    since = rig.now
+    rig.setpoint(velocity(0.5), commander="bob")
+    rig.run(0.3)
+    assert {sticks for _, sticks in rig.rcs(since)} <= {STOP}  # bob's sticks never flown
+    for steps, request in (
+        (ops.arming, CommandBool(value=True)),
+        (ops.takeoff, CommandTOL.takeoff(2.0)),
+        (ops.land, CommandTOL.land()),
+        (ops.set_mode, SetMode(custom_mode="AUTO.LAND")),
+    ):
+        with pytest.raises(ServiceError, match="holds the command lease") as error:
+            rig.call(steps, request, commander="bob")
+        assert error.value.code == "lease", steps.__name__
+    assert rig.commands(since) == [] and rig.flying
+    reply = rig.core.on_lease_request(LeaseRequest(action="take_over"), "bob", rig.now, rig.now)
     rig.collect()
+    assert (reply.granted, reply.previous) == (True, holder)
+    assert rig.published(registry.STATE)[-1].commander == "bob"
+    taken = rig.now
+    rig.stream(velocity(0.5), 0.3, commander="bob")
+    assert any(sticks[1] > 0 for _, sticks in rig.rcs(taken))  # forward: pitch stick
+    rig.setpoint(velocity(-0.5), commander=holder)  # refused in turn
+    assert rig.core.failsafe.target.velocity.x == 0.5
+
+
+def test_state_shows_a_lapsed_lease_and_malformed_states_are_counted():
+    rig = TelloRig(command_lease=True, command_lease_ttl_s=2.0)
+    rig.connect()
+    rig.setpoint(velocity(), commander="alice")
+    rig.run(0.2)
     assert rig.published(registry.STATE)[-1].commander == "alice"
+    rig.run(2.0)  # alice silent for the ttl: State says nobody holds it
+    assert rig.published(registry.STATE)[-1].commander == ""
     rig.core.on_state(b"pitch:nan;", rig.now, rig.now)
     assert rig.core.malformed_states == 1 and rig.core.connected

@@ -2,11 +2,14 @@
 (:class:`CoreDriver`: feed the core under one lock, execute its effects).
 
 A bridge's core (bridge_mavlink's ``BridgeCore``, bridge_tello's ``TelloCore``) takes inputs
-with the time as arguments and queues what to send and publish in an outbox. :class:`CoreDriver`
-is the only place a node touches it: every input goes through :meth:`CoreDriver.feed` (the core
-called under the lock with the monotonic and wall-clock time, its outbox executed after the lock
-is released), and a service call runs its operation to the end with :meth:`CoreDriver.call`,
-waiting on the lock's condition until the operation ends, asks to be resumed, or the node stops.
+with the time as arguments and queues what to send and publish in an outbox. It applies the
+commander lease itself (:class:`~dronewrapper.security.lease.LeaseGate`): a setpoint or command
+from anyone but the lease holder is refused in the core, so the rule is held by the core's
+tests. :class:`CoreDriver` is the only place a node touches a core: every input goes through
+:meth:`CoreDriver.feed` (the core called under the lock with the monotonic and wall-clock time,
+its outbox executed after the lock is released), and a service call runs its operation to the
+end with :meth:`CoreDriver.call`, waiting on the lock's condition until the operation ends,
+asks to be resumed, or the node stops.
 """
 
 from __future__ import annotations
@@ -17,8 +20,11 @@ import time
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
+from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.operation import Operation, Operations, Steps
+from dronewrapper.security.lease import LeaseGate
 
 MAX_WAIT_S = 0.05
 """A waiting service call looks at its operation at least this often (s)."""
@@ -27,20 +33,31 @@ MAX_WAIT_S = 0.05
 class PureCore:
     """What every bridge's pure core shares: the time of the input being handled (``now``,
     monotonic s; ``stamp``, Unix s), the outbox of effects the node executes after each call,
-    and the running operations (service calls that wait on the aircraft).
+    the running operations (service calls that wait on the aircraft) and the commander lease
+    (``commander``: its holder, shown on State).
 
     Args:
         now: where the core's time starts (monotonic s).
         outbox: makes an empty outbox (the core's own ``Outbox`` dataclass).
-        log: where a background operation's failure is logged.
+        log: where a background operation's failure and the lease's changes are logged.
+        lease_ttl_s: the commander lease's ttl (s); None: no lease, every commander obeyed.
     """
 
-    def __init__(self, now: float, outbox: Callable[[], Any], log: logging.Logger) -> None:
+    def __init__(
+        self,
+        now: float,
+        outbox: Callable[[], Any],
+        log: logging.Logger,
+        *,
+        lease_ttl_s: float | None = None,
+    ) -> None:
         self.now, self.stamp = now, 0.0
         self._outbox = outbox
         self.out = outbox()
         self.operations = Operations(log)
         self.command_busy = False  # one command exchange with the aircraft at a time
+        self.lease = LeaseGate(lease_ttl_s, log)
+        self.commander = ""  # the lease's holder as State shows it ("": nobody)
 
     def _at(self, now: float, stamp: float) -> None:
         self.now, self.stamp = now, stamp
@@ -53,6 +70,48 @@ class PureCore:
     def publish(self, topic: Topic, msg: Any) -> None:
         """Queue a sample for ``topic``."""
         self.out.samples.append((topic, msg))
+
+    def publish_state(self, *, force: bool = False) -> None:
+        """Publish State (the core's own; called when the lease's holder changed)."""
+        raise NotImplementedError
+
+    # ---- the commander lease
+
+    def admit_setpoint(self, commander: str) -> bool:
+        """True if a setpoint from ``commander`` may be flown now (the lease's rule)."""
+        admitted = self.lease.admit_setpoint(commander, self.now)
+        self.show_commander()
+        return admitted
+
+    def request(self, steps: Steps, commander: str, what: str, now: float, stamp: float):
+        """A service call from ``commander``: ``what`` names the command the lease guards
+        (``""``: a read, never refused). A refused one fails at once (ServiceError, code
+        ``lease``) and its steps never run."""
+        self._at(now, stamp)
+        refusal = self.lease.command_refusal(commander, what, now) if what else None
+        self.show_commander()
+        if refusal is not None:
+            steps.close()
+            steps = _refused(refusal)
+        return self.operations.start(steps)
+
+    def on_lease_request(
+        self, request: LeaseRequest, commander: str, now: float, stamp: float
+    ) -> LeaseReply:
+        """The ``{ns}/dronewrapper/lease`` service: take, take over or release."""
+        self._at(now, stamp)
+        reply = self.lease.handle(request, commander, now)
+        self.show_commander()
+        return reply
+
+    def show_commander(self) -> None:
+        """State follows the lease's holder now (a taken, released or lapsed lease)."""
+        holder = self.lease.holder(self.now)
+        if holder != self.commander:
+            self.commander = holder
+            self.publish_state(force=True)
+
+    # ---- operations
 
     def start(self, steps: Steps, now: float, stamp: float, *, background=False) -> Operation:
         """Begin an operation (its first step runs now; a bad request fails it at once);
@@ -68,6 +127,12 @@ class PureCore:
     def cancel(self, op: Operation) -> None:
         """Abandon ``op`` (the node is stopping): its cleanup runs (a command slot is freed)."""
         self.operations.cancel(op)
+
+
+def _refused(error: ServiceError) -> Steps:
+    """An operation that fails at once with ``error`` (a refused command)."""
+    raise error
+    yield 0.0
 
 
 C = TypeVar("C", bound=PureCore)
@@ -111,10 +176,11 @@ class CoreDriver(Generic[C]):
         self._execute(out)
         return result
 
-    def call(self, steps: Steps) -> Any:
-        """Start an operation and wait (bounded by its own timeouts) for its reply; raises its
-        error. If the node stops meanwhile the operation is cancelled."""
-        op = self.feed(self.core.start, steps)
+    def call(self, steps: Steps, commander: str = "", what: str = "") -> Any:
+        """Start the operation of ``commander``'s request and wait (bounded by its own
+        timeouts) for its reply; raises its error (a command ``what`` the lease refuses fails
+        at once). If the node stops meanwhile the operation is cancelled."""
+        op = self.feed(self.core.request, steps, commander, what)
         while not op.done:
             if self._stop.is_set():
                 with self.cond:

@@ -1,13 +1,15 @@
-"""The command lease: at most one commander per drone at a time (pure logic, time injected).
+"""The commander lease: at most one commander per drone at a time (pure logic, time injected).
 
-A bridge keeps one :class:`CommandLease`. Every setpoint and command names its commander (the
-``commander`` attachment the SDK adds, see :mod:`dronewrapper.runtime.caller`); the lease says
-whether to obey it:
+Every setpoint and command names its commander (the ``commander`` attachment the SDK adds, see
+:mod:`dronewrapper.runtime.caller`). :class:`CommanderLease` says whether to obey it:
 
 - nobody holds the lease, or the holder has been silent for ``ttl_s``: the commander takes it;
 - the holder: obeyed, and the lease is renewed;
 - anyone else: refused, until it takes the lease over explicitly (:meth:`take_over`), which is
   logged and shown on ``State.commander``.
+
+:class:`LeaseGate` is that lease applied by a bridge's pure core to setpoints, commands and the
+``{ns}/dronewrapper/lease`` service; off (``ttl_s`` None), it admits everything.
 
 The lease coordinates authorised operators (the router's access control keeps everyone else
 out); it is not an authentication mechanism by itself: a commander's name is what its SDK says.
@@ -15,10 +17,16 @@ out); it is not an authentication mechanism by itself: a commander's name is wha
 
 from __future__ import annotations
 
+import logging
+import math
 from dataclasses import dataclass
+
+from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
+from dronewrapper.runtime.errors import ServiceError
 
 DEFAULT_TTL_S = 10.0
 ANONYMOUS = "anonymous"
+LEASE_ACTIONS = ("take", "take_over", "release")
 
 
 @dataclass(frozen=True)
@@ -38,7 +46,7 @@ class LeaseDecision:
         )
 
 
-class CommandLease:
+class CommanderLease:
     """Who may command the drone now.
 
     Args:
@@ -50,7 +58,7 @@ class CommandLease:
             raise ValueError(f"lease ttl_s must be > 0, got {ttl_s}")
         self.ttl_s = ttl_s
         self.holder = ""
-        self._last_s = float("-inf")
+        self._last_s = -math.inf
 
     def current(self, now: float) -> str:
         """The holder at ``now`` (``""`` when free or lapsed)."""
@@ -83,5 +91,83 @@ class CommandLease:
         holder = self.current(now)
         if holder and holder != commander:
             return LeaseDecision(False, holder)
-        self.holder, self._last_s = "", float("-inf")
+        self.holder, self._last_s = "", -math.inf
         return LeaseDecision(True, "", "released", holder)
+
+
+class LeaseGate:
+    """The lease applied to a bridge's inputs (pure; ``now`` monotonic s).
+
+    Args:
+        ttl_s: a holder silent this long loses the lease (s); None: the lease is off and
+            everything is admitted.
+        log: where changes of holder and (at most every 2 s) refusals are logged.
+
+    Attributes:
+        refused_setpoints, refused_commands: how many were refused so far.
+    """
+
+    def __init__(self, ttl_s: float | None, log: logging.Logger) -> None:
+        self.lease = CommanderLease(ttl_s) if ttl_s is not None else None
+        self.refused_setpoints = 0
+        self.refused_commands = 0
+        self._log = log
+        self._last_refusal_log = -math.inf
+
+    def holder(self, now: float) -> str:
+        """The commander holding the lease at ``now`` (``""`` when free or the lease is off)."""
+        return self.lease.current(now) if self.lease is not None else ""
+
+    def admit_setpoint(self, commander: str, now: float) -> bool:
+        """True if a setpoint from ``commander`` may be flown."""
+        if self.lease is None:
+            return True
+        decision = self._note(self.lease.admit(commander, now), commander, now)
+        if not decision.accepted:
+            self.refused_setpoints += 1
+        return decision.accepted
+
+    def command_refusal(self, commander: str, what: str, now: float) -> ServiceError | None:
+        """None if command ``what`` from ``commander`` may run, else its refusal (code
+        ``lease``)."""
+        if self.lease is None:
+            return None
+        decision = self._note(self.lease.admit(commander, now), commander, now)
+        if decision.accepted:
+            return None
+        self.refused_commands += 1
+        return ServiceError(f"{what} refused: {decision.reason(commander)}", "lease")
+
+    def handle(self, request: LeaseRequest, commander: str, now: float) -> LeaseReply:
+        """The lease service: take, take over or release (ValueError for another action)."""
+        if request.action not in LEASE_ACTIONS:
+            raise ValueError(f"action must be one of {', '.join(LEASE_ACTIONS)}")
+        if self.lease is None:
+            return LeaseReply(granted=True, message="the command lease is off on this bridge")
+        if request.action == "take_over":
+            decision = self.lease.take_over(commander, now)
+        elif request.action == "take":
+            decision = self.lease.admit(commander, now)
+        else:
+            decision = self.lease.release(commander, now)
+        self._note(decision, commander, now)
+        message = "ok" if decision.accepted else decision.reason(commander or ANONYMOUS)
+        return LeaseReply(
+            granted=decision.accepted,
+            holder=decision.holder,
+            previous=decision.previous,
+            message=message,
+        )
+
+    def _note(self, decision: LeaseDecision, commander: str, now: float) -> LeaseDecision:
+        if decision.event:
+            self._log.warning(
+                "command lease %s: %s (was %s)",
+                decision.event,
+                decision.holder or "nobody",
+                decision.previous or "nobody",
+            )
+        elif not decision.accepted and now - self._last_refusal_log >= 2.0:
+            self._last_refusal_log = now
+            self._log.warning("refused %r: %s", commander, decision.reason(commander))
+        return decision

@@ -1,0 +1,112 @@
+"""What a bridge's node does around its pure core, for every aircraft: the wiring.
+
+A bridge process is its pure core (a :class:`~dronewrapper.runtime.core_driver.PureCore`), the
+aircraft's link, and a :class:`BridgeNode`, which owns the rest: the core's driver (one lock,
+the time), the publishers of the core's samples, the setpoint subscription, the MAVROS-parity
+services and the command lease service, each request fed to the core with its commander (the
+core applies the lease), and the core's tick loop. A bridge subclasses it with its link: it
+executes the aircraft's part of the core's outbox (:meth:`BridgeNode.send`) and runs its
+receive loops.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Mapping
+from typing import Any, Generic, TypeVar
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
+from dronewrapper.msgs.mavros import PositionTarget
+from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.runtime.caller import current_commander
+from dronewrapper.runtime.core_driver import CoreDriver, PureCore
+from dronewrapper.runtime.node import Node
+from dronewrapper.runtime.operation import Steps
+from dronewrapper.runtime.rate import Ratekeeper
+
+C = TypeVar("C", bound=PureCore)
+
+Operation = Callable[[Any, Any], Steps]
+"""A service's operation: ``steps(core, request)``."""
+
+COMMANDS: dict[Service[Any, Any], str] = {
+    registry.ARMING: "arming",
+    registry.TAKEOFF: "takeoff",
+    registry.LAND: "land",
+    registry.SET_MODE: "set_mode",
+    registry.PARAM_SET: "param_set",
+}
+"""The services that command the aircraft (only the lease holder's requests run), and how a
+refusal names them."""
+
+
+class BridgeNode(Generic[C]):
+    """A pure core on a node: driver, publishers, subscriptions, services, tick loop.
+
+    Args:
+        node: the process's node (the bus).
+        core: the bridge's pure core.
+        publishers: the node's publisher of each topic the core publishes on.
+        log: the bridge's logger.
+    """
+
+    def __init__(
+        self, node: Node, core: C, publishers: Mapping[Topic[Any], Any], log: logging.Logger
+    ) -> None:
+        self.node = node
+        self.core = core
+        self.log = log
+        self.driver: CoreDriver[C] = CoreDriver(core, self.execute, node.stop_event)
+        self._publishers = publishers
+
+    # ---- the core's effects
+
+    def execute(self, out: Any) -> None:
+        """Carry out one outbox: the aircraft's part (:meth:`send`), then the samples."""
+        self.send(out)
+        for topic, msg in out.samples:
+            self._publishers[topic].put(msg)
+
+    def send(self, out: Any) -> None:
+        """Send the outbox's messages to the aircraft (the bridge's own link)."""
+        raise NotImplementedError
+
+    # ---- inputs from commanders
+
+    def on_setpoint(self, target: PositionTarget) -> None:
+        """A PositionTarget from a commander (the core applies the lease)."""
+        self.driver.feed(self.core.on_setpoint, target, current_commander())
+
+    def on_lease(self, request: LeaseRequest) -> LeaseReply:
+        """The lease service's handler."""
+        return self.driver.feed(self.core.on_lease_request, request, current_commander())
+
+    def serve(self, services: Mapping[Service[Any, Any], Operation]) -> None:
+        """Subscribe to setpoints, serve each service with its operation (a command service's
+        request refused unless from the lease holder) and the lease service."""
+        self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
+        for service, steps in services.items():
+            self.node.serve(service, self._handler(service, steps))
+        self.node.serve(registry.COMMAND_LEASE, self.on_lease)
+
+    def _handler(self, service: Service[Any, Any], steps: Operation) -> Callable[[Any], Any]:
+        what = COMMANDS.get(service, "")
+
+        def handle(request: Any) -> Any:
+            return self.driver.call(steps(self.core, request), current_commander(), what)
+
+        return handle
+
+    # ---- the tick
+
+    def tick_loop(self, rate_hz: float, what: str) -> None:
+        """Feed the core's ``tick`` at ``rate_hz`` until the node stops (errors counted under
+        ``what`` and logged; the loop goes on)."""
+        rate = Ratekeeper(rate_hz, stop=self.node.stop_event)
+        while rate.sleep():
+            try:
+                self.driver.feed(self.core.tick)
+            except Exception:
+                self.node.callback_errors[what] += 1
+                self.log.exception("%s loop error", what)

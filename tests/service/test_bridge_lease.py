@@ -1,0 +1,90 @@
+"""Both bridges' cores on the fake bus behind the shared bridge wiring (BridgeNode): each
+request and setpoint reaches the core with its commander, and the core's lease decides."""
+
+from __future__ import annotations
+
+import logging
+
+import pytest
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.lease import LeaseRequest
+from dronewrapper.msgs.mavros import (
+    FRAME_BODY_NED,
+    MASK_VELOCITY,
+    CommandBool,
+    CommandTOL,
+    PositionTarget,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.bridge_node import BridgeNode
+from dronewrapper.runtime.caller import commander_attachment, handling
+from dronewrapper.runtime.fake import FakeBus, FakeNode
+from dronewrapper_bridge_mavlink import node as mavlink_node
+from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
+from dronewrapper_bridge_mavlink.core import BridgeCore
+from dronewrapper_bridge_tello import node as tello_node
+from dronewrapper_bridge_tello.config import Config as TelloConfig
+from dronewrapper_bridge_tello.core import TelloCore
+
+FORWARD = PositionTarget(
+    coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=0.5)
+)
+
+
+class Wired(BridgeNode):
+    """A core on the bridge wiring, its sends recorded instead of going to an aircraft."""
+
+    def send(self, out) -> None:
+        self.sent = [*getattr(self, "sent", []), *out.sends]
+
+
+def wired(kind: str) -> tuple[FakeBus, Wired]:
+    bus = FakeBus(start=1_700_000_000.0)
+    if kind == "mavlink":
+        core = BridgeCore(MavlinkConfig(command_lease=True))
+        module = mavlink_node
+    else:
+        core = TelloCore(TelloConfig(command_lease=True, video=False))
+        module = tello_node
+    node = FakeNode("bridge", bus)
+    publishers = {topic: node.publisher(topic) for topic in module.PUBLISHED}
+    bridge = Wired(node, core, publishers, logging.getLogger(kind))
+    bridge.serve(module.SERVICES)
+    return bus, bridge
+
+
+def ask(user: FakeNode, service, request, commander: str):
+    return user.call(service, request, attachment=commander_attachment(commander))
+
+
+@pytest.mark.parametrize("kind", ["mavlink", "tello"])
+def test_a_non_holders_requests_and_setpoints_are_refused_until_it_takes_over(kind):
+    bus, bridge = wired(kind)
+    user = FakeNode("apps", bus)
+    assert ask(user, registry.COMMAND_LEASE, LeaseRequest(action="take"), "alice").granted
+    for service, request in (
+        (registry.ARMING, CommandBool(value=True)),
+        (registry.TAKEOFF, CommandTOL.takeoff(2.0)),
+        (registry.LAND, CommandTOL.land()),
+    ):
+        with pytest.raises(ServiceError, match="'alice' holds the command lease") as error:
+            ask(user, service, request, "bob")
+        assert error.value.code == "lease"
+        with pytest.raises(ServiceError) as error:  # alice's reaches the aircraft's side
+            ask(user, service, request, "alice")
+        assert error.value.code == "unavailable"  # no aircraft connected
+    with handling(commander_attachment("bob")):
+        bridge.on_setpoint(FORWARD)
+    assert bridge.core.lease.refused_setpoints == 1
+    reply = ask(user, registry.COMMAND_LEASE, LeaseRequest(action="take_over"), "bob")
+    assert (reply.granted, reply.previous) == (True, "alice")
+    states = bus.published[registry.STATE.key("drone")]
+    assert states[-1].msg.commander == "bob"
+    with handling(commander_attachment("bob")):
+        bridge.on_setpoint(FORWARD)
+    assert bridge.core.lease.refused_setpoints == 1
+    with pytest.raises(ServiceError) as error:
+        ask(user, registry.ARMING, CommandBool(value=True), "bob")
+    assert error.value.code == "unavailable"
