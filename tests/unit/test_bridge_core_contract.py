@@ -268,6 +268,26 @@ def test_commander_lost_lands():
     assert land.target_system == 1
 
 
+@pytest.mark.parametrize("answer", [None, REJECTED])
+def test_the_hold_streams_on_while_the_failsafe_land_is_unanswered_or_refused(answer):
+    """Without the stream, PX4 would leave OFFBOARD on its own offboard-loss failsafe."""
+    rig = flying_in_offboard(commander_lost_timeout=2.0)
+    rig.run(2.5)
+    (land,) = rig.commands(NAV_LAND)
+    asked = rig.now
+    if answer is not None:
+        rig.ack(NAV_LAND, answer)
+    rig.run(4.0)  # heartbeats: still in OFFBOARD
+    assert rig.core.failsafe.state == "land" and rig.core.current_state().mode == "OFFBOARD"
+    times = [
+        t for t, m in rig.sent if t >= asked and m.get_type() == "SET_POSITION_TARGET_LOCAL_NED"
+    ]
+    period = 1.0 / rig.core.config.stream_rate_hz
+    gaps = [b - a for a, b in zip([asked, *times], [*times, rig.now], strict=False)]
+    assert max(gaps) <= 1.5 * period, "the hold stopped while the landing was not under way"
+    assert {m.type_mask for m in rig.setpoints(since=asked)} == {MASK_POSITION}
+
+
 def test_commander_lost_action_return():
     rig = flying_in_offboard(commander_lost_action="return")
     rig.run(6.0)
