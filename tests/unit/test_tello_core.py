@@ -109,6 +109,15 @@ def test_commander_lost_hold_keeps_hovering():
     assert rig.core.failsafe.state == "hold"
 
 
+def test_no_sticks_on_the_ground_even_for_a_streaming_commander():
+    rig = TelloRig()
+    rig.connect()
+    rig.stream(velocity(0.5, vz=0.3), 2.0)  # fresh setpoints all along
+    rig.run(1.0)  # then stale: no stop either
+    assert rig.core.failsafe.target is not None and rig.rcs() == []
+    assert rig.core.telemetry.landed.state == LANDED_STATE_ON_GROUND
+
+
 def test_keepalive_while_flying_and_nothing_on_the_ground():
     rig = TelloRig()
     rig.connect()
