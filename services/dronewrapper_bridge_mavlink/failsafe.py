@@ -23,6 +23,12 @@ What the bridge streams to the autopilot each tick, and when it acts on its own:
   > 1 s; while priming it streams the fresh setpoint or, without one, a hold at the current
   pose. Priming ends the moment the mode is confirmed (then the primed stream goes on as the
   engaged stream) or a take-off is requested.
+* The bridge's own hold (its take-off in PX4's OFFBOARD): while nobody steers, the bridge
+  streams the position it was told to hold (:meth:`Failsafe.hold_at`: the ground before arming,
+  then the height asked), so PX4 stays in OFFBOARD and the aircraft holds there as ArduPilot's
+  and the Tello's do by themselves after their take-off. No commander is lost meanwhile: none
+  has steered. It ends when a commander steers, the autopilot leaves the guided mode or
+  disarms, or the bridge lets it go (:meth:`Failsafe.release_hold`).
 * Engagement: the hold stream and the commander-lost action apply once a commander has steered
   in the guided mode (a setpoint arrived while in it, it was entered with a fresh setpoint, or
   the bridge entered it with a primed stream). So an autopilot's own take-off in GUIDED
@@ -118,6 +124,7 @@ class Failsafe(CommandLease[Kind]):
         self.pilot_override = False
         self._guided_since = -math.inf
         self._hold: PositionTarget | None = None
+        self._own: PositionTarget | None = None  # the bridge's own hold (hold_at)
         self._prime_until = -math.inf
         self._requested: dict[str, float] = {}
         self._events: list[str] = []
@@ -128,6 +135,7 @@ class Failsafe(CommandLease[Kind]):
         """A valid setpoint arrived from a commander."""
         if is_guided(self.mode) and not self.pilot_override:
             self.engaged = True
+            self._own = None  # a commander steers: the bridge's own hold ends
         self.take_setpoint(target, kind, now)
 
     def fresh_target(self, now: float) -> PositionTarget | None:
@@ -142,11 +150,21 @@ class Failsafe(CommandLease[Kind]):
             if self.state in (LAND, RETURN):
                 self.set_state(NONE, f"{mode} requested")
 
+    def hold_at(self, target: PositionTarget) -> None:
+        """Stream ``target`` (a position hold) on the bridge's own account while the autopilot
+        is in its guided mode and no commander steers (see module docstring)."""
+        self.forget_setpoint()
+        self._own = target
+
+    def release_hold(self) -> None:
+        """Stop the bridge's own hold."""
+        self._own = None
+
     def on_takeoff_requested(self, now: float) -> None:
         """The autopilot flies its own take-off now: the bridge stays out until commanded
         (no priming, no hold: a hold at the ground would override the take-off)."""
         self.engaged = False
-        self._hold = None
+        self._hold = self._own = None
         self._prime_until = min(self._prime_until, now)
 
     def start_priming(self, now: float, duration: float) -> None:
@@ -189,6 +207,8 @@ class Failsafe(CommandLease[Kind]):
         self.mode, self.airborne = mode, airborne
         if self.armed and not armed and self.state != NONE:
             self.set_state(NONE, "disarmed")
+        if not is_guided(mode) or (self.armed and not armed):
+            self._own = None
         self.armed = armed
 
     def _expected(self, mode: str, now: float) -> bool:
@@ -225,6 +245,8 @@ class Failsafe(CommandLease[Kind]):
         elif in_control and self.state in (LAND, RETURN):
             self._hold_here(pose)  # until the autopilot has switched mode
             out.send = self._hold
+        elif self._own is not None and is_guided(self.mode) and not self.engaged:
+            out.send = self._own
         action = self.commander_lost(
             now,
             in_control=in_control and self.airborne,

@@ -21,8 +21,8 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.bridge_node import BridgeNode
+from dronewrapper_bridge_mavlink import flight, parameters
 from dronewrapper_bridge_mavlink import operations as ops
-from dronewrapper_bridge_mavlink import parameters
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
@@ -42,6 +42,8 @@ PUBLISHED = (
     registry.STATUSTEXT,
 )
 SERVICES = {
+    registry.FLIGHT_TAKEOFF: flight.takeoff_to,
+    registry.FLIGHT_LAND: flight.land_here,
     registry.ARMING: ops.arming,
     registry.TAKEOFF: ops.takeoff,
     registry.LAND: ops.land,

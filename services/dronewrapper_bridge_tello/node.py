@@ -24,6 +24,7 @@ from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper.security.wifi import open_wifi_warning
+from dronewrapper_bridge_tello import flight
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import Outbox, TelloCore
@@ -44,6 +45,8 @@ PUBLISHED = (
     registry.STATUSTEXT,
 )
 SERVICES = {
+    registry.FLIGHT_TAKEOFF: flight.takeoff_to,
+    registry.FLIGHT_LAND: flight.land_here,
     registry.ARMING: ops.arming,
     registry.TAKEOFF: ops.takeoff,
     registry.LAND: ops.land,

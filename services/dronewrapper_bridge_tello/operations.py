@@ -183,21 +183,29 @@ def takeoff(core: TelloCore, request: CommandTOL) -> Steps:
     core.publish_state(force=True)
     if result != 0 or math.isnan(height):
         return CommandTOLResult(success=result == 0, result=result, message=message)
+    move_result, move_message, _ = yield from move_to_height(core, height)
+    message += f"; {move_message}"
+    return CommandTOLResult(success=move_result == 0, result=move_result, message=message)
+
+
+def move_to_height(core: TelloCore, height: float) -> Generator[float, None, tuple[int, str, str]]:
+    """After the Tello's own take-off (which ends near 1 m), ``up``/``down`` to ``height`` m
+    above the take-off point: (result, what was done, the move sent or ""). The SDK's moves
+    are 20-500 cm, so an error of 8 cm or less is left (a 20 cm move would overshoot by more
+    than it corrects)."""
     z = yield from settled_height(core)
     error_cm = (height - z) * 100.0
-    log.info("take-off done at %.2f m; %.2f m asked", z, height)
-    # the SDK's moves are 20-500 cm: correct only errors beyond 8 cm (a 20 cm move for a
-    # smaller error would overshoot by more than it corrects)
-    if abs(error_cm) > 8.0:
-        verb = "up" if error_cm > 0 else "down"
-        cm = round(min(500.0, max(20.0, abs(error_cm))))
-        move = f"{verb} {cm}"
-        reply = yield from exchange(core, move, timeout=core.config.move_timeout, attempts=1)
-        move_result, move_message = result_of(reply, move)
-        message += f"; {move_message}"
-        if move_result != 0:
-            return CommandTOLResult(success=False, result=move_result, message=message)
-    return CommandTOLResult(success=True, result=0, message=message)
+    if abs(error_cm) <= 8.0:
+        return MAV_RESULT_ACCEPTED, f"the Tello's take-off ended at {z:.2f} m, as asked", ""
+    verb = "up" if error_cm > 0 else "down"
+    move = f"{verb} {round(min(500.0, max(20.0, abs(error_cm))))}"
+    log.info("the Tello's own take-off ended at %.2f m; %s to the %.2f m asked", z, move, height)
+    reply = yield from exchange(core, move, timeout=core.config.move_timeout, attempts=1)
+    result, message = result_of(reply, move)
+    if result != MAV_RESULT_ACCEPTED:
+        return result, f"the Tello's take-off ended at {z:.2f} m; {message}", move
+    done = f"the Tello's take-off ended at {z:.2f} m, then {move} to the {height:g} m asked"
+    return result, done, move
 
 
 def settled_height(core: TelloCore, timeout: float = 3.0) -> Generator[float, None, float]:

@@ -75,6 +75,9 @@ class TelloRig:
             self.flying, self.height_cm = True, 100
         if text == "land" and reply == "ok":
             self.flying, self.height_cm = False, 0
+        verb, _, cm = text.partition(" ")
+        if verb in ("up", "down") and reply == "ok":
+            self.height_cm += int(cm) if verb == "up" else -int(cm)
         if reply is not None:
             delay = self.delays.get(text, self.reply_delay)
             self._replies.append((self.now + delay, reply))

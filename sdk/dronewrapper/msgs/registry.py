@@ -18,6 +18,7 @@ from functools import cached_property
 from typing import Any, Generic, TypeVar
 
 from dronewrapper.msgs.control import ControllerStatus
+from dronewrapper.msgs.flight import FlightResult, LandRequest, TakeoffRequest
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavlink import MavlinkFrames
@@ -285,6 +286,20 @@ PARAM_GET = Service("{ns}/mavros/param/get", ParamGet, ParamGetResult, "bridge",
 PARAM_SET = Service("{ns}/mavros/param/set", ParamSet, ParamSetResult, "bridge", "write param")
 COMMAND_LEASE = Service(
     "{ns}/dronewrapper/lease", LeaseRequest, LeaseReply, "bridge", "take or give back the lease"
+)
+FLIGHT_TAKEOFF = Service(
+    "{ns}/dronewrapper/takeoff",
+    TakeoffRequest,
+    FlightResult,
+    "bridge",
+    "take off to a height; the reply comes once there (or failed)",
+)
+FLIGHT_LAND = Service(
+    "{ns}/dronewrapper/land",
+    LandRequest,
+    FlightResult,
+    "bridge",
+    "land here; the reply comes once on the ground and disarmed (or failed)",
 )
 
 SIM_WORLD_LOAD = Service(

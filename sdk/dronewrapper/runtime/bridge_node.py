@@ -2,11 +2,11 @@
 
 A bridge process is its pure core (a :class:`~dronewrapper.runtime.core_driver.PureCore`), the
 aircraft's link, and a :class:`BridgeNode`, which owns the rest: the core's driver (one lock,
-the time), the publishers of the core's samples, the setpoint subscription, the MAVROS-parity
-services and the command lease service, each request fed to the core with its commander (the
-core applies the lease), and the core's tick loop. A bridge subclasses it with its link: it
-executes the aircraft's part of the core's outbox (:meth:`BridgeNode.send`) and runs its
-receive loops.
+the time), the publishers of the core's samples, the setpoint subscription, the services (the
+take-off and landing operations, the MAVROS-parity ones, the command lease), each request fed
+to the core with its commander (the core applies the lease), and the core's tick loop. A
+bridge subclasses it with its link: it executes the aircraft's part of the core's outbox
+(:meth:`BridgeNode.send`) and runs its receive loops.
 """
 
 from __future__ import annotations
@@ -31,6 +31,8 @@ Operation = Callable[[Any, Any], Steps]
 """A service's operation: ``steps(core, request)``."""
 
 COMMANDS: dict[Service[Any, Any], str] = {
+    registry.FLIGHT_TAKEOFF: "takeoff",
+    registry.FLIGHT_LAND: "land",
     registry.ARMING: "arming",
     registry.TAKEOFF: "takeoff",
     registry.LAND: "land",

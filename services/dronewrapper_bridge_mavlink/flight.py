@@ -1,0 +1,192 @@
+"""Take-off and landing, each one waiting operation flown the autopilot's way (pure).
+
+- take-off, PX4: OFFBOARD (the stream primed for > ``offboard_prime_s`` first), the bridge's
+  own hold at the ground (:meth:`~dronewrapper_bridge_mavlink.failsafe.Failsafe.hold_at`),
+  arm, the own hold moved ``height`` m up; ArduPilot: GUIDED, arm, MAV_CMD_NAV_TAKEOFF. Then
+  the climb is watched until within ``tolerance`` of the height: it fails when the autopilot
+  disarms or leaves the mode it was put in, or the ``timeout`` passes. Already flying: done
+  at once, nothing sent.
+- landing: LAND here, then wait until on the ground and disarmed.
+
+Each returns a :class:`~dronewrapper.msgs.flight.FlightResult` (a failure says which step and
+why); a bad request is a ``ValueError``. Heights in metres above the take-off point (local ENU
+z, origin where the autopilot started), time the core's (monotonic s).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Generator
+from typing import TYPE_CHECKING, Any
+
+from dronewrapper.msgs.flight import (
+    NO_POSITION,
+    NOT_READY,
+    REFUSED,
+    TOO_LATE,
+    FlightResult,
+    LandRequest,
+    TakeoffRequest,
+)
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    LANDED_STATE_ON_GROUND,
+    LANDED_STATE_TAKEOFF,
+    LANDED_STATE_UNDEFINED,
+    SEVERITY_WARNING,
+    CommandBool,
+    CommandTOL,
+    SetMode,
+)
+from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
+from dronewrapper_bridge_mavlink.setpoints import hold_target
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core import BridgeCore
+
+log = logging.getLogger("bridge_mavlink")
+
+MAX_HEIGHT_M = 1000.0
+MAX_TIMEOUT_S = 600.0
+
+
+def checked(name: str, value: float, low: float, high: float) -> float:
+    """``value`` if finite and in (``low``, ``high``]; ValueError naming ``name`` otherwise."""
+    if not (isinstance(value, int | float) and math.isfinite(value) and low < value <= high):
+        raise ValueError(f"{name} must be in ({low:g}, {high:g}], got {value!r}")
+    return float(value)
+
+
+def failed(failure: str, message: str, step: str = "", result: int | None = None):
+    return FlightResult(success=False, failure=failure, step=step, result=result, message=message)
+
+
+def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
+    """Take off to ``request.height`` m above the take-off point (see module docstring)."""
+    height = checked("height", request.height, 0.0, MAX_HEIGHT_M)
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    tolerance = request.tolerance
+    if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
+        raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
+    if not core.connected:
+        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
+        return FlightResult(
+            success=True,
+            message=f"already flying ({altitude_text(core)}): nothing done; a position "
+            "setpoint changes the altitude",
+        )
+    pose = core.pose()
+    if pose is None:
+        return failed(NO_POSITION, "no local position: no point to take off from")
+    (x, y, z0), yaw = pose
+    on_ground = core.ext.landed_state in (LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED)
+    start_z = z0 if on_ground else 0.0  # caught mid-landing: the height above the origin
+    target_z = start_z + height
+    deadline = core.now + timeout
+    mode = GUIDED_MODE[autopilot]
+    if autopilot == AUTOPILOT_ARDUPILOT:
+        steps: list[tuple[str, Any, Any]] = [
+            (f"set_mode {mode}", ops.set_mode, SetMode(custom_mode=mode)),
+            ("arming", ops.arming, CommandBool(value=True)),
+            ("takeoff", ops.takeoff, CommandTOL.takeoff(height, yaw)),
+        ]
+    else:
+        steps = [
+            (f"set_mode {mode}", ops.set_mode, SetMode(custom_mode=mode)),
+            ("arming", ops.arming, CommandBool(value=True)),
+        ]
+    for step, operation, step_request in steps:
+        reply = yield from operation(core, step_request)
+        if not (reply.mode_sent if isinstance(step_request, SetMode) else reply.success):
+            core.failsafe.release_hold()
+            return failed(REFUSED, reply.message, step, reply.result)
+        if autopilot != AUTOPILOT_ARDUPILOT:  # in OFFBOARD: hold the ground, then the height
+            z = start_z if step != "arming" else target_z
+            core.failsafe.hold_at(hold_target((x, y, z), yaw))
+    log.info("takeoff: %s, armed, climbing to %.2f m", mode, target_z)
+    outcome = yield from climb(core, mode, target_z - tolerance, deadline)
+    if outcome is not None:
+        if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == REFUSED:
+            core.failsafe.release_hold()
+        return outcome
+    z = core.telemetry.position_enu[2] if core.telemetry.position_enu else math.nan
+    return FlightResult(
+        success=True,
+        message=f"took off: {z - start_z:.2f} m above the take-off point ({height:g} m asked)",
+        height=z - start_z,
+    )
+
+
+def climb(
+    core: BridgeCore, mode: str, z_done: float, deadline: float
+) -> Generator[float, None, FlightResult | None]:
+    """Wait until the local z reaches ``z_done``: None, or the failure (disarmed, left
+    ``mode``, too late)."""
+    seen_armed = seen_mode = False
+    while True:
+        state = core.heartbeat_state
+        if state is not None:
+            seen_armed |= state.armed
+            seen_mode |= state.mode == mode
+            if seen_armed and not state.armed:
+                return failed(REFUSED, f"the autopilot disarmed{last_text(core)}", "takeoff")
+            if seen_mode and state.mode != mode:
+                text = f"the autopilot left {mode} for {state.mode}{last_text(core)}"
+                return failed(REFUSED, text, "takeoff")
+        position = core.telemetry.position_enu
+        if position is not None and position[2] >= z_done:
+            return None
+        if core.now >= deadline:
+            return failed(
+                TOO_LATE,
+                f"altitude {z_done:.2f} m not reached in time (now {altitude_text(core)}, "
+                f"mode {state.mode if state else '?'}, armed {state.armed if state else '?'})",
+            )
+        yield deadline
+
+
+def land_here(core: BridgeCore, request: LandRequest) -> Steps:
+    """Land where the aircraft is; done once on the ground and disarmed."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    if not core.connected:
+        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+    if landed(core):
+        return FlightResult(success=True, message="already on the ground and disarmed")
+    deadline = core.now + timeout
+    reply = yield from ops.land(core, CommandTOL.land())
+    if not reply.success:
+        return failed(REFUSED, reply.message, "land", reply.result)
+    log.info("land: landing from %s", altitude_text(core))
+    while not landed(core):
+        if core.now >= deadline:
+            state = core.heartbeat_state
+            return failed(
+                TOO_LATE,
+                f"not on the ground and disarmed in time (now {altitude_text(core)}, "
+                f"landed_state {core.ext.landed_state}, armed {state.armed if state else '?'})",
+            )
+        yield deadline
+    return FlightResult(success=True, message="on the ground and disarmed")
+
+
+def landed(core: BridgeCore) -> bool:
+    state = core.heartbeat_state
+    return core.ext.landed_state == LANDED_STATE_ON_GROUND and state is not None and not state.armed
+
+
+def altitude_text(core: BridgeCore) -> str:
+    position = core.telemetry.position_enu
+    return "no position" if position is None else f"z={position[2]:.2f} m"
+
+
+def last_text(core: BridgeCore) -> str:
+    """`` (the autopilot's latest warning)`` or ``""``."""
+    for _, text in reversed(core.recent_texts):
+        if text.severity <= SEVERITY_WARNING and text.header.frame_id != "bridge":
+            return f" ({text.text})"
+    return ""

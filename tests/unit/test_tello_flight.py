@@ -1,0 +1,78 @@
+"""bridge_tello's take-off and landing operations on the pure core, with real SDK strings."""
+
+from __future__ import annotations
+
+import pytest
+from tello_core_rig import TelloRig
+
+from dronewrapper.msgs.flight import NOT_READY, REFUSED, TOO_LATE, LandRequest, TakeoffRequest
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper_bridge_tello import flight
+
+
+def connected(**config) -> TelloRig:
+    rig = TelloRig(**config)
+    rig.connect()
+    return rig
+
+
+def test_takeoff_then_up_to_the_height_and_the_message_says_so():
+    rig = connected()
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=2.5))
+    assert rig.commands()[-2:] == ["takeoff", "up 150"]
+    assert reply.success and reply.height == pytest.approx(2.5)
+    assert reply.message == (
+        "took off: the Tello's take-off ended at 1.00 m, then up 150 to the 2.5 m asked"
+    )
+
+
+def test_a_height_near_the_tellos_own_take_off_needs_no_move():
+    rig = connected()
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=1.05))
+    assert reply.success and rig.commands()[-1] == "takeoff"
+    assert reply.message == "took off: the Tello's take-off ended at 1.00 m, as asked"
+
+
+def test_a_refused_take_off_or_move_is_named_with_the_tellos_text():
+    rig = connected()
+    rig.script["takeoff"] = "error Motor stop"
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=2.0))
+    assert (reply.failure, reply.step) == (REFUSED, "takeoff")
+    assert "error Motor stop" in reply.message
+    rig = connected()
+    rig.script["up 100"] = "error Not joystick"
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=2.0))
+    assert (reply.failure, reply.step) == (REFUSED, "up 100")
+
+
+def test_a_take_off_that_ends_after_its_timeout_is_too_late():
+    rig = connected()
+    rig.delays["takeoff"] = 3.0
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=2.0, timeout=2.0))
+    assert reply.failure == TOO_LATE
+
+
+def test_already_flying_or_not_connected_sends_nothing():
+    rig = connected()
+    assert rig.call(flight.takeoff_to, TakeoffRequest(height=2.0)).success
+    since = rig.now
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=3.0))
+    assert reply.success and reply.message.startswith("already flying (z=2.00 m)")
+    assert rig.commands(since) == []
+    fresh = TelloRig()
+    assert fresh.call(flight.takeoff_to, TakeoffRequest(height=2.0)).failure == NOT_READY
+    with pytest.raises(ValueError, match="height"):
+        rig.call(flight.takeoff_to, TakeoffRequest(height=31.0))
+
+
+def test_landing_is_done_on_the_tellos_ok():
+    rig = connected()
+    assert rig.call(flight.takeoff_to, TakeoffRequest(height=1.0)).success
+    reply = rig.call(flight.land_here, LandRequest())
+    assert reply.success and rig.commands()[-1] == "land"
+    assert rig.core.telemetry.landed.state == LANDED_STATE_ON_GROUND
+    again = rig.call(flight.land_here, LandRequest())
+    assert again.success and again.message == "already on the ground"
+    rig.script["land"] = "error"
+    assert rig.call(flight.takeoff_to, TakeoffRequest(height=1.0)).success
+    assert rig.call(flight.land_here, LandRequest()).failure == REFUSED
