@@ -67,6 +67,11 @@ class BusAutopilot(FakeAircraft):
             absent=absent,
         )
         self.node.announce()  # its liveliness token, as a real bridge's
+        self.steppers: tuple = (self,)  # what moves while a waiting service waits
+
+    def wait(self, done: Callable[[], bool], seconds: float) -> None:
+        """Move the bus on (up to ``seconds``), stepping :attr:`steppers`, until ``done()``."""
+        drive(self.bus, self.bus.clock() + seconds, *self.steppers, stop=done)
 
     def next_wake(self, now: float) -> float:
         return (self._last_tick if self._last_tick is not None else now) + TELEMETRY_PERIOD_S
@@ -116,6 +121,7 @@ class SdkRig:
         self.pilot = BusAutopilot(self.bus, **{"flying": False, **(autopilot or {})})
         self.node = FakeNode("app", self.bus)
         self._actions: list[tuple[float, Callable[[], None]]] = []
+        self.pilot.steppers = (self, self.pilot)
         self.drone = DroneWrapper("drone", **self.options(**drone)) if open_drone else None
         self.run(TELEMETRY_PERIOD_S)  # the first telemetry is in
 

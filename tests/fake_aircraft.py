@@ -4,9 +4,11 @@
 :class:`~dronewrapper.runtime.fake.FakeNode`, whichever is given) what a bridge publishes and
 serves: State, ExtendedState, the local pose, the velocities, the battery and status texts
 (simulated objects' poses, and a camera's image key declared but silent, when asked); the
-ARMING, SET_MODE, TAKEOFF, LAND, PARAM_GET and PARAM_SET services. It has no thread and reads
-no clock but the one it is given: :meth:`FakeAircraft.tick` moves it to ``now`` and publishes
-its telemetry stamped ``now``.
+ARMING, SET_MODE, TAKEOFF, LAND, PARAM_GET and PARAM_SET services, and the bridge's waiting
+take-off and landing (``{ns}/dronewrapper/takeoff`` and ``land``: answered once there, the wait
+being :meth:`FakeAircraft.wait`'s). It has no thread and reads no clock but the one it is
+given: :meth:`FakeAircraft.tick` moves it to ``now`` and publishes its telemetry stamped
+``now``.
 
 The aircraft: while armed it climbs or sinks at ``climb_rate`` toward its goal altitude, the
 newest of a TAKEOFF request's and (in OFFBOARD or GUIDED) a position setpoint's; velocity
@@ -28,6 +30,8 @@ from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import REFUSED as STEP_REFUSED
+from dronewrapper.msgs.flight import TOO_LATE, FlightResult, LandRequest, TakeoffRequest
 from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Twist, TwistStamped, Vector3
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -61,6 +65,8 @@ if TYPE_CHECKING:
 REFUSED = 4
 """MAV_RESULT_FAILED: the result code of every refusal."""
 GUIDED_MODES = ("OFFBOARD", "GUIDED")
+FLIGHT_MODES = {"px4": "OFFBOARD", "ardupilotmega": "GUIDED"}
+"""The mode its waiting take-off climbs in, per ``autopilot`` (another keeps its mode)."""
 """The modes that follow position setpoints (PX4, ArduPilot); State.guided in them."""
 IN_AIR_ABOVE_M = 0.1
 """Armed above this altitude (m) is in the air; a landing touches down below it."""
@@ -87,8 +93,9 @@ class FakeAircraft:
         offboard_needs_stream: refuse OFFBOARD until a setpoint has arrived (as PX4 does).
         camera: declare the image stream of this camera (``pub_image``; nothing is sent).
         objects: simulated object poses (name -> x, y, z in m, ENU) published each tick.
-        refuse: service name (``set_mode``, ``arming``, ``takeoff``, ``land``) -> the reason
-            given when refusing it (a dict the tests may change).
+        refuse: service name (``set_mode``, ``arming``, ``takeoff``, ``land``,
+            ``flight_takeoff``, ``flight_land``) -> the reason given when refusing it (a dict
+            the tests may change).
         absent: services not served at all (a call gets no reply).
     """
 
@@ -129,6 +136,7 @@ class FakeAircraft:
         self.z_at_first_velocity: float | None = None  # altitude when the first one arrived
         self.refuse = refuse if refuse is not None else {}
         self.calls: list[tuple[float, str]] = []  # (clock s, service) of every command
+        self.last_text = ""
         self.requests: list[Any] = []  # every service request, as received
         self.params: dict[str, ParamValue] = {"MPC_XY_VEL_MAX": ParamValue(real=12.0)}
         self.objects = dict(objects or {})
@@ -151,6 +159,8 @@ class FakeAircraft:
             "arming": (registry.ARMING, self._arming),
             "takeoff": (registry.TAKEOFF, self._takeoff),
             "land": (registry.LAND, self._land),
+            "flight_takeoff": (registry.FLIGHT_TAKEOFF, self._flight_takeoff),
+            "flight_land": (registry.FLIGHT_LAND, self._flight_land),
             "param_get": (registry.PARAM_GET, self._param_get),
             "param_set": (registry.PARAM_SET, self._param_set),
         }
@@ -168,7 +178,12 @@ class FakeAircraft:
 
     def say(self, text: str, severity: int = SEVERITY_CRITICAL) -> None:
         """Publish an autopilot text message now."""
+        self.last_text = text
         self._text.put(StatusText(header=Header(stamp=self.clock()), severity=severity, text=text))
+
+    def wait(self, done: Callable[[], bool], seconds: float) -> None:
+        """Let up to ``seconds`` pass, flying, until ``done()`` (how depends on the runner)."""
+        raise NotImplementedError
 
     # ---- the services ----
 
@@ -220,6 +235,52 @@ class FakeAircraft:
         if self.landing_speed == math.inf:
             self._touch_down()
         return CommandTOLResult(success=True, result=0)
+
+    def _flight_takeoff(self, req: TakeoffRequest) -> FlightResult:
+        reason = self._command("flight_takeoff", req)
+        if reason:
+            return FlightResult(
+                failure=STEP_REFUSED, step="takeoff", result=REFUSED, message=reason
+            )
+        if self.in_air:
+            return FlightResult(success=True, message=f"already flying (z={self.z:.2f} m)")
+        mode = FLIGHT_MODES.get(self.autopilot, self.mode)
+        start, target = self.z, self.z + req.height
+        self.mode, self.armed, self.goal = mode, True, target
+        self.wait(
+            lambda: self.z >= target - req.tolerance or not self.armed or self.mode != mode,
+            req.timeout,
+        )
+        self.publish(self.clock())
+        text = f" ({self.last_text})" if self.last_text else ""
+        if not self.armed:
+            refusal = f"the autopilot disarmed{text}"
+        elif self.mode != mode:
+            refusal = f"the autopilot left {mode} for {self.mode}{text}"
+        elif self.z < target - req.tolerance:
+            return FlightResult(
+                failure=TOO_LATE,
+                message=f"altitude {target:.2f} m not reached within {req.timeout:g} s "
+                f"(now z={self.z:.2f} m, mode {self.mode}, armed {self.armed})",
+            )
+        else:
+            return FlightResult(success=True, message="took off", height=self.z - start)
+        return FlightResult(failure=STEP_REFUSED, step="takeoff", message=refusal)
+
+    def _flight_land(self, req: LandRequest) -> FlightResult:
+        reason = self._command("flight_land", req)
+        if reason:
+            return FlightResult(failure=STEP_REFUSED, step="land", result=REFUSED, message=reason)
+        if not self.armed and not self.in_air:
+            return FlightResult(success=True, message="already on the ground and disarmed")
+        self.mode, self.landing = "AUTO.LAND", True
+        if self.landing_speed == math.inf:
+            self._touch_down()
+        self.wait(lambda: not self.armed, req.timeout)
+        self.publish(self.clock())  # the reply comes after the telemetry that shows it
+        if self.armed:
+            return FlightResult(failure=TOO_LATE, message=f"not landed within {req.timeout:g} s")
+        return FlightResult(success=True, message="on the ground and disarmed")
 
     def _param_get(self, req: ParamGet) -> ParamGetResult:
         self.requests.append(req)

@@ -84,6 +84,12 @@ class FakeBridge(FakeAircraft):
             time.sleep(0.01)
         return super()._set_mode(req)
 
+    def wait(self, done, seconds: float) -> None:
+        """Poll ``done()`` while the aircraft's own thread flies it (up to ``seconds``)."""
+        deadline = time.monotonic() + seconds
+        while not done() and time.monotonic() < deadline:
+            time.sleep(0.01)
+
     # what the tests read
     def setpoints_since(self, t0: float) -> list[PositionTarget]:
         """The setpoints that arrived at or after ``t0`` (monotonic s)."""

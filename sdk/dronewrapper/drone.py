@@ -247,15 +247,7 @@ class DroneWrapper:
             self._declare_inputs(cameras)
             self._declare_setpoints()
             self._aircraft = flying.WrapperAircraft(
-                self.ns,
-                state=self._state,
-                extended=self._extended,
-                pose=self._pose,
-                status_texts=self.status_texts,
-                set_target=self._command_setpoint,
-                stop=self.stop_commanding,
-                ask=self._ask,
-                wall=time.time,
+                self.ns, state=self._state, stop=self.stop_commanding, ask=self._ask
             )
             self._streamer = SetpointStreamer(
                 self._publish_setpoint,
@@ -996,10 +988,10 @@ class DroneWrapper:
     def takeoff(self, h: float = 3.0, *, timeout: float = 30.0, tolerance: float = 0.1) -> None:
         """Take off to ``h`` metres above the take-off point and return there.
 
-        Idempotent: returns at once when already flying. PX4: streams a hold setpoint, enters
-        OFFBOARD, arms, then streams a position setpoint ``h`` m above the start point (which
-        keeps being streamed after the return). ArduPilot: GUIDED, arm, TAKEOFF command.
-        Tello: TAKEOFF command. The steps are the runtime's (:mod:`dronewrapper.flying`).
+        One request to the bridge, which flies the take-off its aircraft's way (PX4: OFFBOARD
+        on its own held setpoint, arm, climb; ArduPilot: GUIDED, arm, TAKEOFF; Tello: takeoff,
+        then up to ``h``) and answers once there; the aircraft then holds there by itself
+        until commanded. Idempotent: already flying, nothing is done (a warning says so).
 
         Raises:
             CommandRefused: a step was refused (the autopilot's reason is in the message), or
@@ -1018,7 +1010,8 @@ class DroneWrapper:
     def land(self, *, timeout: float = 60.0) -> None:
         """Land where the drone is and return when it is on the ground and disarmed.
 
-        Stops the setpoint stream, then calls the bridge's LAND service (no GPS needed).
+        Stops the setpoint stream, then one request to the bridge, which lands here (no GPS
+        needed) and answers once on the ground and disarmed.
 
         Raises:
             CommandRefused: the autopilot refused to land (its reason is in the message).

@@ -1,23 +1,20 @@
 """The SDK's blocking take-off and landing: the runtime's flight steps, driven to the end.
 
-``DroneWrapper.takeoff`` / ``land`` do not write the sequences again: they build the
-:mod:`dronewrapper.runtime.flight` ``Takeoff`` / ``Landing`` that a service's loop steps, on a
-:class:`WrapperAircraft` (the wrapper's telemetry, setpoint stream and service calls), and
-:func:`fly` steps them on the caller's thread until done. A service call blocks its step (up
-to the wrapper's ``service_timeout``, as the SDK's calls always did); the climb and the
-descent are watched every ``interval`` s of the wrapper's clock. A :class:`FlightError`
-becomes the SDK's exception (:func:`drone_error`), with the same text.
+``DroneWrapper.takeoff`` / ``land`` build the :mod:`dronewrapper.runtime.flight` ``Takeoff`` /
+``Landing`` that a service's loop steps (one request to the bridge each, answered once the
+manoeuvre has ended), on a :class:`WrapperAircraft` (the wrapper's state, setpoint stream and
+service calls), and :func:`fly` steps them on the caller's thread until done. A
+:class:`FlightError` becomes the SDK's exception (:func:`drone_error`), with the same text.
 """
 
 from __future__ import annotations
 
-import collections
 from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
 from dronewrapper.errors import CommandRefused, DroneError, NoData, NotConnected, Timeout
-from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State, StatusText
+from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime.commander import STATE_FRESH_S, Pending
 from dronewrapper.runtime.flight import (
@@ -39,13 +36,10 @@ class WrapperAircraft:
 
     Args:
         ns: the vehicle namespace.
-        state, extended, pose: the wrapper's newest-value holders.
-        status_texts: the wrapper's autopilot texts (newest last).
-        set_target: streams a setpoint (the wrapper's setpoint stream).
-        stop: stops the stream.
+        state: the wrapper's newest State holder.
+        stop: stops the wrapper's setpoint stream.
         ask: ``ask(service, request, timeout)``: a blocking call that returns the reply or
             raises the runtime's ServiceError / ServiceUnavailable.
-        wall: Unix time (s), the stamp of the take-off setpoints.
     """
 
     def __init__(
@@ -53,19 +47,12 @@ class WrapperAircraft:
         ns: str,
         *,
         state: Latest[State],
-        extended: Latest[ExtendedState],
-        pose: Latest[Any],
-        status_texts: collections.deque[StatusText],
-        set_target: Callable[[PositionTarget], None],
         stop: Callable[[], None],
         ask: Callable[[Service[Any, Any], Any, float], Any],
-        wall: Callable[[], float],
     ) -> None:
         self.ns = ns
-        self.state, self.extended, self.pose = state, extended, pose
-        self.wall = wall
-        self._texts = status_texts
-        self._set_target, self._stop, self._ask = set_target, stop, ask
+        self.state = state
+        self._stop, self._ask = stop, ask
 
     def connected_state(self) -> State | None:
         state = self.state.fresh(STATE_FRESH_S)
@@ -73,12 +60,6 @@ class WrapperAircraft:
 
     def not_ready_reason(self) -> str:
         return "the bridge's autopilot is not connected"
-
-    def last_status_text(self) -> str:
-        return self._texts[-1].text if self._texts else ""
-
-    def set(self, target: PositionTarget, now: float) -> None:
-        self._set_target(target)
 
     def stop(self) -> None:
         self._stop()

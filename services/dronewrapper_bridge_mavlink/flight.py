@@ -109,7 +109,7 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
             z = start_z if step != "arming" else target_z
             core.failsafe.hold_at(hold_target((x, y, z), yaw))
     log.info("takeoff: %s, armed, climbing to %.2f m", mode, target_z)
-    outcome = yield from climb(core, mode, target_z - tolerance, deadline)
+    outcome = yield from climb(core, mode, target_z, tolerance, deadline, timeout)
     if outcome is not None:
         if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == REFUSED:
             core.failsafe.release_hold()
@@ -123,10 +123,10 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
 
 
 def climb(
-    core: BridgeCore, mode: str, z_done: float, deadline: float
+    core: BridgeCore, mode: str, target_z: float, tolerance: float, deadline: float, timeout: float
 ) -> Generator[float, None, FlightResult | None]:
-    """Wait until the local z reaches ``z_done``: None, or the failure (disarmed, left
-    ``mode``, too late)."""
+    """Wait until the local z is within ``tolerance`` of ``target_z`` (m): None, or the
+    failure (disarmed, left ``mode``, ``deadline`` passed)."""
     seen_armed = seen_mode = False
     while True:
         state = core.heartbeat_state
@@ -139,12 +139,13 @@ def climb(
                 text = f"the autopilot left {mode} for {state.mode}{last_text(core)}"
                 return failed(REFUSED, text, "takeoff")
         position = core.telemetry.position_enu
-        if position is not None and position[2] >= z_done:
+        if position is not None and position[2] >= target_z - tolerance:
             return None
         if core.now >= deadline:
             return failed(
                 TOO_LATE,
-                f"altitude {z_done:.2f} m not reached in time (now {altitude_text(core)}, "
+                f"altitude {target_z:.2f} m not reached within {timeout:g} s (now "
+                f"{altitude_text(core)}, "
                 f"mode {state.mode if state else '?'}, armed {state.armed if state else '?'})",
             )
         yield deadline

@@ -10,7 +10,9 @@ test_controller_process.py.
 from __future__ import annotations
 
 import itertools
+import math
 import threading
+from concurrent.futures import Future
 
 import pytest
 from bus_autopilot import BusAutopilot, drive
@@ -25,7 +27,7 @@ from dronewrapper.msgs.control import (
     CONTROLLER_TRACKING,
     ControllerStatus,
 )
-from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY, PositionTarget
+from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
 from dronewrapper.runtime.commander import Commander
@@ -45,6 +47,50 @@ def blob(x: float, y: float, radius: float) -> Detection2D:
     return Detection2D(bbox=box, circle_radius=radius, id="")
 
 
+class DeferredCalls:
+    """The commander's calls, each made at the bus's next wake instead of on a worker thread: a
+    request the aircraft answers only once its manoeuvre has ended (the take-off) moves the bus
+    on meanwhile, stepping the controller's loop too, so the loop runs during the call as it
+    does with the real commander's workers."""
+
+    def __init__(self) -> None:
+        self.queue: list[tuple] = []
+
+    def submit(self, call) -> Future:
+        future: Future = Future()
+        self.queue.append((call, future))
+        return future
+
+    def step(self, now: float) -> None:
+        while self.queue:
+            call, future = self.queue.pop(0)
+            try:
+                future.set_result(call())
+            except Exception as exc:
+                future.set_exception(exc)
+
+    def next_wake(self, now: float) -> float:
+        return now if self.queue else math.inf
+
+    def shutdown(self, **_: object) -> None:
+        self.queue.clear()
+
+
+class At:
+    """Runs ``action`` once, at bus time ``when`` (also while a waiting call moves the bus)."""
+
+    def __init__(self, when: float, action) -> None:
+        self.when, self.action = when, action
+
+    def step(self, now: float) -> None:
+        if now >= self.when and self.action is not None:
+            action, self.action = self.action, None
+            action()
+
+    def next_wake(self, now: float) -> float:
+        return self.when if self.action is not None else math.inf
+
+
 class Rig:
     """The controller and an autopilot on one fake bus."""
 
@@ -61,15 +107,26 @@ class Rig:
             if self.config.dry_run
             else Commander(self.node, name="controller", clock=clock, wall=clock, inline_calls=True)
         )
+        self.calls = DeferredCalls()
+        if commander is not None:
+            commander._pool = self.calls
         self.ctl = Controller(self.node, self.config, commander, clock(), clock=clock, wall=clock)
+        self.steppers = [s for s in (self.autopilot, self.ctl, self.calls) if s is not None]
+        if self.autopilot is not None:
+            self.autopilot.steppers = tuple(self.steppers)
 
     def now(self) -> float:
         return self.bus.clock()
 
+    def at(self, delay: float, action) -> None:
+        """Run ``action`` once ``delay`` s of bus time from now have passed."""
+        self.steppers.append(At(self.now() + delay, action))
+        if self.autopilot is not None:
+            self.autopilot.steppers = tuple(self.steppers)
+
     def run(self, seconds: float) -> None:
         """Run for ``seconds`` of bus time (or until the controller finished)."""
-        steppers = [s for s in (self.autopilot, self.ctl) if s is not None]
-        drive(self.bus, self.now() + seconds, *steppers, stop=lambda: self.ctl.finished)
+        drive(self.bus, self.now() + seconds, *self.steppers, stop=lambda: self.ctl.finished)
 
     def feed(self, *dets: Detection2D, seconds: float, hz: float = 20.0) -> list[float]:
         """Schedule detections (``dets``, maybe none) at ``hz`` from now on; their stamps."""
@@ -187,7 +244,7 @@ def test_stop_is_seen_within_one_control_period_while_servoing():
     rig.node.stop()
     stopped_at = rig.now()
     rig.run(10.0)
-    (called_at,) = [t for t, name in rig.autopilot.calls if name == "land"]
+    (called_at,) = [t for t, name in rig.autopilot.calls if name == "flight_land"]
     assert called_at - stopped_at <= 1 / 20 + 1e-6
     assert rig.ctl.exit_code == 0 and not rig.autopilot.armed
 
@@ -197,24 +254,23 @@ def test_takes_off_on_start_watching_only_and_lands_on_exit():
     rig.feed(blob(600, 240, 10), seconds=4.0)  # the target is in view during the climb
     rig.run(0.2)
     assert rig.state() == CONTROLLER_TAKEOFF
-    assert [name for _, name in rig.autopilot.calls] == ["set_mode", "arming"]
+    assert [name for _, name in rig.autopilot.calls] == ["flight_takeoff"]
     rig.run(3.0)
     assert rig.autopilot.z >= 1.4 and rig.autopilot.mode == "OFFBOARD"
     assert rig.state() == CONTROLLER_TRACKING
     # taking off, the controller only watched: its first velocity command came at the top
     assert rig.autopilot.z_at_first_velocity >= 1.4 - 1e-6
-    positions = [sp for _, sp in rig.autopilot.setpoints() if sp.type_mask == MASK_POSITION]
-    assert positions[0].position.z == 0.0 and positions[-1].position.z == 1.5
     assert rig.stop() == 0
-    assert rig.autopilot.called("land") == 1 and not rig.autopilot.armed
+    assert rig.autopilot.called("flight_land") == 1 and not rig.autopilot.armed
     assert CONTROLLER_LANDING in {s.state for s in rig.statuses()}
 
 
 def test_a_refused_takeoff_stops_the_stream_and_exits_1():
-    rig = Rig(["takeoff.height=1.5", "on_exit=land"], flying=False, refuse={"arming": "no GPS"})
+    refuse = {"flight_takeoff": "no GPS"}
+    rig = Rig(["takeoff.height=1.5", "on_exit=land"], flying=False, refuse=refuse)
     rig.run(5.0)
     assert rig.ctl.finished and rig.ctl.exit_code == 1
-    assert rig.autopilot.called("arming") == 1 and rig.autopilot.z == 0.0
+    assert rig.autopilot.called("flight_takeoff") == 1 and rig.autopilot.z == 0.0
     assert rig.ctl.commander.target is None  # the hold setpoint no longer streamed
 
 
@@ -222,7 +278,7 @@ def test_a_bridge_that_never_answers_fails_the_takeoff_within_its_timeout():
     rig = Rig(
         ["takeoff.height=1.5", "takeoff.timeout=3", "on_exit=land"],
         flying=False,
-        absent=["set_mode"],
+        absent=["flight_takeoff"],
     )
     start = rig.now()
     rig.run(10.0)
@@ -283,12 +339,18 @@ def test_a_bad_detections_message_is_counted_and_dropped():
 
 def test_a_stop_during_the_takeoff_lands_at_once():
     rig = Rig(["takeoff.height=3", "on_exit=land"], flying=False)
-    rig.run(1.0)  # climbing
-    assert rig.state() == CONTROLLER_TAKEOFF and 0.5 < rig.autopilot.z < 1.5
-    rig.node.stop()
-    stopped_at = rig.now()
-    assert rig.stop() == 0
-    (called_at,) = [t for t, name in rig.autopilot.calls if name == "land"]
+    seen: dict = {}
+
+    def stop_while_climbing() -> None:
+        seen.update(state=rig.state(), z=rig.autopilot.z, at=rig.now())
+        rig.node.stop()
+
+    rig.at(1.0, stop_while_climbing)
+    rig.run(30.0)
+    assert seen["state"] == CONTROLLER_TAKEOFF and 0.5 < seen["z"] < 1.5
+    assert rig.ctl.finished and rig.ctl.exit_code == 0
+    stopped_at = seen["at"]
+    (called_at,) = [t for t, name in rig.autopilot.calls if name == "flight_land"]
     assert called_at - stopped_at <= 1 / 20 + 1e-6
     assert rig.velocity() == []  # never servoed
 

@@ -1,17 +1,16 @@
 """DroneWrapper's logic on the fake bus, in bus time (tests/bus_autopilot.py SdkRig).
 
-Take-off and landing per autopilot (the runtime's flight steps, driven by the blocking calls),
-services and the errors they raise, setpoints, getters and their ages: a BusAutopilot serves the
-bridge's keys, and the wrapper's blocking calls move the bus time instead of sleeping, so every
-duration here is exact however loaded the machine. The SDK's Zenoh wiring (the constructor's
-waits and diagnoses, the stream's rate on the wire, sessions, cameras pulled only when read) is
-tested on a real router in tests/integration/test_sdk_zenoh.py.
+Take-off and landing (one request each: the bridge flies them), services and the errors they
+raise, setpoints, getters and their ages: a BusAutopilot serves the bridge's keys, and the
+wrapper's blocking calls move the bus time instead of sleeping, so every duration here is
+exact however loaded the machine. The SDK's Zenoh wiring (the constructor's waits and
+diagnoses, the stream's rate on the wire, sessions, cameras pulled only when read) is tested on
+a real router in tests/integration/test_sdk_zenoh.py.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Iterator
 
 import numpy as np
@@ -23,7 +22,6 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_ON_GROUND,
     MASK_MIXED,
-    MASK_POSITION,
     MASK_VELOCITY,
     ParamGetResult,
 )
@@ -104,59 +102,49 @@ def test_bad_commands_raise_and_send_nothing(rig):
     assert {(m.velocity.x, m.type_mask) for m in sent(rig)} == {(0.25, MASK_VELOCITY)}
 
 
-def test_takeoff_streams_then_offboard_then_arms_and_returns_at_altitude(rig):
+def test_takeoff_is_one_request_answered_at_altitude(rig):
     drone, pilot = rig.drone, rig.pilot
     start = rig.bus.clock()
     drone.takeoff(h=1.0, timeout=20)
     assert drone.get_position()[2] >= 0.9
     assert rig.bus.clock() - start == pytest.approx(0.9, abs=0.1)  # 1 m/s, back on arrival
-    assert names(rig) == ["set_mode", "arming"] and pilot.requests[0].custom_mode == "OFFBOARD"
-    hold = sent(rig)[0]  # streamed before OFFBOARD: hold where it stands
-    assert hold.type_mask == MASK_POSITION and (hold.position.x, hold.position.z) == (1.0, 0.0)
-    assert drone.commanding.position.z == pytest.approx(1.0)  # still streamed after the return
+    assert names(rig) == ["flight_takeoff"]
+    assert (pilot.requests[0].height, pilot.requests[0].timeout) == (1.0, 20.0)
+    assert drone.commanding is None and sent(rig) == []  # the bridge holds it there
     assert drone.is_flying()
-    drone.takeoff(h=1.0)  # idempotent: flying -> returns at once, no service call
-    assert names(rig) == ["set_mode", "arming"]
+    drone.takeoff(h=3.0)  # idempotent: the bridge does nothing while flying
+    assert pilot.goal == pytest.approx(1.0)
     drone.land(timeout=20)
-    assert names(rig)[-1] == "land"
+    assert names(rig)[-1] == "flight_land" and pilot.requests[-1].timeout == 20.0
     assert drone.get_landed_state() == LANDED_STATE_ON_GROUND and not drone.get_state().armed
-    assert drone.commanding is None  # land stops the stream
-    # no GPS needed: land asks to land "here" (NaN latitude/longitude)
-    assert math.isnan(pilot.requests[-1].latitude) and math.isnan(pilot.requests[-1].longitude)
 
 
-@pytest.mark.parametrize(
-    ("autopilot", "expected"),
-    [("ardupilotmega", ["set_mode", "arming", "takeoff"]), ("tello", ["takeoff"])],
-)
-def test_takeoff_sequence_follows_the_autopilot(autopilot, expected):
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilotmega", "tello"])
+def test_takeoff_is_the_same_request_for_every_aircraft(autopilot):
     rig = SdkRig({"autopilot": autopilot})
     rig.drone.takeoff(h=1.0, timeout=20)
-    assert names(rig) == expected
-    assert rig.pilot.requests[-1].altitude == 1.0
-    if autopilot != "tello":
-        assert rig.pilot.requests[0].custom_mode == "GUIDED"
+    assert names(rig) == ["flight_takeoff"] and rig.pilot.requests[-1].height == 1.0
     assert rig.drone.get_position()[2] >= 0.9
-    assert rig.drone.commanding is None  # these autopilots hold by themselves
     rig.close()
 
 
-def test_takeoff_refusal_carries_the_autopilot_reason_and_result(rig):
-    rig.pilot.refuse["arming"] = "Arming denied: preflight checks failed"
+def test_land_stops_the_stream_first(rig):
+    rig.pilot.armed, rig.pilot.z = True, 2.0
+    rig.drone.set_cmd_vel(vx=0.5)
+    rig.drone.land(timeout=20)
+    assert rig.drone.commanding is None
+    last_setpoint = rig.pilot.setpoints()[-1][0]
+    assert last_setpoint <= rig.pilot.calls[-1][0]  # nothing streamed after the request
+
+
+def test_takeoff_refusal_carries_the_bridges_step_reason_and_result(rig):
+    rig.pilot.refuse["flight_takeoff"] = "Arming denied: preflight checks failed"
     with pytest.raises(CommandRefused) as info:
         rig.drone.takeoff(h=1.0, timeout=10)
-    assert str(info.value) == f"arming refused (result {REFUSED}): {rig.pilot.refuse['arming']}"
-    assert info.value.command == "arming" and info.value.result == REFUSED
-    assert rig.drone.commanding is None  # no stream left behind after a refusal
-    assert rig.drone.status_texts[-1].text == rig.pilot.refuse["arming"]
-
-
-def test_a_refused_mode_names_it():
-    rig = SdkRig({"refuse": {"set_mode": "no setpoint stream"}})
-    with pytest.raises(CommandRefused, match=r"set_mode OFFBOARD refused \(result 4\): no setp"):
-        rig.drone.takeoff(h=1.0, timeout=10)
-    assert rig.drone.commanding is None
-    rig.close()
+    reason = rig.pilot.refuse["flight_takeoff"]
+    assert str(info.value) == f"takeoff refused (result {REFUSED}): {reason}"
+    assert info.value.command == "takeoff" and info.value.result == REFUSED
+    assert rig.drone.status_texts[-1].text == reason
 
 
 def test_takeoff_timeout_names_the_altitude_mode_and_arming(rig):
@@ -187,11 +175,10 @@ def test_the_pilot_taking_over_during_the_climb_is_a_refusal(rig):
 
 
 def test_a_call_nobody_answers_is_a_timeout_naming_the_key():
-    rig = SdkRig({"absent": ["arming"]})
-    key = registry.ARMING.key("drone")
-    with pytest.raises(Timeout, match=f"arming: no reply from {key} within 10 s"):
-        rig.drone.takeoff(h=1.0, timeout=30)
-    assert rig.drone.commanding is None
+    rig = SdkRig({"absent": ["flight_takeoff"]})
+    key = registry.FLIGHT_TAKEOFF.key("drone")
+    with pytest.raises(Timeout, match=f"takeoff: no reply from {key} within 40 s"):
+        rig.drone.takeoff(h=1.0, timeout=30)  # the take-off's 30 s, and 10 s for the reply
     rig.close()
 
 
@@ -277,7 +264,7 @@ def test_land_on_exit_lands_when_flying():
     with rig.drone as drone:
         drone.takeoff(h=0.6, timeout=20)
         assert drone.is_flying()
-    assert names(rig)[-1] == "land" and not rig.pilot.armed
+    assert names(rig)[-1] == "flight_land" and not rig.pilot.armed
 
 
 def test_position_setpoint_without_z_or_yaw_keeps_altitude_and_heading(rig):
@@ -319,13 +306,11 @@ def test_grounded_setpoints_and_takeoff_while_flying_say_so(rig, caplog):
         assert len(grounded) == 1  # once, not at every call
         drone.takeoff(h=1.0, timeout=20)
         messages = [r.message for r in caplog.records]
-        assert any("armed in OFFBOARD, climbing" in m for m in messages)
-        assert any("takeoff: reached 1.00 m" in m for m in messages)
+        assert any("takeoff: drone 'drone' to 1.00 m" in m for m in messages)
+        assert any("takeoff: drone 'drone': took off" in m for m in messages)
         drone.takeoff(h=4.0)
         assert any(
-            "already flying" in r.message and "does nothing" in r.message
-            for r in caplog.records
-            if r.levelno == logging.WARNING
+            "already flying" in r.message for r in caplog.records if r.levelno == logging.WARNING
         )
         drone.land(timeout=20)
         assert any("on the ground and disarmed" in r.message for r in caplog.records)

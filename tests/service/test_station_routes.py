@@ -14,10 +14,10 @@ from asgi_driver import WebSocketRefused
 from station_rig import REMOTE, TARGET, TOKEN, StationRig, X
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import LandRequest
 from dronewrapper.msgs.mavros import (
     MASK_POSITION,
     CommandBool,
-    CommandTOL,
     PositionTarget,
     SetMode,
     State,
@@ -161,14 +161,15 @@ def test_goto_and_hold_send_position_setpoints(rig: StationRig) -> None:
 def test_land_waits_for_the_ground(rig: StationRig) -> None:
     status, reply, _ = rig.http("POST", "/api/drones/drone/land", {})
     assert status == 200 and reply["ok"] is True, reply
-    assert rig.pilot.called("land") == 1 and isinstance(rig.pilot.requests[-1], CommandTOL)
+    assert rig.pilot.called("flight_land") == 1
+    assert isinstance(rig.pilot.requests[-1], LandRequest)
     snap = rig.http("GET", "/api/drones/drone")[1]  # answered once on the ground
     assert snap["landed"]["landed_state"] == "on_ground"
     assert snap["state"]["armed"] is False
 
 
 def test_land_refused_says_why(rig: StationRig) -> None:
-    rig.pilot.refuse["land"] = "landing denied"
+    rig.pilot.refuse["flight_land"] = "landing denied"
     status, reply, _ = rig.http("POST", "/api/drones/drone/land", {})
     assert status == 409 and "landing denied" in reply["error"]
 

@@ -174,7 +174,7 @@ def test_too_late_names_the_altitude_mode_and_arming():
     ap.rate = 0.1
     reply = ap.run(rig.call(flight.takeoff_to, TakeoffRequest(height=5.0, timeout=3.0)))
     assert reply.failure == TOO_LATE
-    assert "altitude 4.90 m not reached in time (now z=0." in reply.message
+    assert "altitude 5.00 m not reached within 3 s (now z=0." in reply.message
     assert "mode OFFBOARD, armed True" in reply.message
 
 

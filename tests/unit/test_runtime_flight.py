@@ -1,4 +1,5 @@
-"""Take-off and landing as non-blocking sequences, per autopilot, on the fake bus."""
+"""Take-off and landing as non-blocking sequences on the fake bus: one request each, the
+bridge's reply mapped to its error."""
 
 from __future__ import annotations
 
@@ -7,14 +8,17 @@ import logging
 import pytest
 from bus_autopilot import BusAutopilot, drive
 
-from dronewrapper.msgs.mavros import MASK_POSITION
+from dronewrapper.msgs.flight import NO_POSITION, REFUSED, TOO_LATE, FlightResult, TakeoffRequest
+from dronewrapper.runtime import flight
 from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper.runtime.flight import (
     FlightError,
     FlightSequence,
     Landing,
+    NoPosition,
     NoReply,
+    NotReady,
     StepRefused,
     Takeoff,
     TooLate,
@@ -43,6 +47,19 @@ class Loop:
         return min(now + PERIOD, self.commander.next_due())
 
 
+class Stepper:
+    """Runs ``action`` at every wake of the bus (as the aircraft moves)."""
+
+    def __init__(self, action) -> None:
+        self.action = action
+
+    def step(self, now: float) -> None:
+        self.action()
+
+    def next_wake(self, now: float) -> float:
+        return now + PERIOD
+
+
 def rig(**autopilot) -> tuple[FakeBus, BusAutopilot, Commander]:
     bus = FakeBus(start=T0)
     pilot = BusAutopilot(bus, **{"flying": False, **autopilot})
@@ -57,77 +74,66 @@ def fly(bus: FakeBus, pilot: BusAutopilot, loop: Loop, seconds: float) -> None:
     drive(bus, bus.clock() + seconds, pilot, loop, stop=lambda: loop.sequence.done)
 
 
-def test_px4_holds_enters_offboard_arms_and_climbs_streaming_the_target():
+def test_takeoff_is_one_request_and_the_climb_is_the_bridges():
     bus, pilot, c = rig()
     loop = Loop(c, Takeoff(c, 2.0, 10.0, T0))
     fly(bus, pilot, loop, 10.0)
     assert loop.sequence.done and loop.error is None
-    assert [name for _, name in pilot.calls] == ["set_mode", "arming"]
-    assert pilot.mode == "OFFBOARD" and pilot.z >= 1.9
-    positions = [sp.position.z for _, sp in pilot.setpoints() if sp.type_mask == MASK_POSITION]
-    assert positions[0] == 0.0 and positions[-1] == 2.0  # hold first, then the target
-    assert c.target is not None and c.target.position.z == 2.0  # still streamed after
-    assert bus.clock() - T0 == pytest.approx(2.0, abs=0.2)  # at 1 m/s
+    assert [name for _, name in pilot.calls] == ["flight_takeoff"]
+    assert pilot.requests[0] == TakeoffRequest(height=2.0, timeout=10.0, tolerance=0.1)
+    assert loop.sequence.result.success and pilot.z >= 1.9
+    assert pilot.setpoints() == [] and c.target is None  # nothing streamed by the loop
+    assert bus.clock() - T0 == pytest.approx(2.0, abs=0.2)  # at 1 m/s, in bus time
 
 
-@pytest.mark.parametrize(
-    ("autopilot", "calls"),
-    [("ardupilotmega", ["set_mode", "arming", "takeoff"]), ("tello", ["takeoff"])],
-)
-def test_ardupilot_and_tello_take_off_by_command(autopilot, calls):
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilotmega", "tello"])
+def test_every_aircraft_gets_the_same_request(autopilot):
     bus, pilot, c = rig(autopilot=autopilot)
     loop = Loop(c, Takeoff(c, 1.5, 10.0, T0))
     fly(bus, pilot, loop, 10.0)
-    assert loop.sequence.done and loop.error is None
-    assert [name for _, name in pilot.calls] == calls and pilot.z >= 1.4
-    assert pilot.setpoints() == []  # no setpoint stream needed
+    assert loop.error is None and [name for _, name in pilot.calls] == ["flight_takeoff"]
 
 
 def test_already_flying_does_nothing_and_says_so(caplog):
     _, pilot, c = rig(flying=True)
     seq = Takeoff(c, 3.0, 10.0, T0)
     with caplog.at_level(logging.WARNING, logger="dronewrapper.flight"):
-        assert seq.step(T0) and pilot.calls == [] and c.target is None
+        assert seq.step(T0) and pilot.goal == 2.0
     (warning,) = caplog.records
-    assert "already flying (z=2.00 m), so this does nothing" in warning.message
+    assert "already flying (z=2.00 m)" in warning.message
 
 
-def test_a_refused_arming_names_the_reason_and_stops_the_hold_stream():
-    _, _, c = rig(refuse={"arming": "Arming denied: no GPS"})
+def test_a_refusal_names_the_step_the_reason_and_the_result():
+    _, _, c = rig(refuse={"flight_takeoff": "Arming denied: no GPS"})
     seq = Takeoff(c, 2.0, 10.0, T0)
-    with pytest.raises(FlightError, match=r"arming refused \(result 4\): Arming denied: no GPS"):
+    with pytest.raises(StepRefused, match=r"takeoff refused \(result 4\): Arming denied: no GPS"):
         seq.step(T0)
-    assert seq.done and c.target is None and seq.step(T0 + 1)
+    assert seq.done and seq.step(T0 + 1)
 
 
-def test_a_missing_server_fails_the_step_naming_it():
-    _, _, c = rig(absent=["set_mode"])
-    with pytest.raises(
-        NoReply, match="set_mode OFFBOARD: no reply from drone/mavros/set_mode"
-    ) as e:
+def test_a_missing_server_is_no_reply_naming_the_key_and_the_whole_wait():
+    _, _, c = rig(absent=["flight_takeoff"])
+    with pytest.raises(NoReply, match="takeoff: no reply from drone/dronewrapper/takeoff") as e:
         Takeoff(c, 2.0, 10.0, T0).step(T0)
-    assert e.value.key == "drone/mavros/set_mode" and e.value.timeout == 10.0
+    assert e.value.key == "drone/dronewrapper/takeoff" and e.value.timeout == 20.0
 
 
-def test_disarming_or_leaving_offboard_during_the_climb_fails():
+def test_disarming_or_leaving_the_mode_during_the_climb_fails():
     bus, pilot, c = rig()
+
+    def failsafe() -> None:
+        if pilot.z > 1.0:
+            pilot.say("Failsafe: battery critical")
+            pilot.armed = False  # e.g. a failsafe on the autopilot
+
+    pilot.steppers = (pilot, Stepper(failsafe))
     loop = Loop(c, Takeoff(c, 5.0, 20.0, T0))
-    fly(bus, pilot, loop, 1.0)
-    pilot.say("Failsafe: battery critical")
-    pilot.armed = False  # e.g. a failsafe on the autopilot
-    fly(bus, pilot, loop, 1.0)
+    fly(bus, pilot, loop, 10.0)
     assert isinstance(loop.error, StepRefused) and loop.error.command == "takeoff"
     assert "the autopilot disarmed (Failsafe: battery critical)" in str(loop.error)
 
-    bus, pilot, c = rig()
-    loop = Loop(c, Takeoff(c, 5.0, 20.0, T0))
-    fly(bus, pilot, loop, 1.0)
-    pilot.mode = "AUTO.LOITER"  # the pilot took over
-    fly(bus, pilot, loop, 1.0)
-    assert loop.error is not None and "left OFFBOARD for AUTO.LOITER" in str(loop.error)
 
-
-def test_the_climb_times_out_on_the_loop_clock():
+def test_the_climb_times_out_in_the_bridges_time():
     bus, pilot, c = rig()
     loop = Loop(c, Takeoff(c, 10.0, 3.0, T0))  # 10 m at 1 m/s cannot take 3 s
     fly(bus, pilot, loop, 10.0)
@@ -135,19 +141,27 @@ def test_the_climb_times_out_on_the_loop_clock():
     assert bus.clock() - T0 == pytest.approx(3.0, abs=PERIOD + 1e-6)
 
 
-def test_landing_stops_the_stream_calls_land_and_waits_for_the_ground():
+@pytest.mark.parametrize(
+    ("failure", "error"),
+    [(REFUSED, StepRefused), (TOO_LATE, TooLate), (NO_POSITION, NoPosition), ("x", NotReady)],
+)
+def test_each_failure_the_bridge_reports_is_its_error(failure, error):
+    reply = FlightResult(failure=failure, step="arming", result=1, message="why")
+    assert isinstance(flight.failure("takeoff", reply), error)
+    assert "why" in str(flight.failure("takeoff", reply))
+
+
+def test_landing_stops_the_stream_then_asks_once_and_waits_for_the_ground():
     bus, pilot, c = rig(flying=True)
     c.set_velocity(0, 0, 0, 0, T0)
     loop = Loop(c, Landing(c, 10.0, T0))
     fly(bus, pilot, loop, 10.0)
     assert loop.sequence.done and loop.error is None
-    assert pilot.called("land") == 1 and not pilot.armed and c.target is None
+    assert pilot.called("flight_land") == 1 and not pilot.armed and c.target is None
 
 
-def test_landing_on_the_ground_disarmed_calls_nothing_and_a_refusal_is_named():
-    _, pilot, c = rig()
-    assert Landing(c, 10.0, T0).step(T0) and pilot.calls == []
-    _, _, c = rig(flying=True, refuse={"land": "not now"})
+def test_a_refused_landing_is_named():
+    _, _, c = rig(flying=True, refuse={"flight_land": "not now"})
     with pytest.raises(FlightError, match=r"land refused \(result 4\): not now"):
         Landing(c, 10.0, T0).step(T0)
 
