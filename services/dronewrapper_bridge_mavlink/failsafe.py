@@ -1,7 +1,7 @@
 """The failsafe contract of docs/design.md for a MAVLink autopilot (pure; time injected, s).
 
 The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
-config's shape) is the shared :mod:`dronewrapper.runtime.command_lease`; this module adds what
+config's shape) is the shared :mod:`dronewrapper.runtime.setpoint_watchdog`; this module adds what
 is MAVLink's: the guided mode, priming, and never fighting the pilot.
 
 What the bridge streams to the autopilot each tick, and when it acts on its own:
@@ -52,15 +52,15 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     PositionTarget,
 )
-from dronewrapper.runtime.command_lease import (
+from dronewrapper.runtime.setpoint_watchdog import (
     ACTIONS,
     HOLD,
     LAND,
     NONE,
     RETURN,
-    CommandLease,
-    LeaseConfig,
+    SetpointWatchdog,
     Transition,
+    WatchdogConfig,
 )
 from dronewrapper_bridge_mavlink.modes import holds_on_the_ground, is_guided
 from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
@@ -80,8 +80,8 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class FailsafeConfig(LeaseConfig):
-    """The lease's timeouts (s) and lost action (``hold``, ``land``, ``return``), and how long a
+class FailsafeConfig(WatchdogConfig):
+    """The watchdog's timeouts (s) and lost action (``hold``, ``land``, ``return``), and how long a
     mode change the bridge asked for counts as expected (s)."""
 
     expected_mode_window: float = 15.0
@@ -111,7 +111,7 @@ def is_airborne(landed_state: int, armed: bool) -> bool:
     return landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF, LANDED_STATE_LANDING)
 
 
-class Failsafe(CommandLease[Kind]):
+class Failsafe(SetpointWatchdog[Kind]):
     """The bridge's setpoint stream and failsafe state (see module docstring)."""
 
     config: FailsafeConfig

@@ -1,7 +1,7 @@
 """The failsafe contract of DESIGN.md for a Tello, as a pure state machine (time injected).
 
 The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
-config's shape) is the shared :mod:`dronewrapper.runtime.command_lease`; this module adds what
+config's shape) is the shared :mod:`dronewrapper.runtime.setpoint_watchdog`; this module adds what
 is the Tello's: the repeated stop and the keep-alive.
 
 A Tello has no flight modes to fight over and hovers by itself on its optical-flow sensor when
@@ -28,13 +28,13 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from dronewrapper.msgs.mavros import PositionTarget
-from dronewrapper.runtime.command_lease import (
+from dronewrapper.runtime.setpoint_watchdog import (
     HOLD,
     LAND,
     NONE,
-    CommandLease,
-    LeaseConfig,
+    SetpointWatchdog,
     Transition,
+    WatchdogConfig,
 )
 from dronewrapper_bridge_tello.sticks import Kind
 
@@ -43,8 +43,8 @@ __all__ = ["ACTIONS", "HOLD", "LAND", "NONE", "Failsafe", "FailsafeConfig", "Tic
 
 
 @dataclass(frozen=True)
-class FailsafeConfig(LeaseConfig):
-    """The lease's timeouts (s) and lost action (``land`` or ``hold``: a Tello has no return),
+class FailsafeConfig(WatchdogConfig):
+    """The watchdog's timeouts (s) and lost action (``land`` or ``hold``: a Tello has no return),
     how long the stop is repeated (s) and the keep-alive period (s, under the Tello's 15 s)."""
 
     ACTIONS: ClassVar[tuple[str, ...]] = ACTIONS
@@ -75,7 +75,7 @@ class Tick:
     transitions: list[Transition] = field(default_factory=list)
 
 
-class Failsafe(CommandLease[Kind]):
+class Failsafe(SetpointWatchdog[Kind]):
     """The bridge's stick stream and failsafe state (see module docstring)."""
 
     config: FailsafeConfig

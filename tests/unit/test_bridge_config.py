@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from dronewrapper.runtime.config import ConfigError, load_config
-from dronewrapper_bridge_mavlink.__main__ import _configure
 from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.flags import as_overrides
 from dronewrapper_bridge_mavlink.link import network_exposure
 
 CONFIG_DIR = (
@@ -38,7 +38,7 @@ def test_overrides_and_cli_flags():
         connection = "tcp:127.0.0.1:5760"
         baud = 921600
 
-    _configure(Args(), overrides)
+    as_overrides(Args(), overrides)
     c = load_config(Config, None, [*overrides, "limits.max_horizontal_speed=5"])
     assert (c.connection, c.baud, c.limits.max_horizontal_speed) == ("tcp:127.0.0.1:5760",
                                                                       921600, 5.0)  # fmt: skip

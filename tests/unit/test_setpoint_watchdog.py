@@ -1,4 +1,5 @@
-"""The command lease every bridge shares (dronewrapper.runtime.command_lease), in given time."""
+"""The setpoint watchdog every bridge shares (dronewrapper.runtime.setpoint_watchdog), in given
+time."""
 
 from __future__ import annotations
 
@@ -10,14 +11,14 @@ import pytest
 
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.runtime.command_lease import (
+from dronewrapper.runtime.setpoint_watchdog import (
     HOLD,
     LAND,
     NONE,
     RETURN,
-    CommandLease,
-    LeaseConfig,
+    SetpointWatchdog,
     Transition,
+    WatchdogConfig,
 )
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig as MavlinkFailsafeConfig
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig as TelloFailsafeConfig
@@ -27,8 +28,8 @@ TARGET = PositionTarget(
 )
 
 
-def steered(config: LeaseConfig | None = None, at: float = 10.0) -> CommandLease[str]:
-    lease: CommandLease[str] = CommandLease(config or LeaseConfig())
+def steered(config: WatchdogConfig | None = None, at: float = 10.0) -> SetpointWatchdog[str]:
+    lease: SetpointWatchdog[str] = SetpointWatchdog(config or WatchdogConfig())
     lease.take_setpoint(TARGET, "velocity", at)
     lease.engaged = True
     return lease
@@ -42,10 +43,10 @@ def test_fresh_until_setpoint_timeout_then_stale():
 
 
 def test_no_setpoint_is_never_fresh():
-    lease: CommandLease[str] = CommandLease(LeaseConfig())
+    lease: SetpointWatchdog[str] = SetpointWatchdog(WatchdogConfig())
     assert not lease.is_fresh(0.0) and lease.setpoint_age(0.0) == math.inf
     assert lease.commander_lost(100.0, in_control=True) == LAND  # in control, nothing came
-    lease = CommandLease(LeaseConfig())
+    lease = SetpointWatchdog(WatchdogConfig())
     assert lease.commander_lost(100.0, in_control=False) == ""
 
 
@@ -65,7 +66,7 @@ def test_hold_then_a_fresh_setpoint_ends_it():
 
 @pytest.mark.parametrize("action", [LAND, RETURN])
 def test_commander_lost_after_its_timeout_once(action):
-    lease = steered(LeaseConfig(commander_lost_action=action))
+    lease = steered(WatchdogConfig(commander_lost_action=action))
     assert lease.commander_lost(15.0, in_control=True) == ""  # exactly 5 s: not yet
     assert lease.commander_lost(15.01, in_control=True) == action
     assert lease.state == action
@@ -82,7 +83,7 @@ def test_commander_lost_counts_from_since_and_needs_control():
 
 
 def test_hold_action_never_acts():
-    lease = steered(LeaseConfig(commander_lost_action=HOLD))
+    lease = steered(WatchdogConfig(commander_lost_action=HOLD))
     assert lease.commander_lost(1e6, in_control=True) == "" and lease.state == NONE
 
 
@@ -95,16 +96,16 @@ def test_forget_setpoint_drops_it_and_the_engagement():
 
 def test_config_is_checked_and_names_the_problem():
     with pytest.raises(ValueError, match="commander_lost_action"):
-        LeaseConfig(commander_lost_action="panic")
+        WatchdogConfig(commander_lost_action="panic")
     with pytest.raises(ValueError, match="setpoint_timeout < commander_lost_timeout"):
-        LeaseConfig(setpoint_timeout=6.0)
+        WatchdogConfig(setpoint_timeout=6.0)
     with pytest.raises(ValueError, match="setpoint_timeout"):
-        LeaseConfig(setpoint_timeout=math.nan)
+        WatchdogConfig(setpoint_timeout=math.nan)
 
 
 def test_each_bridge_narrows_the_actions_it_can_fly():
     @dataclass(frozen=True)
-    class NoReturn(LeaseConfig):
+    class NoReturn(WatchdogConfig):
         ACTIONS: ClassVar[tuple[str, ...]] = (HOLD, LAND)
 
     with pytest.raises(ValueError, match="one of hold, land"):
@@ -112,5 +113,5 @@ def test_each_bridge_narrows_the_actions_it_can_fly():
     with pytest.raises(ValueError, match="one of hold, land,"):
         TelloFailsafeConfig(commander_lost_action=RETURN)  # a Tello has no return
     assert MavlinkFailsafeConfig(commander_lost_action=RETURN).commander_lost_action == RETURN
-    assert isinstance(TelloFailsafeConfig(), LeaseConfig)
-    assert isinstance(MavlinkFailsafeConfig(), LeaseConfig)
+    assert isinstance(TelloFailsafeConfig(), WatchdogConfig)
+    assert isinstance(MavlinkFailsafeConfig(), WatchdogConfig)

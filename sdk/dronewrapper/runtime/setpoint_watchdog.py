@@ -1,11 +1,11 @@
-"""The command lease every bridge keeps with its commander (pure; time injected, monotonic s).
+"""The setpoint watchdog every bridge keeps on its commander (pure; time injected, monotonic s).
 
 DESIGN's failsafe contract, the part that does not depend on the aircraft:
 
 * The latest valid setpoint is **fresh** while younger than ``setpoint_timeout`` (default
   0.5 s) and is flown as it is; once it is older it is **stale** and the bridge makes the
   aircraft hover: state ``hold``. A fresh setpoint ends the hold.
-* Once a commander has steered (the bridge says when: :attr:`CommandLease.engaged`), no
+* Once a commander has steered (the bridge says when: :attr:`SetpointWatchdog.engaged`), no
   setpoint for ``commander_lost_timeout`` (default 5 s) while airborne means the **commander is
   lost**: the bridge takes ``commander_lost_action`` (``land`` by default, ``return``, or
   ``hold``: keep hovering), once; state ``land`` / ``return`` until the bridge clears it.
@@ -13,10 +13,10 @@ DESIGN's failsafe contract, the part that does not depend on the aircraft:
 How the hover and the action are flown is each bridge's own (a MAVLink bridge streams a
 position hold in the autopilot's guided mode and never fights the pilot; a Tello bridge sends
 centred sticks and keeps its link alive): their failsafe modules subclass
-:class:`CommandLease` and :class:`LeaseConfig`. Every state change is queued as a
-:class:`Transition` so the bridge logs and publishes it (:meth:`CommandLease.transitions`).
+:class:`SetpointWatchdog` and :class:`WatchdogConfig`. Every state change is queued as a
+:class:`Transition` so the bridge logs and publishes it (:meth:`SetpointWatchdog.transitions`).
 
-(Not to be confused with :mod:`dronewrapper.security.lease`, which decides *who* may command.)
+It watches *how* the commander commands; :mod:`dronewrapper.security.lease` decides *who* may.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ K = TypeVar("K")  # the bridge's kind of setpoint (velocity, position, ...)
 
 
 @dataclass(frozen=True)
-class LeaseConfig:
+class WatchdogConfig:
     """Timeouts (s) and the commander-lost action; a bridge lists the actions it can fly in
     ``ACTIONS`` (a subclass's class attribute)."""
 
@@ -63,7 +63,7 @@ class Transition:
     reason: str
 
 
-class CommandLease(Generic[K]):
+class SetpointWatchdog(Generic[K]):
     """The latest setpoint, its freshness, and the failsafe state (see module docstring).
 
     Attributes:
@@ -72,7 +72,7 @@ class CommandLease(Generic[K]):
             (take-off, landing, a mode the pilot chose); set by the bridge.
     """
 
-    def __init__(self, config: LeaseConfig) -> None:
+    def __init__(self, config: WatchdogConfig) -> None:
         self.config = config
         self.state = NONE
         self.engaged = False
