@@ -1,15 +1,14 @@
 """The bridge without I/O: MAVLink messages and Zenoh requests in, what to send and publish out.
 
-:class:`BridgeCore` holds everything the bridge knows (the autopilot's state, telemetry, the
-failsafe, pending commands and parameter reads) and is pure: no sockets, no threads, no clock.
-Every entry point takes the time (``now`` monotonic s, ``stamp`` wall-clock s for headers) and
-queues its effects in an :class:`Outbox` that the node takes with :meth:`BridgeCore.take` and
-executes (MAVLink sends, Zenoh samples). Service calls that wait for acknowledgements are
-:mod:`operations` the core advances as messages and time arrive; the node only waits on them.
-The sim's autopilot (sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
-
-Size: just over 400 lines: the core's entry points and its outbox; the handlers are in
-``receive``, the waiting service calls in ``operations``, parameters in ``parameters``.
+:class:`BridgeCore` holds everything the bridge knows (the autopilot's connection, mode and
+landed state, telemetry, the failsafe, pending commands and parameter reads) and is pure: no
+sockets, no threads, no clock. Every entry point takes the time (``now`` monotonic s,
+``stamp`` wall-clock s for headers) and queues its effects in an :class:`Outbox` that the node
+takes with :meth:`BridgeCore.take` and executes (MAVLink sends, Zenoh samples). Which messages
+may be used and the telemetry handlers are in ``receive``; the service calls that wait for
+acknowledgements are operations (``operations``, ``flight``, ``parameters``) the core advances
+as messages and time arrive; the node only waits on them. The sim's autopilot
+(sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
 """
 
 from __future__ import annotations
@@ -17,8 +16,9 @@ from __future__ import annotations
 import collections
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import msgspec
 from pymavlink.dialects.v20 import common as mavlink
@@ -36,13 +36,20 @@ from dronewrapper_bridge_mavlink import receive
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
+from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
 from dronewrapper_bridge_mavlink.operations import failsafe_action
+from dronewrapper_bridge_mavlink.parameters import ParamCache
 from dronewrapper_bridge_mavlink.setpoints import SetpointError, to_local_ned, validate
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
     Telemetry,
+    battery_from_battery_status,
+    battery_from_sys_status,
+    extended_state,
+    is_autopilot_heartbeat,
+    state_from_heartbeat,
 )
 
 log = logging.getLogger("bridge_mavlink")
@@ -81,8 +88,7 @@ class BridgeCore(PureCore):
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
-        self.params: dict[str, tuple[float, int, int]] = {}  # id -> (raw, type, arrival no.)
-        self.param_values_received = 0  # PARAM_VALUEs so far: orders them against our sends
+        self.params = ParamCache()
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
             maxlen=32
         )
@@ -135,16 +141,95 @@ class BridgeCore(PureCore):
         if kind == "BAD_DATA":
             return
         self.messages_received += 1
-        if not receive.admit(self, msg, kind, source):
+        verdict = receive.admission(self, msg, kind, source)
+        if verdict.flag:
+            self.bridge_text(verdict.flag)
+        if verdict.peer is not None:
+            self.out.peers.append(verdict.peer)
+        if verdict.error:
+            self.out.errors.append(verdict.error)
+        if not verdict.accept:
             return
         if kind == "HEARTBEAT":
-            receive.on_heartbeat(self, msg)
+            self._on_heartbeat(msg)
         elif not self.target_system or msg.get_srcSystem() == self.target_system:
+            own = self._OWN_HANDLERS.get(kind)
             handler = receive.HANDLERS.get(kind)
-            if handler is not None:
+            if own is not None:
+                own(self, msg)
+            elif handler is not None:
                 handler(self, msg)
         if self.operations:
             self.advance(now, stamp)
+
+    def _on_heartbeat(self, msg: Any) -> None:
+        if not is_autopilot_heartbeat(msg):
+            return
+        if self.target_system and msg.get_srcSystem() != self.target_system:
+            return
+        if not self.target_system:
+            self.target_system = msg.get_srcSystem()
+            self.target_component = msg.get_srcComponent()
+        before, lost_for = self.heartbeat_state, self.now - self.last_heartbeat
+        self.last_heartbeat = self.now
+        state = state_from_heartbeat(msg, self.stamp, failsafe=self.failsafe.state)
+        if state.autopilot != self.autopilot:
+            self.autopilot = state.autopilot
+            log.info(
+                "autopilot %s (system %d, component %d)",
+                self.autopilot,
+                self.target_system,
+                self.target_component,
+            )
+        reconnected = not self.connected
+        self.connected = True
+        self.heartbeat_state = state
+        self.update_failsafe_vehicle()
+        if reconnected:
+            log.info("connected to the autopilot (mode %s)", state.mode)
+            self.rates_round = 0
+            self.next_rates = self.now
+            if before is not None:  # after a link gap: what the autopilot changed meanwhile
+                report = gap_report(before, state, lost_for)
+                if report is not None:
+                    self.bridge_text(report)
+        self.publish_state()
+
+    def _on_extended_sys_state(self, msg: Any) -> None:
+        ext = extended_state(msg, self.stamp)
+        changed = (ext.landed_state, ext.vtol_state) != (
+            self.ext.landed_state,
+            self.ext.vtol_state,
+        )
+        self.ext = ext
+        if changed:
+            self.update_failsafe_vehicle()
+            self.last_ext_pub = self.now
+            self.publish(registry.EXTENDED_STATE, ext)
+
+    def _on_global_position_int(self, msg: Any) -> None:
+        fix = self.telemetry.on_global_position(msg, self.stamp)
+        max_hz = self.config.global_position_max_hz
+        if fix is not None and (max_hz <= 0 or self.now - self.last_global_pub >= 0.9 / max_hz):
+            self.last_global_pub = self.now
+            self.publish(registry.GLOBAL_POSITION, fix)
+
+    def _on_sys_status(self, msg: Any) -> None:
+        battery = battery_from_sys_status(msg, self.stamp)
+        known = self.battery is not None and not math.isnan(self.battery.percentage)
+        if not known or not math.isnan(battery.percentage):
+            self.battery = battery
+
+    def _on_battery_status(self, msg: Any) -> None:
+        if msg.id == 0:
+            self.battery = battery_from_battery_status(msg, self.stamp)
+
+    _OWN_HANDLERS: ClassVar[dict[str, Callable[[BridgeCore, Any], None]]] = {
+        "EXTENDED_SYS_STATE": _on_extended_sys_state,
+        "GLOBAL_POSITION_INT": _on_global_position_int,
+        "SYS_STATUS": _on_sys_status,
+        "BATTERY_STATUS": _on_battery_status,
+    }
 
     def bridge_text(self, text: str) -> None:
         """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""

@@ -75,7 +75,7 @@ def exchange(
     )
     while core.command_busy or core.now < core.acks.quiet_until(command):
         yield core.now + 0.05 if core.command_busy else core.acks.quiet_until(command)
-    core.command_busy = True
+    core.take_command_slot()
     started = core.now
     core.acks.register(pending)
     try:
@@ -89,7 +89,7 @@ def exchange(
             yield pending.wake_at(core.now)
     finally:
         core.acks.release(pending, core.now)
-        core.command_busy = False
+        core.release_command_slot()
     name = cmds.command_name(command)
     if pending.result == ACCEPTED:
         return pending, f"{name} accepted"

@@ -8,7 +8,7 @@ sent, and its reply is the value the autopilot echoes.
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamSet, ParamSetResult, ParamValue
 from dronewrapper_bridge_mavlink import param_values
@@ -17,6 +17,31 @@ from dronewrapper_bridge_mavlink.operations import Steps
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core import BridgeCore
+
+
+class ParamCache:
+    """The autopilot's parameters as last heard (PARAM_VALUE), each with its arrival number, so
+    a read knows which answers came after its request."""
+
+    def __init__(self) -> None:
+        self._values: dict[str, tuple[float, int, int]] = {}  # id -> (raw, type, arrival no.)
+        self.received = 0  # PARAM_VALUEs so far
+
+    def on_value(self, msg: Any) -> None:
+        """One PARAM_VALUE."""
+        param_id = msg.param_id
+        if isinstance(param_id, bytes | bytearray):
+            param_id = bytes(param_id).decode("ascii", "replace")
+        self.received += 1
+        self._values[param_id.split("\x00", 1)[0]] = (
+            float(msg.param_value),
+            int(msg.param_type),
+            self.received,
+        )
+
+    def get(self, param_id: str) -> tuple[float, int, int] | None:
+        """(raw float, MAV_PARAM_TYPE, arrival number) of ``param_id``, None if never heard."""
+        return self._values.get(param_id)
 
 
 def check_param_id(param_id: str) -> str:
@@ -42,7 +67,7 @@ def param_exchange(
 ) -> Generator[float, None, tuple[float, int] | None]:
     """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""
     for _ in range(core.config.param_attempts):
-        sent_after = core.param_values_received  # only a PARAM_VALUE arriving later answers
+        sent_after = core.params.received  # only a PARAM_VALUE arriving later answers
         send()
         deadline = core.now + core.config.param_timeout
         while True:

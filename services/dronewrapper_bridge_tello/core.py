@@ -110,6 +110,16 @@ class TelloCore(PureCore):
         self.out.sends.append(text)
         self.failsafe.on_sent(self.now)
 
+    def in_sdk_mode(self) -> None:
+        """The Tello answered ``command``: it is in SDK mode."""
+        if not self.sdk_mode:
+            log.info("Tello in SDK mode")
+        self.sdk_mode = True
+
+    def video_streaming(self, streaming: bool) -> None:
+        """Whether the Tello accepted ``streamon``."""
+        self.streaming = streaming
+
     def require_connected(self) -> None:
         """ServiceError when no state string is arriving."""
         if not self.connected:

@@ -91,7 +91,7 @@ def exchange(
     )
     while core.command_busy:
         yield core.now + BUSY_POLL_S
-    core.command_busy = True
+    core.take_command_slot()
     try:
         while True:
             if pending.due(core.now):
@@ -107,7 +107,7 @@ def exchange(
                 yield settle
     finally:
         core.matcher.forget(pending)
-        core.command_busy = False
+        core.release_command_slot()
     if pending.reply is None:
         log.warning("%r: no reply after %d attempt(s)", text, pending.sent)
     elif not is_ok(pending.reply) and not text.endswith("?"):
@@ -129,12 +129,10 @@ def connect(core: TelloCore) -> Steps:
     reply = yield from exchange(core, "command", attempts=1)
     if reply is None or not is_ok(reply):
         return False
-    if not core.sdk_mode:
-        log.info("Tello in SDK mode")
-    core.sdk_mode = True
+    core.in_sdk_mode()
     if core.config.video:
         reply = yield from exchange(core, "streamon")
-        core.streaming = reply is not None and is_ok(reply)
+        core.video_streaming(reply is not None and is_ok(reply))
     core.publish_state(force=True)
     return True
 
@@ -156,7 +154,7 @@ def arming(core: TelloCore, request: CommandBool) -> Steps:
     reply = yield from exchange(core, "command")
     result, message = result_of(reply, "command (SDK mode)")
     if result == 0:
-        core.sdk_mode = True
+        core.in_sdk_mode()
         message = "a Tello has no arming: SDK mode confirmed, the motors start with take-off"
     return CommandBoolResult(success=result == 0, result=result, message=message)
 
@@ -275,7 +273,7 @@ def set_mode(core: TelloCore, request: SetMode) -> Steps:
     if mode in SDK_MODES:
         reply = yield from exchange(core, "command")
         if reply is not None and is_ok(reply):
-            core.sdk_mode = True
+            core.in_sdk_mode()
     elif mode in HOVER_MODES:
         core.failsafe.on_takeoff_or_land()
         reply = yield from exchange(core, "stop")

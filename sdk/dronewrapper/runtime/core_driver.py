@@ -55,7 +55,7 @@ class PureCore:
         self._outbox = outbox
         self.out = outbox()
         self.operations = Operations(log)
-        self.command_busy = False  # one command exchange with the aircraft at a time
+        self._command_busy = False  # one command exchange with the aircraft at a time
         self.lease = LeaseGate(lease_ttl_s, log)
         self.commander = ""  # the lease's holder as State shows it ("": nobody)
 
@@ -70,6 +70,20 @@ class PureCore:
     def publish(self, topic: Topic, msg: Any) -> None:
         """Queue a sample for ``topic``."""
         self.out.samples.append((topic, msg))
+
+    @property
+    def command_busy(self) -> bool:
+        """True while an operation exchanges a command with the aircraft (one at a time)."""
+        return self._command_busy
+
+    def take_command_slot(self) -> None:
+        """An operation starts its command exchange (only when :attr:`command_busy` is False)."""
+        assert not self._command_busy, "the command slot is taken"
+        self._command_busy = True
+
+    def release_command_slot(self) -> None:
+        """The exchange has ended (answered, unanswered or abandoned)."""
+        self._command_busy = False
 
     def publish_state(self, *, force: bool = False) -> None:
         """Publish State (the core's own; called when the lease's holder changed)."""
