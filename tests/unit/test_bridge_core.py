@@ -1,7 +1,6 @@
 """The bridge core's logic beyond the contract rules: modes, connection, telemetry, ArduPilot.
 
-Moved here from tests/service (where each needed a router, UDP and seconds of wall time);
-the service tier keeps the tests that prove the wiring. Given time, real MAVLink bytes.
+Given time, real MAVLink bytes, no sockets; the wiring is tested in tests/integration.
 """
 
 from __future__ import annotations
