@@ -9,12 +9,16 @@ from __future__ import annotations
 
 import asyncio
 
+import numpy as np
 import pytest
 from bus_autopilot import REFUSED, TELEMETRY_PERIOD_S, SdkRig
 
 from dronewrapper import CommandRefused, InvalidArgument, NotConnected
 from dronewrapper.aio import Drone
+from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, MASK_VELOCITY
+from dronewrapper.msgs.sensor import Image
+from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 
@@ -75,6 +79,43 @@ def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(rig):
     assert answered == 3  # the loop ran while the take-off was under way
     names = [name for _, name in rig.pilot.calls]
     assert names == ["flight_takeoff", "flight_land"]
+
+
+def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(rig):
+    async def main():
+        async with Drone(**rig.options()) as drone:
+            stop = asyncio.Event()
+            feeder = asyncio.create_task(feed(rig, stop))
+            positions = [p async for p in _take(drone.position(), 5)]
+            states = [s async for s in _take(drone.landed_state(), 3)]
+            batteries = [b async for b in _take(drone.battery(), 2)]
+            stop.set()
+            await feeder
+            return positions, states, batteries
+
+    positions, states, batteries = run(main())
+    assert all(isinstance(p, np.ndarray) and p.shape == (3,) for p in positions)
+    assert states == [LANDED_STATE_ON_GROUND] * 3
+    assert batteries == [pytest.approx(0.8)] * 2
+
+
+def test_frames_iterator_gives_bgr_arrays(rig):
+    camera = FakeNode("camera", rig.bus).publisher(registry.IMAGE_RAW, camera="cam_frontal")
+    image = np.full((24, 32, 3), 7, np.uint8)
+
+    async def main():
+        async with Drone(**rig.options()) as drone:
+            frames = drone.frames("frontal")
+            first = asyncio.ensure_future(anext(frames))
+            await asyncio.sleep(0)  # subscribed
+            header = Header(stamp=rig.bus.clock())
+            camera.put(Image(header=header, height=24, width=32, step=96, data=image.tobytes()))
+            frame = await first
+            await frames.aclose()
+            return frame
+
+    frame = run(main())
+    assert frame.shape == (24, 32, 3) and int(frame[0, 0, 0]) == 7
 
 
 def test_errors_are_the_sync_ones(rig):
