@@ -41,6 +41,8 @@ from dronewrapper_compose.graph import (
     GraphError,
     ProcessSpec,
     assets_dir,
+    check_value,
+    check_variables,
     load_graph,
     resolve_graph_path,
     substitute,
@@ -209,6 +211,9 @@ class Launcher:
             self.values.update(choose_ports(graph.ports, self.values))
         except ValueError as exc:
             raise GraphError(f"{graph_path}: {exc}") from exc
+        for name in graph.types:
+            if why := check_value(graph, name, self.values[name]):
+                raise GraphError(f"{graph_path}: {name}={self.values[name]!r} {why}")
         self.children: list[_Child] = []
         self.failures: list[str] = []
         self.exit_code: int | None = None
@@ -410,6 +415,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         variables = _parse_vars(args.var)
         if args.scenario:
             variables["scenario"] = args.scenario
+        path = resolve_graph_path(args.graph)
+        check_variables(load_graph(path), path, variables)  # the command line's: names too
         launcher = Launcher.from_file(
             args.graph,
             router=args.router,

@@ -1,5 +1,6 @@
-"""`dronewrapper up` refuses a graph whose port is taken, before starting anything (issue 12
-item 10: two graphs on the same UDP port cross-talked silently)."""
+"""`dronewrapper up` refuses a graph whose port is taken, before starting anything (two graphs
+on the same UDP port would cross-talk silently), and does not mistake a port left in TIME_WAIT
+for a taken one."""
 
 from __future__ import annotations
 
@@ -27,3 +28,24 @@ def test_a_taken_autopilot_port_is_refused_with_a_clear_message(spawn):
     assert f"UDP port {port} (${{onboard_port}}) is already in use" in out, out
     assert "--var onboard_port=N" in out
     assert "starting bridge_mavlink" not in out  # nothing was started
+
+
+def test_a_router_port_left_in_time_wait_is_free_and_a_listening_one_is_not():
+    """A graph stopped while a client was connected leaves its router port in TIME_WAIT (the
+    router closed first); the router binds over it, so the check must too."""
+    from dronewrapper_compose.ports import port_in_use
+
+    with socket.socket() as server:
+        server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the router's listener
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        port = server.getsockname()[1]
+        client = socket.create_connection(("127.0.0.1", port), timeout=5)
+        conn, _ = server.accept()
+        assert port_in_use("tcp", port)  # listening: taken
+        conn.close()  # the router's side closes first: TIME_WAIT on the router's port
+        client.recv(1)  # the end of stream, so the close above is complete
+        client.close()
+    with socket.socket() as probe, pytest.raises(OSError):  # TIME_WAIT refuses a plain bind
+        probe.bind(("127.0.0.1", port))
+    assert not port_in_use("tcp", port)
