@@ -30,6 +30,7 @@ import zenoh
 
 from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.router import InsecureEndpoint, router_options
+from dronewrapper.router_reach import open_client_session
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
@@ -289,7 +290,7 @@ class Launcher:
             options.namespace = self.ns
         else:
             options = ZenohOptions(mode="client", connect=[self.router], namespace=self.ns)
-        self._session = open_session(options)
+        self._session = (open_session if self.start_router else open_client_session)(options)
         where = ", ".join([self.router, *self.listen]) if self.start_router else self.router
         acl = " (access control on)" if options.access_control else ""
         self._say(f"{'router listening on' if self.start_router else 'using router'} {where}{acl}")

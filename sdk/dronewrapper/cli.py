@@ -114,8 +114,8 @@ def _echo(argv: Sequence[str]) -> int:
     import zenoh
 
     from dronewrapper.echo import echo, keyexpr_problem
+    from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
-    from dronewrapper.runtime.node import open_session
 
     parser = argparse.ArgumentParser(prog="dronewrapper echo", description="print messages")
     parser.add_argument("keyexpr", help="key expression, e.g. drone/mavros/state or drone/**")
@@ -134,7 +134,7 @@ def _echo(argv: Sequence[str]) -> int:
         return 2
     stop = _stop_on_signals()
     try:
-        session = open_session(options_from_args(args))
+        session = open_client_session(options_from_args(args))
     except ConnectionError as exc:
         print(f"dronewrapper echo: {exc}", file=sys.stderr)
         return 1
@@ -158,7 +158,7 @@ def _stdout_writable() -> bool:
 def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.discovery import services_by_namespace
     from dronewrapper.doctor import describe_drone, listen, topic_families
-    from dronewrapper.runtime.node import open_session
+    from dronewrapper.router_reach import open_client_session
 
     parser = argparse.ArgumentParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
@@ -169,7 +169,7 @@ def _alive(argv: Sequence[str]) -> int:
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
     try:
-        session = open_session(options_from_args(args))
+        session = open_client_session(options_from_args(args))
     except ConnectionError as exc:
         print(f"dronewrapper alive: {exc}", file=sys.stderr)
         return 1

@@ -36,6 +36,7 @@ from dronewrapper.msgs import codec
 from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.registry import STATE, TOPICS, Topic, topic_for_key
 from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image
+from dronewrapper.router_reach import NO_ROUTER_HINT, open_client_session
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 
@@ -204,9 +205,10 @@ def run_doctor(
     where = ", ".join(options.connect) or "the default router"
     started = time.monotonic()
     try:
-        session = open_session(options, timeout=timeout)
+        session = open_client_session(options, timeout=timeout)
     except ConnectionError as exc:
-        say(FAIL, f"router: {exc}; start one with `dronewrapper up compose/GRAPH.yaml`")
+        hint = "" if NO_ROUTER_HINT in str(exc) else f"; {NO_ROUTER_HINT}"
+        say(FAIL, f"router: {exc}{hint}")
         return 1
     try:
         say(OK, f"router {where} reachable ({(time.monotonic() - started) * 1000:.0f} ms)")

@@ -48,10 +48,10 @@ def _positive(value: str) -> float:
 
 
 def _open(args: argparse.Namespace, prog: str):
-    from dronewrapper.runtime.node import open_session
+    from dronewrapper.router_reach import open_client_session
 
     try:
-        return open_session(options_from_args(args))
+        return open_client_session(options_from_args(args))
     except ConnectionError as exc:
         print(f"{prog}: {exc}", file=sys.stderr)
         return None
