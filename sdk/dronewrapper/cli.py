@@ -113,7 +113,7 @@ def _quiet_broken_pipe() -> None:
 def _echo(argv: Sequence[str]) -> int:
     import zenoh
 
-    from dronewrapper.echo import echo, keyexpr_problem
+    from dronewrapper.echo import echo, keyexpr_problem, path_warning
     from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
 
@@ -132,6 +132,8 @@ def _echo(argv: Sequence[str]) -> int:
     if problem:
         print(f"dronewrapper echo: {problem}", file=sys.stderr)
         return 2
+    if warning := path_warning(args.keyexpr):
+        print(f"dronewrapper echo: warning: {warning}", file=sys.stderr)
     stop = _stop_on_signals()
     try:
         session = open_client_session(options_from_args(args))

@@ -85,6 +85,11 @@ def record_main(argv: Sequence[str]) -> int:
         return 0
     if not args.output:
         parser.error("-o FILE.mcap is required (or --info FILE)")
+    from dronewrapper.echo import path_warning
+
+    for keyexpr in args.keyexprs:
+        if warning := path_warning(keyexpr):
+            print(f"dronewrapper record: warning: {warning}", file=sys.stderr)
     from dronewrapper.record.capture import capture
     from dronewrapper.record.recorder import Recorder
 
