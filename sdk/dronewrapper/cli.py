@@ -32,7 +32,7 @@ import threading
 from collections.abc import Sequence
 
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
-from dronewrapper.runtime.service import setup_logging
+from dronewrapper.runtime.service import plain_text, setup_logging
 
 # subcommand -> (module, function) in the on-board stack, imported only when used
 _STACK_COMMANDS = {
@@ -282,7 +282,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Dispatch ``dronewrapper SUBCOMMAND ...``."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
-        print(__doc__.strip())
+        print(plain_text(__doc__.strip()))
         return 0 if argv else 2
     if argv[0] in ("-V", "--version"):
         print(f"dronewrapper {_version()}")
@@ -320,7 +320,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return 2
         return int(entry(rest) or 0)
-    print(f"dronewrapper: unknown command {command!r}\n\n{__doc__.strip()}", file=sys.stderr)
+    usage = plain_text(__doc__.strip())
+    print(f"dronewrapper: unknown command {command!r}\n\n{usage}", file=sys.stderr)
     return 2
 
 
