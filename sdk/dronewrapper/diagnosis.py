@@ -82,13 +82,15 @@ def no_reply(
     ns: str,
     connect: str,
     alive_names: set[str],
+    sees_telemetry: bool = True,
     identity: str = "",
     standing: tuple[str, bool] | None = None,
 ) -> DroneError:
     """The exception for call ``what`` on ``key`` unanswered after ``timeout`` s.
 
     Args:
-        alive_names: the liveliness keys the router showed (``ns/alive/name``, every namespace).
+        alive_names: the liveliness keys the router showed in namespace ``ns``.
+        sees_telemetry: the drone's State ever arrived (a refused identity sees none).
         identity: our certificate (``tls/`` routers), "" on a plain link.
         standing: ``(role, refused)`` from :func:`local_standing`, None when unknown.
     """
@@ -98,7 +100,8 @@ def no_reply(
         for name in alive_names
     )
     role, refused = standing if standing is not None else ("", False)
-    if identity and (refused or not alive_names):
+    shown_nothing = not alive_names and not sees_telemetry
+    if identity and (refused or (standing is None and shown_nothing)):
         return NotConnected(f"{what}: {refused_identity(identity, connect)}")
     if identity and role in WATCH_ONLY_ROLES:
         return CommandRefused(

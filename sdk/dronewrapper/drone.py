@@ -892,10 +892,11 @@ class DroneWrapper:
     def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
         """A call nobody answered, diagnosed (:func:`dronewrapper.diagnosis.no_reply`)."""
         try:
-            names = self._alive_services("*")
+            names = self._alive_services(self.ns)
         except Exception:
             names = set()
         ask = {"ns": self.ns, "connect": self.connect, "alive_names": names}
+        ask["sees_telemetry"] = self._state.value is not None
         return no_reply(what, key, timeout, **ask, **identity_facts(self._identity, self.connect))
 
     def _alive_services(self, ns: str) -> set[str]:

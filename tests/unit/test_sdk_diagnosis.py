@@ -43,9 +43,12 @@ def test_a_revoked_identity_is_told_it_was_refused_not_that_no_bridge_runs():
     error = ask(identity="rex", standing=("operator", True))
     assert isinstance(error, NotConnected)
     assert "this identity was refused (revoked or unknown)" in str(error)
-    nothing = no_reply("arming", KEY, 10, ns="drone", connect=TLS, alive_names=set(), identity="x")
+    where = {"ns": "drone", "connect": TLS, "alive_names": set(), "identity": "x"}
+    nothing = no_reply("arming", KEY, 10, sees_telemetry=False, **where)
     assert "this identity was refused (revoked or unknown)" in str(nothing)
     assert "Start one" not in str(nothing)
+    watching = no_reply("arming", KEY, 10, sees_telemetry=True, **where)  # it sees the drone
+    assert "refused (revoked" not in str(watching)
 
 
 def test_without_identity_the_bridge_decides_between_timeout_and_not_connected():
