@@ -41,7 +41,7 @@ import numpy as np
 import zenoh
 
 from dronewrapper import flying, images, setpoints, telemetry
-from dronewrapper.diagnosis import identity_facts, no_reply
+from dronewrapper.diagnosis import identity_facts, no_reply, seconds
 from dronewrapper.discovery import (
     alive_services,
     connection_problem,
@@ -514,8 +514,9 @@ class DroneWrapper:
         ]
         if missing:
             raise NotConnected(
-                f"the bridge of drone {self.ns!r} is connected but after {timeout:g} s nothing "
-                f"arrived on: {', '.join(missing)}; is the link too slow, or the bridge old?"
+                f"the bridge of drone {self.ns!r} is connected but after {seconds(timeout)} s "
+                f"nothing arrived on: {', '.join(missing)}; is the link too slow, or the bridge "
+                "old?"
             )
         log.info("connected to drone %r via %s", self.ns, self.connect)
         return state
