@@ -334,7 +334,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--insecure", action="store_true", help="allow plain tcp/ off loopback (trusted networks)"
     )
     args = parser.parse_args(argv)
-    setup_logging()
     try:
         variables = _parse_vars(args.var)
         if args.scenario:
@@ -363,6 +362,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"dronewrapper up: {exc}", file=sys.stderr)
         return 2
 
+    setup_logging()  # the graph runs: log lines from here on (a bad graph only printed above)
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

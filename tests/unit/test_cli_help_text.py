@@ -36,6 +36,7 @@ def test_dronewrapper_help_is_plain_text(argv, capsys):
 @pytest.mark.parametrize("module", SERVICES)
 def test_service_help_is_plain_text(module, capsys, monkeypatch):
     monkeypatch.setattr(sys, "argv", [module, "--help"])
+    monkeypatch.delitem(sys.modules, f"{module}.__main__", raising=False)  # run afresh
     with pytest.raises(SystemExit) as done:
         runpy.run_module(module, run_name="__main__")
     assert done.value.code == 0
