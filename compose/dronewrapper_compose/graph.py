@@ -16,8 +16,9 @@ A graph lists the processes that run together (in start order) and their config:
         module: dronewrapper_bridge_mavlink
         set: {connection: "udpin:127.0.0.1:${onboard_port}"}
 
-``vars`` declares the graph's variables and their defaults; ``--scenario``/``--var NAME=VALUE``
-on the command line override them, and a name the graph does not declare is refused.
+``vars`` declares the graph's variables and their defaults (a ``${name:-default}`` in a process
+declares ``name`` too); ``--scenario``/``--var NAME=VALUE`` on the command line override them,
+and a name the graph does not declare is refused.
 ``types`` gives a variable's type (undeclared: ``str``): ``int``, ``float``, ``bool``
 (true/false), ``port`` (1-65535, a port of another program) or a list of the allowed values;
 every value, default or given, is checked against it. ``ports`` names the variables that are
@@ -123,6 +124,18 @@ def check_value(graph: Graph, name: str, value: str) -> str | None:
     return None if valid(value) else f"must be {what}"
 
 
+def declared_variables(graph: Graph) -> set[str]:
+    """The variables a graph declares: its ``vars`` and each ``${name:-default}`` it uses."""
+    texts: list[str] = []
+    for proc in graph.processes:
+        texts += [proc.module or "", proc.config or "", *(proc.command or []), *proc.args]
+        texts += [str(value) for value in (*proc.set.values(), *proc.env.values())]
+    defaulted = {
+        m.group(1) for text in texts for m in _VAR.finditer(text) if m.group(2) is not None
+    }
+    return set(graph.vars) | defaulted
+
+
 def check_variables(graph: Graph, path: Path | str, values: Mapping[str, str]) -> None:
     """Refuse a variable the graph does not declare (naming the closest declared one) or a value
     of the wrong type (naming the type).
@@ -130,11 +143,12 @@ def check_variables(graph: Graph, path: Path | str, values: Mapping[str, str]) -
     Raises:
         GraphError: names the file, the variable and what it must be.
     """
+    declared = declared_variables(graph)
     for name, value in values.items():
-        if name not in graph.vars:
-            close = difflib.get_close_matches(name, list(graph.vars), n=1)
+        if name not in declared:
+            close = difflib.get_close_matches(name, sorted(declared), n=1)
             hint = f"did you mean {close[0]}? " if close else ""
-            known = ", ".join(sorted(graph.vars)) or "none"
+            known = ", ".join(sorted(declared)) or "none"
             raise GraphError(
                 f"{path}: no variable {name!r} in this graph ({hint}declared: {known})"
             )

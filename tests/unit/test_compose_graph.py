@@ -127,6 +127,13 @@ def test_command_line_variables_are_checked_against_the_declared_names_and_types
     check_variables(load_graph(path), path, {**good, "video": "true"})  # all fine
 
 
+def test_a_variable_with_an_inline_default_is_declared(tmp_path):
+    path = write(tmp_path, "version: 1\nprocesses:\n  - {name: a, module: m, args: ['${n:-1}']}\n")
+    check_variables(load_graph(path), path, {"n": "2"})
+    with pytest.raises(GraphError, match=r"no variable 'm' in this graph \(declared: n\)"):
+        check_variables(load_graph(path), path, {"m": "2"})
+
+
 def test_the_launcher_checks_every_typed_value_wherever_it_came_from(tmp_path):
     path = write(tmp_path, TYPED)
     with pytest.raises(GraphError, match=r"gcs_port='abc' must be a port"):
