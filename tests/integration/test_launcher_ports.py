@@ -4,6 +4,7 @@ for a taken one."""
 
 from __future__ import annotations
 
+import os
 import socket
 
 import pytest
@@ -49,3 +50,21 @@ def test_a_router_port_left_in_time_wait_is_free_and_a_listening_one_is_not():
     with socket.socket() as probe, pytest.raises(OSError):  # TIME_WAIT refuses a plain bind
         probe.bind(("127.0.0.1", port))
     assert not port_in_use("tcp", port)
+
+
+def test_a_tello_graph_on_a_taken_address_refuses_to_start(spawn):
+    """The Tello's ports are fixed by its protocol (8889): a second simulated Tello on the
+    same address fails at its bind, before its bridge starts, and says why."""
+    address = f"127.0.0.{100 + os.getpid() % 100}"  # a loopback address of this test's own
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as held:
+        held.bind((address, 8889))  # as the first Tello graph's simulator holds it
+        argv = python_module(
+            "dronewrapper", "up", "sim_tello", "--var", f"address={address}",
+            "--router", free_endpoint(),
+        )  # fmt: skip
+        proc = spawn(argv, "up")
+        assert proc.proc.wait(60) == 1, proc.output()
+    out = proc.output()
+    assert f"cannot bind udp {address}:8889" in out and "Address already in use" in out, out
+    assert "start failed: sim exited with code 1 before it was ready" in out
+    assert "starting bridge_tello" not in out

@@ -60,7 +60,8 @@ PEER_PORTS = {
     "sitl_port": "ArduPilot SITL's TCP server; the bridge connects to it",
 }
 # graphs whose ports are fixed by the aircraft's protocol, bound without address reuse: a second
-# such graph on the same address fails at its first bind (the Tello SDK's 8889/8890/11111)
+# such graph on the same address fails at its first bind (the Tello SDK's 8889/8890/11111;
+# tests/integration/test_launcher_ports.py holds it)
 FIXED_BY_PROTOCOL = {"sim_tello", "sim_tello_follow_color", "sim_tello_follow_person"}
 FIXED_BY_PEER = {"px4_sitl": "PX4 SITL sends to 14540"}  # the other end's port: refused if taken
 
