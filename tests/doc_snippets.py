@@ -1,11 +1,12 @@
 """The shell and Python snippets of README.md and docs/*.md, and how each is checked (pure).
 
-Every fenced ``sh`` or ``python`` block is listed in :data:`PLAN` under ``FILE:LINE`` (the line
-of its opening fence): run against the one sim graph the docs test brings up, or excluded with
-the reason it cannot run here. Inside a shell snippet a command line can be left out, with its
-reason, and a command that runs until Ctrl-C gets a bound (``--duration``). What a snippet
-needs of this machine (the graph's router, its TLS endpoint, a key store, a scratch folder) is
-put in by :func:`adapt`, by plain text replacement of the documented addresses and paths.
+Every fenced ``sh`` or ``python`` block is listed in :data:`PLAN` under its
+:attr:`Snippet.key` (``FILE: first command``): run against the one sim graph the docs test
+brings up, or excluded with the reason it cannot run here. Inside a shell snippet a command
+line can be left out, with its reason, and a command that runs until Ctrl-C gets a bound
+(``--duration``). What a snippet needs of this machine (the graph's router, its TLS endpoint,
+a key store, a scratch folder) is put in by :func:`adapt`, by plain text replacement of the
+documented addresses and paths.
 """
 
 from __future__ import annotations
@@ -25,6 +26,14 @@ class Snippet:
     where: str  # FILE:LINE of the opening fence
     language: str
     text: str
+
+    @property
+    def key(self) -> str:
+        """``FILE: first command`` (its first 50 characters, comment left out): how
+        :data:`PLAN` names the snippet, unmoved by edits above it."""
+        first = self.text.strip().splitlines()[0]
+        code = first.split("#", 1)[0].strip() or first.strip()
+        return f"{self.where.split(':')[0]}: {' '.join(code.split())[:50].rstrip()}"
 
 
 def snippets() -> list[Snippet]:
@@ -65,67 +74,85 @@ class Run:
 
 
 HARDWARE = "needs the drone's hardware (serial autopilot, USB camera, Jetson GPU)"
-LISTING = "README.md:23"
+LISTING = "README.md: from dronewrapper import DroneWrapper"
+ASYNCIO = "docs/api.md: import asyncio"
+RECORDING = "README.md: dronewrapper record 'drone/**' 'sim/**' -o flight."
 
 PLAN: dict[str, Run | Excluded] = {
-    "README.md:3": Excluded(
+    "README.md: make demo": Excluded(
         "`make demo` brings up a graph of its own and `make test` is the whole suite; the "
         "scenario tier flies the demo"
     ),
     LISTING: Run(),  # the paper's listing, against the graph
-    "README.md:89": Excluded(
+    "README.md: .venv/bin/dronewrapper up compose/sim_iris.yaml &": Excluded(
         "brings up sim_iris (the docs test brings up its secure variant), runs "
         "examples/paper_listing.py (README.md:23's code, run here; test_examples.py runs the "
         "file) and a second graph (the scenario tier flies it)"
     ),
-    "README.md:103": Run(
+    "README.md: .venv/bin/dronewrapper keys init": Run(
         skip={"provision --connection /dev/ttyACM0": "an autopilot on USB (hardware)"}
     ),
-    "README.md:115": Run(bound={"px4_real_follow_person_secure": "--check"}),
-    "README.md:124": Run(preamble="from dronewrapper import DroneWrapper"),
-    "README.md:142": Run(
+    "README.md: .venv/bin/dronewrapper up compose/px4_real_follow_": Run(
+        bound={"px4_real_follow_person_secure": "--check"}
+    ),
+    'README.md: drone = DroneWrapper(connect="tls/192.168.1.50:744': Run(
+        preamble="from dronewrapper import DroneWrapper"
+    ),
+    RECORDING: Run(
         skip={"make demo": "the demo brings up a graph of its own"},
         bound={
             "dronewrapper record '": "--duration 2",
             "dronewrapper foxglove": "--port 0 --duration 1",  # not the fixed 8765
         },
     ),
-    "docs/api.md:3": Run(same_as=LISTING),
-    "docs/api.md:168": Run(),
-    "docs/ardupilot.md:33": Excluded("builds and runs ArduPilot's SITL (not installed here)"),
-    "docs/ardupilot.md:41": Run(
+    "docs/api.md: from dronewrapper import DroneWrapper": Run(same_as=LISTING),
+    ASYNCIO: Run(),
+    "docs/ardupilot.md: build/sitl/bin/arducopter --model quad --speedup 1": Excluded(
+        "builds and runs ArduPilot's SITL (not installed here)"
+    ),
+    "docs/ardupilot.md: .venv/bin/dronewrapper up compose/ardupilot_sitl.y": Run(
         skip={
             "ardupilot_sitl.yaml &": "needs ArduPilot's SITL listening on 5760",
             "paper_listing.py": "flies the SITL above; the listing runs as README.md:23",
         },
         bound={"sitl_port=5770": "--check"},
     ),
-    "docs/ardupilot.md:54": Excluded("the opt-in SITL tier (needs ArduPilot's SITL binary)"),
-    "docs/ardupilot.md:104": Excluded(HARDWARE),
-    "docs/px4_real.md:47": Excluded("sets up a Jetson (apt groups, GPU wheels, the model)"),
-    "docs/px4_real.md:60": Excluded(HARDWARE),
-    "docs/px4_real.md:71": Run(bound={"px4_real_follow_person_secure": "--check"}),
-    "docs/px4_real.md:99": Run(
+    "docs/ardupilot.md: DRONEWRAPPER_ARDUPILOT_SITL=/path/to/ardupilot/bui": Excluded(
+        "the opt-in SITL tier (needs ArduPilot's SITL binary)"
+    ),
+    "docs/ardupilot.md: python -m dronewrapper_bridge_mavlink --config ser": Excluded(HARDWARE),
+    "docs/px4_real.md: git clone <this repository> dronewrapper && cd dro": Excluded(
+        "sets up a Jetson (apt groups, GPU wheels, the model)"
+    ),
+    "docs/px4_real.md: ls -l /dev/ttyUSB0 /dev/ttyTHS1 /dev/video0": Excluded(HARDWARE),
+    "docs/px4_real.md: dronewrapper up compose/px4_real_follow_person_sec": Run(
+        bound={"px4_real_follow_person_secure": "--check"}
+    ),
+    "docs/px4_real.md: pip install './sdk[security,images]'": Run(
         skip={
             "pip install": "installs into an environment; tests/integration/test_sdk_install.py "
             "installs the SDK alone"
         },
         bound={"dronewrapper echo": "--duration 2"},
     ),
-    "docs/px4_real.md:109": Run(),
-    "docs/security.md:21": Run(),
-    "docs/security.md:49": Run(
+    "docs/px4_real.md: from dronewrapper import DroneWrapper": Run(),
+    "docs/security.md: dronewrapper keys init": Run(),
+    "docs/security.md: # drone: loopback for its own processes, TLS with": Run(
         skip={
             "dronewrapper router --listen": "a drone's fixed ports 7447 and "
             "7448; the graph the test brings up runs the same listeners on free ports"
         },
         bound={"px4_real_follow_person_secure": "--check"},
     ),
-    "docs/security.md:56": Run(preamble="from dronewrapper import DroneWrapper"),
-    "docs/security.md:134": Run(
+    'docs/security.md: drone = DroneWrapper(connect="tls/192.168.1.50:744': Run(
+        preamble="from dronewrapper import DroneWrapper"
+    ),
+    "docs/security.md: dronewrapper keys mavlink": Run(
         skip={"provision --connection /dev/ttyACM0": "an autopilot on USB (hardware)"}
     ),
-    "docs/security.md:160": Excluded("a real Tello's Wi-Fi access point at 192.168.10.1"),
+    "docs/security.md: # joined to the Tello's open network, from the lap": Excluded(
+        "a real Tello's Wi-Fi access point at 192.168.10.1"
+    ),
 }
 
 DRONE_ADDRESSES = ("tls/192.168.1.50:7448",)

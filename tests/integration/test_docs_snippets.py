@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from doc_snippets import LISTING, PLAN, Run, adapt, snippets
+from doc_snippets import ASYNCIO, LISTING, PLAN, RECORDING, Run, adapt, snippets
 
 from dronewrapper.security.keystore import KeyStore
 from dronewrapper_compose.launcher import Launcher
@@ -25,16 +25,16 @@ from support import free_endpoint, free_port
 
 pytestmark = pytest.mark.integration
 
-FIRST = [LISTING, "docs/api.md:168"]  # the flights, as one commander
-LAST = ["README.md:142"]  # its replay publishes recorded telemetry
+FIRST = [LISTING, ASYNCIO]  # the flights, as one commander
+LAST = [RECORDING]  # its replay publishes recorded telemetry
 SNIPPET_TIMEOUT_S = 120
 
 
 def _ordered() -> list:
-    runs = [s for s in snippets() if isinstance(PLAN[s.where], Run) and not PLAN[s.where].same_as]
-    rank = {where: i for i, where in enumerate(FIRST)}
+    runs = [s for s in snippets() if isinstance(PLAN[s.key], Run) and not PLAN[s.key].same_as]
+    rank = {key: i for i, key in enumerate(FIRST)}
     return sorted(
-        runs, key=lambda s: (rank.get(s.where, len(FIRST)), s.where in LAST)
+        runs, key=lambda s: (rank.get(s.key, len(FIRST)), s.key in LAST)
     )  # stable: document order otherwise
 
 
@@ -71,7 +71,7 @@ def graph(tmp_path_factory):
 
 @pytest.mark.parametrize("snippet", _ordered(), ids=lambda s: s.where)
 def test_snippet_runs(graph, snippet, tmp_path):
-    plan = PLAN[snippet.where]
+    plan = PLAN[snippet.key]
     bin_dir = str(Path(sys.executable).parent)
     text, left_out = adapt(
         snippet, plan, router=graph["router"], tls=graph["tls"], bin_dir=bin_dir,

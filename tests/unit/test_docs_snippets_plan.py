@@ -9,7 +9,8 @@ from doc_snippets import DOCS, DRONE_ADDRESSES, PLAN, REPO, Excluded, Run, code_
 
 
 def test_every_snippet_is_run_or_excluded_with_a_reason():
-    found = {s.where for s in snippets()}
+    found = {s.key for s in snippets()}
+    assert len(found) == len(snippets()), "two snippets of one page start alike"
     assert found - PLAN.keys() == set(), "snippets nobody runs or excludes (add to PLAN)"
     assert PLAN.keys() - found == set(), "PLAN entries for snippets that moved or went"
     for where, plan in PLAN.items():
@@ -21,10 +22,10 @@ def test_every_snippet_is_run_or_excluded_with_a_reason():
 
 
 def test_a_snippet_run_as_another_is_the_same_code():
-    by_where = {s.where: s for s in snippets()}
+    by_key = {s.key: s for s in snippets()}
     for where, plan in PLAN.items():
         if isinstance(plan, Run) and plan.same_as:
-            assert code_lines(by_where[where].text) == code_lines(by_where[plan.same_as].text)
+            assert code_lines(by_key[where].text) == code_lines(by_key[plan.same_as].text)
 
 
 def test_most_snippets_run():
