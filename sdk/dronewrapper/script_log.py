@@ -22,21 +22,21 @@ class _UnlessConfigured(logging.Filter):
         return not logging.getLogger().handlers
 
 
-class ProgressHandler(logging.StreamHandler):
-    """The SDK's own stderr handler (one per process)."""
+class ProgressHandler(logging.Handler):
+    """The SDK's own handler (one per process): each line to ``sys.stderr`` as it is when the
+    line is written (a tool or a test may have replaced it)."""
 
     def __init__(self) -> None:
-        super().__init__(sys.stderr)
+        super().__init__()
         self.setFormatter(logging.Formatter(FORMAT))
         self.addFilter(_UnlessConfigured())
 
-    @property
-    def stream(self):  # stderr as it is now (a test or a tool may have replaced it)
-        return sys.stderr
-
-    @stream.setter
-    def stream(self, _value) -> None:
-        pass
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            sys.stderr.write(self.format(record) + "\n")
+            sys.stderr.flush()
+        except Exception:
+            self.handleError(record)
 
 
 def show_progress(logger: logging.Logger | None = None) -> None:
