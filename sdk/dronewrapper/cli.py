@@ -19,7 +19,8 @@
 
 ``up``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the on-board stack (``make
 setup``); the SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and
-``doctor``; ``record``, ``replay`` and ``foxglove`` come with its ``record`` extra (``pip install './sdk[record]'``).
+``doctor``; ``record``, ``replay`` and ``foxglove`` come with its ``record`` extra (``pip
+install './sdk[record]'``).
 """
 
 from __future__ import annotations

@@ -272,3 +272,25 @@ def test_peer_arms_takes_off_moves_the_drone_and_lands(ros, graph):
         pub.close()
         for client in (arming, takeoff, land, set_mode):
             client.close()
+
+
+def test_a_humble_peer_is_reported_by_name_by_the_gateway_and_doctor(graph):
+    from dronewrapper.doctor import FAIL, ros2_findings
+    from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text
+
+    router, node = graph
+    humble = NodeName(0, "0123456789abcdef0123456789abcdef", 0, "/", "humble_echo")
+    token = humble.endpoint_token(
+        1, SUBSCRIBER, STATE, "mavros_msgs/msg/State", "TypeHashNotSupported", qos_text()
+    )
+    declared = node.session.liveliness().declare_token(token)
+    try:
+        findings = wait_for(
+            lambda: [f for f in ros2_findings(node.session) if f[0] == FAIL], 10, what="doctor"
+        )
+        assert len(findings) == 1
+        text = findings[0][1]
+        assert STATE in text and "/humble_echo subscribes" in text and "ROS 2 Humble" in text
+        assert "/drone/mavros publishes" in text
+    finally:
+        declared.undeclare()
