@@ -278,7 +278,7 @@ def test_a_humble_peer_is_reported_by_name_by_the_gateway_and_doctor(graph):
     from dronewrapper.doctor import FAIL, ros2_findings
     from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text
 
-    router, node = graph
+    _router, node = graph
     humble = NodeName(0, "0123456789abcdef0123456789abcdef", 0, "/", "humble_echo")
     token = humble.endpoint_token(
         1, SUBSCRIBER, STATE, "mavros_msgs/msg/State", "TypeHashNotSupported", qos_text()

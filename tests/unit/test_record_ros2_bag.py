@@ -94,7 +94,9 @@ def _equal(ours: object, theirs: object) -> bool:
     if isinstance(ours, memoryview | bytes):
         return bytes(ours) == bytes(theirs)
     if isinstance(ours, list):
-        return len(ours) == len(theirs) and all(_equal(a, b) for a, b in zip(ours, theirs))
+        return len(ours) == len(theirs) and all(
+            _equal(a, b) for a, b in zip(ours, theirs, strict=True)
+        )
     if isinstance(ours, float):
         return (math.isnan(ours) and math.isnan(theirs)) or math.isclose(
             ours, float(theirs), rel_tol=1e-6, abs_tol=1e-9
