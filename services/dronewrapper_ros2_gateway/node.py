@@ -117,7 +117,8 @@ class Gateway:
         self.config = config
         self.session = ros_session
         self.zid = str(ros_session.zid())
-        self.commander = config.commander or node.options.identity or DEFAULT_COMMANDER
+        identity = getattr(getattr(node, "options", None), "identity", "")
+        self.commander = config.commander or identity or DEFAULT_COMMANDER
         if "/" in self.commander:  # a path to NAME.crt: the name
             self.commander = self.commander.rsplit("/", 1)[1].removesuffix(".crt")
         self.refused: dict[str, int] = {}
