@@ -57,6 +57,7 @@ from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.qos import qos_for
 from dronewrapper.setpoint_limits import SetpointError, validate
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import IN, OUT, SERVE, Entity, selected
@@ -183,7 +184,11 @@ class Gateway:
             log.info("%s %s", kind, key)
 
     def _declare_out(self, ns: str, entity: Entity, key: str, gid: bytes) -> None:
-        publisher = self.session.declare_publisher(key)
+        # the registry's transport class (priority, drop under congestion); telemetry leaves
+        # at once rather than waiting for a batch, as it arrived
+        options = qos_for(entity.registry_entry)
+        options["express"] = entity.registry_entry.transport != registry.STREAM
+        publisher = self.session.declare_publisher(key, **options)
         self._declared.append(publisher)
         out = Outgoing(publisher, entity.ros_type, gid)
         self.outgoing.append((ns, entity, out))

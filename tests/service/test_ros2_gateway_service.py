@@ -56,7 +56,7 @@ class RosSession:
     def zid(self) -> str:
         return ZID
 
-    def declare_publisher(self, key: str) -> RosPublisher:
+    def declare_publisher(self, key: str, **_qos: Any) -> RosPublisher:
         self.publishers[key] = RosPublisher(key)
         return self.publishers[key]
 
