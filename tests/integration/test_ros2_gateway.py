@@ -294,3 +294,37 @@ def test_a_humble_peer_is_reported_by_name_by_the_gateway_and_doctor(graph):
         assert "/drone/mavros publishes" in text
     finally:
         declared.undeclare()
+
+
+def test_our_zenoh_opens_with_the_protocol_version_rmw_zenoh_speaks():
+    """rmw_zenoh builds on zenoh-c 1.x, whose zenoh-protocol VERSION is 0x09 from 1.0.0 on
+    (commons/zenoh-protocol/src/lib.rs); our eclipse-zenoh's first bytes on a link (INIT_SYN:
+    2-byte length, header, version) must say the same (docs/ros2.md, "Same protocol")."""
+    import json
+    import socket as sockets
+
+    import zenoh
+
+    server = sockets.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+    first: list[bytes] = []
+
+    def accept() -> None:
+        conn, _ = server.accept()
+        with conn:
+            conn.settimeout(5)
+            first.append(conn.recv(64))
+
+    thread = threading.Thread(target=accept)
+    thread.start()
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    with pytest.raises(zenoh.ZError):  # nobody answers the handshake
+        zenoh.open(conf)
+    thread.join(10)
+    server.close()
+    (init,) = first
+    assert init[2] & 0x1F == 0x01  # INIT (the SYN: no A flag)
+    assert init[3] == 0x09
