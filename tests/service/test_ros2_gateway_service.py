@@ -272,3 +272,19 @@ def test_a_type_mismatch_announced_by_a_peer_is_named(rig):
     )
     watch(SimpleNamespace(key_expr=matching, kind=zenoh.SampleKind.PUT))
     assert len(rig.gateway.mismatches) == 1
+
+
+@pytest.mark.parametrize(
+    ("identity", "configured", "name"),
+    [
+        ("", "", "ros2_gateway"),
+        ("ros2-gw", "", "ros2-gw"),
+        ("/keys/ros2-gw.crt", "", "ros2-gw"),
+        ("ros2-gw", "lab", "lab"),
+    ],
+)
+def test_the_commander_name_is_the_identity_s_unless_configured(identity, configured, name):
+    node = FakeNode("ros2_gateway", FakeBus())
+    node.options = SimpleNamespace(identity=identity)  # type: ignore[attr-defined]
+    gateway = Gateway(node, Config(commander=configured), RosSession())  # type: ignore[arg-type]
+    assert gateway.commander == name
