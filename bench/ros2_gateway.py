@@ -155,6 +155,9 @@ def stream(publish, rate_hz: float, seconds: float) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0, help="length of each phase")
+    parser.add_argument(
+        "--gateway-arg", action="append", default=[], help="an extra flag for the gateway"
+    )
     args = parser.parse_args(argv)
 
     endpoint = f"tcp/127.0.0.1:{free_port(socket.SOCK_STREAM)}"
@@ -168,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     gateway = subprocess.Popen(
         [sys.executable, "-m", "dronewrapper_ros2_gateway", "--connect", endpoint,
-         "--ns", NS, "--log-level", "WARNING"],
+         "--ns", NS, "--log-level", "WARNING", *args.gateway_arg],
         cwd=REPO,
     )  # fmt: skip
     relay_key = "bench/relay/pose"
