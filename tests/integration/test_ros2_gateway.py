@@ -36,7 +36,8 @@ SETPOINT = f"/{NS}/mavros/setpoint_raw/local"
 
 @pytest.fixture(scope="module")
 def graph(tmp_path_factory):
-    """The graph's router endpoint, once the bridge and the gateway are alive."""
+    """(router endpoint, a client node on it, the graph's process), once the bridge and the
+    gateway are alive."""
     router = free_endpoint()
     log = tmp_path_factory.mktemp("ros2") / "sim_iris_ros2.log"
     argv = python_module(
@@ -62,7 +63,7 @@ def graph(tmp_path_factory):
                 return {f"{NS}/alive/bridge_mavlink", f"{NS}/alive/ros2_gateway"} <= alive
 
             wait_for(ready, 60, interval=0.3, what="bridge and gateway alive")
-            yield router, node
+            yield router, node, proc
     finally:
         proc.stop(30)
 
@@ -159,7 +160,7 @@ def _setpoints_seen(node):
 def test_garbage_and_commands_without_the_lease_are_refused(ros, graph):
     from zenoh_ros2_sdk import ROS2Publisher
 
-    _router, node = graph
+    _router, node, _proc = graph
     seen = _setpoints_seen(node)
     time.sleep(0.5)
     # garbage bytes with a valid attachment on the exact ROS 2 key: nothing reaches the bridge
@@ -221,7 +222,7 @@ def test_garbage_and_commands_without_the_lease_are_refused(ros, graph):
 def test_peer_arms_takes_off_moves_the_drone_and_lands(ros, graph):
     from zenoh_ros2_sdk import ROS2Publisher
 
-    _router, node = graph
+    _router, node, _proc = graph
     truth = node.latest(registry.SIM_GROUND_TRUTH)
     arming = _client(ros, "cmd/arming", "CommandBool")
     takeoff = _client(ros, "cmd/takeoff", "CommandTOL", timeout=30)
@@ -278,7 +279,7 @@ def test_a_humble_peer_is_reported_by_name_by_the_gateway_and_doctor(graph):
     from dronewrapper.doctor import FAIL, ros2_findings
     from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text
 
-    _router, node = graph
+    _router, node, proc = graph
     humble = NodeName(0, "0123456789abcdef0123456789abcdef", 0, "/", "humble_echo")
     token = humble.endpoint_token(
         1, SUBSCRIBER, STATE, "mavros_msgs/msg/State", "TypeHashNotSupported", qos_text()
@@ -292,6 +293,8 @@ def test_a_humble_peer_is_reported_by_name_by_the_gateway_and_doctor(graph):
         text = findings[0][1]
         assert STATE in text and "/humble_echo subscribes" in text and "ROS 2 Humble" in text
         assert "/drone/mavros publishes" in text
+        wait_for(lambda: "ROS 2 type mismatch on /drone/mavros/state" in proc.output(), 10,
+                 what="the gateway's own report")  # fmt: skip
     finally:
         declared.undeclare()
 
