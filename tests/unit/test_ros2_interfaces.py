@@ -219,3 +219,15 @@ def test_msg_text_is_the_ros2msg_schema(store):
     text = interfaces.msg_text("geometry_msgs/msg/PoseStamped")
     assert text.startswith("std_msgs/Header header\ngeometry_msgs/Pose pose\n")
     assert "\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n" in text
+
+
+def test_upstream_mavros_msgs_files_are_the_recorded_ones():
+    import hashlib
+    import re
+
+    readme = (UPSTREAM / "README.md").read_text()
+    recorded = re.findall(r"([0-9a-f]{64})  ((?:msg|srv)/\w+\.(?:msg|srv))", readme)
+    assert len(recorded) == 9
+    for digest, name in recorded:
+        data = (UPSTREAM / "mavros_msgs" / name).read_bytes()
+        assert hashlib.sha256(data).hexdigest() == digest, name
