@@ -1,5 +1,6 @@
 """A recording converted to a ROS 2 bag reads back with rosbags (an independent MCAP + CDR
-reader with ROS 2 Jazzy's own definitions), every message equal to the one recorded."""
+reader with ROS 2 Jazzy's own definitions), every message equal to the one recorded, and with
+Foxglove's own decoder (mcap-ros2-support, from the schemas in the file)."""
 
 from __future__ import annotations
 
@@ -83,6 +84,25 @@ def test_ros2_bag_reads_back_with_rosbags_every_message_equal(tmp_path):
         assert topic == "/" + message.key and log_time == message.log_time_ns
         assert msgtype == convert.ROS_TYPES[type(ours)]
         assert _equal(convert.to_ros(ours), theirs), (topic, ours, theirs)
+
+
+def test_foxglove_s_decoder_reads_the_ros2_bag(tmp_path):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    source, target = tmp_path / "ours.mcap", tmp_path / "ros2.mcap"
+    with source.open("wb") as f, Recorder(f) as recorder:
+        for key, msg in _messages(3).items():
+            recorder.write(key, codec.encode(msg), int(T0 * 1e9))
+    convert_to_ros2(source, target)
+    with target.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        assert reader.get_header().profile == "ros2"
+        decoded = {c.topic: m for _, c, _, m in reader.iter_decoded_messages()}
+    assert decoded["/drone/mavros/state"].mode == "OFFBOARD"
+    assert decoded["/drone/mavros/local_position/pose"].pose.position.x == 3.0
+    image = decoded["/drone/cam_frontal/image_raw"]
+    assert (image.width, image.height, image.encoding, len(image.data)) == (6, 4, "bgr8", 72)
 
 
 def _equal(ours: object, theirs: object) -> bool:
