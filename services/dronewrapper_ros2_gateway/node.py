@@ -127,8 +127,7 @@ class Gateway:
         self.outgoing: list[tuple[str, Entity, Outgoing]] = []
         self._declared: list[Any] = []
         self._tokens: list[Any] = []
-        self._entity_ids = itertools.count(1)
-        self._node_ids = itertools.count(0)
+        self._ids = itertools.count(0)  # node and entity ids: one counter, as rmw_zenoh's
         self._endpoints: dict[str, Endpoint] = {}
         self._lock = threading.Lock()
         self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix="ros2-srv")
@@ -155,7 +154,7 @@ class Gateway:
 
     def _declare_drone(self, ns: str) -> None:
         ros_node = NodeName(
-            self.config.domain_id, self.zid, next(self._node_ids), f"/{ns}", self.config.node_name
+            self.config.domain_id, self.zid, next(self._ids), f"/{ns}", self.config.node_name
         )
         self._token(ros_node.token())
         for entity in selected(self.config.keys):
@@ -167,7 +166,7 @@ class Gateway:
             )
             kind = {OUT: PUBLISHER, IN: SUBSCRIBER, SERVE: SERVICE}[entity.direction]
             token = ros_node.endpoint_token(
-                next(self._entity_ids),
+                next(self._ids),
                 kind,
                 entity.ros_name(ns),
                 entity.ros_type,

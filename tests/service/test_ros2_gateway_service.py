@@ -288,3 +288,14 @@ def test_the_commander_name_is_the_identity_s_unless_configured(identity, config
     node.options = SimpleNamespace(identity=identity)  # type: ignore[attr-defined]
     gateway = Gateway(node, Config(commander=configured), RosSession())  # type: ignore[arg-type]
     assert gateway.commander == name
+
+
+def test_each_drone_is_its_own_node_with_ids_unique_in_the_session():
+    session = RosSession()
+    node = FakeNode("ros2_gateway", FakeBus())
+    Gateway(node, Config(drones=["drone1", "drone2"], keys=["mavros/state"]), session).start()  # type: ignore[arg-type]
+    ids = [tuple(t.split("/")[3:5]) for t in session.tokens]
+    assert len(set(ids)) == len(ids) == 4
+    assert sorted(session.publishers) == sorted(
+        ros_key(f"/{ns}/mavros/state", "mavros_msgs/msg/State") for ns in ("drone1", "drone2")
+    )
