@@ -4,7 +4,7 @@ gateway: compose/sim_iris_ros2.yaml (sim, bridge with the command lease, gateway
 router on loopback.
 
 One graph for the module; the tests run in order: discovery, echo, refusals (garbage, no
-lease), then the flight (arming, takeoff, a PositionTarget that moves the aircraft in ground
+lease), parameters, then the flight (arming, takeoff, a PositionTarget that moves the aircraft in ground
 truth, land).
 """
 
@@ -217,6 +217,31 @@ def test_garbage_and_commands_without_the_lease_are_refused(ros, graph):
     finally:
         node.call(registry.COMMAND_LEASE, LeaseRequest(action="release"), attachment=alice)
         arming.close()
+
+
+def test_peer_reads_and_writes_a_parameter(ros):
+    from zenoh_ros2_sdk import ROS2ServiceClient, ZenohSession
+
+    # zenoh-ros2-sdk 0.1.8 resolves the upstream file's unqualified ``ParamValue`` to
+    # mavros_msgs/srv/msg/ParamValue: give it the same definition with the name qualified
+    get = ROS2ServiceClient(
+        f"/{NS}/mavros/param/get", "mavros_msgs/srv/ParamGet",
+        request_definition="string param_id\n",
+        response_definition="bool success\nmavros_msgs/ParamValue value\n",
+        router_ip=ros[0], router_port=ros[1], timeout=20,
+    )  # fmt: skip
+    put = _client(ros, "param/set", "ParamSet")
+    try:
+        reply = get.call(param_id="SYS_AUTOSTART")
+        assert reply is not None and reply.success and reply.value.integer == 10040
+        value = ZenohSession.get_instance().store.types["mavros_msgs/msg/ParamValue"]
+        reply = put.call(param_id="COM_OF_LOSS_T", value=value(integer=0, real=1.5))
+        assert reply is not None and reply.success and reply.value.real == 1.5
+        reply = get.call(param_id="NO_SUCH_PARAM")
+        assert reply is not None and not reply.success
+    finally:
+        get.close()
+        put.close()
 
 
 def test_peer_arms_takes_off_moves_the_drone_and_lands(ros, graph):
