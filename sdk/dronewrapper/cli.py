@@ -9,6 +9,7 @@
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
     dronewrapper station [--host H] [--port P]       the web ground station (loopback)
+    dronewrapper ros2 [--set domain_id=N] [...]      the drone as ROS 2 topics/services (rmw_zenoh)
     dronewrapper record [KEYEXPR...] -o FILE.mcap    the bus to MCAP (--info FILE summarises)
     dronewrapper replay FILE.mcap [--rate R] [...]   a recording back on the bus
     dronewrapper foxglove [KEYEXPR...] [--port P]    the live bus to Foxglove (WebSocket)
@@ -16,9 +17,10 @@
     dronewrapper bench --quick [--target-ms MS]      this computer's speed, settings to use (stack)
     dronewrapper --version                           the installed version
 
-``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
-SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``; ``record``,
-``replay`` and ``foxglove`` come with its ``record`` extra (``pip install './sdk[record]'``).
+``up``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the on-board stack (``make
+setup``); the SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and
+``doctor``; ``record``, ``replay`` and ``foxglove`` come with its ``record`` extra (``pip
+install './sdk[record]'``).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ _STACK_COMMANDS = {
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
     "station": ("dronewrapper_ground_station.cli", "main"),
+    "ros2": ("dronewrapper_ros2_gateway.cli", "main"),
 }
 
 # subcommand -> (module, function) of the SDK's record extra (mcap, foxglove-sdk)
