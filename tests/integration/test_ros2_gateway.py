@@ -4,8 +4,8 @@ gateway: compose/sim_iris_ros2.yaml (sim, bridge with the command lease, gateway
 router on loopback.
 
 One graph for the module; the tests run in order: discovery, echo, refusals (garbage, no
-lease), parameters, then the flight (arming, takeoff, a PositionTarget that moves the aircraft in ground
-truth, land).
+lease), parameters, then the flight (arming, takeoff, a PositionTarget that moves the aircraft
+in ground truth, land).
 """
 
 from __future__ import annotations
