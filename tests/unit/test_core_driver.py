@@ -27,6 +27,11 @@ class EchoCore(PureCore):
     def publish_state(self, *, force: bool = False) -> None:
         self.states.append(self.commander)
 
+    def on_answer(self, text: str, now: float, stamp: float) -> None:
+        """An input that ends the waiting operation at once (as a bridge's replies do)."""
+        self.on_input(text, now, stamp)
+        self.advance(now, stamp)
+
     def on_setpoint(self, commander: str, now: float, stamp: float) -> bool:
         self._at(now, stamp)
         return self.admit_setpoint(commander)
@@ -82,6 +87,30 @@ def test_a_call_returns_when_another_threads_input_ends_its_operation():
     finally:
         feeder.cancel()
     assert core.operations.finished == 1 and len(core.operations) == 0
+
+
+def test_a_reply_never_overtakes_the_effects_of_the_input_that_ended_it():
+    """The State that shows a landing is published before the landing's reply goes out."""
+    core = EchoCore()
+    executing, release, order = threading.Event(), threading.Event(), []
+
+    def execute(out: list) -> None:
+        if out:  # the input's effects: slow to publish
+            executing.set()
+            release.wait(5.0)
+            order.append("effects")
+
+    driver = CoreDriver(core, execute, threading.Event())
+    feeder = threading.Thread(target=driver.feed, args=(core.on_answer, "ok"))
+    caller = threading.Thread(target=lambda: order.append(driver.call(wait_for_answer(core))))
+    caller.start()
+    feeder.start()
+    assert executing.wait(5.0)
+    caller.join(0.2)  # the operation has ended; its reply must wait for the effects
+    release.set()
+    feeder.join(5.0)
+    caller.join(5.0)
+    assert order == ["effects", "ok"]
 
 
 def test_a_call_is_cancelled_when_the_node_stops():

@@ -173,21 +173,24 @@ class CoreDriver(Generic[C]):
     ) -> None:
         self.core = core
         self.cond = threading.Condition()  # guards the core; notified when an operation ends
+        self._executing = threading.RLock()  # outboxes run one at a time, in the core's order
         self._execute = execute
         self._stop = stop
         self._clock = clock
         self._wall = wall
 
     def feed(self, call: Callable[..., Any], *args: Any) -> Any:
-        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox;
-        service calls waiting on their operations are woken when one has finished."""
-        with self.cond:
-            finished = self.core.operations.finished
-            result = call(*args, self._clock(), self._wall())
-            out = self.core.take()
-            if self.core.operations.finished != finished:
-                self.cond.notify_all()
-        self._execute(out)
+        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox
+        (outboxes are executed one at a time, in the order the core made them); service calls
+        waiting on their operations are woken when one has finished."""
+        with self._executing:
+            with self.cond:
+                finished = self.core.operations.finished
+                result = call(*args, self._clock(), self._wall())
+                out = self.core.take()
+                if self.core.operations.finished != finished:
+                    self.cond.notify_all()
+            self._execute(out)
         return result
 
     def call(self, steps: Steps, commander: str = "", what: str = "") -> Any:
@@ -206,4 +209,6 @@ class CoreDriver(Generic[C]):
                 wait = op.wake_at - self._clock()
                 self.cond.wait(min(max(wait, 0.001), MAX_WAIT_S))
             self.feed(self.core.advance)
+        with self._executing:  # the reply never overtakes what ended it (a State, a sample)
+            pass
         return op.result()
