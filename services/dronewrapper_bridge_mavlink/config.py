@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import msgspec
+from dronewrapper.envelope import Envelope
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
@@ -52,6 +53,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
     )  # Hz asked with SET_MESSAGE_INTERVAL
     limits: Limits = msgspec.field(default_factory=Limits)
+    envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly (envelope.py)
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off

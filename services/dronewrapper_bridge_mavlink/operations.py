@@ -36,6 +36,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
@@ -143,6 +144,7 @@ def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
         raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
     if core.ext.landed_state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
+    missions.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
     yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
     if autopilot == AUTOPILOT_ARDUPILOT:
         altitude = height if not math.isnan(height) else 2.5
