@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import msgspec
-from dronewrapper.envelope import Envelope
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
 from dronewrapper_bridge_mavlink.setpoints import Limits

@@ -21,9 +21,8 @@ from dronewrapper.msgs.mavros import PositionTarget, State
 from dronewrapper.runtime import Node, Ratekeeper
 from dronewrapper.runtime.core_driver import CoreDriver
 from dronewrapper.security.guard import CommandGuard
-from dronewrapper_bridge_mavlink import missions
+from dronewrapper_bridge_mavlink import missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
-from dronewrapper_bridge_mavlink import parameters
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url

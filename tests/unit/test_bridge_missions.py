@@ -6,6 +6,9 @@ from __future__ import annotations
 import math
 
 import pytest
+from bridge_core_rig import OFFBOARD, CoreRig, ops, velocity
+from pymavlink.dialects.v20 import common as mavlink
+
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point
@@ -25,9 +28,6 @@ from dronewrapper.msgs.mission import (
 )
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import missions
-from pymavlink.dialects.v20 import common as mavlink
-
-from bridge_core_rig import OFFBOARD, CoreRig, ops, velocity
 
 HOME_LAT, HOME_LON = 47.397742, 8.545594
 
@@ -176,7 +176,7 @@ def test_mission_push_refuses_an_item_outside_the_envelope():
     home(rig)
     far = [Waypoint(x_lat=HOME_LAT + 0.01, y_long=HOME_LON, z_alt=10.0)]  # 1.1 km north
     op = rig.call(missions.push, WaypointPush(waypoints=far))
-    with pytest.raises(ServiceError, match="mission item 0: distance 1113.19 m from home beyond"):
+    with pytest.raises(ServiceError, match=r"mission item 0: distance 1113\.19 m from home beyond"):
         op.result()
     assert not rig.sent_since(-math.inf, "MISSION_COUNT")
 

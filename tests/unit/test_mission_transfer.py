@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+from pymavlink.dialects.v20 import common as mavlink
+
 from dronewrapper_bridge_mavlink.mission_transfer import (
     FENCE,
     MISSION,
@@ -13,7 +15,6 @@ from dronewrapper_bridge_mavlink.mission_transfer import (
     Item,
     Upload,
 )
-from pymavlink.dialects.v20 import common as mavlink
 
 TARGET = (1, 1)
 

@@ -22,21 +22,6 @@ from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavlink import MavlinkFrames
-from dronewrapper.msgs.mission import (
-    EnvelopeResult,
-    EnvelopeSet,
-    HomePosition,
-    MissionControl,
-    MissionResult,
-    WaypointClear,
-    WaypointList,
-    WaypointPull,
-    WaypointPullResult,
-    WaypointPush,
-    WaypointPushResult,
-    WaypointReached,
-    WaypointSetCurrent,
-)
 from dronewrapper.msgs.mavros import (
     CommandBool,
     CommandBoolResult,
@@ -52,6 +37,21 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
     State,
     StatusText,
+)
+from dronewrapper.msgs.mission import (
+    EnvelopeResult,
+    EnvelopeSet,
+    HomePosition,
+    MissionControl,
+    MissionResult,
+    WaypointClear,
+    WaypointList,
+    WaypointPull,
+    WaypointPullResult,
+    WaypointPush,
+    WaypointPushResult,
+    WaypointReached,
+    WaypointSetCurrent,
 )
 from dronewrapper.msgs.sensor import (
     BatteryState,
