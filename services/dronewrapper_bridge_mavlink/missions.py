@@ -56,6 +56,7 @@ from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_PX4,
     HOLD_MODE,
     RETURN_MODE,
+    is_guided,
 )
 
 if TYPE_CHECKING:
@@ -150,6 +151,18 @@ def refuse_takeoff(core: BridgeCore, height: float) -> None:
         env.check_takeoff(core.missions.envelope, height)
     except EnvelopeError as exc:
         raise ServiceError(str(exc), "refused") from None
+
+
+def refuse_mode(core: BridgeCore, mode: str) -> None:
+    """ServiceError (refused) for the guided mode while the aircraft is outside the envelope
+    (its breach action must not be undone by a commander's mode change; once back inside,
+    the guided mode may be entered again)."""
+    if is_guided(mode) and core.missions.monitor.outside:
+        raise ServiceError(
+            f"{mode} refused: the aircraft is outside the envelope (breach action "
+            f"{core.missions.envelope.breach_action} in progress)",
+            "refused",
+        )
 
 
 def tick(core: BridgeCore) -> None:

@@ -228,6 +228,7 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
     primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
     if primed:
         yield from prime(core)
+    missions.refuse_mode(core, params.name)  # no guided mode while outside the envelope
     core.failsafe.on_mode_requested(params.name, core.now)
     pending, message = yield from exchange(
         core,
