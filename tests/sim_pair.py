@@ -67,6 +67,7 @@ class SimPair:
         self.setpoint: PositionTarget | None = None
         self.truth: list[tuple[float, tuple[float, float, float], str]] = []  # t, pose, mode
         self.drop_to_autopilot: Callable[[Any], bool] = lambda msg: False
+        self.streaming: Callable[[], bool] = lambda: True  # whether a commander streams
         self._steps = 0
         self._next_tick = 0.0
         self._next_setpoint = 0.0
@@ -104,7 +105,7 @@ class SimPair:
             self._to_bridge(self.autopilot.poll()["onboard"])
             s = self.autopilot.state
             self.truth.append((self.t, (s.x, s.y, s.z), self.autopilot.mode.name))
-        if self.setpoint is not None and self.t >= self._next_setpoint:
+        if self.setpoint is not None and self.streaming() and self.t >= self._next_setpoint:
             self._next_setpoint = self.t + 1.0 / SETPOINT_HZ
             self.core.on_setpoint(self.setpoint, self.t, EPOCH + self.t)
             self._collect()

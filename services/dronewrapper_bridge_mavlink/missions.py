@@ -27,6 +27,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper import envelope as env
 from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.geodesy import to_enu, to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
 from dronewrapper.msgs.mission import (
@@ -64,7 +65,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("bridge_mavlink")
 
-EARTH_RADIUS_M = 6_378_137.0
 MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", AUTOPILOT_ARDUPILOT: "AUTO"}
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
@@ -98,22 +98,6 @@ def relative(core: BridgeCore, x: float, y: float, z: float) -> tuple[float, flo
     """Local ENU (m) -> ENU m from home."""
     hx, hy, hz = core.missions.home_local
     return (x - hx, y - hy, z - hz)
-
-
-def to_geodetic(home: tuple[float, float, float], east: float, north: float) -> tuple[float, float]:
-    """(lat, lon) degrees of the point ``east``, ``north`` m from ``home`` (flat earth)."""
-    lat0, lon0, _ = home
-    lat = lat0 + math.degrees(north / EARTH_RADIUS_M)
-    lon = lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0))))
-    return lat, lon
-
-
-def to_enu(home: tuple[float, float, float], lat: float, lon: float) -> tuple[float, float]:
-    """(east, north) m of (lat, lon) degrees from ``home`` (flat earth)."""
-    lat0, lon0, _ = home
-    north = math.radians(lat - lat0) * EARTH_RADIUS_M
-    east = math.radians(lon - lon0) * EARTH_RADIUS_M * math.cos(math.radians(lat0))
-    return east, north
 
 
 # ---------------------------------------------------------------- hooks the core calls
