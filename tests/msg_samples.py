@@ -50,7 +50,7 @@ _RANGED = {
     ("CommandTOL", "longitude"): lambda rng: rng.uniform(-180.0, 180.0),
     ("CommandTOL", "altitude"): lambda rng: rng.uniform(0.5, 100.0),
     ("SetMode", "base_mode"): lambda rng: 0,
-    **{("Envelope", name): lambda rng: rng.uniform(1.0, 500.0) for name in _ENVELOPE_LIMITS},
+    **{("Envelope", name): lambda rng: rng.uniform(1.0, 50.0) for name in _ENVELOPE_LIMITS},
     ("Envelope", "margin"): lambda rng: rng.uniform(0.0, 5.0),
     ("Envelope", "breach_action"): lambda rng: rng.choice(("hold", "return", "land")),
     ("Envelope", "fence"): lambda rng: _polygon(rng),

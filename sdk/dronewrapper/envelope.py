@@ -22,6 +22,12 @@ import math
 import msgspec
 
 BREACH_ACTIONS = ("hold", "return", "land")
+UPPER_BOUNDS = {  # beyond these a value is a typo, not an envelope
+    "max_altitude": 10_000.0,  # m
+    "max_distance": 100_000.0,  # m
+    "max_horizontal_speed": 100.0,  # m/s
+    "max_vertical_speed": 50.0,  # m/s
+}
 
 Polygon = list[tuple[float, float]]
 
@@ -54,15 +60,10 @@ class Envelope(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=
     margin: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in (
-            "max_altitude",
-            "max_distance",
-            "max_horizontal_speed",
-            "max_vertical_speed",
-        ):
+        for name, upper in UPPER_BOUNDS.items():
             value = getattr(self, name)
-            if isinstance(value, bool) or not (math.isfinite(value) and value > 0):
-                raise ValueError(f"envelope {name} must be a finite number > 0, got {value!r}")
+            if isinstance(value, bool) or not (math.isfinite(value) and 0 < value <= upper):
+                raise ValueError(f"envelope {name} must be in (0, {upper:g}], got {value!r}")
         if not (math.isfinite(self.margin) and 0 <= self.margin <= 50):
             raise ValueError(f"envelope margin must be in [0, 50] m, got {self.margin!r}")
         if self.breach_action not in BREACH_ACTIONS:

@@ -173,7 +173,7 @@ class MissionsMixin:
             raise CommandRefused("goto", str(exc)) from None
         hx, hy, hz = self._home_local()
         target = (hx + x, hy + y, hz + z)
-        texts_before = len(self.status_texts)
+        seen = list(self.status_texts)  # the texts before: a refusal is a new one
         self.set_cmd_pos(*target)
         state = self._require_connected("goto")
         guided = GUIDED.get(state.autopilot)
@@ -185,7 +185,7 @@ class MissionsMixin:
             if math.dist(position, target) <= tolerance:
                 return
             refused = [
-                t.text for t in list(self.status_texts)[texts_before:] if "refused" in t.text
+                t.text for t in list(self.status_texts) if "refused" in t.text and t not in seen
             ]
             if refused:
                 raise CommandRefused("goto", refused[-1])

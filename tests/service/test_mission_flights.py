@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import msgspec
 import pytest
 from sim_pair import SimPair, position_target
 
@@ -87,7 +88,7 @@ def test_an_item_the_autopilot_refuses_is_reported_with_the_partial_count():
     pair = SimPair()
     pair.take_off(3.0)
     items = waypoints(pair, SQUARE)
-    items[2] = Waypoint(command=183, x_lat=items[2].x_lat, y_long=items[2].y_long)  # DO_SET_SERVO
+    items[2] = msgspec.structs.replace(items[2], command=183)  # DO_SET_SERVO
     reply = pair.call(missions.push, WaypointPush(waypoints=items))
     assert not reply.success and reply.wp_transfered == 2
     assert "MAV_MISSION_UNSUPPORTED" in reply.message

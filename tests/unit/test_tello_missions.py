@@ -99,7 +99,9 @@ def test_a_local_mission_is_flown_as_go_moves_and_reports_each_item():
 def test_a_global_mission_is_refused_honestly():
     rig = flying_rig()
     with pytest.raises(ServiceError, match="the Tello has no GPS"):
-        rig.call(missions.push, WaypointPush(waypoints=[Waypoint(x_lat=47.0, y_long=8.0)]))
+        rig.call(
+            missions.push, WaypointPush(waypoints=[Waypoint(x_lat=47.0, y_long=8.0, z_alt=5.0)])
+        )
 
 
 def test_a_mission_item_outside_the_envelope_is_refused():

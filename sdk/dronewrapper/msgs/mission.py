@@ -21,6 +21,8 @@ FRAME_MISSION = 2
 FRAME_GLOBAL_REL_ALT = 3
 FRAME_GLOBAL_RELATIVE_ALT_INT = 6
 
+MAX_PARAM = 1e7  # |param1..4| (s, m, deg ...): beyond is a mistake, and float32 ends at 3e38
+
 # MAV_CMD values of mission items.
 NAV_WAYPOINT = 16
 NAV_RETURN_TO_LAUNCH = 20
@@ -29,7 +31,12 @@ NAV_TAKEOFF = 22
 
 
 class Waypoint(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
-    """One mission item (mavros_msgs/Waypoint): degrees, metres above home, MAV_CMD params."""
+    """One mission item (mavros_msgs/Waypoint): degrees, metres above home, MAV_CMD params.
+    ``x_lat``, ``y_long`` and ``z_alt`` are required: no default place is safe to fly to."""
+
+    x_lat: float
+    y_long: float
+    z_alt: float
 
     frame: int = FRAME_GLOBAL_REL_ALT
     command: int = NAV_WAYPOINT
@@ -39,9 +46,6 @@ class Waypoint(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=
     param2: float = 0.0  # NAV_WAYPOINT: acceptance radius (m)
     param3: float = 0.0
     param4: float = math.nan  # NAV_WAYPOINT: yaw (deg), NaN: the autopilot's choice
-    x_lat: float = 0.0
-    y_long: float = 0.0
-    z_alt: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.x_lat) and abs(self.x_lat) <= 90):
@@ -50,9 +54,12 @@ class Waypoint(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=
             raise ValueError(f"waypoint y_long must be within ±180 degrees, got {self.y_long!r}")
         if not (math.isfinite(self.z_alt) and -1000 <= self.z_alt <= 10_000):
             raise ValueError(f"waypoint z_alt must be within [-1000, 10000] m, got {self.z_alt!r}")
-        for name in ("param1", "param2", "param3"):
-            if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"waypoint {name} must be finite")
+        for name in ("param1", "param2", "param3", "param4"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and abs(value) <= MAX_PARAM) and not (
+                name == "param4" and math.isnan(value)
+            ):
+                raise ValueError(f"waypoint {name} must be within ±{MAX_PARAM:g}, got {value!r}")
         if not 0 <= self.command <= 65535 or not 0 <= self.frame <= 255:
             raise ValueError("waypoint command must be a MAV_CMD and frame a MAV_FRAME")
 
