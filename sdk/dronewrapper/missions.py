@@ -20,7 +20,7 @@ origin (the Tello's take-off point).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
 from typing import TYPE_CHECKING, Any
@@ -228,14 +228,14 @@ class MissionsMixin:
 
     def upload_mission(
         self: Any,
-        plan: str | PathLike[str] | Sequence[Any],
+        plan: str | PathLike[str] | Mapping[str, Any] | Sequence[Any],
         *,
         frame: str = "global",
         timeout: float = 30.0,
     ) -> int:
-        """Upload a mission: a QGroundControl ``.plan`` path, or a list of ``(lat, lon, alt)``
-        (degrees, m above home); ``frame="local"``: ``(x, y, z)`` ENU m from home (the
-        Tello's only kind). Returns the number of items.
+        """Upload a mission: a QGroundControl ``.plan`` path (or its parsed JSON), or a list
+        of ``(lat, lon, alt)`` (degrees, m above home); ``frame="local"``: ``(x, y, z)`` ENU
+        m from home (the Tello's only kind). Returns the number of items.
 
         Raises:
             InvalidArgument: the plan cannot be read or flown (the message says where).

@@ -3,9 +3,10 @@
 :func:`waypoints_of` turns either into mission items
 (:class:`~dronewrapper.msgs.mission.Waypoint`):
 
-* a ``.plan`` path: its ``mission.items`` of type ``SimpleItem`` as they are (command, frame,
-  the seven params: lat, lon and alt are params 5-7; ``null`` is NaN). A ``ComplexItem``
-  (survey, corridor scan) is refused: QGroundControl expands it only when it uploads.
+* a ``.plan`` path (or its parsed JSON document): its ``mission.items`` of type
+  ``SimpleItem`` as they are (command, frame, the seven params: lat, lon and alt are params
+  5-7; ``null`` is NaN). A ``ComplexItem`` (survey, corridor scan) is refused:
+  QGroundControl expands it only when it uploads.
 * a list of ``(lat, lon, alt)``: NAV_WAYPOINT items, degrees and metres above home, each
   reached within :data:`ACCEPTANCE_RADIUS_M` (the autopilot's default, PX4's NAV_ACC_RAD, is
   2 m).
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -47,12 +48,20 @@ def read_plan(path: str | PathLike[str]) -> list[Waypoint]:
         document = json.loads(path.read_text())
     except (OSError, json.JSONDecodeError) as exc:
         raise PlanError(f"{path}: not a readable .plan file ({exc})") from None
+    return parse_plan(document, path.name)
+
+
+def parse_plan(document: Any, name: str = "plan") -> list[Waypoint]:
+    """The mission items of a parsed ``.plan`` document (``name`` says where in errors)."""
     if not isinstance(document, dict) or document.get("fileType") != "Plan":
-        raise PlanError(f"{path}: not a QGroundControl plan (fileType is not 'Plan')")
-    items = document.get("mission", {}).get("items", [])
+        raise PlanError(f"{name}: not a QGroundControl plan (fileType is not 'Plan')")
+    mission = document.get("mission")
+    items = mission.get("items") if isinstance(mission, dict) else None
+    if not isinstance(items, list):
+        raise PlanError(f"{name}: no mission.items list")
     waypoints = []
     for number, item in enumerate(items):
-        where = f"{path.name}: mission item {number}"
+        where = f"{name}: mission item {number}"
         if not isinstance(item, dict) or item.get("type") != "SimpleItem":
             kind = item.get("type") if isinstance(item, dict) else type(item).__name__
             raise PlanError(
@@ -81,7 +90,7 @@ def read_plan(path: str | PathLike[str]) -> list[Waypoint]:
         except (KeyError, TypeError, ValueError) as exc:
             raise PlanError(f"{where}: {exc}") from None
     if not waypoints:
-        raise PlanError(f"{path}: the plan has no mission items")
+        raise PlanError(f"{name}: the plan has no mission items")
     return waypoints
 
 
@@ -108,6 +117,8 @@ def waypoints_of(
         raise PlanError(f"frame must be 'global' or 'local', got {frame!r}")
     if isinstance(plan, str | PathLike):
         return read_plan(plan)
+    if isinstance(plan, Mapping):
+        return parse_plan(dict(plan))
     if frame == "local":
         return [
             Waypoint(frame=FRAME_LOCAL_ENU, command=NAV_WAYPOINT, x_lat=x, y_long=y, z_alt=z)
@@ -122,4 +133,4 @@ def waypoints_of(
         raise PlanError(str(exc)) from None
 
 
-__all__ = ["FRAME_LOCAL_ENU", "PlanError", "read_plan", "waypoints_of"]
+__all__ = ["FRAME_LOCAL_ENU", "PlanError", "parse_plan", "read_plan", "waypoints_of"]
