@@ -68,6 +68,7 @@ log = logging.getLogger("bridge_mavlink")
 MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", AUTOPILOT_ARDUPILOT: "AUTO"}
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
+MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
 TRANSFER_TIMEOUT_S = 1.5
 TRANSFER_ATTEMPTS = 5
 FENCE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
@@ -392,8 +393,15 @@ def control(core: BridgeCore, request: MissionControl) -> Steps:
         "pause": HOLD_MODE,
         "return": RETURN_MODE,
     }[request.action][autopilot]
-    reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
-    return MissionResult(success=reply.mode_sent, message=reply.message)
+    deadline = core.now + MISSION_CHECK_WAIT_S
+    while True:
+        reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
+        busy = reply.result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+        if reply.mode_sent or request.action != "start" or not busy or core.now >= deadline:
+            return MissionResult(success=reply.mode_sent, message=reply.message)
+        retry = core.now + 0.5  # PX4 refuses the mission mode until it has checked the upload
+        while core.now < retry:
+            yield retry
 
 
 def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
