@@ -69,6 +69,7 @@ MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", AUTOPILOT_ARDUPILOT: "AUTO"}
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
 MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
+FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's breach
 TRANSFER_TIMEOUT_S = 1.5
 TRANSFER_ATTEMPTS = 5
 FENCE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
@@ -216,6 +217,8 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
     state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
     if (state.home_local, state.home_geo) != before:
         publish_home(core)
+    if before[1] is None and core.config.upload_fence:  # home known: the autopilot's fence
+        core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
 
 
 def on_transfer_message(core: BridgeCore, msg: Any) -> None:
@@ -413,15 +416,17 @@ def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
         state.monitor = BreachMonitor()
         core.publish(registry.ENVELOPE, state.envelope)
         log.info("envelope set: %s", state.envelope)
-        if core.connected and state.home_geo is not None:
+        if core.connected and state.home_geo is not None and core.config.upload_fence:
             core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
     yield from ()
     return EnvelopeResult(success=True, message="envelope in force", envelope=state.envelope)
 
 
 def fence_items(state: MissionState) -> list[mt.Item]:
-    """The envelope as MAV_MISSION_TYPE_FENCE items: a circle of max_distance around home,
-    the inclusion polygon, the exclusion zones (needs home's geodetic position)."""
+    """The envelope as MAV_MISSION_TYPE_FENCE items: a circle around home of max_distance
+    plus the margin and :data:`FENCE_BACKUP_M` (the autopilot's fence is the backstop: the
+    bridge acts first), the inclusion polygon, the exclusion zones (needs home's geodetic
+    position)."""
     assert state.home_geo is not None
     home = state.home_geo
     envelope = state.envelope
@@ -430,7 +435,7 @@ def fence_items(state: MissionState) -> list[mt.Item]:
         mt.Item(
             frame=frame,
             command=FENCE_CIRCLE,
-            param1=envelope.max_distance,
+            param1=envelope.max_distance + envelope.margin + FENCE_BACKUP_M,
             x=round(home[0] * 1e7),
             y=round(home[1] * 1e7),
         )

@@ -57,6 +57,7 @@ def home(rig: CoreRig, east: float = 0.0, north: float = 0.0) -> None:
 
 
 def flying(**config) -> CoreRig:
+    config.setdefault("upload_fence", False)  # the tests of the fence turn it on
     rig = CoreRig(**config).connect(mode=OFFBOARD, armed=True, flying=True)
     rig.run(0.2)
     return rig
@@ -230,16 +231,29 @@ def test_mission_start_without_a_mission_is_refused():
         op.result()
 
 
-def test_set_envelope_replaces_it_and_uploads_the_fence():
-    rig = flying()
+def test_home_known_uploads_the_envelope_as_the_autopilots_fence():
+    rig = flying(upload_fence=True)
     home(rig)
+    (count,) = rig.sent_since(-math.inf, "MISSION_COUNT")
+    assert count.mission_type == mavlink.MAV_MISSION_TYPE_FENCE and count.count == 1
+    (circle,) = answer_upload(rig, mavlink.MAV_MISSION_TYPE_FENCE)
+    assert circle.command == mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
+    assert circle.param1 == 500.0 + 1.0 + missions.FENCE_BACKUP_M  # beyond the bridge's breach
+    home(rig)  # again: no second upload
+    assert len(rig.sent_since(-math.inf, "MISSION_COUNT")) == 1
+
+
+def test_set_envelope_replaces_it_and_uploads_the_fence():
+    rig = flying(upload_fence=True)
+    home(rig)
+    answer_upload(rig, mavlink.MAV_MISSION_TYPE_FENCE)  # the first, when home became known
     fence = [(-20.0, -20.0), (20.0, -20.0), (20.0, 20.0), (-20.0, 20.0)]
     op = rig.call(
         missions.set_envelope, EnvelopeSet(envelope=Envelope(max_altitude=30, fence=fence))
     )
     assert op.result().envelope.max_altitude == 30
     assert rig.published(registry.ENVELOPE)[-1].max_altitude == 30
-    (count,) = rig.sent_since(-math.inf, "MISSION_COUNT")
+    count = rig.sent_since(-math.inf, "MISSION_COUNT")[-1]
     assert count.mission_type == mavlink.MAV_MISSION_TYPE_FENCE and count.count == 5
     items = answer_upload(rig, mavlink.MAV_MISSION_TYPE_FENCE)
     assert items[0].command == mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
