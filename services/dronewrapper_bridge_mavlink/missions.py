@@ -88,8 +88,7 @@ class MissionState:
         self.waypoints: list[Waypoint] = []
         self.current_seq = 0
         self.transfer: mt.Transfer | None = None
-        self.last_refusal = ""
-        self._last_refusal_text = -math.inf
+        self.last_refusal_text = -math.inf
         self._next_publish = -math.inf
 
 
@@ -123,9 +122,8 @@ def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> str
                     )
     except EnvelopeError as exc:
         reason = f"setpoint refused: {exc}"
-        state.last_refusal = reason
-        if core.now - state._last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
-            state._last_refusal_text = core.now
+        if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
+            state.last_refusal_text = core.now
             core.bridge_text(reason)
         return reason
     return ""

@@ -71,7 +71,7 @@ class TelloMissions:
         self.current_seq = 0
         self.running: Operation | None = None
         self.paused = False
-        self._last_refusal_text = -math.inf
+        self.last_refusal_text = -math.inf
         self._next_publish = -math.inf
 
 
@@ -110,8 +110,8 @@ def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> str:
                 env.check_position(state.envelope, 0.0, 0.0, target.position.z)
     except EnvelopeError as exc:
         reason = f"setpoint refused: {exc}"
-        if core.now - state._last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
-            state._last_refusal_text = core.now
+        if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
+            state.last_refusal_text = core.now
             log.warning("%s", reason)
             core.text(4, f"bridge: {reason}")
         return reason

@@ -22,7 +22,8 @@ TIMEOUT_S = 600
 
 
 def _flight(tmp_path: Path, firmware: str, kind: str, connection: str) -> dict:
-    """Run the firmware and the flight in one private namespace; the flight's report."""
+    """Run the firmware (``firmware`` execs it, so it is the process stopped at the end) and
+    the flight in one private namespace; the flight's report."""
     script = (
         "ip link set lo up && "
         f"({firmware}) > {tmp_path}/firmware.log 2>&1 & fw=$! ; "
@@ -62,9 +63,9 @@ def test_px4_sitl_mission_rtl_and_fence(tmp_path):
     assert (build / "bin" / "px4").is_file(), f"{build}/bin/px4: not built"
     (tmp_path / "etc").symlink_to(build / "etc")
     firmware = (
-        "PX4_SIM_MODEL=sihsim_quadx PX4_SIMULATOR=sihsim HEADLESS=1 "
-        f"{build / 'bin' / 'px4'} -d -i 7"
-    )  # instance 7: its own lock and ports, beside anyone's instance 0
+        "exec env PX4_SIM_MODEL=sihsim_quadx PX4_SIMULATOR=sihsim HEADLESS=1 "
+        f"{build / 'bin' / 'px4'} -d -i 7 {tmp_path}"
+    )  # instance 7: its own lock and ports beside anyone's instance 0; tmp_path its rootfs
     _judge(_flight(tmp_path, firmware, "px4", "udpin:127.0.0.1:14547"))
 
 
@@ -75,5 +76,5 @@ def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
     binary = tree / "build" / "sitl" / "bin" / "arducopter"
     assert binary.is_file(), f"{binary}: not built"
     defaults = tree / "Tools" / "autotest" / "default_params" / "copter.parm"
-    firmware = f"{binary} --model quad --speedup 1 -I0 -w --defaults {defaults}"
+    firmware = f"exec {binary} --model quad --speedup 1 -I0 -w --defaults {defaults}"
     _judge(_flight(tmp_path, firmware, "ardupilot", "tcp:127.0.0.1:5760"))
