@@ -100,7 +100,7 @@ def main(kind: str, connection: str) -> int:
             if pair.call(ops.arming, CommandBool(value=True)).success:
                 break
             pair.run(2.0)
-        pair.call(ops.takeoff, CommandTOL.takeoff(altitude=6.0))
+        report["takeoff_2"] = pair.call(ops.takeoff, CommandTOL.takeoff(altitude=6.0)).message
         assert pair.run(40.0, until=lambda: pair.position[2] > 5.5), "no second climb"
         hx, hy, hz = pair.core.missions.home_local
         pair.setpoint = target(hx, hy, hz + 6.0)
@@ -127,6 +127,10 @@ def main(kind: str, connection: str) -> int:
     except AssertionError as exc:
         report["failed"] = str(exc)
         report["texts"] = pair.texts[-15:]
+        report["track_tail"] = [
+            (round(t, 1), [round(v, 2) for v in p], mode) for t, p, mode in pair.track[-150::30]
+        ]
+        report["home_local"] = pair.core.missions.home_local
         print(json.dumps(report))
         return 1
     finally:

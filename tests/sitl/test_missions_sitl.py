@@ -9,8 +9,10 @@ tests/sitl/mission_flight.py with the firmware in a private network namespace (`
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -18,27 +20,37 @@ from pathlib import Path
 import pytest
 
 HERE = Path(__file__).parent
-TIMEOUT_S = 600
+TIMEOUT_S = 800  # s for one flight (the firmware flies in real time)
+STOP_GROUP = (  # TERM the firmware's process group, KILL it after 5 s
+    "kill -TERM -- -$fw ; for i in $(seq 50) ; do kill -0 -- -$fw 2>/dev/null || break ; "
+    "sleep 0.1 ; done ; kill -KILL -- -$fw 2>/dev/null"
+)
 
 
 def _flight(tmp_path: Path, firmware: str, kind: str, connection: str) -> dict:
-    """Run the firmware (``firmware`` execs it, so it is the process stopped at the end) and
-    the flight in one private namespace; the flight's report."""
+    """Run the firmware (``firmware`` execs it in a session of its own, whose process group
+    is stopped at the end) and the flight in one private namespace; the flight's report."""
     script = (
         "ip link set lo up && "
-        f"({firmware}) > {tmp_path}/firmware.log 2>&1 & fw=$! ; "
+        f"({firmware}) > {tmp_path}/firmware.log 2>&1 & fw=$! ; echo $fw > {tmp_path}/fw.pid ; "
         f"{sys.executable} {HERE / 'mission_flight.py'} {kind} '{connection}' ; rc=$? ; "
-        "kill $fw ; wait $fw ; exit $rc"
+        f"{STOP_GROUP} ; exit $rc"
     )
     env = {**os.environ, "PYTHONPATH": f"{HERE}:{os.environ.get('PYTHONPATH', '')}"}
-    done = subprocess.run(
-        ["unshare", "-n", "bash", "-c", script],
-        capture_output=True,
-        text=True,
-        timeout=TIMEOUT_S,
-        env=env,
-        cwd=tmp_path,
-    )
+    try:
+        done = subprocess.run(
+            ["unshare", "-n", "bash", "-c", script],
+            capture_output=True,
+            text=True,
+            timeout=TIMEOUT_S,
+            env=env,
+            cwd=tmp_path,
+        )
+    finally:  # the firmware's process group, if the script could not stop it
+        pid_file = tmp_path / "fw.pid"
+        if pid_file.exists():
+            with contextlib.suppress(ProcessLookupError, ValueError):
+                os.killpg(int(pid_file.read_text()), signal.SIGKILL)
     lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
     log = (tmp_path / "firmware.log").read_text(errors="replace")[-2000:]
     assert lines, f"no report (rc {done.returncode}):\n{done.stderr[-3000:]}\n{log}"
@@ -56,6 +68,7 @@ def _judge(report: dict) -> None:
     assert report["breach_action"], report
 
 
+@pytest.mark.timeout(TIMEOUT_S + 60)
 @pytest.mark.skipif(not os.environ.get("PX4_SITL_DIR"), reason="PX4_SITL_DIR is not set (opt-in)")
 @pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
 def test_px4_sitl_mission_rtl_and_fence(tmp_path):
@@ -63,12 +76,13 @@ def test_px4_sitl_mission_rtl_and_fence(tmp_path):
     assert (build / "bin" / "px4").is_file(), f"{build}/bin/px4: not built"
     (tmp_path / "etc").symlink_to(build / "etc")
     firmware = (
-        "exec env PX4_SIM_MODEL=sihsim_quadx PX4_SIMULATOR=sihsim HEADLESS=1 "
+        "exec setsid env PX4_SIM_MODEL=sihsim_quadx PX4_SIMULATOR=sihsim HEADLESS=1 "
         f"{build / 'bin' / 'px4'} -d -i 7 {tmp_path}"
     )  # instance 7: its own lock and ports beside anyone's instance 0; tmp_path its rootfs
     _judge(_flight(tmp_path, firmware, "px4", "udpin:127.0.0.1:14547"))
 
 
+@pytest.mark.timeout(TIMEOUT_S + 60)
 @pytest.mark.skipif(not os.environ.get("AP_SITL_DIR"), reason="AP_SITL_DIR is not set (opt-in)")
 @pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
 def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
@@ -76,5 +90,5 @@ def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
     binary = tree / "build" / "sitl" / "bin" / "arducopter"
     assert binary.is_file(), f"{binary}: not built"
     defaults = tree / "Tools" / "autotest" / "default_params" / "copter.parm"
-    firmware = f"exec {binary} --model quad --speedup 1 -I0 -w --defaults {defaults}"
+    firmware = f"exec setsid {binary} --model quad --speedup 1 -I0 -w --defaults {defaults}"
     _judge(_flight(tmp_path, firmware, "ardupilot", "tcp:127.0.0.1:5760"))
