@@ -87,6 +87,7 @@ class MissionState:
         self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
         self.waypoints: list[Waypoint] = []
         self.current_seq = 0
+        self.last_reached = -1  # the item last reported on mission/reached
         self.transfer: mt.Transfer | None = None
         self.last_refusal_text = -math.inf
         self._next_publish = -math.inf
@@ -235,6 +236,10 @@ def on_mission_current(core: BridgeCore, msg: Any) -> None:
 
 
 def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
+    """MISSION_ITEM_REACHED, published once per item (PX4 repeats it for a while)."""
+    if int(msg.seq) == core.missions.last_reached:
+        return
+    core.missions.last_reached = int(msg.seq)
     reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=int(msg.seq))
     core.publish(registry.MISSION_REACHED, reached)
 
@@ -335,6 +340,7 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     if not upload.error:
         core.missions.waypoints = list(request.waypoints)
         core.missions.current_seq = 0
+        core.missions.last_reached = -1
         publish_waypoints(core)
     message = upload.error or f"{len(items)} item(s) uploaded"
     return WaypointPushResult(
@@ -389,6 +395,8 @@ def control(core: BridgeCore, request: MissionControl) -> Steps:
     autopilot = core.require_connected()
     if request.action == "start" and not core.missions.waypoints:
         raise ServiceError("no mission uploaded", "refused")
+    if request.action == "start":
+        core.missions.last_reached = -1
     mode = {
         "start": MISSION_MODE,
         "pause": HOLD_MODE,

@@ -221,7 +221,9 @@ def test_mission_clear_and_progress():
     rig.deliver(mavlink.MAVLink_mission_ack_message(255, 191, 0, 0))
     assert op.result().success
     rig.deliver(mavlink.MAVLink_mission_item_reached_message(2))
-    assert rig.published(registry.MISSION_REACHED)[-1].wp_seq == 2
+    rig.deliver(mavlink.MAVLink_mission_item_reached_message(2))  # PX4 repeats it
+    rig.deliver(mavlink.MAVLink_mission_item_reached_message(3))
+    assert [m.wp_seq for m in rig.published(registry.MISSION_REACHED)] == [2, 3]
 
 
 def test_mission_start_without_a_mission_is_refused():
