@@ -39,6 +39,8 @@ from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
 
 SQUARE = [(10.0, 0.0, 6.0), (10.0, 10.0, 6.0), (0.0, 10.0, 6.0), (0.0, 0.0, 6.0)]
+"""The square (ENU m from home), each corner held 0.5 s within 0.5 m (ArduCopter cuts
+corners it need not stop at)."""
 GUIDED = {"px4": "OFFBOARD", "ardupilot": "GUIDED"}
 
 
@@ -76,7 +78,7 @@ def main(kind: str, connection: str) -> int:
         items = []
         for x, y, z in SQUARE:
             lat, lon = to_geodetic(home, x, y)
-            items.append(Waypoint(x_lat=lat, y_long=lon, z_alt=z, param2=0.5))
+            items.append(Waypoint(x_lat=lat, y_long=lon, z_alt=z, param1=0.5, param2=0.5))
         if kind == "ardupilot":  # item 0 is home on ArduPilot: a copy of the first
             items.insert(0, items[0])
         pushed = pair.call(missions.push, WaypointPush(waypoints=items))
@@ -96,6 +98,8 @@ def main(kind: str, connection: str) -> int:
         report["rtl_landing_error_m"] = round(math.hypot(*pair.position[:2]), 3)
         # the envelope: a setpoint beyond it is refused; then, 20 m out, the envelope shrinks
         # to 10 m around the aircraft's home: a breach, and the return it starts
+        if kind == "ardupilot":  # it stays in RTL after landing, where it does not arm
+            assert pair.call(ops.set_mode, SetMode(custom_mode="GUIDED")).mode_sent
         for _attempt in range(20):
             if pair.call(ops.arming, CommandBool(value=True)).success:
                 break
