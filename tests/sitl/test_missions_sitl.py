@@ -28,7 +28,7 @@ def _flight(tmp_path: Path, firmware: str, kind: str, connection: str) -> dict:
     """Run the firmware (``firmware`` execs it in a session of its own, whose process group
     is stopped at the end) and the flight in one private namespace; the flight's report."""
     script = (
-        "ip link set lo up && "
+        "ip link set lo up ; "
         f"({firmware}) > {tmp_path}/firmware.log 2>&1 & fw=$! ; echo $fw > {tmp_path}/fw.pid ; "
         f"{sys.executable} {HERE / 'mission_flight.py'} {kind} '{connection}' ; rc=$? ; "
         f"{STOP_GROUP} ; exit $rc"
