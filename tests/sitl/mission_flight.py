@@ -39,7 +39,8 @@ from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
 
 SQUARE = [(10.0, 0.0, 6.0), (10.0, 10.0, 6.0), (0.0, 10.0, 6.0), (0.0, 0.0, 6.0)]
-"""The square (ENU m from home), each corner held 0.5 s within 0.5 m (ArduCopter cuts
+"""The square (ENU m from home), each corner held 1 s within 0.5 m (ArduCopter holds whole
+seconds only, and cuts
 corners it need not stop at)."""
 GUIDED = {"px4": "OFFBOARD", "ardupilot": "GUIDED"}
 
@@ -78,7 +79,7 @@ def main(kind: str, connection: str) -> int:
         items = []
         for x, y, z in SQUARE:
             lat, lon = to_geodetic(home, x, y)
-            items.append(Waypoint(x_lat=lat, y_long=lon, z_alt=z, param1=0.5, param2=0.5))
+            items.append(Waypoint(x_lat=lat, y_long=lon, z_alt=z, param1=1.0, param2=0.5))
         if kind == "ardupilot":  # item 0 is home on ArduPilot: a copy of the first
             items.insert(0, items[0])
         pushed = pair.call(missions.push, WaypointPush(waypoints=items))
