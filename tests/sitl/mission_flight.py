@@ -40,8 +40,7 @@ from dronewrapper_bridge_mavlink import operations as ops
 
 SQUARE = [(10.0, 0.0, 6.0), (10.0, 10.0, 6.0), (0.0, 10.0, 6.0), (0.0, 0.0, 6.0)]
 """The square (ENU m from home), each corner held 1 s within 0.5 m (ArduCopter holds whole
-seconds only, and cuts
-corners it need not stop at)."""
+seconds only, and cuts corners it need not stop at)."""
 GUIDED = {"px4": "OFFBOARD", "ardupilot": "GUIDED"}
 
 
