@@ -19,7 +19,13 @@ os.environ.setdefault("MAVLINK20", "1")
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.geometry import Point
-from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_POSITION, CommandBool, PositionTarget
+from dronewrapper.msgs.mavros import (
+    FRAME_LOCAL_NED,
+    MASK_POSITION,
+    CommandBool,
+    CommandTOL,
+    PositionTarget,
+)
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore
@@ -141,8 +147,6 @@ class SimPair:
         """Arm, NAV_TAKEOFF to ``height`` m above home, wait until there (AUTO.LOITER)."""
         self.connect()
         assert self.call(ops.arming, CommandBool(value=True)).success
-        from dronewrapper.msgs.mavros import CommandTOL
-
         assert self.call(ops.takeoff, CommandTOL.takeoff(altitude=height)).success
         assert self.run(30.0, until=lambda: self.autopilot.state.z > height - 0.15)
         self.run(2.0)
