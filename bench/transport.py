@@ -93,6 +93,9 @@ def serve(role: str, options: ZenohOptions) -> None:
         print("ready", flush=True)
         for line in sys.stdin:  # the parent asks for counts, then closes stdin
             kind, _, what = line.strip().partition(" ")
+            if kind == "fallbacks":
+                print(shm_fallbacks(node), flush=True)
+                continue
             if what == "one_way":
                 lat = np.asarray(one_way[kind][50:]) * 1e3
                 print(f"{np.percentile(lat, 50):.6f} {np.percentile(lat, 99):.6f}", flush=True)
@@ -101,6 +104,11 @@ def serve(role: str, options: ZenohOptions) -> None:
             span = first_last[kind][1] - first_last[kind][0]
             print(f"{n} {span:.6f}", flush=True)
             counts[kind] = 0
+
+
+def shm_fallbacks(node: Node) -> int:
+    """Images this node put the ordinary way because its shared-memory pool had no room."""
+    return node.shm_writer.fallbacks if node.shm_writer is not None else 0
 
 
 def serve_raw(options: ZenohOptions) -> None:
@@ -171,6 +179,11 @@ class Peer:
         self.proc.stdin.flush()
         p50, p99 = self.proc.stdout.readline().split()
         return {"p50_ms": float(p50), "p99_ms": float(p99)}
+
+    def fallbacks(self) -> int:
+        self.proc.stdin.write("fallbacks\n")
+        self.proc.stdin.flush()
+        return int(self.proc.stdout.readline())
 
     def close(self) -> None:
         self.proc.stdin.close()
@@ -243,15 +256,19 @@ def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
         time.sleep(1.0)
         result["pose_rtt"] = percentiles(round_trips(node, "pose", args.samples_small))
         result["image_rtt"] = percentiles(round_trips(node, "image", args.samples_image))
+        fallbacks = {"ping": shm_fallbacks(node)}
     result["pose_one_way"] = pong.one_way("pose")
     result["image_one_way"] = pong.one_way("image")
+    fallbacks["pong"] = pong.fallbacks()
     pong.close()
     sink = Peer("sink", peer_mode, peer_connect, peer_listen)
     with Node("bench_source", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
         result["image_throughput"] = throughput(node, sink, "image", args.seconds)
         result["pose_throughput"] = throughput(node, sink, "pose", args.seconds)
+        fallbacks["source"] = shm_fallbacks(node)
     sink.close()
+    result["shm_fallbacks"] = fallbacks
     stop.set()
     if router_thread:
         router_thread.join(10)
@@ -291,6 +308,9 @@ def main(argv: list[str] | None = None) -> int:
         "  (ms; RTT = ping -> typed echo that decodes and re-publishes -> ping; raw = the same\n"
         "   sizes as plain bytes through plain Zenoh, measured in the same run: the floor; SHM on)"
     )
+    for name, res in results.items():
+        counts = ", ".join(f"{who} {n}" for who, n in res["shm_fallbacks"].items())
+        print(f"  shared-memory puts that fell back to ordinary ones ({name}): {counts}")
     best_image_rtt = min(r["image_rtt"]["p50_ms"] for r in results.values())
     best_image_rate = max(r["image_throughput"]["msgs_per_s"] for r in results.values())
     best_pose_rtt = min(r["pose_rtt"]["p50_ms"] for r in results.values())
