@@ -12,7 +12,16 @@ drone's namespace, with these variables of its own:
                ``ns_prefix`` variable, ``drone`` by default)
 ``kind``       its kind
 ``drone_port`` a UDP port free on this machine, one per drone (its autopilot link)
+``address``    the drone's own address, from the ``addresses`` list ("" without one)
+``local``      this machine's address for that drone, from ``local_addresses`` (else
+               ``0.0.0.0``: every address, enough for one Tello)
 =============  ==========================================================================
+
+A classroom graph (``compose/classroom_tello.yaml``) lists its aircraft instead of counting
+them: ``addresses`` (comma-separated: one per Tello, in station mode on one access point) sets
+the number of drones, and ``local_addresses`` (as many, or empty) the address on this machine
+each drone's bridge binds, since a Tello sends its state and video to the address that
+commanded it.
 """
 
 from __future__ import annotations
@@ -24,6 +33,8 @@ KINDS = ("iris", "tello")
 """The simulated aircraft a fleet can hold."""
 ANY = "any"
 """``each_drone: any`` runs a process for every drone, whatever its kind."""
+ANY_ADDRESS = "0.0.0.0"
+"""A bridge's local address when none is listed: every address of this machine."""
 MAX_DRONES = 200
 """More drones than this is a typo, not a fleet (each is a few processes)."""
 
@@ -42,9 +53,14 @@ class FleetDrone:
     values: dict[str, str] = field(default_factory=dict, compare=False)
 
 
+def split_list(text: str) -> list[str]:
+    """``a, b,c`` -> ``["a", "b", "c"]`` (empty parts dropped)."""
+    return [part.strip() for part in str(text).split(",") if part.strip()]
+
+
 def parse_kinds(text: str) -> list[str]:
     """``iris`` / ``tello`` / ``iris,tello,...`` -> the list of kinds, checked."""
-    kinds = [part.strip() for part in text.split(",") if part.strip()]
+    kinds = split_list(text)
     if not kinds:
         raise FleetError("kind: give iris, tello, or a list such as iris,tello")
     for kind in kinds:
@@ -54,13 +70,23 @@ def parse_kinds(text: str) -> list[str]:
 
 
 def plan_fleet(values: Mapping[str, str], free_udp_port: Callable[[], int]) -> list[FleetDrone]:
-    """The drones that the variables ``drones``, ``kind`` and ``ns_prefix`` describe.
+    """The drones that the variables ``drones`` (or ``addresses``), ``kind``,
+    ``local_addresses`` and ``ns_prefix`` describe.
 
     Raises:
-        FleetError: ``drones`` is not a whole number 1..MAX_DRONES, or ``kind`` names an
-            aircraft that is not simulated.
+        FleetError: ``drones`` is not a whole number 1..MAX_DRONES, ``kind`` names an
+            aircraft that is not simulated, an address is listed twice, or
+            ``local_addresses`` does not give one per address.
     """
-    count_text = str(values.get("drones", "")).strip()
+    addresses = split_list(values.get("addresses", ""))
+    locals_ = split_list(values.get("local_addresses", ""))
+    if locals_ and len(locals_) != len(addresses):
+        raise FleetError(
+            f"local_addresses: {len(locals_)} given for {len(addresses)} addresses (one each)"
+        )
+    if len(set(addresses)) != len(addresses):
+        raise FleetError(f"addresses: listed twice: {', '.join(addresses)}")
+    count_text = str(len(addresses)) if addresses else str(values.get("drones", "")).strip()
     if not count_text.isdigit() or not 1 <= int(count_text) <= MAX_DRONES:
         raise FleetError(f"drones={count_text!r} must be a whole number 1..{MAX_DRONES}")
     kinds = parse_kinds(str(values.get("kind", KINDS[0])))
@@ -68,7 +94,14 @@ def plan_fleet(values: Mapping[str, str], free_udp_port: Callable[[], int]) -> l
     drones = []
     for i in range(1, int(count_text) + 1):
         ns, kind = f"{prefix}{i}", kinds[(i - 1) % len(kinds)]
-        own = {"i": str(i), "ns": ns, "kind": kind, "drone_port": str(free_udp_port())}
+        own = {
+            "i": str(i),
+            "ns": ns,
+            "kind": kind,
+            "drone_port": str(free_udp_port()),
+            "address": addresses[i - 1] if addresses else "",
+            "local": locals_[i - 1] if locals_ else ANY_ADDRESS,
+        }
         drones.append(FleetDrone(i, ns, kind, own))
     return drones
 

@@ -241,7 +241,8 @@ class Fleet:
             )
         return chosen
 
-    # ---- the commands, on every drone at once
+    # ---- the commands, on every drone at once (``names=[...]``: on those; ``wait_s``: see
+    # collect)
 
     def takeoff(self, h: float = 3.0, *, timeout: float = 30.0, **kw: Any) -> FleetResult[None]:
         """Every drone takes off to ``h`` m above its take-off point (see DroneWrapper.takeoff)."""

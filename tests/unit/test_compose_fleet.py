@@ -89,3 +89,25 @@ def test_a_process_name_repeats_only_for_drones_of_different_kinds(tmp_path):
     with pytest.raises(GraphError, match="each_drone must be one of"):
         load_graph(path)
     assert load_graph(GRAPH_DIR / "sim_fleet.yaml").processes[0].each_drone == "iris"
+
+
+def test_a_classroom_lists_its_tellos_and_this_machines_address_for_each():
+    drones = plan(addresses="192.168.1.11, 192.168.1.12", local_addresses="10.0.0.1,10.0.0.2")
+    assert [(d.ns, d.values["address"], d.values["local"]) for d in drones] == [
+        ("drone1", "192.168.1.11", "10.0.0.1"), ("drone2", "192.168.1.12", "10.0.0.2"),
+    ]  # fmt: skip
+    assert plan(addresses="192.168.1.11")[0].values["local"] == "0.0.0.0"
+    with pytest.raises(FleetError, match="1 given for 2 addresses"):
+        plan(addresses="a,b", local_addresses="c")
+    with pytest.raises(FleetError, match="listed twice"):
+        plan(addresses="a,a")
+    launcher = Launcher.from_file(
+        "classroom_tello",
+        router="tcp/127.0.0.1:1",
+        variables={"addresses": "127.0.43.1,127.0.43.2", "config": "sim"},
+    )
+    labels = [[inst.label for inst in group] for group in launcher.groups]
+    assert labels == [["drone1/bridge_tello", "drone2/bridge_tello"], ["station"]]
+    bridge2 = " ".join(launcher.argv_of(launcher.groups[0][1])[0])
+    assert "tello_address=127.0.43.2" in bridge2 and "video=false" in bridge2
+    assert "config/sim.yaml" in bridge2
