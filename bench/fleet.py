@@ -187,7 +187,9 @@ def hold_fleet(endpoint: str, count: int, seconds: float) -> None:
                           "healthy": healthy}), flush=True)  # fmt: skip
 
 
-def measure(count: int, seconds: float, settle: float, log_dir: Path) -> dict[str, object]:
+def measure(
+    count: int, seconds: float, settle: float, log_dir: Path, kind: str = "iris"
+) -> dict[str, object]:
     """Start a fleet of ``count`` drones, measure it, stop it."""
     import zenoh
 
@@ -197,8 +199,8 @@ def measure(count: int, seconds: float, settle: float, log_dir: Path) -> dict[st
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     log_path = log_dir / f"fleet_{count}.log"
     argv = [sys.executable, "-m", "dronewrapper", "up", "sim_fleet", "--router", endpoint,
-            "--var", f"drones={count}", "--var", "kind=iris"]  # fmt: skip
-    out: dict[str, object] = {"drones": count}
+            "--var", f"drones={count}", "--var", f"kind={kind}"]  # fmt: skip
+    out: dict[str, object] = {"drones": count, "kind": kind}
     started = time.monotonic()
     with open(log_path, "w") as log:
         up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
@@ -248,6 +250,7 @@ def measure(count: int, seconds: float, settle: float, log_dir: Path) -> dict[st
             cpu_percent={role: sum(v) for role, v in usage.items()},
             cpu_percent_per_process={role: sum(v) / len(v) for role, v in usage.items()},
             rss_mb={role: sum(v) for role, v in memory.items()},
+            rss_mb_per_process={role: sum(v) / len(v) for role, v in memory.items()},
             sdk_fleet=sdk,
             pose_age=per_drone,
             pose_age_worst_p99_ms=max(p.get("p99_ms", float("inf")) for p in per_drone.values()),
@@ -325,8 +328,8 @@ def report(results: list[dict[str, object]]) -> None:
             r["setpoint_to_mavlink"].get("p99_ms", float("nan")),
         ])  # fmt: skip
     print_table(
-        "A fleet of N simulated Iris (no cameras) on one router: CPU % of one core, memory, "
-        "latency (ms)",
+        f"A fleet of N simulated drones ({results[0].get('kind', 'iris')}, no cameras) on one "
+        "router: CPU % of one core, memory, latency (ms)",
         ["N", "start s", "sim %/each", "bridge %/each", "router %", "SDK fleet %",
          "MB/drone", "pose age p50", "worst p99", "arming p50/p99", "sp->MAVLink p99"],
         rows,
@@ -344,6 +347,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--step", type=int, default=10, help="drones added past the counts")
     parser.add_argument("--seconds", type=float, default=10.0, help="measuring window (s)")
     parser.add_argument("--settle", type=float, default=3.0, help="wait after start (s)")
+    parser.add_argument("--kind", default="iris", help="iris, tello, or a list (iris,tello)")
     parser.add_argument("--hold", nargs=3, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.hold:
@@ -358,7 +362,7 @@ def main(argv: list[str] | None = None) -> int:
     while counts:
         n = counts.pop(0)
         print(f"... {n} drone(s)", flush=True)
-        result = measure(n, args.seconds, args.settle, log_dir)
+        result = measure(n, args.seconds, args.settle, log_dir, args.kind)
         results.append(result)
         reason = knee_reason(result)
         if reason:
@@ -381,8 +385,9 @@ def main(argv: list[str] | None = None) -> int:
     last = ok[-1]["drones"] if ok else 0
     print(f"knee: {knee['drones']} drones ({knee['reason']})" if knee else f"knee: above {last}")
     if ok:
-        plot(ok, RESULTS / "fleet.png")
-    write_results("fleet", {"results": results, "knee": knee, "targets": targets})
+        plot(ok, RESULTS / ("fleet.png" if args.kind == "iris" else f"fleet_{args.kind}.png"))
+    name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
+    write_results(name, {"results": results, "knee": knee, "targets": targets})
     return 0
 
 
