@@ -1,6 +1,6 @@
 """How the cost grows with the number of drones: N simulated Iris without cameras on one router.
 
-For each N (1, 5, 10, 20, then +10 until the knee or ``--max``) it starts ``compose/sim_fleet``
+For each N (1, 5, 10 and 20, then +10 until the knee or ``--max``) it starts ``compose/sim_fleet``
 through ``dronewrapper up`` (its own process: the launcher holds the router), lets it settle,
 and over ``--seconds`` measures:
 
@@ -365,12 +365,11 @@ def main(argv: list[str] | None = None) -> int:
         result = measure(n, args.seconds, args.settle, log_dir, args.kind)
         results.append(result)
         reason = knee_reason(result)
-        if reason:
+        if reason and knee is None:
             knee = {"drones": n, "reason": reason}
             print(f"    the machine no longer keeps up at {n}: {reason}", flush=True)
-            break
-        if not counts and n + args.step <= args.max:
-            counts.append(n + args.step)
+        if knee is None and not counts and n + args.step <= args.max:
+            counts.append(n + args.step)  # the fixed counts all run; beyond them, to the knee
     report(results)
     ok = [r for r in results if "error" not in r]
     at20 = next((r for r in ok if r["drones"] == 20), None)
