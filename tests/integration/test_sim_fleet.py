@@ -2,7 +2,8 @@
 
 Wiring only: each drone's sim and bridge come up under its own namespace, the fleet finds all
 five with their kinds, and a take-off and a landing ordered to all reach each drone (its own
-ground truth climbs, and only its own). The fleet's logic is tested on the fake bus
+ground truth climbs, and only its own), and an Iris reset to its start is on the ground,
+disarmed, while the others fly on. The fleet's logic is tested on the fake bus
 (tests/service/test_sdk_fleet.py); the graph's expansion in tests/unit/test_compose_fleet.py.
 """
 
@@ -14,8 +15,9 @@ import pytest
 
 from dronewrapper.fleet import Fleet
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.simulation import VehicleReset
 from dronewrapper_compose.launcher import Launcher
-from support import client_node, free_endpoint
+from support import client_node, free_endpoint, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -43,7 +45,14 @@ def test_five_drones_of_two_kinds_take_off_and_land_together():
                 assert heights["drone2"] > 0.5 and heights["drone3"] > 0.8, heights
                 assert all(heights[ns] < 0.2 for ns in ("drone1", "drone4", "drone5")), heights
 
-                result = fleet.land(timeout=60)
+                # drone3 (an Iris) is reset to its start: on the ground, disarmed, at once
+                reply = watcher.call(registry.SIM_RESET, VehicleReset(), ns="drone3", timeout=10)
+                assert reply.success, reply
+                wait_for(lambda: truth["drone3"].value.pose.position.z < 0.05, 10, what="reset")
+                wait_for(lambda: not fleet["drone3"].get_state().armed, 10, what="disarmed")
+                assert truth["drone2"].wait(5).pose.position.z > 0.5  # the other one flies on
+
+                result = fleet.land(timeout=60, names=["drone2"])
                 assert result.ok, result.failed
                 assert not any(d.is_flying() for d in fleet)
     assert graph.exit_code == 0, log.getvalue()
