@@ -179,9 +179,10 @@ def test_a_command_reaches_only_its_drone_and_all_land(flight):
 
 @pytest.mark.xfail(
     strict=True,
-    reason="the bridges judge a setpoint's freshness by its arrival, not its stamp: setpoints "
-    "held in the routers' TCP stream during a cut arrive in a burst once it is restored and "
-    "are flown (docs/fleet.md, 'A cut link')",
+    reason="a bridge judges a setpoint's freshness by its arrival (its stamp is the source "
+    "frame's capture time, kept on every repetition): setpoints held in the routers' TCP "
+    "stream during a cut arrive in a burst once it is restored and are flown (docs/fleet.md, "
+    "'A cut link')",
 )
 def test_a_command_withdrawn_during_a_cut_never_flies(flight):
     after = flight["after"]
