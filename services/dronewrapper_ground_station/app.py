@@ -278,6 +278,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                     "type": "telemetry",
                     "t": time.time(),
                     "role": role,
+                    "router": fleet.router(),
                     "fleet": fleet.summary(),
                     "drones": {ns: link.snapshot() for ns, link in list(fleet.links.items())},
                     "objects": fleet.objects.snapshot(),

@@ -333,11 +333,14 @@ class Fleet:
         *,
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], Any] = time.sleep,
+        router_linked: Callable[[], bool] | None = None,
     ) -> None:
         self.node = node
         self.config = config
         self.clock = clock
         self._sleep = sleep
+        self._router_linked = router_linked or (lambda: session_linked(node))
+        self.router_linked = True
         self.links: dict[str, DroneLink] = {}
         self.objects = SimObjects(node, clock)
         self._lock = threading.Lock()
@@ -348,7 +351,9 @@ class Fleet:
         return DroneLink(self.node, ns, self.config, clock=self.clock, sleep=self._sleep)
 
     def discover(self) -> None:
-        """List the processes alive now; add new drones, mark vanished ones offline."""
+        """Whether the router is linked; list the processes alive now; add new drones, mark
+        vanished ones offline."""
+        self.router_linked = self._router_linked()
         by_ns = services_by_namespace(self.node.alive_services("*"))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
@@ -359,6 +364,12 @@ class Fleet:
         for ns, link in self.links.items():
             link.services = by_ns.get(ns, [])
             link.online = any(name.startswith(BRIDGE_PREFIX) for name in link.services)
+
+    def router(self) -> dict[str, Any]:
+        """The station's link to its router: ``linked`` and the ``endpoint`` it connects to."""
+        options = getattr(self.node, "options", None)
+        endpoint = ", ".join(getattr(options, "connect", None) or []) or "the router"
+        return {"linked": self.router_linked, "endpoint": endpoint}
 
     def get(self, ns: str) -> DroneLink:
         """The drone ``ns``. Raises KeyError if the station does not know it."""
@@ -404,6 +415,15 @@ class Fleet:
         for link in self.links.values():
             link.close()
         self.objects.close()
+
+
+def session_linked(node: Any) -> bool:
+    """True while ``node``'s Zenoh session has a router or a peer (the fake bus: always)."""
+    session = getattr(node, "session", None)
+    if session is None:
+        return True
+    info = session.info
+    return bool(list(info.routers_zid()) or list(info.peers_zid()))
 
 
 def _undeclare(entities: list[Any]) -> None:

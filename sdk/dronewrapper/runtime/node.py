@@ -14,8 +14,8 @@ Zenoh queryables whose handlers run on a worker pool; a bad request gets an erro
 what is wrong, never silence. SIGINT and SIGTERM set ``stop_event``; the session is always
 closed on exit (an unclosed session can hang the interpreter).
 
-Size: just over 400 lines: the Node's whole surface (publishers, subscribers, services,
-liveliness, shutdown) and ``call_service``, the one module every process imports.
+This module is the Node's whole surface (publishers, subscribers, services, liveliness,
+shutdown) and ``call_service``: the one module every process imports.
 """
 
 from __future__ import annotations
