@@ -52,35 +52,6 @@ def test_qos_field_writes_only_what_differs_from_rmw_zenoh_defaults():
     assert qos_text(durability=TRANSIENT_LOCAL, depth=1) == ":1:,1:,:,:,,"
 
 
-def test_tokens_equal_zenoh_ros2_sdk():
-    from zenoh_ros2_sdk.entity import EndpointEntity, EntityKind, NodeEntity
-    from zenoh_ros2_sdk.keyexpr import endpoint_liveliness_keyexpr, node_liveliness_keyexpr
-
-    theirs_node = NodeEntity(
-        domain_id=3,
-        session_id="abc1",
-        node_id=2,
-        node_name="mavros",
-        namespace="/drone",
-        enclave="",
-    )
-    ours = NodeName(3, "abc1", 2, "/drone", "mavros")
-    assert ours.token() == node_liveliness_keyexpr(theirs_node)
-    theirs = EndpointEntity(
-        node=theirs_node,
-        entity_id=5,
-        kind=EntityKind.PUBLISHER,
-        name="/drone/mavros/state",
-        dds_type_name="mavros_msgs::msg::dds_::State_",
-        type_hash="RIHS01_aa",
-        qos="::,10:,:,:,,",
-        gid=bytes(16),
-    )
-    assert ours.endpoint_token(
-        5, PUBLISHER, "/drone/mavros/state", "mavros_msgs/msg/State", "RIHS01_aa", "::,10:,:,:,,"
-    ) == endpoint_liveliness_keyexpr(theirs)
-
-
 def test_parse_endpoint_reads_tokens_back_and_ignores_nodes():
     node = NodeName(0, "z1", 1, "/drone", "mavros")
     token = node.endpoint_token(
@@ -102,21 +73,6 @@ def test_parse_endpoint_reads_tokens_back_and_ignores_nodes():
     assert parse_endpoint(token + "/backends:x:y") == endpoint  # Lyrical/Rolling's 14th chunk
     assert parse_endpoint(node.token()) is None
     assert parse_endpoint("drone/alive/bridge") is None
-
-
-def test_attachment_is_33_bytes_and_reads_as_zenoh_ros2_sdk_reads_it():
-    from zenoh_ros2_sdk.attachment import Attachment
-
-    raw = attachment.pack(42, 1_700_000_000_000_000_000, bytes(range(16)))
-    assert len(raw) == 33 and raw[16] == 16
-    theirs = Attachment.from_bytes(raw)
-    assert (theirs.sequence_id, theirs.timestamp_ns, theirs.gid) == (
-        42,
-        1_700_000_000_000_000_000,
-        bytes(range(16)),
-    )
-    back = attachment.unpack(Attachment(7, 8, bytes(16)).to_bytes())
-    assert (back.sequence, back.timestamp_ns) == (7, 8)
 
 
 @pytest.mark.parametrize("raw", [None, b"", b"commander=alice", bytes(33)])
