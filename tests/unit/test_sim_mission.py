@@ -3,11 +3,13 @@ mission protocol, and its geofence action."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper_sim.px4.autopilot import Autopilot
+from dronewrapper_sim.px4 import mission
+from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 from dronewrapper_sim.px4.mission import FENCE, MISSION, Geofence, MissionStore
 from dronewrapper_sim.px4.modes import Mode
 
@@ -117,3 +119,25 @@ def test_mission_mode_is_refused_in_the_air_without_a_mission():
     cmd.armed = True
     result = cmd.set_mode(Mode.MISSION, 1.0, autopilot.state)
     assert result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+
+
+def test_a_fence_breach_in_the_air_starts_gf_action_once():
+    autopilot = Autopilot(AutopilotConfig(params={"GF_ACTION": 3}))  # 3: return
+    store = autopilot.missions
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 1, FENCE)), 0.0)
+    lat, lon = HOME
+    fence = item(0, command=5003, frame=0, mission_type=FENCE, param1=20.0,
+                 x=round(lat * 1e7), y=round(lon * 1e7))  # fmt: skip
+    store.handle(fence, 0.1)
+    cmd = autopilot.commander
+    cmd.armed, cmd.landed = True, False
+    inside = dataclasses.replace(autopilot.state, x=5.0, z=5.0)
+    mission.check_geofence(cmd, 1.0, inside)
+    assert cmd.nav_mode is Mode.LOITER
+    outside = dataclasses.replace(autopilot.state, x=25.0, z=5.0)
+    mission.check_geofence(cmd, 1.1, outside)
+    assert cmd.nav_mode is Mode.RTL and cmd.user_mode is Mode.RTL
+    assert any(t.text == "Geofence exceeded" for t in cmd.drain_texts())
+    cmd.set_mode(Mode.LOITER, 1.2, outside)  # a pilot takes it back: no second action
+    mission.check_geofence(cmd, 1.3, outside)
+    assert cmd.nav_mode is Mode.LOITER
