@@ -39,7 +39,9 @@ from dronewrapper.msgs.mavros import (
     CommandTOL,
     SetMode,
 )
+from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
 from dronewrapper_bridge_mavlink.setpoints import hold_target
@@ -80,6 +82,10 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
             message=f"already flying ({altitude_text(core)}): nothing done; a position "
             "setpoint changes the altitude",
         )
+    try:  # above the safety envelope: refused, the limit named
+        missions.refuse_takeoff(core, height)
+    except ServiceError as exc:
+        return failed(REFUSED, exc.message, "takeoff")
     pose = core.pose()
     if pose is None:
         return failed(NO_POSITION, "no local position: no point to take off from")

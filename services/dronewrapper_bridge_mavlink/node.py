@@ -21,7 +21,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.bridge_node import BridgeNode
-from dronewrapper_bridge_mavlink import flight, parameters
+from dronewrapper_bridge_mavlink import flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
@@ -40,6 +40,10 @@ PUBLISHED = (
     registry.GLOBAL_POSITION,
     registry.BATTERY,
     registry.STATUSTEXT,
+    registry.ENVELOPE,  # missions.py: the envelope, home and the mission
+    registry.HOME_POSITION,
+    registry.MISSION_WAYPOINTS,
+    registry.MISSION_REACHED,
 )
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
@@ -128,7 +132,10 @@ class Bridge(BridgeNode[BridgeCore]):
     def start(self) -> list[threading.Thread]:
         """Open the link, subscribe, serve, and start the loops (returns the threads)."""
         self._open_link()
-        self.serve(SERVICES)
+        self.serve(
+            {**SERVICES, **{service: steps for service, steps, _ in missions.SERVICES}},
+            guarded={service: what for service, _, what in missions.SERVICES if what},
+        )
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(

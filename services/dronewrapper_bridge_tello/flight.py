@@ -24,7 +24,9 @@ from dronewrapper.msgs.flight import (
     TakeoffRequest,
 )
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, LANDED_STATE_ON_GROUND, CommandTOL
+from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 
 if TYPE_CHECKING:
@@ -61,6 +63,10 @@ def takeoff_to(core: TelloCore, request: TakeoffRequest) -> Steps:
             message=f"already flying (z={height_now(core):.2f} m): nothing done; a position "
             "setpoint changes the altitude",
         )
+    try:  # above the safety envelope: refused, the limit named
+        missions.refuse_takeoff(core, height)
+    except ServiceError as exc:
+        return failed(REFUSED, exc.message, "takeoff")
     reply = yield from ops.takeoff(core, CommandTOL.takeoff())
     if not reply.success:
         return failed(REFUSED, reply.message, "takeoff", reply.result)

@@ -24,7 +24,7 @@ from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper.security.wifi import open_wifi_warning
-from dronewrapper_bridge_tello import flight
+from dronewrapper_bridge_tello import flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import Outbox, TelloCore
@@ -43,6 +43,10 @@ PUBLISHED = (
     registry.VELOCITY_LOCAL,
     registry.BATTERY,
     registry.STATUSTEXT,
+    registry.ENVELOPE,  # missions.py: the envelope, home and the mission
+    registry.HOME_POSITION,
+    registry.MISSION_WAYPOINTS,
+    registry.MISSION_REACHED,
 )
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
@@ -122,7 +126,10 @@ class Bridge(BridgeNode[TelloCore]):
 
     def start(self) -> list[threading.Thread]:
         """Subscribe, serve, and start the loops (returns the threads)."""
-        self.serve(SERVICES)
+        self.serve(
+            {**SERVICES, **{service: steps for service, steps, _ in missions.SERVICES}},
+            guarded={service: what for service, _, what in missions.SERVICES if what},
+        )
         loops = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),
             (self._receive_loop, (self.link.state, self._on_state, "state"), "tello-state"),

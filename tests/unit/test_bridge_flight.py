@@ -21,6 +21,7 @@ from bridge_core_rig import (
 )
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.flight import (
     NO_POSITION,
     NOT_READY,
@@ -224,3 +225,11 @@ def test_a_refused_landing_is_named():
     ap.refuse[NAV_LAND] = REJECTED
     reply = ap.run(rig.call(flight.land_here, LandRequest()))
     assert (reply.failure, reply.step, reply.result) == (REFUSED, "land", REJECTED)
+
+
+def test_a_take_off_above_the_envelope_is_refused_before_anything_is_sent():
+    rig, ap = grounded(envelope=Envelope(max_altitude=10.0))
+    reply = ap.run(rig.call(flight.takeoff_to, TakeoffRequest(height=12.0)))
+    assert (reply.success, reply.failure, reply.step) == (False, REFUSED, "takeoff")
+    assert "12 m above the envelope's 10 m" in reply.message
+    assert [c for c in rig.sent_since(-1.0, "COMMAND_LONG") if c.command != 511] == []

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from tello_core_rig import TelloRig
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.flight import NOT_READY, REFUSED, TOO_LATE, LandRequest, TakeoffRequest
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper_bridge_tello import flight
@@ -76,3 +77,11 @@ def test_landing_is_done_on_the_tellos_ok():
     rig.script["land"] = "error"
     assert rig.call(flight.takeoff_to, TakeoffRequest(height=1.0)).success
     assert rig.call(flight.land_here, LandRequest()).failure == REFUSED
+
+
+def test_a_take_off_above_the_envelope_is_refused_before_anything_is_sent():
+    rig = connected(envelope=Envelope(max_altitude=3.0))
+    since = rig.now
+    reply = rig.call(flight.takeoff_to, TakeoffRequest(height=4.0))
+    assert (reply.success, reply.failure, reply.step) == (False, REFUSED, "takeoff")
+    assert "4 m above the envelope's 3 m" in reply.message and rig.commands(since) == []

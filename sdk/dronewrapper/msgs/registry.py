@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Generic, TypeVar
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.flight import FlightResult, LandRequest, TakeoffRequest
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
@@ -38,6 +39,21 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
+from dronewrapper.msgs.mission import (
+    EnvelopeResult,
+    EnvelopeSet,
+    HomePosition,
+    MissionControl,
+    MissionResult,
+    WaypointClear,
+    WaypointList,
+    WaypointPull,
+    WaypointPullResult,
+    WaypointPush,
+    WaypointPushResult,
+    WaypointReached,
+    WaypointSetCurrent,
+)
 from dronewrapper.msgs.sensor import (
     BatteryState,
     CameraInfo,
@@ -46,7 +62,13 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
-from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import (
+    VehicleReset,
+    VehicleResetResult,
+    WorldLoad,
+    WorldQuery,
+    WorldState,
+)
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
@@ -302,10 +324,68 @@ FLIGHT_LAND = Service(
     "land here; the reply comes once on the ground and disarmed (or failed)",
 )
 
+# ---- missions, home and the safety envelope (MAVROS's mission/geofence/home keys) ----
+MISSION_WAYPOINTS = Topic(
+    "{ns}/mavros/mission/waypoints", WaypointList, 0.5, ("bridge",), "the mission, on change too"
+)
+MISSION_REACHED = Topic(
+    "{ns}/mavros/mission/reached", WaypointReached, 0.0, ("bridge",), "a mission item reached"
+)
+HOME_POSITION = Topic(
+    "{ns}/mavros/home_position/home", HomePosition, 0.5, ("bridge",), "home, on change too"
+)
+ENVELOPE = Topic(
+    "{ns}/dronewrapper/envelope", Envelope, 0.5, ("bridge",), "the safety envelope in force"
+)
+MISSION_PUSH = Service(
+    "{ns}/mavros/mission/push", WaypointPush, WaypointPushResult, "bridge", "upload a mission"
+)
+MISSION_PULL = Service(
+    "{ns}/mavros/mission/pull", WaypointPull, WaypointPullResult, "bridge", "download it"
+)
+MISSION_CLEAR = Service(
+    "{ns}/mavros/mission/clear", WaypointClear, MissionResult, "bridge", "clear the mission"
+)
+MISSION_SET_CURRENT = Service(
+    "{ns}/mavros/mission/set_current",
+    WaypointSetCurrent,
+    MissionResult,
+    "bridge",
+    "fly this item next",
+)
+MISSION_CONTROL = Service(
+    "{ns}/dronewrapper/mission/control",
+    MissionControl,
+    MissionResult,
+    "bridge",
+    "start, pause or return",
+)
+GEOFENCE_PUSH = Service(
+    "{ns}/mavros/geofence/push",
+    WaypointClear,
+    MissionResult,
+    "bridge",
+    "upload the envelope's fence to the autopilot",
+)
+ENVELOPE_SET = Service(
+    "{ns}/dronewrapper/envelope/set",
+    EnvelopeSet,
+    EnvelopeResult,
+    "bridge",
+    "replace or read the safety envelope",
+)
+
 SIM_WORLD_LOAD = Service(
     "sim/world/load", WorldLoad, WorldState, "sim", "load a scenario's world, or reset it"
 )
 SIM_WORLD = Service("sim/world/info", WorldQuery, WorldState, "sim", "the world the sim runs")
+SIM_RESET = Service(
+    "{ns}/sim/world/reset",
+    VehicleReset,
+    VehicleResetResult,
+    "sim",
+    "put this simulated vehicle back at its start pose, on the ground, motors off",
+)
 
 # ---- liveliness ----
 ALIVE = Liveliness("{ns}/alive/{service}", "held by every running service")

@@ -84,16 +84,21 @@ class BridgeNode(Generic[C]):
         """The lease service's handler."""
         return self.driver.feed(self.core.on_lease_request, request, current_commander())
 
-    def serve(self, services: Mapping[Service[Any, Any], Operation]) -> None:
-        """Subscribe to setpoints, serve each service with its operation (a command service's
-        request refused unless from the lease holder) and the lease service."""
+    def serve(
+        self,
+        services: Mapping[Service[Any, Any], Operation],
+        guarded: Mapping[Service[Any, Any], str] | None = None,
+    ) -> None:
+        """Subscribe to setpoints, serve each service with its operation and the lease service.
+        A command service's request (:data:`COMMANDS`, and ``guarded``: service -> the name a
+        refusal gives it) is refused unless from the lease holder."""
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
+        commands = {**COMMANDS, **(guarded or {})}
         for service, steps in services.items():
-            self.node.serve(service, self._handler(service, steps))
+            self.node.serve(service, self._handler(steps, commands.get(service, "")))
         self.node.serve(registry.COMMAND_LEASE, self.on_lease)
 
-    def _handler(self, service: Service[Any, Any], steps: Operation) -> Callable[[Any], Any]:
-        what = COMMANDS.get(service, "")
+    def _handler(self, steps: Operation, what: str) -> Callable[[Any], Any]:
 
         def handle(request: Any) -> Any:
             return self.driver.call(steps(self.core, request), current_commander(), what)
