@@ -20,18 +20,16 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import socket
 import statistics
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from bench.common import RESULTS, percentiles, print_table, write_results
+from bench.common import RESULTS, LoopbackRouter, percentiles, print_table, write_results
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
@@ -131,18 +129,11 @@ def publisher_main(endpoint: str, fps: float, duration: float) -> int:
 
 def bench_latency(duration: float, fps: float, detector: str) -> dict[str, object]:
     from dronewrapper.msgs import Detections, registry
-    from dronewrapper.router import router_options, run_router
     from dronewrapper.runtime import Node, ZenohOptions
 
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        endpoint = f"tcp/127.0.0.1:{sock.getsockname()[1]}"
-    stop, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
+    router = LoopbackRouter()
     router.start()
-    ready.wait(10)
+    endpoint = router.endpoint
     settings = ["--set", f"detector={detector}", "--set", "stats_period_s=30"]
     if detector == "yolox":
         settings += ["--set", f"model_path={YOLOX_NANO}"]
@@ -177,8 +168,7 @@ def bench_latency(duration: float, fps: float, detector: str) -> dict[str, objec
             perception.wait(15)
         except subprocess.TimeoutExpired:
             perception.kill()
-        stop.set()
-        router.join(10)
+        router.stop(10)
     if len(samples) < 10:
         raise RuntimeError(f"only {len(samples)} Detections received")
     arrivals = np.array([a for a, _ in samples])

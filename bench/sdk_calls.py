@@ -29,10 +29,9 @@ import timeit
 
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import LoopbackRouter, percentiles, print_table, write_results
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs import Image, registry
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_compose.ports import free_port
 
@@ -147,14 +146,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--calls", type=int, default=20000)
     args = parser.parse_args(argv)
 
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    router = LoopbackRouter()
+    endpoint = router.endpoint
     udp_port = free_port(socket.SOCK_DGRAM)
-    stop, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
     router.start()
-    ready.wait(10)
     bridge = subprocess.Popen(
         [
             sys.executable,
@@ -199,8 +194,7 @@ def main(argv: list[str] | None = None) -> int:
             bridge.wait(10)
         except subprocess.TimeoutExpired:
             bridge.kill()
-        stop.set()
-        router.join(5)
+        router.stop(5)
 
     print_table("getter call time (best of 3)", ["getter", "us/call"], getters)
     lat = percentiles(latencies)
