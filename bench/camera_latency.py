@@ -21,7 +21,14 @@ import sys
 import time
 from pathlib import Path
 
-from bench.common import LoopbackRouter, cpu_seconds, percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    call_times_ms,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    write_results,
+)
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.runtime import Node, ZenohOptions
@@ -33,14 +40,8 @@ FPS = 30
 
 
 def median_ms(fn, runs: int = 200) -> float:
-    for _ in range(5):
-        fn()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - start) * 1e3)
-    return statistics.median(times)
+    """Median wall time of ``fn()`` (ms) over ``runs`` calls."""
+    return statistics.median(call_times_ms(fn, runs))
 
 
 def one_run(endpoint: str, width: int, height: int, jpeg: bool, duration: float) -> dict:

@@ -1,5 +1,5 @@
 """Small helpers shared by the benchmarks: percentiles, tables, JSON results, machine facts,
-CPU time of a process, and a Zenoh router on loopback."""
+call timings, CPU time of a process, and a Zenoh router on loopback."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import os
 import platform
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,18 @@ def percentiles(values_s: Sequence[float]) -> dict[str, float]:
         "p99_ms": float(np.percentile(arr, 99)),
         "max_ms": float(arr.max()),
     }
+
+
+def call_times_ms(fn: Callable[[], object], runs: int, warmup: int = 5) -> list[float]:
+    """Wall time of each of ``runs`` calls of ``fn()`` (ms), after ``warmup`` calls untimed."""
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        fn()
+        times.append((time.perf_counter() - start) * 1e3)
+    return times
 
 
 def machine() -> dict[str, object]:

@@ -29,7 +29,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bench.common import RESULTS, LoopbackRouter, percentiles, print_table, write_results
+from bench.common import (
+    RESULTS,
+    LoopbackRouter,
+    call_times_ms,
+    percentiles,
+    print_table,
+    write_results,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
@@ -40,13 +47,7 @@ VTEST = ASSETS / "images" / "vtest_f0550.png"
 def median_ms(fn, runs: int, warmup: int = 5) -> tuple[float, float, float]:
     """Median, p90 and minimum of ``fn()`` wall time in ms (the minimum is the figure least
     disturbed by other processes on a shared machine)."""
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - start) * 1e3)
+    times = call_times_ms(fn, runs, warmup)
     return statistics.median(times), float(np.percentile(times, 90)), min(times)
 
 
