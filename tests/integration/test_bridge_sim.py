@@ -23,6 +23,7 @@ import pytest
 os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink import mavutil
+from setpoint_stream import SetpointStream, yaw_of
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -85,27 +86,14 @@ class Rig:
         u.subscribe(registry.STATUSTEXT, self.texts.append)
         self.states: list = []
         u.subscribe(registry.STATE, self.states.append)
-        self.setpoints = u.publisher(registry.SETPOINT_RAW_LOCAL)
-        self._target: PositionTarget | None = None
-        self._stop = threading.Event()
-        self._streamer = threading.Thread(target=self._stream, daemon=True)
-        self._streamer.start()
-
-    # -- a commander inside the test, like the SDK's 20 Hz stream
-    def _stream(self) -> None:
-        while not self._stop.wait(0.05):
-            target = self._target
-            if target is not None:
-                self.setpoints.put(target)
+        self.stream = SetpointStream(u)
+        self.setpoints = self.stream.setpoints
 
     def command(self, target: PositionTarget | None) -> None:
-        self._target = target
-        if target is not None:
-            self.setpoints.put(target)
+        self.stream.command(target)
 
     def close(self) -> None:
-        self._stop.set()
-        self._streamer.join(2)
+        self.stream.close()
 
     def z(self) -> float:
         return self.pose.value.pose.position.z if self.pose.value else math.nan
@@ -142,11 +130,6 @@ class Rig:
         )
         assert self.ext.value.landed_state == LANDED_STATE_ON_GROUND
         assert self.z() < 0.3
-
-
-def yaw_of(pose) -> float:
-    q = pose.pose.orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
 
 
 def mixed(vx: float, z: float, yaw_rate: float = 0.0) -> PositionTarget:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from setpoint_stream import SetpointStream, yaw_of
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -45,11 +46,6 @@ pytestmark = pytest.mark.integration
 def loopback_address() -> str:
     """A loopback address of our own, so 8889/8890/11111 never clash with another test."""
     return f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
-
-
-def yaw_of(pose) -> float:
-    q = pose.pose.orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
 
 
 def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0) -> PositionTarget:
@@ -81,26 +77,14 @@ class Rig:
         self.battery = u.latest(registry.BATTERY)
         self.states: list = []
         u.subscribe(registry.STATE, self.states.append)
-        self.setpoints = u.publisher(registry.SETPOINT_RAW_LOCAL)
-        self._target: PositionTarget | None = None
-        self._stop = threading.Event()
-        self._streamer = threading.Thread(target=self._stream, daemon=True)
-        self._streamer.start()
-
-    def _stream(self) -> None:
-        while not self._stop.wait(0.05):
-            target = self._target
-            if target is not None:
-                self.setpoints.put(target)
+        self.stream = SetpointStream(u)
+        self.setpoints = self.stream.setpoints
 
     def command(self, target: PositionTarget | None) -> None:
-        self._target = target
-        if target is not None:
-            self.setpoints.put(target)
+        self.stream.command(target)
 
     def close(self) -> None:
-        self._stop.set()
-        self._streamer.join(2)
+        self.stream.close()
 
     def call(self, service, request, timeout: float = 40.0):
         return self.user.call(service, request, timeout=timeout)
@@ -286,7 +270,7 @@ def test_keepalive_then_failsafe_hold_and_commander_lost_land(rig):
 
     rig.command(velocity(vx=0.5))
     time.sleep(1.5)
-    rig._target = None  # the commander dies: nothing more is sent
+    rig.stream.target = None  # the commander dies: nothing more is sent
     stopped_at = time.monotonic()
     wait_for(lambda: rig.state.value.failsafe == "hold", 3, what="failsafe hold")
     assert time.monotonic() - stopped_at < 1.5
