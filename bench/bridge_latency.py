@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import socket
 import subprocess
 import sys
@@ -30,7 +29,14 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from bench.common import LoopbackRouter, cpu_seconds, percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, PositionTarget
@@ -273,11 +279,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         px4.stop.set()
         node.close()
-        bridge.send_signal(signal.SIGINT)
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
+        stop_process(bridge)
         router.stop(5)
     return 0 if results else 1
 

@@ -1,11 +1,14 @@
 """Small helpers shared by the benchmarks: percentiles, tables, JSON results, machine facts,
-call timings, CPU time of a process, and a Zenoh router on loopback."""
+call timings, CPU time of a process, stopping a child process, and a Zenoh router on
+loopback."""
 
 from __future__ import annotations
 
 import json
 import os
 import platform
+import signal
+import subprocess
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -91,6 +94,17 @@ def cpu_seconds(pid: int) -> float:
     """
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime, stime (fields 14, 15)
+
+
+def stop_process(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout_s: float = 10.0) -> None:
+    """Send ``sig`` to ``proc`` and wait up to ``timeout_s`` for it to exit; kill it (and reap
+    it, up to 5 s) if it has not."""
+    proc.send_signal(sig)
+    try:
+        proc.wait(timeout_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(5)
 
 
 def free_endpoint() -> str:

@@ -35,6 +35,7 @@ from bench.common import (
     call_times_ms,
     percentiles,
     print_table,
+    stop_process,
     write_results,
 )
 
@@ -164,11 +165,7 @@ def bench_latency(duration: float, fps: float, detector: str) -> dict[str, objec
     finally:
         if publisher is not None and publisher.poll() is None:
             publisher.kill()
-        perception.send_signal(2)
-        try:
-            perception.wait(15)
-        except subprocess.TimeoutExpired:
-            perception.kill()
+        stop_process(perception, timeout_s=15)
         router.stop(10)
     if len(samples) < 10:
         raise RuntimeError(f"only {len(samples)} Detections received")

@@ -24,6 +24,7 @@ bench/results/ros2_gateway.json.
 from __future__ import annotations
 
 import argparse
+import signal
 import subprocess
 import sys
 import threading
@@ -32,7 +33,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import LoopbackRouter, cpu_seconds, percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, TwistStamped
 from dronewrapper.msgs.mavros import ExtendedState, State
@@ -318,12 +326,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         receiver.close()
         node.close()
-        gateway.terminate()
-        try:
-            gateway.wait(10)
-        except subprocess.TimeoutExpired:
-            gateway.kill()
-            gateway.wait(5)
+        stop_process(gateway, signal.SIGTERM)
         relay.stdin.close()
         relay.wait(10)
         router.stop(10)

@@ -29,7 +29,7 @@ import timeit
 
 import numpy as np
 
-from bench.common import LoopbackRouter, percentiles, print_table, write_results
+from bench.common import LoopbackRouter, percentiles, print_table, stop_process, write_results
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs import Image, registry
 from dronewrapper.runtime import Node, ZenohOptions
@@ -189,11 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         camera.close()
         autopilot.close()
-        bridge.send_signal(2)
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
+        stop_process(bridge)
         router.stop(5)
 
     print_table("getter call time (best of 3)", ["getter", "us/call"], getters)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import random
+import signal
 import socket
 import subprocess
 import sys
@@ -31,7 +32,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import LoopbackRouter, cpu_seconds, percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet
 from dronewrapper.runtime import Node, ZenohOptions
@@ -221,11 +229,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         tello.stop.set()
         node.close()
-        bridge.terminate()
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
+        stop_process(bridge, signal.SIGTERM)
         router.stop(5)
     return 0
 
