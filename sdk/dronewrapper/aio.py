@@ -19,6 +19,8 @@ no flight logic of its own. Blocking calls (take-off, landing, mode changes, par
 run on a worker thread and are awaited, so the event loop keeps running; getters and setpoints
 return at once, as in the sync API. Telemetry and frames are async iterators of the newest
 values: a slow consumer skips values instead of queueing them (never a backlog).
+
+Many drones at once: :class:`Fleet` (:mod:`dronewrapper.fleet_aio`).
 """
 
 from __future__ import annotations
@@ -32,10 +34,13 @@ import numpy as np
 
 from dronewrapper import telemetry
 from dronewrapper.drone import DroneWrapper
+from dronewrapper.fleet_aio import Fleet
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
+
+__all__ = ["Drone", "Fleet"]
 
 T = TypeVar("T")
 V = TypeVar("V")

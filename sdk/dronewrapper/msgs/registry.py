@@ -45,7 +45,13 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
-from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import (
+    VehicleReset,
+    VehicleResetResult,
+    WorldLoad,
+    WorldQuery,
+    WorldState,
+)
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
@@ -291,6 +297,13 @@ SIM_WORLD_LOAD = Service(
     "sim/world/load", WorldLoad, WorldState, "sim", "load a scenario's world, or reset it"
 )
 SIM_WORLD = Service("sim/world/info", WorldQuery, WorldState, "sim", "the world the sim runs")
+SIM_RESET = Service(
+    "{ns}/sim/world/reset",
+    VehicleReset,
+    VehicleResetResult,
+    "sim",
+    "put this simulated vehicle back at its start pose, on the ground, motors off",
+)
 
 # ---- liveliness ----
 ALIVE = Liveliness("{ns}/alive/{service}", "held by every running service")
