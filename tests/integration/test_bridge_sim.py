@@ -22,8 +22,9 @@ import pytest
 
 os.environ.setdefault("MAVLINK20", "1")
 
+from bridge_user import BridgeUser
 from pymavlink import mavutil
-from setpoint_stream import SetpointStream, yaw_of
+from setpoint_stream import yaw_of
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -63,7 +64,7 @@ with Node("commander", ZenohOptions(connect=[endpoint], name="commander")) as no
 
 
 @dataclass
-class Rig:
+class Rig(BridgeUser):
     """The running processes and the test's own Zenoh node with the telemetry it watches."""
 
     router: str
@@ -74,26 +75,11 @@ class Rig:
     bridge: object
 
     def __post_init__(self) -> None:
-        u = self.user
-        self.state = u.latest(registry.STATE)
-        self.ext = u.latest(registry.EXTENDED_STATE)
-        self.pose = u.latest(registry.LOCAL_POSE)
-        self.vbody = u.latest(registry.VELOCITY_BODY)
-        self.vlocal = u.latest(registry.VELOCITY_LOCAL)
-        self.fix = u.latest(registry.GLOBAL_POSITION)
-        self.battery = u.latest(registry.BATTERY)
+        super().__post_init__()
+        self.vlocal = self.user.latest(registry.VELOCITY_LOCAL)
+        self.fix = self.user.latest(registry.GLOBAL_POSITION)
         self.texts: list = []
-        u.subscribe(registry.STATUSTEXT, self.texts.append)
-        self.states: list = []
-        u.subscribe(registry.STATE, self.states.append)
-        self.stream = SetpointStream(u)
-        self.setpoints = self.stream.setpoints
-
-    def command(self, target: PositionTarget | None) -> None:
-        self.stream.command(target)
-
-    def close(self) -> None:
-        self.stream.close()
+        self.user.subscribe(registry.STATUSTEXT, self.texts.append)
 
     def z(self) -> float:
         return self.pose.value.pose.position.z if self.pose.value else math.nan

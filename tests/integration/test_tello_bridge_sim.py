@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from setpoint_stream import SetpointStream, yaw_of
+from bridge_user import BridgeUser
+from setpoint_stream import yaw_of
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -58,7 +59,7 @@ def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0) -> PositionTarget:
 
 
 @dataclass
-class Rig:
+class Rig(BridgeUser):
     """The processes, and the test's own node with what it watches and a 20 Hz commander."""
 
     router: str
@@ -68,23 +69,8 @@ class Rig:
     bridge: object
 
     def __post_init__(self) -> None:
-        u = self.user
-        self.state = u.latest(registry.STATE)
-        self.ext = u.latest(registry.EXTENDED_STATE)
-        self.pose = u.latest(registry.LOCAL_POSE)
-        self.vbody = u.latest(registry.VELOCITY_BODY)
-        self.truth = u.latest(registry.SIM_GROUND_TRUTH)
-        self.battery = u.latest(registry.BATTERY)
-        self.states: list = []
-        u.subscribe(registry.STATE, self.states.append)
-        self.stream = SetpointStream(u)
-        self.setpoints = self.stream.setpoints
-
-    def command(self, target: PositionTarget | None) -> None:
-        self.stream.command(target)
-
-    def close(self) -> None:
-        self.stream.close()
+        super().__post_init__()
+        self.truth = self.user.latest(registry.SIM_GROUND_TRUTH)
 
     def call(self, service, request, timeout: float = 40.0):
         return self.user.call(service, request, timeout=timeout)
