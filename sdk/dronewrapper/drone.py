@@ -57,6 +57,7 @@ from dronewrapper.errors import (
     Timeout,
 )
 from dronewrapper.health import stale_after
+from dronewrapper.missions import MissionsMixin
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
@@ -142,7 +143,7 @@ def _camera_key_name(camera: str) -> str:
     raise InvalidArgument(f"unknown camera {camera!r}: use 'frontal' or 'ventral'")
 
 
-class DroneWrapper:
+class DroneWrapper(MissionsMixin):
     """One drone, reached through a Zenoh router. Several objects fly several drones.
 
     Args:
@@ -290,6 +291,7 @@ class DroneWrapper:
         self._velocity_local = self._latest(registry.VELOCITY_LOCAL)
         self._global = self._latest(registry.GLOBAL_POSITION)
         self._battery = self._latest(registry.BATTERY)
+        self._declare_mission_inputs()  # home, envelope, mission (missions.py)
         self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
         """The autopilot's last 20 text messages (newest last)."""
         self._subscribe(registry.STATUSTEXT, self.status_texts.append)
@@ -1012,6 +1014,7 @@ class DroneWrapper:
             raise InvalidArgument(f"h must be > 0 m, got {h}")
         now = self._clock()
         self._require_connected("takeoff")
+        self._check_takeoff(h)  # above the envelope: refused, the limit named
         kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
         self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs))
 
