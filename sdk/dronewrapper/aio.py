@@ -17,13 +17,16 @@
 One core, two fronts: :class:`Drone` drives a :class:`~dronewrapper.drone.DroneWrapper` and adds
 no flight logic of its own. Blocking calls (take-off, landing, mode changes, parameters, waits)
 run on a worker thread and are awaited, so the event loop keeps running; getters and setpoints
-return at once, as in the sync API. Telemetry and frames are async iterators of the newest
+return at once, as in the sync API. Cancelling an awaited take-off or landing stops it: no
+further step is taken and the setpoint stream stops (the bridge holds position); the awaiting
+task sees CancelledError once the worker has stopped. Telemetry and frames are async iterators of the newest
 values: a slow consumer skips values instead of queueing them (never a backlog).
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import threading
 from collections.abc import AsyncIterator, Callable
 from typing import Any, TypeVar
@@ -32,6 +35,7 @@ import numpy as np
 
 from dronewrapper import telemetry
 from dronewrapper.drone import DroneWrapper
+from dronewrapper.inputs import camera_key_name
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.registry import Topic
@@ -114,13 +118,28 @@ class Drone:
     async def _run(self, method: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         return await asyncio.to_thread(method, *args, **kwargs)
 
+    async def _run_cancellable(self, method: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        """``method(..., cancel=event)`` on a worker thread; a cancelled await sets the event
+        and waits for the worker to stop before CancelledError goes on."""
+        cancel = threading.Event()
+        worker = asyncio.ensure_future(asyncio.to_thread(method, *args, cancel=cancel, **kwargs))
+        try:
+            return await asyncio.shield(worker)
+        except asyncio.CancelledError:
+            cancel.set()
+            with contextlib.suppress(Exception):  # Cancelled, or what it raised on the way
+                await worker
+            raise
+
     async def takeoff(self, h: float = 3.0, **kwargs: Any) -> None:
-        """Take off to ``h`` m and return there (see :meth:`DroneWrapper.takeoff`)."""
-        await self._run(self.sync.takeoff, h, **kwargs)
+        """Take off to ``h`` m and return there (see :meth:`DroneWrapper.takeoff`); cancel
+        the await to stop it."""
+        await self._run_cancellable(self.sync.takeoff, h, **kwargs)
 
     async def land(self, **kwargs: Any) -> None:
-        """Land and return on the ground, disarmed (see :meth:`DroneWrapper.land`)."""
-        await self._run(self.sync.land, **kwargs)
+        """Land and return on the ground, disarmed (see :meth:`DroneWrapper.land`); cancel
+        the await to stop it."""
+        await self._run_cancellable(self.sync.land, **kwargs)
 
     async def arm(self, **kwargs: Any) -> None:
         await self._run(self.sync.arm, **kwargs)
@@ -189,7 +208,7 @@ class Drone:
         """Camera frames (BGR ``uint8``), the newest each time; slow consumers skip frames."""
         mailbox = _Newest(asyncio.get_running_loop())
         topic = registry.IMAGE_COMPRESSED if self.sync.compressed_images else registry.IMAGE_RAW
-        key_name = {"frontal": "cam_frontal", "ventral": "cam_ventral"}.get(camera, camera)
+        key_name = camera_key_name(camera)
         subscription = self.sync.subscribe(topic, mailbox.put, camera=key_name)
         try:
             while True:

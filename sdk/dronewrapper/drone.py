@@ -12,57 +12,46 @@
 Frames and units (docs/design.md): local ENU fixed at the take-off point (x east, y north, z up, m);
 body FLU (forward, left, up, m/s); angles in radians, yaw counter-clockwise positive.
 
-Getters read the newest message already received (no network round trip) and raise
-:class:`~dronewrapper.errors.NoData` if none has arrived yet. Blocking calls take timeouts and
-raise :class:`~dronewrapper.errors.Timeout`, :class:`~dronewrapper.errors.CommandRefused` (with the
-autopilot's reason) or :class:`~dronewrapper.errors.NotConnected`.
-
-Size: over 400 lines on purpose: this is the paper's API, one class a user reads top to bottom
-(getters, setpoints, commands, parameters); its plumbing lives in ``telemetry``, ``setpoints``,
-``streamer`` and the runtime.
+A DroneWrapper stands on a node (the node contract, :mod:`dronewrapper.runtime.contract`): the
+one it is given, or its own (:func:`dronewrapper.connection.open_node`). Its time is the node's
+clock. The getters (:class:`dronewrapper.inputs.Getters`) read the newest message already
+received (no network round trip) and raise :class:`~dronewrapper.errors.NoData` if none has
+arrived yet. Blocking calls take timeouts and raise :class:`~dronewrapper.errors.Timeout`,
+:class:`~dronewrapper.errors.CommandRefused` (with the autopilot's reason) or
+:class:`~dronewrapper.errors.NotConnected` (:mod:`dronewrapper.connection` says why).
 """
 
 from __future__ import annotations
 
 import atexit
 import collections
-import contextlib
 import getpass
 import logging
 import os
 import socket
-import time
+import threading
 import weakref
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
-import zenoh
 
-from dronewrapper import flying, images, setpoints, telemetry
-from dronewrapper.discovery import (
-    BRIDGE_PREFIX,
-    alive_services,
-    connection_problem,
-    default_connect,
-    open_client,
-)
+from dronewrapper import connection, flying, images, setpoints, telemetry
+from dronewrapper.discovery import default_connect
 from dronewrapper.errors import (
+    Cancelled,
     CommandRefused,
-    DroneError,
     InvalidArgument,
     NoData,
     NotConnected,
     Timeout,
 )
-from dronewrapper.health import stale_after
-from dronewrapper.msgs import codec, registry
+from dronewrapper.inputs import Getters, Inputs
+from dronewrapper.msgs import registry
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
-    LANDED_STATE_TAKEOFF,
     MASK_MIXED,
     MASK_POSITION,
     CommandBool,
@@ -76,33 +65,15 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import commander_attachment
-from dronewrapper.runtime.commander import STATE_FRESH_S
-from dronewrapper.runtime.delivery import SampleErrors, decoding
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.flight import Landing, Takeoff
-from dronewrapper.runtime.latest import Latest
-from dronewrapper.runtime.node import call_service, encoding_for
 from dronewrapper.runtime.options import is_local_endpoint
-from dronewrapper.runtime.qos import qos_for
 from dronewrapper.streamer import SetpointStreamer
 
 T = TypeVar("T")
 
 log = logging.getLogger("dronewrapper")
-
-CAMERAS = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
-"""Camera short names accepted by the image methods, and their key names."""
-
-TELEMETRY_READ_BY_GETTERS = (
-    ("extended state", "_extended"),
-    ("local position", "_pose"),
-    ("body velocity", "_velocity_body"),
-    ("local velocity", "_velocity_local"),
-    ("battery state", "_battery"),
-)
-"""The streams every bridge publishes and the getters read: the constructor and
-:meth:`DroneWrapper.wait_for_connection` wait for each of them (global position needs a GPS and
-images a camera, so those are waited for by their own ``wait_for_*`` calls)."""
 
 
 def default_commander(identity: str = "") -> str:
@@ -133,15 +104,7 @@ def _satisfied(value: object) -> bool:
     return bool(value)
 
 
-def _camera_key_name(camera: str) -> str:
-    if camera in CAMERAS:
-        return CAMERAS[camera]
-    if camera in CAMERAS.values():
-        return camera
-    raise InvalidArgument(f"unknown camera {camera!r}: use 'frontal' or 'ventral'")
-
-
-class DroneWrapper:
+class DroneWrapper(Getters):
     """One drone, reached through a Zenoh router. Several objects fly several drones.
 
     Args:
@@ -151,8 +114,6 @@ class DroneWrapper:
             ``DRONEWRAPPER_CONNECT`` or ``tcp/127.0.0.1:7447``.
         timeout: seconds to reach the router and find a bridge whose autopilot is connected.
         mode: Zenoh session mode (``client``: everything through the router; ``peer``).
-        session: an open ``zenoh.Session`` to reuse (a service embedding the SDK); it is not
-            closed by :meth:`close`. ``connect`` and ``mode`` are then ignored.
         cameras: the cameras to receive from the start (``frontal``, ``ventral``); ``()``
             receives none; None (default) subscribes to a camera the first time it is read, so
             frames cross the network only for a program that uses them.
@@ -172,13 +133,9 @@ class DroneWrapper:
             NAME.crt, see ``dronewrapper keys``; env ``DRONEWRAPPER_IDENTITY``).
         commander: our name on the command lease (default: the identity's name, or
             ``user@host``); the bridge obeys one commander at a time, see take_command().
-        node: a runtime ``Node``, or a ``FakeNode`` on the fake bus (tests), to talk through
-            instead of a session; it is not closed by :meth:`close`. ``connect``, ``mode`` and
-            ``session`` are then ignored.
-        clock, sleep: the monotonic clock (s) of the getters' ages and of the deadlines of
-            takeoff(), land() and the polling waits (wait_for, wait_for_altitude ...), and
-            how those calls wait: injected time in tests (the connection and image waits
-            block on arrivals, in real time).
+        node: the node to stand on (a service's ``Node``, or a ``FakeNode`` on the fake bus);
+            not closed by :meth:`close`. None: the wrapper opens its own (``connect``, ``mode``
+            and ``identity`` are for that one).
 
     Raises:
         NotConnected: no router at ``connect``, no bridge in namespace ``name``, or the bridge
@@ -192,7 +149,6 @@ class DroneWrapper:
         timeout: float = 10.0,
         *,
         mode: str = "client",
-        session: zenoh.Session | None = None,
         cameras: Sequence[str] | None = None,
         compressed_images: bool | None = None,
         land_on_exit: bool = False,
@@ -202,224 +158,106 @@ class DroneWrapper:
         wait: bool = True,
         identity: str | None = None,
         commander: str | None = None,
-        node: Any = None,
-        clock: Callable[[], float] = time.monotonic,
-        sleep: Callable[[float], Any] = time.sleep,
+        node: NodeApi | None = None,
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
+        registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
         self.connect = connect or default_connect()
-        if compressed_images is None:
-            remote = session is None and node is None and not is_local_endpoint(self.connect)
-            compressed_images = remote and images.has_jpeg_decoder()
-            if remote and not compressed_images:
+        self.land_on_exit = land_on_exit
+        self.service_timeout = service_timeout
+        self._closed = False
+        self._warned_grounded = False
+        identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
+        self.commander = commander or default_commander(identity)
+        self._attachment = commander_attachment(self.commander)
+        self.compressed_images = self._choose_compression(compressed_images, node, cameras)
+        self._own_node = node is None
+        if node is None:
+            node = connection.open_node(
+                self.ns, self.connect, timeout, mode=mode, identity=identity
+            )
+        self.node: NodeApi = node
+        self.clock = node.clock
+        deadline = self.clock.monotonic() + timeout
+        _open_wrappers.add(self)
+        try:
+            self.inputs = Inputs(
+                node, self.ns, compressed_images=self.compressed_images, cameras=cameras
+            )
+            self._setpoints = node.publisher(
+                registry.SETPOINT_RAW_LOCAL, key=registry.SETPOINT_RAW_LOCAL.key(self.ns)
+            )
+            self._streamer = SetpointStreamer(
+                self._publish_setpoint,
+                clock=self.clock,
+                rate_hz=setpoint_rate_hz,
+                idle_timeout=command_timeout,
+                name=f"{self.ns}-setpoints",
+            )
+            self._matching = self._setpoints.on_matching(self._on_setpoint_matching)
+            self._aircraft = flying.WrapperAircraft(
+                self.ns,
+                state=self.inputs.state,
+                extended=self.inputs.extended,
+                pose=self.inputs.pose,
+                status_texts=self.status_texts,
+                set_target=self._command_setpoint,
+                stop=self.stop_commanding,
+                ask=self._ask,
+                wall=self.clock.time,
+            )
+            if wait:
+                self.wait_for_connection(max(0.0, deadline - self.clock.monotonic()))
+        except BaseException:
+            self.close()
+            raise
+
+    def _choose_compression(
+        self, compressed: bool | None, node: NodeApi | None, cameras: Sequence[str] | None
+    ) -> bool:
+        """JPEG or raw frames (see the ``compressed_images`` argument)."""
+        if compressed is None:
+            remote = node is None and not is_local_endpoint(self.connect)
+            compressed = remote and images.has_jpeg_decoder()
+            if remote and not compressed:
                 log.warning(
                     "the router %s is on another machine but OpenCV is missing, so camera "
                     "frames come raw (~220 Mbit/s each): pip install 'dronewrapper[images]'",
                     self.connect,
                 )
-        elif compressed_images and cameras != ():
+        elif compressed and cameras != ():
             images.jpeg_decoder()  # fail now, not at the first frame, if OpenCV is missing
-        registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
-        self.land_on_exit = land_on_exit
-        self.compressed_images = compressed_images
-        self.service_timeout = service_timeout
-        self.sample_errors = SampleErrors(log) if node is None else node.sample_errors
-        self.decode_errors: collections.Counter[str] = self.sample_errors.decode
-        self._closed = False
-        self._warned_grounded = False
-        self._stale_after: dict[str, float] = {}
-        self._stale_warned: set[str] = set()
-        self._subscribers: list[Any] = []
-        self._node = node
-        self._clock, self._sleep = clock, sleep
-        self._own_session = session is None and node is None
-        deadline = time.monotonic() + timeout
-        identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
-        self.commander = commander or default_commander(identity)
-        self._attachment = commander_attachment(self.commander)
-        if node is not None:
-            session = node.session
-        elif session is None:
-            session = open_client(self.connect, timeout, mode=mode, identity=identity)
-        self.session: zenoh.Session = session
-        _open_wrappers.add(self)
-        try:
-            self._declare_inputs(cameras)
-            self._declare_setpoints()
-            self._aircraft = flying.WrapperAircraft(
-                self.ns,
-                state=self._state,
-                extended=self._extended,
-                pose=self._pose,
-                status_texts=self.status_texts,
-                set_target=self._command_setpoint,
-                stop=self.stop_commanding,
-                ask=self._ask,
-                wall=time.time,
-            )
-            self._streamer = SetpointStreamer(
-                self._publish_setpoint,
-                rate_hz=setpoint_rate_hz,
-                idle_timeout=command_timeout,
-                name=f"{self.ns}-setpoints",
-            )
-            self._bridge_matched = False
-            if node is not None:
-                self._matching = self._setpoints.on_matching(self._on_setpoint_matching)
-            else:  # a direct callback: no thread to block interpreter exit (see _subscribe)
-                self._matching = self._setpoints.declare_matching_listener(
-                    zenoh.handlers.Callback(
-                        lambda status: self._on_setpoint_matching(status.matching), indirect=False
-                    )
-                )
-            if wait:
-                self.wait_for_connection(max(0.0, deadline - time.monotonic()))
-        except BaseException:
-            self.close()
-            raise
+        return compressed
 
-    # ------------------------------------------------------------------ plumbing
-
-    def _declare_inputs(self, cameras: Sequence[str]) -> None:
-        self._state: Latest[State] = self._latest(registry.STATE)
-        self._extended = self._latest(registry.EXTENDED_STATE)
-        self._pose = self._latest(registry.LOCAL_POSE)
-        self._velocity_body = self._latest(registry.VELOCITY_BODY)
-        self._velocity_local = self._latest(registry.VELOCITY_LOCAL)
-        self._global = self._latest(registry.GLOBAL_POSITION)
-        self._battery = self._latest(registry.BATTERY)
-        self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
+    @property
+    def status_texts(self) -> collections.deque[StatusText]:
         """The autopilot's last 20 text messages (newest last)."""
-        self._subscribe(registry.STATUSTEXT, self.status_texts.append)
-        self._images: dict[str, Latest[Any]] = {}
-        self._decoded: dict[str, tuple[Any, np.ndarray]] = {}
-        self._lazy_cameras = cameras is None
-        self._images_declared = False
-        for camera in cameras or ():
-            self._camera_holder(camera)
-        self._images_declared = True
+        return self.inputs.status_texts
 
-    def _declare_setpoints(self) -> None:
-        if self._node is not None:  # a typed publisher (the runtime's)
-            key = registry.SETPOINT_RAW_LOCAL.key(self.ns)
-            self._setpoints = self._node.publisher(registry.SETPOINT_RAW_LOCAL, key=key)
-        else:
-            self._setpoints = self.session.declare_publisher(
-                registry.SETPOINT_RAW_LOCAL.key(self.ns),
-                encoding=encoding_for(PositionTarget),
-                **qos_for(registry.SETPOINT_RAW_LOCAL),
-            )
+    @property
+    def decode_errors(self) -> collections.Counter[str]:
+        """Undecodable samples per key (the node's count)."""
+        return self.node.decode_errors
 
-    def _camera_holder(self, camera: str) -> Latest[Any] | None:
-        """The newest-frame holder of ``camera``, subscribing now if cameras are lazy; None if
-        the camera was not requested."""
-        key_name = _camera_key_name(camera)
-        holder = self._images.get(key_name)
-        if holder is None and (self._lazy_cameras or not self._images_declared):
-            topic = registry.IMAGE_COMPRESSED if self.compressed_images else registry.IMAGE_RAW
-            holder = self._images[key_name] = self._latest(topic, camera=key_name)
-        return holder
-
-    def subscribe(
-        self, topic: Topic[T], callback: Callable[[T], None], **parts: str
-    ) -> zenoh.Subscriber:
+    def subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
         """Call ``callback(msg)`` for every decodable message on ``topic`` in this drone's
         namespace (``parts`` fill the other key fields, e.g. ``camera="cam_frontal"``).
 
-        The callback runs on a Zenoh thread: keep it short. Undecodable samples are counted in
-        ``decode_errors``; an exception in the callback is logged and never ends the
+        The callback may run on a Zenoh thread: keep it short. Undecodable samples are counted
+        in ``decode_errors``; an exception in the callback is logged and never ends the
         subscription. ``undeclare()`` the returned subscriber to stop; :meth:`close` does too.
         """
-        return self._subscribe(topic, callback, **parts)
-
-    def _subscribe(
-        self, topic: Topic[T], callback: Callable[[T], None], **parts: str
-    ) -> zenoh.Subscriber:
-        if self._node is not None:
-            subscriber = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
-            self._subscribers.append(subscriber)
-            return subscriber
-        key = topic.key(self.ns, **parts)
-        deliver = decoding(topic.type, callback, self.sample_errors)
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            deliver(key, sample.payload.to_bytes(), sample.attachment)
-
-        # Direct callbacks (no Python thread per subscriber): the handler is tiny (decode and
-        # store), and no non-daemon thread is left to block interpreter exit before our atexit
-        # hook closes the session (the paper's listing never calls close()).
-        handler = zenoh.handlers.Callback(on_sample, indirect=False)
-        subscriber = self.session.declare_subscriber(key, handler)
-        self._subscribers.append(subscriber)
-        return subscriber
-
-    def _latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
-        holder: Latest[T] = Latest(name=topic.key(self.ns, **parts), clock=self._clock)
-        self._subscribe(topic, holder.update, **parts)
-        self._stale_after[holder.name] = stale_after(topic.rate_hz)
-        return holder
+        return self.inputs.subscribe(topic, callback, **parts)
 
     def _on_setpoint_matching(self, matching: bool) -> None:
         """The bridge's setpoint subscriber became (un)reachable: a link gap (router restart,
         lost Wi-Fi) withholds setpoints, and a command that went stale meanwhile is not resent
-        (see SetpointStreamer). "Unreachable" counts only after it was reachable once."""
-        if self._closed:
-            return
-        if matching:
-            self._bridge_matched = True
-            self._streamer.link_up()
-        elif self._bridge_matched:
-            self._streamer.link_down()
+        (see runtime.setpoint_stream)."""
+        if not self._closed:
+            self._streamer.link(matching)
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
-        message = target if self._node is not None else codec.encode(target)
-        self._setpoints.put(message, attachment=self._attachment)
-
-    def _need(self, latest: Latest[T], what: str) -> T:
-        value = latest.value
-        if value is None:
-            raise NoData(
-                f"no {what} received yet on {latest.name}: is the bridge running and publishing? "
-                "(wait_for_connection() waits for it)"
-            )
-        age, limit = latest.age(), self._stale_after.get(latest.name, float("inf"))
-        if age > limit and latest.name not in self._stale_warned:
-            self._stale_warned.add(latest.name)
-            log.warning(
-                "%s is %.1f s old (stale after %.1f s for its rate): the link or the bridge is "
-                "slow; check with `dronewrapper doctor`",
-                latest.name,
-                age,
-                limit,
-            )
-        elif age <= limit:
-            self._stale_warned.discard(latest.name)
-        return value
-
-    def age(self, what: str) -> float:
-        """Seconds since the newest value of a getter's stream arrived (inf before the first).
-
-        ``what`` names a getter without ``get_``: ``position``, ``orientation``, ``velocity``,
-        ``velocity_local``, ``yaw_rate``, ``landed_state``, ``battery``, ``global_position``,
-        ``state``, ``frontal_image``, ``ventral_image``.
-        """
-        holders = {
-            "position": self._pose,
-            "orientation": self._pose,
-            "velocity": self._velocity_body,
-            "yaw_rate": self._velocity_body,
-            "velocity_local": self._velocity_local,
-            "landed_state": self._extended,
-            "battery": self._battery,
-            "global_position": self._global,
-            "state": self._state,
-        }
-        if what in ("frontal_image", "ventral_image"):
-            holder = self._camera_holder(what.removesuffix("_image"))
-            return holder.age() if holder is not None else float("inf")
-        if what not in holders:
-            raise InvalidArgument(f"age of {what!r}: use one of {', '.join(sorted(holders))}")
-        return holders[what].age()
+        self._setpoints.put(target, attachment=self._attachment)
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -440,7 +278,7 @@ class DroneWrapper:
             self.close()
 
     def close(self) -> None:
-        """Stop commanding, drop the subscriptions and close the session if it is ours.
+        """Stop commanding, drop the subscriptions and close the node if it is ours.
 
         Idempotent; also done at interpreter exit. Does not land: the bridge hovers, then lands
         after its ``commander_lost_timeout``.
@@ -449,27 +287,18 @@ class DroneWrapper:
             return
         self._closed = True
         _open_wrappers.discard(self)
-        streamer = getattr(self, "_streamer", None)
-        if streamer is not None:
-            streamer.close()
-        matching = getattr(self, "_matching", None)
-        if matching is not None:
-            with contextlib.suppress(Exception):
-                matching.undeclare()
-        try:
-            if self._own_session:
-                time.sleep(0.05)  # let the last messages leave before the session closes
-                self.session.close()
-            else:
-                for entity in [*self._subscribers, getattr(self, "_setpoints", None)]:
-                    if entity is not None:
-                        with contextlib.suppress(Exception):  # one the caller undeclared
-                            entity.undeclare()
-        except Exception as exc:  # a session already closed by its owner
-            log.debug("close: %s", exc)
+        for part in ("_streamer", "_matching", "inputs", "_setpoints"):
+            entity = getattr(self, part, None)
+            if entity is not None:
+                try:
+                    entity.close() if hasattr(entity, "close") else entity.undeclare()
+                except Exception as exc:  # a session already closed by its owner
+                    log.debug("close %s: %s", part, exc)
+        if self._own_node:
+            self.node.close()
 
     def __repr__(self) -> str:
-        state = self._state.value
+        state = self.inputs.state.value
         link = "closed" if self._closed else ("connected" if self.is_connected() else "waiting")
         mode = f" mode={state.mode} armed={state.armed}" if state else ""
         return f"DroneWrapper(name={self.ns!r}, connect={self.connect!r}, {link}{mode})"
@@ -478,8 +307,7 @@ class DroneWrapper:
 
     def is_connected(self) -> bool:
         """True if a fresh State (< 3 s old) says the bridge's autopilot is connected."""
-        state = self._state.fresh(STATE_FRESH_S)
-        return bool(state is not None and state.connected)
+        return connection.connected_state(self.inputs) is not None
 
     def wait_for_connection(self, timeout: float = 10.0) -> State:
         """Block until the bridge reports its autopilot connected and every telemetry stream the
@@ -489,166 +317,10 @@ class DroneWrapper:
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
                 after ``timeout`` s (the message names the missing keys).
         """
-        deadline = time.monotonic() + timeout
-        seen = -1
-        while True:
-            state = self._state.fresh(STATE_FRESH_S)
-            if state is not None and state.connected:
-                break
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                raise NotConnected(self._diagnose(timeout))
-            seen = self._state.count
-            with contextlib.suppress(TimeoutError):
-                self._state.wait(min(remaining, 0.5), newer_than=seen)
-        for _, attribute in TELEMETRY_READ_BY_GETTERS:
-            holder: Latest[Any] = getattr(self, attribute)
-            with contextlib.suppress(TimeoutError):
-                holder.wait(max(0.0, deadline - time.monotonic()))
-        missing = [
-            f"{what} ({getattr(self, attribute).name})"
-            for what, attribute in TELEMETRY_READ_BY_GETTERS
-            if getattr(self, attribute).value is None
-        ]
-        if missing:
-            raise NotConnected(
-                f"the bridge of drone {self.ns!r} is connected but after {timeout:g} s nothing "
-                f"arrived on: {', '.join(missing)}; is the link too slow, or the bridge old?"
-            )
-        return state
+        return connection.wait_for_connection(self.inputs, self.connect, timeout)
 
-    def _diagnose(self, timeout: float) -> str:
-        if self._node is not None and self._node.session is None:  # the fake bus: in process
-            linked = True
-        else:
-            info = self.session.info
-            linked = bool(list(info.routers_zid()) or list(info.peers_zid()))
-        keys: set[str] = set()
-        if linked:
-            with contextlib.suppress(Exception):
-                keys = self._alive_services("*")
-        state = self._state.value
-        return connection_problem(
-            self.ns,
-            self.connect,
-            linked=linked,
-            alive_keys=keys,
-            state_connected=None if state is None else state.connected,
-            state_age=self._state.age(),
-            fresh_s=STATE_FRESH_S,
-            waited=timeout,
-        )
-
-    def _require_connected(self, what: str) -> State:
-        state = self._state.fresh(STATE_FRESH_S)
-        if state is None or not state.connected:
-            raise NotConnected(f"{what}: {self._diagnose(0.0)}")
-        return state
-
-    # ------------------------------------------------------------------ getters (no I/O)
-
-    def get_state(self) -> State:
-        """The newest autopilot State (connected, armed, mode, autopilot, failsafe ...)."""
-        return self._need(self._state, "state")
-
-    def get_position(self) -> np.ndarray:
-        """``np.array([x, y, z])``: position in local ENU metres (origin: the take-off point)."""
-        return telemetry.position_of(self._need(self._pose, "local position"))
-
-    def get_velocity(self) -> np.ndarray:
-        """``np.array([vx, vy, vz])``: velocity in body FLU m/s (forward, left, up)."""
-        return telemetry.linear_of(self._need(self._velocity_body, "body velocity"))
-
-    def get_velocity_local(self) -> np.ndarray:
-        """``np.array([vx, vy, vz])``: velocity in local ENU m/s (east, north, up)."""
-        return telemetry.linear_of(self._need(self._velocity_local, "local velocity"))
-
-    def get_yaw_rate(self) -> float:
-        """Yaw rate in rad/s, counter-clockwise positive."""
-        return telemetry.yaw_rate_of(self._need(self._velocity_body, "body velocity"))
-
-    def get_orientation(self) -> np.ndarray:
-        """``np.array([roll, pitch, yaw])`` in radians, ENU (yaw 0 = east, CCW positive)."""
-        return telemetry.orientation_of(self._need(self._pose, "local position"))
-
-    def get_roll(self) -> float:
-        """Roll angle in radians."""
-        return float(self.get_orientation()[0])
-
-    def get_pitch(self) -> float:
-        """Pitch angle in radians."""
-        return float(self.get_orientation()[1])
-
-    def get_yaw(self) -> float:
-        """Yaw angle in radians, ENU: 0 facing east, counter-clockwise positive."""
-        return float(self.get_orientation()[2])
-
-    def get_landed_state(self) -> int:
-        """MAVROS landed state: 0 undefined, 1 on ground, 2 in air, 3 taking off, 4 landing."""
-        return int(self._need(self._extended, "extended state").landed_state)
-
-    def get_battery(self) -> float:
-        """Battery charge as a fraction 0..1 (NaN if the aircraft does not report it)."""
-        return float(self._need(self._battery, "battery state").percentage)
-
-    def get_global_position(self) -> np.ndarray:
-        """``np.array([latitude, longitude, altitude])``: degrees, degrees, metres AMSL.
-
-        Raises NoData when the aircraft has no GPS (nothing published).
-        """
-        return telemetry.global_of(self._need(self._global, "global position (GPS)"))
-
-    def is_flying(self) -> bool:
-        """True if the landed state is in the air or taking off."""
-        extended = self._extended.value
-        return extended is not None and extended.landed_state in (
-            LANDED_STATE_IN_AIR,
-            LANDED_STATE_TAKEOFF,
-        )
-
-    def get_image(self, camera: str = "frontal", *, with_stamp: bool = False) -> Any:
-        """The newest frame of ``camera`` as a BGR ``uint8`` array (height, width, 3).
-
-        Args:
-            camera: ``frontal`` or ``ventral``.
-            with_stamp: return ``(image, stamp)``, the stamp being the capture time in seconds
-                since the Unix epoch (for latency measurements).
-
-        Raises:
-            NoData: no frame received yet (no camera running, or the camera was not
-                requested in ``cameras=``).
-        """
-        key_name = _camera_key_name(camera)
-        holder = self._camera_holder(camera)
-        if holder is None:
-            raise NoData(
-                f"camera {camera!r} was not requested: DroneWrapper(cameras=[..., {camera!r}])"
-            )
-        msg = holder.value
-        if msg is None:
-            raise NoData(
-                f"no image received yet on {holder.name}: is a camera running? "
-                "(wait_for_image() waits for the first frame)"
-            )
-        cached = self._decoded.get(key_name)
-        if cached is None or cached[0] is not msg:
-            self._decoded[key_name] = cached = (msg, self.decode_image(msg))
-        image = cached[1].copy()
-        return (image, float(msg.header.stamp)) if with_stamp else image
-
-    def decode_image(self, msg: Any) -> np.ndarray:
-        """A camera message (raw or JPEG, as this object receives them) as a BGR array."""
-        if self.compressed_images:
-            return images.compressed_to_bgr(msg)
-        return images.image_to_bgr(msg)
-
-    def get_frontal_image(self) -> np.ndarray:
-        """The newest frontal camera frame, BGR ``uint8`` (height, width, 3)."""
-        return self.get_image("frontal")
-
-    def get_ventral_image(self) -> np.ndarray:
-        """The newest ventral (downward) camera frame, BGR ``uint8`` (height, width, 3)."""
-        return self.get_image("ventral")
+    def _no_reply(self, what: str, key: str, timeout: float) -> Exception:
+        return connection.no_reply(self.node, self.ns, self.connect, what, key, timeout)
 
     # ------------------------------------------------------------------ waiting
 
@@ -668,7 +340,7 @@ class DroneWrapper:
         Raises:
             Timeout: still false after ``timeout`` seconds (the message names ``what``).
         """
-        deadline = self._clock() + timeout
+        deadline = self.clock.monotonic() + timeout
         while True:
             try:
                 value = predicate()
@@ -676,9 +348,9 @@ class DroneWrapper:
                 value = None
             if _satisfied(value):
                 return value
-            if self._clock() >= deadline:
+            if self.clock.monotonic() >= deadline:
                 raise Timeout(f"timed out after {timeout:g} s waiting for {what}")
-            self._sleep(interval)
+            self.clock.sleep(interval)
 
     def wait_for_altitude(
         self, z: float, timeout: float = 30.0, *, tolerance: float = 0.1
@@ -713,7 +385,7 @@ class DroneWrapper:
         Raises:
             Timeout: no frame within ``timeout`` s (no camera publishing on the key).
         """
-        holder = self._camera_holder(camera)
+        holder = self.inputs.camera(camera)
         if holder is None:
             return self.get_image(camera)  # raises NoData naming the cameras= argument
         try:
@@ -726,7 +398,7 @@ class DroneWrapper:
         return self.get_image(camera)
 
     def _altitude_text(self) -> str:
-        pose = self._pose.value
+        pose = self.inputs.pose.value
         return "no position" if pose is None else f"z={pose.pose.position.z:.2f} m"
 
     # ------------------------------------------------------------------ setpoints
@@ -753,7 +425,7 @@ class DroneWrapper:
                 (degrees by mistake); nothing is sent.
             NoData: ``z`` or ``az`` left out before any position arrived.
         """
-        stamp = setpoints.check_stamp(stamp, time.time())
+        stamp = setpoints.check_stamp(stamp, self.clock.time())
         z = self._kept_altitude("set_cmd_pos") if z is None else z
         az = self._kept_yaw("set_cmd_pos") if az is None else az
         target = setpoints.position_target(x, y, z, az, stamp=stamp)
@@ -778,7 +450,7 @@ class DroneWrapper:
             InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
                 per second (degrees by mistake); nothing is sent.
         """
-        stamp = setpoints.check_stamp(stamp, time.time())
+        stamp = setpoints.check_stamp(stamp, self.clock.time())
         target = setpoints.velocity_target(vx, vy, vz, az, stamp=stamp)
         self._warn_if_grounded("set_cmd_vel")
         self._command_setpoint(target)
@@ -800,7 +472,7 @@ class DroneWrapper:
             InvalidArgument: an argument is not a finite number (nothing is sent).
             NoData: ``z`` left out before any position arrived.
         """
-        stamp = setpoints.check_stamp(stamp, time.time())
+        stamp = setpoints.check_stamp(stamp, self.clock.time())
         z = self._kept_altitude("set_cmd_mix") if z is None else z
         target = setpoints.mixed_target(vx, vy, z, az, stamp=stamp)
         self._warn_if_grounded("set_cmd_mix")
@@ -811,7 +483,7 @@ class DroneWrapper:
         commanded = self._streamer.target
         if commanded is not None and commanded.type_mask in (MASK_POSITION, MASK_MIXED):
             return float(commanded.position.z)
-        pose = self._pose.value
+        pose = self.inputs.pose.value
         if pose is None:
             raise NoData(f"{what}: z left out, and no position yet to keep the altitude of")
         return float(pose.pose.position.z)
@@ -821,14 +493,14 @@ class DroneWrapper:
         commanded = self._streamer.target
         if commanded is not None and commanded.type_mask == MASK_POSITION:
             return float(commanded.yaw)
-        pose = self._pose.value
+        pose = self.inputs.pose.value
         if pose is None:
             raise NoData(f"{what}: az left out, and no attitude yet to keep the heading of")
         return float(telemetry.orientation_of(pose)[2])
 
     def _warn_if_grounded(self, what: str) -> None:
         """Say once per landing that setpoints do nothing to a disarmed drone on the ground."""
-        state, extended = self._state.value, self._extended.value
+        state, extended = self.inputs.state.value, self.inputs.extended.value
         grounded = (
             state is not None
             and not state.armed
@@ -868,12 +540,8 @@ class DroneWrapper:
 
     def _ask(self, service: Service[Any, T], request: Any, timeout: float) -> T:
         """One request/reply; raises the runtime's ServiceError / ServiceUnavailable."""
-        if self._node is not None:
-            return self._node.call(
-                service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
-            )
-        return call_service(
-            self.session, service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
+        return self.node.call(
+            service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
         )
 
     def _call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
@@ -884,27 +552,6 @@ class DroneWrapper:
             raise self._no_reply(what, service.key(self.ns), timeout) from None
         except ServiceError as exc:
             raise CommandRefused(what, exc.message) from None
-
-    def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
-        """A call nobody answered: Timeout if a bridge is alive (slow or stuck), else
-        NotConnected (none running)."""
-        try:
-            names = sorted(self._alive_services(self.ns))
-        except Exception:
-            names = []
-        alive = any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names)
-        if alive:
-            return Timeout(f"{what}: no reply from {key} within {timeout:g} s")
-        return NotConnected(
-            f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
-            f"drone {self.ns!r} on {self.connect}"
-        )
-
-    def _alive_services(self, ns: str) -> set[str]:
-        """The liveliness keys present in ``ns`` ("*": all), through the node when given."""
-        if self._node is not None:
-            return self._node.alive_services(ns, timeout=1.0)
-        return alive_services(self.session, ns, timeout=1.0)
 
     def _command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
         reply = self._call(service, request, what, timeout)
@@ -939,7 +586,7 @@ class DroneWrapper:
         try:
             self._command(registry.ARMING, CommandBool(value=True), "arming", timeout)
         except CommandRefused as exc:
-            state = self._state.value
+            state = self.inputs.state.value
             if state is not None and state.mode == "OFFBOARD" and self.commanding is None:
                 raise CommandRefused(
                     "arming",
@@ -993,7 +640,14 @@ class DroneWrapper:
 
     # ------------------------------------------------------------------ take-off and landing
 
-    def takeoff(self, h: float = 3.0, *, timeout: float = 30.0, tolerance: float = 0.1) -> None:
+    def takeoff(
+        self,
+        h: float = 3.0,
+        *,
+        timeout: float = 30.0,
+        tolerance: float = 0.1,
+        cancel: threading.Event | None = None,
+    ) -> None:
         """Take off to ``h`` metres above the take-off point and return there.
 
         Idempotent: returns at once when already flying. PX4: streams a hold setpoint, enters
@@ -1006,16 +660,18 @@ class DroneWrapper:
                 the autopilot disarmed or left the mode during the climb.
             Timeout: the altitude was not reached within ``timeout`` seconds.
             NotConnected: no bridge / autopilot.
+            Cancelled: ``cancel`` was set (from another thread): no further step, and the
+                setpoint stream stopped (the bridge holds position).
         """
         h = setpoints.finite("h", h)
         if h <= 0:
             raise InvalidArgument(f"h must be > 0 m, got {h}")
-        now = self._clock()
-        self._require_connected("takeoff")
+        now = self.clock.monotonic()
+        connection.require_connected(self.inputs, self.connect, "takeoff")
         kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
-        self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs))
+        self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs), cancel)
 
-    def land(self, *, timeout: float = 60.0) -> None:
+    def land(self, *, timeout: float = 60.0, cancel: threading.Event | None = None) -> None:
         """Land where the drone is and return when it is on the ground and disarmed.
 
         Stops the setpoint stream, then calls the bridge's LAND service (no GPS needed).
@@ -1023,10 +679,23 @@ class DroneWrapper:
         Raises:
             CommandRefused: the autopilot refused to land (its reason is in the message).
             Timeout: not on the ground and disarmed within ``timeout`` seconds.
+            Cancelled: ``cancel`` was set (see :meth:`takeoff`).
         """
-        now = self._clock()
-        self._require_connected("land")
-        self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout))
+        now = self.clock.monotonic()
+        connection.require_connected(self.inputs, self.connect, "land")
+        self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout), cancel)
 
-    def _fly(self, sequence: Takeoff | Landing) -> None:
-        flying.fly(sequence, clock=self._clock, sleep=self._sleep, no_reply=self._no_reply)
+    def _fly(self, sequence: Takeoff | Landing, cancel: threading.Event | None) -> None:
+        """Step ``sequence`` to its end, waiting on the node's clock (or until ``cancel``)."""
+        clock, cancel = self.clock, cancel or threading.Event()
+        try:
+            flying.fly(
+                sequence,
+                clock=clock.monotonic,
+                sleep=lambda seconds: clock.wait(cancel, seconds),
+                no_reply=self._no_reply,
+                cancelled=cancel.is_set,
+            )
+        except Cancelled:
+            self.stop_commanding()
+            raise

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
-from dronewrapper.errors import CommandRefused, DroneError, NoData, NotConnected, Timeout
+from dronewrapper.errors import Cancelled, CommandRefused, DroneError, NoData, NotConnected, Timeout
 from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State, StatusText
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime.commander import STATE_FRESH_S, Pending
@@ -116,14 +116,18 @@ def fly(
     sleep: Callable[[float], Any],
     no_reply: Callable[[str, str, float], DroneError],
     interval: float = POLL_INTERVAL_S,
+    cancelled: Callable[[], bool] = lambda: False,
 ) -> None:
     """Step ``sequence`` until it is done, sleeping ``interval`` s between steps.
 
     Raises:
         DroneError: the sequence failed (see :func:`drone_error`).
+        Cancelled: ``cancelled()`` became true: no further step was taken.
     """
     try:
         while not sequence.step(clock()):
             sleep(interval)
+            if cancelled():
+                raise Cancelled(f"{type(sequence).__name__.lower()} cancelled")
     except FlightError as exc:
         raise drone_error(exc, no_reply) from None

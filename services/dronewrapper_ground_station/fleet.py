@@ -11,7 +11,6 @@ from __future__ import annotations
 import collections
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -22,6 +21,7 @@ from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
@@ -33,7 +33,7 @@ T = TypeVar("T")
 
 log = logging.getLogger("station")
 
-CAMERAS = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
+CAMERAS = registry.CAMERA_SHORT_NAMES
 
 # (snapshot section, topic, message -> fields)
 TELEMETRY: tuple[tuple[str, Topic[Any], Callable[[Any], dict[str, Any]]], ...] = (
@@ -54,32 +54,23 @@ class DroneLink:
     """One drone as the station sees it: telemetry holders, video slots, commands.
 
     Args:
-        node: the station's runtime Node (shared by every drone), or a FakeNode in tests.
+        node: the station's node (shared by every drone); its clock times the ages, the
+            dead-man and the blocking commands.
         ns: the drone's namespace.
         config: the station config.
-        clock: monotonic clock (s) of the ages and the dead-man, injectable.
-        sleep: how the blocking commands (take-off, landing) wait, injectable.
     """
 
-    def __init__(
-        self,
-        node: Any,
-        ns: str,
-        config: Config,
-        *,
-        clock: Callable[[], float] = time.monotonic,
-        sleep: Callable[[float], Any] = time.sleep,
-    ) -> None:
+    def __init__(self, node: NodeApi, ns: str, config: Config) -> None:
         self.ns = ns
         self.config = config
-        self.clock = clock
+        self.clock = node.clock
         self.services: list[str] = []
         self.online = True
         self._node = node
         self._subs: list[Any] = []
         self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {}
         for name, topic, fields in TELEMETRY:
-            holder: Latest[Any] = Latest(name=topic.key(ns), clock=clock)
+            holder: Latest[Any] = Latest(name=topic.key(ns), clock=node.clock)
             self._subscribe(topic, holder.update)
             self._latest[name] = (holder, topic.rate_hz, fields)
         self.status_texts: collections.deque[dict[str, Any]] = collections.deque(maxlen=50)
@@ -93,7 +84,7 @@ class DroneLink:
         self.deadman = DeadMan(config.teleop.timeout)
         self._command_lock = threading.Lock()
         self.last_command: dict[str, Any] | None = None
-        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False, clock=clock, sleep=sleep)
+        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False)
 
     def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
         sub = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
@@ -161,7 +152,7 @@ class DroneLink:
     # ---- commands (blocking: run them on a worker thread)
 
     def _note(self, what: str, **fields: Any) -> None:
-        self.last_command = {"what": what, "at": time.time(), **fields}
+        self.last_command = {"what": what, "at": self.clock.time(), **fields}
 
     def teleop(self, cmd: VelocityCommand, owner: object) -> None:
         """Velocity teleop, body FLU; must be renewed within the teleop timeout."""
@@ -239,9 +230,9 @@ class SimObjects:
     WORLD_NS = registry.DEFAULT_NAMESPACE
     """The world's keys (``sim/...``) belong to no vehicle; the namespace is not used."""
 
-    def __init__(self, node: Any, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, node: NodeApi) -> None:
         self.node = node
-        self.clock = clock
+        self.clock = node.clock
         self._poses: dict[str, tuple[dict[str, Any], float]] = {}
         self._publishers: dict[str, Any] = {}
         topic = registry.SIM_OBJECT_POSE
@@ -299,30 +290,20 @@ class Fleet:
     Args:
         node: the station's runtime Node, or a FakeNode on the fake bus (tests).
         config: the station config (``namespaces`` fixes the list; empty: discover).
-        clock: monotonic clock (s) of ages and dead-men; sleep: how blocking commands wait
-            (both injected in tests: bus time).
     """
 
-    def __init__(
-        self,
-        node: Any,
-        config: Config,
-        *,
-        clock: Callable[[], float] = time.monotonic,
-        sleep: Callable[[float], Any] = time.sleep,
-    ) -> None:
+    def __init__(self, node: NodeApi, config: Config) -> None:
         self.node = node
         self.config = config
-        self.clock = clock
-        self._sleep = sleep
+        self.clock = node.clock
         self.links: dict[str, DroneLink] = {}
-        self.objects = SimObjects(node, clock)
+        self.objects = SimObjects(node)
         self._lock = threading.Lock()
         for ns in config.namespaces:
             self.links[ns] = self._link(ns)
 
     def _link(self, ns: str) -> DroneLink:
-        return DroneLink(self.node, ns, self.config, clock=self.clock, sleep=self._sleep)
+        return DroneLink(self.node, ns, self.config)
 
     def discover(self) -> None:
         """List the processes alive now; add new drones, mark vanished ones offline."""

@@ -55,6 +55,22 @@ Rep = TypeVar("Rep")
 
 DEFAULT_NAMESPACE = "drone"
 CAMERAS = ("cam_frontal", "cam_ventral")
+CAMERA_SHORT_NAMES = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
+"""The SDK's camera names (``get_image("frontal")``) and the key names they stand for."""
+
+
+def camera_key_name(camera: str) -> str:
+    """The key name (``cam_frontal``) of a camera given by short or key name.
+
+    Raises:
+        ValueError: an unknown camera.
+    """
+    if camera in CAMERA_SHORT_NAMES:
+        return CAMERA_SHORT_NAMES[camera]
+    if camera in CAMERAS:
+        return camera
+    raise ValueError(f"unknown camera {camera!r}: use 'frontal' or 'ventral'")
+
 
 _FIELD_VALUE = r"[A-Za-z0-9_\-.]+"  # one chunk: no '/', no wildcard
 

@@ -14,8 +14,8 @@ Zenoh queryables whose handlers run on a worker pool; a bad request gets an erro
 what is wrong, never silence. SIGINT and SIGTERM set ``stop_event``; the session is always
 closed on exit (an unclosed session can hang the interpreter).
 
-Size: just over 400 lines: the Node's whole surface (publishers, subscribers, services,
-liveliness, shutdown) and ``call_service``, the one module every process imports.
+A Node satisfies the node contract (:class:`~dronewrapper.runtime.contract.NodeApi`): the bus
+and the clock (``node.clock``, the real clocks unless given another).
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.msgs.std import ErrorReply
 from dronewrapper.runtime import caller
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import (
     ServiceError,
@@ -151,6 +152,11 @@ class Node:
         handle_signals: turn SIGINT/SIGTERM into ``stop_event`` (main thread only).
         linger: seconds to wait before closing so the last messages leave (Zenoh drops
             messages still queued when a session closes).
+        open_timeout: seconds to keep trying to open the session.
+        clock: the process's time (ages, waits, stamps); the real clocks by default.
+        direct_callbacks: run subscriber callbacks on Zenoh's own thread (no Python thread
+            per subscriber; keep them short): for a library inside someone else's process,
+            where no thread of ours may hold up the interpreter's exit.
     """
 
     def __init__(
@@ -161,13 +167,17 @@ class Node:
         handle_signals: bool = True,
         linger: float = 0.05,
         open_timeout: float = 10.0,
+        clock: Clock = REAL,
+        direct_callbacks: bool = False,
     ) -> None:
         self.options = options or ZenohOptions()
+        self.clock = clock
+        self._direct = direct_callbacks
         self.name = self.options.name or name
         self.ns = self.options.namespace
         self.log = logging.getLogger(self.name)
         self.stop_event = threading.Event()
-        self.sample_errors = SampleErrors(self.log)
+        self.sample_errors = SampleErrors(self.log, clock=clock)
         self.decode_errors: Counter[str] = self.sample_errors.decode
         self.callback_errors: Counter[str] = self.sample_errors.callback
         self._linger = linger
@@ -224,11 +234,11 @@ class Node:
 
     def sleep(self, seconds: float) -> bool:
         """Sleep unless stopped; False if a stop was requested."""
-        return not self.stop_event.wait(seconds)
+        return not self.clock.wait(self.stop_event, seconds)
 
     def spin(self) -> None:
         """Block until a stop is requested."""
-        while not self.stop_event.wait(0.5):
+        while not self.clock.wait(self.stop_event, 0.5):
             pass
 
     def announce(self) -> None:
@@ -241,6 +251,14 @@ class Node:
     def alive_services(self, ns: str = "*", timeout: float = 1.0) -> set[str]:
         """The liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
         return alive_services(self.session, ns, timeout)
+
+    def linked(self) -> bool:
+        """True while the session reaches a router or a peer."""
+        try:
+            info = self.session.info
+            return bool(list(info.routers_zid()) or list(info.peers_zid()))
+        except zenoh.ZError:
+            return False
 
     def close(self) -> None:
         """Withdraw the token, undeclare everything and close the session (idempotent)."""
@@ -308,13 +326,14 @@ class Node:
         def on_sample(sample: zenoh.Sample) -> None:
             deliver(str(sample.key_expr), sample.payload.to_bytes(), sample.attachment)
 
-        sub = self.session.declare_subscriber(keyexpr, on_sample)
+        handler = zenoh.handlers.Callback(on_sample, indirect=not self._direct)
+        sub = self.session.declare_subscriber(keyexpr, handler)
         self._declared.append(sub)
         return sub
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
-        """Subscribe to ``topic`` and keep only its newest value and its age."""
-        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts))
+        """Subscribe to ``topic`` and keep only its newest value and its age (node clock)."""
+        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)
         self.subscribe(topic, holder.update, key=key, **parts)
         return holder
 
