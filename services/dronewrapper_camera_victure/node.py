@@ -91,7 +91,7 @@ class CameraService:
         )
         self.status_pub = node.publisher(registry.CAMERA_STATUS, camera=camera)
         self.source = make_source(config, factory, clock)
-        self.slot = FrameSlot(clock)
+        self.slot = FrameSlot(name="captured frames", clock=clock)
         self.reader: Reader | None = None
         self.published = 0
         self.dropped = 0

@@ -20,12 +20,12 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.sensor import CompressedImage
 from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
-from dronewrapper_ground_station.frames import FrameSlot
 from dronewrapper_ground_station.requests import VelocityCommand
 from dronewrapper_ground_station.teleop import DeadMan
 
@@ -78,7 +78,10 @@ class DroneLink:
             registry.STATUSTEXT,
             lambda m: self.status_texts.append(snapshot.status_text_entry(m)),
         )
-        self.slots = {camera: FrameSlot() for camera in CAMERAS}
+        self.slots: dict[str, Latest[CompressedImage]] = {
+            camera: Latest(name=f"{ns} {camera} video", clock=node.clock) for camera in CAMERAS
+        }
+        self._viewers = dict.fromkeys(CAMERAS, 0)
         self._video_subs: dict[str, Any] = {}
         self._video_lock = threading.Lock()
         self.deadman = DeadMan(config.teleop.timeout)
@@ -111,8 +114,7 @@ class DroneLink:
         out["command"] = self.last_command
         out["teleop"] = self.deadman.active
         for camera, slot in self.slots.items():
-            frame = slot.latest()
-            out[f"video_{camera}_age"] = None if frame is None else self.clock() - frame.received
+            out[f"video_{camera}_age"] = None if slot.value is None else slot.age()
         return out
 
     def health(self) -> str:
@@ -127,24 +129,23 @@ class DroneLink:
 
     # ---- video (subscribed only while someone watches; the sim encodes JPEG only then)
 
-    def watch(self, camera: str) -> FrameSlot:
+    def watch(self, camera: str) -> Latest[CompressedImage]:
         """Start receiving ``camera``'s JPEG frames (counted per viewer)."""
         key_name = CAMERAS[camera]
         slot = self.slots[camera]
         with self._video_lock:
+            self._viewers[camera] += 1
             if camera not in self._video_subs:
                 self._video_subs[camera] = self._subscribe(
-                    registry.IMAGE_COMPRESSED,
-                    lambda m: slot.put(m.header.stamp, bytes(m.data), self.clock()),
-                    camera=key_name,
+                    registry.IMAGE_COMPRESSED, slot.update, camera=key_name
                 )
         return slot
 
     def unwatch(self, camera: str) -> None:
         """Stop receiving ``camera`` when its last viewer left."""
         with self._video_lock:
-            slot = self.slots[camera]
-            if slot.listeners == 0 and camera in self._video_subs:
+            self._viewers[camera] = max(0, self._viewers[camera] - 1)
+            if self._viewers[camera] == 0 and camera in self._video_subs:
                 sub = self._video_subs.pop(camera)
                 self._subs.remove(sub)
                 sub.undeclare()

@@ -2,8 +2,10 @@
 
 A subscriber callback calls :meth:`Latest.update`; loops read :meth:`Latest.fresh` so a stale
 input never drives an actuator. The same holder is the newest-frame policy of a slow consumer
-(perception, a camera's lossless hand-over): :meth:`Latest.take` returns the newest item with its
-number, so the reader knows exactly how many it skipped.
+(perception, the station's video senders): :meth:`Latest.take` returns the newest item with its
+number, so the reader knows exactly how many it skipped; ``update(..., wait_taken=stop)`` is a
+lossless hand-over instead (a camera reading a file); :meth:`Latest.listen` tells a consumer on
+another loop (asyncio, a web socket) that a value came.
 
 Ages and waits are on the holder's :class:`~dronewrapper.runtime.clock.Clock` (the node's), so
 a holder under a :class:`~dronewrapper.runtime.clock.VirtualClock` waits in virtual time.
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Callable
 from typing import Generic, TypeVar
 
 from dronewrapper.runtime.clock import REAL, Clock
@@ -33,15 +36,42 @@ class Latest(Generic[T]):
         self._cond = threading.Condition()
         self._value: T | None = None
         self._received_at = -math.inf
+        self._taken = True
+        self._listeners: list[Callable[[], None]] = []
         self.count = 0
 
-    def update(self, value: T) -> None:
-        """Store a new value, stamped with the receive time."""
+    def update(self, value: T, *, wait_taken: threading.Event | None = None) -> None:
+        """Store a new value, stamped with the receive time, and tell the listeners.
+
+        With ``wait_taken`` (a stop event), first wait until the previous value was taken
+        (:meth:`take`) or the event is set: a lossless hand-over.
+        """
         with self._cond:
+            while wait_taken is not None and not self._taken and not wait_taken.is_set():
+                self.clock.wait_for(self._cond, lambda: self._taken or wait_taken.is_set(), 0.1)
             self._value = value
             self._received_at = self.clock.monotonic()
+            self._taken = False
             self.count += 1
             self._cond.notify_all()
+            listeners = list(self._listeners)
+        for notify in listeners:
+            notify()
+
+    def listen(self, notify: Callable[[], None]) -> None:
+        """Call ``notify()`` after every update, on the updating thread (keep it short)."""
+        with self._cond:
+            self._listeners.append(notify)
+
+    def unlisten(self, notify: Callable[[], None]) -> None:
+        with self._cond:
+            if notify in self._listeners:
+                self._listeners.remove(notify)
+
+    @property
+    def received_at(self) -> float:
+        """When the newest value arrived (clock's monotonic s; -inf before the first)."""
+        return self._received_at
 
     @property
     def value(self) -> T | None:
@@ -82,4 +112,6 @@ class Latest(Generic[T]):
                 self._cond, lambda: self.count > newer_than, max(0.0, timeout)
             ):
                 return None
+            self._taken = True
+            self._cond.notify_all()
             return self.count, self._value  # type: ignore[return-value]
