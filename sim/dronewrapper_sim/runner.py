@@ -18,12 +18,12 @@ import logging
 import math
 import select
 import threading
-import time
 from pathlib import Path
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
@@ -65,6 +65,8 @@ class SimRunner:
         self.config = config
         self.scenario = scenario
         self.node = node
+        self.time: Clock = REAL if node is None else node.clock
+        """The process's time: the node's clock (the real clocks without a node)."""
         seed = scenario.seed if config.seed is None else config.seed
         self.world = World(scenario, seed=seed)
         self.world_lock = threading.Lock()
@@ -104,7 +106,7 @@ class SimRunner:
         self.world_topics: WorldTopics | None = None
         self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
         # (monotonic wall s, simulated s, slipped_s) taken together after each stepping
-        self.clock: tuple[float, float, float] = (time.monotonic(), 0.0, 0.0)
+        self.clock: tuple[float, float, float] = (self.time.monotonic(), 0.0, 0.0)
         if node is not None:
             self._setup_zenoh(node)
 
@@ -145,7 +147,9 @@ class SimRunner:
 
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.autopilot.state
-        return PoseSnapshot((s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), time.time())
+        return PoseSnapshot(
+            (s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), self.time.time()
+        )
 
     def describe(self) -> str:
         """One line saying what runs where."""
@@ -168,7 +172,7 @@ class SimRunner:
             self.cameras.start()
         dt = 1.0 / self.config.physics_rate_hz
         rtf = self.config.realtime_factor
-        start = time.monotonic()
+        start = self.time.monotonic()
         t0 = start
         steps = 0
         gt_period = 1.0 / self.config.ground_truth_rate_hz
@@ -176,7 +180,7 @@ class SimRunner:
         next_gt = next_obj = start
         socks = list(self.links.values())
         while not stop.is_set():
-            now = time.monotonic()
+            now = self.time.monotonic()
             if duration_s is not None and now - start >= duration_s:
                 break
             next_tick = t0 + (steps + 1) * dt / rtf
@@ -186,8 +190,8 @@ class SimRunner:
                 for link in readable:
                     self._receive(link)
             elif wait > 0:
-                stop.wait(wait)
-            now = time.monotonic()
+                self.time.wait(stop, wait)
+            now = self.time.monotonic()
             if now < next_tick:
                 continue
             owed = int((now - t0) * rtf / dt) - steps
@@ -230,7 +234,7 @@ class SimRunner:
             self._set_signing_key(decision.key)
 
     def _note_rejections(self, link: MavlinkUdpLink) -> None:
-        rejected, now = link.rejected, time.monotonic()
+        rejected, now = link.rejected, self.time.monotonic()
         logged, at = self._rejections_logged.get(link.name, (0, -math.inf))
         if rejected > logged and now - at >= 2.0:
             self._rejections_logged[link.name] = (rejected, now)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -91,7 +90,7 @@ class WorldTopics:
 
     def publish_objects(self) -> None:
         """Publish the true pose of every world object (stamped now)."""
-        stamp = time.time()
+        stamp = self.node.clock.time()
         for obj in self.world.objects:
             pub = self._object_pubs.get(obj.name)
             if pub is None:

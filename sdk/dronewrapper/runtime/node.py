@@ -72,7 +72,7 @@ queryable yet; a query then finishes immediately with no reply. Asking again for
 
 
 def encoding_for(msg_type: type) -> zenoh.Encoding:
-    """The Zenoh encoding of a message type: ``application/msgpack;dronewrapper/<Type>``."""
+    """The Zenoh encoding of a message type: ``application/msgpack;dronewrapper/v1/<Type>``."""
     return zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(msg_type))
 
 
