@@ -45,8 +45,8 @@ def schema_name(msg_type: type) -> str:
     """The schema id carried in the Zenoh encoding and in recordings, e.g.
     ``dronewrapper/v1/PoseStamped``.
 
-    Messages are decoded by their key's registry type, never by this name, so recordings made
-    before names carried a version (``dronewrapper/PoseStamped``) decode as before.
+    Messages are decoded by their key's registry type, never by this name, so recordings
+    whose names carry no version (``dronewrapper/PoseStamped``) decode too.
     """
     return f"dronewrapper/v{SCHEMA_VERSION}/{msg_type.__name__}"
 
