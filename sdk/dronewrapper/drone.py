@@ -14,11 +14,15 @@ body FLU (forward, left, up, m/s); angles in radians, yaw counter-clockwise posi
 
 A DroneWrapper stands on a node (the node contract, :mod:`dronewrapper.runtime.contract`): the
 one it is given, or its own (:func:`dronewrapper.connection.open_node`). Its time is the node's
-clock. The getters (:class:`dronewrapper.inputs.Getters`) read the newest message already
-received (no network round trip) and raise :class:`~dronewrapper.errors.NoData` if none has
-arrived yet. Blocking calls take timeouts and raise :class:`~dronewrapper.errors.Timeout`,
-:class:`~dronewrapper.errors.CommandRefused` (with the autopilot's reason) or
-:class:`~dronewrapper.errors.NotConnected` (:mod:`dronewrapper.connection` says why).
+clock. This module is the facade: construction, life cycle, connection, take-off and landing.
+The rest of the API comes in parts, one module each: the getters (:mod:`dronewrapper.inputs`,
+which read the newest message already received, no network round trip, and raise
+:class:`~dronewrapper.errors.NoData` if none has arrived yet), the waits
+(:mod:`dronewrapper.waits`), the setpoints (:mod:`dronewrapper.motion`) and the bridge's
+services (:mod:`dronewrapper.commands`). Blocking calls take timeouts and raise
+:class:`~dronewrapper.errors.Timeout`, :class:`~dronewrapper.errors.CommandRefused` (with the
+autopilot's reason) or :class:`~dronewrapper.errors.NotConnected` (:mod:`dronewrapper.connection`
+says why).
 """
 
 from __future__ import annotations
@@ -35,41 +39,28 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
-import numpy as np
-
-from dronewrapper import connection, flying, images, setpoints, telemetry
+from dronewrapper import connection, flying, images, setpoints
+from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
 from dronewrapper.errors import (
     Cancelled,
-    CommandRefused,
     InvalidArgument,
-    NoData,
-    NotConnected,
-    Timeout,
 )
 from dronewrapper.inputs import Getters, Inputs
+from dronewrapper.motion import Motion
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
-    LANDED_STATE_ON_GROUND,
-    MASK_MIXED,
-    MASK_POSITION,
-    CommandBool,
-    ParamGet,
-    ParamSet,
-    ParamValue,
     PositionTarget,
-    SetMode,
     State,
     StatusText,
 )
-from dronewrapper.msgs.registry import Service, Topic
+from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.flight import Landing, Takeoff
 from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.streamer import SetpointStreamer
+from dronewrapper.waits import Waits
 
 T = TypeVar("T")
 
@@ -97,14 +88,7 @@ def _close_all() -> None:
         wrapper.close()
 
 
-def _satisfied(value: object) -> bool:
-    """Truthiness for wait_for: any numpy array counts as a result (not "ambiguous")."""
-    if isinstance(value, np.ndarray):
-        return True
-    return bool(value)
-
-
-class DroneWrapper(Getters):
+class DroneWrapper(Getters, Waits, Motion, Commands):
     """One drone, reached through a Zenoh router. Several objects fly several drones.
 
     Args:
@@ -321,322 +305,6 @@ class DroneWrapper(Getters):
 
     def _no_reply(self, what: str, key: str, timeout: float) -> Exception:
         return connection.no_reply(self.node, self.ns, self.connect, what, key, timeout)
-
-    # ------------------------------------------------------------------ waiting
-
-    def wait_for(
-        self,
-        predicate: Callable[[], T],
-        timeout: float,
-        what: str = "condition",
-        *,
-        interval: float = 0.02,
-    ) -> T:
-        """Poll ``predicate()`` until it returns a truthy value, which is returned.
-
-        A numpy array counts as truthy (``wait_for(drone.get_global_position, 5)`` returns the
-        first fix); ``NoData`` raised by the predicate counts as "not yet".
-
-        Raises:
-            Timeout: still false after ``timeout`` seconds (the message names ``what``).
-        """
-        deadline = self.clock.monotonic() + timeout
-        while True:
-            try:
-                value = predicate()
-            except NoData:
-                value = None
-            if _satisfied(value):
-                return value
-            if self.clock.monotonic() >= deadline:
-                raise Timeout(f"timed out after {timeout:g} s waiting for {what}")
-            self.clock.sleep(interval)
-
-    def wait_for_altitude(
-        self, z: float, timeout: float = 30.0, *, tolerance: float = 0.1
-    ) -> np.ndarray:
-        """Block until the local ENU altitude is within ``tolerance`` m of ``z``; the position.
-
-        Raises:
-            Timeout: not there within ``timeout`` seconds (the message gives the altitude).
-        """
-        z = setpoints.finite("z", z)
-        try:
-            return self.wait_for(
-                lambda: p if abs((p := self.get_position())[2] - z) <= tolerance else None,
-                timeout,
-                f"altitude {z:.2f} m",
-            )
-        except Timeout as exc:
-            raise Timeout(f"{exc} (now {self._altitude_text()})") from None
-
-    def wait_for_landed_state(self, landed_state: int, timeout: float = 30.0) -> int:
-        """Block until :meth:`get_landed_state` equals ``landed_state``; returns it."""
-        self.wait_for(
-            lambda: self.get_landed_state() == landed_state,
-            timeout,
-            f"landed state {landed_state}",
-        )
-        return landed_state
-
-    def wait_for_image(self, camera: str = "frontal", timeout: float = 10.0) -> np.ndarray:
-        """Block until ``camera`` delivered a frame; returns the newest one (BGR).
-
-        Raises:
-            Timeout: no frame within ``timeout`` s (no camera publishing on the key).
-        """
-        holder = self.inputs.camera(camera)
-        if holder is None:
-            return self.get_image(camera)  # raises NoData naming the cameras= argument
-        try:
-            holder.wait(timeout)
-        except TimeoutError:
-            raise Timeout(
-                f"no image on {holder.name} within {timeout:g} s: is a camera running "
-                f"in namespace {self.ns!r}?"
-            ) from None
-        return self.get_image(camera)
-
-    def _altitude_text(self) -> str:
-        pose = self.inputs.pose.value
-        return "no position" if pose is None else f"z={pose.pose.position.z:.2f} m"
-
-    # ------------------------------------------------------------------ setpoints
-
-    def set_cmd_pos(
-        self,
-        x: float = 0.0,
-        y: float = 0.0,
-        z: float | None = None,
-        az: float | None = None,
-        *,
-        stamp: float | None = None,
-    ) -> None:
-        """Position control: fly to (x, y, z) local ENU metres facing yaw ``az`` (rad, ENU).
-
-        Left out, ``z`` keeps the altitude (the one being commanded, else the current one) and
-        ``az`` keeps the heading, so ``set_cmd_pos(1, 0)`` moves sideways instead of diving to
-        the ground and turning east. Re-published at the stream rate until another command or
-        :meth:`stop_commanding`. ``stamp`` (seconds since the Unix epoch) is carried in
-        ``header.stamp`` (default now).
-
-        Raises:
-            InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
-                (degrees by mistake); nothing is sent.
-            NoData: ``z`` or ``az`` left out before any position arrived.
-        """
-        stamp = setpoints.check_stamp(stamp, self.clock.time())
-        z = self._kept_altitude("set_cmd_pos") if z is None else z
-        az = self._kept_yaw("set_cmd_pos") if az is None else az
-        target = setpoints.position_target(x, y, z, az, stamp=stamp)
-        self._warn_if_grounded("set_cmd_pos")
-        self._command_setpoint(target)
-
-    def set_cmd_vel(
-        self,
-        vx: float = 0.0,
-        vy: float = 0.0,
-        vz: float = 0.0,
-        az: float = 0.0,
-        *,
-        stamp: float | None = None,
-    ) -> None:
-        """Velocity control: body FLU velocity (m/s) and yaw rate ``az`` (rad/s, CCW +).
-
-        ``vx`` is forward, ``vy`` left, ``vz`` up on every aircraft. Re-published at the
-        stream rate until changed: ``set_cmd_vel(az=1); sleep(5)`` spins for 5 s.
-
-        Raises:
-            InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
-                per second (degrees by mistake); nothing is sent.
-        """
-        stamp = setpoints.check_stamp(stamp, self.clock.time())
-        target = setpoints.velocity_target(vx, vy, vz, az, stamp=stamp)
-        self._warn_if_grounded("set_cmd_vel")
-        self._command_setpoint(target)
-
-    def set_cmd_mix(
-        self,
-        vx: float = 0.0,
-        vy: float = 0.0,
-        z: float | None = None,
-        az: float = 0.0,
-        *,
-        stamp: float | None = None,
-    ) -> None:
-        """Mixed control: body FLU vx, vy (m/s), altitude ``z`` (local ENU m), yaw rate (rad/s).
-
-        Left out, ``z`` keeps the altitude (the one being commanded, else the current one).
-
-        Raises:
-            InvalidArgument: an argument is not a finite number (nothing is sent).
-            NoData: ``z`` left out before any position arrived.
-        """
-        stamp = setpoints.check_stamp(stamp, self.clock.time())
-        z = self._kept_altitude("set_cmd_mix") if z is None else z
-        target = setpoints.mixed_target(vx, vy, z, az, stamp=stamp)
-        self._warn_if_grounded("set_cmd_mix")
-        self._command_setpoint(target)
-
-    def _kept_altitude(self, what: str) -> float:
-        """The altitude a setpoint without ``z`` keeps: the commanded one, else the current."""
-        commanded = self._streamer.target
-        if commanded is not None and commanded.type_mask in (MASK_POSITION, MASK_MIXED):
-            return float(commanded.position.z)
-        pose = self.inputs.pose.value
-        if pose is None:
-            raise NoData(f"{what}: z left out, and no position yet to keep the altitude of")
-        return float(pose.pose.position.z)
-
-    def _kept_yaw(self, what: str) -> float:
-        """The heading a position setpoint without ``az`` keeps: the commanded, else current."""
-        commanded = self._streamer.target
-        if commanded is not None and commanded.type_mask == MASK_POSITION:
-            return float(commanded.yaw)
-        pose = self.inputs.pose.value
-        if pose is None:
-            raise NoData(f"{what}: az left out, and no attitude yet to keep the heading of")
-        return float(telemetry.orientation_of(pose)[2])
-
-    def _warn_if_grounded(self, what: str) -> None:
-        """Say once per landing that setpoints do nothing to a disarmed drone on the ground."""
-        state, extended = self.inputs.state.value, self.inputs.extended.value
-        grounded = (
-            state is not None
-            and not state.armed
-            and extended is not None
-            and extended.landed_state == LANDED_STATE_ON_GROUND
-        )
-        if grounded and not self._warned_grounded:
-            self._warned_grounded = True
-            log.warning(
-                "%s: drone %r is disarmed on the ground, so nothing moves until takeoff()",
-                what,
-                self.ns,
-            )
-        elif not grounded:
-            self._warned_grounded = False
-
-    def _command_setpoint(self, target: PositionTarget) -> None:
-        if self._closed:
-            raise NotConnected(f"DroneWrapper {self.ns!r} is closed")
-        self._streamer.set(target)
-
-    def stop_commanding(self) -> None:
-        """Stop the setpoint stream. The bridge hovers after its ``setpoint_timeout``."""
-        self._streamer.stop()
-
-    @property
-    def commanding(self) -> PositionTarget | None:
-        """The setpoint being streamed, or None."""
-        return self._streamer.target
-
-    @property
-    def setpoints_sent(self) -> int:
-        """How many setpoint messages were published so far."""
-        return self._streamer.published
-
-    # ------------------------------------------------------------------ services
-
-    def _ask(self, service: Service[Any, T], request: Any, timeout: float) -> T:
-        """One request/reply; raises the runtime's ServiceError / ServiceUnavailable."""
-        return self.node.call(
-            service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
-        )
-
-    def _call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
-        timeout = self.service_timeout if timeout is None else timeout
-        try:
-            return self._ask(service, request, timeout)
-        except ServiceUnavailable:
-            raise self._no_reply(what, service.key(self.ns), timeout) from None
-        except ServiceError as exc:
-            raise CommandRefused(what, exc.message) from None
-
-    def _command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
-        reply = self._call(service, request, what, timeout)
-        ok = reply.mode_sent if hasattr(reply, "mode_sent") else reply.success
-        if not ok:
-            raise CommandRefused(what, reply.message, getattr(reply, "result", None))
-        return reply
-
-    def take_command(self, *, take_over: bool = True, timeout: float | None = None) -> str:
-        """Take this drone's command lease (another operator's too, when ``take_over``): the
-        bridge then obeys only our setpoints and commands. Returns the previous holder.
-
-        Raises:
-            CommandRefused: ``take_over`` is False and someone else holds the lease.
-        """
-        action = "take_over" if take_over else "take"
-        reply = self._call(registry.COMMAND_LEASE, LeaseRequest(action=action), action, timeout)
-        if not reply.granted:
-            raise CommandRefused(action, reply.message)
-        return reply.previous
-
-    def release_command(self, *, timeout: float | None = None) -> None:
-        """Give the command lease back (any authorised operator may then take it)."""
-        self._call(registry.COMMAND_LEASE, LeaseRequest(action="release"), "release", timeout)
-
-    def arm(self, *, timeout: float | None = None) -> None:
-        """Arm the motors. Raises CommandRefused with the autopilot's reason on refusal.
-
-        PX4 refuses to arm in OFFBOARD without a setpoint stream and says only "Resolve system
-        health failures first"; the error then names the real cause.
-        """
-        try:
-            self._command(registry.ARMING, CommandBool(value=True), "arming", timeout)
-        except CommandRefused as exc:
-            state = self.inputs.state.value
-            if state is not None and state.mode == "OFFBOARD" and self.commanding is None:
-                raise CommandRefused(
-                    "arming",
-                    f"{exc.reason}; the autopilot is in OFFBOARD and no setpoint is being "
-                    "streamed: PX4 arms in OFFBOARD only with a setpoint stream (use takeoff(), "
-                    "or set_cmd_pos(...) before arm())",
-                    exc.result,
-                ) from None
-            raise
-
-    def disarm(self, *, timeout: float | None = None) -> None:
-        """Disarm the motors (the autopilot refuses in flight). Raises CommandRefused."""
-        self._command(registry.ARMING, CommandBool(value=False), "disarming", timeout)
-
-    def set_mode(self, mode: str, *, timeout: float | None = None) -> None:
-        """Ask for a flight mode by name (``OFFBOARD``, ``AUTO.LOITER``, ``GUIDED`` ...).
-
-        Returns when the autopilot acknowledged it. Raises CommandRefused otherwise.
-        """
-        if not isinstance(mode, str) or not mode.strip():
-            raise InvalidArgument(f"mode must be a mode name, got {mode!r}")
-        self._command(registry.SET_MODE, SetMode(custom_mode=mode), f"set_mode {mode}", timeout)
-
-    def param_get(self, param: str, *, timeout: float | None = None) -> int | float:
-        """Read an autopilot parameter; an int or a float."""
-        if not isinstance(param, str) or not param:
-            raise InvalidArgument(f"param must be a parameter name, got {param!r}")
-        reply = self._command(
-            registry.PARAM_GET, ParamGet(param_id=param), f"param_get {param}", timeout
-        )
-        return reply.value.as_number()
-
-    def param_set(
-        self, param: str, value: int | float, *, timeout: float | None = None
-    ) -> int | float:
-        """Write an autopilot parameter (ints as integer, floats as real); returns the value
-        the autopilot reports after the write."""
-        if not isinstance(param, str) or not param:
-            raise InvalidArgument(f"param must be a parameter name, got {param!r}")
-        if isinstance(value, int | np.integer) and not isinstance(value, bool):
-            wrapped = ParamValue(integer=int(value))
-        else:
-            wrapped = ParamValue(real=setpoints.finite(param, value))
-        reply = self._command(
-            registry.PARAM_SET,
-            ParamSet(param_id=param, value=wrapped),
-            f"param_set {param}",
-            timeout,
-        )
-        return reply.value.as_number()
 
     # ------------------------------------------------------------------ take-off and landing
 
