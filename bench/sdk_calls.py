@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
             pixels = np.random.default_rng(0).integers(0, 255, (240, 320, 3), np.uint8)
             pub.put(Image(height=240, width=320, step=960, data=pixels.tobytes()))
             drone.wait_for_image("frontal", timeout=10)
-            drone.wait_for(lambda: drone._pose.value is not None, 10, "pose")
+            drone.wait_for(lambda: drone.inputs.pose.value is not None, 10, "pose")
             getters = time_getters(drone, args.calls)
             time_commands(drone, autopilot, 20)  # warm-up
             latencies, call_times, lost = time_commands(drone, autopilot, args.samples)

@@ -32,7 +32,7 @@ def pose_ages(drone: DroneWrapper, seconds: float) -> dict[str, float]:
     ages = []
     end = time.monotonic() + seconds
     while time.monotonic() < end:
-        pose = drone._pose.value
+        pose = drone.inputs.pose.value
         if pose is not None:
             ages.append(time.time() - pose.header.stamp)
         time.sleep(0.02)
