@@ -22,8 +22,8 @@ from pathlib import Path
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node
 from dronewrapper.runtime.clock import REAL, Clock
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
@@ -59,7 +59,7 @@ class SimRunner:
         node: the Zenoh node to publish on (None: MAVLink only, no Zenoh, no cameras).
     """
 
-    def __init__(self, config: SimConfig, scenario: Scenario, node: Node | None) -> None:
+    def __init__(self, config: SimConfig, scenario: Scenario, node: NodeApi | None) -> None:
         from dronewrapper_sim.world.world import World
 
         self.config = config
@@ -112,12 +112,12 @@ class SimRunner:
 
     # ---- setup ----
 
-    def _setup_zenoh(self, node: Node) -> None:
+    def _setup_zenoh(self, node: NodeApi) -> None:
         self.world_topics = WorldTopics(node, self.world, self.world_lock, seed=self.config.seed)
         if self.config.cameras:
             self.cameras = self._make_cameras(node)
 
-    def _make_cameras(self, node: Node) -> CameraStreamer:
+    def _make_cameras(self, node: NodeApi) -> CameraStreamer:
         from dronewrapper_sim.render.camera import FRONTAL, VENTRAL, PinholeCamera
         from dronewrapper_sim.render.renderer import Renderer
 

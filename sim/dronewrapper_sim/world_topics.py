@@ -14,7 +14,8 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist
 from dronewrapper.msgs.simulation import WorldLoad, WorldState
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node, ServiceError
+from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.pose_snapshot import PoseSnapshot, pose_msg
 from dronewrapper_sim.world.scenario import SCENARIO_NAMES, load_scenario
 
@@ -32,7 +33,7 @@ class WorldTopics:
     """
 
     def __init__(
-        self, node: Node, world: Any, world_lock: threading.Lock, *, seed: int | None = None
+        self, node: NodeApi, world: Any, world_lock: threading.Lock, *, seed: int | None = None
     ) -> None:
         self.node = node
         self.world = world
