@@ -1,4 +1,4 @@
-"""camera_victure: capture-to-Zenoh latency and CPU (issue 15 targets).
+"""camera_victure: capture-to-Zenoh latency and CPU against the camera's targets.
 
 The camera service runs as its own process on a loopback router with the test pattern as its
 "camera" at 30 fps, 640x480 and 1280x720, publishing raw bgr8 or JPEG only. A subscriber here

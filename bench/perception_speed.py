@@ -1,4 +1,4 @@
-"""Perception speed, latency and identity benchmarks (issue 6 targets).
+"""Perception speed, latency and identity benchmarks against perception's targets.
 
 1. Colour filter ms/frame at 640x480 on one core (target <= 3 ms).
 2. YOLOX-Nano ms/frame with 2 threads, whole ``detect()`` and inference alone (target <= 20 ms);

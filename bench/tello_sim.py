@@ -5,7 +5,7 @@
    threads: flight, world, renderer, libx264's threads) over ``--seconds``: in SDK mode on the
    ground without video; streaming 960x720 30 fps on the ground; streaming while flying and
    turning (rc yaw, so that every frame changes); with the default ``render_scale`` 0.5 and
-   with 1 (full-size rendering). 100 % = one core. Target (issue 13): sim +
+   with 1 (full-size rendering). 100 % = one core. Target: sim +
    encoder <= 35 % of one core at 960x720 30 fps. The client counts the frames it receives.
 2. Encode-to-UDP latency per frame, in this process: the forward camera rendered while
    turning (rendered at the default ``render_scale`` and scaled up to 960x720 as the sim

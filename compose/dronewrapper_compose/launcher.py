@@ -7,18 +7,15 @@ Every line a process prints is prefixed with its name. On Ctrl-C, SIGTERM or aft
 period) and closes the router. Exit status: 0 when every process started and stopped cleanly,
 1 when a process died or failed to become ready, 2 for a bad graph file or bad flags.
 
-Size: over 400 lines: a process's whole life in a graph (start in order, readiness, prefixed
-logs, ordered stop, exit status) is one concern; the graph file's schema is ``graph.py``.
+A process's whole life in a graph (start in order, readiness, ordered stop, exit status) is
+here; one running process and its prefixed output is ``child.py``, the graph file's schema
+``graph.py``, its ports ``ports.py``.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import ctypes
-import os
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -30,17 +27,21 @@ import zenoh
 
 from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.router import InsecureEndpoint, router_options
+from dronewrapper.router_reach import open_client_session
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.security.keystore import default_keys_dir
+from dronewrapper_compose.child import Child, die_with_parent  # noqa: F401 (imported from here)
 from dronewrapper_compose.graph import (
     REPO,
     Graph,
     GraphError,
     ProcessSpec,
     assets_dir,
+    check_value,
+    check_variables,
     load_graph,
     resolve_graph_path,
     substitute,
@@ -51,18 +52,6 @@ from dronewrapper_compose.ports import (
     choose_ports,
     router_port_in_use,
 )
-
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
-    """Ask Linux to send SIGTERM to the child if its parent dies, so nothing is orphaned.
-
-    For ``subprocess.Popen(preexec_fn=...)``, called from the thread that lives as long as the
-    children (Linux signals them when the forking *thread* ends).
-    """
-    with contextlib.suppress(OSError):
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 class LaunchError(RuntimeError):
@@ -92,69 +81,6 @@ def build_argv(
         argv += ["--connect", router, "--namespace", ns, "--name", spec.name, "--mode", "peer"]
     env = {key: substitute(value, values, where) for key, value in spec.env.items()}
     return argv, env
-
-
-class _Child:
-    """A running process of the graph, with its output forwarded line by line."""
-
-    def __init__(
-        self,
-        spec: ProcessSpec,
-        argv: list[str],
-        env: dict[str, str],
-        out: TextIO,
-        out_lock: threading.Lock,
-        width: int,
-    ) -> None:
-        self.spec = spec
-        self.name = spec.name
-        self.argv = argv
-        self.stopping = False
-        self.proc = subprocess.Popen(
-            argv,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            env={**os.environ, "PYTHONUNBUFFERED": "1", **env},
-            cwd=REPO,
-            start_new_session=True,  # the launcher, not the terminal, decides the stop order
-            preexec_fn=die_with_parent,
-        )
-        prefix = f"{spec.name:>{width}} | "
-        self._reader = threading.Thread(
-            target=self._forward, args=(prefix, out, out_lock), daemon=True
-        )
-        self._reader.start()
-
-    def _forward(self, prefix: str, out: TextIO, lock: threading.Lock) -> None:
-        assert self.proc.stdout is not None
-        for raw in iter(self.proc.stdout.readline, b""):
-            line = raw.decode("utf-8", "replace").rstrip("\n")
-            with lock:
-                out.write(prefix + line + "\n")
-                out.flush()
-
-    def poll(self) -> int | None:
-        return self.proc.poll()
-
-    def interrupt(self) -> None:
-        self.stopping = True
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-
-    def wait(self, timeout: float) -> int | None:
-        try:
-            return self.proc.wait(max(timeout, 0.0))
-        except subprocess.TimeoutExpired:
-            return None
-
-    def kill(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(5)
-
-    def join_output(self) -> None:
-        self._reader.join(2)
 
 
 class Launcher:
@@ -209,7 +135,10 @@ class Launcher:
             self.values.update(choose_ports(graph.ports, self.values))
         except ValueError as exc:
             raise GraphError(f"{graph_path}: {exc}") from exc
-        self.children: list[_Child] = []
+        for name in graph.types:
+            if why := check_value(graph, name, self.values[name]):
+                raise GraphError(f"{graph_path}: {name}={self.values[name]!r} {why}")
+        self.children: list[Child] = []
         self.failures: list[str] = []
         self.exit_code: int | None = None
         self._alive: set[str] = set()
@@ -284,7 +213,7 @@ class Launcher:
             options.namespace = self.ns
         else:
             options = ZenohOptions(mode="client", connect=[self.router], namespace=self.ns)
-        self._session = open_session(options)
+        self._session = (open_session if self.start_router else open_client_session)(options)
         where = ", ".join([self.router, *self.listen]) if self.start_router else self.router
         acl = " (access control on)" if options.access_control else ""
         self._say(f"{'router listening on' if self.start_router else 'using router'} {where}{acl}")
@@ -297,11 +226,11 @@ class Launcher:
         ]
         for spec, argv, env in plans:
             self._say(f"starting {spec.name}: {' '.join(argv[1:] if spec.module else argv)}")
-            child = _Child(spec, argv, env, self.out, self._out_lock, self._width)
+            child = Child(spec, argv, env, self.out, self._out_lock, self._width)
             self.children.append(child)
             self._wait_ready(child)
 
-    def _wait_ready(self, child: _Child) -> None:
+    def _wait_ready(self, child: Child) -> None:
         if child.spec.ready == "none":
             return
         deadline = time.monotonic() + child.spec.ready_timeout_s
@@ -405,11 +334,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--insecure", action="store_true", help="allow plain tcp/ off loopback (trusted networks)"
     )
     args = parser.parse_args(argv)
-    setup_logging()
     try:
         variables = _parse_vars(args.var)
         if args.scenario:
             variables["scenario"] = args.scenario
+        path = resolve_graph_path(args.graph)
+        check_variables(load_graph(path), path, variables)  # the command line's: names too
         launcher = Launcher.from_file(
             args.graph,
             router=args.router,
@@ -432,6 +362,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"dronewrapper up: {exc}", file=sys.stderr)
         return 2
 
+    setup_logging()  # the graph runs: log lines from here on (a bad graph only printed above)
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

@@ -12,15 +12,19 @@ bridge, a bridge without an autopilot, a stream that never came).
 from __future__ import annotations
 
 import contextlib
+import logging
 
-from dronewrapper.discovery import BRIDGE_PREFIX, connection_problem
-from dronewrapper.errors import DroneError, NotConnected, Timeout
+from dronewrapper import diagnosis
+from dronewrapper.diagnosis import identity_facts, seconds
+from dronewrapper.discovery import connection_problem
+from dronewrapper.errors import DroneError, NotConnected
 from dronewrapper.inputs import TELEMETRY_READ_BY_GETTERS, Inputs
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime.commander import STATE_FRESH_S
-from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import ZenohOptions
+
+log = logging.getLogger("dronewrapper")
 
 SDK_NODE_NAME = "dronewrapper_sdk"
 """The name of a wrapper's own node (its logger, its worker threads)."""
@@ -56,7 +60,7 @@ def connected_state(inputs: Inputs) -> State | None:
     return state if state is not None and state.connected else None
 
 
-def wait_for_connection(inputs: Inputs, connect: str, timeout: float) -> State:
+def wait_for_connection(inputs: Inputs, connect: str, identity: str, timeout: float) -> State:
     """Wait until the bridge reports its autopilot connected and every stream the getters read
     has arrived; the State.
 
@@ -69,7 +73,7 @@ def wait_for_connection(inputs: Inputs, connect: str, timeout: float) -> State:
     while (state := connected_state(inputs)) is None:
         remaining = deadline - clock.monotonic()
         if remaining <= 0:
-            raise NotConnected(diagnose(inputs, connect, timeout))
+            raise NotConnected(diagnose(inputs, connect, identity, timeout))
         with contextlib.suppress(TimeoutError):
             inputs.state.wait(min(remaining, 0.5), newer_than=inputs.state.count)
     for _, name in TELEMETRY_READ_BY_GETTERS:
@@ -82,21 +86,23 @@ def wait_for_connection(inputs: Inputs, connect: str, timeout: float) -> State:
     ]
     if missing:
         raise NotConnected(
-            f"the bridge of drone {inputs.ns!r} is connected but after {timeout:g} s nothing "
-            f"arrived on: {', '.join(missing)}; is the link too slow, or the bridge old?"
+            f"the bridge of drone {inputs.ns!r} is connected but after {seconds(timeout)} s "
+            f"nothing arrived on: {', '.join(missing)}; is the link too slow, or the bridge "
+            "old?"
         )
+    log.info("connected to drone %r via %s", inputs.ns, connect)
     return state
 
 
-def require_connected(inputs: Inputs, connect: str, what: str) -> State:
+def require_connected(inputs: Inputs, connect: str, identity: str, what: str) -> State:
     """The connected State, or NotConnected naming ``what`` could not be done and why."""
     state = connected_state(inputs)
     if state is None:
-        raise NotConnected(f"{what}: {diagnose(inputs, connect, 0.0)}")
+        raise NotConnected(f"{what}: {diagnose(inputs, connect, identity, 0.0)}")
     return state
 
 
-def diagnose(inputs: Inputs, connect: str, waited: float) -> str:
+def diagnose(inputs: Inputs, connect: str, identity: str, waited: float) -> str:
     """Why the drone is not usable, in one sentence (see discovery.connection_problem)."""
     node = inputs.node
     linked = node.linked()
@@ -114,21 +120,25 @@ def diagnose(inputs: Inputs, connect: str, waited: float) -> str:
         state_age=inputs.state.age(),
         fresh_s=STATE_FRESH_S,
         waited=waited,
+        **identity_facts(identity, connect),
     )
 
 
 def no_reply(
-    node: NodeApi, ns: str, connect: str, what: str, key: str, timeout: float
+    inputs: Inputs, connect: str, identity: str, what: str, key: str, timeout: float
 ) -> DroneError:
-    """A call nobody answered: Timeout if a bridge is alive (slow or stuck), else NotConnected
-    (none running)."""
+    """A call nobody answered, diagnosed (:func:`dronewrapper.diagnosis.no_reply`)."""
     try:
-        names = sorted(node.alive_services(ns, timeout=1.0))
+        names = inputs.node.alive_services(inputs.ns, timeout=1.0)
     except Exception:
-        names = []
-    if any(name.split("/")[-1].startswith(BRIDGE_PREFIX) for name in names):
-        return Timeout(f"{what}: no reply from {key} within {timeout:g} s")
-    return NotConnected(
-        f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
-        f"drone {ns!r} on {connect}"
+        names = set()
+    return diagnosis.no_reply(
+        what,
+        key,
+        timeout,
+        ns=inputs.ns,
+        connect=connect,
+        alive_names=names,
+        sees_telemetry=inputs.state.value is not None,
+        **identity_facts(identity, connect),
     )

@@ -42,10 +42,7 @@ from typing import Any, TypeVar
 from dronewrapper import connection, flying, images, setpoints
 from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
-from dronewrapper.errors import (
-    Cancelled,
-    InvalidArgument,
-)
+from dronewrapper.errors import Cancelled, DroneError, InvalidArgument
 from dronewrapper.inputs import Getters, Inputs
 from dronewrapper.motion import Motion
 from dronewrapper.msgs import registry
@@ -59,6 +56,7 @@ from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.flight import Landing, Takeoff
 from dronewrapper.runtime.options import is_local_endpoint
+from dronewrapper.script_log import show_progress
 from dronewrapper.streamer import SetpointStreamer
 from dronewrapper.waits import Waits
 
@@ -147,11 +145,12 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
         registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
         self.connect = connect or default_connect()
+        show_progress()  # INFO lines on stderr for a script that configured no logging
         self.land_on_exit = land_on_exit
         self.service_timeout = service_timeout
         self._closed = False
         self._warned_grounded = False
-        identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
+        identity = self._identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
         self.commander = commander or default_commander(identity)
         self._attachment = commander_attachment(self.commander)
         self.compressed_images = self._choose_compression(compressed_images, node, cameras)
@@ -301,10 +300,10 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
                 after ``timeout`` s (the message names the missing keys).
         """
-        return connection.wait_for_connection(self.inputs, self.connect, timeout)
+        return connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
 
-    def _no_reply(self, what: str, key: str, timeout: float) -> Exception:
-        return connection.no_reply(self.node, self.ns, self.connect, what, key, timeout)
+    def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
+        return connection.no_reply(self.inputs, self.connect, self._identity, what, key, timeout)
 
     # ------------------------------------------------------------------ take-off and landing
 
@@ -335,7 +334,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
         if h <= 0:
             raise InvalidArgument(f"h must be > 0 m, got {h}")
         now = self.clock.monotonic()
-        connection.require_connected(self.inputs, self.connect, "takeoff")
+        connection.require_connected(self.inputs, self.connect, self._identity, "takeoff")
         kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
         self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs), cancel)
 
@@ -350,7 +349,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
             Cancelled: ``cancel`` was set (see :meth:`takeoff`).
         """
         now = self.clock.monotonic()
-        connection.require_connected(self.inputs, self.connect, "land")
+        connection.require_connected(self.inputs, self.connect, self._identity, "land")
         self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout), cancel)
 
     def _fly(self, sequence: Takeoff | Landing, cancel: threading.Event | None) -> None:

@@ -8,8 +8,8 @@ executes (MAVLink sends, Zenoh samples). Service calls that wait for acknowledge
 :mod:`operations` the core advances as messages and time arrive; the node only waits on them.
 The sim's autopilot (sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
 
-Size: just over 400 lines: the core's entry points and its outbox; the handlers are in
-``receive``, the waiting service calls in ``operations``, parameters in ``parameters``.
+This module holds the core's entry points and its outbox; the handlers are in ``receive``,
+the waiting service calls in ``operations``, parameters in ``parameters``.
 """
 
 from __future__ import annotations

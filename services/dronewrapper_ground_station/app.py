@@ -268,6 +268,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                     "type": "telemetry",
                     "t": fleet.clock.time(),
                     "role": role,
+                    "router": fleet.router(),
                     "fleet": fleet.summary(),
                     "drones": {ns: link.snapshot() for ns, link in list(fleet.links.items())},
                     "objects": fleet.objects.snapshot(),

@@ -289,7 +289,7 @@ class Fleet:
     """Every drone the station shows, found by their bridges' liveliness tokens.
 
     Args:
-        node: the station's runtime Node, or a FakeNode on the fake bus (tests).
+        node: the station's node (``linked()`` says whether its router is reachable).
         config: the station config (``namespaces`` fixes the list; empty: discover).
     """
 
@@ -297,6 +297,7 @@ class Fleet:
         self.node = node
         self.config = config
         self.clock = node.clock
+        self.router_linked = True
         self.links: dict[str, DroneLink] = {}
         self.objects = SimObjects(node)
         self._lock = threading.Lock()
@@ -307,7 +308,9 @@ class Fleet:
         return DroneLink(self.node, ns, self.config)
 
     def discover(self) -> None:
-        """List the processes alive now; add new drones, mark vanished ones offline."""
+        """Whether the router is linked; list the processes alive now; add new drones, mark
+        vanished ones offline."""
+        self.router_linked = self.node.linked()
         by_ns = services_by_namespace(self.node.alive_services("*"))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
@@ -318,6 +321,12 @@ class Fleet:
         for ns, link in self.links.items():
             link.services = by_ns.get(ns, [])
             link.online = any(name.startswith(BRIDGE_PREFIX) for name in link.services)
+
+    def router(self) -> dict[str, Any]:
+        """The station's link to its router: ``linked`` and the ``endpoint`` it connects to."""
+        options = getattr(self.node, "options", None)
+        endpoint = ", ".join(getattr(options, "connect", None) or []) or "the router"
+        return {"linked": self.router_linked, "endpoint": endpoint}
 
     def get(self, ns: str) -> DroneLink:
         """The drone ``ns``. Raises KeyError if the station does not know it."""

@@ -7,6 +7,8 @@ A value is stale when older than ``stale_after`` nominal periods of its topic (a
 
 from __future__ import annotations
 
+import math
+import time
 from typing import Any
 
 from dronewrapper import telemetry
@@ -119,8 +121,12 @@ def detection_fields(msg: Detections) -> dict[str, Any]:
 
 
 def status_text_entry(msg: StatusText) -> dict[str, Any]:
+    """A log line: the event's own stamp (s since the epoch) and its local ``time`` (HH:MM:SS),
+    which the page shows, not when the page received it."""
     severity = SEVERITIES[msg.severity] if 0 <= msg.severity < len(SEVERITIES) else "info"
-    return {"stamp": msg.header.stamp, "severity": severity, "text": msg.text}
+    stamp = msg.header.stamp
+    shown = time.strftime("%H:%M:%S", time.localtime(stamp)) if math.isfinite(stamp) else "--:--:--"
+    return {"stamp": stamp, "time": shown, "severity": severity, "text": msg.text}
 
 
 def _stamp(msg: Any) -> float:

@@ -54,7 +54,12 @@ class WorldObjects:
 class StationRig:
     """The station (token :data:`TOKEN`) over the fake bus; ``config`` overrides Config."""
 
-    def __init__(self, *, autopilot: dict[str, Any] | None = None, **config: Any) -> None:
+    def __init__(
+        self,
+        *,
+        autopilot: dict[str, Any] | None = None,
+        **config: Any,
+    ) -> None:
         self.bus = FakeBus(start=T0)
         self.pilot = BusAutopilot(self.bus, **{"flying": True, "x": X, **(autopilot or {})})
         self.pilot.node.announce()

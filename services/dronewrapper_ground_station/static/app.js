@@ -24,9 +24,9 @@ function wsUrl(path) {
   return `${proto}//${location.host}${path}${station.token ? "?token=" + encodeURIComponent(station.token) : ""}`;
 }
 
-function logLine(text, cls = "station") {
+function logLine(text, cls = "station", time = new Date().toLocaleTimeString()) {
   const li = document.createElement("li");
-  li.className = cls; li.textContent = `${new Date().toLocaleTimeString()}  ${text}`;
+  li.className = cls; li.textContent = `${time}  ${text}`;
   const log = $("log"); log.prepend(li);
   while (log.children.length > 200) log.lastChild.remove();
 }
@@ -103,7 +103,8 @@ const seenLog = new Set();
 function onTelemetry(msg) {
   station.tele = msg; station.offset = msg.t - Date.now() / 1000;
   if (msg.role !== station.role) setRole(msg.role);
-  renderDrones(msg.fleet);
+  renderLink(msg.router);
+  renderDrones(msg.fleet, msg.router);
   if (!station.ns && msg.fleet.length) selectDrone(msg.fleet[0].ns);
   station.drone = msg.drones[station.ns] || null;
   const now = Date.now() / 1000;
@@ -118,7 +119,7 @@ function onTelemetry(msg) {
   if (d) {
     for (const e of d.log) {
       const key = `${e.stamp}|${e.text}`;
-      if (!seenLog.has(key)) { seenLog.add(key); logLine(`${station.ns}: ${e.text}`, e.severity); }
+      if (!seenLog.has(key)) { seenLog.add(key); logLine(`${station.ns}: ${e.text}`, e.severity, e.time); }
     }
     plots.alt.push(0, now, d.pose && d.pose.z); plots.alt.push(1, now, d.ground_truth && d.ground_truth.z);
     const c = d.controller && !d.controller.stale ? d.controller : null;
@@ -141,9 +142,17 @@ function setRole(role) {
   for (const s of sticks) s.enabled = role === "operator";
 }
 
-function renderDrones(fleet) {
+function renderLink(router) {  // the page's socket is open: is the station's router linked?
+  const linked = !router || router.linked;
+  $("link").textContent = linked ? "connected" : "router unreachable";
+  $("link").className = `badge ${linked ? "ok" : "bad"}`;
+  $("link").title = router ? `station's router: ${router.endpoint}` : "";
+}
+
+function renderDrones(fleet, router) {
   const nav = $("drones");
-  const sig = JSON.stringify(fleet.map((d) => [d.ns, d.health])) + station.ns;
+  const unreachable = router && !router.linked;
+  const sig = JSON.stringify(fleet.map((d) => [d.ns, d.health])) + station.ns + unreachable;
   if (nav.dataset.sig === sig) return;
   nav.dataset.sig = sig; nav.textContent = "";
   for (const d of fleet) {
@@ -155,7 +164,8 @@ function renderDrones(fleet) {
     b.onclick = () => selectDrone(d.ns);
     nav.append(b);
   }
-  if (!fleet.length) nav.textContent = "no drone online";
+  if (unreachable) nav.textContent = `router ${router.endpoint} unreachable: no drone can be seen`;
+  else if (!fleet.length) nav.textContent = "no drone online";
 }
 
 function selectDrone(ns) {

@@ -7,8 +7,8 @@ and parameter lists due on each link with :meth:`Autopilot.poll`. Links are name
 ``gcs``); STATUSTEXT goes only to links where a MAV_TYPE_GCS heartbeat was seen in the last
 few seconds, as PX4 does.
 
-Size: over 400 lines: one handler per MAVLink message PX4 answers, beside the state it changes;
-physics, the commander and the parameters are their own modules.
+One handler per MAVLink message PX4 answers, beside the state it changes; physics, the
+commander and the parameters are their own modules.
 """
 
 from __future__ import annotations

@@ -19,8 +19,8 @@ Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
   default; not latched: the vehicle is back in OFFBOARD as soon as setpoints resume;
 - after a disarm, a LAND or RTL intention reverts to the mode intended before it.
 
-Size: over 400 lines: PX4's mode and arming rules are one state machine, each rule next to the
-PX4 behaviour it reproduces.
+PX4's mode and arming rules are one state machine, each rule next to the PX4 behaviour it
+reproduces.
 """
 
 from __future__ import annotations
