@@ -153,6 +153,25 @@ PLAN: dict[str, Run | Excluded] = {
     "docs/security.md: # joined to the Tello's open network, from the lap": Excluded(
         "a real Tello's Wi-Fi access point at 192.168.10.1"
     ),
+    "docs/fleet.md: dronewrapper up compose/sim_fleet.yaml --var drone": Excluded(
+        "starts fleets of its own until Ctrl-C (tests/integration/test_sim_fleet.py runs the "
+        "graph with five drones of both kinds)"
+    ),
+    "docs/fleet.md: from dronewrapper.fleet import Fleet": Excluded(
+        "needs five drones online, not the docs test's one (tests/integration/test_sim_fleet.py "
+        "and examples/swarm.py fly the same calls on a fleet graph)"
+    ),
+    "docs/fleet.md: sudo ip addr add 192.168.1.101/24 dev wlan0": Excluded(
+        "real Tellos on a classroom's access point, and a Wi-Fi interface to add addresses to"
+    ),
+    "docs/fleet.md: dronewrapper up compose/classroom_tello.yaml --var": Excluded(
+        "starts its own classroom until Ctrl-C (tests/integration/test_classroom_tello.py runs "
+        "the same graph and three Tello simulators)"
+    ),
+    "docs/fleet.md: # field computer": Excluded(
+        "two computers on a radio link (tests/network/test_fleet_routers.py builds them with "
+        "network namespaces, as root)"
+    ),
 }
 
 DRONE_ADDRESSES = ("tls/192.168.1.50:7448",)

@@ -39,9 +39,13 @@ class Child:
         out: TextIO,
         out_lock: threading.Lock,
         width: int,
+        *,
+        label: str = "",
+        ns: str = "",
     ) -> None:
         self.spec = spec
-        self.name = spec.name
+        self.name = label or spec.name  # a fleet's process: ``drone2/sim``
+        self.ns = ns  # the namespace it runs under (its liveliness token's)
         self.argv = argv
         self.stopping = False
         self.proc = subprocess.Popen(
@@ -54,7 +58,7 @@ class Child:
             start_new_session=True,  # the launcher, not the terminal, decides the stop order
             preexec_fn=die_with_parent,
         )
-        prefix = f"{spec.name:>{width}} | "
+        prefix = f"{self.name:>{width}} | "
         self._reader = threading.Thread(
             target=self._forward, args=(prefix, out, out_lock), daemon=True
         )

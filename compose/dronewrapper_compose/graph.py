@@ -38,6 +38,8 @@ from typing import Any
 
 import msgspec
 
+from dronewrapper_compose import fleet
+
 REPO = Path(__file__).resolve().parents[2]
 GRAPH_DIR = Path(__file__).resolve().parents[1]  # compose/: the graph files
 _VAR = re.compile(r"\$\{([A-Za-z_][A-Za-z0-9_]*)(?::-([^}]*))?\}")
@@ -63,6 +65,9 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         ready_timeout_s: how long to wait for readiness, seconds.
         stop_timeout_s: how long a stop (SIGINT) may take before SIGKILL, seconds.
         zenoh_args: append the common Zenoh flags (``--connect --namespace --name --mode``).
+        each_drone: run once per drone of a fleet graph of this kind (``iris``, ``tello``,
+            ``any``), under the drone's namespace, all of them started together
+            (:mod:`dronewrapper_compose.fleet`).
     """
 
     name: str
@@ -76,6 +81,7 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     ready_timeout_s: float = 30.0
     stop_timeout_s: float = 10.0
     zenoh_args: bool = True
+    each_drone: str | None = None
 
 
 class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -243,17 +249,24 @@ def load_graph(path: str | Path) -> Graph:
             raise GraphError(f"{path}: type {kind!r} must be {allowed} or a list of values - {at}")
         if why := check_value(graph, var, graph.vars[var]):
             raise GraphError(f"{path}: default {graph.vars[var]!r} {why} - at `$.vars.{var}`")
-    seen: set[str] = set()
+    seen: set[tuple[str, str | None]] = set()
     for i, proc in enumerate(graph.processes):
         at = f"at `$.processes[{i}]`"
         if not _NAME.fullmatch(proc.name):
             raise GraphError(f"{path}: process name {proc.name!r} must be [A-Za-z0-9_-] - {at}")
-        if proc.name in seen:
+        # a name may repeat only for drones of different kinds (one sim per Iris, per Tello)
+        kinds = (proc.each_drone,) if proc.each_drone in fleet.KINDS else (None, *fleet.KINDS)
+        if any((proc.name, kind) in seen for kind in kinds):
             raise GraphError(f"{path}: duplicate process name {proc.name!r} - {at}")
-        seen.add(proc.name)
+        seen.update((proc.name, kind) for kind in kinds)
         if (proc.module is None) == (proc.command is None):
             raise GraphError(
                 f"{path}: process {proc.name!r} needs exactly one of module/command - {at}"
+            )
+        if proc.each_drone is not None and proc.each_drone not in (*fleet.KINDS, fleet.ANY):
+            raise GraphError(
+                f"{path}: process {proc.name!r}: each_drone must be one of "
+                f"{', '.join((*fleet.KINDS, fleet.ANY))} - {at}"
             )
         if proc.ready not in ("alive", "none"):
             raise GraphError(f"{path}: process {proc.name!r}: ready must be alive or none - {at}")

@@ -21,6 +21,8 @@ return at once, as in the sync API. Cancelling an awaited take-off or landing st
 further step is taken and the setpoint stream stops (the bridge holds position); the awaiting
 task sees CancelledError once the worker has stopped. Telemetry and frames are async iterators
 of the newest values: a slow consumer skips values instead of queueing them (never a backlog).
+
+Many drones at once: :class:`Fleet` (:mod:`dronewrapper.fleet_aio`).
 """
 
 from __future__ import annotations
@@ -35,12 +37,15 @@ import numpy as np
 
 from dronewrapper import telemetry
 from dronewrapper.drone import DroneWrapper
+from dronewrapper.fleet_aio import Fleet
 from dronewrapper.inputs import camera_key_name
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.runtime.latest import Latest
+
+__all__ = ["Drone", "Fleet"]
 
 T = TypeVar("T")
 V = TypeVar("V")

@@ -106,6 +106,7 @@ def _command_action(link: DroneLink, command: str, body: Any, config: Config) ->
         "disarm": link.disarm,
         "land": link.land,
         "hold": link.hold,
+        "reset": link.reset,
     }
     if command in simple:
         return simple[command]
@@ -185,6 +186,15 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         seconds = link.clock.monotonic() - started
         log.info("%s %s done in %.1f s", ns, name, seconds)
         return _ok({"ok": True, "command": name, "seconds": seconds})
+
+    async def land_all(request: Request) -> Response:
+        refused = _operator_check(request)
+        if refused:
+            return refused
+        outcomes = await run_in_threadpool(fleet.land_all)
+        log.info("land all: %s", ", ".join(f"{ns} {what}" for ns, what in outcomes.items()))
+        landed = all(what == "landed" for what in outcomes.values())
+        return _ok({"ok": landed, "drones": outcomes})
 
     async def objects(_: Request) -> Response:
         return _ok(fleet.objects.snapshot())
@@ -356,6 +366,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         Route("/api/drones", drones),
         Route("/api/drones/{ns}", drone),
         Route("/api/drones/{ns}/{command}", command, methods=["POST"]),
+        Route("/api/fleet/land", land_all, methods=["POST"]),
         Route("/api/objects", objects),
         Route("/api/objects/{name}/velocity", object_velocity, methods=["POST"]),
         Route("/api/world", world),

@@ -16,13 +16,15 @@ from typing import Any, TypeVar
 
 from dronewrapper import DroneWrapper
 from dronewrapper.discovery import BRIDGE_PREFIX, services_by_namespace
+from dronewrapper.errors import CommandRefused, NotConnected
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import CompressedImage
-from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import VehicleReset, WorldLoad, WorldQuery, WorldState
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
@@ -211,6 +213,27 @@ class DroneLink:
         self._note("land")
         self.drone.land(timeout=self.config.command_timeout)
 
+    def reset(self) -> None:
+        """Put this simulated drone back at its start pose, landed (``{ns}/sim/world/reset``).
+
+        Raises:
+            NotConnected: no simulator answers for this drone (a real aircraft).
+            CommandRefused: the simulator could not reset it.
+        """
+        self.deadman.release()
+        self.drone.stop_commanding()
+        self._note("reset")
+        try:
+            reply = self._node.call(
+                registry.SIM_RESET, VehicleReset(), ns=self.ns, timeout=self.config.command_timeout
+            )
+        except ServiceUnavailable:
+            raise NotConnected(f"{self.ns}: no simulator answers: a real aircraft?") from None
+        except ServiceError as exc:
+            raise CommandRefused("reset", exc.message) from None
+        if not reply.success:
+            raise CommandRefused("reset", reply.message)
+
     def arm(self) -> None:
         self.drone.arm()
 
@@ -338,6 +361,26 @@ class Fleet:
             {"ns": ns, "health": link.health(), "services": link.services}
             for ns, link in sorted(self.links.items())
         ]
+
+    def land_all(self) -> dict[str, str]:
+        """Land every drone online at once; ``{ns: "landed" or why not}``, each on its own
+        thread so that one slow drone delays nobody else."""
+        links = {ns: link for ns, link in list(self.links.items()) if link.online}
+        outcomes: dict[str, str] = {}
+
+        def land(ns: str, link: DroneLink) -> None:
+            try:
+                link.land()
+                outcomes[ns] = "landed"
+            except Exception as exc:
+                outcomes[ns] = str(exc)
+
+        threads = [threading.Thread(target=land, args=item, daemon=True) for item in links.items()]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        return dict(sorted(outcomes.items()))
 
     def check_deadmen(self) -> None:
         for link in list(self.links.values()):

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
+from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.security.keystore import read_mavlink_key
@@ -104,6 +105,8 @@ class SimRunner:
         self._snapshot = self._make_snapshot()
         self.cameras: CameraStreamer | None = None
         self.world_topics: WorldTopics | None = None
+        self._reset_asked = threading.Event()  # a reset, applied by the loop between steps
+        self._reset_done = threading.Event()
         self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
         # (monotonic wall s, simulated s, slipped_s) taken together after each stepping
         self.clock: tuple[float, float, float] = (self.time.monotonic(), 0.0, 0.0)
@@ -113,7 +116,9 @@ class SimRunner:
     # ---- setup ----
 
     def _setup_zenoh(self, node: NodeApi) -> None:
-        self.world_topics = WorldTopics(node, self.world, self.world_lock, seed=self.config.seed)
+        self.world_topics = WorldTopics(
+            node, self.world, self.world_lock, seed=self.config.seed, reset_vehicle=self.reset
+        )
         if self.config.cameras:
             self.cameras = self._make_cameras(node)
 
@@ -164,6 +169,20 @@ class SimRunner:
             f"MAVLink {links or 'off'}, cameras {cams}"
         )
 
+    def reset(self, timeout_s: float = 2.0) -> str:
+        """Put the vehicle back at its start pose, disarmed (applied by the loop between two
+        physics steps); says what was done.
+
+        Raises:
+            ServiceError: the loop did not apply it within ``timeout_s`` (it is not running).
+        """
+        self._reset_done.clear()
+        self._reset_asked.set()
+        if not self._reset_done.wait(timeout_s):
+            raise ServiceError(f"the simulation loop did not reset within {timeout_s:g} s")
+        cfg = self.autopilot.config
+        return f"back at its start ({cfg.start_x:g}, {cfg.start_y:g}) m, landed, disarmed"
+
     # ---- the loop ----
 
     def run(self, stop: threading.Event, duration_s: float | None = None) -> None:
@@ -200,6 +219,10 @@ class SimRunner:
                 t0 += slip
                 self.slipped_s += slip
                 owed = MAX_CATCH_UP_STEPS
+            if self._reset_asked.is_set():
+                self._reset_asked.clear()
+                self.autopilot.reset_to_start()
+                self._reset_done.set()
             for _ in range(owed):
                 self.autopilot.step(dt)
             steps += owed

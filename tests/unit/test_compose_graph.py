@@ -28,12 +28,12 @@ def test_fixed_graph_names_exist():
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
 def test_shipped_graphs_validate_and_resolve(path: Path):
     launcher = Launcher.from_file(path, router="tcp/127.0.0.1:1")
-    for spec in launcher.graph.processes:
-        argv, _ = build_argv(spec, launcher.values, path, launcher.ns, launcher.router)
+    for inst in (inst for group in launcher.groups for inst in group):
+        argv, _ = launcher.argv_of(inst)
         assert "${" not in " ".join(argv), argv
         assert argv[-8:] == [
-            "--connect", "tcp/127.0.0.1:1", "--namespace", launcher.ns,
-            "--name", spec.name, "--mode", "peer",
+            "--connect", "tcp/127.0.0.1:1", "--namespace", inst.ns,
+            "--name", inst.spec.name, "--mode", "peer",
         ]  # fmt: skip
 
 

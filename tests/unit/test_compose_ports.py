@@ -64,6 +64,9 @@ PEER_PORTS = {
 # tests/integration/test_launcher_ports.py holds it)
 FIXED_BY_PROTOCOL = {"sim_tello", "sim_tello_follow_color", "sim_tello_follow_person"}
 FIXED_BY_PEER = {"px4_sitl": "PX4 SITL sends to 14540"}  # the other end's port: refused if taken
+# fleet graphs: each drone's autopilot port is a free one the launcher picks per drone
+# (``${drone_port}``, dronewrapper_compose.fleet), and each Tello has an address of its own
+CHOSEN_PER_DRONE = {"sim_fleet"}
 
 
 @pytest.mark.parametrize("path", sorted(GRAPH_DIR.glob("*.yaml")), ids=lambda p: p.stem)
@@ -81,7 +84,9 @@ def test_every_graph_picks_free_ports_or_refuses_to_start(path):
         else:
             assert path.stem in FIXED_BY_PEER or graph.vars[name] == "auto"
     if path.stem.startswith("sim_") and not graph.ports:
-        assert path.stem in FIXED_BY_PROTOCOL, f"{path.name}: a simulated graph binds no port?"
+        assert path.stem in FIXED_BY_PROTOCOL | CHOSEN_PER_DRONE, (
+            f"{path.name}: a simulated graph binds no port?"
+        )
 
 
 def test_two_secure_sims_get_different_ports():

@@ -45,7 +45,13 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
-from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import (
+    VehicleReset,
+    VehicleResetResult,
+    WorldLoad,
+    WorldQuery,
+    WorldState,
+)
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
@@ -404,6 +410,13 @@ SIM_WORLD = Service(
     reply=WorldState,
     server="sim",
     doc="the world the sim runs",
+)
+SIM_RESET = Service(
+    "{ns}/sim/world/reset",
+    request=VehicleReset,
+    reply=VehicleResetResult,
+    server="sim",
+    doc="put this simulated vehicle back at its start pose, on the ground, motors off",
 )
 
 # ---- liveliness ----

@@ -52,7 +52,7 @@ from dronewrapper.runtime.session import (
     open_session,
 )
 from dronewrapper.runtime.shm import remove_stale_segments
-from dronewrapper.runtime.shm_put import ShmWriter
+from dronewrapper.runtime.shm_put import BLOCK_WAIT_S, ShmWriter
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -80,6 +80,8 @@ class Publisher(Generic[T]):
         self.type = msg_type
         self.count = 0
         self._shm = shm
+        blocking = qos.get("congestion_control") == zenoh.CongestionControl.BLOCK
+        self._shm_wait_s = BLOCK_WAIT_S if blocking else 0.0
         self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type), **qos)
 
     def put(self, msg: T, *, attachment: bytes | None = None) -> None:
@@ -87,7 +89,7 @@ class Publisher(Generic[T]):
         (see :mod:`dronewrapper.runtime.caller`)."""
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
-        payload = self._shm.payload(msg) if self._shm is not None else None
+        payload = self._shm.payload(msg, wait_s=self._shm_wait_s) if self._shm else None
         self._pub.put(codec.encode(msg) if payload is None else payload, attachment=attachment)
         self.count += 1
 

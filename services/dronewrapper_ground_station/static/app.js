@@ -48,6 +48,20 @@ async function command(name, body = {}) {
   } finally { $("busy").textContent = ""; }
 }
 
+// ---- every drone at once: land all (each drone's outcome in the log)
+async function landAll() {
+  const el = $("result"); el.className = "result"; el.textContent = "landing all…";
+  try {
+    const r = await fetch("/api/fleet/land", {
+      method: "POST", headers: { "Content-Type": "application/json", "X-Station-Token": station.token },
+    });
+    const reply = await r.json();
+    for (const [ns, what] of Object.entries(reply.drones || {})) logLine(`${ns}: ${what}`, what === "landed" ? "station" : "error");
+    el.className = reply.ok ? "result ok" : "result bad";
+    el.textContent = reply.ok ? "all landed" : (reply.error || "some did not land: see the log");
+  } catch (err) { el.className = "result bad"; el.textContent = `land all: ${err}`; }
+}
+
 // ---- the simulator's world: which scenario runs; load another or reset it
 async function refreshWorld() {
   const r = await fetch("/api/world");
@@ -379,6 +393,8 @@ async function start() {
   $("btn-takeoff").onclick = () => command("takeoff", { height: Number($("takeoff-height").value) });
   $("btn-land").onclick = () => { stopTeleop(); command("land"); };
   $("btn-hold").onclick = () => { stopTeleop(); command("hold"); };
+  $("btn-reset").onclick = () => { stopTeleop(); command("reset"); };
+  $("btn-land-all").onclick = () => { stopTeleop(); landAll(); };
   $("btn-mode").onclick = () => command("mode", { mode: $("mode-select").value });
   for (const b of document.querySelectorAll(".seg button")) b.onclick = () => {
     station.camera = b.dataset.camera;

@@ -201,6 +201,13 @@ class Autopilot:
         self.controller.reset()
         return QuadState(x=last.x, y=last.y, yaw=last.yaw)
 
+    def reset_to_start(self) -> None:
+        """Back at the start pose, on the ground, disarmed, at rest (battery and params stay)."""
+        cfg = self.config
+        self.commander.disarm(self.time_s, self.state, force=True, reason="Disarmed: reset")
+        self.controller.reset()
+        self.state = QuadState(x=cfg.start_x, y=cfg.start_y, yaw=cfg.start_yaw)
+
     @property
     def armed(self) -> bool:
         return self.commander.armed
