@@ -44,6 +44,7 @@ from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
 from dronewrapper.errors import Cancelled, DroneError, InvalidArgument
 from dronewrapper.inputs import Getters, Inputs
+from dronewrapper.missions import MissionsMixin
 from dronewrapper.motion import Motion
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
@@ -86,7 +87,7 @@ def _close_all() -> None:
         wrapper.close()
 
 
-class DroneWrapper(Getters, Waits, Motion, Commands):
+class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     """One drone, reached through a Zenoh router. Several objects fly several drones.
 
     Args:
@@ -167,6 +168,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
             self.inputs = Inputs(
                 node, self.ns, compressed_images=self.compressed_images, cameras=cameras
             )
+            self._declare_mission_inputs()  # home, envelope, mission (missions.py)
             self._setpoints = node.publisher(
                 registry.SETPOINT_RAW_LOCAL, key=registry.SETPOINT_RAW_LOCAL.key(self.ns)
             )
@@ -302,6 +304,10 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
         """
         return connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
 
+    def _require_connected(self, what: str) -> State:
+        """The connected State, or NotConnected saying why ``what`` cannot be done."""
+        return connection.require_connected(self.inputs, self.connect, self._identity, what)
+
     def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
         return connection.no_reply(self.inputs, self.connect, self._identity, what, key, timeout)
 
@@ -334,7 +340,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
         if h <= 0:
             raise InvalidArgument(f"h must be > 0 m, got {h}")
         now = self.clock.monotonic()
-        connection.require_connected(self.inputs, self.connect, self._identity, "takeoff")
+        self._require_connected("takeoff")
+        self._check_takeoff(h)  # above the envelope: refused, the limit named
         kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
         self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs), cancel)
 
@@ -349,7 +356,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands):
             Cancelled: ``cancel`` was set (see :meth:`takeoff`).
         """
         now = self.clock.monotonic()
-        connection.require_connected(self.inputs, self.connect, self._identity, "land")
+        self._require_connected("land")
         self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout), cancel)
 
     def _fly(self, sequence: Takeoff | Landing, cancel: threading.Event | None) -> None:

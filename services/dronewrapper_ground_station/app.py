@@ -101,11 +101,19 @@ def _command_action(link: DroneLink, command: str, body: Any, config: Config) ->
         if mode not in MODES and not mode.replace(".", "").replace("_", "").isalnum():
             raise requests.BadRequest(f"mode {mode!r} is not a mode name")
         return lambda: link.set_mode(mode)
+    if command == "upload_plan":
+        plan = body.get("plan") if isinstance(body, dict) else None
+        if not isinstance(plan, dict):
+            raise requests.BadRequest("plan must be a QGroundControl .plan document (an object)")
+        return lambda: link.upload_plan(plan)
     simple = {
         "arm": link.arm,
         "disarm": link.disarm,
         "land": link.land,
         "hold": link.hold,
+        "start_mission": link.start_mission,
+        "pause_mission": link.pause_mission,
+        "rtl": link.return_to_launch,
         "reset": link.reset,
     }
     if command in simple:

@@ -49,6 +49,9 @@ TELEMETRY: tuple[tuple[str, Topic[Any], Callable[[Any], dict[str, Any]]], ...] =
     ("ground_truth", registry.SIM_GROUND_TRUTH, snapshot.pose_fields),
     ("controller", registry.CONTROLLER_STATUS, snapshot.controller_fields),
     ("detections", registry.DETECTIONS, snapshot.detection_fields),
+    ("home", registry.HOME_POSITION, snapshot.home_fields),
+    ("mission", registry.MISSION_WAYPOINTS, snapshot.mission_fields),
+    ("envelope", registry.ENVELOPE, snapshot.envelope_fields),
 )
 
 
@@ -212,6 +215,25 @@ class DroneLink:
         self.deadman.release()
         self._note("land")
         self.drone.land(timeout=self.config.command_timeout)
+
+    def upload_plan(self, plan: dict[str, Any]) -> None:
+        """Upload a QGroundControl ``.plan`` document as the drone's mission."""
+        self._note("upload_plan")
+        self.drone.upload_mission(plan)
+
+    def start_mission(self) -> None:
+        self.deadman.release()
+        self._note("start_mission")
+        self.drone.start_mission()
+
+    def pause_mission(self) -> None:
+        self._note("pause_mission")
+        self.drone.pause_mission()
+
+    def return_to_launch(self) -> None:
+        self.deadman.release()
+        self._note("return_to_launch")
+        self.drone.return_to_launch(timeout=self.config.command_timeout)
 
     def reset(self) -> None:
         """Put this simulated drone back at its start pose, landed (``{ns}/sim/world/reset``).

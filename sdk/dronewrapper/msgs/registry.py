@@ -17,6 +17,7 @@ from dataclasses import KW_ONLY, dataclass, field
 from functools import cached_property
 from typing import Any, Generic, TypeVar
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
@@ -36,6 +37,21 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
     State,
     StatusText,
+)
+from dronewrapper.msgs.mission import (
+    EnvelopeResult,
+    EnvelopeSet,
+    HomePosition,
+    MissionControl,
+    MissionResult,
+    WaypointClear,
+    WaypointList,
+    WaypointPull,
+    WaypointPullResult,
+    WaypointPush,
+    WaypointPushResult,
+    WaypointReached,
+    WaypointSetCurrent,
 )
 from dronewrapper.msgs.sensor import (
     BatteryState,
@@ -395,6 +411,85 @@ COMMAND_LEASE = Service(
     reply=LeaseReply,
     server="bridge",
     doc="take or give back the lease",
+)
+
+# ---- missions, home and the safety envelope (MAVROS's mission/geofence/home keys) ----
+MISSION_WAYPOINTS = Topic(
+    "{ns}/mavros/mission/waypoints",
+    type=WaypointList,
+    rate_hz=0.5,
+    publishers=("bridge",),
+    doc="the mission, on change too",
+)
+MISSION_REACHED = Topic(
+    "{ns}/mavros/mission/reached",
+    type=WaypointReached,
+    rate_hz=0.0,
+    publishers=("bridge",),
+    doc="a mission item reached",
+)
+HOME_POSITION = Topic(
+    "{ns}/mavros/home_position/home",
+    type=HomePosition,
+    rate_hz=0.5,
+    publishers=("bridge",),
+    doc="home, on change too",
+)
+ENVELOPE = Topic(
+    "{ns}/dronewrapper/envelope",
+    type=Envelope,
+    rate_hz=0.5,
+    publishers=("bridge",),
+    doc="the safety envelope in force",
+)
+MISSION_PUSH = Service(
+    "{ns}/mavros/mission/push",
+    request=WaypointPush,
+    reply=WaypointPushResult,
+    server="bridge",
+    doc="upload a mission",
+)
+MISSION_PULL = Service(
+    "{ns}/mavros/mission/pull",
+    request=WaypointPull,
+    reply=WaypointPullResult,
+    server="bridge",
+    doc="download it",
+)
+MISSION_CLEAR = Service(
+    "{ns}/mavros/mission/clear",
+    request=WaypointClear,
+    reply=MissionResult,
+    server="bridge",
+    doc="clear the mission",
+)
+MISSION_SET_CURRENT = Service(
+    "{ns}/mavros/mission/set_current",
+    request=WaypointSetCurrent,
+    reply=MissionResult,
+    server="bridge",
+    doc="fly this item next",
+)
+MISSION_CONTROL = Service(
+    "{ns}/dronewrapper/mission/control",
+    request=MissionControl,
+    reply=MissionResult,
+    server="bridge",
+    doc="start, pause or return",
+)
+GEOFENCE_PUSH = Service(
+    "{ns}/mavros/geofence/push",
+    request=WaypointClear,
+    reply=MissionResult,
+    server="bridge",
+    doc="upload the envelope's fence to the autopilot",
+)
+ENVELOPE_SET = Service(
+    "{ns}/dronewrapper/envelope/set",
+    request=EnvelopeSet,
+    reply=EnvelopeResult,
+    server="bridge",
+    doc="replace or read the safety envelope",
 )
 
 SIM_WORLD_LOAD = Service(

@@ -321,6 +321,7 @@ function drawMap() {
     ctx.beginPath(); ctx.arc(sx(gx), sy(gy), 8, 0, 2 * Math.PI); ctx.moveTo(sx(gx) - 12, sy(gy)); ctx.lineTo(sx(gx) + 12, sy(gy));
     ctx.moveTo(sx(gx), sy(gy) - 12); ctx.lineTo(sx(gx), sy(gy) + 12); ctx.stroke();
   }
+  drawMissionAndFence(ctx, sx, sy, s);
   const drones = Object.entries((tele && tele.drones) || {});
   drones.sort(([a], [b]) => (a === station.ns) - (b === station.ns)); // the picked one on top
   for (const [ns, d] of drones) {
@@ -331,6 +332,54 @@ function drawMap() {
     ctx.beginPath(); ctx.moveTo(12, 0); ctx.lineTo(-8, 7); ctx.lineTo(-4, 0); ctx.lineTo(-8, -7); ctx.closePath(); ctx.fill();
     ctx.restore(); ctx.fillText(ns, x + 10, y - 8);
   }
+}
+// mission items (lat/lon, or local ENU from home) and the envelope (ENU from home) in local ENU
+const EARTH_RADIUS_M = 6378137;
+function homeLocal(d) { return d.home ? [d.home.x, d.home.y] : [0, 0]; }
+function itemLocal(d, item) {
+  const [hx, hy] = homeLocal(d);
+  if (item.frame === 4) return [hx + item.x, hy + item.y];
+  if (!d.home || d.home.latitude === null) return null;
+  const lat0 = d.home.latitude * Math.PI / 180;
+  const north = (item.x - d.home.latitude) * Math.PI / 180 * EARTH_RADIUS_M;
+  const east = (item.y - d.home.longitude) * Math.PI / 180 * EARTH_RADIUS_M * Math.cos(lat0);
+  return [hx + east, hy + north];
+}
+function drawMissionAndFence(ctx, sx, sy, s) {
+  const d = station.drone;
+  if (!d) return;
+  const [hx, hy] = homeLocal(d);
+  const env = d.envelope;
+  if (env) {
+    ctx.strokeStyle = "rgba(248,81,73,.8)"; ctx.lineWidth = 1.5; ctx.setLineDash([6, 4]);
+    ctx.beginPath(); ctx.arc(sx(hx), sy(hy), env.max_distance * s, 0, 2 * Math.PI); ctx.stroke();
+    for (const polygon of [env.fence, ...env.exclusions]) {
+      if (!polygon.length) continue;
+      ctx.beginPath();
+      polygon.forEach(([x, y], k) => (k ? ctx.lineTo(sx(hx + x), sy(hy + y)) : ctx.moveTo(sx(hx + x), sy(hy + y))));
+      ctx.closePath(); ctx.stroke();
+    }
+    ctx.setLineDash([]);
+  }
+  const mission = d.mission;
+  if (!mission || !mission.items.length) return;
+  const points = mission.items.map((item) => itemLocal(d, item)).filter((p) => p);
+  ctx.strokeStyle = "rgba(210,153,34,.9)"; ctx.lineWidth = 1.5; ctx.beginPath();
+  points.forEach(([x, y], k) => (k ? ctx.lineTo(sx(x), sy(y)) : ctx.moveTo(sx(x), sy(y)))); ctx.stroke();
+  points.forEach(([x, y], k) => {
+    ctx.fillStyle = k === mission.current ? "#3fb950" : "#d29922";
+    ctx.beginPath(); ctx.arc(sx(x), sy(y), 6, 0, 2 * Math.PI); ctx.fill();
+    ctx.fillStyle = "#0d1117"; ctx.fillText(String(k + 1), sx(x) - 3, sy(y) + 4);
+  });
+}
+async function uploadPlan() {
+  const file = $("plan-file").files[0];
+  if (!file) { $("result").className = "result bad"; $("result").textContent = "pick a .plan file first"; return; }
+  let plan;
+  try { plan = JSON.parse(await file.text()); } catch (err) {
+    $("result").className = "result bad"; $("result").textContent = `${file.name}: not JSON (${err})`; return;
+  }
+  command("upload_plan", { plan });
 }
 function onMapClick(e) {
   if (station.role !== "operator" || !station.drone || !station.drone.pose) return;
@@ -393,6 +442,10 @@ async function start() {
   $("btn-takeoff").onclick = () => command("takeoff", { height: Number($("takeoff-height").value) });
   $("btn-land").onclick = () => { stopTeleop(); command("land"); };
   $("btn-hold").onclick = () => { stopTeleop(); command("hold"); };
+  $("btn-plan").onclick = uploadPlan;
+  $("btn-mission-start").onclick = () => { stopTeleop(); command("start_mission"); };
+  $("btn-mission-pause").onclick = () => command("pause_mission");
+  $("btn-rtl").onclick = () => { stopTeleop(); command("rtl"); };
   $("btn-reset").onclick = () => { stopTeleop(); command("reset"); };
   $("btn-land-all").onclick = () => { stopTeleop(); landAll(); };
   $("btn-mode").onclick = () => command("mode", { mode: $("mode-select").value });
