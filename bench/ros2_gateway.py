@@ -24,8 +24,7 @@ bench/results/ros2_gateway.json.
 from __future__ import annotations
 
 import argparse
-import os
-import socket
+import signal
 import subprocess
 import sys
 import threading
@@ -34,7 +33,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, TwistStamped
 from dronewrapper.msgs.mavros import ExtendedState, State
@@ -44,12 +50,9 @@ from dronewrapper.ros2 import cdr
 from dronewrapper.ros2.convert import ROS_TYPES
 from dronewrapper.ros2.names import topic_key
 from dronewrapper.ros2.typehash import type_hash
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
-from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
-CLK_TCK = os.sysconf("SC_CLK_TCK")
 NS = "drone"
 TELEMETRY = [
     (registry.STATE, State),
@@ -75,11 +78,6 @@ with zenoh.open(conf) as session:
     sys.stdin.read()
 """
 """A bare relay: every sample on argv[2] put again on argv[3] (until stdin closes)."""
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
 
 
 def ros_key_of(key: str, msg_type: type) -> str:
@@ -160,15 +158,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
 
-    endpoint = f"tcp/127.0.0.1:{free_port(socket.SOCK_STREAM)}"
-    stop_router, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop_router, ready), daemon=True
-    )
-    router.start()
-    if not ready.wait(10):
+    router = LoopbackRouter()
+    if not router.start():
         print("router did not start", file=sys.stderr)
         return 1
+    endpoint = router.endpoint
     gateway = subprocess.Popen(
         [sys.executable, "-m", "dronewrapper_ros2_gateway", "--connect", endpoint,
          "--ns", NS, "--log-level", "WARNING", *args.gateway_arg],
@@ -332,16 +326,10 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         receiver.close()
         node.close()
-        gateway.terminate()
-        try:
-            gateway.wait(10)
-        except subprocess.TimeoutExpired:
-            gateway.kill()
-            gateway.wait(5)
+        stop_process(gateway, signal.SIGTERM)
         relay.stdin.close()
         relay.wait(10)
-        stop_router.set()
-        router.join(10)
+        router.stop(10)
     return 0
 
 

@@ -27,9 +27,8 @@ import threading
 import time
 from pathlib import Path
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import LoopbackRouter, percentiles, print_table, write_results
 from bench.sim_physics import cpu_percent
-from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -86,14 +85,9 @@ def _window(pid: int, client: Client, seconds: float) -> dict[str, float]:
 
 
 def process_cpu(seconds: float, render_scale: float) -> dict[str, dict[str, float]]:
-    from dronewrapper.router import router_options, run_router
-
-    router = f"tcp/127.0.0.1:{free_port()}"
-    stop, ready = threading.Event(), threading.Event()
-    threading.Thread(
-        target=run_router, args=(router_options([router]), stop, ready), daemon=True
-    ).start()
-    ready.wait(10)
+    zenoh_router = LoopbackRouter()
+    zenoh_router.start()
+    router = zenoh_router.endpoint
     drone, host = "127.77.0.10", "127.77.0.11"
     client = Client(drone, host)
     argv = [sys.executable, "-m", "dronewrapper_sim", "--aircraft", "tello", "--address", drone,
@@ -130,7 +124,7 @@ def process_cpu(seconds: float, render_scale: float) -> dict[str, dict[str, floa
         client.close()
         proc.send_signal(2)
         proc.wait(15)
-        stop.set()
+        zenoh_router.stop()
     return out
 
 

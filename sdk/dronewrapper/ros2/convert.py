@@ -17,46 +17,28 @@ from typing import Any
 
 import msgspec
 
-from dronewrapper.msgs.geometry import Point, PoseStamped, Twist, TwistStamped, Vector3
-from dronewrapper.msgs.mavros import (
-    MAV_RESULT_FAILED,
-    CommandBool,
-    CommandBoolResult,
-    CommandTOL,
-    CommandTOLResult,
-    ExtendedState,
-    ParamGet,
-    ParamGetResult,
-    ParamSet,
-    ParamSetResult,
-    ParamValue,
-    PositionTarget,
-    SetMode,
-    SetModeResult,
-    State,
-)
-from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix
-from dronewrapper.msgs.std import Header
+from dronewrapper import msgs
+from dronewrapper.msgs.mavros import MAV_RESULT_FAILED
 
 ROS_TYPES: dict[type, str] = {
-    State: "mavros_msgs/msg/State",
-    ExtendedState: "mavros_msgs/msg/ExtendedState",
-    PoseStamped: "geometry_msgs/msg/PoseStamped",
-    TwistStamped: "geometry_msgs/msg/TwistStamped",
-    NavSatFix: "sensor_msgs/msg/NavSatFix",
-    BatteryState: "sensor_msgs/msg/BatteryState",
-    Image: "sensor_msgs/msg/Image",
-    CompressedImage: "sensor_msgs/msg/CompressedImage",
-    PositionTarget: "mavros_msgs/msg/PositionTarget",
+    msgs.State: "mavros_msgs/msg/State",
+    msgs.ExtendedState: "mavros_msgs/msg/ExtendedState",
+    msgs.PoseStamped: "geometry_msgs/msg/PoseStamped",
+    msgs.TwistStamped: "geometry_msgs/msg/TwistStamped",
+    msgs.NavSatFix: "sensor_msgs/msg/NavSatFix",
+    msgs.BatteryState: "sensor_msgs/msg/BatteryState",
+    msgs.Image: "sensor_msgs/msg/Image",
+    msgs.CompressedImage: "sensor_msgs/msg/CompressedImage",
+    msgs.PositionTarget: "mavros_msgs/msg/PositionTarget",
 }
 """Our message type -> the ROS 2 message it is."""
 
 ROS_SERVICES: dict[type, str] = {
-    CommandBool: "mavros_msgs/srv/CommandBool",
-    CommandTOL: "mavros_msgs/srv/CommandTOL",
-    SetMode: "mavros_msgs/srv/SetMode",
-    ParamGet: "mavros_msgs/srv/ParamGet",
-    ParamSet: "mavros_msgs/srv/ParamSet",
+    msgs.CommandBool: "mavros_msgs/srv/CommandBool",
+    msgs.CommandTOL: "mavros_msgs/srv/CommandTOL",
+    msgs.SetMode: "mavros_msgs/srv/SetMode",
+    msgs.ParamGet: "mavros_msgs/srv/ParamGet",
+    msgs.ParamSet: "mavros_msgs/srv/ParamSet",
 }
 """Our request type -> the ROS 2 service it is."""
 
@@ -77,13 +59,13 @@ def stamp_of(time: dict[str, Any]) -> float:
     return float(time["sec"]) + float(time["nanosec"]) * 1e-9
 
 
-def header_of(header: Header) -> dict[str, Any]:
+def header_of(header: msgs.Header) -> dict[str, Any]:
     return {"stamp": time_of(header.stamp), "frame_id": header.frame_id}
 
 
 def _plain(value: Any) -> Any:
     """A Struct as a dict, recursively (headers as ROS headers, buffers left as they are)."""
-    if isinstance(value, Header):
+    if isinstance(value, msgs.Header):
         return header_of(value)
     if isinstance(value, msgspec.Struct):
         return {name: _plain(getattr(value, name)) for name in value.__struct_fields__}
@@ -92,31 +74,31 @@ def _plain(value: Any) -> Any:
 
 def to_ros(msg: Any) -> dict[str, Any]:
     """The ROS 2 value of one of our messages (a type in :data:`ROS_TYPES`)."""
-    if isinstance(msg, BatteryState):
+    if isinstance(msg, msgs.BatteryState):
         value = _plain(msg)
         value.update(temperature=math.nan, design_capacity=math.nan)
         return value
-    if isinstance(msg, PositionTarget) and msg.position is msgspec.UNSET:
-        return _plain(msgspec.structs.replace(msg, position=Point()))
+    if isinstance(msg, msgs.PositionTarget) and msg.position is msgspec.UNSET:
+        return _plain(msgspec.structs.replace(msg, position=msgs.Point()))
     return _plain(msg)
 
 
-def _header(value: dict[str, Any]) -> Header:
-    return Header(stamp=stamp_of(value["stamp"]), frame_id=value["frame_id"])
+def _header(value: dict[str, Any]) -> msgs.Header:
+    return msgs.Header(stamp=stamp_of(value["stamp"]), frame_id=value["frame_id"])
 
 
-def _point(value: dict[str, Any]) -> Point:
-    return Point(x=value["x"], y=value["y"], z=value["z"])
+def _point(value: dict[str, Any]) -> msgs.Point:
+    return msgs.Point(x=value["x"], y=value["y"], z=value["z"])
 
 
-def _vector(value: dict[str, Any]) -> Vector3:
-    return Vector3(x=value["x"], y=value["y"], z=value["z"])
+def _vector(value: dict[str, Any]) -> msgs.Vector3:
+    return msgs.Vector3(x=value["x"], y=value["y"], z=value["z"])
 
 
-def position_target(value: dict[str, Any]) -> PositionTarget:
+def position_target(value: dict[str, Any]) -> msgs.PositionTarget:
     """Our PositionTarget of a decoded mavros_msgs/PositionTarget (values as sent: the
     bridge's rules judge them)."""
-    return PositionTarget(
+    return msgs.PositionTarget(
         header=_header(value["header"]),
         coordinate_frame=value["coordinate_frame"],
         type_mask=value["type_mask"],
@@ -131,24 +113,26 @@ def position_target(value: dict[str, Any]) -> PositionTarget:
 def from_ros(msg_type: type, value: dict[str, Any]) -> Any:
     """One of our messages from its decoded ROS 2 value (the inverse of :func:`to_ros` where
     ROS has the fields; our extensions take their defaults)."""
-    if msg_type is PositionTarget:
+    if msg_type is msgs.PositionTarget:
         return position_target(value)
-    if msg_type is PoseStamped:
+    if msg_type is msgs.PoseStamped:
         pose = value["pose"]
         return msgspec.convert(
-            {"header": _header(value["header"]), "pose": pose}, PoseStamped, from_attributes=True
+            {"header": _header(value["header"]), "pose": pose},
+            msgs.PoseStamped,
+            from_attributes=True,
         )
-    if msg_type is TwistStamped:
+    if msg_type is msgs.TwistStamped:
         twist = value["twist"]
-        return TwistStamped(
+        return msgs.TwistStamped(
             header=_header(value["header"]),
-            twist=Twist(linear=_vector(twist["linear"]), angular=_vector(twist["angular"])),
+            twist=msgs.Twist(linear=_vector(twist["linear"]), angular=_vector(twist["angular"])),
         )
     fields = {k: v for k, v in value.items() if k in msg_type.__struct_fields__}
     fields["header"] = _header(value["header"])
     if "data" in fields:
         fields["data"] = memoryview(bytes(fields["data"]))
-    if msg_type is BatteryState:
+    if msg_type is msgs.BatteryState:
         fields.pop("temperature", None)
     return msgspec.convert(fields, msg_type, from_attributes=True, strict=False)
 
@@ -158,20 +142,20 @@ def from_ros(msg_type: type, value: dict[str, Any]) -> Any:
 
 def request_of(request_type: type, value: dict[str, Any]) -> Any:
     """Our request from a decoded ROS 2 service request; our rules check it (ValueError)."""
-    if request_type is ParamSet:
+    if request_type is msgs.ParamSet:
         param = value["value"]
-        return ParamSet(param_id=value["param_id"], value=param_value(param))
+        return msgs.ParamSet(param_id=value["param_id"], value=param_value(param))
     try:
         return msgspec.convert(value, request_type)
     except msgspec.ValidationError as exc:
         raise ValueError(str(exc)) from exc
 
 
-def param_value(value: dict[str, Any]) -> ParamValue:
+def param_value(value: dict[str, Any]) -> msgs.ParamValue:
     """ParamValue of a mavros_msgs/ParamValue (as MAVROS reads it: integer when non-zero)."""
     if value["integer"] != 0:
-        return ParamValue.of(int(value["integer"]))
-    return ParamValue.of(float(value["real"]))
+        return msgs.ParamValue.of(int(value["integer"]))
+    return msgs.ParamValue.of(float(value["real"]))
 
 
 def _result(code: int) -> int:
@@ -180,11 +164,11 @@ def _result(code: int) -> int:
 
 def response_of(reply: Any) -> dict[str, Any]:
     """The ROS 2 response of one of our replies."""
-    if isinstance(reply, CommandBoolResult | CommandTOLResult):
+    if isinstance(reply, msgs.CommandBoolResult | msgs.CommandTOLResult):
         return {"success": reply.success, "result": _result(reply.result)}
-    if isinstance(reply, SetModeResult):
+    if isinstance(reply, msgs.SetModeResult):
         return {"mode_sent": reply.mode_sent}
-    if isinstance(reply, ParamGetResult | ParamSetResult):
+    if isinstance(reply, msgs.ParamGetResult | msgs.ParamSetResult):
         number = reply.value.as_number()
         param = {"integer": number, "real": 0.0} if isinstance(number, int) else {"integer": 0}
         if not isinstance(number, int):
@@ -196,8 +180,8 @@ def response_of(reply: Any) -> dict[str, Any]:
 def refusal_of(request_type: type, result: int) -> dict[str, Any]:
     """The ROS 2 response that says "refused" for a request the bridge or the gateway refused
     (``result``: a MAV_RESULT, e.g. DENIED for the lease)."""
-    if request_type in (CommandBool, CommandTOL):
+    if request_type in (msgs.CommandBool, msgs.CommandTOL):
         return {"success": False, "result": _result(result)}
-    if request_type is SetMode:
+    if request_type is msgs.SetMode:
         return {"mode_sent": False}
     return {"success": False, "value": {"integer": 0, "real": 0.0}}
