@@ -13,7 +13,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
-from dronewrapper.errors import CommandRefused, DroneError, NoData, NotConnected, Timeout
+from dronewrapper.errors import Cancelled, CommandRefused, DroneError, NoData, NotConnected, Timeout
 from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime.commander import STATE_FRESH_S, Pending
@@ -97,14 +97,23 @@ def fly(
     sleep: Callable[[float], Any],
     no_reply: Callable[[str, str, float], DroneError],
     interval: float = POLL_INTERVAL_S,
+    cancelled: Callable[[], bool] = lambda: False,
 ) -> None:
     """Step ``sequence`` until it is done, sleeping ``interval`` s between steps.
 
     Raises:
         DroneError: the sequence failed (see :func:`drone_error`).
+        Cancelled: ``cancelled()`` became true: no further step was taken. The bridge's
+            take-off or landing is one request it answers when the manoeuvre has ended, so a
+            cancel during it is seen when that reply comes.
     """
+    what = type(sequence).__name__.lower()
     try:
         while not sequence.step(clock()):
             sleep(interval)
+            if cancelled():
+                raise Cancelled(f"{what} cancelled")
     except FlightError as exc:
         raise drone_error(exc, no_reply) from None
+    if cancelled():  # set while the bridge flew it: the bridge's manoeuvre had ended first
+        raise Cancelled(f"{what} cancelled (the bridge's {what} had ended first)")

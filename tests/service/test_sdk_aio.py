@@ -81,6 +81,42 @@ def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(rig):
     assert names == ["flight_takeoff", "flight_land"]
 
 
+def test_cancelling_an_awaited_takeoff_stops_it(rig):
+    """The take-off runs on a worker thread; cancelling its await stops its steps and the
+    setpoint stream before CancelledError reaches the awaiting code. The cancel comes mid-climb,
+    while the bridge flies the take-off (one request), and is seen when its reply comes."""
+    heights: list[float] = []
+
+    async def main():
+        loop = asyncio.get_running_loop()
+        takeoff: asyncio.Task | None = None
+
+        async def cancel_takeoff() -> None:
+            takeoff.cancel()
+            await asyncio.sleep(0)  # the task's wake-up runs first (FIFO): it sets the cancel
+
+        def cancel_mid_climb() -> None:
+            heights.append(rig.pilot.z)
+            asyncio.run_coroutine_threadsafe(cancel_takeoff(), loop).result(timeout=30)
+
+        async with Drone(**rig.options()) as drone:
+            rig.run(TELEMETRY_PERIOD_S)
+            rig.at(0.5, cancel_mid_climb)  # while the bridge flies the take-off
+            takeoff = asyncio.create_task(drone.takeoff(h=2.0, timeout=20))
+            with pytest.raises(asyncio.CancelledError):
+                await takeoff
+            stopped_at, height = rig.bus.clock(), rig.pilot.z
+            assert drone.commanding is None
+            rig.run(1.0)
+            return stopped_at, height
+
+    stopped_at, height = run(main())
+    # the bridge's take-off is one request: it runs to its end, then the cancel is seen
+    assert heights[0] < 1.0 and height == pytest.approx(2.0, abs=0.1)
+    assert rig.pilot.setpoints(since=stopped_at + 1e-9) == []  # nothing streamed after
+    assert [name for _, name in rig.pilot.calls] == ["flight_takeoff"]
+
+
 def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(rig):
     async def main():
         async with Drone(**rig.options()) as drone:
