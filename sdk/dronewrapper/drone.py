@@ -234,7 +234,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             self._streamer.link(matching)
 
     def _publish_setpoint(self, target: PositionTarget) -> None:
-        self._setpoints.put(target, attachment=self._attachment)
+        sent = self.clock.time()  # the send time: the bridges' late-setpoint rule
+        self._setpoints.put(target, attachment=commander_attachment(self.commander, sent))
 
     # ------------------------------------------------------------------ lifecycle
 

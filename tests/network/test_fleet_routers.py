@@ -177,13 +177,8 @@ def test_a_command_reaches_only_its_drone_and_all_land(flight):
     assert flight["landed"]["ok"], flight["landed"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a bridge judges a setpoint's freshness by its arrival (its stamp is the source "
-    "frame's capture time, kept on every repetition): setpoints held in the routers' TCP "
-    "stream during a cut arrive in a burst once it is restored and are flown (docs/fleet.md, "
-    "'A cut link')",
-)
 def test_a_command_withdrawn_during_a_cut_never_flies(flight):
+    """The routers' TCP stream holds the setpoints sent during the cut and delivers them in a
+    burst; the bridge refuses those that arrive late after their sending (docs/fleet.md)."""
     after = flight["after"]
     assert after["max_dx"] < 0.5, after  # the withdrawn command (3 m east) never flew

@@ -295,7 +295,7 @@ def _sent(rig: StationRig, velocity: bool, what: str) -> PositionTarget:
     arrived = threading.Event()  # set by the publication itself (the fake bus delivers at once)
     sub = rig.bus.subscribe(
         registry.SETPOINT_RAW_LOCAL.key("drone"),
-        lambda _key, _payload: newest() is not None and arrived.set(),
+        lambda _key, _payload, *_: newest() is not None and arrived.set(),
     )
     try:
         if newest() is None:

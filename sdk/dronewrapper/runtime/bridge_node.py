@@ -19,7 +19,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
-from dronewrapper.runtime.caller import current_commander
+from dronewrapper.runtime.caller import current_commander, current_sent_at
 from dronewrapper.runtime.core_driver import CoreDriver, PureCore
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.operation import Steps
@@ -77,8 +77,8 @@ class BridgeNode(Generic[C]):
     # ---- inputs from commanders
 
     def on_setpoint(self, target: PositionTarget) -> None:
-        """A PositionTarget from a commander (the core applies the lease)."""
-        self.driver.feed(self.core.on_setpoint, target, current_commander())
+        """A PositionTarget from a commander (the core applies the lease and the late rule)."""
+        self.driver.feed(self.core.on_setpoint, target, current_commander(), sent=current_sent_at())
 
     def on_lease(self, request: LeaseRequest) -> LeaseReply:
         """The lease service's handler."""

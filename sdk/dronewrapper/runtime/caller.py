@@ -1,36 +1,61 @@
-"""Who sent the sample or query being handled: the ``commander`` attachment.
+"""Who sent the sample or query being handled, and when: the ``commander`` attachment.
 
-The SDK attaches ``commander=NAME`` (UTF-8) to every setpoint and command it sends; the runtime
-records it around each subscriber callback and service handler, so a handler can ask
-:func:`current_commander` without changing its signature. Handlers run on the thread that
-called them, so a thread-local is enough.
+The SDK attaches ``commander=NAME`` (UTF-8) to every setpoint and command it sends; a setpoint
+also carries its send time, ``commander=NAME\nsent=SECONDS`` (the publisher's clock, Unix s),
+which the bridges' late-setpoint rule reads (:mod:`dronewrapper.runtime.setpoint_delay`). The
+runtime records both around each subscriber callback and service handler, so a handler can ask
+:func:`current_commander` and :func:`current_sent_at` without changing its signature. Handlers
+run on the thread that called them, so a thread-local is enough.
 """
 
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 from collections.abc import Iterator
 from typing import Any
 
 _PREFIX = b"commander="
+_SENT = b"\nsent="
 _MAX_NAME = 64
 _local = threading.local()
 
 
-def commander_attachment(name: str) -> bytes:
-    """The attachment naming ``name`` as the commander."""
-    return _PREFIX + name.encode()[:_MAX_NAME]
+def commander_attachment(name: str, sent: float | None = None) -> bytes:
+    """The attachment naming ``name`` as the commander; ``sent``: the publication's send time
+    (Unix s on the publisher's clock), carried by every setpoint."""
+    raw = _PREFIX + name.encode()[:_MAX_NAME]
+    if sent is not None and math.isfinite(sent):
+        raw += _SENT + f"{sent:.6f}".encode()
+    return raw
+
+
+def origin_of(attachment: Any) -> tuple[str, float | None]:
+    """(commander, send time or None) of a Zenoh attachment (``("", None)`` when none or not
+    ours; an attachment without a send time reads as before)."""
+    if attachment is None:
+        return "", None
+    raw = attachment.to_bytes() if hasattr(attachment, "to_bytes") else bytes(attachment)
+    if not raw.startswith(_PREFIX):
+        return "", None
+    body, sep, sent_text = raw[len(_PREFIX) :].rpartition(_SENT)
+    if not sep:
+        body = sent_text
+    sent: float | None = None
+    if sep:
+        try:
+            sent = float(sent_text)
+        except ValueError:
+            body, sent = raw[len(_PREFIX) :], None
+        else:
+            sent = sent if math.isfinite(sent) else None
+    return body[:_MAX_NAME].decode("utf-8", "replace"), sent
 
 
 def commander_of(attachment: Any) -> str:
     """The commander named by a Zenoh attachment (``""`` when none or not ours)."""
-    if attachment is None:
-        return ""
-    raw = attachment.to_bytes() if hasattr(attachment, "to_bytes") else bytes(attachment)
-    if not raw.startswith(_PREFIX):
-        return ""
-    return raw[len(_PREFIX) :][:_MAX_NAME].decode("utf-8", "replace")
+    return origin_of(attachment)[0]
 
 
 def current_commander() -> str:
@@ -38,12 +63,18 @@ def current_commander() -> str:
     return getattr(_local, "commander", "")
 
 
+def current_sent_at() -> float | None:
+    """The send time (Unix s, the publisher's clock) of the sample handled on this thread
+    (None if it carried none)."""
+    return getattr(_local, "sent", None)
+
+
 @contextlib.contextmanager
 def handling(attachment: Any) -> Iterator[None]:
-    """Record ``attachment``'s commander while a callback or handler runs."""
-    previous = current_commander()
-    _local.commander = commander_of(attachment)
+    """Record ``attachment``'s commander and send time while a callback or handler runs."""
+    previous = current_commander(), current_sent_at()
+    _local.commander, _local.sent = origin_of(attachment)
     try:
         yield
     finally:
-        _local.commander = previous
+        _local.commander, _local.sent = previous

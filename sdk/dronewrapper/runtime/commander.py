@@ -221,7 +221,8 @@ class Commander:
         return self.stream.next_due()
 
     def _put(self, target: PositionTarget) -> None:
-        self._setpoints.put(target, attachment=self._attachment)
+        sent = self.wall()  # the send time: the bridges' late-setpoint rule
+        self._setpoints.put(target, attachment=commander_attachment(self.name, sent))
 
     # ---- services ----
 

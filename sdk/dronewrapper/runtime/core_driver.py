@@ -15,6 +15,7 @@ asks to be resumed, or the node stops.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -24,6 +25,7 @@ from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.operation import Operation, Operations, Steps
+from dronewrapper.runtime.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
 from dronewrapper.security.lease import LeaseGate
 
 MAX_WAIT_S = 0.05
@@ -41,6 +43,8 @@ class PureCore:
         outbox: makes an empty outbox (the core's own ``Outbox`` dataclass).
         log: where a background operation's failure and the lease's changes are logged.
         lease_ttl_s: the commander lease's ttl (s); None: no lease, every commander obeyed.
+        late_setpoint_s: a setpoint arriving this much later after its sending than its
+            commander's usually do is refused (:mod:`~dronewrapper.runtime.setpoint_delay`).
     """
 
     def __init__(
@@ -50,14 +54,18 @@ class PureCore:
         log: logging.Logger,
         *,
         lease_ttl_s: float | None = None,
+        late_setpoint_s: float = DEFAULT_THRESHOLD_S,
     ) -> None:
         self.now, self.stamp = now, 0.0
         self._outbox = outbox
+        self._log = log
         self.out = outbox()
         self.operations = Operations(log)
         self._command_busy = False  # one command exchange with the aircraft at a time
         self.lease = LeaseGate(lease_ttl_s, log)
         self.commander = ""  # the lease's holder as State shows it ("": nobody)
+        self.setpoint_delay = SetpointDelay(late_setpoint_s)
+        self._late_log_at = -math.inf
 
     def _at(self, now: float, stamp: float) -> None:
         self.now, self.stamp = now, stamp
@@ -91,8 +99,21 @@ class PureCore:
 
     # ---- the commander lease
 
-    def admit_setpoint(self, commander: str) -> bool:
-        """True if a setpoint from ``commander`` may be flown now (the lease's rule)."""
+    def admit_setpoint(self, commander: str, sent: float | None = None) -> bool:
+        """True if a setpoint from ``commander``, sent at ``sent`` (its clock, Unix s; None:
+        not known), may be flown now: it did not arrive late (counted in
+        ``setpoint_delay.refused`` and logged) and the lease admits it."""
+        verdict = self.setpoint_delay.judge(commander, sent, self.now)
+        if verdict.late:
+            if self.now - self._late_log_at >= 2.0:
+                self._late_log_at = self.now
+                self._log.warning(
+                    "late setpoint from %r refused (%d so far): %.2f s later than its usual lag",
+                    commander,
+                    self.setpoint_delay.refused,
+                    verdict.excess,
+                )
+            return False
         admitted = self.lease.admit_setpoint(commander, self.now)
         self.show_commander()
         return admitted
@@ -179,14 +200,14 @@ class CoreDriver(Generic[C]):
         self._clock = clock
         self._wall = wall
 
-    def feed(self, call: Callable[..., Any], *args: Any) -> Any:
-        """Run ``call(*args, now, stamp)`` on the core under the lock, then execute its outbox
-        (outboxes are executed one at a time, in the order the core made them); service calls
-        waiting on their operations are woken when one has finished."""
+    def feed(self, call: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+        """Run ``call(*args, now, stamp, **kwargs)`` on the core under the lock, then execute
+        its outbox (outboxes are executed one at a time, in the order the core made them);
+        service calls waiting on their operations are woken when one has finished."""
         with self._executing:
             with self.cond:
                 finished = self.core.operations.finished
-                result = call(*args, self._clock(), self._wall())
+                result = call(*args, self._clock(), self._wall(), **kwargs)
                 out = self.core.take()
                 if self.core.operations.finished != finished:
                     self.cond.notify_all()

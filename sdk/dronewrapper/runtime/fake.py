@@ -32,7 +32,7 @@ import itertools
 import logging
 import threading
 from collections import Counter, defaultdict
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
@@ -61,9 +61,7 @@ class Delivered(Generic[T]):
 
 
 class _Subscription:
-    def __init__(
-        self, bus: FakeBus, keyexpr: str, on_payload: Callable[[str, bytes], None]
-    ) -> None:
+    def __init__(self, bus: FakeBus, keyexpr: str, on_payload: Callable[..., None]) -> None:
         self.keyexpr = zenoh.KeyExpr(keyexpr)
         self.on_payload = on_payload
         self.active = True
@@ -108,6 +106,7 @@ class FakeBus:
         self._subs: list[_Subscription] = []
         self._listeners: list[_MatchingListener] = []
         self._gap = False
+        self._held: list[tuple[str, bytes, bytes | None]] | None = None
         self._queue: list[tuple[float, int, str, bytes]] = []
         self._seq = itertools.count()
         self._services: dict[str, Callable[[bytes], Any]] = {}
@@ -115,21 +114,39 @@ class FakeBus:
         """The liveliness tokens declared on the bus (``{ns}/alive/{name}``, see
         :meth:`FakeNode.announce`)."""
 
-    def subscribe(self, keyexpr: str, on_payload: Callable[[str, bytes], None]) -> _Subscription:
+    def subscribe(self, keyexpr: str, on_payload: Callable[..., None]) -> _Subscription:
         sub = _Subscription(self, keyexpr, on_payload)
         self._subs.append(sub)
         self._matching_changed()
         return sub
 
-    def put(self, key: str, payload: bytes) -> None:
-        """Deliver ``payload`` on concrete ``key`` to every matching subscriber, now (nothing
-        during a :meth:`link_gap`)."""
+    def put(self, key: str, payload: bytes, attachment: bytes | None = None) -> None:
+        """Deliver ``payload`` (and its ``attachment``) on concrete ``key`` to every matching
+        subscriber, now (nothing during a :meth:`link_gap`; later in a :meth:`held` one)."""
         if self._gap:
+            return
+        if self._held is not None:
+            self._held.append((key, payload, attachment))
             return
         ke = zenoh.KeyExpr(key)
         for sub in list(self._subs):
             if sub.active and sub.keyexpr.intersects(ke):
-                sub.on_payload(key, payload)
+                if attachment is None:
+                    sub.on_payload(key, payload)
+                else:
+                    sub.on_payload(key, payload, attachment)
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """A stalled link that holds what is published (a router's TCP stream during a cut):
+        nothing is delivered inside, everything in a burst, in order, on leaving."""
+        self._held = []
+        try:
+            yield
+        finally:
+            held, self._held = self._held, None
+            for key, payload, attachment in held:
+                self.put(key, payload, attachment)
 
     def matched(self, key: str) -> bool:
         """True while at least one active subscription matches ``key`` (none in a gap)."""
@@ -205,12 +222,12 @@ class FakePublisher(Generic[T]):
         self._bus = bus
 
     def put(self, msg: T, *, attachment: bytes | None = None) -> None:
-        """Deliver ``msg`` now (``attachment`` is accepted as on the real bus, not carried)."""
+        """Deliver ``msg`` now, with ``attachment`` as on the real bus."""
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
         self.count += 1
         self._bus.published[self.key].append(Delivered(self._bus.clock(), msg))
-        self._bus.put(self.key, codec.encode(msg))
+        self._bus.put(self.key, codec.encode(msg), attachment)
 
     def watched(self) -> bool:
         """True while a subscriber on the bus matches this key (as the real one's matching
@@ -309,7 +326,9 @@ class FakeNode:
     ) -> _Subscription:
         keyexpr = key or topic.key(self.ns, **parts)
         deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
-        return self.bus.subscribe(keyexpr, lambda where, payload: deliver(where, payload, None))
+        return self.bus.subscribe(
+            keyexpr, lambda where, payload, attachment=None: deliver(where, payload, attachment)
+        )
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)

@@ -57,11 +57,14 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     upload_fence: bool = True  # give the autopilot the envelope as its fence once home is known
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
     gcs_url: str = ""  # udp:HOST:PORT of a ground station (QGC 14550) to forward MAVLink to
     gcs_over_zenoh: bool = False  # also forward on {ns}/mavlink/* (dronewrapper mavlink-forward)
 
     def __post_init__(self) -> None:
+        if not 0 < self.late_setpoint_s <= 5:
+            raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
         if self.stream_rate_hz < 20.0:
             raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")

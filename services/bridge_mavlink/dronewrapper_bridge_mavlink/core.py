@@ -79,7 +79,9 @@ class BridgeCore(PureCore):
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
         lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
-        super().__init__(now, Outbox, log, lease_ttl_s=lease_ttl_s)
+        super().__init__(
+            now, Outbox, log, lease_ttl_s=lease_ttl_s, late_setpoint_s=config.late_setpoint_s
+        )
         self.config = config
         self.limits = config.limits
         self.failsafe = Failsafe(config.failsafe_config())
@@ -376,11 +378,19 @@ class BridgeCore(PureCore):
 
     # ------------------------------------------------------------------ setpoints
 
-    def on_setpoint(self, target: PositionTarget, commander: str, now: float, stamp: float) -> None:
-        """A PositionTarget from ``commander``: refused unless the lease admits it, then
+    def on_setpoint(
+        self,
+        target: PositionTarget,
+        commander: str,
+        now: float,
+        stamp: float,
+        sent: float | None = None,
+    ) -> None:
+        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s): refused
+        if it arrives late (:meth:`admit_setpoint`) or the lease refuses it, then
         validated, remembered and forwarded at once."""
         self._at(now, stamp)
-        if not self.admit_setpoint(commander):
+        if not self.admit_setpoint(commander, sent):
             return
         try:
             kind = validate(target, self.limits)

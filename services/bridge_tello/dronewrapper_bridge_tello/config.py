@@ -55,10 +55,13 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     battery_rate_hz: float = 1.0
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
     scale: StickScale = msgspec.field(default_factory=StickScale)
     envelope: Envelope = msgspec.field(default_factory=lambda: TELLO_ENVELOPE)  # envelope.py
 
     def __post_init__(self) -> None:
+        if not 0 < self.late_setpoint_s <= 5:
+            raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
         if not 20.0 <= self.rc_rate_hz <= 50.0:
             raise ValueError(f"rc_rate_hz must be in [20, 50], got {self.rc_rate_hz}")

@@ -253,7 +253,10 @@ class Gateway:
         except (KeyError, TypeError, ValueError) as exc:
             self._refuse("setpoint", f"malformed PositionTarget: {exc}")
             return False
-        self._setpoint_publishers[ns].put(target, attachment=commander_attachment(self.commander))
+        sent = self.node.clock.time()  # the send time: the bridges' late-setpoint rule
+        self._setpoint_publishers[ns].put(
+            target, attachment=commander_attachment(self.commander, sent)
+        )
         return True
 
     def serve(self, ns: str, entity: Entity, payload: bytes | None) -> dict[str, Any]:
