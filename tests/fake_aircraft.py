@@ -26,13 +26,21 @@ tests/fake_bridge.py (``FakeBridge``: a real Zenoh router, ticked by its own thr
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from dronewrapper import msgs
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import (
+    CANCELLED,
+    TOO_LATE,
+    CancelRequest,
+    FlightResult,
+    LandRequest,
+    TakeoffRequest,
+)
 from dronewrapper.msgs.flight import REFUSED as STEP_REFUSED
-from dronewrapper.msgs.flight import TOO_LATE, FlightResult, LandRequest, TakeoffRequest
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -115,6 +123,8 @@ class FakeAircraft:
         self.mode = "OFFBOARD" if flying else ground_mode
         self.goal = self.z  # the altitude it flies to while armed (m)
         self.landing = False
+        self.cancelled = False  # a cancel ends the waiting take-off or landing
+        self.cancel_heard = threading.Event()  # set by every cancel (from another thread)
         self.streamed = False  # a setpoint has arrived
         self.z_at_first_velocity: float | None = None  # altitude when the first one arrived
         self.refuse = refuse if refuse is not None else {}
@@ -144,6 +154,7 @@ class FakeAircraft:
             "land": (registry.LAND, self._land),
             "flight_takeoff": (registry.FLIGHT_TAKEOFF, self._flight_takeoff),
             "flight_land": (registry.FLIGHT_LAND, self._flight_land),
+            "flight_cancel": (registry.FLIGHT_CANCEL, self._flight_cancel),
             "param_get": (registry.PARAM_GET, self._param_get),
             "param_set": (registry.PARAM_SET, self._param_set),
         }
@@ -232,12 +243,20 @@ class FakeAircraft:
         mode = FLIGHT_MODES.get(self.autopilot, self.mode)
         start, target = self.z, self.z + req.height
         self.mode, self.armed, self.goal = mode, True, target
+        self.cancelled = False
         self.wait(
-            lambda: self.z >= target - req.tolerance or not self.armed or self.mode != mode,
+            lambda: (
+                self.cancelled
+                or self.z >= target - req.tolerance
+                or not self.armed
+                or self.mode != mode
+            ),
             req.timeout,
         )
         self.publish(self.clock())
         text = f" ({self.last_text})" if self.last_text else ""
+        if self.cancelled:
+            return FlightResult(failure=CANCELLED, message="take-off cancelled; holding here")
         if not self.armed:
             refusal = f"the autopilot disarmed{text}"
         elif self.mode != mode:
@@ -261,11 +280,22 @@ class FakeAircraft:
         self.mode, self.landing = "AUTO.LAND", True
         if self.landing_speed == math.inf:
             self._touch_down()
-        self.wait(lambda: not self.armed, req.timeout)
+        self.cancelled = False
+        self.wait(lambda: self.cancelled or not self.armed, req.timeout)
         self.publish(self.clock())  # the reply comes after the telemetry that shows it
+        if self.cancelled:
+            return FlightResult(failure=CANCELLED, message="landing cancelled; holding here")
         if self.armed:
             return FlightResult(failure=TOO_LATE, message=f"not landed within {req.timeout:g} s")
         return FlightResult(success=True, message="on the ground and disarmed")
+
+    def _flight_cancel(self, req: CancelRequest) -> FlightResult:
+        """End the waiting take-off or landing; hold the altitude it is at."""
+        self._command("flight_cancel", req)
+        self.cancelled, self.landing, self.goal = True, False, self.z
+        self.mode = FLIGHT_MODES.get(self.autopilot, self.mode)
+        self.cancel_heard.set()
+        return FlightResult(success=True, message="cancelled; holding here")
 
     def _param_get(self, req: msgs.ParamGet) -> msgs.ParamGetResult:
         self.requests.append(req)

@@ -47,6 +47,7 @@ from dronewrapper.inputs import Getters, Inputs
 from dronewrapper.missions import MissionsMixin
 from dronewrapper.motion import Motion
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import CancelRequest
 from dronewrapper.msgs.mavros import (
     PositionTarget,
     State,
@@ -356,6 +357,14 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     def _fly(self, sequence: Takeoff | Landing, cancel: threading.Event | None) -> None:
         """Step ``sequence`` to its end, waiting on the node's clock (or until ``cancel``)."""
         clock, cancel = self.clock, cancel or threading.Event()
+        ended = threading.Event()
+        watcher = threading.Thread(
+            target=flying.cancel_on,
+            args=(cancel, ended, self._ask_cancel),
+            name="dronewrapper-cancel",
+            daemon=True,
+        )
+        watcher.start()
         try:
             flying.fly(
                 sequence,
@@ -367,3 +376,10 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         except Cancelled:
             self.stop_commanding()
             raise
+        finally:
+            ended.set()
+            watcher.join(timeout=self.service_timeout + 1.0)
+
+    def _ask_cancel(self) -> None:
+        """Ask the bridge to end its running take-off or landing (it holds where it is)."""
+        self._ask(registry.FLIGHT_CANCEL, CancelRequest(reason="the caller cancelled"), 2.0)

@@ -9,6 +9,8 @@ service calls), and :func:`fly` steps them on the caller's thread until done. A
 
 from __future__ import annotations
 
+import logging
+import threading
 from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
@@ -26,6 +28,8 @@ from dronewrapper.runtime.flight import (
     TooLate,
 )
 from dronewrapper.runtime.latest import Latest
+
+log = logging.getLogger("dronewrapper")
 
 POLL_INTERVAL_S = 0.02
 """How often a blocking take-off or landing looks at the telemetry (s)."""
@@ -90,6 +94,25 @@ def drone_error(exc: FlightError, no_reply: Callable[[str, str, float], DroneErr
     return NotConnected(str(exc))
 
 
+CANCEL_POLL_S = 0.05
+"""How often the cancel watcher looks whether the flight has ended (s, real time)."""
+
+
+def cancel_on(cancel: threading.Event, ended: threading.Event, ask: Callable[[], Any]) -> None:
+    """Once ``cancel`` is set before ``ended``, ``ask()`` the bridge to cancel (its running
+    take-off or landing ends at once and the aircraft holds where it is); a failed ask is
+    logged. Runs on its own thread, since the flight's thread waits on the bridge's reply."""
+    while not ended.is_set():
+        if cancel.wait(CANCEL_POLL_S):
+            if ended.is_set():
+                return
+            try:
+                ask()
+            except Exception as exc:  # no bridge, refused: the flight's own error says more
+                log.warning("the bridge did not take the cancel: %s", exc)
+            return
+
+
 def fly(
     sequence: FlightSequence,
     *,
@@ -103,9 +126,9 @@ def fly(
 
     Raises:
         DroneError: the sequence failed (see :func:`drone_error`).
-        Cancelled: ``cancelled()`` became true: no further step was taken. The bridge's
-            take-off or landing is one request it answers when the manoeuvre has ended, so a
-            cancel during it is seen when that reply comes.
+        Cancelled: ``cancelled()`` became true: no further step was taken (the bridge's
+            take-off or landing, one request, is ended by the cancel sent meanwhile:
+            :func:`cancel_on`).
     """
     what = type(sequence).__name__.lower()
     try:
@@ -114,6 +137,8 @@ def fly(
             if cancelled():
                 raise Cancelled(f"{what} cancelled")
     except FlightError as exc:
+        if cancelled():  # the bridge ended it on our cancel
+            raise Cancelled(f"{what} cancelled") from None
         raise drone_error(exc, no_reply) from None
     if cancelled():  # set while the bridge flew it: the bridge's manoeuvre had ended first
         raise Cancelled(f"{what} cancelled (the bridge's {what} had ended first)")

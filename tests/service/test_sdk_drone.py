@@ -346,16 +346,25 @@ def test_every_getter_says_its_age_and_stale_telemetry_is_warned_once(rig, caplo
     assert len(stale) == 1 and "drone/mavros/local_position/pose" in stale[0].message
 
 
-def test_a_cancelled_takeoff_takes_no_further_step_and_stops_commanding(rig):
+def test_a_cancelled_takeoff_stops_the_climb_at_once_and_stops_commanding(rig):
     drone = rig.drone
     cancel = threading.Event()
-    rig.at(0.4, cancel.set)  # another thread's cancel, mid-climb
+    heights: list[float] = []
+
+    def cancel_mid_climb() -> None:  # another thread's cancel; bus time stands still until
+        heights.append(rig.pilot.z)  # the SDK's cancel has reached the bridge
+        cancel.set()
+        assert rig.pilot.cancel_heard.wait(10), "the SDK sent no cancel"
+
+    rig.at(0.4, cancel_mid_climb)
     start = rig.bus.clock()
     with pytest.raises(Cancelled, match="takeoff cancelled"):
         drone.takeoff(h=2.0, timeout=20, cancel=cancel)
-    # the bridge's take-off is one request: the cancel is seen when its reply comes
-    assert rig.bus.clock() - start == pytest.approx(1.9, abs=0.1)
-    assert drone.commanding is None and names(rig) == ["flight_takeoff"]
-    stopped = rig.bus.clock()
+    # the bridge's take-off ended on the cancel, mid-climb, not at its height
+    assert rig.bus.clock() - start == pytest.approx(0.4, abs=0.1)
+    assert drone.commanding is None and names(rig) == ["flight_takeoff", "flight_cancel"]
+    stopped, z = rig.bus.clock(), rig.pilot.z
+    assert z == pytest.approx(heights[0], abs=0.06) and z < 0.6
     rig.run(1.0)
+    assert rig.pilot.z == pytest.approx(z)  # the climb stopped: it holds there
     assert rig.pilot.setpoints(since=stopped + 1e-9) == []

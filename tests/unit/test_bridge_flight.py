@@ -23,13 +23,16 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.flight import (
+    CANCELLED,
     NO_POSITION,
     NOT_READY,
     REFUSED,
     TOO_LATE,
+    CancelRequest,
     LandRequest,
     TakeoffRequest,
 )
+from dronewrapper.runtime.core_driver import cancel_steps
 from dronewrapper_bridge_mavlink import flight
 
 SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
@@ -233,3 +236,59 @@ def test_a_take_off_above_the_envelope_is_refused_before_anything_is_sent():
     assert (reply.success, reply.failure, reply.step) == (False, REFUSED, "takeoff")
     assert "12 m above the envelope's 10 m" in reply.message
     assert [c for c in rig.sent_since(-1.0, "COMMAND_LONG") if c.command != 511] == []
+
+
+def climb_to(rig: CoreRig, ap: Autopilot, z: float, limit: float = 20.0) -> None:
+    end = rig.now + limit
+    while ap.z < z and rig.now < end:
+        ap.answer()
+        rig.run(DT)
+        ap.fly()
+    assert ap.z >= z
+
+
+@pytest.mark.parametrize("autopilot", ["px4", ARDUPILOT])
+def test_a_cancel_ends_the_take_off_at_once_and_holds_where_it_is(autopilot):
+    rig, ap = grounded() if autopilot == "px4" else grounded(autopilot=ARDUPILOT)
+    if autopilot == ARDUPILOT:
+        rig.custom_mode = 5
+    takeoff = rig.call(flight.takeoff_to, TakeoffRequest(height=3.0))
+    climb_to(rig, ap, 1.0)
+    cancelled_at, z = rig.now, ap.z
+    reply = rig.call(cancel_steps, CancelRequest(reason="the user's cancel")).result()
+    assert reply.success and reply.message == "take-off cancelled; holding here"
+    assert takeoff.done and takeoff.result().failure == CANCELLED
+    assert "the user's cancel" in takeoff.result().message
+    for _ in range(round(2.0 / DT)):
+        ap.answer()
+        rig.run(DT)
+        ap.fly()
+    held = rig.setpoints(since=cancelled_at)
+    assert held and all(-sp.z == pytest.approx(z, abs=0.06) for sp in held)
+    if autopilot == "px4":  # the bus autopilot follows the hold: the climb stopped
+        assert ap.z == pytest.approx(z, abs=0.06)
+    nothing = rig.call(cancel_steps, CancelRequest()).result()
+    assert not nothing.success and "nothing to cancel" in nothing.message
+
+
+def test_a_cancelled_landing_holds_in_offboard():
+    rig, ap = grounded()
+    ap.run(rig.call(flight.takeoff_to, TakeoffRequest(height=2.0)))
+    landing = rig.call(flight.land_here, LandRequest())
+    for _ in range(round(0.6 / DT)):
+        ap.answer()
+        rig.run(DT)
+        ap.fly()
+    z = ap.z
+    assert 1.0 < z < 1.9
+    cancelled_at = rig.now
+    rig.call(cancel_steps, CancelRequest())
+    assert landing.done and landing.result().failure == CANCELLED
+    for _ in range(round(2.0 / DT)):
+        ap.answer()
+        rig.run(DT)
+        ap.fly()
+    assert rig.commands(SET_MODE, since=cancelled_at), "OFFBOARD was not asked for"
+    assert rig.custom_mode == OFFBOARD  # the bus autopilot entered it
+    held = rig.setpoints(since=cancelled_at)
+    assert held and all(-sp.z == pytest.approx(z, abs=0.06) for sp in held)

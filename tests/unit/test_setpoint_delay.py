@@ -37,11 +37,22 @@ def test_a_burst_held_during_a_cut_is_refused():
     verdicts = [rule.judge("ada", s + OFFSET, 4.0) for s in sent]
     lags = [v.excess for v in verdicts]
     late = [v.late for v in verdicts]
-    # everything sent more than 0.3 s (+ the link's delay) before the end is refused
-    assert all(late[i] for i, s in enumerate(sent) if 4.0 - s > 0.31 + 1e-9)
-    assert not any(late[i] for i, s in enumerate(sent) if 4.0 - s < 0.3)
-    assert max(lags) == pytest.approx(2.0 - 0.01, abs=1e-6)
-    assert rule.refused == sum(late)
+    # all of it: the tail, sent less than 0.3 s before it arrived, was queued behind the rest
+    assert all(late)
+    assert max(lags) == pytest.approx(2.0 - 0.01, abs=1e-6) and min(lags) < 0.3
+    assert rule.refused == len(sent)
+    # the stream goes on: fresh setpoints fly again 0.3 s after the burst
+    after = steady(rule, 4.0, 1.0, 0.01)
+    assert all(v.late for v in after[:9]) and not any(v.late for v in after[10:])
+
+
+def test_after_a_late_setpoint_only_one_sent_the_threshold_after_its_arrival_flies():
+    rule = SetpointDelay(0.3)
+    steady(rule, 0.0, 2.0, 0.01)
+    assert rule.judge("ada", 2.0 + OFFSET, 2.5).late  # waited 0.49 s more than usual
+    assert rule.judge("ada", 2.45 + OFFSET, 2.5).late  # queued behind it (waited 0.04 s)
+    assert rule.judge("ada", 2.7 + OFFSET, 2.71).late  # fresh, but too soon after it
+    assert not rule.judge("ada", 2.8 + OFFSET, 2.81).late  # 0.3 s after: obeyed
 
 
 def test_a_long_silence_keeps_the_minimum():

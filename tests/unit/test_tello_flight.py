@@ -6,8 +6,17 @@ import pytest
 from tello_core_rig import TelloRig
 
 from dronewrapper.envelope import Envelope
-from dronewrapper.msgs.flight import NOT_READY, REFUSED, TOO_LATE, LandRequest, TakeoffRequest
+from dronewrapper.msgs.flight import (
+    CANCELLED,
+    NOT_READY,
+    REFUSED,
+    TOO_LATE,
+    CancelRequest,
+    LandRequest,
+    TakeoffRequest,
+)
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper.runtime.core_driver import cancel_steps
 from dronewrapper_bridge_tello import flight
 
 
@@ -85,3 +94,16 @@ def test_a_take_off_above_the_envelope_is_refused_before_anything_is_sent():
     reply = rig.call(flight.takeoff_to, TakeoffRequest(height=4.0))
     assert (reply.success, reply.failure, reply.step) == (False, REFUSED, "takeoff")
     assert "4 m above the envelope's 3 m" in reply.message and rig.commands(since) == []
+
+
+def test_a_cancel_mid_climb_ends_the_take_off_and_sends_stop():
+    rig = connected()
+    rig.delays["up 200"] = 3.0  # the move to the height takes 3 s
+    takeoff = rig.start(flight.takeoff_to, TakeoffRequest(height=3.0))
+    rig.run(10.0, until=lambda: "up 200" in rig.commands())
+    rig.run(1.0)
+    cancelled_at = rig.now
+    reply = rig.call(cancel_steps, CancelRequest())
+    assert reply.success and takeoff.done and takeoff.result().failure == CANCELLED
+    rig.run(1.0)
+    assert rig.commands(since=cancelled_at) == ["stop"]

@@ -21,7 +21,10 @@ NOT_READY = "not_ready"
 """Nothing to start from: the aircraft is not connected."""
 NO_POSITION = "no_position"
 """No local position has arrived, so there is no point to take off from."""
-FAILURES = (REFUSED, TOO_LATE, NOT_READY, NO_POSITION)
+CANCELLED = "cancelled"
+"""A cancel request ended it (``{ns}/dronewrapper/cancel``): the aircraft holds where it is."""
+
+FAILURES = (REFUSED, TOO_LATE, NOT_READY, NO_POSITION, CANCELLED)
 
 
 class TakeoffRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
@@ -37,6 +40,17 @@ class LandRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, froz
     """Land where the aircraft is; done once on the ground and disarmed, within ``timeout`` s."""
 
     timeout: float = 60.0
+
+
+class CancelRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
+    """End the running take-off or landing at once; the aircraft holds where it is.
+    ``reason`` (for the log, at most 200 characters) says why."""
+
+    reason: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.reason, str) or len(self.reason) > 200:
+            raise ValueError("reason must be a string of at most 200 characters")
 
 
 class FlightResult(msgspec.Struct, kw_only=True, frozen=True):

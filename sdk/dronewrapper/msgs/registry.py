@@ -19,7 +19,7 @@ from typing import Any, Generic, TypeVar
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
-from dronewrapper.msgs.flight import FlightResult, LandRequest, TakeoffRequest
+from dronewrapper.msgs.flight import CancelRequest, FlightResult, LandRequest, TakeoffRequest
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavlink import MavlinkFrames
@@ -426,6 +426,14 @@ FLIGHT_LAND = Service(
     reply=FlightResult,
     server="bridge",
     doc="land here; the reply comes once on the ground and disarmed (or failed)",
+)
+FLIGHT_CANCEL = Service(
+    "{ns}/dronewrapper/cancel",
+    request=CancelRequest,
+    reply=FlightResult,
+    server="bridge",
+    doc="end the running take-off or landing at once (its reply: cancelled); the "
+    "aircraft holds where it is",
 )
 
 # ---- missions, home and the safety envelope (MAVROS's mission/geofence/home keys) ----

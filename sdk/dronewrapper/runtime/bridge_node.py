@@ -20,7 +20,7 @@ from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import current_commander, current_sent_at
-from dronewrapper.runtime.core_driver import CoreDriver, PureCore
+from dronewrapper.runtime.core_driver import CoreDriver, PureCore, cancel_steps
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.operation import Steps
 from dronewrapper.runtime.rate import Ratekeeper
@@ -33,6 +33,7 @@ Operation = Callable[[Any, Any], Steps]
 COMMANDS: dict[Service[Any, Any], str] = {
     registry.FLIGHT_TAKEOFF: "takeoff",
     registry.FLIGHT_LAND: "land",
+    registry.FLIGHT_CANCEL: "cancel",
     registry.ARMING: "arming",
     registry.TAKEOFF: "takeoff",
     registry.LAND: "land",
@@ -94,6 +95,7 @@ class BridgeNode(Generic[C]):
         refusal gives it) is refused unless from the lease holder."""
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
         commands = {**COMMANDS, **(guarded or {})}
+        services = {registry.FLIGHT_CANCEL: cancel_steps, **services}
         for service, steps in services.items():
             self.node.serve(service, self._handler(steps, commands.get(service, "")))
         self.node.serve(registry.COMMAND_LEASE, self.on_lease)

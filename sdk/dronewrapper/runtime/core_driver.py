@@ -21,6 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
+from dronewrapper.msgs.flight import CANCELLED, CancelRequest, FlightResult
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.errors import ServiceError
@@ -162,6 +163,40 @@ class PureCore:
     def cancel(self, op: Operation) -> None:
         """Abandon ``op`` (the node is stopping): its cleanup runs (a command slot is freed)."""
         self.operations.cancel(op)
+
+    # ---- a commander's cancel
+
+    def cancel_flight(self, request: CancelRequest) -> FlightResult:
+        """End the running take-off or landing (:data:`CANCELLABLE`) at once, each
+        answered ``cancelled``, and hold where the aircraft is (:meth:`hold_here`)."""
+        running = [
+            op for op in self.operations.pending if not op.background and op.name in CANCELLABLE
+        ]
+        if not running:
+            return FlightResult(message="nothing to cancel: no take-off or landing runs")
+        names = ", ".join(CANCELLABLE[op.name] for op in running)
+        why = f": {request.reason}" if request.reason else ""
+        for op in running:
+            message = f"{CANCELLABLE[op.name]} cancelled{why}; holding here"
+            self.operations.interrupt(op, FlightResult(failure=CANCELLED, message=message))
+        self._log.warning("%s cancelled%s; holding here", names, why)
+        self.hold_here()
+        return FlightResult(success=True, message=f"{names} cancelled; holding here")
+
+    def hold_here(self) -> None:
+        """Hold where the aircraft is now (the core's own way: a position hold, a hover)."""
+        raise NotImplementedError
+
+
+CANCELLABLE = {"takeoff_to": "take-off", "land_here": "landing"}
+"""The waiting operations a cancel ends (their steps' names: both bridges' ``flight``
+module), and how its reply names them."""
+
+
+def cancel_steps(core: PureCore, request: CancelRequest) -> Steps:
+    """The ``{ns}/dronewrapper/cancel`` service's operation: done at once."""
+    return core.cancel_flight(request)
+    yield 0.0
 
 
 def _refused(error: ServiceError) -> Steps:

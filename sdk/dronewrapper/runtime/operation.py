@@ -54,6 +54,11 @@ class Operation:
         if not self.done:
             self.done, self.error = True, ServiceError("the bridge is stopping", "unavailable")
 
+    def interrupt(self, reply: Any) -> None:
+        """End it now with ``reply`` (a cancel): its cleanup runs (a command slot is released)."""
+        self._steps.close()
+        self.done, self.reply, self.error = True, reply, None
+
     def result(self) -> Any:
         """The reply; raises the operation's error."""
         if self.error is not None:
@@ -93,6 +98,11 @@ class Operations:
     def cancel(self, op: Operation) -> None:
         """Abandon ``op`` (the node is stopping): its cleanup runs."""
         op.cancel()
+        self._prune()
+
+    def interrupt(self, op: Operation, reply: Any) -> None:
+        """End ``op`` now with ``reply`` (a cancel): its cleanup runs."""
+        op.interrupt(reply)
         self._prune()
 
     def _prune(self) -> None:

@@ -4,8 +4,11 @@ Every setpoint publication carries its send time on the publisher's clock (the a
 :mod:`dronewrapper.runtime.caller`). A setpoint's lag is (arrival on the bridge's clock - send
 time on the publisher's): the two clocks' offset plus the link's delay. The smallest recent lag
 of a commander is its offset plus the link's usual delay, so a setpoint whose lag exceeds that
-minimum by more than ``threshold_s`` has waited on the way and is refused. The rule needs no
-synchronised clocks.
+minimum by more than ``threshold_s`` has waited on the way and is refused. A late setpoint
+means the link has just stalled, and what was queued behind it arrives in a burst, its tail
+having waited but little: so the commander is obeyed again only with setpoints sent at least
+``threshold_s`` after the late one arrived (on the commander's clock: that arrival minus the
+smallest lag). The rule needs no synchronised clocks.
 
 The minimum is taken over the last ``window_s`` seconds of the commander's stream, a silence
 counting for at most ``MAX_GAP_S``: a cut link never empties it, so the burst after a long cut
@@ -70,6 +73,9 @@ class SetpointDelay:
         # its last arrival
         self._lags: dict[str, deque[tuple[float, float]]] = {}
         self._stream: dict[str, tuple[float, float]] = {}
+        # per commander: when a late setpoint arrived, on the commander's clock, plus
+        # threshold_s: what was sent before is refused (the burst queued behind it)
+        self._queued_before: dict[str, float] = {}
 
     def min_lag(self, commander: str) -> float | None:
         """``commander``'s smallest recent lag (s), None before its first timed setpoint."""
@@ -86,16 +92,22 @@ class SetpointDelay:
         if lags is None:
             lags = deque()
             if len(self._lags) >= MAX_COMMANDERS:
-                del self._stream[next(iter(self._lags))]
-                del self._lags[next(iter(self._lags))]
+                oldest = next(iter(self._lags))
+                del self._stream[oldest], self._lags[oldest]
+                self._queued_before.pop(oldest, None)
         self._lags[commander] = lags  # the most recently heard last
         elapsed, last = self._stream.get(commander, (0.0, arrival))
         elapsed += min(max(arrival - last, 0.0), MAX_GAP_S)
         self._stream[commander] = (elapsed, arrival)
         while lags and lags[0][0] < elapsed - self.window_s:
             lags.popleft()
+            self._queued_before.pop(commander, None)  # judged against a forgotten lag
         excess = lag - lags[0][1] if lags else 0.0
         late = excess > self.threshold_s
+        if late:
+            self._queued_before[commander] = arrival - lags[0][1] + self.threshold_s
+        elif sent < self._queued_before.get(commander, -math.inf):
+            late = True  # queued behind a late one, or too soon after it
         while lags and lags[-1][1] >= lag:
             lags.pop()
         lags.append((elapsed, lag))

@@ -24,7 +24,13 @@ import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import SEVERITY_WARNING, ExtendedState, PositionTarget, State
+from dronewrapper.msgs.mavros import (
+    SEVERITY_WARNING,
+    ExtendedState,
+    PositionTarget,
+    SetMode,
+    State,
+)
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
@@ -33,14 +39,20 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.core_driver import PureCore
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive
+from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.link_gap import gap_report
-from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, is_guided
+from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, GUIDED_MODE, is_guided
 from dronewrapper_bridge_mavlink.operations import failsafe_action
 from dronewrapper_bridge_mavlink.parameters import ParamCache
-from dronewrapper_bridge_mavlink.setpoints import SetpointError, to_local_ned, validate
+from dronewrapper_bridge_mavlink.setpoints import (
+    SetpointError,
+    hold_target,
+    to_local_ned,
+    validate,
+)
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
@@ -278,6 +290,20 @@ class BridgeCore(PureCore):
             failsafe=self.failsafe.state,
             commander=self.commander,
         )
+
+    def hold_here(self) -> None:
+        """A cancel's hold: the bridge's own position hold where the aircraft is, in the
+        autopilot's guided mode (PX4 OFFBOARD, ArduPilot GUIDED), asked for if not in it."""
+        pose = self.pose()
+        if pose is None:
+            return
+        position, yaw = pose
+        self.failsafe.hold_at(hold_target(position, yaw))
+        mode = GUIDED_MODE[self.autopilot or AUTOPILOT_PX4]
+        state = self.heartbeat_state
+        if state is None or state.mode != mode:
+            steps = ops.set_mode(self, SetMode(custom_mode=mode))
+            self.start(steps, self.now, self.stamp, background=True)
 
     def publish_state(self, *, force: bool = False) -> None:
         """Publish State if it changed (or ``force``, or the periodic time has come)."""

@@ -196,6 +196,10 @@ class TelloCore(PureCore):
             commander=self.commander,
         )
 
+    def hold_here(self) -> None:
+        """A cancel's hold: ``stop`` (the Tello hovers where it is, its move abandoned)."""
+        self.start(ops.hover(self), self.now, self.stamp, background=True)
+
     def publish_state(self, *, force: bool = False) -> None:
         """Publish State if it changed (or ``force``, or the periodic time has come)."""
         msg = self.state_message()

@@ -265,6 +265,13 @@ def failsafe_land(core: TelloCore) -> Steps:
 # ---------------------------------------------------------------- modes and parameters
 
 
+def hover(core: TelloCore) -> Steps:
+    """``stop``: hover where it is (a cancelled take-off or landing); the reply's text."""
+    core.failsafe.on_takeoff_or_land()
+    reply = yield from exchange(core, "stop")
+    return result_of(reply, "stop")[1]
+
+
 def set_mode(core: TelloCore, request: SetMode) -> Steps:
     """Modes mapped onto Tello commands: OFFBOARD/GUIDED/SDK -> ``command``;
     AUTO.LOITER/HOLD/LOITER/POSCTL/BRAKE -> ``stop`` (hover); AUTO.LAND/LAND -> ``land``;
