@@ -9,6 +9,7 @@ import pytest
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.flight import CancelRequest
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -88,3 +89,15 @@ def test_a_non_holders_requests_and_setpoints_are_refused_until_it_takes_over(ki
     with pytest.raises(ServiceError) as error:
         ask(user, registry.ARMING, CommandBool(value=True), "bob")
     assert error.value.code == "unavailable"
+
+
+@pytest.mark.parametrize("kind", ["mavlink", "tello"])
+def test_a_non_holders_cancel_is_refused_and_the_holders_is_answered(kind):
+    _, bridge = wired(kind)
+    user = FakeNode("apps", bridge.node.bus)
+    assert ask(user, registry.COMMAND_LEASE, LeaseRequest(action="take"), "alice").granted
+    with pytest.raises(ServiceError, match="'alice' holds the command lease") as error:
+        ask(user, registry.FLIGHT_CANCEL, CancelRequest(), "bob")
+    assert error.value.code == "lease"
+    reply = ask(user, registry.FLIGHT_CANCEL, CancelRequest(), "alice")
+    assert not reply.success and "nothing to cancel" in reply.message

@@ -92,7 +92,7 @@ def test_the_window_forgets_old_minima():
     assert not any(v.late for v in verdicts[first_obeyed:])
 
 
-def test_a_setpoint_without_a_send_time_is_judged_as_before():
+def test_a_setpoint_without_a_send_time_is_admitted():
     rule = SetpointDelay(0.3)
     steady(rule, 0.0, 1.0, 0.01)
     assert not rule.judge("ada", None, 50.0).late

@@ -33,7 +33,7 @@ def commander_attachment(name: str, sent: float | None = None) -> bytes:
 
 def origin_of(attachment: Any) -> tuple[str, float | None]:
     """(commander, send time or None) of a Zenoh attachment (``("", None)`` when none or not
-    ours; an attachment without a send time reads as before)."""
+    ours; an attachment without a send time has None)."""
     if attachment is None:
         return "", None
     raw = attachment.to_bytes() if hasattr(attachment, "to_bytes") else bytes(attachment)

@@ -15,7 +15,7 @@ counting for at most ``MAX_GAP_S``: a cut link never empties it, so the burst af
 is still judged against the lags from before the cut, and a commander whose clock stepped back
 is obeyed again ``window_s`` after the step. Each commander's lags are its own (a new one
 starts afresh; the ``MAX_COMMANDERS`` most recent are remembered); a setpoint without a send
-time (an older publisher) is admitted as it always was.
+time (an older publisher) is judged by the lease alone.
 """
 
 from __future__ import annotations
