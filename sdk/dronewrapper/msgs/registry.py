@@ -45,7 +45,7 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
-from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import PoseSourceStatus, WorldLoad, WorldQuery, WorldState
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
@@ -254,6 +254,13 @@ CONTROLLER_STATUS = Topic(
 # ---- simulator ground truth and world control ----
 SIM_GROUND_TRUTH = Topic(
     "{ns}/sim/ground_truth", PoseStamped, 30.0, ("sim",), "true vehicle pose, local ENU"
+)
+SIM_POSE_SOURCE = Topic(
+    "{ns}/sim/pose_source",
+    PoseSourceStatus,
+    1.0,
+    ("sim",),
+    "where the vehicle pose comes from (an external autopilot's truth) and its age in frames",
 )
 SIM_OBJECT_POSE = Topic(
     "sim/objects/{name}/pose", PoseStamped, 10.0, ("sim",), "true pose of a world object, ENU"
