@@ -142,6 +142,7 @@ def test_age_stats_report_and_reset():
     for t in (0.02, 0.05, 0.06, 0.08):
         stats.add(buf.at(t))
     frames, mean, p95, worst, extrapolated = stats.report()
+    assert p95 == pytest.approx(0.04)
     assert frames == 4 and worst == pytest.approx(0.04)
     assert mean == pytest.approx((-0.02 + 0.01 + 0.02 + 0.04) / 4)
     assert extrapolated == pytest.approx(0.75)
