@@ -133,10 +133,11 @@ def fly(
     seconds: float,
     tmp_path: Path,
     variables: dict[str, str] | None = None,
+    start_timeout: float = START_TIMEOUT_S,
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record until the controller has been
     servoing (after its take-off) for ``seconds`` and, when it acquired the target late, for
-    MIN_TRACKED_S after that; or until START_TIMEOUT_S passed without servoing."""
+    MIN_TRACKED_S after that; or until ``start_timeout`` s passed without servoing."""
     router = f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
@@ -158,7 +159,7 @@ def fly(
             launcher.start()
             session = open_session(ZenohOptions(mode="client", connect=[router]))
             monitor = FollowMonitor(session, launcher.ns, aim_height=aim).start()
-            deadline = time.monotonic() + START_TIMEOUT_S  # until servoing starts
+            deadline = time.monotonic() + start_timeout  # until servoing starts
             servoing = acquired = False
             while time.monotonic() < deadline:
                 dead = [c.name for c in launcher.children if c.poll() is not None]
