@@ -70,6 +70,10 @@ def test_px4_truth_decodes_units_and_frames():
     assert rpy_from_quat((x, y, z, w))[2] == pytest.approx(0.3, abs=1e-6)
 
 
+def test_px4_sih_truth_without_a_time_reads_as_none():
+    assert decode(hil_state(0.0)).time_s is None  # PX4 SIH leaves time_usec at 0
+
+
 def test_ardupilot_truth_reads_the_integer_position_and_has_no_time():
     truth = decode(sim_state(north=3.0, east=-2.0, up=1.5))
     assert truth.time_s is None
@@ -108,6 +112,7 @@ def test_clock_map_takes_the_least_delayed_arrival():
     walls = [clock.wall_time(10.0 + 0.04 * i, 1000.0 + 0.04 * i + d) for i, d in enumerate(delays)]
     assert walls[-1] == pytest.approx(1000.0 + 0.16 + 0.001)  # the smallest delay seen
     assert clock.wall_time(None, 1234.5) == 1234.5  # no autopilot time: the arrival
+    assert clock.wall_time(10.16, 1000.3) == 1000.3  # a clock standing still: the arrival
     # the autopilot restarts (its clock begins again): the old offset is forgotten
     assert clock.wall_time(0.5, 1001.0) == pytest.approx(1001.0)
 
@@ -159,11 +164,13 @@ def test_external_pose_publishes_truth_in_the_scenario_frame_and_frames_at_captu
     second = pose.add(hil_state(3.04, north=0.04, vel_ned=(1.0, 0, 0)), arrival_s=100.05)
     assert second.stamp == pytest.approx(100.04)  # the autopilot's time, not the late arrival
     assert second.position[0] == pytest.approx(0.04, abs=0.012)  # +x; degE7 = 1.1 cm
-    assert pose.add(hil_state(3.04), arrival_s=100.06) is None  # a repeat is not published
     frame = pose.frame_pose(100.06)
     assert frame.stamp == 100.06 and frame.position[0] == pytest.approx(0.06, abs=0.012)
     frames, _mean, _p95, worst, extrapolated = pose.ages.report()
     assert frames == 1 and worst == pytest.approx(0.02) and extrapolated == 1.0
+    # a time that stands still (a repeat): the sample is placed at its arrival
+    repeat = pose.add(hil_state(3.04, north=0.04), arrival_s=100.07)
+    assert repeat.stamp == 100.07
 
 
 def test_link_specs_and_the_rate_request():

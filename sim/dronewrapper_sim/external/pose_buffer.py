@@ -2,7 +2,8 @@
 
 Each truth sample gets a wall-clock time: the autopilot's own time plus an offset learnt as the
 smallest (arrival - autopilot time) seen over the last ``window_s`` (a sample delayed by the
-machine arrives late, never early), or its arrival time when the message carries no time. The
+machine arrives late, never early), or its arrival time when the message carries no time or a
+time that does not advance. The
 pose at an instant ``t`` is interpolated between the two samples around ``t`` when ``t`` lies
 inside the samples received; past the newest sample it is extrapolated from it with its own
 velocity and yaw rate, for at most ``max_extrapolation_s``, and held beyond. A camera frame
@@ -36,8 +37,11 @@ class ClockMap:
         ``arrival_s``; the arrival itself when there is no stamp."""
         if autopilot_s is None:
             return arrival_s
-        if self._autopilot_last is not None and autopilot_s < self._autopilot_last - 1.0:
+        last = self._autopilot_last
+        if last is not None and autopilot_s < last - 1.0:
             self._offsets.clear()  # the autopilot restarted: its clock began again
+        elif last is not None and autopilot_s <= last:
+            return arrival_s  # a clock that stands still says nothing about time
         self._autopilot_last = autopilot_s
         offset = arrival_s - autopilot_s
         while self._offsets and self._offsets[-1][1] >= offset:

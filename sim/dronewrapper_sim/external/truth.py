@@ -43,10 +43,12 @@ class GeoTruth:
 
 
 def from_hil_state_quaternion(msg: Any) -> GeoTruth:
-    """PX4 SIH's truth: time_usec (PX4 clock), lat/lon degE7, alt mm, velocity cm/s."""
+    """PX4 SIH's truth: lat/lon degE7, alt mm, velocity cm/s. PX4 SIH leaves ``time_usec`` at
+    0 (measured on PX4 main of 2026-03-02), which reads as no time; another value is PX4's
+    clock (s)."""
     q = tuple(float(c) for c in msg.attitude_quaternion)
     return GeoTruth(
-        time_s=msg.time_usec * 1e-6,
+        time_s=msg.time_usec * 1e-6 if msg.time_usec else None,
         lat_deg=msg.lat * 1e-7,
         lon_deg=msg.lon * 1e-7,
         alt_m=msg.alt * 1e-3,
