@@ -16,14 +16,14 @@ from ardupilot_sitl import ENV, sitl_binary
 
 sys.path.append(str(Path(__file__).parents[1] / "scenario"))  # the scenario tier's flight helper
 
-from firmware import AP_ENV, PX4_ENV, arducopter_binary, px4_build
+from firmware import AP_ENV, PX4_ENV, ardupilot_dir, px4_dir
 
 MARKER = "ardupilot_sitl"
 _deselected: list[str] = []
 # the world-around-real-firmware flights: marker -> (variable, is it set)
 FIRMWARE_MARKERS = {
-    "px4_sih": (PX4_ENV, lambda: px4_build() is not None),
-    "ap_sitl": (AP_ENV, lambda: arducopter_binary() is not None),
+    "px4_sih": (PX4_ENV, lambda: px4_dir() is not None),
+    "ap_sitl": (AP_ENV, lambda: ardupilot_dir() is not None),
 }
 _firmware_deselected: dict[str, list[str]] = {}
 

@@ -1,8 +1,8 @@
 """The paper's follow experiments flown by real firmware in our world, judged from ground truth.
 
 Opt-in: PX4 flights run when ``PX4_SITL_DIR`` names a PX4 SITL build, ArduCopter flights when
-``AP_SITL_DIR`` names an ArduCopter SITL build (tests/sitl/firmware.py); otherwise they are
-deselected and the run says why. Each flight starts the firmware (a free instance), runs the
+``AP_SITL_DIR`` names an ArduCopter SITL build (started by dronewrapper_sim.external.firmware);
+otherwise they are deselected and the run says why. Each flight starts the firmware (a free instance), runs the
 autopilot's follow graph (compose/{px4,ardupilot}_sitl_follow_{color,person}.yaml: the world
 posed from the firmware's own simulation, perception, the controller with its config for that
 firmware) and judges it with the scenario tier's thresholds (tests/scenario/
@@ -22,9 +22,11 @@ import os
 
 import pytest
 from busy_core import one_core_busy
-from firmware import arducopter, arducopter_binary, px4_build, px4_sih
+from firmware import ardupilot_dir, px4_dir
 from scenario_flight import fly
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed
+
+from dronewrapper_sim.external.firmware import arducopter, px4_sih
 
 pytestmark = [pytest.mark.timeout(420)]
 
@@ -35,8 +37,8 @@ RESULTS_ENV = "DRONEWRAPPER_SITL_RESULTS"
 
 def firmware(autopilot: str, tmp_path):
     if autopilot == "px4":
-        return px4_sih(px4_build(), tmp_path)
-    return arducopter(arducopter_binary(), tmp_path)
+        return px4_sih(px4_dir(), tmp_path)
+    return arducopter(ardupilot_dir(), tmp_path)
 
 
 def record(entry: dict) -> None:
