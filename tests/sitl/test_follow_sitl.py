@@ -2,14 +2,14 @@
 
 Opt-in: PX4 flights run when ``PX4_SITL_DIR`` names a PX4 SITL build, ArduCopter flights when
 ``AP_SITL_DIR`` names an ArduCopter SITL build (started by dronewrapper_sim.external.firmware);
-otherwise they are deselected and the run says why. Each flight starts the firmware (a free instance), runs the
-autopilot's follow graph (compose/{px4,ardupilot}_sitl_follow_{color,person}.yaml: the world
-posed from the firmware's own simulation, perception, the controller with its config for that
-firmware) and judges it with the scenario tier's thresholds (tests/scenario/
-test_follow_scenarios.py: acquisition, centred share, distance share; the crossing: pointing at
-the target 90 % of the time after acquiring it, on a loaded machine). Each flight's figures are
-written to ``$DRONEWRAPPER_SITL_RESULTS`` (a JSON-lines file) when it is set, for
-docs/capabilities.md.
+otherwise they are deselected and the run says why. Each flight starts the firmware (a free
+instance), runs the autopilot's follow graph
+(compose/{px4,ardupilot}_sitl_follow_{color,person}.yaml: the world posed from the firmware's
+own simulation, perception, the controller with its config for that firmware) and judges it with
+the scenario tier's thresholds (tests/scenario/ test_follow_scenarios.py: acquisition, centred
+share, distance share; the crossing: pointing at the target 90 % of the time after acquiring it,
+on a loaded machine). Each flight's figures are written to ``$DRONEWRAPPER_SITL_RESULTS`` (a
+JSON-lines file) when it is set, for docs/capabilities.md.
 """
 
 from __future__ import annotations
