@@ -115,6 +115,36 @@ def intended_distance(
     return d, height / 2.0
 
 
+RESULTS_ENV = "DRONEWRAPPER_CAPABILITIES"  # a JSON-lines file: each app flight's result
+
+
+def record_result(flight: Flight, app: str, backend: str, firmware: str, passed: bool) -> None:
+    """Append ``flight``'s result to ``$DRONEWRAPPER_CAPABILITIES`` when it is set (for
+    docs/capabilities.md, ``python -m bench.capabilities render``)."""
+    import datetime
+    import json
+    import os
+
+    path = os.environ.get(RESULTS_ENV, "").strip()
+    if not path:
+        return
+    s = flight.summary
+    entry = {
+        "kind": "app",
+        "app": app,
+        "scenario": flight.scenario,
+        "backend": backend,
+        "firmware": firmware,
+        "date": datetime.date.today().isoformat(),
+        "passed": passed,
+        "acquire_s": s.time_to_acquire if math.isfinite(s.time_to_acquire) else None,
+        "centred": s.centred_share,
+        "within_distance": s.distance_share,
+    }
+    with open(path, "a") as out:
+        out.write(json.dumps(entry) + "\n")
+
+
 START_TIMEOUT_S = 60.0  # from the graph being up to the controller servoing (after take-off)
 MIN_TRACKED_S = 8.0  # a flight goes on at least this long after the target was acquired
 

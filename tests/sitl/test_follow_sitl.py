@@ -8,23 +8,19 @@ instance), runs the autopilot's follow graph
 own simulation, perception, the controller with its config for that firmware) and judges it with
 the scenario tier's thresholds (tests/scenario/ test_follow_scenarios.py: acquisition, centred
 share, distance share; the crossing: pointing at the target 90 % of the time after acquiring it,
-on a loaded machine). Each flight's figures are written to ``$DRONEWRAPPER_SITL_RESULTS`` (a
+on a loaded machine). Each flight's figures are written to ``$DRONEWRAPPER_CAPABILITIES`` (a
 JSON-lines file) when it is set, for docs/capabilities.md.
 """
 
 from __future__ import annotations
 
 import contextlib
-import datetime
-import json
-import math
-import os
 
 import pytest
 from busy_core import one_core_busy
 from firmware import ardupilot_dir, px4_dir
-from scenario_flight import fly
-from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed
+from scenario_flight import fly, record_result
+from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
 from dronewrapper_sim.external.firmware import arducopter, px4_sih
 
@@ -32,20 +28,12 @@ pytestmark = [pytest.mark.timeout(420)]
 
 SCENARIOS = ("beacon_smooth", "beacon_abrupt", "person_moving", "people_crossing_front")
 START_TIMEOUT_S = {"px4": 90.0, "ardupilot": 150.0}  # graph up -> servoing (GPS fix, take-off)
-RESULTS_ENV = "DRONEWRAPPER_SITL_RESULTS"
 
 
 def firmware(autopilot: str, tmp_path):
     if autopilot == "px4":
         return px4_sih(px4_dir(), tmp_path)
     return arducopter(ardupilot_dir(), tmp_path)
-
-
-def record(entry: dict) -> None:
-    path = os.environ.get(RESULTS_ENV, "").strip()
-    if path:
-        with open(path, "a") as out:
-            out.write(json.dumps(entry) + "\n")
 
 
 @pytest.mark.parametrize(
@@ -73,30 +61,9 @@ def test_follow_on_real_firmware(autopilot, scenario, tmp_path):
     print(f"{fw.version}: {flight.describe()}")
     ages = [line for line in flight.log.splitlines() if "pose age" in line]
     print(ages[-1] if ages else "no pose-age report in the log")
-    passed = (
-        flight.exit_code == 0
-        and s.samples > 50
-        and s.time_to_acquire <= max_acquire
-        and s.centred_share >= min_centred
-        and s.distance_share >= min_distance
-    )
+    passed = passes(flight, max_acquire, min_centred, min_distance)
     crossings = sum(crossed(x) for x in flight.samples) if scenario in CROSSING else None
-    record(
-        {
-            "kind": "app",
-            "app": f"follow_{app}",
-            "scenario": scenario,
-            "backend": autopilot,
-            "firmware": fw.version,
-            "date": datetime.date.today().isoformat(),
-            "passed": passed,
-            "acquire_s": s.time_to_acquire if math.isfinite(s.time_to_acquire) else None,
-            "centred": s.centred_share,
-            "within_distance": s.distance_share,
-            "crossings": crossings,
-            "pose_age": ages[-1].split("truth ", 1)[-1] if ages else "",
-        }
-    )
+    record_result(flight, f"follow_{app}", autopilot, fw.version, passed)
     detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
     assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
     assert s.samples > 50, detail
