@@ -18,7 +18,8 @@ and figures (bench/results/fidelity.json) and a PNG of the responses overlaid
 
     python -m bench.fidelity --px4 PX4_TREE --ardupilot ARDUPILOT_TREE [--only sim,px4]
 
-(``PX4_SITL_DIR`` / ``AP_SITL_DIR`` are read when the flags are left out.)
+(``PX4_SITL_DIR`` / ``AP_SITL_DIR`` are read when the flags are left out.) ``--only sim --reuse
+FILE`` flies our sim alone and compares it with the firmware figures of an earlier run.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import itertools
+import json
 import math
 import os
 import socket
@@ -331,9 +333,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--px4", type=Path, default=os.environ.get("PX4_SITL_DIR") or None)
     parser.add_argument("--ardupilot", type=Path, default=os.environ.get("AP_SITL_DIR") or None)
     parser.add_argument("--only", default="sim,px4,ardupilot", help="backends, comma-separated")
+    parser.add_argument(
+        "--reuse",
+        type=Path,
+        metavar="FILE",
+        help="take the backends not flown now from an earlier run's fidelity.json",
+    )
     args = parser.parse_args(argv)
-    names = [n for n in args.only.split(",") if n]
-    results = {name: fly_backend(name, args.px4, args.ardupilot) for name in names}
+    flown = [n for n in args.only.split(",") if n]
+    earlier = json.loads(args.reuse.read_text())["backends"] if args.reuse else {}
+    results = {name: fly_backend(name, args.px4, args.ardupilot) for name in flown}
+    for name, res in earlier.items():
+        if name not in results:
+            results[name] = res
+            print(f"{name}: figures of an earlier run ({args.reuse})")
+    names = [n for n in ("sim", "px4", "ardupilot") if n in results]
+    results = {n: results[n] for n in names}
     reals = [n for n in names if n != "sim"]
     header = ["figure", *names, *(f"sim/{r}" for r in reals if "sim" in names)]
     print_table("fidelity: step responses and durations (ground truth)", header, table(results))
