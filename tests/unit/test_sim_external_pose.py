@@ -173,6 +173,17 @@ def test_external_pose_publishes_truth_in_the_scenario_frame_and_frames_at_captu
     assert repeat.stamp == 100.07
 
 
+def test_the_scenario_clock_starts_when_the_vehicle_leaves_the_ground():
+    pose = ExternalPose(load_scenario("beacon_smooth"))
+    pose.add(hil_state(1.0), arrival_s=10.0)
+    pose.add(hil_state(1.04, up=0.25), arrival_s=10.04)
+    assert not pose.airborne  # still on (or just above) the ground: the world waits
+    pose.add(hil_state(1.08, up=0.35), arrival_s=10.08)
+    assert pose.airborne
+    pose.add(hil_state(1.12, up=0.0), arrival_s=10.12)
+    assert pose.airborne  # once started, the scenario runs on
+
+
 def test_link_specs_and_the_rate_request():
     assert default_link("px4-sih") == "udp:127.0.0.1:19410"
     assert default_link("ardupilot") == "tcp:127.0.0.1:5762"

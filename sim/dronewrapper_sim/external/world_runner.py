@@ -7,6 +7,11 @@ time), steps the world by wall time, publishes ``sim/objects/{name}/pose`` and, 
 ``{ns}/sim/pose_source``. The camera thread renders from the pose at each frame's capture time
 (interpolated or extrapolated, see :mod:`pose_buffer`), and the frame's ``header.stamp`` is that
 time. Before the first truth the vehicle stands at the scenario's start.
+
+The scenario's clock starts when the vehicle first leaves the ground (its truth above
+``TAKEN_OFF_M``): the world's objects stand at their start until then, so a firmware's boot
+(PX4 about 5 s, ArduCopter's GPS fix about 40 s) and its take-off do not eat into the scenario
+(a beacon drifting sideways would otherwise have left the view before the vehicle is up).
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ WORLD_STEP_S = 0.02  # the world's objects move in steps of about this (wall s)
 MAX_WORLD_STEP_S = 0.25  # after a stall the world jumps at most this far
 STATUS_PERIOD_S = 1.0
 LOG_PERIOD_S = 10.0
+TAKEN_OFF_M = 0.3  # above its start height: the vehicle has left the ground (m)
 
 
 class ExternalPose:
@@ -48,6 +54,7 @@ class ExternalPose:
         self.clock = ClockMap()
         self.buffer = PoseBuffer(max_extrapolation_s)
         self.ages = AgeStats()
+        self.airborne = False  # the vehicle has left the ground (the scenario's clock runs)
         self._lock = threading.Lock()
 
     def add(self, msg: Any, arrival_s: float) -> PoseSnapshot | None:
@@ -66,6 +73,9 @@ class ExternalPose:
                     math.degrees(self.alignment.rotation),
                 )  # fmt: skip
             local = self.alignment.local(truth)
+            if local.position[2] > TAKEN_OFF_M and not self.airborne:
+                self.airborne = True
+                log.info("the vehicle left the ground: the scenario's objects start moving")
             t = self.clock.wall_time(truth.time_s, arrival_s)
             if not self.buffer.add(TimedPose(t, local)):
                 return None
@@ -197,8 +207,9 @@ class ExternalWorldRunner:
                 stop.wait(WORLD_STEP_S)
             now = time.monotonic()
             if now - last_step >= WORLD_STEP_S:
-                with self.world_lock:
-                    self.world.step(min(now - last_step, MAX_WORLD_STEP_S))
+                if self.pose.airborne:
+                    with self.world_lock:
+                        self.world.step(min(now - last_step, MAX_WORLD_STEP_S))
                 last_step = now
             if now >= next_obj:
                 next_obj = max(next_obj + obj_period, now)
