@@ -138,7 +138,9 @@ def probe(drone, backend: str, version: str) -> Probe:
     p.check(
         "get_image", lambda: drone.get_image("frontal"), lambda v: "" if v is not None else "None"
     )
-    for name in ("get_frontal_image", "get_ventral_image"):
+    for name, camera in (("get_frontal_image", "frontal"), ("get_ventral_image", "ventral")):
+        with contextlib.suppress(Exception):  # the first frame of a camera asked for now
+            drone.wait_for_image(camera, 10.0)
         p.check(name, getattr(drone, name), lambda v: "" if getattr(v, "size", 0) else "empty")
     param = PARAM[backend]
     value = p.check("param_get", lambda: drone.param_get(param or "SPEED"), _finite)
