@@ -128,6 +128,16 @@ def probe(drone, backend: str, version: str) -> Probe:
     p.check("wait_for_connection", lambda: drone.wait_for_connection(READY_S))
     p.check("is_connected", drone.is_connected, lambda v: "" if v else "False")
     p.check("get_state", drone.get_state, lambda v: "" if v.connected else "not connected")
+
+    def has(getter) -> bool:
+        try:
+            getter()
+            return True
+        except Exception:
+            return False
+
+    with contextlib.suppress(Exception):  # telemetry that follows the GPS fix: give it time
+        drone.wait_for(lambda: has(drone.get_global_position), 45.0, "a global position")
     for name in ("get_position", "get_velocity", "get_velocity_local", "get_yaw_rate",
                  "get_orientation", "get_roll", "get_pitch", "get_yaw", "get_battery",
                  "get_global_position"):  # fmt: skip
