@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import socket
 import subprocess
 import sys
@@ -30,16 +29,21 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
-CLK_TCK = os.sysconf("SC_CLK_TCK")
 
 # PX4 onboard link, messages per second (px4_sitl_behaviour.md), as (name, hz)
 PX4_RATES = [
@@ -61,11 +65,6 @@ PX4_RATES = [
     ("EXTENDED_SYS_STATE", 5),
     ("HEARTBEAT", 1),
 ]
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
 
 
 class PX4StandIn:
@@ -178,15 +177,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=15.0, help="length of each phase")
     args = parser.parse_args(argv)
 
-    endpoint = f"tcp/127.0.0.1:{free_port(socket.SOCK_STREAM)}"
-    stop_router, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop_router, ready), daemon=True
-    )
-    router.start()
-    if not ready.wait(10):
+    router = LoopbackRouter()
+    if not router.start():
         print("router did not start", file=sys.stderr)
         return 1
+    endpoint = router.endpoint
     port = free_port(socket.SOCK_DGRAM)
     bridge = subprocess.Popen(
         [sys.executable, "-m", "dronewrapper_bridge_mavlink", "--connect", endpoint,
@@ -284,13 +279,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         px4.stop.set()
         node.close()
-        bridge.send_signal(signal.SIGINT)
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
-        stop_router.set()
-        router.join(5)
+        stop_process(bridge)
+        router.stop(5)
     return 0 if results else 1
 
 

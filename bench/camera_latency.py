@@ -1,4 +1,4 @@
-"""camera_victure: capture-to-Zenoh latency and CPU (issue 15 targets).
+"""camera_victure: capture-to-Zenoh latency and CPU against the camera's targets.
 
 The camera service runs as its own process on a loopback router with the test pattern as its
 "camera" at 30 fps, 640x480 and 1280x720, publishing raw bgr8 or JPEG only. A subscriber here
@@ -15,19 +15,22 @@ Run: ``python -m bench.camera_latency [--duration 10]``. Writes bench/results/ca
 from __future__ import annotations
 
 import argparse
-import os
-import socket
 import statistics
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    call_times_ms,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    write_results,
+)
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_camera_victure.pattern import render_pattern
 
@@ -36,27 +39,9 @@ SIZES = ((640, 480), (1280, 720))
 FPS = 30
 
 
-def free_endpoint() -> str:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return f"tcp/127.0.0.1:{sock.getsockname()[1]}"
-
-
-def cpu_seconds(pid: int) -> float:
-    """User + system CPU time of process ``pid`` so far (s), from /proc."""
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def median_ms(fn, runs: int = 200) -> float:
-    for _ in range(5):
-        fn()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - start) * 1e3)
-    return statistics.median(times)
+    """Median wall time of ``fn()`` (ms) over ``runs`` calls."""
+    return statistics.median(call_times_ms(fn, runs))
 
 
 def one_run(endpoint: str, width: int, height: int, jpeg: bool, duration: float) -> dict:
@@ -108,14 +93,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=10.0, help="seconds per run")
     args = parser.parse_args(argv)
-    endpoint = free_endpoint()
-    stop, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
-    router.start()
-    if not ready.wait(10):
+    router = LoopbackRouter()
+    if not router.start():
         raise RuntimeError("router did not start")
+    endpoint = router.endpoint
     runs, costs = [], []
     try:
         for width, height in SIZES:
@@ -137,8 +118,7 @@ def main(argv: list[str] | None = None) -> int:
             for jpeg in (False, True):
                 runs.append(one_run(endpoint, width, height, jpeg, args.duration))
     finally:
-        stop.set()
-        router.join(10)
+        router.stop(10)
     print_table(
         f"capture-to-Zenoh latency, test pattern at {FPS} fps ({args.duration:g} s each)",
         ["size", "output", "fps", "p50 ms", "p90 ms", "p99 ms", "max ms", "CPU (core)"],

@@ -1,17 +1,24 @@
-"""Small helpers shared by the benchmarks: percentiles, tables, JSON results, machine facts."""
+"""Small helpers shared by the benchmarks: percentiles, tables, JSON results, machine facts,
+call timings, CPU time of a process, stopping a child process, and a Zenoh router on
+loopback."""
 
 from __future__ import annotations
 
 import json
 import os
 import platform
+import signal
+import subprocess
+import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 RESULTS = Path(__file__).resolve().parent / "results"
+CLK_TCK = os.sysconf("SC_CLK_TCK")
+"""Kernel clock ticks per second: the unit of the CPU times in ``/proc/PID/stat``."""
 
 
 def percentiles(values_s: Sequence[float]) -> dict[str, float]:
@@ -26,6 +33,18 @@ def percentiles(values_s: Sequence[float]) -> dict[str, float]:
         "p99_ms": float(np.percentile(arr, 99)),
         "max_ms": float(arr.max()),
     }
+
+
+def call_times_ms(fn: Callable[[], object], runs: int, warmup: int = 5) -> list[float]:
+    """Wall time of each of ``runs`` calls of ``fn()`` (ms), after ``warmup`` calls untimed."""
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        fn()
+        times.append((time.perf_counter() - start) * 1e3)
+    return times
 
 
 def machine() -> dict[str, object]:
@@ -65,3 +84,57 @@ def write_results(name: str, data: dict[str, object]) -> Path:
     path.write_text(json.dumps({"machine": machine(), **data}, indent=2) + "\n")
     print(f"\nwrote {path}")
     return path
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of process ``pid`` so far (s), from ``/proc/PID/stat``.
+
+    Raises:
+        OSError: the process is gone.
+    """
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime, stime (fields 14, 15)
+
+
+def stop_process(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout_s: float = 10.0) -> None:
+    """Send ``sig`` to ``proc`` and wait up to ``timeout_s`` for it to exit; kill it (and reap
+    it, up to 5 s) if it has not."""
+    proc.send_signal(sig)
+    try:
+        proc.wait(timeout_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(5)
+
+
+def free_endpoint() -> str:
+    """A Zenoh TCP endpoint on a loopback port that is free right now."""
+    from dronewrapper_compose.ports import free_port
+
+    return f"tcp/127.0.0.1:{free_port('tcp')}"
+
+
+class LoopbackRouter:
+    """A Zenoh router in a daemon thread of this process, listening on ``endpoint`` (a free
+    loopback TCP port unless one is given)."""
+
+    def __init__(self, endpoint: str | None = None) -> None:
+        from dronewrapper.router import router_options, run_router
+
+        self.endpoint = endpoint or free_endpoint()
+        self._stop, self._ready = threading.Event(), threading.Event()
+        self._thread = threading.Thread(
+            target=run_router,
+            args=(router_options([self.endpoint]), self._stop, self._ready),
+            daemon=True,
+        )
+
+    def start(self, timeout_s: float = 10.0) -> bool:
+        """Start the router; True once it listens, False if it did not within ``timeout_s``."""
+        self._thread.start()
+        return self._ready.wait(timeout_s)
+
+    def stop(self, timeout_s: float = 10.0) -> None:
+        """Close the router and wait up to ``timeout_s`` for its thread to end."""
+        self._stop.set()
+        self._thread.join(timeout_s)

@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from bench import common
 from bench.common import print_table, write_results
 from dronewrapper_compose.ports import free_port
 
@@ -27,16 +28,14 @@ GRAPHS = [
 ]
 """(graph, scenario, graph variables): the person app detecting on every frame it can, then
 at its default of 10 detections a second."""
-TICKS = os.sysconf("SC_CLK_TCK")
 
 
 def cpu_seconds(pid: int) -> float:
     """User + system CPU seconds of a process so far (0 when it is gone)."""
     try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return common.cpu_seconds(pid)
     except OSError:
         return 0.0
-    return (int(fields[11]) + int(fields[12])) / TICKS  # utime, stime (fields 14, 15)
 
 
 def measure(

@@ -6,7 +6,7 @@ do) and puts it back as plain bytes, so only the way the frame is sent differs:
 
 * ``raw bytes (floor)``: the pixels already in a ``bytes`` object, put as they are (Zenoh
   copies them once into shared memory);
-* ``before, ...``: an Image message through the runtime's Publisher as it was before issue 20
+* ``before, ...``: an Image message through a Publisher without the shared-memory writer
   (MessagePack writes a new buffer, Zenoh copies it into shared memory: one copy more than the
   floor), around ``bytes``, and around a rendered array's ``tobytes()`` (what the simulator's
   camera did: two more);

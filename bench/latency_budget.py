@@ -4,7 +4,7 @@ For each app (follow-color on ``beacon_static``, follow-person with YOLOX on ``p
 the real graph runs, every process separate, on a loopback router. This process stands beside
 it and times each camera frame on its way (see :mod:`bench.budget` for the stages):
 
-* perception's Detections carry the frame's stamp, its processing time and (since issue 20)
+* perception's Detections carry the frame's stamp, its processing time and
   when the frame reached perception, its queue wait and its decode time;
 * a subscriber takes the arrival of the first velocity setpoint carrying the frame's stamp
   (where the bridge receives it);
@@ -56,7 +56,8 @@ APPS = {
     "person": ("sim_follow_person", "person_static", "yolox"),
 }
 PREVIOUS = {
-    # issue 20, before this work (glass -> setpoint at the bridge, ms): p50, p99
+    # the reference measurement on the same VM kind, idle (glass -> setpoint at the bridge, ms):
+    # p50, p99 (docs/performance.md)
     "color": (10.7, 45.0),
     "person": (33.0, 88.0),
 }
@@ -352,7 +353,7 @@ def print_budget(app: str, result: dict) -> None:
     prev = PREVIOUS[app]
     p50, p99 = sp.get("p50_ms", math.nan), sp.get("p99_ms", math.nan)
     print(f"  glass -> setpoint at the bridge: p50 {p50:.1f} / p99 {p99:.1f} ms "
-          f"(previous, issue 20: {prev[0]} / {prev[1]} ms)")  # fmt: skip
+          f"(reference: {prev[0]} / {prev[1]} ms)")  # fmt: skip
     mw = summary["middleware"]
     print(f"  middleware share: p50 {mw['p50_ms']:.2f} ms (target <= 3), p99 {mw['p99_ms']:.2f} ms"
           f" (target <= 10)")  # fmt: skip

@@ -1,4 +1,4 @@
-"""Perception speed, latency and identity benchmarks (issue 6 targets).
+"""Perception speed, latency and identity benchmarks against perception's targets.
 
 1. Colour filter ms/frame at 640x480 on one core (target <= 3 ms).
 2. YOLOX-Nano ms/frame with 2 threads, whole ``detect()`` and inference alone (target <= 20 ms);
@@ -20,18 +20,24 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import socket
 import statistics
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from bench.common import RESULTS, percentiles, print_table, write_results
+from bench.common import (
+    RESULTS,
+    LoopbackRouter,
+    call_times_ms,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
@@ -42,13 +48,7 @@ VTEST = ASSETS / "images" / "vtest_f0550.png"
 def median_ms(fn, runs: int, warmup: int = 5) -> tuple[float, float, float]:
     """Median, p90 and minimum of ``fn()`` wall time in ms (the minimum is the figure least
     disturbed by other processes on a shared machine)."""
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - start) * 1e3)
+    times = call_times_ms(fn, runs, warmup)
     return statistics.median(times), float(np.percentile(times, 90)), min(times)
 
 
@@ -131,18 +131,11 @@ def publisher_main(endpoint: str, fps: float, duration: float) -> int:
 
 def bench_latency(duration: float, fps: float, detector: str) -> dict[str, object]:
     from dronewrapper.msgs import Detections, registry
-    from dronewrapper.router import router_options, run_router
     from dronewrapper.runtime import Node, ZenohOptions
 
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        endpoint = f"tcp/127.0.0.1:{sock.getsockname()[1]}"
-    stop, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
+    router = LoopbackRouter()
     router.start()
-    ready.wait(10)
+    endpoint = router.endpoint
     settings = ["--set", f"detector={detector}", "--set", "stats_period_s=30"]
     if detector == "yolox":
         settings += ["--set", f"model_path={YOLOX_NANO}"]
@@ -172,13 +165,8 @@ def bench_latency(duration: float, fps: float, detector: str) -> dict[str, objec
     finally:
         if publisher is not None and publisher.poll() is None:
             publisher.kill()
-        perception.send_signal(2)
-        try:
-            perception.wait(15)
-        except subprocess.TimeoutExpired:
-            perception.kill()
-        stop.set()
-        router.join(10)
+        stop_process(perception, timeout_s=15)
+        router.stop(10)
     if len(samples) < 10:
         raise RuntimeError(f"only {len(samples)} Detections received")
     arrivals = np.array([a for a, _ in samples])

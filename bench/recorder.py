@@ -26,24 +26,15 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import LoopbackRouter, percentiles, print_table, write_results
 from dronewrapper.msgs import Detections, Header, Image, PoseStamped, codec, registry
 from dronewrapper.record.reader import read_bus, summarize
 from dronewrapper.record.recorder import Recorder
 from dronewrapper.record.replayer import replay
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions, open_session
 
 REPO = Path(__file__).resolve().parents[1]
 PHOTO = REPO / "assets" / "images" / "basketball1.png"
-
-
-def _free_endpoint() -> str:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return f"tcp/127.0.0.1:{s.getsockname()[1]}"
 
 
 def _frames() -> list[bytes]:
@@ -138,20 +129,15 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0)
     args = parser.parse_args()
-    endpoint = _free_endpoint()
-    stop, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
-    router.start()
-    if not ready.wait(10):
+    router = LoopbackRouter()
+    if not router.start():
         raise RuntimeError("router did not start")
+    endpoint = router.endpoint
     try:
         rec = [bench_recorder(endpoint, args.seconds, c) for c in (False, True)]
         rep = bench_replay(endpoint, args.seconds)
     finally:
-        stop.set()
-        router.join(10)
+        router.stop(10)
     print_table(
         f"recorder at full camera rate ({args.seconds:g} s: 640x480 at 30 Hz + pose 50 Hz "
         "+ detections 30 Hz)",

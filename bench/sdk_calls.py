@@ -1,8 +1,8 @@
 """SDK benchmark: getter call time, and time from ``set_cmd_vel`` to the MAVLink packet.
 
 Runs a loopback Zenoh router (in this process), the real bridge_mavlink (a child process) and a
-fake autopilot (pymavlink over real UDP, in this process: heartbeats, LOCAL_POSITION_NED,
-ATTITUDE), then a DroneWrapper in client mode, as a laptop app would be.
+fake autopilot (pymavlink over real UDP, in this process: heartbeats, SYS_STATUS,
+LOCAL_POSITION_NED, ATTITUDE), then a DroneWrapper in client mode, as a laptop app would be.
 
 * Getters: time per call of each getter (target: microseconds; they read the newest message
   already received, no network round trip). ``get_frontal_image`` returns a copy of a 320x240
@@ -29,10 +29,10 @@ import timeit
 
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import LoopbackRouter, percentiles, print_table, stop_process, write_results
 from dronewrapper import DroneWrapper
+from dronewrapper.errors import Timeout
 from dronewrapper.msgs import Image, registry
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_compose.ports import free_port
 
@@ -43,7 +43,7 @@ NS = "bench_sdk"
 
 
 class FakeAutopilot:
-    """Just enough of a PX4 on UDP: heartbeats and pose out, setpoints in (timestamped)."""
+    """Just enough of a PX4 on UDP: heartbeats, battery and pose out, setpoints in (timestamped)."""
 
     def __init__(self, port: int) -> None:
         self.mav = mavutil.mavlink_connection(
@@ -68,6 +68,8 @@ class FakeAutopilot:
             if tick % 25 == 0:
                 m.heartbeat_send(2, 12, 1 | 128 * 0, 3 << 16, 3)  # quadrotor, PX4, POSCTL
                 m.extended_sys_state_send(0, 1)  # on ground
+                # battery: 12.4 V, 1.0 A, 90 % (the SDK connects once every getter's stream is in)
+                m.sys_status_send(0, 0, 0, 500, 12400, 100, 90, 0, 0, 0, 0, 0, 0)
             m.local_position_ned_send(ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             m.attitude_send(ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             tick += 1
@@ -147,14 +149,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--calls", type=int, default=20000)
     args = parser.parse_args(argv)
 
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    router = LoopbackRouter()
+    endpoint = router.endpoint
     udp_port = free_port(socket.SOCK_DGRAM)
-    stop, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop, ready), daemon=True
-    )
     router.start()
-    ready.wait(10)
     bridge = subprocess.Popen(
         [
             sys.executable,
@@ -184,8 +182,16 @@ def main(argv: list[str] | None = None) -> int:
         with DroneWrapper(NS, endpoint, timeout=60) as drone:
             pub = camera.publisher(registry.IMAGE_RAW, camera="cam_frontal")
             pixels = np.random.default_rng(0).integers(0, 255, (240, 320, 3), np.uint8)
-            pub.put(Image(height=240, width=320, step=960, data=pixels.tobytes()))
-            drone.wait_for_image("frontal", timeout=10)
+            frame = Image(height=240, width=320, step=960, data=pixels.tobytes())
+            for _ in range(40):  # the camera is subscribed on first use: publish until it is in
+                pub.put(frame)
+                try:
+                    drone.wait_for_image("frontal", timeout=0.25)
+                    break
+                except Timeout:
+                    continue
+            else:
+                raise Timeout("the benchmark's frame never reached the SDK within 10 s")
             drone.wait_for(lambda: drone._pose.value is not None, 10, "pose")
             getters = time_getters(drone, args.calls)
             time_commands(drone, autopilot, 20)  # warm-up
@@ -194,13 +200,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         camera.close()
         autopilot.close()
-        bridge.send_signal(2)
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
-        stop.set()
-        router.join(5)
+        stop_process(bridge)
+        router.stop(5)
 
     print_table("getter call time (best of 3)", ["getter", "us/call"], getters)
     lat = percentiles(latencies)

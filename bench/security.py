@@ -10,7 +10,7 @@ MAVLink: packing SET_POSITION_TARGET_LOCAL_NED unsigned vs signed, and parsing i
 vs verifying the signature (PX4's order, ``verify_signed_frame``), per message; the CPU cost is
 given at the bridge's message rates (60 sent/s, 250 received/s).
 
-Targets (issue 17): <= 0.3 ms added per message p50, <= 5 % CPU.
+Targets: <= 0.3 ms added per message p50, <= 5 % CPU.
 
     python -m bench.security [--round-trips 1000]
 """

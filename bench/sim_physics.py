@@ -13,7 +13,6 @@ Run: ``python -m bench.sim_physics [--seconds 10]``; writes bench/results/sim_ph
 from __future__ import annotations
 
 import argparse
-import os
 import socket
 import subprocess
 import sys
@@ -21,11 +20,9 @@ import threading
 import time
 from pathlib import Path
 
-from bench.common import print_table, write_results
-from dronewrapper_compose.ports import free_port
+from bench.common import LoopbackRouter, cpu_seconds, print_table, write_results
 
 REPO = Path(__file__).resolve().parents[1]
-TICKS = os.sysconf("SC_CLK_TCK")
 DT = 1.0 / 250.0
 
 
@@ -54,11 +51,6 @@ def physics_rates(seconds: float = 3.0) -> dict[str, float]:
         "dynamics_steps_per_s": dynamics,
         "autopilot_steps_per_s": n / (time.perf_counter() - t0),
     }
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / TICKS
 
 
 def cpu_percent(pid: int, seconds: float) -> float:
@@ -119,14 +111,9 @@ class Pilot:
 
 
 def process_cpu(seconds: float, cameras: bool) -> dict[str, float]:
-    from dronewrapper.router import router_options, run_router
-
-    router = f"tcp/127.0.0.1:{free_port()}"
-    stop, ready = threading.Event(), threading.Event()
-    threading.Thread(
-        target=run_router, args=(router_options([router]), stop, ready), daemon=True
-    ).start()
-    ready.wait(10)
+    zenoh_router = LoopbackRouter()
+    zenoh_router.start()
+    router = zenoh_router.endpoint
     pilot = Pilot()
     udp = f"{pilot.port}:0"
     argv = [sys.executable, "-m", "dronewrapper_sim", "--scenario", "beacon_static",
@@ -157,7 +144,7 @@ def process_cpu(seconds: float, cameras: bool) -> dict[str, float]:
         pilot.stop.set()
         proc.send_signal(2)
         proc.wait(15)
-        stop.set()
+        zenoh_router.stop()
     return {"idle_cpu_percent": idle, "flying_cpu_percent": flying, "altitude_m": altitude}
 
 

@@ -5,7 +5,7 @@
    threads: flight, world, renderer, libx264's threads) over ``--seconds``: in SDK mode on the
    ground without video; streaming 960x720 30 fps on the ground; streaming while flying and
    turning (rc yaw, so that every frame changes); with the default ``render_scale`` 0.5 and
-   with 1 (full-size rendering). 100 % = one core. Target (issue 13): sim +
+   with 1 (full-size rendering). 100 % = one core. Target: sim +
    encoder <= 35 % of one core at 960x720 30 fps. The client counts the frames it receives.
 2. Encode-to-UDP latency per frame, in this process: the forward camera rendered while
    turning (rendered at the default ``render_scale`` and scaled up to 960x720 as the sim
@@ -27,9 +27,8 @@ import threading
 import time
 from pathlib import Path
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import LoopbackRouter, percentiles, print_table, write_results
 from bench.sim_physics import cpu_percent
-from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -86,14 +85,9 @@ def _window(pid: int, client: Client, seconds: float) -> dict[str, float]:
 
 
 def process_cpu(seconds: float, render_scale: float) -> dict[str, dict[str, float]]:
-    from dronewrapper.router import router_options, run_router
-
-    router = f"tcp/127.0.0.1:{free_port()}"
-    stop, ready = threading.Event(), threading.Event()
-    threading.Thread(
-        target=run_router, args=(router_options([router]), stop, ready), daemon=True
-    ).start()
-    ready.wait(10)
+    zenoh_router = LoopbackRouter()
+    zenoh_router.start()
+    router = zenoh_router.endpoint
     drone, host = "127.77.0.10", "127.77.0.11"
     client = Client(drone, host)
     argv = [sys.executable, "-m", "dronewrapper_sim", "--aircraft", "tello", "--address", drone,
@@ -130,7 +124,7 @@ def process_cpu(seconds: float, render_scale: float) -> dict[str, dict[str, floa
         client.close()
         proc.send_signal(2)
         proc.wait(15)
-        stop.set()
+        zenoh_router.stop()
     return out
 
 

@@ -21,8 +21,8 @@ Both clocks are this machine's CLOCK_MONOTONIC. Run:
 from __future__ import annotations
 
 import argparse
-import os
 import random
+import signal
 import socket
 import subprocess
 import sys
@@ -32,32 +32,26 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import (
+    LoopbackRouter,
+    cpu_seconds,
+    percentiles,
+    print_table,
+    stop_process,
+    write_results,
+)
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet
-from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper_sim.tello.video import H264Encoder, packetise
 
 REPO = Path(__file__).resolve().parents[1]
-CLK_TCK = os.sysconf("SC_CLK_TCK")
 W, H, FPS = 960, 720, 30.0
 BITS, BLOCK = 20, 40  # frame index as 20 blocks of 40x40 px along the top
 STATE = (
     "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;"
     "templ:60;temph:62;tof:10;h:0;bat:87;baro:100.00;time:0;agx:0.00;agy:0.00;agz:-1000.00;\r\n"
 )
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
 
 
 def stamped_image(index: int) -> np.ndarray:
@@ -142,15 +136,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=60.0, help="length of the video run")
     args = parser.parse_args(argv)
 
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    stop_router, ready = threading.Event(), threading.Event()
-    router = threading.Thread(
-        target=run_router, args=(router_options([endpoint]), stop_router, ready), daemon=True
-    )
-    router.start()
-    if not ready.wait(10):
+    router = LoopbackRouter()
+    if not router.start():
         print("router did not start", file=sys.stderr)
         return 1
+    endpoint = router.endpoint
     address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
     tello = TelloStandIn(address)
     threads = [
@@ -239,13 +229,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         tello.stop.set()
         node.close()
-        bridge.terminate()
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
-        stop_router.set()
-        router.join(5)
+        stop_process(bridge, signal.SIGTERM)
+        router.stop(5)
     return 0
 
 

@@ -5,8 +5,10 @@ the boundary -> callback) for a PoseStamped (~170 B) and a 640x480 bgr8 Image (9
 pixels), through the loopback router (client -> router -> client) and peer to peer (two peers,
 direct link), with Zenoh shared memory on (the default for local processes).
 
-Reference on this machine kind (shared/reading/stack_facts.md): rospy 0.13 ms (64 B) and 3.2 ms
-(image) round trips, 740 images/s. Targets: images <= 0.65 ms and >= 3,700 images/s between local
+With Debian's ROS 1 installed (``apt-get install python3-rospy python3-sensor-msgs
+python3-rosmaster``; it runs under the system Python) it measures rospy in the same run
+(``bench/rospy_transport.py``) and prints ours / rospy for the 64-byte and 640x480 round trips
+and for images per second. Targets: images <= 0.65 ms and >= 3,700 images/s between local
 processes; small messages <= 0.3 ms.
 
     python -m bench.transport [--samples-small 2000] [--samples-image 400] [--seconds 4]
@@ -15,16 +17,19 @@ processes; small messages <= 0.3 ms.
 from __future__ import annotations
 
 import argparse
+import json
+import shutil
 import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import zenoh
 
 from bench.common import percentiles, print_table, write_results
-from dronewrapper.msgs import Header, Image, PoseStamped, codec, registry
+from dronewrapper.msgs import CompressedImage, Header, Image, PoseStamped, codec, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
 
@@ -43,8 +48,15 @@ def _free_endpoint() -> str:
 _FRAME = np.random.default_rng(0).integers(0, 255, (480, 640, 3), dtype=np.uint8).tobytes()
 
 
-def make_message(kind: str) -> Image | PoseStamped:
+KINDS = ("small", "pose", "image")
+"""64 bytes of data (a CompressedImage too small for shared memory), a PoseStamped, a frame."""
+SMALL = bytes(64)
+
+
+def make_message(kind: str) -> Image | PoseStamped | CompressedImage:
     """A fresh message stamped now (the pixels are shared, not copied)."""
+    if kind == "small":
+        return CompressedImage(header=Header.now("small"), format="raw", data=SMALL)
     if kind == "pose":
         return PoseStamped(header=Header.now("map"))
     return Image(header=Header.now("cam_frontal"), height=480, width=640, encoding="bgr8",
@@ -52,12 +64,14 @@ def make_message(kind: str) -> Image | PoseStamped:
 
 
 def _topic(kind: str):
-    return registry.LOCAL_POSE if kind == "pose" else registry.IMAGE_RAW
+    topics = {"small": registry.IMAGE_COMPRESSED, "pose": registry.LOCAL_POSE}
+    return topics.get(kind, registry.IMAGE_RAW)
 
 
 def _key(kind: str, ns: str) -> str:
     topic = _topic(kind)
-    return topic.key(ns, camera="cam_frontal") if kind == "image" else topic.key(ns)
+    cameras = {"image": "cam_frontal", "small": "cam_small"}
+    return topic.key(ns, camera=cameras[kind]) if kind in cameras else topic.key(ns)
 
 
 # ---- the peer process (pong / sink) ----
@@ -68,10 +82,10 @@ def serve(role: str, options: ZenohOptions) -> None:
     if role == "rawpong":
         return serve_raw(options)
     with Node(f"bench_{role}", options, handle_signals=False, linger=0.0) as node:
-        counts = {"pose": 0, "image": 0}
-        first_last = {"pose": [0.0, 0.0], "image": [0.0, 0.0]}
-        one_way: dict[str, list[float]] = {"pose": [], "image": []}
-        for kind in ("pose", "image"):
+        counts = dict.fromkeys(KINDS, 0)
+        first_last = {kind: [0.0, 0.0] for kind in KINDS}
+        one_way: dict[str, list[float]] = {kind: [] for kind in KINDS}
+        for kind in KINDS:
             if role == "pong":
                 pub = node.publisher(_topic(kind), key=_key(kind, PONG_NS), qos=BLOCK)
 
@@ -93,6 +107,9 @@ def serve(role: str, options: ZenohOptions) -> None:
         print("ready", flush=True)
         for line in sys.stdin:  # the parent asks for counts, then closes stdin
             kind, _, what = line.strip().partition(" ")
+            if kind == "fallbacks":
+                print(shm_fallbacks(node), flush=True)
+                continue
             if what == "one_way":
                 lat = np.asarray(one_way[kind][50:]) * 1e3
                 print(f"{np.percentile(lat, 50):.6f} {np.percentile(lat, 99):.6f}", flush=True)
@@ -103,14 +120,18 @@ def serve(role: str, options: ZenohOptions) -> None:
             counts[kind] = 0
 
 
+def shm_fallbacks(node: Node) -> int:
+    """Images this node put the ordinary way because its shared-memory pool had no room."""
+    return node.shm_writer.fallbacks if node.shm_writer is not None else 0
+
+
 def serve_raw(options: ZenohOptions) -> None:
     """Baseline echo with plain Zenoh: copy the payload out and put it back, no decoding."""
     with Node("bench_rawpong", options, handle_signals=False, linger=0.0) as node:
         pubs = {
-            kind: node.session.declare_publisher(_key(kind, PONG_NS), **BLOCK)
-            for kind in ("pose", "image")
+            kind: node.session.declare_publisher(_key(kind, PONG_NS), **BLOCK) for kind in KINDS
         }
-        for kind in ("pose", "image"):
+        for kind in KINDS:
             node.session.declare_subscriber(
                 _key(kind, PING_NS),
                 lambda sample, pub=pubs[kind]: pub.put(sample.payload.to_bytes()),
@@ -172,6 +193,11 @@ class Peer:
         p50, p99 = self.proc.stdout.readline().split()
         return {"p50_ms": float(p50), "p99_ms": float(p99)}
 
+    def fallbacks(self) -> int:
+        self.proc.stdin.write("fallbacks\n")
+        self.proc.stdin.flush()
+        return int(self.proc.stdout.readline())
+
     def close(self) -> None:
         self.proc.stdin.close()
         self.proc.wait(20)
@@ -231,9 +257,10 @@ def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
     raw = Peer("rawpong", peer_mode, peer_connect, peer_listen)
     with Node("bench_rawping", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
-        result["raw_pose_rtt"] = percentiles(
-            raw_round_trips(node.session, "pose", args.samples_small)
-        )
+        for kind in ("small", "pose"):
+            result[f"raw_{kind}_rtt"] = percentiles(
+                raw_round_trips(node.session, kind, args.samples_small)
+            )
         result["raw_image_rtt"] = percentiles(
             raw_round_trips(node.session, "image", args.samples_image)
         )
@@ -241,21 +268,80 @@ def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
     pong = Peer("pong", peer_mode, peer_connect, peer_listen)
     with Node("bench_ping", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
-        result["pose_rtt"] = percentiles(round_trips(node, "pose", args.samples_small))
+        for kind in ("small", "pose"):
+            result[f"{kind}_rtt"] = percentiles(round_trips(node, kind, args.samples_small))
         result["image_rtt"] = percentiles(round_trips(node, "image", args.samples_image))
-    result["pose_one_way"] = pong.one_way("pose")
-    result["image_one_way"] = pong.one_way("image")
+        fallbacks = {"ping": shm_fallbacks(node)}
+    for kind in KINDS:
+        result[f"{kind}_one_way"] = pong.one_way(kind)
+    fallbacks["pong"] = pong.fallbacks()
     pong.close()
     sink = Peer("sink", peer_mode, peer_connect, peer_listen)
     with Node("bench_source", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
         result["image_throughput"] = throughput(node, sink, "image", args.seconds)
         result["pose_throughput"] = throughput(node, sink, "pose", args.seconds)
+        result["small_throughput"] = throughput(node, sink, "small", args.seconds)
+        fallbacks["source"] = shm_fallbacks(node)
     sink.close()
+    result["shm_fallbacks"] = fallbacks
     stop.set()
     if router_thread:
         router_thread.join(10)
     return result
+
+
+LABELS = {"small": "64 B", "pose": "PoseStamped", "image": "Image 640x480"}
+SYSTEM_PYTHON = "/usr/bin/python3"
+
+
+def rospy_available() -> bool:
+    """Debian's ROS 1 (rospy, sensor_msgs, rosmaster) under the system Python."""
+    try:
+        probe = subprocess.run(
+            [SYSTEM_PYTHON, "-c", "import rospy, sensor_msgs.msg, std_msgs.msg"],
+            capture_output=True, timeout=60,
+        )  # fmt: skip
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return probe.returncode == 0 and shutil.which("rosmaster") is not None
+
+
+def rospy_side_by_side(results: dict, args: argparse.Namespace) -> dict | None:
+    """rospy's figures in the same run (bench/rospy_transport.py) and ours / rospy, or None
+    without ROS 1 (``apt-get install python3-rospy python3-sensor-msgs python3-rosmaster``)."""
+    if not rospy_available():
+        print("\nrospy: not installed (apt-get install python3-rospy python3-sensor-msgs "
+              "python3-rosmaster), no side by side")  # fmt: skip
+        return None
+    done = subprocess.run(
+        [SYSTEM_PYTHON, str(Path(__file__).with_name("rospy_transport.py")), "--small",
+         str(args.samples_small), "--image", str(args.samples_image), "--seconds",
+         str(args.seconds)], capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    if done.returncode != 0:
+        print(f"\nrospy: failed: {done.stderr[-500:]}")
+        return None
+    ros = json.loads(done.stdout.strip().splitlines()[-1])
+    p2p = results["p2p"]
+    ours = {
+        "small_rtt_p50_ms": p2p["small_rtt"]["p50_ms"],
+        "image_rtt_p50_ms": p2p["image_rtt"]["p50_ms"],
+        "images_per_s": max(r["image_throughput"]["msgs_per_s"] for r in results.values()),
+    }
+    theirs = {
+        "small_rtt_p50_ms": ros["small_rtt_ms"]["p50_ms"],
+        "image_rtt_p50_ms": ros["image_rtt_ms"]["p50_ms"],
+        "images_per_s": ros["images_per_s"],
+    }
+    rows = [[what, ours[what], theirs[what], ours[what] / theirs[what]] for what in ours]
+    print_table(
+        "ours (Zenoh p2p) side by side with rospy (TCPROS), same run, same machine",
+        ["figure", "ours", "rospy", "ours / rospy"],
+        rows,
+    )
+    print("  (round trips: lower is better; images/s: higher is better)")
+    return {"rospy": ros, "ours": ours, "ratio": {r[0]: r[3] for r in rows}}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -275,7 +361,7 @@ def main(argv: list[str] | None = None) -> int:
     results = {name: run_topology(name, args) for name in ("router", "p2p")}
     rows = []
     for name, res in results.items():
-        for kind, label in (("pose", "PoseStamped"), ("image", "Image 640x480")):
+        for kind, label in LABELS.items():
             rtt, one = res[f"{kind}_rtt"], res[f"{kind}_one_way"]
             raw = res[f"raw_{kind}_rtt"]
             rate = res[f"{kind}_throughput"]["msgs_per_s"]
@@ -291,6 +377,9 @@ def main(argv: list[str] | None = None) -> int:
         "  (ms; RTT = ping -> typed echo that decodes and re-publishes -> ping; raw = the same\n"
         "   sizes as plain bytes through plain Zenoh, measured in the same run: the floor; SHM on)"
     )
+    for name, res in results.items():
+        counts = ", ".join(f"{who} {n}" for who, n in res["shm_fallbacks"].items())
+        print(f"  shared-memory puts that fell back to ordinary ones ({name}): {counts}")
     best_image_rtt = min(r["image_rtt"]["p50_ms"] for r in results.values())
     best_image_rate = max(r["image_throughput"]["msgs_per_s"] for r in results.values())
     best_pose_rtt = min(r["pose_rtt"]["p50_ms"] for r in results.values())
@@ -302,8 +391,8 @@ def main(argv: list[str] | None = None) -> int:
     print_table(
         "targets (best local path)", ["target", "met"], [[k, v] for k, v in targets.items()]
     )
-    print("\nreference rospy (stack_facts.md): 0.13 ms small, 3.2 ms image, 740 images/s")
-    write_results("transport", {"results": results, "targets": targets})
+    rospy_result = rospy_side_by_side(results, args)
+    write_results("transport", {"results": results, "targets": targets, "rospy": rospy_result})
     return 0
 
 

@@ -27,32 +27,15 @@ import math
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
+from dronewrapper import msgs
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Twist, TwistStamped, Vector3
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     MASK_POSITION,
     MASK_VELOCITY,
     SEVERITY_CRITICAL,
-    CommandBool,
-    CommandBoolResult,
-    CommandTOL,
-    CommandTOLResult,
-    ExtendedState,
-    ParamGet,
-    ParamGetResult,
-    ParamSet,
-    ParamSetResult,
-    ParamValue,
-    PositionTarget,
-    SetMode,
-    SetModeResult,
-    State,
-    StatusText,
 )
-from dronewrapper.msgs.sensor import BatteryState
-from dronewrapper.msgs.std import Header
 
 if TYPE_CHECKING:
     from dronewrapper.runtime.fake import FakeNode
@@ -130,7 +113,7 @@ class FakeAircraft:
         self.refuse = refuse if refuse is not None else {}
         self.calls: list[tuple[float, str]] = []  # (clock s, service) of every command
         self.requests: list[Any] = []  # every service request, as received
-        self.params: dict[str, ParamValue] = {"MPC_XY_VEL_MAX": ParamValue(real=12.0)}
+        self.params: dict[str, msgs.ParamValue] = {"MPC_XY_VEL_MAX": msgs.ParamValue(real=12.0)}
         self.objects = dict(objects or {})
         self.silent: set[str] = set()  # keys of streams left out
         self._last_tick: float | None = None
@@ -168,7 +151,9 @@ class FakeAircraft:
 
     def say(self, text: str, severity: int = SEVERITY_CRITICAL) -> None:
         """Publish an autopilot text message now."""
-        self._text.put(StatusText(header=Header(stamp=self.clock()), severity=severity, text=text))
+        self._text.put(
+            msgs.StatusText(header=msgs.Header(stamp=self.clock()), severity=severity, text=text)
+        )
 
     # ---- the services ----
 
@@ -182,7 +167,7 @@ class FakeAircraft:
             self.say(reason)
         return reason
 
-    def _set_mode(self, req: SetMode) -> SetModeResult:
+    def _set_mode(self, req: msgs.SetMode) -> msgs.SetModeResult:
         mode = req.custom_mode
         refusal = ""
         if self.modes is not None and mode not in self.modes:
@@ -191,48 +176,48 @@ class FakeAircraft:
             refusal = "no setpoint stream"
         reason = self._command("set_mode", req, refusal)
         if reason:
-            return SetModeResult(mode_sent=False, result=REFUSED, message=reason)
+            return msgs.SetModeResult(mode_sent=False, result=REFUSED, message=reason)
         self.mode = mode
-        return SetModeResult(mode_sent=True, result=0)
+        return msgs.SetModeResult(mode_sent=True, result=0)
 
-    def _arming(self, req: CommandBool) -> CommandBoolResult:
+    def _arming(self, req: msgs.CommandBool) -> msgs.CommandBoolResult:
         in_flight = not req.value and self.in_air
         reason = self._command("arming", req, "disarming denied in flight" if in_flight else "")
         if reason:
-            return CommandBoolResult(success=False, result=REFUSED, message=reason)
+            return msgs.CommandBoolResult(success=False, result=REFUSED, message=reason)
         self.armed = req.value
-        return CommandBoolResult(success=True, result=0)
+        return msgs.CommandBoolResult(success=True, result=0)
 
-    def _takeoff(self, req: CommandTOL) -> CommandTOLResult:
+    def _takeoff(self, req: msgs.CommandTOL) -> msgs.CommandTOLResult:
         arms_itself = self.autopilot == "tello"  # a Tello arms and lifts off on "takeoff"
         refusal = "" if self.armed or arms_itself else "not armed"
         reason = self._command("takeoff", req, refusal)
         if reason:
-            return CommandTOLResult(success=False, result=REFUSED, message=reason)
+            return msgs.CommandTOLResult(success=False, result=REFUSED, message=reason)
         self.armed, self.goal = True, req.altitude
-        return CommandTOLResult(success=True, result=0)
+        return msgs.CommandTOLResult(success=True, result=0)
 
-    def _land(self, req: CommandTOL) -> CommandTOLResult:
+    def _land(self, req: msgs.CommandTOL) -> msgs.CommandTOLResult:
         reason = self._command("land", req)
         if reason:
-            return CommandTOLResult(success=False, result=REFUSED, message=reason)
+            return msgs.CommandTOLResult(success=False, result=REFUSED, message=reason)
         self.mode, self.landing = "AUTO.LAND", True
         if self.landing_speed == math.inf:
             self._touch_down()
-        return CommandTOLResult(success=True, result=0)
+        return msgs.CommandTOLResult(success=True, result=0)
 
-    def _param_get(self, req: ParamGet) -> ParamGetResult:
+    def _param_get(self, req: msgs.ParamGet) -> msgs.ParamGetResult:
         self.requests.append(req)
         if req.param_id not in self.params:
-            return ParamGetResult(success=False, message=f"no parameter {req.param_id}")
-        return ParamGetResult(success=True, value=self.params[req.param_id])
+            return msgs.ParamGetResult(success=False, message=f"no parameter {req.param_id}")
+        return msgs.ParamGetResult(success=True, value=self.params[req.param_id])
 
-    def _param_set(self, req: ParamSet) -> ParamSetResult:
+    def _param_set(self, req: msgs.ParamSet) -> msgs.ParamSetResult:
         self.requests.append(req)
         self.params[req.param_id] = req.value
-        return ParamSetResult(success=True, value=req.value)
+        return msgs.ParamSetResult(success=True, value=req.value)
 
-    def _on_setpoint(self, sp: PositionTarget) -> None:
+    def _on_setpoint(self, sp: msgs.PositionTarget) -> None:
         self.streamed = True
         if sp.type_mask == MASK_VELOCITY and self.z_at_first_velocity is None:
             self.z_at_first_velocity = self.z
@@ -264,8 +249,8 @@ class FakeAircraft:
 
     def publish(self, now: float) -> None:
         """Publish the telemetry, stamped ``now``, but the streams in ``silent``."""
-        header = Header(stamp=now)
-        state = State(
+        header = msgs.Header(stamp=now)
+        state = msgs.State(
             header=header,
             connected=self.connected,
             armed=self.armed,
@@ -274,18 +259,19 @@ class FakeAircraft:
             autopilot=self.autopilot,
         )
         landed = LANDED_STATE_IN_AIR if self.in_air else LANDED_STATE_ON_GROUND
-        pose = Pose(position=Point(x=self.x, y=self.y, z=self.z))
-        turning = Twist(angular=Vector3(z=YAW_RATE))
+        pose = msgs.Pose(position=msgs.Point(x=self.x, y=self.y, z=self.z))
+        in_map = msgs.Header(stamp=now, frame_id="map")
+        turning = msgs.Twist(angular=msgs.Vector3(z=YAW_RATE))
         for pub, msg in (
             (self._state, state),
-            (self._ext, ExtendedState(header=header, landed_state=landed)),
-            (self._pose, PoseStamped(header=Header(stamp=now, frame_id="map"), pose=pose)),
-            (self._velocity_body, TwistStamped(header=header, twist=turning)),
-            (self._velocity_local, TwistStamped(header=header)),
-            (self._battery, BatteryState(header=header, percentage=BATTERY)),
+            (self._ext, msgs.ExtendedState(header=header, landed_state=landed)),
+            (self._pose, msgs.PoseStamped(header=in_map, pose=pose)),
+            (self._velocity_body, msgs.TwistStamped(header=header, twist=turning)),
+            (self._velocity_local, msgs.TwistStamped(header=header)),
+            (self._battery, msgs.BatteryState(header=header, percentage=BATTERY)),
         ):
             if pub.key not in self.silent:
                 pub.put(msg)
         for name, (x, y, z) in self.objects.items():
-            pose = Pose(position=Point(x=x, y=y, z=z))
-            self._object_poses[name].put(PoseStamped(header=header, pose=pose))
+            pose = msgs.Pose(position=msgs.Point(x=x, y=y, z=z))
+            self._object_poses[name].put(msgs.PoseStamped(header=header, pose=pose))

@@ -13,6 +13,8 @@ def _value(tp, rng: random.Random):
     if origin is list:
         (item,) = typing.get_args(tp)
         return [_value(item, rng) for _ in range(rng.randint(1, 3))]
+    if origin is tuple:
+        return tuple(_value(item, rng) for item in typing.get_args(tp))
     if origin in (typing.Union, __import__("types").UnionType):
         args = [a for a in typing.get_args(tp) if a is not type(None)]
         return _value(args[0], rng)
@@ -33,6 +35,13 @@ def _value(tp, rng: random.Random):
     raise TypeError(f"no sample for {tp!r}")
 
 
+_ENVELOPE_LIMITS = ("max_altitude", "max_distance", "max_horizontal_speed", "max_vertical_speed")
+
+
+def _polygon(rng: random.Random) -> list[tuple[float, float]]:
+    return [(rng.uniform(-50, 50), rng.uniform(-50, 50)) for _ in range(rng.randint(3, 5))]
+
+
 # Fields whose messages check their range (requests): a random value within it.
 _RANGED = {
     ("CommandTOL", "min_pitch"): lambda rng: rng.uniform(-90.0, 90.0),
@@ -41,6 +50,19 @@ _RANGED = {
     ("CommandTOL", "longitude"): lambda rng: rng.uniform(-180.0, 180.0),
     ("CommandTOL", "altitude"): lambda rng: rng.uniform(0.5, 100.0),
     ("SetMode", "base_mode"): lambda rng: 0,
+    **{("Envelope", name): lambda rng: rng.uniform(1.0, 50.0) for name in _ENVELOPE_LIMITS},
+    ("Envelope", "margin"): lambda rng: rng.uniform(0.0, 5.0),
+    ("Envelope", "breach_action"): lambda rng: rng.choice(("hold", "return", "land")),
+    ("Envelope", "fence"): lambda rng: _polygon(rng),
+    ("Envelope", "exclusions"): lambda rng: [_polygon(rng)],
+    ("Waypoint", "x_lat"): lambda rng: rng.uniform(-90.0, 90.0),
+    ("Waypoint", "y_long"): lambda rng: rng.uniform(-180.0, 180.0),
+    ("Waypoint", "z_alt"): lambda rng: rng.uniform(0.0, 100.0),
+    ("Waypoint", "frame"): lambda rng: 3,
+    ("Waypoint", "command"): lambda rng: 16,
+    ("WaypointPush", "start_index"): lambda rng: 0,
+    ("WaypointSetCurrent", "wp_seq"): lambda rng: rng.randint(0, 100),
+    ("MissionControl", "action"): lambda rng: rng.choice(("start", "pause", "return")),
 }
 
 

@@ -38,10 +38,11 @@ class Host:
 def two_hosts(tag: str = "") -> Iterator[tuple[Host, Host]]:
     """(drone, laptop) namespaces on one private subnet; removed on exit."""
     suffix = f"{tag}{os.getpid() % 100000}"
+    prefix = os.environ.get("DRONEWRAPPER_NETNS_PREFIX", "dw")  # unique per concurrent run
     subnet = f"10.213.{os.getpid() % 250}"
-    drone = Host(f"dwd{suffix}", f"{subnet}.1")
-    laptop = Host(f"dwl{suffix}", f"{subnet}.2")
-    veth = (f"dwvd{suffix}"[:15], f"dwvl{suffix}"[:15])
+    drone = Host(f"{prefix}d{suffix}", f"{subnet}.1")
+    laptop = Host(f"{prefix}l{suffix}", f"{subnet}.2")
+    veth = (f"{prefix}vd{suffix}"[:15], f"{prefix}vl{suffix}"[:15])
     made: list[str] = []
     try:
         for host in (drone, laptop):

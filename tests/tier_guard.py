@@ -9,19 +9,23 @@ network socket and start no process.
 A tier's ``conftest.py`` wraps each test's setup, call and teardown, and the import of each test
 module, in :meth:`TierGuard.watching`:
 while it runs, ``zenoh.open`` (which the runtime's ``Node``, the SDK and the test router all go
-through), starting a process with the tests' ``support.Process`` (the ``spawn`` fixture's) and
-the tier's forbidden calls on an IPv4/IPv6 socket (service: any; unit: those that
-talk, ``connect``/``sendto``, as binding a loopback port to probe it is the port allocator's
-logic) fail the test with a message naming the tier it belongs in. A violation on another
-thread (a service's own thread opening a session) is remembered and fails the test at the end
-of that phase. The tier's conftest also shadows the ``router`` and ``spawn`` fixtures with ones
-that fail at once (:func:`refusing`).
+through), starting a process (the tests' ``support.Process``, the ``spawn`` fixture's, and
+every way the standard library starts one: ``subprocess.Popen``, which ``subprocess.run`` and
+asyncio's subprocesses go through, ``os.system``, ``os.posix_spawn``/``posix_spawnp``,
+``os.fork``) and the tier's forbidden calls on an IPv4/IPv6 socket (service: any; unit: those
+that talk, ``connect``/``sendto``/``sendmsg``, as binding a loopback port to probe it is the
+port allocator's logic) fail the test with a message naming the tier it belongs in. A violation
+on another thread (a service's own thread opening a session) is remembered and fails the test at
+the end of that phase. The tier's conftest also shadows the ``router`` and ``spawn`` fixtures
+with ones that fail at once (:func:`refusing`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import socket
+import subprocess
 import threading
 from collections.abc import Iterator
 from typing import Any
@@ -43,8 +47,9 @@ DEFINITIONS = {
     ),
 }
 _INET = (socket.AF_INET, socket.AF_INET6)
-NETWORK = ("bind", "connect", "connect_ex", "sendto")  # any use of a network socket
-TRAFFIC = ("connect", "connect_ex", "sendto")  # talking to someone (binding to probe a port is not)
+NETWORK = ("bind", "connect", "connect_ex", "sendto", "sendmsg")  # any use of a network socket
+TRAFFIC = ("connect", "connect_ex", "sendto", "sendmsg")  # talking (binding to probe is not)
+SPAWNERS = ("system", "posix_spawn", "posix_spawnp", "fork")  # ``os`` functions that start one
 
 
 class TierGuard:
@@ -75,13 +80,20 @@ class TierGuard:
             forbid("opened a real Zenoh session (zenoh.open)")
 
         def no_process(_process: Any, argv: Any, *_args: Any, **_kwargs: Any) -> None:
-            forbid(f"started a process ({' '.join(map(str, argv))})")
+            shown = argv if isinstance(argv, str | bytes) else " ".join(map(str, argv))
+            forbid(f"started a process ({shown})")
 
         with contextlib.ExitStack() as undo:
             undo.callback(setattr, zenoh, "open", zenoh.open)
             zenoh.open = no_session
             undo.callback(setattr, support.Process, "__init__", support.Process.__init__)
             support.Process.__init__ = no_process
+            undo.callback(setattr, subprocess.Popen, "__init__", subprocess.Popen.__init__)
+            subprocess.Popen.__init__ = no_process
+            for name in SPAWNERS:
+                if hasattr(os, name):
+                    undo.callback(setattr, os, name, getattr(os, name))
+                    setattr(os, name, _spawn_guarded(name, forbid))
             for name in self.sockets:
                 undo.callback(_restore, name, socket.socket.__dict__.get(name))
                 setattr(socket.socket, name, _network_guarded(name, forbid))
@@ -94,6 +106,14 @@ def _restore(name: str, own: Any) -> None:
         delattr(socket.socket, name)
     else:
         setattr(socket.socket, name, own)
+
+
+def _spawn_guarded(name: str, forbid) -> Any:
+    def guarded(*args: Any, **_kwargs: Any) -> None:
+        shown = " ".join(map(str, args[1] if name.startswith("posix_spawn") else args))
+        forbid(f"started a process (os.{name} {shown})".replace(" )", ")"))
+
+    return guarded
 
 
 def _network_guarded(name: str, forbid) -> Any:

@@ -5,8 +5,9 @@ A graph lists the processes that run together (in start order) and their config:
     version: 1
     description: Simulated Iris and its MAVLink bridge
     namespace: drone
-    vars: {scenario: empty, onboard_port: auto}
+    vars: {scenario: empty, onboard_port: auto, gcs_port: "14550", takeoff_height: "2.0"}
     ports: {onboard_port: udp}        # bound here: checked free; auto = a free port
+    types: {gcs_port: port, takeoff_height: float}
     processes:
       - name: sim
         module: dronewrapper_sim
@@ -15,13 +16,20 @@ A graph lists the processes that run together (in start order) and their config:
         module: dronewrapper_bridge_mavlink
         set: {connection: "udpin:127.0.0.1:${onboard_port}"}
 
-``${name}`` takes a var (``--scenario``/``--var`` on the command line override the graph's
-defaults) or a built-in (``ns``, ``router``, ``repo``, ``graph_dir``, ``assets``, ``python``);
-``${name:-default}`` falls back to ``default``. Errors name the file and the key.
+``vars`` declares the graph's variables and their defaults (a ``${name:-default}`` in a process
+declares ``name`` too); ``--scenario``/``--var NAME=VALUE`` on the command line override them,
+and a name the graph does not declare is refused.
+``types`` gives a variable's type (undeclared: ``str``): ``int``, ``float``, ``bool``
+(true/false), ``port`` (1-65535, a port of another program) or a list of the allowed values;
+every value, default or given, is checked against it. ``ports`` names the variables that are
+ports this graph binds here (see ports.py). ``${name}`` takes a var or a built-in (``ns``,
+``router``, ``repo``, ``graph_dir``, ``assets``, ``python``, ``keys``); ``${name:-default}``
+falls back to ``default``. Errors name the file and the key.
 """
 
 from __future__ import annotations
 
+import difflib
 import os
 import re
 from collections.abc import Mapping
@@ -29,6 +37,8 @@ from pathlib import Path
 from typing import Any
 
 import msgspec
+
+from dronewrapper_compose import fleet
 
 REPO = Path(__file__).resolve().parents[2]
 GRAPH_DIR = Path(__file__).resolve().parents[1]  # compose/: the graph files
@@ -55,6 +65,9 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         ready_timeout_s: how long to wait for readiness, seconds.
         stop_timeout_s: how long a stop (SIGINT) may take before SIGKILL, seconds.
         zenoh_args: append the common Zenoh flags (``--connect --namespace --name --mode``).
+        each_drone: run once per drone of a fleet graph of this kind (``iris``, ``tello``,
+            ``any``), under the drone's namespace, all of them started together
+            (:mod:`dronewrapper_compose.fleet`).
     """
 
     name: str
@@ -68,6 +81,7 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     ready_timeout_s: float = 30.0
     stop_timeout_s: float = 10.0
     zenoh_args: bool = True
+    each_drone: str | None = None
 
 
 class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -78,7 +92,79 @@ class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     namespace: str = "drone"
     vars: dict[str, str] = msgspec.field(default_factory=dict)
     ports: dict[str, str] = msgspec.field(default_factory=dict)  # var -> udp | tcp (ports.py)
+    types: dict[str, str | list[str]] = msgspec.field(default_factory=dict)  # var -> VAR_TYPES
     processes: list[ProcessSpec]
+
+
+def _is_int(value: str) -> bool:
+    try:
+        int(value)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_float(value: str) -> bool:
+    try:
+        number = float(value)
+    except ValueError:
+        return False
+    return number == number and abs(number) != float("inf")  # finite
+
+
+VAR_TYPES = {  # type name -> (is the value valid, what it must be)
+    "str": (lambda value: True, "text"),
+    "int": (_is_int, "an integer"),
+    "float": (_is_float, "a finite number"),
+    "bool": (lambda value: value in ("true", "false"), "true or false"),
+    "port": (lambda value: value.isdigit() and 1 <= int(value) <= 65535, "a port 1-65535"),
+}
+
+
+def check_value(graph: Graph, name: str, value: str) -> str | None:
+    """Why ``value`` is wrong for the graph's variable ``name`` (its declared type), or None."""
+    kind = graph.types.get(name, "str")
+    if isinstance(kind, list):
+        return None if value in kind else f"must be one of {', '.join(kind)}"
+    valid, what = VAR_TYPES[kind]
+    return None if valid(value) else f"must be {what}"
+
+
+def declared_variables(graph: Graph) -> set[str]:
+    """The variables a graph declares: its ``vars`` and each ``${name:-default}`` it uses."""
+    texts: list[str] = []
+    for proc in graph.processes:
+        texts += [proc.module or "", proc.config or "", *(proc.command or []), *proc.args]
+        texts += [str(value) for value in (*proc.set.values(), *proc.env.values())]
+    defaulted = {
+        m.group(1) for text in texts for m in _VAR.finditer(text) if m.group(2) is not None
+    }
+    return set(graph.vars) | defaulted
+
+
+def check_variables(graph: Graph, path: Path | str, values: Mapping[str, str]) -> None:
+    """Refuse a variable the graph does not declare (naming the closest declared one) or a value
+    of the wrong type (naming the type).
+
+    Raises:
+        GraphError: names the file, the variable and what it must be.
+    """
+    declared = declared_variables(graph)
+    for name, value in values.items():
+        if name not in declared:
+            close = difflib.get_close_matches(name, sorted(declared), n=1)
+            hint = f"did you mean {close[0]}? " if close else ""
+            known = ", ".join(sorted(declared)) or "none"
+            raise GraphError(
+                f"{path}: no variable {name!r} in this graph ({hint}declared: {known})"
+            )
+        if name not in graph.ports and (why := check_value(graph, name, str(value))):
+            raise GraphError(f"{path}: {name}={value!r} {why}")
+
+
+def _text(value: Any) -> str:
+    """A YAML scalar as a variable's text (YAML's booleans as ``true``/``false``)."""
+    return str(value).lower() if isinstance(value, bool) else str(value)
 
 
 def assets_dir() -> Path:
@@ -130,7 +216,11 @@ def load_graph(path: str | Path) -> Graph:
         raise GraphError(f"{path}: not valid YAML: {exc}") from exc
     if not isinstance(raw, dict):
         raise GraphError(f"{path}: top level must be a mapping")
-    raw["vars"] = {k: str(v) for k, v in (raw.get("vars") or {}).items()}
+    raw["vars"] = {k: _text(v) for k, v in (raw.get("vars") or {}).items()}
+    raw["types"] = {
+        k: [_text(item) for item in v] if isinstance(v, list) else v
+        for k, v in (raw.get("types") or {}).items()
+    }
     try:
         graph = msgspec.convert(raw, Graph)
     except msgspec.ValidationError as exc:
@@ -148,17 +238,35 @@ def load_graph(path: str | Path) -> Graph:
             )
         if var not in graph.vars:
             raise GraphError(f"{path}: port {var!r} has no variable - at `$.ports.{var}`")
-    seen: set[str] = set()
+    for var, kind in graph.types.items():
+        at = f"at `$.types.{var}`"
+        if var not in graph.vars:
+            raise GraphError(f"{path}: type for {var!r}, which is not a variable - {at}")
+        if var in graph.ports:
+            raise GraphError(f"{path}: {var!r} is a port (ports:); it takes no type - {at}")
+        if kind == [] or (isinstance(kind, str) and kind not in VAR_TYPES):
+            allowed = ", ".join(VAR_TYPES)
+            raise GraphError(f"{path}: type {kind!r} must be {allowed} or a list of values - {at}")
+        if why := check_value(graph, var, graph.vars[var]):
+            raise GraphError(f"{path}: default {graph.vars[var]!r} {why} - at `$.vars.{var}`")
+    seen: set[tuple[str, str | None]] = set()
     for i, proc in enumerate(graph.processes):
         at = f"at `$.processes[{i}]`"
         if not _NAME.fullmatch(proc.name):
             raise GraphError(f"{path}: process name {proc.name!r} must be [A-Za-z0-9_-] - {at}")
-        if proc.name in seen:
+        # a name may repeat only for drones of different kinds (one sim per Iris, per Tello)
+        kinds = (proc.each_drone,) if proc.each_drone in fleet.KINDS else (None, *fleet.KINDS)
+        if any((proc.name, kind) in seen for kind in kinds):
             raise GraphError(f"{path}: duplicate process name {proc.name!r} - {at}")
-        seen.add(proc.name)
+        seen.update((proc.name, kind) for kind in kinds)
         if (proc.module is None) == (proc.command is None):
             raise GraphError(
                 f"{path}: process {proc.name!r} needs exactly one of module/command - {at}"
+            )
+        if proc.each_drone is not None and proc.each_drone not in (*fleet.KINDS, fleet.ANY):
+            raise GraphError(
+                f"{path}: process {proc.name!r}: each_drone must be one of "
+                f"{', '.join((*fleet.KINDS, fleet.ANY))} - {at}"
             )
         if proc.ready not in ("alive", "none"):
             raise GraphError(f"{path}: process {proc.name!r}: ready must be alive or none - {at}")

@@ -2,45 +2,49 @@
 
 It starts a Zenoh router (a router-mode session in this process) on ``--router``, then each
 process in order, waiting for its liveliness token ``{ns}/alive/{name}`` before starting the next.
-Every line a process prints is prefixed with its name. On Ctrl-C, SIGTERM or after
+Every line a process prints is prefixed with its name. A fleet graph's ``each_drone`` process
+runs once per drone (``drone1/sim``, ``drone2/sim`` ...), all of them started together and
+waited for together (:mod:`dronewrapper_compose.fleet`). On Ctrl-C, SIGTERM or after
 ``--duration`` it stops the processes in reverse order (SIGINT, then SIGKILL after a grace
 period) and closes the router. Exit status: 0 when every process started and stopped cleanly,
 1 when a process died or failed to become ready, 2 for a bad graph file or bad flags.
 
-Size: over 400 lines: a process's whole life in a graph (start in order, readiness, prefixed
-logs, ordered stop, exit status) is one concern; the graph file's schema is ``graph.py``.
+A process's whole life in a graph (start in order, readiness, ordered stop, exit status) is
+here; one running process and its prefixed output is ``child.py``, the graph file's schema
+``graph.py``, its ports ``ports.py``.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import ctypes
-import os
 import signal
-import subprocess
 import sys
 import threading
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TextIO
+from typing import NamedTuple, TextIO
 
 import zenoh
 
 from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.router import InsecureEndpoint, router_options
+from dronewrapper.router_reach import open_client_session
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.security.keystore import default_keys_dir
+from dronewrapper_compose import fleet
+from dronewrapper_compose.child import Child, die_with_parent  # noqa: F401 (imported from here)
 from dronewrapper_compose.graph import (
     REPO,
     Graph,
     GraphError,
     ProcessSpec,
     assets_dir,
+    check_value,
+    check_variables,
     load_graph,
     resolve_graph_path,
     substitute,
@@ -49,20 +53,9 @@ from dronewrapper_compose.ports import (
     PortInUse,
     check_ports_free,
     choose_ports,
+    free_port,
     router_port_in_use,
 )
-
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
-    """Ask Linux to send SIGTERM to the child if its parent dies, so nothing is orphaned.
-
-    For ``subprocess.Popen(preexec_fn=...)``, called from the thread that lives as long as the
-    children (Linux signals them when the forking *thread* ends).
-    """
-    with contextlib.suppress(OSError):
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 class LaunchError(RuntimeError):
@@ -94,67 +87,14 @@ def build_argv(
     return argv, env
 
 
-class _Child:
-    """A running process of the graph, with its output forwarded line by line."""
+class Instance(NamedTuple):
+    """One process to start: a spec under a namespace, with its variables; ``label`` names it
+    in the output (``sim``, or ``drone2/sim`` for a fleet's)."""
 
-    def __init__(
-        self,
-        spec: ProcessSpec,
-        argv: list[str],
-        env: dict[str, str],
-        out: TextIO,
-        out_lock: threading.Lock,
-        width: int,
-    ) -> None:
-        self.spec = spec
-        self.name = spec.name
-        self.argv = argv
-        self.stopping = False
-        self.proc = subprocess.Popen(
-            argv,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            env={**os.environ, "PYTHONUNBUFFERED": "1", **env},
-            cwd=REPO,
-            start_new_session=True,  # the launcher, not the terminal, decides the stop order
-            preexec_fn=die_with_parent,
-        )
-        prefix = f"{spec.name:>{width}} | "
-        self._reader = threading.Thread(
-            target=self._forward, args=(prefix, out, out_lock), daemon=True
-        )
-        self._reader.start()
-
-    def _forward(self, prefix: str, out: TextIO, lock: threading.Lock) -> None:
-        assert self.proc.stdout is not None
-        for raw in iter(self.proc.stdout.readline, b""):
-            line = raw.decode("utf-8", "replace").rstrip("\n")
-            with lock:
-                out.write(prefix + line + "\n")
-                out.flush()
-
-    def poll(self) -> int | None:
-        return self.proc.poll()
-
-    def interrupt(self) -> None:
-        self.stopping = True
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-
-    def wait(self, timeout: float) -> int | None:
-        try:
-            return self.proc.wait(max(timeout, 0.0))
-        except subprocess.TimeoutExpired:
-            return None
-
-    def kill(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait(5)
-
-    def join_output(self) -> None:
-        self._reader.join(2)
+    spec: ProcessSpec
+    label: str
+    ns: str
+    values: Mapping[str, str]
 
 
 class Launcher:
@@ -209,15 +149,48 @@ class Launcher:
             self.values.update(choose_ports(graph.ports, self.values))
         except ValueError as exc:
             raise GraphError(f"{graph_path}: {exc}") from exc
-        self.children: list[_Child] = []
+        for name in graph.types:
+            if why := check_value(graph, name, self.values[name]):
+                raise GraphError(f"{graph_path}: {name}={self.values[name]!r} {why}")
+        self.drones: list[fleet.FleetDrone] = []
+        if any(spec.each_drone for spec in graph.processes):
+            try:
+                self.drones = fleet.plan_fleet(self.values, lambda: free_port("udp"))
+            except fleet.FleetError as exc:
+                raise GraphError(f"{graph_path}: {exc}") from exc
+        self.groups = self.plan()
+        self.namespaces = sorted({inst.ns for group in self.groups for inst in group})
+        self.children: list[Child] = []
+        self._started: list[list[Child]] = []  # the children, in the groups they started in
         self.failures: list[str] = []
         self.exit_code: int | None = None
-        self._alive: set[str] = set()
+        self._alive: set[tuple[str, str]] = set()  # (namespace, service)
         self._alive_cond = threading.Condition()
         self._out_lock = threading.Lock()
         self._session: zenoh.Session | None = None
         self._token_sub = None
-        self._width = max(len(p.name) for p in graph.processes)
+        self._width = max(len(inst.label) for group in self.groups for inst in group)
+
+    def plan(self) -> list[list[Instance]]:
+        """The processes to start, in groups started together: one group per spec, holding
+        one instance, or one per drone for an ``each_drone`` spec."""
+        groups = []
+        for spec in self.graph.processes:
+            if spec.each_drone is None:
+                groups.append([Instance(spec, spec.name, self.ns, self.values)])
+                continue
+            drones = fleet.drones_of(self.drones, spec.each_drone)
+            groups.append(
+                [
+                    Instance(spec, f"{d.ns}/{spec.name}", d.ns, {**self.values, **d.values})
+                    for d in drones
+                ]
+            )
+        return [group for group in groups if group]
+
+    def argv_of(self, inst: Instance) -> tuple[list[str], dict[str, str]]:
+        """The argv and extra environment of one instance."""
+        return build_argv(inst.spec, inst.values, self.graph_path, inst.ns, self.router)
 
     @classmethod
     def from_file(cls, path: str | Path, **kwargs) -> Launcher:
@@ -245,13 +218,13 @@ class Launcher:
 
     def _on_token(self, sample: zenoh.Sample) -> None:
         match = ALIVE.match(str(sample.key_expr))
-        if match is None or match["ns"] != self.ns:
+        if match is None or match["ns"] not in self.namespaces:
             return
         with self._alive_cond:
             if sample.kind == zenoh.SampleKind.PUT:
-                self._alive.add(match["service"])
+                self._alive.add((match["ns"], match["service"]))
             else:
-                self._alive.discard(match["service"])
+                self._alive.discard((match["ns"], match["service"]))
             self._alive_cond.notify_all()
 
     def start(self) -> None:
@@ -279,35 +252,48 @@ class Launcher:
                 identity=self.identity,
                 keys_dir=self.keys_dir,
                 insecure=self.insecure,
-                acl_namespaces=[self.ns],
+                acl_namespaces=self.namespaces,
             )
             options.namespace = self.ns
         else:
             options = ZenohOptions(mode="client", connect=[self.router], namespace=self.ns)
-        self._session = open_session(options)
+        self._session = (open_session if self.start_router else open_client_session)(options)
         where = ", ".join([self.router, *self.listen]) if self.start_router else self.router
         acl = " (access control on)" if options.access_control else ""
         self._say(f"{'router listening on' if self.start_router else 'using router'} {where}{acl}")
+        watched = self.namespaces[0] if len(self.namespaces) == 1 else "*"
         self._token_sub = self._session.liveliness().declare_subscriber(
-            ALIVE.wildcard(self.ns), self._on_token, history=True
+            ALIVE.wildcard(watched), self._on_token, history=True
         )
-        plans = [
-            (spec, *build_argv(spec, self.values, self.graph_path, self.ns, self.router))
-            for spec in self.graph.processes
-        ]
-        for spec, argv, env in plans:
-            self._say(f"starting {spec.name}: {' '.join(argv[1:] if spec.module else argv)}")
-            child = _Child(spec, argv, env, self.out, self._out_lock, self._width)
-            self.children.append(child)
-            self._wait_ready(child)
+        plans = [[(inst, *self.argv_of(inst)) for inst in group] for group in self.groups]
+        for group in plans:
+            started: list[Child] = []
+            self._started.append(started)
+            for inst, argv, env in group:
+                shown = " ".join(argv[1:] if inst.spec.module else argv)
+                self._say(f"starting {inst.label}: {shown}")
+                child = Child(
+                    inst.spec,
+                    argv,
+                    env,
+                    self.out,
+                    self._out_lock,
+                    self._width,
+                    label=inst.label,
+                    ns=inst.ns,
+                )
+                self.children.append(child)
+                started.append(child)
+            for child in started:
+                self._wait_ready(child)
 
-    def _wait_ready(self, child: _Child) -> None:
+    def _wait_ready(self, child: Child) -> None:
         if child.spec.ready == "none":
             return
         deadline = time.monotonic() + child.spec.ready_timeout_s
         started = time.monotonic()
         with self._alive_cond:
-            while child.name not in self._alive:
+            while (child.ns, child.spec.name) not in self._alive:
                 code = child.poll()
                 if code is not None:
                     raise LaunchError(f"{child.name} exited with code {code} before it was ready")
@@ -315,7 +301,7 @@ class Launcher:
                 if remaining <= 0:
                     raise LaunchError(
                         f"{child.name} not ready after {child.spec.ready_timeout_s:g} s "
-                        f"(no liveliness token {ALIVE.key(self.ns, service=child.name)})"
+                        f"(no liveliness token {ALIVE.key(child.ns, service=child.spec.name)})"
                     )
                 self._alive_cond.wait(min(remaining, 0.2))
         self._say(f"{child.name} ready in {time.monotonic() - started:.1f} s")
@@ -338,25 +324,30 @@ class Launcher:
                 break
         return self.stop()
 
+    def _reap(self, child: Child) -> None:
+        """Wait for an interrupted child (SIGKILL after its grace period); note failures."""
+        if child.proc.returncode is None:
+            grace = child.spec.stop_timeout_s
+            code = child.wait(grace)
+            if code is None:
+                self.failures.append(f"{child.name} ignored SIGINT for {grace:g} s")
+                self._say(self.failures[-1] + "; killing it")
+                child.kill()
+        code = child.proc.returncode
+        if child.stopping and code not in (0, -signal.SIGINT):
+            self.failures.append(f"{child.name} exited with code {code} when stopped")
+        child.join_output()
+
     def stop(self) -> int:
         """Stop every process in reverse order, close the router; the graph's exit status."""
         if self.exit_code is not None:
             return self.exit_code
-        for child in reversed(self.children):
-            if child.poll() is None:
-                child.interrupt()
-                grace = child.spec.stop_timeout_s
-                code = child.wait(grace)
-                if code is None:
-                    self.failures.append(f"{child.name} ignored SIGINT for {grace:g} s")
-                    self._say(self.failures[-1] + "; killing it")
-                    child.kill()
-                    code = child.proc.returncode
-            else:
-                code = child.proc.returncode
-            if child.stopping and code not in (0, -signal.SIGINT):
-                self.failures.append(f"{child.name} exited with code {code} when stopped")
-            child.join_output()
+        for group in reversed(self._started):  # a group stops together, as it started
+            for child in group:
+                if child.poll() is None:
+                    child.interrupt()
+            for child in group:
+                self._reap(child)
         if self._token_sub is not None:
             self._token_sub.undeclare()
         if self._session is not None:
@@ -405,11 +396,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--insecure", action="store_true", help="allow plain tcp/ off loopback (trusted networks)"
     )
     args = parser.parse_args(argv)
-    setup_logging()
     try:
         variables = _parse_vars(args.var)
         if args.scenario:
             variables["scenario"] = args.scenario
+        path = resolve_graph_path(args.graph)
+        check_variables(load_graph(path), path, variables)  # the command line's: names too
         launcher = Launcher.from_file(
             args.graph,
             router=args.router,
@@ -422,16 +414,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             insecure=args.insecure,
         )
         if args.check:
-            for spec in launcher.graph.processes:
-                argv_, _ = build_argv(
-                    spec, launcher.values, launcher.graph_path, launcher.ns, launcher.router
-                )
-                print(f"{spec.name}: {' '.join(argv_)}")
+            for group in launcher.groups:
+                for inst in group:
+                    print(f"{inst.label}: {' '.join(launcher.argv_of(inst)[0])}")
             return 0
     except GraphError as exc:
         print(f"dronewrapper up: {exc}", file=sys.stderr)
         return 2
 
+    setup_logging()  # the graph runs: log lines from here on (a bad graph only printed above)
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

@@ -22,9 +22,16 @@ class PortInUse(ValueError):
 
 
 def port_in_use(kind: str, port: int, host: str = "127.0.0.1") -> bool:
-    """Whether ``port`` (``kind`` udp/tcp) on ``host`` is bound by someone (a test bind
-    without address reuse fails even against sockets that allow reuse)."""
+    """Whether ``port`` (``kind`` udp/tcp) on ``host`` is bound by someone.
+
+    UDP: a test bind without address reuse, which fails even against sockets that allow reuse
+    (the bridge's). TCP: a test bind with address reuse, as the router binds: it fails against
+    a bound or listening socket but not against connections left in TIME_WAIT by a stopped
+    graph (those hold the port for a minute, and the router binds over them).
+    """
     with socket.socket(socket.AF_INET, PORT_KINDS[kind]) as sock:
+        if kind == "tcp":
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             sock.bind((host, port))
         except OSError as exc:

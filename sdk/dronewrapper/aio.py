@@ -19,6 +19,8 @@ no flight logic of its own. Blocking calls (take-off, landing, mode changes, par
 run on a worker thread and are awaited, so the event loop keeps running; getters and setpoints
 return at once, as in the sync API. Telemetry and frames are async iterators of the newest
 values: a slow consumer skips values instead of queueing them (never a backlog).
+
+Many drones at once: :class:`Fleet` (:mod:`dronewrapper.fleet_aio`).
 """
 
 from __future__ import annotations
@@ -32,10 +34,13 @@ import numpy as np
 
 from dronewrapper import telemetry
 from dronewrapper.drone import DroneWrapper
+from dronewrapper.fleet_aio import Fleet
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
+
+__all__ = ["Drone", "Fleet"]
 
 T = TypeVar("T")
 V = TypeVar("V")
@@ -136,6 +141,30 @@ class Drone:
 
     async def param_set(self, param: str, value: int | float, **kwargs: Any) -> int | float:
         return await self._run(self.sync.param_set, param, value, **kwargs)
+
+    async def goto(self, lat: float, lon: float, alt: float, **kwargs: Any) -> None:
+        await self._run(self.sync.goto, lat, lon, alt, **kwargs)
+
+    async def goto_local(self, x: float, y: float, z: float, **kwargs: Any) -> None:
+        await self._run(self.sync.goto_local, x, y, z, **kwargs)
+
+    async def return_to_launch(self, **kwargs: Any) -> None:
+        await self._run(self.sync.return_to_launch, **kwargs)
+
+    async def upload_mission(self, plan: Any, **kwargs: Any) -> int:
+        return await self._run(self.sync.upload_mission, plan, **kwargs)
+
+    async def start_mission(self, **kwargs: Any) -> None:
+        await self._run(self.sync.start_mission, **kwargs)
+
+    async def pause_mission(self, **kwargs: Any) -> None:
+        await self._run(self.sync.pause_mission, **kwargs)
+
+    async def set_envelope(self, **kwargs: Any) -> Any:
+        return await self._run(self.sync.set_envelope, **kwargs)
+
+    async def envelope(self, **kwargs: Any) -> Any:
+        return await self._run(self.sync.envelope, **kwargs)
 
     async def wait_for_connection(self, timeout: float = 10.0) -> State:
         return await self._run(self.sync.wait_for_connection, timeout)

@@ -9,6 +9,7 @@
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
     dronewrapper station [--host H] [--port P]       the web ground station (loopback)
+    dronewrapper ros2 [--set domain_id=N] [...]      the drone as ROS 2 topics/services (rmw_zenoh)
     dronewrapper record [KEYEXPR...] -o FILE.mcap    the bus to MCAP (--info FILE summarises)
     dronewrapper replay FILE.mcap [--rate R] [...]   a recording back on the bus
     dronewrapper foxglove [KEYEXPR...] [--port P]    the live bus to Foxglove (WebSocket)
@@ -16,9 +17,10 @@
     dronewrapper bench --quick [--target-ms MS]      this computer's speed, settings to use (stack)
     dronewrapper --version                           the installed version
 
-``up``, ``sim``, ``detect`` and ``station`` come with the on-board stack (``make setup``); the
-SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and ``doctor``; ``record``,
-``replay`` and ``foxglove`` come with its ``record`` extra (``pip install './sdk[record]'``).
+``up``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the on-board stack (``make
+setup``); the SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and
+``doctor``; ``record``, ``replay`` and ``foxglove`` come with its ``record`` extra (``pip
+install './sdk[record]'``).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ import threading
 from collections.abc import Sequence
 
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
-from dronewrapper.runtime.service import setup_logging
+from dronewrapper.runtime.service import plain_text, setup_logging
 
 # subcommand -> (module, function) in the on-board stack, imported only when used
 _STACK_COMMANDS = {
@@ -40,6 +42,7 @@ _STACK_COMMANDS = {
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
     "station": ("dronewrapper_ground_station.cli", "main"),
+    "ros2": ("dronewrapper_ros2_gateway.cli", "main"),
 }
 
 # subcommand -> (module, function) of the SDK's record extra (mcap, foxglove-sdk)
@@ -113,9 +116,9 @@ def _quiet_broken_pipe() -> None:
 def _echo(argv: Sequence[str]) -> int:
     import zenoh
 
-    from dronewrapper.echo import echo, keyexpr_problem
+    from dronewrapper.echo import echo, keyexpr_problem, path_warning
+    from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
-    from dronewrapper.runtime.node import open_session
 
     parser = argparse.ArgumentParser(prog="dronewrapper echo", description="print messages")
     parser.add_argument("keyexpr", help="key expression, e.g. drone/mavros/state or drone/**")
@@ -132,9 +135,11 @@ def _echo(argv: Sequence[str]) -> int:
     if problem:
         print(f"dronewrapper echo: {problem}", file=sys.stderr)
         return 2
+    if warning := path_warning(args.keyexpr):
+        print(f"dronewrapper echo: warning: {warning}", file=sys.stderr)
     stop = _stop_on_signals()
     try:
-        session = open_session(options_from_args(args))
+        session = open_client_session(options_from_args(args))
     except ConnectionError as exc:
         print(f"dronewrapper echo: {exc}", file=sys.stderr)
         return 1
@@ -158,7 +163,7 @@ def _stdout_writable() -> bool:
 def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.discovery import services_by_namespace
     from dronewrapper.doctor import describe_drone, listen, topic_families
-    from dronewrapper.runtime.node import open_session
+    from dronewrapper.router_reach import open_client_session
 
     parser = argparse.ArgumentParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
@@ -169,7 +174,7 @@ def _alive(argv: Sequence[str]) -> int:
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
     try:
-        session = open_session(options_from_args(args))
+        session = open_client_session(options_from_args(args))
     except ConnectionError as exc:
         print(f"dronewrapper alive: {exc}", file=sys.stderr)
         return 1
@@ -280,7 +285,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Dispatch ``dronewrapper SUBCOMMAND ...``."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
-        print(__doc__.strip())
+        print(plain_text(__doc__.strip()))
         return 0 if argv else 2
     if argv[0] in ("-V", "--version"):
         print(f"dronewrapper {_version()}")
@@ -318,7 +323,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return 2
         return int(entry(rest) or 0)
-    print(f"dronewrapper: unknown command {command!r}\n\n{__doc__.strip()}", file=sys.stderr)
+    usage = plain_text(__doc__.strip())
+    print(f"dronewrapper: unknown command {command!r}\n\n{usage}", file=sys.stderr)
     return 2
 
 

@@ -10,6 +10,7 @@ import os
 
 import zenoh
 
+from dronewrapper.diagnosis import refused_identity, seconds
 from dronewrapper.errors import NotConnected
 from dronewrapper.msgs.registry import ALIVE, STATE
 from dronewrapper.runtime.node import alive_services, open_session
@@ -50,6 +51,8 @@ def connection_problem(
     state_age: float,
     fresh_s: float,
     waited: float,
+    identity: str = "",
+    standing: tuple[str, bool] | None = None,
 ) -> str:
     """Why a drone is not usable, in one sentence naming what is missing (pure).
 
@@ -60,10 +63,17 @@ def connection_problem(
         state_connected: ``State.connected`` of the newest State, None if none arrived.
         state_age: seconds since the newest State; fresh_s: older is "stopped".
         waited: seconds waited, for the message.
+        identity: our certificate on a ``tls/`` router ("" on a plain link); with it, a router
+            that shows nothing at all, or a local key store that says revoked, means the
+            router refused the identity.
+        standing: ``(role, refused)`` from the local key store, None when unknown.
     """
     state_key = STATE.key(ns)
     if not linked:
         return f"cannot reach the Zenoh router at {connect}: no router or peer linked"
+    revoked = standing is not None and standing[1]
+    if identity and state_connected is None and (revoked or not alive_keys):
+        return refused_identity(identity, connect)
     grouped = services_by_namespace(alive_keys)
     here = grouped.get(ns, [])
     elsewhere = [
@@ -78,11 +88,11 @@ def connection_problem(
         if bridges:
             return (
                 f"bridge {', '.join(bridges)} is alive in namespace {ns!r} but published no "
-                f"State on {state_key} within {waited:g} s"
+                f"State on {state_key} within {seconds(waited)} s"
             )
         return (
             f"no bridge for drone {ns!r} on the router at {connect}: nothing published "
-            f"{state_key} within {waited:g} s (alive in {ns!r}: {alive}{hint}). Start one, "
+            f"{state_key} within {seconds(waited)} s (alive in {ns!r}: {alive}{hint}). Start one, "
             "e.g. `dronewrapper up compose/sim_iris.yaml`"
         )
     if state_age > fresh_s:
@@ -93,7 +103,7 @@ def connection_problem(
     if not state_connected:
         return (
             f"the bridge of drone {ns!r} is up but its autopilot is not connected (no "
-            f"heartbeat) after {waited:g} s"
+            f"heartbeat) after {seconds(waited)} s"
         )
     return f"drone {ns!r} is connected"
 
@@ -113,8 +123,8 @@ def open_client(
         return open_session(options, timeout=timeout)
     except ConnectionError as exc:
         raise NotConnected(
-            f"cannot reach the Zenoh router at {connect} within {timeout:g} s: is it running? "
-            f"(start one with `dronewrapper router --listen {connect}` or "
+            f"cannot reach the Zenoh router at {connect} within {seconds(timeout)} s: is it "
+            f"running? (start one with `dronewrapper router --listen {connect}` or "
             "`dronewrapper up compose/sim_iris.yaml`)"
         ) from exc
 

@@ -1,7 +1,8 @@
 """``dronewrapper doctor``: diagnose a setup and say what to fix.
 
 Checks, in order: the router is reachable; which processes are alive in which namespace; each
-drone's autopilot link (kind, connected, mode, battery); every telemetry stream's rate and age
+drone's autopilot link (kind, connected, mode, battery); ROS 2 (rmw_zenoh) endpoints that
+disagree on a type or its hash; every telemetry stream's rate and age
 against the registry; the senders' clocks against this computer's; the link bandwidth through
 the router. Each line starts with ``ok``, ``warn`` or ``FAIL``; the exit status is 1 if any check
 failed. Images are left out unless asked for (``--images``): on a slow link, listening to raw
@@ -36,6 +37,7 @@ from dronewrapper.msgs import codec
 from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.registry import STATE, TOPICS, Topic, topic_for_key
 from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image
+from dronewrapper.router_reach import NO_ROUTER_HINT, open_client_session
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 
@@ -184,6 +186,26 @@ def stream_findings(heard: Heard) -> list[StreamHealth]:
     return findings
 
 
+def ros2_findings(session: zenoh.Session, timeout: float = 1.0) -> list[tuple[str, str]]:
+    """ROS 2 endpoints (rmw_zenoh liveliness tokens) on this router: each topic or service
+    whose endpoints disagree on its type or hash is a FAIL naming both sides (they never
+    exchange a message); none at all, no finding."""
+    from dronewrapper.ros2.mismatch import disagreements
+    from dronewrapper.ros2.names import ADMIN, parse_endpoint
+
+    endpoints = []
+    for reply in session.liveliness().get(f"{ADMIN}/**", timeout=timeout):
+        if reply.ok is not None and (found := parse_endpoint(str(reply.ok.key_expr))):
+            endpoints.append(found)
+    if not endpoints:
+        return []
+    problems = disagreements(endpoints)
+    if problems:
+        return [(FAIL, problem.describe()) for problem in problems]
+    names = {e.topic for e in endpoints}
+    return [(OK, f"ROS 2: {len(endpoints)} endpoints on {len(names)} names, all types agree")]
+
+
 def run_doctor(
     options: ZenohOptions,
     report: Report,
@@ -204,9 +226,10 @@ def run_doctor(
     where = ", ".join(options.connect) or "the default router"
     started = time.monotonic()
     try:
-        session = open_session(options, timeout=timeout)
+        session = open_client_session(options, timeout=timeout)
     except ConnectionError as exc:
-        say(FAIL, f"router: {exc}; start one with `dronewrapper up compose/GRAPH.yaml`")
+        hint = "" if NO_ROUTER_HINT in str(exc) else f"; {NO_ROUTER_HINT}"
+        say(FAIL, f"router: {exc}{hint}")
         return 1
     try:
         say(OK, f"router {where} reachable ({(time.monotonic() - started) * 1000:.0f} ms)")
@@ -216,6 +239,8 @@ def run_doctor(
         heard = listen(session, topic_families(images), listen_s)
         for ns, processes in grouped.items():
             say(*describe_drone(ns, processes, heard.latest))
+        for finding in ros2_findings(session, min(timeout, 1.0)):
+            say(*finding)
         for health in stream_findings(heard):
             if health.verdict != OK or health.expected_hz > 0:
                 say(health.verdict, describe_stream(health))

@@ -41,8 +41,8 @@ import numpy as np
 import zenoh
 
 from dronewrapper import flying, images, setpoints, telemetry
+from dronewrapper.diagnosis import identity_facts, no_reply, seconds
 from dronewrapper.discovery import (
-    BRIDGE_PREFIX,
     alive_services,
     connection_problem,
     default_connect,
@@ -57,6 +57,7 @@ from dronewrapper.errors import (
     Timeout,
 )
 from dronewrapper.health import stale_after
+from dronewrapper.missions import MissionsMixin
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
@@ -84,6 +85,7 @@ from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.node import call_service, encoding_for
 from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.runtime.qos import qos_for
+from dronewrapper.script_log import show_progress
 from dronewrapper.streamer import SetpointStreamer
 
 T = TypeVar("T")
@@ -141,7 +143,7 @@ def _camera_key_name(camera: str) -> str:
     raise InvalidArgument(f"unknown camera {camera!r}: use 'frontal' or 'ventral'")
 
 
-class DroneWrapper:
+class DroneWrapper(MissionsMixin):
     """One drone, reached through a Zenoh router. Several objects fly several drones.
 
     Args:
@@ -208,6 +210,7 @@ class DroneWrapper:
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
         self.connect = connect or default_connect()
+        show_progress()  # INFO lines on stderr for a script that configured no logging
         if compressed_images is None:
             remote = session is None and node is None and not is_local_endpoint(self.connect)
             compressed_images = remote and images.has_jpeg_decoder()
@@ -234,7 +237,7 @@ class DroneWrapper:
         self._clock, self._sleep = clock, sleep
         self._own_session = session is None and node is None
         deadline = time.monotonic() + timeout
-        identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
+        identity = self._identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
         self.commander = commander or default_commander(identity)
         self._attachment = commander_attachment(self.commander)
         if node is not None:
@@ -288,6 +291,7 @@ class DroneWrapper:
         self._velocity_local = self._latest(registry.VELOCITY_LOCAL)
         self._global = self._latest(registry.GLOBAL_POSITION)
         self._battery = self._latest(registry.BATTERY)
+        self._declare_mission_inputs()  # home, envelope, mission (missions.py)
         self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
         """The autopilot's last 20 text messages (newest last)."""
         self._subscribe(registry.STATUSTEXT, self.status_texts.append)
@@ -512,9 +516,11 @@ class DroneWrapper:
         ]
         if missing:
             raise NotConnected(
-                f"the bridge of drone {self.ns!r} is connected but after {timeout:g} s nothing "
-                f"arrived on: {', '.join(missing)}; is the link too slow, or the bridge old?"
+                f"the bridge of drone {self.ns!r} is connected but after {seconds(timeout)} s "
+                f"nothing arrived on: {', '.join(missing)}; is the link too slow, or the bridge "
+                "old?"
             )
+        log.info("connected to drone %r via %s", self.ns, self.connect)
         return state
 
     def _diagnose(self, timeout: float) -> str:
@@ -537,6 +543,7 @@ class DroneWrapper:
             state_age=self._state.age(),
             fresh_s=STATE_FRESH_S,
             waited=timeout,
+            **identity_facts(self._identity, self.connect),
         )
 
     def _require_connected(self, what: str) -> State:
@@ -886,19 +893,14 @@ class DroneWrapper:
             raise CommandRefused(what, exc.message) from None
 
     def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
-        """A call nobody answered: Timeout if a bridge is alive (slow or stuck), else
-        NotConnected (none running)."""
+        """A call nobody answered, diagnosed (:func:`dronewrapper.diagnosis.no_reply`)."""
         try:
-            names = sorted(self._alive_services(self.ns))
+            names = self._alive_services(self.ns)
         except Exception:
-            names = []
-        alive = any(n.split("/")[-1].startswith(BRIDGE_PREFIX) for n in names)
-        if alive:
-            return Timeout(f"{what}: no reply from {key} within {timeout:g} s")
-        return NotConnected(
-            f"{what}: no reply from {key} within {timeout:g} s: no bridge is running for "
-            f"drone {self.ns!r} on {self.connect}"
-        )
+            names = set()
+        ask = {"ns": self.ns, "connect": self.connect, "alive_names": names}
+        ask["sees_telemetry"] = self._state.value is not None
+        return no_reply(what, key, timeout, **ask, **identity_facts(self._identity, self.connect))
 
     def _alive_services(self, ns: str) -> set[str]:
         """The liveliness keys present in ``ns`` ("*": all), through the node when given."""
@@ -1012,6 +1014,7 @@ class DroneWrapper:
             raise InvalidArgument(f"h must be > 0 m, got {h}")
         now = self._clock()
         self._require_connected("takeoff")
+        self._check_takeoff(h)  # above the envelope: refused, the limit named
         kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
         self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs))
 

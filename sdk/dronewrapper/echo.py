@@ -13,6 +13,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
+import os
 import sys
 import threading
 import time
@@ -97,6 +98,17 @@ def keyexpr_problem(keyexpr: str) -> str | None:
     if keyexpr.endswith("/") or "//" in keyexpr or not keyexpr:
         return f"{keyexpr!r} has an empty chunk; chunks are separated by single '/'"
     return None
+
+
+def path_warning(argument: str, exists: Callable[[str], bool] = os.path.exists) -> str | None:
+    """A warning when a key expression argument names a file or folder here: the shell expanded
+    an unquoted ``sim/**`` into paths (pure apart from ``exists``)."""
+    if not exists(argument):
+        return None
+    return (
+        f"{argument!r} is a file or folder in this directory: did the shell expand an unquoted "
+        f"key expression? Quote it, as in 'sim/**'"
+    )
 
 
 def light_key_families() -> list[str]:

@@ -1,10 +1,10 @@
 """The SDK's blocking take-off and landing: the runtime's flight steps, driven to the end.
 
-``DroneWrapper.takeoff`` / ``land`` do not write the sequences again: they build the
+``DroneWrapper.takeoff`` / ``land`` build the
 :mod:`dronewrapper.runtime.flight` ``Takeoff`` / ``Landing`` that a service's loop steps, on a
 :class:`WrapperAircraft` (the wrapper's telemetry, setpoint stream and service calls), and
 :func:`fly` steps them on the caller's thread until done. A service call blocks its step (up
-to the wrapper's ``service_timeout``, as the SDK's calls always did); the climb and the
+to the wrapper's ``service_timeout``, like every other call of the SDK); the climb and the
 descent are watched every ``interval`` s of the wrapper's clock. A :class:`FlightError`
 becomes the SDK's exception (:func:`drone_error`), with the same text.
 """

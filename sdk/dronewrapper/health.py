@@ -19,6 +19,9 @@ OK, WARN, FAIL = "ok", "warn", "fail"
 
 RATE_SLACK = 0.7
 """A stream is slow below this fraction of its registry rate (jitter and short windows)."""
+MIN_ARRIVALS_FOR_RATE = 5
+"""Fewer arrivals than this measure no rate worth judging (``echo --count 2`` sees one or two
+gaps, and one late frame halves the estimate)."""
 CLOCK_SKEW_WARN_S = 0.25
 """Stamps further than this from our clock point at unsynchronised clocks (or a slow link)."""
 
@@ -91,12 +94,14 @@ def judge_stream(key: str, expected_hz: float, log: StreamLog, end: float) -> St
         if not log.arrivals:
             verdict = FAIL
             notes.append(f"nothing arrived (expected >= {expected_hz:g} Hz)")
-        elif rate < RATE_SLACK * expected_hz:
+        elif len(log.arrivals) >= MIN_ARRIVALS_FOR_RATE and rate < RATE_SLACK * expected_hz:
             verdict = WARN
             notes.append(f"{rate:.1f} Hz, expected >= {expected_hz:g} Hz")
         elif is_stale(expected_hz, age):
             verdict = WARN
             notes.append(f"stopped {age:.1f} s ago (stale after {stale_after(expected_hz):g} s)")
+        elif len(log.arrivals) < MIN_ARRIVALS_FOR_RATE:
+            notes.append(f"{len(log.arrivals)} samples: too few to judge the rate")
     if skew is not None and abs(skew) > CLOCK_SKEW_WARN_S:
         verdict = WARN if verdict == OK else verdict
         notes.append(f"stamps {skew * 1000:+.0f} ms from this clock")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
 from dronewrapper_bridge_mavlink.setpoints import Limits
@@ -52,6 +53,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
     )  # Hz asked with SET_MESSAGE_INTERVAL
     limits: Limits = msgspec.field(default_factory=Limits)
+    envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly (envelope.py)
+    upload_fence: bool = True  # give the autopilot the envelope as its fence once home is known
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off

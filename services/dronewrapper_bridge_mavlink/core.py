@@ -8,8 +8,8 @@ executes (MAVLink sends, Zenoh samples). Service calls that wait for acknowledge
 :mod:`operations` the core advances as messages and time arrive; the node only waits on them.
 The sim's autopilot (sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
 
-Size: just over 400 lines: the core's entry points and its outbox; the handlers are in
-``receive``, the waiting service calls in ``operations``, parameters in ``parameters``.
+This module holds the core's entry points and its outbox; the handlers are in ``receive``,
+the waiting service calls in ``operations``, parameters in ``parameters``.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.core_driver import PureCore
 from dronewrapper_bridge_mavlink import commands as cmds
-from dronewrapper_bridge_mavlink import receive
+from dronewrapper_bridge_mavlink import missions, receive
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
@@ -80,6 +80,7 @@ class BridgeCore(PureCore):
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
+        self.missions = missions.MissionState(config.envelope)
         self.params: dict[str, tuple[float, int, int]] = {}  # id -> (raw, type, arrival no.)
         self.param_values_received = 0  # PARAM_VALUEs so far: orders them against our sends
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
@@ -250,6 +251,7 @@ class BridgeCore(PureCore):
         if now - self._last_send < 0.5 / self.config.stream_rate_hz:
             tick.send = None  # just forwarded by the subscriber
         self._act(tick, send=self.connected)
+        missions.tick(self)
         self._periodic()
         self.advance(now, stamp)
 
@@ -306,6 +308,9 @@ class BridgeCore(PureCore):
             if now - self._last_reject_log >= 2.0:
                 self._last_reject_log = now
                 log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
+            return
+        if missions.refuse_setpoint(self, target, kind):
+            self.rejected_setpoints += 1
             return
         self.failsafe.on_setpoint(target, kind, now)
         self._act(self.failsafe.tick(now, self.pose()), send=True)

@@ -1,9 +1,9 @@
 """What changed while the autopilot link was down (pure), so it is reported when it returns.
 
 A failsafe that happens while the link is down (the autopilot's own RTL or land on data-link
-loss, a disarm, an emergency) used to go unreported: the bridge simply published the new state
-as if nothing had happened. On reconnection the state the autopilot reports is compared with
-the last one heard before the gap, and every difference is named.
+loss, a disarm, an emergency) would otherwise look like an ordinary new state. On reconnection
+the state the autopilot reports is compared with the last one heard before the gap, and every
+difference is named.
 """
 
 from __future__ import annotations

@@ -21,8 +21,8 @@ from dronewrapper.msgs.mavros import PositionTarget, State
 from dronewrapper.runtime import Node, Ratekeeper
 from dronewrapper.runtime.core_driver import CoreDriver
 from dronewrapper.security.guard import CommandGuard
+from dronewrapper_bridge_mavlink import missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
-from dronewrapper_bridge_mavlink import parameters
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
@@ -40,6 +40,10 @@ PUBLISHED = (
     registry.GLOBAL_POSITION,
     registry.BATTERY,
     registry.STATUSTEXT,
+    registry.ENVELOPE,  # missions.py: the envelope, home and the mission
+    registry.HOME_POSITION,
+    registry.MISSION_WAYPOINTS,
+    registry.MISSION_REACHED,
 )
 
 
@@ -150,6 +154,8 @@ class Bridge:
         self._serve(registry.SET_MODE, ops.set_mode, "set_mode")
         self._serve(registry.PARAM_GET, parameters.param_get)
         self._serve(registry.PARAM_SET, parameters.param_set, "param_set")
+        for service, steps, guarded in missions.SERVICES:
+            self._serve(service, steps, guarded)
         self.guard.serve(self.node)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),

@@ -36,6 +36,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
@@ -143,6 +144,7 @@ def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
         raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
     if core.ext.landed_state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
+    missions.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
     yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
     if autopilot == AUTOPILOT_ARDUPILOT:
         altitude = height if not math.isnan(height) else 2.5
@@ -226,6 +228,7 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
     primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
     if primed:
         yield from prime(core)
+    missions.refuse_mode(core, params.name)  # no guided mode while outside the envelope
     core.failsafe.on_mode_requested(params.name, core.now)
     pending, message = yield from exchange(
         core,

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from dronewrapper.msgs import registry
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink.freshness import boot_ms_of
 from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.telemetry import (
@@ -200,3 +201,4 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
     "COMMAND_ACK": on_command_ack,
     "PARAM_VALUE": on_param_value,
 }
+HANDLERS.update(missions.HANDLERS)  # the mission protocol, home (missions.py)

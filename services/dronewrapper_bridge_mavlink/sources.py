@@ -1,8 +1,8 @@
 """One autopilot per system id (pure): a second sender with the same id is flagged, not mixed.
 
 Two simulators (or a simulator and a real autopilot) sending to the same UDP port with the
-same system id used to be merged into one stream: poses jumped between two aircraft, commands
-went to whichever spoke last, and the link looked lost for seconds. The first address heard for
+same system id would merge into one stream: poses jumping between two aircraft, commands going
+to whichever spoke last, the link looking lost for seconds. The first address heard for
 a system id is its autopilot; while it keeps talking, messages with that id from any other
 address are dropped and reported. When it has been silent for ``TAKEOVER_SILENCE_S`` the new
 address takes over (an autopilot restarted on a new UDP source port).

@@ -3,7 +3,7 @@
 Talks to the Tello at ``tello_address`` (default 192.168.10.1, the Tello's Wi-Fi; a simulated
 Tello: 127.0.0.1), publishes state, telemetry (ENU/FLU, position dead-reckoned) and the
 decoded frontal camera, serves arming/takeoff/land/set_mode/param, flies setpoints with ``rc``
-sticks, and keeps DESIGN.md's failsafe contract.
+sticks, and keeps the failsafe contract of docs/design.md.
 """
 
 import argparse

@@ -6,8 +6,18 @@ import math
 
 import msgspec
 
+from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig
 from dronewrapper_bridge_tello.sticks import StickScale
+
+TELLO_ENVELOPE = Envelope(
+    max_altitude=10.0,
+    max_distance=30.0,
+    max_horizontal_speed=3.0,
+    max_vertical_speed=2.0,
+    breach_action="land",
+)
+"""A Tello's default envelope: 10 m up, 30 m out (its Wi-Fi's reach), land on a breach."""
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -46,6 +56,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     command_lease: bool = False  # obey one commander at a time (security.lease)
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     scale: StickScale = msgspec.field(default_factory=StickScale)
+    envelope: Envelope = msgspec.field(default_factory=lambda: TELLO_ENVELOPE)  # envelope.py
 
     def __post_init__(self) -> None:
         self.failsafe_config()  # raises ValueError naming a bad timeout or action

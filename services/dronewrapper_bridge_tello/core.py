@@ -32,6 +32,7 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.core_driver import PureCore
 from dronewrapper.runtime.operation import Operation
+from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
@@ -75,6 +76,7 @@ class TelloCore(PureCore):
         self.config = config
         self.scale = config.scale
         self.failsafe = Failsafe(config.failsafe_config())
+        self.missions = missions.TelloMissions(config.envelope)
         self.telemetry = Telemetry(
             velocity_frame=config.velocity_frame,
             reference_yaw=math.radians(config.reference_yaw_deg),
@@ -217,6 +219,9 @@ class TelloCore(PureCore):
                 self._last_reject_log = now
                 log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
             return
+        if missions.refuse_setpoint(self, target, kind):
+            self.rejected_setpoints += 1
+            return
         self.failsafe.on_setpoint(target, kind, now)
 
     def tick(self, now: float, stamp: float) -> None:
@@ -244,6 +249,7 @@ class TelloCore(PureCore):
             self._last_reconnect = now
             if self._connect_op is None or self._connect_op.done:
                 self._connect_op = self.start(ops.connect(self), now, stamp, background=True)
+        missions.tick(self)
         self.publish_state()
         self.advance(now, stamp)
 

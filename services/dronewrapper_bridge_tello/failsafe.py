@@ -1,4 +1,4 @@
-"""The failsafe contract of DESIGN.md for a Tello, as a pure state machine (time injected).
+"""The failsafe contract of docs/design.md for a Tello, as a pure state machine (time injected).
 
 The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
 config's shape) is the shared :mod:`dronewrapper.runtime.command_lease`; this module adds what

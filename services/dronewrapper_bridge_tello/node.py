@@ -24,6 +24,7 @@ from dronewrapper.runtime import Node, Ratekeeper
 from dronewrapper.runtime.core_driver import CoreDriver
 from dronewrapper.security.guard import CommandGuard
 from dronewrapper.security.wifi import open_wifi_warning
+from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import Outbox, TelloCore
@@ -42,6 +43,10 @@ PUBLISHED = (
     registry.VELOCITY_LOCAL,
     registry.BATTERY,
     registry.STATUSTEXT,
+    registry.ENVELOPE,  # missions.py: the envelope, home and the mission
+    registry.HOME_POSITION,
+    registry.MISSION_WAYPOINTS,
+    registry.MISSION_REACHED,
 )
 
 
@@ -143,6 +148,8 @@ class Bridge:
         self._serve(registry.SET_MODE, ops.set_mode, "set_mode")
         self._serve(registry.PARAM_GET, ops.param_get)
         self._serve(registry.PARAM_SET, ops.param_set, "param_set")
+        for service, steps, guarded in missions.SERVICES:
+            self._serve(service, steps, guarded)
         self.guard.serve(self.node)
         loops = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),

@@ -24,6 +24,7 @@ import re
 from collections.abc import Generator
 from typing import TYPE_CHECKING, Any
 
+from dronewrapper.envelope import EnvelopeError, check_takeoff
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -39,6 +40,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
+from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.operation import Steps
 from dronewrapper_bridge_tello.replies import Pending, is_ok
 
@@ -171,6 +173,10 @@ def takeoff(core: TelloCore, request: CommandTOL) -> Steps:
         raise ValueError(f"altitude must be in (0, 30] m or NaN, got {height!r}")
     if core.telemetry.landed.state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=0, message="already flying")
+    try:  # above the envelope: refused, the limit named
+        check_takeoff(core.missions.envelope, height)
+    except EnvelopeError as exc:
+        raise ServiceError(str(exc), "refused") from None
     core.telemetry.reset_position()
     core.telemetry.landed.on_takeoff_sent()
     core.failsafe.on_takeoff_or_land()

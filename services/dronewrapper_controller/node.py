@@ -11,10 +11,13 @@ camera frame's stamp; take-off and landing as non-blocking sequences, see
 :class:`Controller` is the life cycle as steps in injected time: wait for the bridge ->
 announce ready -> take off to ``takeoff.height`` (if ``takeoff.on_start``; the servo only
 watches meanwhile) -> servo until stopped -> land (``on_exit: land``) or send a zero command for
-0.2 s and stop commanding (``on_exit: stop``). With ``dry_run`` no aircraft is involved:
-announce ready -> servo until stopped, the commands only in the status. :func:`run` drives it
-on the real clock: it wakes on each new detections message and otherwise at the next control
-period, setpoint or status due, so a stop request is seen within one control period.
+0.2 s and stop commanding (``on_exit: stop``). A landing another commander orders while the
+controller servos (:mod:`~dronewrapper_controller.yielding`) ends its commanding at once: it
+yields, reports ``idle`` and, when stopped, neither lands nor commands. With ``dry_run`` no
+aircraft is involved: announce ready -> servo until stopped, the commands only in the status.
+:func:`run` drives it on the real clock: it wakes on each new detections message and otherwise
+at the next control period, setpoint or status due, so a stop request is seen within one
+control period.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from dronewrapper.runtime.flight import FlightError, Landing, NotReady, StepRefu
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop
+from dronewrapper_controller.yielding import ForeignLanding
 
 log = logging.getLogger("controller")
 
@@ -43,15 +47,21 @@ STOP_ZERO_S = 0.2
 TAKEOFF_RETRY_S = 2.0  # a take-off refused while the autopilot gets ready is tried again after
 """``on_exit: stop``: how long the zero command is streamed before commanding stops (s)."""
 
-WAIT, TAKEOFF, SERVO, LANDING, STOPPING, DONE = (
+WAIT, TAKEOFF, SERVO, LANDING, STOPPING, YIELDED, DONE = (
     "wait",
     "takeoff",
     "servo",
     "landing",
     "stopping",
+    "yielded",
     "done",
 )
-STATUS_PHASE = {WAIT: CONTROLLER_IDLE, TAKEOFF: CONTROLLER_TAKEOFF, LANDING: CONTROLLER_LANDING}
+STATUS_PHASE = {
+    WAIT: CONTROLLER_IDLE,
+    TAKEOFF: CONTROLLER_TAKEOFF,
+    LANDING: CONTROLLER_LANDING,
+    YIELDED: CONTROLLER_IDLE,
+}
 """The state the status reports in each phase (others: the servo's own state)."""
 
 
@@ -119,6 +129,7 @@ class Controller:
         self._takeoff_wait_until = math.inf
         self._landing: Landing | None = None
         self._stop_commanding_at = math.inf
+        self._foreign_landing = ForeignLanding()
         if config.dry_run:
             log.info("%s dry run: commands are shown in the status, not sent", config.mode)
             node.announce()
@@ -134,6 +145,8 @@ class Controller:
         """Do what is due at ``now`` (loop clock, s); never waits."""
         if self.node.stopping and self.phase in (WAIT, TAKEOFF, SERVO):
             self._shut_down(now)
+        elif self.node.stopping and self.phase == YIELDED:
+            self.phase = DONE  # another commander landed it: nothing of ours to undo
         if self.phase == WAIT:
             self._wait_for_bridge(now)
         elif self.phase == TAKEOFF:
@@ -246,6 +259,8 @@ class Controller:
             self._servo(now)
 
     def _servo(self, now: float) -> None:
+        if self.commander is not None and self._yield_to_a_foreign_landing():
+            return
         if not self._new_input(now):
             return
         try:
@@ -261,6 +276,21 @@ class Controller:
         if cmd.state != self._logged_state:
             log.info("state %s", cmd.state)
             self._logged_state = cmd.state
+
+    def _yield_to_a_foreign_landing(self) -> bool:
+        """Stop commanding for good when another commander lands the aircraft."""
+        assert self.commander is not None
+        state, extended = self.commander.state.value, self.commander.extended.value
+        reason = self._foreign_landing.reason(
+            None if state is None else state.mode,
+            None if extended is None else extended.landed_state,
+        )
+        if reason is None:
+            return False
+        log.warning("%s: the controller stops commanding until it is started again", reason)
+        self.commander.stop()
+        self.phase = YIELDED
+        return True
 
     def _shut_down(self, now: float) -> None:
         """Land (``on_exit: land``) or stream a zero command briefly and stop commanding."""

@@ -1,10 +1,10 @@
 """Who may do what on the station (pure: no sockets, no clocks).
 
-Loopback is trusted (DESIGN.md, Security): a page opened on the station's own machine, through
-a loopback address, is an operator's. From any other address a page is an operator's only with
+Loopback is trusted (docs/security.md): a page opened on the station's own machine, through a
+loopback address, is an operator's. From any other address a page is an operator's only with
 the one-time token printed when the station starts; without it, an observer's: it watches and
-never commands. The project's operator certificates (mTLS) do not exist yet; when they do they
-replace the token.
+never commands. What the station itself may do on a drone's router is its own certificate's
+role (``--identity``), judged by the router's access control.
 
 Two browser attacks are refused whatever the token: a page from another site sending commands
 through the operator's browser (the ``Origin`` must be the station itself) and DNS rebinding (a

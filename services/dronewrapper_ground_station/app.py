@@ -102,11 +102,20 @@ def _command_action(link: DroneLink, command: str, body: Any, config: Config) ->
         if mode not in MODES and not mode.replace(".", "").replace("_", "").isalnum():
             raise requests.BadRequest(f"mode {mode!r} is not a mode name")
         return lambda: link.set_mode(mode)
+    if command == "upload_plan":
+        plan = body.get("plan") if isinstance(body, dict) else None
+        if not isinstance(plan, dict):
+            raise requests.BadRequest("plan must be a QGroundControl .plan document (an object)")
+        return lambda: link.upload_plan(plan)
     simple = {
         "arm": link.arm,
         "disarm": link.disarm,
         "land": link.land,
         "hold": link.hold,
+        "start_mission": link.start_mission,
+        "pause_mission": link.pause_mission,
+        "rtl": link.return_to_launch,
+        "reset": link.reset,
     }
     if command in simple:
         return simple[command]
@@ -185,6 +194,15 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
             return _error(409, str(exc))
         log.info("%s %s done in %.1f s", ns, name, time.monotonic() - started)
         return _ok({"ok": True, "command": name, "seconds": time.monotonic() - started})
+
+    async def land_all(request: Request) -> Response:
+        refused = _operator_check(request)
+        if refused:
+            return refused
+        outcomes = await run_in_threadpool(fleet.land_all)
+        log.info("land all: %s", ", ".join(f"{ns} {what}" for ns, what in outcomes.items()))
+        landed = all(what == "landed" for what in outcomes.values())
+        return _ok({"ok": landed, "drones": outcomes})
 
     async def objects(_: Request) -> Response:
         return _ok(fleet.objects.snapshot())
@@ -268,6 +286,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                     "type": "telemetry",
                     "t": time.time(),
                     "role": role,
+                    "router": fleet.router(),
                     "fleet": fleet.summary(),
                     "drones": {ns: link.snapshot() for ns, link in list(fleet.links.items())},
                     "objects": fleet.objects.snapshot(),
@@ -355,6 +374,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         Route("/api/drones", drones),
         Route("/api/drones/{ns}", drone),
         Route("/api/drones/{ns}/{command}", command, methods=["POST"]),
+        Route("/api/fleet/land", land_all, methods=["POST"]),
         Route("/api/objects", objects),
         Route("/api/objects/{name}/velocity", object_velocity, methods=["POST"]),
         Route("/api/world", world),

@@ -17,11 +17,13 @@ from typing import Any, TypeVar
 
 from dronewrapper import DroneWrapper
 from dronewrapper.discovery import BRIDGE_PREFIX, services_by_namespace
+from dronewrapper.errors import CommandRefused, NotConnected
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
-from dronewrapper.msgs.simulation import WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import VehicleReset, WorldLoad, WorldQuery, WorldState
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
@@ -47,6 +49,9 @@ TELEMETRY: tuple[tuple[str, Topic[Any], Callable[[Any], dict[str, Any]]], ...] =
     ("ground_truth", registry.SIM_GROUND_TRUTH, snapshot.pose_fields),
     ("controller", registry.CONTROLLER_STATUS, snapshot.controller_fields),
     ("detections", registry.DETECTIONS, snapshot.detection_fields),
+    ("home", registry.HOME_POSITION, snapshot.home_fields),
+    ("mission", registry.MISSION_WAYPOINTS, snapshot.mission_fields),
+    ("envelope", registry.ENVELOPE, snapshot.envelope_fields),
 )
 
 
@@ -219,6 +224,46 @@ class DroneLink:
         self._note("land")
         self.drone.land(timeout=self.config.command_timeout)
 
+    def upload_plan(self, plan: dict[str, Any]) -> None:
+        """Upload a QGroundControl ``.plan`` document as the drone's mission."""
+        self._note("upload_plan")
+        self.drone.upload_mission(plan)
+
+    def start_mission(self) -> None:
+        self.deadman.release()
+        self._note("start_mission")
+        self.drone.start_mission()
+
+    def pause_mission(self) -> None:
+        self._note("pause_mission")
+        self.drone.pause_mission()
+
+    def return_to_launch(self) -> None:
+        self.deadman.release()
+        self._note("return_to_launch")
+        self.drone.return_to_launch(timeout=self.config.command_timeout)
+
+    def reset(self) -> None:
+        """Put this simulated drone back at its start pose, landed (``{ns}/sim/world/reset``).
+
+        Raises:
+            NotConnected: no simulator answers for this drone (a real aircraft).
+            CommandRefused: the simulator could not reset it.
+        """
+        self.deadman.release()
+        self.drone.stop_commanding()
+        self._note("reset")
+        try:
+            reply = self._node.call(
+                registry.SIM_RESET, VehicleReset(), ns=self.ns, timeout=self.config.command_timeout
+            )
+        except ServiceUnavailable:
+            raise NotConnected(f"{self.ns}: no simulator answers: a real aircraft?") from None
+        except ServiceError as exc:
+            raise CommandRefused("reset", exc.message) from None
+        if not reply.success:
+            raise CommandRefused("reset", reply.message)
+
     def arm(self) -> None:
         self.drone.arm()
 
@@ -310,11 +355,14 @@ class Fleet:
         *,
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], Any] = time.sleep,
+        router_linked: Callable[[], bool] | None = None,
     ) -> None:
         self.node = node
         self.config = config
         self.clock = clock
         self._sleep = sleep
+        self._router_linked = router_linked or (lambda: session_linked(node))
+        self.router_linked = True
         self.links: dict[str, DroneLink] = {}
         self.objects = SimObjects(node, clock)
         self._lock = threading.Lock()
@@ -325,7 +373,9 @@ class Fleet:
         return DroneLink(self.node, ns, self.config, clock=self.clock, sleep=self._sleep)
 
     def discover(self) -> None:
-        """List the processes alive now; add new drones, mark vanished ones offline."""
+        """Whether the router is linked; list the processes alive now; add new drones, mark
+        vanished ones offline."""
+        self.router_linked = self._router_linked()
         by_ns = services_by_namespace(self.node.alive_services("*"))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
@@ -337,6 +387,12 @@ class Fleet:
             link.services = by_ns.get(ns, [])
             link.online = any(name.startswith(BRIDGE_PREFIX) for name in link.services)
 
+    def router(self) -> dict[str, Any]:
+        """The station's link to its router: ``linked`` and the ``endpoint`` it connects to."""
+        options = getattr(self.node, "options", None)
+        endpoint = ", ".join(getattr(options, "connect", None) or []) or "the router"
+        return {"linked": self.router_linked, "endpoint": endpoint}
+
     def get(self, ns: str) -> DroneLink:
         """The drone ``ns``. Raises KeyError if the station does not know it."""
         return self.links[ns]
@@ -347,6 +403,26 @@ class Fleet:
             {"ns": ns, "health": link.health(), "services": link.services}
             for ns, link in sorted(self.links.items())
         ]
+
+    def land_all(self) -> dict[str, str]:
+        """Land every drone online at once; ``{ns: "landed" or why not}``, each on its own
+        thread so that one slow drone delays nobody else."""
+        links = {ns: link for ns, link in list(self.links.items()) if link.online}
+        outcomes: dict[str, str] = {}
+
+        def land(ns: str, link: DroneLink) -> None:
+            try:
+                link.land()
+                outcomes[ns] = "landed"
+            except Exception as exc:
+                outcomes[ns] = str(exc)
+
+        threads = [threading.Thread(target=land, args=item, daemon=True) for item in links.items()]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        return dict(sorted(outcomes.items()))
 
     def check_deadmen(self) -> None:
         for link in list(self.links.values()):
@@ -361,6 +437,15 @@ class Fleet:
         for link in self.links.values():
             link.close()
         self.objects.close()
+
+
+def session_linked(node: Any) -> bool:
+    """True while ``node``'s Zenoh session has a router or a peer (the fake bus: always)."""
+    session = getattr(node, "session", None)
+    if session is None:
+        return True
+    info = session.info
+    return bool(list(info.routers_zid()) or list(info.peers_zid()))
 
 
 def _undeclare(entities: list[Any]) -> None:

@@ -66,8 +66,7 @@ def run(node: Node, config: Config) -> int:
         if token:
             print(
                 "station: listening beyond loopback; the token above makes a page an operator's "
-                "(one-time: a new one at each start); without it a page is read-only. "
-                "Operator certificates (mTLS) are not available yet.",
+                "(one-time: a new one at each start); without it a page is read-only.",
                 flush=True,
             )
         node.announce()

@@ -7,12 +7,16 @@ A value is stale when older than ``stale_after`` nominal periods of its topic (a
 
 from __future__ import annotations
 
+import math
+import time
 from typing import Any
 
 from dronewrapper import telemetry
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, TwistStamped
 from dronewrapper.msgs.mavros import ExtendedState, State, StatusText
+from dronewrapper.msgs.mission import HomePosition, WaypointList
 from dronewrapper.msgs.sensor import BatteryState, NavSatFix
 from dronewrapper.msgs.vision import Detections
 
@@ -75,6 +79,43 @@ def gps_fields(msg: NavSatFix) -> dict[str, Any]:
     }
 
 
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def home_fields(msg: HomePosition) -> dict[str, Any]:
+    """Home: local ENU (m) and geodetic (deg; None without GPS)."""
+    return {
+        "x": msg.x,
+        "y": msg.y,
+        "z": msg.z,
+        "latitude": _finite(msg.latitude),
+        "longitude": _finite(msg.longitude),
+    }
+
+
+def mission_fields(msg: WaypointList) -> dict[str, Any]:
+    """The mission's items (lat/lon deg, or ENU m from home for local items) and progress."""
+    return {
+        "current": msg.current_seq,
+        "items": [
+            {"frame": w.frame, "command": w.command, "x": w.x_lat, "y": w.y_long, "z": w.z_alt}
+            for w in msg.waypoints
+        ],
+    }
+
+
+def envelope_fields(msg: Envelope) -> dict[str, Any]:
+    """The envelope (ENU m from home)."""
+    return {
+        "max_altitude": msg.max_altitude,
+        "max_distance": msg.max_distance,
+        "fence": [list(v) for v in msg.fence],
+        "exclusions": [[list(v) for v in zone] for zone in msg.exclusions],
+        "breach_action": msg.breach_action,
+    }
+
+
 def controller_fields(msg: ControllerStatus) -> dict[str, Any]:
     return {
         "mode": msg.mode,
@@ -119,8 +160,12 @@ def detection_fields(msg: Detections) -> dict[str, Any]:
 
 
 def status_text_entry(msg: StatusText) -> dict[str, Any]:
+    """A log line: the event's own stamp (s since the epoch) and its local ``time`` (HH:MM:SS),
+    which the page shows, not when the page received it."""
     severity = SEVERITIES[msg.severity] if 0 <= msg.severity < len(SEVERITIES) else "info"
-    return {"stamp": msg.header.stamp, "severity": severity, "text": msg.text}
+    stamp = msg.header.stamp
+    shown = time.strftime("%H:%M:%S", time.localtime(stamp)) if math.isfinite(stamp) else "--:--:--"
+    return {"stamp": stamp, "time": shown, "severity": severity, "text": msg.text}
 
 
 def _stamp(msg: Any) -> float:

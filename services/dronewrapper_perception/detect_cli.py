@@ -1,18 +1,23 @@
 """``dronewrapper detect FILE``: run perception offline on an image or a video.
 
-    dronewrapper detect photo.jpg --detector yolox --model yolox_nano.onnx
+    dronewrapper detect photo.jpg                         # YOLOX-Nano, the model that ships
     dronewrapper detect clip.avi --detector color --json --max-frames 100
-    dronewrapper detect photo.jpg --detector yolox --model m.onnx --classes person horse
+    dronewrapper detect photo.jpg --model m.onnx --classes person horse
+    dronewrapper detect photo.jpg --detector hog          # OpenCV's HOG people detector
 
-Prints one line per frame (with ``--json``: one JSON object per frame, the Detections message
-as plain data). Video frames are stamped with their position in the video (s), so tracking
-behaves as it would live. Exit status 0, or 2 for a bad file, model or option.
+The detector is YOLOX unless ``--detector`` names another (``person`` is YOLOX too), with the
+model that ships in the assets (``assets/models/yolox_nano.onnx``, or ``$DRONEWRAPPER_ASSETS``)
+unless ``--model`` names one. Which detector and model ran is said first, on stderr. Prints one
+line per frame (with ``--json``: one JSON object per frame, the Detections message as plain
+data). Video frames are stamped with their position in the video (s), so tracking behaves as
+it would live. Exit status 0, or 2 for a bad file, model or option.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -27,6 +32,17 @@ from dronewrapper_perception.model_file import ModelFileError
 from dronewrapper_perception.pipeline import Pipeline, annotate, to_message
 from dronewrapper_perception.tracking import TRACKERS
 
+SHIPPED_MODEL = "yolox_nano.onnx"
+"""The YOLOX model in the assets' ``models/`` (see model_file.BUNDLED_YOLOX_NANO_SHA256)."""
+YOLOX_DETECTORS = ("yolox", "person")  # ``person`` here is YOLOX's person class, with a model
+
+
+def shipped_model() -> Path:
+    """The model that ships: ``$DRONEWRAPPER_ASSETS/models/``, else the repository's assets."""
+    assets = os.environ.get("DRONEWRAPPER_ASSETS") or Path(__file__).resolve().parents[2] / "assets"
+    return Path(assets) / "models" / SHIPPED_MODEL
+
+
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm"}
 
 
@@ -36,9 +52,13 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     )
     parser.add_argument("file", help="image (png, jpg...) or video (avi, mp4...)")
     parser.add_argument(
-        "--detector", choices=DETECTORS, help="default: yolox with --model, else color"
+        "--detector", choices=DETECTORS, help="default yolox (person: yolox's person class)"
     )
-    parser.add_argument("--model", metavar="PATH", help="YOLOX .onnx model file")
+    parser.add_argument(
+        "--model",
+        metavar="PATH",
+        help=f"YOLOX .onnx model file (default: the shipped {SHIPPED_MODEL})",
+    )
     parser.add_argument("--checksum", metavar="SHA256", help="expected sha256 of the model")
     parser.add_argument("--classes", nargs="+", metavar="NAME", help="COCO classes (yolox)")
     parser.add_argument("--score-threshold", type=float, help="minimum score 0..1")
@@ -54,11 +74,12 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
 
 def config_from_args(args: argparse.Namespace) -> Config:
     data: dict = {}
-    if args.model:
-        data["model_path"] = args.model
-    detector = args.detector or ("yolox" if args.model else None)
-    if detector:
-        data["detector"] = detector
+    detector = args.detector or "yolox"
+    data["detector"] = "yolox" if detector in YOLOX_DETECTORS else detector
+    if detector in YOLOX_DETECTORS:
+        data["model_path"] = args.model or str(shipped_model())
+    elif args.model:
+        raise ValueError(f"--model is for the yolox detector, not {detector}")
     for key, value in (
         ("checksum", args.checksum),
         ("classes", args.classes),
@@ -124,6 +145,19 @@ def summary_line(index: int, t: float, message) -> str:
     return f"frame {index} t={t:.2f}s {len(message.detections)} found ({ms:.1f} ms): {found}"
 
 
+def detector_line(config: Config, name: str) -> str:
+    """Which detector ran, and on what: the model file, the colour, or OpenCV's HOG."""
+    if name == "yolox":
+        classes = ", ".join(config.classes)
+        return f"detector: yolox, model {config.model_path} (classes: {classes})"
+    if name == "color":
+        colour = "custom HSV ranges" if config.color_ranges else f"preset {config.color_preset}"
+        return f"detector: color, {colour}"
+    if name == "hog":
+        return "detector: hog, OpenCV's default people detector (no model file)"
+    return f"detector: {name}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
     try:
@@ -132,6 +166,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ConfigError, ModelFileError, ValueError) as exc:
         print(f"dronewrapper detect: {exc}", file=sys.stderr)
         return 2
+    print(detector_line(config, pipeline.detector_name), file=sys.stderr, flush=True)
     path = Path(args.file)
     save_dir = Path(args.save) if args.save else None
     if save_dir:

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node
+from dronewrapper.runtime import Node, ServiceError
 from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
@@ -102,6 +102,8 @@ class SimRunner:
         self._snapshot = self._make_snapshot()
         self.cameras: CameraStreamer | None = None
         self.world_topics: WorldTopics | None = None
+        self._reset_asked = threading.Event()  # a reset, applied by the loop between steps
+        self._reset_done = threading.Event()
         self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
         # (monotonic wall s, simulated s, slipped_s) taken together after each stepping
         self.clock: tuple[float, float, float] = (time.monotonic(), 0.0, 0.0)
@@ -111,7 +113,9 @@ class SimRunner:
     # ---- setup ----
 
     def _setup_zenoh(self, node: Node) -> None:
-        self.world_topics = WorldTopics(node, self.world, self.world_lock, seed=self.config.seed)
+        self.world_topics = WorldTopics(
+            node, self.world, self.world_lock, seed=self.config.seed, reset_vehicle=self.reset
+        )
         if self.config.cameras:
             self.cameras = self._make_cameras(node)
 
@@ -160,6 +164,20 @@ class SimRunner:
             f"MAVLink {links or 'off'}, cameras {cams}"
         )
 
+    def reset(self, timeout_s: float = 2.0) -> str:
+        """Put the vehicle back at its start pose, disarmed (applied by the loop between two
+        physics steps); says what was done.
+
+        Raises:
+            ServiceError: the loop did not apply it within ``timeout_s`` (it is not running).
+        """
+        self._reset_done.clear()
+        self._reset_asked.set()
+        if not self._reset_done.wait(timeout_s):
+            raise ServiceError(f"the simulation loop did not reset within {timeout_s:g} s")
+        cfg = self.autopilot.config
+        return f"back at its start ({cfg.start_x:g}, {cfg.start_y:g}) m, landed, disarmed"
+
     # ---- the loop ----
 
     def run(self, stop: threading.Event, duration_s: float | None = None) -> None:
@@ -196,6 +214,10 @@ class SimRunner:
                 t0 += slip
                 self.slipped_s += slip
                 owed = MAX_CATCH_UP_STEPS
+            if self._reset_asked.is_set():
+                self._reset_asked.clear()
+                self.autopilot.reset_to_start()
+                self._reset_done.set()
             for _ in range(owed):
                 self.autopilot.step(dt)
             steps += owed

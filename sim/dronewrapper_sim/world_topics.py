@@ -13,7 +13,7 @@ import numpy as np
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist
-from dronewrapper.msgs.simulation import WorldLoad, WorldState
+from dronewrapper.msgs.simulation import VehicleResetResult, WorldLoad, WorldState
 from dronewrapper.rotations import quat_from_rpy
 from dronewrapper.runtime import Node, ServiceError
 from dronewrapper_sim.pose_snapshot import PoseSnapshot, pose_msg
@@ -30,10 +30,18 @@ class WorldTopics:
         node: the Zenoh node.
         world: the world whose objects are published and teleoperated.
         world_lock: the lock the simulation holds while it steps ``world``.
+        reset_vehicle: puts the vehicle back at its start pose, on the ground, motors off,
+            and says what it did; served as ``{ns}/sim/world/reset`` when given.
     """
 
     def __init__(
-        self, node: Node, world: Any, world_lock: threading.Lock, *, seed: int | None = None
+        self,
+        node: Node,
+        world: Any,
+        world_lock: threading.Lock,
+        *,
+        seed: int | None = None,
+        reset_vehicle: Callable[[], str] | None = None,
     ) -> None:
         self.node = node
         self.world = world
@@ -46,6 +54,13 @@ class WorldTopics:
         self._declare_objects()
         node.serve(registry.SIM_WORLD, lambda _request: self.state())
         node.serve(registry.SIM_WORLD_LOAD, self.load)
+        if reset_vehicle is not None:
+            node.serve(registry.SIM_RESET, lambda _request: self._reset(reset_vehicle))
+
+    def _reset(self, reset_vehicle: Callable[[], str]) -> VehicleResetResult:
+        message = reset_vehicle()
+        log.info("vehicle reset: %s", message)
+        return VehicleResetResult(success=True, message=message)
 
     def _declare_objects(self) -> None:
         """Pose publishers and teleop subscribers of the objects not declared yet."""

@@ -16,7 +16,7 @@ import sys
 import time
 
 from dronewrapper import DroneWrapper, setpoints
-from dronewrapper.errors import CommandRefused
+from dronewrapper.errors import CommandRefused, DroneError
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.geometry import PoseStamped
 from dronewrapper.msgs.lease import LeaseRequest
@@ -55,18 +55,23 @@ FORGED_VALUE = 12345.0  # what the fake bridge answers for a parameter
 FAKE_SERVICE = "bridge_intruder"  # the liveliness token the intruder declares
 
 
+PLANNED = len(CALLS) + 4  # every call, setpoints, forged telemetry, a fake bridge, a token
+
+
 def attack(endpoint: str, identity: str, keys: str) -> dict:
-    attempts = len(CALLS) + 4  # every call, setpoints, forged telemetry, a fake bridge, a token
-    out = {"identity": identity or "none", "connected": False, "attempts": attempts}
+    """``attempts``: the attempts made, each ``obeyed``, ``refused`` or ``no_reply``; an
+    attacker who never got a session made none (``connected`` False, ``why`` says why)."""
+    out = {"identity": identity or "none", "connected": False, "attempts": 0}
+    out |= {"planned": PLANNED, "calls": len(CALLS)}
     out |= {"obeyed": 0, "refused": 0, "no_reply": 0, "sent": 0}
     options = ZenohOptions(mode="client", connect=[endpoint], identity=identity, keys_dir=keys)
     try:
         session = open_session(options, timeout=4.0)
     except (ConnectionError, FileNotFoundError) as exc:
-        out["refused"] = attempts  # nothing reaches the drone without a session
-        out["why"] = str(exc)[:200]
+        out["why"] = str(exc)[:200]  # nothing reaches the drone without a session
         return out
     out["connected"] = True
+    out["attempts"] = PLANNED
     label = commander_attachment(f"intruder-{identity}")
     states = []  # genuine State samples received: observers may watch, the revoked may not
 
@@ -128,7 +133,21 @@ def attack(endpoint: str, identity: str, keys: str) -> dict:
         out["states_received"] = len(states)
     finally:
         session.close()
+    out["sdk_error"] = sdk_error(endpoint, identity, keys)
     return out
+
+
+def sdk_error(endpoint: str, identity: str, keys: str) -> str:
+    """What the SDK tells this identity when it connects and arms: its exception and text."""
+    os.environ["DRONEWRAPPER_KEYS"] = keys  # where DroneWrapper(identity=NAME) looks
+    try:
+        with DroneWrapper(
+            connect=endpoint, identity=identity, cameras=(), timeout=5, service_timeout=2
+        ) as drone:
+            drone.arm()
+    except DroneError as exc:
+        return f"{type(exc).__name__}: {exc}"
+    return "obeyed"
 
 
 def fly(endpoint: str, keys: str) -> dict:

@@ -56,7 +56,7 @@ def ask_everyone(node: Node, seen: dict) -> None:
 def main() -> int:
     router, out_path = sys.argv[1], sys.argv[2]
     seen = {"states": 0, "forged_states": 0, "poses": 0, "forged_poses": 0, "setpoints": 0}
-    seen |= {"armed": False, "max_z": -1e9, "param_asks": 0, "param_replies": 0}
+    seen |= {"armed": False, "max_z": -1e9, "param_asks": 0, "param_replies": 0, "truths": 0}
     seen |= {"forged_replies": 0, "forged_tokens": 0}
     options = ZenohOptions(mode="client", connect=[router], name="security_monitor")
 
@@ -79,6 +79,7 @@ def main() -> int:
         seen["forged_tokens"] += FAKE_SERVICE in str(sample.key_expr)
 
     def on_truth(msg) -> None:
+        seen["truths"] += 1
         seen["max_z"] = max(seen["max_z"], msg.pose.position.z)
 
     with Node("security_monitor", options) as node:

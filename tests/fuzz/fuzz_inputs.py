@@ -15,8 +15,10 @@ from dataclasses import dataclass
 import msgspec
 from hypothesis import strategies as st
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import CommandTOL
+from dronewrapper.msgs.mission import Waypoint
 from dronewrapper.msgs.vision import Detections
 
 MAX_FLOAT = 1e300
@@ -48,7 +50,7 @@ class Field:
 
     @property
     def name(self) -> str:
-        return ".".join(self.path)
+        return ".".join(str(part) for part in self.path)
 
 
 @dataclass(frozen=True)
@@ -58,6 +60,9 @@ class RequestShape:
     service: registry.Service
     base: dict
     fields: tuple[Field, ...]
+
+
+WAYPOINT = Waypoint(x_lat=47.4, y_long=8.5, z_alt=5.0)
 
 
 def _tol(altitude: float) -> dict:
@@ -101,6 +106,32 @@ REQUESTS = {
             Field(("param_id",), "str"),
             Field(("value", "real"), "float", required=False, nan_refused=True),
             Field(("value", "integer"), "int", required=False),
+        ),
+    ),
+    "mission_push": RequestShape(
+        registry.MISSION_PUSH,
+        {
+            "start_index": 0,
+            "waypoints": [msgspec.to_builtins(WAYPOINT)],
+        },
+        (
+            Field(("waypoints", 0, "x_lat"), "float", nan_refused=True),
+            Field(("waypoints", 0, "y_long"), "float", nan_refused=True),
+            Field(("waypoints", 0, "z_alt"), "float", nan_refused=True),
+            Field(("waypoints", 0, "param1"), "float", required=False, nan_refused=True),
+        ),
+    ),
+    "mission_control": RequestShape(
+        registry.MISSION_CONTROL, {"action": "start"}, (Field(("action",), "str"),)
+    ),
+    "envelope_set": RequestShape(
+        registry.ENVELOPE_SET,
+        {"envelope": msgspec.to_builtins(Envelope(max_altitude=500.0))},
+        (
+            Field(("envelope", "max_altitude"), "float", required=False, nan_refused=True),
+            Field(("envelope", "max_distance"), "float", required=False, nan_refused=True),
+            Field(("envelope", "margin"), "float", required=False, nan_refused=True),
+            Field(("envelope", "breach_action"), "str", required=False),
         ),
     ),
 }
@@ -156,7 +187,7 @@ def bad_request(draw: st.DrawFn, shape: RequestShape) -> Bad:
         return Bad(_encode({**base, name: value}), f"unknown field `{name}`", how)
     if how == "missing":
         field = draw(st.sampled_from([f for f in shape.fields if f.required]))
-        return Bad(_encode(_without(base, field.path)), f"`{field.name}`", how)
+        return Bad(_encode(_without(base, field.path)), f"`{field.path[-1]}`", how)
     if how == "wrong_type":
         field = draw(st.sampled_from(shape.fields))
         value = draw(_WRONG_TYPES[field.kind])

@@ -10,20 +10,19 @@ running. Bad setpoints are sent while the Tello flies: only centred sticks may f
 from __future__ import annotations
 
 import dataclasses
-import random
 import time
 
 import pytest
 from fuzz_inputs import REQUESTS, Bad, bad_request, bad_setpoint
 from hypothesis import HealthCheck, given, settings
+from tello_bridge_rig import running_bridge
 from tello_peer import ScriptedTello
 
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import CommandTOL, ParamGet
 from dronewrapper.msgs.std import ErrorReply
-from dronewrapper.runtime.config import load_config
-from dronewrapper_bridge_tello.node import Bridge, Config
-from support import client_node, wait_for, zenoh_router
+from dronewrapper_bridge_tello.node import Bridge
+from support import zenoh_router
 
 pytestmark = pytest.mark.fuzz
 
@@ -43,30 +42,8 @@ class Rig:
 
 @pytest.fixture(scope="module")
 def rig():
-    address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
-    with zenoh_router() as router:
-        tello = ScriptedTello(address)
-        tello.start()
-        config = load_config(
-            Config, None, [f"tello_address={address}", f"local_address={address}", "video=false"]
-        )
-        node = client_node(router, name="bridge_tello")
-        user = client_node(router, name="test")
-        bridge = Bridge(node, config)
-        threads = bridge.start()
-        try:
-            wait_for(lambda: bridge.connected and bridge.sdk_mode, 10, what="bridge connected")
-            yield Rig(tello, bridge, user)
-        finally:
-            node.stop()
-            for thread in threads:
-                thread.join(2)
-            bridge.link.close()
-            user.close()
-            node.close()
-            tello.stop.set()
-            tello.join(2)
-            tello.sock.close()
+    with zenoh_router() as router, running_bridge([], router, mode="peer") as running:
+        yield Rig(*running)
 
 
 def call_raw(rig: Rig, service: registry.Service, payload: bytes):

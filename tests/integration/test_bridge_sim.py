@@ -22,7 +22,9 @@ import pytest
 
 os.environ.setdefault("MAVLINK20", "1")
 
+from bridge_user import BridgeUser
 from pymavlink import mavutil
+from setpoint_stream import yaw_of
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -62,7 +64,7 @@ with Node("commander", ZenohOptions(connect=[endpoint], name="commander")) as no
 
 
 @dataclass
-class Rig:
+class Rig(BridgeUser):
     """The running processes and the test's own Zenoh node with the telemetry it watches."""
 
     router: str
@@ -73,39 +75,11 @@ class Rig:
     bridge: object
 
     def __post_init__(self) -> None:
-        u = self.user
-        self.state = u.latest(registry.STATE)
-        self.ext = u.latest(registry.EXTENDED_STATE)
-        self.pose = u.latest(registry.LOCAL_POSE)
-        self.vbody = u.latest(registry.VELOCITY_BODY)
-        self.vlocal = u.latest(registry.VELOCITY_LOCAL)
-        self.fix = u.latest(registry.GLOBAL_POSITION)
-        self.battery = u.latest(registry.BATTERY)
+        super().__post_init__()
+        self.vlocal = self.user.latest(registry.VELOCITY_LOCAL)
+        self.fix = self.user.latest(registry.GLOBAL_POSITION)
         self.texts: list = []
-        u.subscribe(registry.STATUSTEXT, self.texts.append)
-        self.states: list = []
-        u.subscribe(registry.STATE, self.states.append)
-        self.setpoints = u.publisher(registry.SETPOINT_RAW_LOCAL)
-        self._target: PositionTarget | None = None
-        self._stop = threading.Event()
-        self._streamer = threading.Thread(target=self._stream, daemon=True)
-        self._streamer.start()
-
-    # -- a commander inside the test, like the SDK's 20 Hz stream
-    def _stream(self) -> None:
-        while not self._stop.wait(0.05):
-            target = self._target
-            if target is not None:
-                self.setpoints.put(target)
-
-    def command(self, target: PositionTarget | None) -> None:
-        self._target = target
-        if target is not None:
-            self.setpoints.put(target)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._streamer.join(2)
+        self.user.subscribe(registry.STATUSTEXT, self.texts.append)
 
     def z(self) -> float:
         return self.pose.value.pose.position.z if self.pose.value else math.nan
@@ -142,11 +116,6 @@ class Rig:
         )
         assert self.ext.value.landed_state == LANDED_STATE_ON_GROUND
         assert self.z() < 0.3
-
-
-def yaw_of(pose) -> float:
-    q = pose.pose.orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
 
 
 def mixed(vx: float, z: float, yaw_rate: float = 0.0) -> PositionTarget:

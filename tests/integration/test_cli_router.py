@@ -123,3 +123,29 @@ def test_usage_lines_name_the_real_command_and_help_lists_scenarios(spawn):
     bridge = spawn(python_module("dronewrapper_bridge_mavlink", "--help"), "bridge-help")
     assert bridge.proc.wait(30) == 0
     assert bridge.output().startswith("usage: python -m dronewrapper_bridge_mavlink ")
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["echo", "drone/**"],
+        ["alive"],
+        ["record", "drone/**", "-o", "{tmp}/never.mcap"],
+        ["up", "sim_iris", "--use-router", "--router", "{endpoint}"],
+    ],
+    ids=lambda c: c[0] if "--use-router" not in c else "up --use-router",
+)
+def test_with_no_router_a_command_fails_at_once_saying_what_to_do(spawn, tmp_path, command):
+    """A refused connection is no router: the command says so and what to do, and never
+    waits out the session's retries to print Zenoh's own error."""
+    endpoint = free_endpoint()  # nothing listens here
+    argv = [part.format(tmp=tmp_path, endpoint=endpoint) for part in command]
+    if command[0] != "up":
+        argv += ["--connect", endpoint]
+    proc = spawn(python_module("dronewrapper", *argv), command[0])
+    assert proc.proc.wait(30) == 1, proc.output()
+    out = proc.output()
+    assert f"no router at {endpoint} (connection refused)" in out, out
+    assert "dronewrapper up compose/GRAPH.yaml" in out
+    assert "cannot open a zenoh" not in out  # the session's retries never ran
+    assert "starting sim" not in out  # up started nothing

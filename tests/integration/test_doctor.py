@@ -79,5 +79,8 @@ def test_doctor_without_a_router_says_how_to_start_one(spawn):
     )
     wait_for(lambda: not doctor.alive(), 60, what="doctor to give up")
     assert doctor.proc.returncode == 1
-    assert "FAIL router: cannot open a zenoh client session" in doctor.output()
+    assert (
+        "FAIL router: no router at tcp/127.0.0.1:9 (connection refused): "
+        "start one with `dronewrapper up compose/GRAPH.yaml`" in doctor.output()
+    )
     assert ".rs:" not in doctor.output()

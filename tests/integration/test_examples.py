@@ -105,6 +105,14 @@ def test_square(sim, watcher):
     assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
 
 
+def test_mission(sim, watcher):
+    out = run_example("mission.py", sim, "--side", "6", "--height", "3", timeout=240)
+    assert "uploaded 4 waypoints" in out and "mission: reached 4 of 4" in out
+    assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
+    x, y, _ = watcher.get_position()
+    assert (x**2 + y**2) ** 0.5 < 1.0  # back home
+
+
 def test_save_frames(sim, tmp_path):
     out_dir = tmp_path / "frames"
     out = run_example(

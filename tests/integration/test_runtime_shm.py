@@ -21,6 +21,7 @@ def test_frames_travel_by_shared_memory_and_leftovers_are_swept(router):
         capture_output=True, text=True, timeout=60, check=True,
         env={**os.environ, "PYTHONPATH": str(REPO / "tests")},
     ).stdout  # fmt: skip
+    assert "fallbacks 0" in out.splitlines(), f"a local frame fell back from shared memory: {out}"
     segments = [line for line in out.splitlines() if line.endswith(".zenoh")]
     assert segments, "two local peers exchanging 900 kB frames should use Zenoh SHM segments"
     leftovers = [p for p in segments if os.path.exists(p)]

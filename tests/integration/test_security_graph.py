@@ -45,10 +45,9 @@ def test_secure_graph_flies_with_an_operator_certificate(spawn, tmp_path, monkey
 
 
 def test_plain_tcp_off_loopback_is_refused(spawn):
-    argv = python_module(
-        "dronewrapper", "up", "compose/sim_iris_secure.yaml", "--router", "tcp/0.0.0.0:7447"
-    )
+    endpoint = f"tcp/0.0.0.0:{free_port()}"
+    argv = python_module("dronewrapper", "up", "compose/sim_iris_secure.yaml", "--router", endpoint)
     proc = spawn(argv, "insecure")
     assert proc.proc.wait(60) == 1
-    assert "refusing to listen on tcp/0.0.0.0:7447" in proc.output()
+    assert f"refusing to listen on {endpoint}" in proc.output()
     assert "--insecure" in proc.output()

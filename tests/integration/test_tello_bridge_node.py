@@ -8,13 +8,12 @@ The scripted Tello (tests/tello_peer.py) answers from a script and records every
 
 from __future__ import annotations
 
-import random
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Any
 
 import pytest
+from tello_bridge_rig import running_bridge
 from tello_peer import ScriptedTello
 
 from dronewrapper.msgs import registry
@@ -31,50 +30,10 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.runtime import ServiceError, call_service
 from dronewrapper.runtime.caller import commander_attachment
-from dronewrapper.runtime.config import load_config
-from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.node import Bridge
-from support import client_node, wait_for
+from support import wait_for
 
 pytestmark = pytest.mark.integration
-
-
-@contextmanager
-def running_bridge(
-    extra: list[str], router: str = ""
-) -> Iterator[tuple[ScriptedTello, Bridge, Any]]:
-    """A scripted Tello on a random loopback address and a started Bridge talking to it, with a
-    user node: on the fake bus, or on a real Zenoh router when ``router`` is given."""
-    address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
-    tello = ScriptedTello(address)
-    tello.start()
-    config = load_config(
-        Config,
-        None,
-        [f"tello_address={address}", f"local_address={address}", "video=false", *extra],
-    )
-    if router:
-        node = client_node(router, name="bridge_tello", mode="client")
-        user = client_node(router, name="test", mode="client")
-    else:
-        bus = FakeBus()
-        node, user = FakeNode("bridge_tello", bus), FakeNode("test", bus)
-    bridge = Bridge(node, config)
-    threads = bridge.start()
-    try:
-        wait_for(lambda: bridge.connected and bridge.sdk_mode, 10, what="bridge connected")
-        yield tello, bridge, user
-    finally:
-        node.stop()
-        for thread in threads:
-            thread.join(2)
-        bridge.link.close()
-        user.close()
-        node.close()
-        tello.stop.set()
-        tello.join(2)
-        tello.sock.close()
 
 
 @pytest.fixture

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from bridge_user import BridgeUser
+from setpoint_stream import yaw_of
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -47,11 +49,6 @@ def loopback_address() -> str:
     return f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
 
 
-def yaw_of(pose) -> float:
-    q = pose.pose.orientation
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
 def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0) -> PositionTarget:
     return PositionTarget(
         coordinate_frame=FRAME_BODY_NED,
@@ -62,7 +59,7 @@ def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0) -> PositionTarget:
 
 
 @dataclass
-class Rig:
+class Rig(BridgeUser):
     """The processes, and the test's own node with what it watches and a 20 Hz commander."""
 
     router: str
@@ -72,35 +69,8 @@ class Rig:
     bridge: object
 
     def __post_init__(self) -> None:
-        u = self.user
-        self.state = u.latest(registry.STATE)
-        self.ext = u.latest(registry.EXTENDED_STATE)
-        self.pose = u.latest(registry.LOCAL_POSE)
-        self.vbody = u.latest(registry.VELOCITY_BODY)
-        self.truth = u.latest(registry.SIM_GROUND_TRUTH)
-        self.battery = u.latest(registry.BATTERY)
-        self.states: list = []
-        u.subscribe(registry.STATE, self.states.append)
-        self.setpoints = u.publisher(registry.SETPOINT_RAW_LOCAL)
-        self._target: PositionTarget | None = None
-        self._stop = threading.Event()
-        self._streamer = threading.Thread(target=self._stream, daemon=True)
-        self._streamer.start()
-
-    def _stream(self) -> None:
-        while not self._stop.wait(0.05):
-            target = self._target
-            if target is not None:
-                self.setpoints.put(target)
-
-    def command(self, target: PositionTarget | None) -> None:
-        self._target = target
-        if target is not None:
-            self.setpoints.put(target)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._streamer.join(2)
+        super().__post_init__()
+        self.truth = self.user.latest(registry.SIM_GROUND_TRUTH)
 
     def call(self, service, request, timeout: float = 40.0):
         return self.user.call(service, request, timeout=timeout)
@@ -286,7 +256,7 @@ def test_keepalive_then_failsafe_hold_and_commander_lost_land(rig):
 
     rig.command(velocity(vx=0.5))
     time.sleep(1.5)
-    rig._target = None  # the commander dies: nothing more is sent
+    rig.stream.target = None  # the commander dies: nothing more is sent
     stopped_at = time.monotonic()
     wait_for(lambda: rig.state.value.failsafe == "hold", 3, what="failsafe hold")
     assert time.monotonic() - stopped_at < 1.5

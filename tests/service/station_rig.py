@@ -54,14 +54,26 @@ class WorldObjects:
 class StationRig:
     """The station (token :data:`TOKEN`) over the fake bus; ``config`` overrides Config."""
 
-    def __init__(self, *, autopilot: dict[str, Any] | None = None, **config: Any) -> None:
+    def __init__(
+        self,
+        *,
+        autopilot: dict[str, Any] | None = None,
+        router_linked: Any = None,
+        **config: Any,
+    ) -> None:
         self.bus = FakeBus(start=T0)
         self.pilot = BusAutopilot(self.bus, **{"flying": True, "x": X, **(autopilot or {})})
         self.pilot.node.announce()
         self.world = WorldObjects(self.bus)
         self.node = FakeNode("station", self.bus)
         self.config = Config(port=0, command_timeout=5.0, **config)
-        self.fleet = Fleet(self.node, self.config, clock=self.bus.clock, sleep=self.run)
+        self.fleet = Fleet(
+            self.node,
+            self.config,
+            clock=self.bus.clock,
+            sleep=self.run,
+            router_linked=router_linked,
+        )
         self.client = AsgiClient(create_app(self.fleet, self.config, Access(TOKEN)))
         self.fleet.discover()
         self.run(2 * TELEMETRY_PERIOD_S)  # the first telemetry and object poses are in

@@ -25,7 +25,7 @@ from dronewrapper.msgs.control import (
     CONTROLLER_TRACKING,
     ControllerStatus,
 )
-from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY, PositionTarget
+from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY, CommandTOL, PositionTarget
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
 from dronewrapper.runtime.commander import Commander
@@ -331,3 +331,29 @@ def test_a_takeoff_still_refused_when_wait_ready_ends_fails():
     rig.run(20.0)
     assert rig.ctl.finished and rig.ctl.exit_code == 1
     assert rig.now() - start <= 5.5 and rig.autopilot.called("arming") >= 2
+
+
+def test_a_landing_by_another_commander_stops_the_commanding_until_started_again(caplog):
+    """The station lands the drone while the follow controller searches: from then on the
+    controller sends nothing (no search turn), reports idle, and at exit neither lands nor
+    says "landing"."""
+    rig = Rig(["takeoff.on_start=false", "on_exit=land", "search_yaw_rate=0.4"])
+    rig.feed(seconds=3.0)  # fresh detections without the target: search
+    rig.run(2.5)
+    assert rig.state() == CONTROLLER_SEARCH and rig.velocity()
+    station = FakeNode("station", rig.bus)
+    reply = station.call(registry.LAND, CommandTOL.land(), ns="drone")
+    assert reply.success
+    landed_at = rig.now()
+    rig.run(0.2)
+    yielded_at = max(t for t, _ in rig.autopilot.setpoints())
+    assert yielded_at <= landed_at + 1 / 30 + 1e-6  # no setpoint after the landing was seen
+    rig.feed(seconds=2.0)
+    rig.run(5.0)  # the drone lands; detections keep coming: still nothing commanded
+    assert max(t for t, _ in rig.autopilot.setpoints()) == yielded_at
+    assert rig.state() == CONTROLLER_IDLE
+    assert not rig.autopilot.armed and rig.autopilot.z == 0.0
+    with caplog.at_level("INFO", logger="controller"):
+        assert rig.stop() == 0
+    assert rig.autopilot.called("land") == 1  # the station's, not the controller's
+    assert "landing" not in [r.getMessage() for r in caplog.records]

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import math
+import time
+from pathlib import Path
 
 import pytest
 from asgi_driver import WebSocketRefused
@@ -21,6 +23,7 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
     SetMode,
     State,
+    StatusText,
 )
 from dronewrapper.msgs.sensor import CompressedImage
 from dronewrapper.msgs.simulation import WorldLoad, WorldState
@@ -30,6 +33,7 @@ from dronewrapper.runtime.fake import FakeNode
 from support import wait_for
 
 pytestmark = pytest.mark.timeout(60)
+STATIC = Path(__file__).resolve().parents[2] / "services" / "dronewrapper_ground_station" / "static"
 
 POSE = (X, 0.0, 2.0)
 
@@ -295,6 +299,35 @@ def test_telemetry_socket_pushes_snapshots(rig: StationRig) -> None:
     assert drone["pose"]["z"] == POSE[2] and drone["pose"]["stale"] is False
     assert second["fleet"][0]["health"] == "ok"
     assert "target" in second["objects"]
+
+
+def test_the_page_is_told_when_the_stations_router_is_unreachable() -> None:
+    """A green badge beside "no drone online" hid a lost router: the snapshot says it."""
+    linked = [True]
+    rig = StationRig(router_linked=lambda: linked[0])
+    try:
+        with rig.websocket("/ws/telemetry") as ws:
+            assert _telemetry(ws)["router"]["linked"] is True
+            linked[0] = False
+            rig.fleet.discover()
+            router = _telemetry(ws)["router"]
+        assert router["linked"] is False and router["endpoint"]
+    finally:
+        rig.close()
+    app_js = (STATIC / "app.js").read_text()
+    assert "router unreachable" in app_js and "renderLink(msg.router)" in app_js
+
+
+def test_the_log_shows_each_events_own_stamp(rig: StationRig) -> None:
+    """The autopilot's text is logged at its stamp (local HH:MM:SS), not when it was received."""
+    stamp = 1_700_000_000.0
+    publisher = rig.pilot.node.publisher(registry.STATUSTEXT, key=registry.STATUSTEXT.key("drone"))
+    publisher.put(StatusText(header=Header(stamp=stamp), severity=6, text="Takeoff detected"))
+    rig.run(0.2)
+    (entry,) = [e for e in rig.link.snapshot()["log"] if e["text"] == "Takeoff detected"]
+    assert entry["stamp"] == stamp
+    assert entry["time"] == time.strftime("%H:%M:%S", time.localtime(stamp))
+    assert "e.severity, e.time)" in (STATIC / "app.js").read_text()  # the page shows it
 
 
 def test_teleop_streams_velocity_and_release_holds(rig: StationRig) -> None:

@@ -4,11 +4,13 @@ Zenoh errors shown as one line."""
 from dronewrapper.echo import (
     ARRIVALS_KEPT,
     RateWatch,
+    declared_rate,
     keyexpr_problem,
     light_key_families,
     nearby,
     silence_notice,
 )
+from dronewrapper.health import OK
 from dronewrapper.runtime.errors import zenoh_error_text
 
 
@@ -72,3 +74,21 @@ def test_echo_watches_each_key_against_its_declared_rate():
     watch.add(pose, last + 5.0, 120)
     assert watch.newly_stale(last + 5.1) == []  # fresh again
     assert "stale" in watch.newly_stale(last + 6.0)[0]  # and stale again, said again
+
+
+def test_echo_count_2_on_a_30_hz_camera_raises_no_rate_alarm():
+    """Two frames (one a little late) measure no rate: no 'expected >= 30 Hz' alarm."""
+    watch = RateWatch()
+    camera = "drone/cam_frontal/image_raw"
+    assert declared_rate(camera) == 30.0
+    watch.add(camera, 10.0, 900_000)
+    watch.add(camera, 10.0 + 0.07, 900_000)  # one frame late: 14 Hz from a single gap
+    (health,) = watch.health(10.08)
+    assert health.verdict == OK, health
+    line = watch.report(10.08)[0]
+    assert "expected >=" not in line and "too few to judge the rate" in line
+    watch.add("drone/cam_ventral/image_raw", 10.01, 900_000)  # a key seen once
+    assert all(h.verdict == OK for h in watch.health(10.08))
+    for i in range(2, 8):  # enough frames at 10 Hz: now the alarm is real
+        watch.add(camera, 10.0 + i * 0.1, 900_000)
+    assert "expected >= 30 Hz" in watch.report(10.75)[0]

@@ -47,11 +47,52 @@ def test_auto_picks_a_free_port_and_numbers_stay():
 
 
 def test_the_simulated_graphs_pick_free_ports_and_px4_sitl_does_not():
-    for name in ("sim_iris", "sim_follow_color", "sim_follow_person"):
+    for name in ("sim_iris", "sim_iris_secure", "sim_follow_color", "sim_follow_person"):
         graph = load_graph(GRAPH_DIR / f"{name}.yaml")
         assert graph.ports == {"onboard_port": "udp"} and graph.vars["onboard_port"] == "auto"
     sitl = load_graph(GRAPH_DIR / "px4_sitl.yaml")
     assert sitl.ports == {"onboard_port": "udp"} and sitl.vars["onboard_port"] == "14540"
+
+
+# ``*_port`` variables that are another program's port, which this graph does not bind
+PEER_PORTS = {
+    "gcs_port": "the simulator sends its ground-station link there (QGroundControl binds it)",
+    "sitl_port": "ArduPilot SITL's TCP server; the bridge connects to it",
+}
+# graphs whose ports are fixed by the aircraft's protocol, bound without address reuse: a second
+# such graph on the same address fails at its first bind (the Tello SDK's 8889/8890/11111;
+# tests/integration/test_launcher_ports.py holds it)
+FIXED_BY_PROTOCOL = {"sim_tello", "sim_tello_follow_color", "sim_tello_follow_person"}
+FIXED_BY_PEER = {"px4_sitl": "PX4 SITL sends to 14540"}  # the other end's port: refused if taken
+# fleet graphs: each drone's autopilot port is a free one the launcher picks per drone
+# (``${drone_port}``, dronewrapper_compose.fleet), and each Tello has an address of its own
+CHOSEN_PER_DRONE = {"sim_fleet"}
+
+
+@pytest.mark.parametrize("path", sorted(GRAPH_DIR.glob("*.yaml")), ids=lambda p: p.stem)
+def test_every_graph_picks_free_ports_or_refuses_to_start(path):
+    """A port variable is either bound here (declared in ``ports:``, so checked free before
+    start, and ``auto`` in every simulated graph) or named above as another program's."""
+    graph = load_graph(path)
+    for name in graph.vars:
+        if name.endswith("_port") and name not in graph.ports:
+            assert name in PEER_PORTS, f"{path.name}: {name} is neither in ports: nor a peer's"
+            assert graph.types.get(name) == "port", f"{path.name}: {name} is not typed port"
+    for name in graph.ports:
+        if path.stem.startswith("sim_"):
+            assert graph.vars[name] == "auto", f"{path.name}: {name} is fixed"
+        else:
+            assert path.stem in FIXED_BY_PEER or graph.vars[name] == "auto"
+    if path.stem.startswith("sim_") and not graph.ports:
+        assert path.stem in FIXED_BY_PROTOCOL | CHOSEN_PER_DRONE, (
+            f"{path.name}: a simulated graph binds no port?"
+        )
+
+
+def test_two_secure_sims_get_different_ports():
+    a = Launcher.from_file("sim_iris_secure", out=io.StringIO())
+    b = Launcher.from_file("sim_iris_secure", out=io.StringIO())
+    assert a.values["onboard_port"] != b.values["onboard_port"]
 
 
 def test_two_sim_graphs_get_different_ports():

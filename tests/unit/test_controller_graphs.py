@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import itertools
 
 import pytest
+from graph_argv import config_args, graph_argvs
 
 from dronewrapper.runtime.config import load_config
 from dronewrapper_compose.graph import REPO, load_graph
-from dronewrapper_compose.launcher import Launcher, build_argv
 
 GRAPHS = [
     "sim_follow_color",
@@ -37,28 +36,14 @@ def schema_for(module: str):
     return getattr(importlib.import_module(mod), cls)
 
 
-def split_config_args(argv: list[str]) -> tuple[str | None, list[str]]:
-    config, sets = None, []
-    for flag, value in itertools.pairwise(argv):
-        if flag == "--config":
-            config = value
-        elif flag == "--set":
-            sets.append(value)
-    return config, sets
-
-
 @pytest.mark.parametrize("name", GRAPHS)
 def test_graph_resolves_and_configs_load(name):
-    path = REPO / "compose" / f"{name}.yaml"
-    launcher = Launcher(load_graph(path), path, router="tcp/127.0.0.1:1")
     checked = 0
-    for spec in launcher.graph.processes:
-        argv, _ = build_argv(spec, launcher.values, path, launcher.ns, launcher.router)
+    for spec, argv in graph_argvs(name, router="tcp/127.0.0.1:1"):
         assert "--connect" in argv and "tcp/127.0.0.1:1" in argv
         schema = schema_for(spec.module or "")
         if schema is not None:
-            config, sets = split_config_args(argv)
-            load_config(schema, config, sets)
+            load_config(schema, *config_args(argv))
             checked += 1
     assert checked >= 3
 
@@ -69,16 +54,10 @@ def test_graph_resolves_and_configs_load(name):
 def test_sim_graphs_pick_the_mode_and_take_a_scenario(name, mode):
     from dronewrapper_controller.config import Config
 
-    path = REPO / "compose" / f"{name}.yaml"
-    launcher = Launcher(
-        load_graph(path), path, variables={"scenario": "beacon_abrupt", "on_exit": "stop"}
-    )
-    argvs = {
-        spec.name: build_argv(spec, launcher.values, path, launcher.ns, launcher.router)[0]
-        for spec in launcher.graph.processes
-    }
+    variables = {"scenario": "beacon_abrupt", "on_exit": "stop"}
+    argvs = {spec.name: argv for spec, argv in graph_argvs(name, variables=variables)}
     assert argvs["sim"][argvs["sim"].index("--scenario") + 1] == "beacon_abrupt"
-    config = load_config(Config, *split_config_args(argvs["controller"]))
+    config = load_config(Config, *config_args(argvs["controller"]))
     assert config.mode == mode and config.on_exit == "stop"
 
 

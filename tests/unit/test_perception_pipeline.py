@@ -134,12 +134,33 @@ def test_detect_cli_video_tracks_across_frames(capsys):
 
 def test_detect_cli_errors(tmp_path, capsys):
     assert detect_main([str(tmp_path / "missing.png")]) == 2
-    assert detect_main([str(IMAGES / "person.jpg"), "--detector", "yolox"]) == 2
-    assert "yolox_nano.onnx" in capsys.readouterr().err  # says where to get the weights
+    missing = tmp_path / "yolox_nano.onnx"
+    assert detect_main([str(IMAGES / "person.jpg"), "--model", str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert str(missing) in err and "does not exist" in err  # says where to get the weights
+    assert detect_main([str(IMAGES / "person.jpg"), "--detector", "hog", "--model", "m.onnx"]) == 2
     junk = tmp_path / "junk.png"
     junk.write_bytes(b"nope")
     assert detect_main([str(junk)]) == 2
     assert detect_main([str(IMAGES / "person.jpg"), "--detector", "hog", "--color", "mauve"]) == 2
+
+
+@pytest.mark.parametrize("argv", [[], ["--detector", "yolox"], ["--detector", "person"]])
+def test_detect_finds_the_person_with_the_shipped_model_and_says_so(argv, capsys):
+    """No flags, ``yolox`` or ``person``: YOLOX with the model in the assets, named on stderr."""
+    assert detect_main([str(IMAGES / "person.jpg"), *argv]) == 0
+    out, err = capsys.readouterr()
+    said = f"detector: yolox, model {ASSETS / 'models' / 'yolox_nano.onnx'} (classes: person)"
+    assert said in err.splitlines()
+    assert "1 found" in out and " person 0.8" in out
+
+
+def test_detect_names_the_other_detectors(capsys):
+    assert detect_main([str(IMAGES / "person.jpg"), "--detector", "color"]) == 0
+    assert "detector: color, preset red" in capsys.readouterr().err.splitlines()
+    assert detect_main([str(IMAGES / "person.jpg"), "--detector", "hog"]) == 0
+    err = capsys.readouterr().err
+    assert "detector: hog, OpenCV's default people detector (no model file)" in err.splitlines()
 
 
 class CountingDetector(ColorDetector):

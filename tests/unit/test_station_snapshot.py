@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 
 from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, Quaternion
 from dronewrapper.msgs.mavros import StatusText
@@ -72,5 +73,6 @@ def test_detections_become_fractions_of_the_image_with_the_target() -> None:
 
 def test_status_text_severity_names() -> None:
     entry = snapshot.status_text_entry(StatusText(header=Header(stamp=1.0), severity=3, text="x"))
-    assert entry == {"stamp": 1.0, "severity": "error", "text": "x"}
+    shown = time.strftime("%H:%M:%S", time.localtime(1.0))  # the event's own time, local
+    assert entry == {"stamp": 1.0, "time": shown, "severity": "error", "text": "x"}
     assert snapshot.status_text_entry(StatusText(severity=42))["severity"] == "info"

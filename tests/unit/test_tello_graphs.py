@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import itertools
-
 import pytest
+from graph_argv import config_args, graph_argvs
 
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_bridge_tello.node import Config as BridgeConfig
-from dronewrapper_compose.graph import REPO, load_graph
-from dronewrapper_compose.launcher import Launcher, build_argv
+from dronewrapper_compose.graph import REPO
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_perception.config import Config as PerceptionConfig
 
@@ -21,23 +19,10 @@ SCHEMAS = {
 }
 
 
-def config_args(argv: list[str]) -> tuple[str | None, list[str]]:
-    config, sets = None, []
-    for flag, value in itertools.pairwise(argv):
-        if flag == "--config":
-            config = value
-        elif flag == "--set":
-            sets.append(value)
-    return config, sets
-
-
 @pytest.mark.parametrize("name", GRAPHS)
 def test_tello_graph_resolves_and_configs_load(name):
-    path = REPO / "compose" / f"{name}.yaml"
-    launcher = Launcher(load_graph(path), path, router="tcp/127.0.0.1:1")
     modules = []
-    for spec in launcher.graph.processes:
-        argv, _ = build_argv(spec, launcher.values, path, launcher.ns, launcher.router)
+    for spec, argv in graph_argvs(name, router="tcp/127.0.0.1:1"):
         modules.append(spec.module)
         schema = SCHEMAS.get(spec.module or "")
         if schema is not None:

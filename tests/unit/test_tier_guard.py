@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
+import os
+import re
 import socket
+import subprocess
 import threading
 from dataclasses import dataclass
 from pathlib import Path
@@ -167,3 +170,38 @@ def test_each_tiers_conftest_fails_a_module_whose_import_opens_a_session(tier):
         hook.send(report)
     assert done.value.value is report and report.failed
     assert str(report.longrepr).startswith(f"tests/{tier}/test_x.py opened a real Zenoh session")
+
+
+@pytest.mark.parametrize(
+    ("start", "shown"),
+    [
+        (lambda: subprocess.run(["true", "run"], check=False), r"\(true run\)"),
+        (lambda: subprocess.Popen(["true", "popen"]), r"\(true popen\)"),
+        (lambda: subprocess.check_output("true shell", shell=True), r"\(true shell\)"),
+        (lambda: os.system("true system"), r"\(os\.system true system\)"),
+        (lambda: os.posix_spawn("/bin/true", ["true", "spawn"], {}), r"os\.posix_spawn true spawn"),
+        (lambda: os.posix_spawnp("true", ["true", "spawnp"], {}), r"os\.posix_spawnp true spawnp"),
+        (lambda: os.fork(), r"os\.fork"),
+    ],
+    ids=["run", "popen", "shell", "system", "posix_spawn", "posix_spawnp", "fork"],
+)
+@pytest.mark.parametrize(("tier", "sockets"), [("unit", TRAFFIC), ("service", NETWORK)])
+def test_every_standard_way_to_start_a_process_is_refused(tier, sockets, start, shown):
+    real = (subprocess.Popen.__init__, os.system, os.posix_spawn, os.fork)
+    guard = TierGuard(tier, sockets=sockets)
+    with guard.watching("t::spawn") as seen, pytest.raises(Failed, match=r"started a process"):
+        start()
+    assert len(seen) == 1 and re.search(shown, seen[0])
+    assert (subprocess.Popen.__init__, os.system, os.posix_spawn, os.fork) == real
+
+
+@pytest.mark.parametrize(("tier", "sockets"), [("unit", TRAFFIC), ("service", NETWORK)])
+def test_sendmsg_on_a_network_socket_is_refused(tier, sockets):
+    guard = TierGuard(tier, sockets=sockets)
+    with (
+        guard.watching("t::sendmsg") as seen,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as udp,
+        pytest.raises(Failed, match=r"socket\.sendmsg"),
+    ):
+        udp.sendmsg([b"x"], [], 0, ("127.0.0.1", 9))
+    assert len(seen) == 1

@@ -6,35 +6,32 @@ Body frame: FLU (x forward, y left, z up), ``frame_id="base_link"``.
 
 from __future__ import annotations
 
+from typing import Self
+
 import msgspec
 
 from dronewrapper.msgs.std import Header
 
 
-class Point(msgspec.Struct, frozen=True, kw_only=True):
+class _XYZ(msgspec.Struct, frozen=True, kw_only=True):
+    """Three components along x, y and z: the layout Point and Vector3 share."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+    @classmethod
+    def of(cls, xyz: tuple[float, float, float]) -> Self:
+        """The value with ``xyz`` as its (x, y, z)."""
+        return cls(x=float(xyz[0]), y=float(xyz[1]), z=float(xyz[2]))
+
+
+class Point(_XYZ, frozen=True, kw_only=True):
     """A position in metres."""
 
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
 
-    @classmethod
-    def of(cls, xyz: tuple[float, float, float]) -> Point:
-        """The Point with ``xyz`` as its (x, y, z)."""
-        return cls(x=float(xyz[0]), y=float(xyz[1]), z=float(xyz[2]))
-
-
-class Vector3(msgspec.Struct, frozen=True, kw_only=True):
+class Vector3(_XYZ, frozen=True, kw_only=True):
     """A free vector (velocity in m/s, angular rate in rad/s, ...)."""
-
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
-
-    @classmethod
-    def of(cls, xyz: tuple[float, float, float]) -> Vector3:
-        """The Vector3 with ``xyz`` as its (x, y, z)."""
-        return cls(x=float(xyz[0]), y=float(xyz[1]), z=float(xyz[2]))
 
 
 class Quaternion(msgspec.Struct, kw_only=True, frozen=True):

@@ -179,7 +179,7 @@ class ParamValue(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, froze
 
 # ---- services (request -> reply), as mavros_msgs/srv, with the autopilot's reason added ----
 #
-# Requests are strict (DESIGN.md "bad input changes nothing"): every field that could make the
+# Requests are strict (docs/design.md: "bad input changes nothing"): every field that could make the
 # aircraft do something has no default, so a request that leaves it out is refused instead of
 # acting on a guess (``CommandBool {}`` must never arm); unknown fields are refused with their
 # name (a misspelt ``altitude`` must not be silently ignored); values are checked for finiteness

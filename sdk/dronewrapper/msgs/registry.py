@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Generic, TypeVar
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
@@ -37,6 +38,21 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
+from dronewrapper.msgs.mission import (
+    EnvelopeResult,
+    EnvelopeSet,
+    HomePosition,
+    MissionControl,
+    MissionResult,
+    WaypointClear,
+    WaypointList,
+    WaypointPull,
+    WaypointPullResult,
+    WaypointPush,
+    WaypointPushResult,
+    WaypointReached,
+    WaypointSetCurrent,
+)
 from dronewrapper.msgs.sensor import (
     BatteryState,
     CameraInfo,
@@ -45,7 +61,14 @@ from dronewrapper.msgs.sensor import (
     Image,
     NavSatFix,
 )
-from dronewrapper.msgs.simulation import PoseSourceStatus, WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import (
+    PoseSourceStatus,
+    VehicleReset,
+    VehicleResetResult,
+    WorldLoad,
+    WorldQuery,
+    WorldState,
+)
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 
@@ -294,10 +317,68 @@ COMMAND_LEASE = Service(
     "{ns}/dronewrapper/lease", LeaseRequest, LeaseReply, "bridge", "take or give back the lease"
 )
 
+# ---- missions, home and the safety envelope (MAVROS's mission/geofence/home keys) ----
+MISSION_WAYPOINTS = Topic(
+    "{ns}/mavros/mission/waypoints", WaypointList, 0.5, ("bridge",), "the mission, on change too"
+)
+MISSION_REACHED = Topic(
+    "{ns}/mavros/mission/reached", WaypointReached, 0.0, ("bridge",), "a mission item reached"
+)
+HOME_POSITION = Topic(
+    "{ns}/mavros/home_position/home", HomePosition, 0.5, ("bridge",), "home, on change too"
+)
+ENVELOPE = Topic(
+    "{ns}/dronewrapper/envelope", Envelope, 0.5, ("bridge",), "the safety envelope in force"
+)
+MISSION_PUSH = Service(
+    "{ns}/mavros/mission/push", WaypointPush, WaypointPushResult, "bridge", "upload a mission"
+)
+MISSION_PULL = Service(
+    "{ns}/mavros/mission/pull", WaypointPull, WaypointPullResult, "bridge", "download it"
+)
+MISSION_CLEAR = Service(
+    "{ns}/mavros/mission/clear", WaypointClear, MissionResult, "bridge", "clear the mission"
+)
+MISSION_SET_CURRENT = Service(
+    "{ns}/mavros/mission/set_current",
+    WaypointSetCurrent,
+    MissionResult,
+    "bridge",
+    "fly this item next",
+)
+MISSION_CONTROL = Service(
+    "{ns}/dronewrapper/mission/control",
+    MissionControl,
+    MissionResult,
+    "bridge",
+    "start, pause or return",
+)
+GEOFENCE_PUSH = Service(
+    "{ns}/mavros/geofence/push",
+    WaypointClear,
+    MissionResult,
+    "bridge",
+    "upload the envelope's fence to the autopilot",
+)
+ENVELOPE_SET = Service(
+    "{ns}/dronewrapper/envelope/set",
+    EnvelopeSet,
+    EnvelopeResult,
+    "bridge",
+    "replace or read the safety envelope",
+)
+
 SIM_WORLD_LOAD = Service(
     "sim/world/load", WorldLoad, WorldState, "sim", "load a scenario's world, or reset it"
 )
 SIM_WORLD = Service("sim/world/info", WorldQuery, WorldState, "sim", "the world the sim runs")
+SIM_RESET = Service(
+    "{ns}/sim/world/reset",
+    VehicleReset,
+    VehicleResetResult,
+    "sim",
+    "put this simulated vehicle back at its start pose, on the ground, motors off",
+)
 
 # ---- liveliness ----
 ALIVE = Liveliness("{ns}/alive/{service}", "held by every running service")

@@ -21,6 +21,23 @@ class WorldQuery(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, froze
     """Ask a simulator which world it runs (no fields)."""
 
 
+class VehicleReset(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
+    """Put one simulated vehicle back at its start pose, on the ground, motors off (no
+    fields): "reset the drone" between two tries. Its world and battery stay as they are."""
+
+
+class VehicleResetResult(msgspec.Struct, kw_only=True, frozen=True):
+    """What a reset did.
+
+    Attributes:
+        success: the vehicle is at its start pose, on the ground, disarmed.
+        message: what was done, or why not.
+    """
+
+    success: bool
+    message: str = ""
+
+
 class WorldState(msgspec.Struct, kw_only=True, frozen=True):
     """The world a simulator runs.
 

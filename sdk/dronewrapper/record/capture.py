@@ -56,6 +56,26 @@ class ImageThrottle:
         return True
 
 
+class OneStreamPerCamera:
+    """With raw frames stored as JPEG, a camera's own JPEG stream would store each frame twice:
+    once a camera's raw frames arrive, its ``image_raw/compressed`` samples are left out."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled
+        self._raw: set[str] = set()  # ``{ns}/{camera}`` prefixes whose raw frames arrive
+
+    def keep(self, key: str) -> bool:
+        """True if a sample on ``key`` is recorded."""
+        if not self.enabled:
+            return True
+        if IMAGE_RAW.match(key):
+            self._raw.add(key.removesuffix("/image_raw"))
+            return True
+        if IMAGE_COMPRESSED.match(key):
+            return key.removesuffix("/image_raw/compressed") not in self._raw
+        return True
+
+
 def capture(
     session: zenoh.Session,
     keyexprs: Sequence[str],
@@ -67,11 +87,14 @@ def capture(
 ) -> CaptureStats:
     """Record every sample on ``keyexprs`` until ``stop`` is set or ``duration`` s (0: no limit).
 
-    Samples are stamped with their receive time (wall clock, ns since the epoch).
+    Samples are stamped with their receive time (wall clock, ns since the epoch). When the
+    recorder stores raw frames as JPEG, a camera's own JPEG stream is left out (counted as
+    dropped ``duplicate_image``).
     """
     stats = CaptureStats()
     samples: queue.Queue[tuple[str, bytes, int]] = queue.Queue(QUEUE_SIZE)
     throttle = ImageThrottle(image_rate_hz)
+    once = OneStreamPerCamera(recorder.jpeg_quality is not None)
     lock = threading.Lock()
 
     def on_sample(sample: zenoh.Sample) -> None:
@@ -79,6 +102,9 @@ def capture(
         now_ns = time.time_ns()
         with lock:
             stats.received += 1
+            if not once.keep(key):
+                stats.dropped["duplicate_image"] += 1
+                return
             if not throttle.keep(key, now_ns / 1e9):
                 stats.dropped["rate"] += 1
                 return

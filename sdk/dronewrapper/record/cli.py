@@ -48,10 +48,10 @@ def _positive(value: str) -> float:
 
 
 def _open(args: argparse.Namespace, prog: str):
-    from dronewrapper.runtime.node import open_session
+    from dronewrapper.router_reach import open_client_session
 
     try:
-        return open_session(options_from_args(args))
+        return open_client_session(options_from_args(args))
     except ConnectionError as exc:
         print(f"{prog}: {exc}", file=sys.stderr)
         return None
@@ -63,6 +63,11 @@ def record_main(argv: Sequence[str]) -> int:
     parser.add_argument("keyexprs", nargs="*", default=["**"], help="what to record (default **)")
     parser.add_argument("-o", "--output", metavar="FILE.mcap", help="the recording to write")
     parser.add_argument("--info", metavar="FILE.mcap", help="summarise a recording and exit")
+    parser.add_argument(
+        "--ros2",
+        metavar="FILE.mcap",
+        help="convert a recording to a ROS 2 bag (ros2msg + CDR) written to -o, and exit",
+    )
     parser.add_argument("--duration", type=_non_negative, default=0.0, help="stop after S s")
     parser.add_argument(
         "--compressed-images", action="store_true", help="store raw camera frames as JPEG"
@@ -85,6 +90,25 @@ def record_main(argv: Sequence[str]) -> int:
         return 0
     if not args.output:
         parser.error("-o FILE.mcap is required (or --info FILE)")
+    if args.ros2:
+        from dronewrapper.record.ros2_bag import convert_to_ros2
+
+        try:
+            written, skipped = convert_to_ros2(args.ros2, args.output, compression=args.compression)
+        except OSError as exc:
+            print(f"dronewrapper record: {exc}", file=sys.stderr)
+            return 1
+        left = ", ".join(sorted(skipped)) or "none"
+        print(
+            f"wrote {sum(written.values())} messages on {len(written)} ROS 2 topics to "
+            f"{args.output} (left out, no ROS 2 type: {left})"
+        )
+        return 0
+    from dronewrapper.echo import path_warning
+
+    for keyexpr in args.keyexprs:
+        if warning := path_warning(keyexpr):
+            print(f"dronewrapper record: warning: {warning}", file=sys.stderr)
     from dronewrapper.record.capture import capture
     from dronewrapper.record.recorder import Recorder
 

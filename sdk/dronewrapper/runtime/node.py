@@ -14,8 +14,8 @@ Zenoh queryables whose handlers run on a worker pool; a bad request gets an erro
 what is wrong, never silence. SIGINT and SIGTERM set ``stop_event``; the session is always
 closed on exit (an unclosed session can hang the interpreter).
 
-Size: just over 400 lines: the Node's whole surface (publishers, subscribers, services,
-liveliness, shutdown) and ``call_service``, the one module every process imports.
+This module is the Node's whole surface (publishers, subscribers, services, liveliness,
+shutdown) and ``call_service``: the one module every process imports.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
 from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
 from dronewrapper.runtime.shm import remove_stale_segments
-from dronewrapper.runtime.shm_put import ShmWriter
+from dronewrapper.runtime.shm_put import BLOCK_WAIT_S, ShmWriter
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -113,6 +113,8 @@ class Publisher(Generic[T]):
         self.type = msg_type
         self.count = 0
         self._shm = shm
+        blocking = qos.get("congestion_control") == zenoh.CongestionControl.BLOCK
+        self._shm_wait_s = BLOCK_WAIT_S if blocking else 0.0
         self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type), **qos)
 
     def put(self, msg: T, *, attachment: bytes | None = None) -> None:
@@ -120,7 +122,7 @@ class Publisher(Generic[T]):
         (see :mod:`dronewrapper.runtime.caller`)."""
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
-        payload = self._shm.payload(msg) if self._shm is not None else None
+        payload = self._shm.payload(msg, wait_s=self._shm_wait_s) if self._shm else None
         self._pub.put(codec.encode(msg) if payload is None else payload, attachment=attachment)
         self.count += 1
 

@@ -46,11 +46,16 @@ def command_line_name(name: str) -> str:
     return f"python -m {package}" if package else name
 
 
+def plain_text(text: str) -> str:
+    """``text`` from a docstring as a terminal shows it: reST's double backticks dropped."""
+    return text.replace("``", "")
+
+
 def service_parser(name: str, description: str | None, *, default_mode: str = "peer"):
     """An ArgumentParser with the flags every service takes."""
     parser = argparse.ArgumentParser(
         prog=command_line_name(name),
-        description=(description or "").strip().splitlines()[0] if description else None,
+        description=plain_text(description.strip().splitlines()[0]) if description else None,
     )
     parser.add_argument("--config", metavar="FILE", help="YAML or JSON config file")
     parser.add_argument(

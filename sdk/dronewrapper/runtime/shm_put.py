@@ -17,6 +17,7 @@ memory once (the typed decode after it is zero-copy).
 from __future__ import annotations
 
 import logging
+import time
 from typing import Any
 
 import msgspec
@@ -33,6 +34,11 @@ this size the saved copy is worth less than the allocation)."""
 POOL_BYTES = 32 * 1024 * 1024
 """Shared memory a process's provider may hold (RAM-backed, touched as used): 35 frames of
 640x480 bgr8 in flight, 11 of 1280x720."""
+
+BLOCK_WAIT_S = 0.1
+"""How long a BLOCK publisher waits for room in a full pool before it falls back (s)."""
+WAIT_STEP_S = 0.0005
+"""How often a waiting put looks for a released buffer (s)."""
 
 _EMPTY_DATA_TAIL = b"\xa4data\xc4\x00"  # "data" -> bin8 of length 0
 _BIN32 = b"\xc6"
@@ -73,12 +79,22 @@ def split_message(msg: Any) -> tuple[bytes, bytes] | None:
 
 class ShmWriter:
     """Builds shared-memory payloads for large messages (one provider per process, made on
-    first use); falls back to the ordinary path (``payload`` returns None) when the message does
-    not fit the scheme or the pool is full."""
+    first use); falls back to the ordinary path (``payload`` returns None, counted in
+    ``fallbacks``) when the message does not fit the scheme or the pool is really full.
+
+    Zenoh's provider reclaims sent buffers only when an allocation fails (garbage collection),
+    and never merges the reclaimed chunks: after a few seconds of frames the pool is a row of
+    frame-sized free chunks, and a frame a byte larger than the last (MessagePack's header
+    grows as ``header.seq`` passes 127, 255 and 65535; a camera changes size) fits none of
+    them. A failed allocation is therefore retried once after a defragmentation; only a pool
+    full of buffers still in flight (readers slower than the camera) falls back.
+    """
 
     def __init__(self, pool_bytes: int = POOL_BYTES) -> None:
         self.pool_bytes = pool_bytes
         self.fallbacks = 0
+        """Puts that went the ordinary way because the pool had no room (0 in a healthy
+        process: readers keep up)."""
         self._provider: Any = None
         self._policy: Any = None
 
@@ -88,21 +104,47 @@ class ShmWriter:
         if self._provider is None:
             self._provider = ShmProvider.default_backend(self.pool_bytes)
             self._policy = GarbageCollect()
-        return self._provider.alloc(size, self._policy)
+        try:
+            return self._provider.alloc(size, self._policy)
+        except zenoh.ZError:  # free chunks, but none of this size: merge them, and retry
+            self._provider.defragment()
+            return self._provider.alloc(size, self._policy)
 
-    def payload(self, msg: Any) -> zenoh.ZBytes | None:
-        """The message in a shared-memory buffer, or None: put ``codec.encode(msg)`` instead."""
+    def _alloc_waiting(self, size: int, wait_s: float) -> Any:
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                return self._alloc(size)
+            except zenoh.ZError:
+                if time.monotonic() >= deadline:
+                    raise
+            time.sleep(WAIT_STEP_S)
+
+    def payload(self, msg: Any, *, wait_s: float = 0.0) -> zenoh.ZBytes | None:
+        """The message in a shared-memory buffer, or None: put ``codec.encode(msg)`` instead.
+
+        ``wait_s``: how long a full pool may be waited on for a reader to release a buffer
+        (s; a publisher whose congestion control is BLOCK waits, a DROP one does not).
+        """
         parts = split_message(msg)
         if parts is None:
             return None
         head, pixels = parts
+        size = len(head) + len(pixels)
         try:
-            buf = self._alloc(len(head) + len(pixels))
-        except zenoh.ZError as exc:  # pool full (slow readers) or no shared memory here
+            buf = self._alloc_waiting(size, wait_s)
+        except zenoh.ZError as exc:  # every buffer in flight (slow readers), or no SHM
             self.fallbacks += 1
-            if self.fallbacks == 1:
-                log.warning("shared-memory put fell back to an ordinary one: %s", exc)
+            if self.fallbacks & (self.fallbacks - 1) == 0:  # the 1st, 2nd, 4th, 8th ...
+                log.warning(
+                    "shared-memory put fell back to an ordinary one (%d so far): %s for %d "
+                    "bytes in a pool of %d MiB (readers too slow to release their frames?)",
+                    self.fallbacks,
+                    exc,
+                    size,
+                    self.pool_bytes // (1024 * 1024),
+                )
             return None
         buf[0 : len(head)] = head
-        buf[len(head) : len(head) + len(pixels)] = pixels
+        buf[len(head) : size] = pixels
         return zenoh.ZBytes(buf)

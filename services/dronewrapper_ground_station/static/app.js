@@ -24,9 +24,9 @@ function wsUrl(path) {
   return `${proto}//${location.host}${path}${station.token ? "?token=" + encodeURIComponent(station.token) : ""}`;
 }
 
-function logLine(text, cls = "station") {
+function logLine(text, cls = "station", time = new Date().toLocaleTimeString()) {
   const li = document.createElement("li");
-  li.className = cls; li.textContent = `${new Date().toLocaleTimeString()}  ${text}`;
+  li.className = cls; li.textContent = `${time}  ${text}`;
   const log = $("log"); log.prepend(li);
   while (log.children.length > 200) log.lastChild.remove();
 }
@@ -46,6 +46,20 @@ async function command(name, body = {}) {
   } catch (err) {
     el.className = "result bad"; el.textContent = `${name}: ${err}`;
   } finally { $("busy").textContent = ""; }
+}
+
+// ---- every drone at once: land all (each drone's outcome in the log)
+async function landAll() {
+  const el = $("result"); el.className = "result"; el.textContent = "landing all…";
+  try {
+    const r = await fetch("/api/fleet/land", {
+      method: "POST", headers: { "Content-Type": "application/json", "X-Station-Token": station.token },
+    });
+    const reply = await r.json();
+    for (const [ns, what] of Object.entries(reply.drones || {})) logLine(`${ns}: ${what}`, what === "landed" ? "station" : "error");
+    el.className = reply.ok ? "result ok" : "result bad";
+    el.textContent = reply.ok ? "all landed" : (reply.error || "some did not land: see the log");
+  } catch (err) { el.className = "result bad"; el.textContent = `land all: ${err}`; }
 }
 
 // ---- the simulator's world: which scenario runs; load another or reset it
@@ -103,7 +117,8 @@ const seenLog = new Set();
 function onTelemetry(msg) {
   station.tele = msg; station.offset = msg.t - Date.now() / 1000;
   if (msg.role !== station.role) setRole(msg.role);
-  renderDrones(msg.fleet);
+  renderLink(msg.router);
+  renderDrones(msg.fleet, msg.router);
   if (!station.ns && msg.fleet.length) selectDrone(msg.fleet[0].ns);
   station.drone = msg.drones[station.ns] || null;
   const now = Date.now() / 1000;
@@ -118,7 +133,7 @@ function onTelemetry(msg) {
   if (d) {
     for (const e of d.log) {
       const key = `${e.stamp}|${e.text}`;
-      if (!seenLog.has(key)) { seenLog.add(key); logLine(`${station.ns}: ${e.text}`, e.severity); }
+      if (!seenLog.has(key)) { seenLog.add(key); logLine(`${station.ns}: ${e.text}`, e.severity, e.time); }
     }
     plots.alt.push(0, now, d.pose && d.pose.z); plots.alt.push(1, now, d.ground_truth && d.ground_truth.z);
     const c = d.controller && !d.controller.stale ? d.controller : null;
@@ -141,9 +156,17 @@ function setRole(role) {
   for (const s of sticks) s.enabled = role === "operator";
 }
 
-function renderDrones(fleet) {
+function renderLink(router) {  // the page's socket is open: is the station's router linked?
+  const linked = !router || router.linked;
+  $("link").textContent = linked ? "connected" : "router unreachable";
+  $("link").className = `badge ${linked ? "ok" : "bad"}`;
+  $("link").title = router ? `station's router: ${router.endpoint}` : "";
+}
+
+function renderDrones(fleet, router) {
   const nav = $("drones");
-  const sig = JSON.stringify(fleet.map((d) => [d.ns, d.health])) + station.ns;
+  const unreachable = router && !router.linked;
+  const sig = JSON.stringify(fleet.map((d) => [d.ns, d.health])) + station.ns + unreachable;
   if (nav.dataset.sig === sig) return;
   nav.dataset.sig = sig; nav.textContent = "";
   for (const d of fleet) {
@@ -155,7 +178,8 @@ function renderDrones(fleet) {
     b.onclick = () => selectDrone(d.ns);
     nav.append(b);
   }
-  if (!fleet.length) nav.textContent = "no drone online";
+  if (unreachable) nav.textContent = `router ${router.endpoint} unreachable: no drone can be seen`;
+  else if (!fleet.length) nav.textContent = "no drone online";
 }
 
 function selectDrone(ns) {
@@ -297,6 +321,7 @@ function drawMap() {
     ctx.beginPath(); ctx.arc(sx(gx), sy(gy), 8, 0, 2 * Math.PI); ctx.moveTo(sx(gx) - 12, sy(gy)); ctx.lineTo(sx(gx) + 12, sy(gy));
     ctx.moveTo(sx(gx), sy(gy) - 12); ctx.lineTo(sx(gx), sy(gy) + 12); ctx.stroke();
   }
+  drawMissionAndFence(ctx, sx, sy, s);
   const drones = Object.entries((tele && tele.drones) || {});
   drones.sort(([a], [b]) => (a === station.ns) - (b === station.ns)); // the picked one on top
   for (const [ns, d] of drones) {
@@ -307,6 +332,54 @@ function drawMap() {
     ctx.beginPath(); ctx.moveTo(12, 0); ctx.lineTo(-8, 7); ctx.lineTo(-4, 0); ctx.lineTo(-8, -7); ctx.closePath(); ctx.fill();
     ctx.restore(); ctx.fillText(ns, x + 10, y - 8);
   }
+}
+// mission items (lat/lon, or local ENU from home) and the envelope (ENU from home) in local ENU
+const EARTH_RADIUS_M = 6378137;
+function homeLocal(d) { return d.home ? [d.home.x, d.home.y] : [0, 0]; }
+function itemLocal(d, item) {
+  const [hx, hy] = homeLocal(d);
+  if (item.frame === 4) return [hx + item.x, hy + item.y];
+  if (!d.home || d.home.latitude === null) return null;
+  const lat0 = d.home.latitude * Math.PI / 180;
+  const north = (item.x - d.home.latitude) * Math.PI / 180 * EARTH_RADIUS_M;
+  const east = (item.y - d.home.longitude) * Math.PI / 180 * EARTH_RADIUS_M * Math.cos(lat0);
+  return [hx + east, hy + north];
+}
+function drawMissionAndFence(ctx, sx, sy, s) {
+  const d = station.drone;
+  if (!d) return;
+  const [hx, hy] = homeLocal(d);
+  const env = d.envelope;
+  if (env) {
+    ctx.strokeStyle = "rgba(248,81,73,.8)"; ctx.lineWidth = 1.5; ctx.setLineDash([6, 4]);
+    ctx.beginPath(); ctx.arc(sx(hx), sy(hy), env.max_distance * s, 0, 2 * Math.PI); ctx.stroke();
+    for (const polygon of [env.fence, ...env.exclusions]) {
+      if (!polygon.length) continue;
+      ctx.beginPath();
+      polygon.forEach(([x, y], k) => (k ? ctx.lineTo(sx(hx + x), sy(hy + y)) : ctx.moveTo(sx(hx + x), sy(hy + y))));
+      ctx.closePath(); ctx.stroke();
+    }
+    ctx.setLineDash([]);
+  }
+  const mission = d.mission;
+  if (!mission || !mission.items.length) return;
+  const points = mission.items.map((item) => itemLocal(d, item)).filter((p) => p);
+  ctx.strokeStyle = "rgba(210,153,34,.9)"; ctx.lineWidth = 1.5; ctx.beginPath();
+  points.forEach(([x, y], k) => (k ? ctx.lineTo(sx(x), sy(y)) : ctx.moveTo(sx(x), sy(y)))); ctx.stroke();
+  points.forEach(([x, y], k) => {
+    ctx.fillStyle = k === mission.current ? "#3fb950" : "#d29922";
+    ctx.beginPath(); ctx.arc(sx(x), sy(y), 6, 0, 2 * Math.PI); ctx.fill();
+    ctx.fillStyle = "#0d1117"; ctx.fillText(String(k + 1), sx(x) - 3, sy(y) + 4);
+  });
+}
+async function uploadPlan() {
+  const file = $("plan-file").files[0];
+  if (!file) { $("result").className = "result bad"; $("result").textContent = "pick a .plan file first"; return; }
+  let plan;
+  try { plan = JSON.parse(await file.text()); } catch (err) {
+    $("result").className = "result bad"; $("result").textContent = `${file.name}: not JSON (${err})`; return;
+  }
+  command("upload_plan", { plan });
 }
 function onMapClick(e) {
   if (station.role !== "operator" || !station.drone || !station.drone.pose) return;
@@ -369,6 +442,12 @@ async function start() {
   $("btn-takeoff").onclick = () => command("takeoff", { height: Number($("takeoff-height").value) });
   $("btn-land").onclick = () => { stopTeleop(); command("land"); };
   $("btn-hold").onclick = () => { stopTeleop(); command("hold"); };
+  $("btn-plan").onclick = uploadPlan;
+  $("btn-mission-start").onclick = () => { stopTeleop(); command("start_mission"); };
+  $("btn-mission-pause").onclick = () => command("pause_mission");
+  $("btn-rtl").onclick = () => { stopTeleop(); command("rtl"); };
+  $("btn-reset").onclick = () => { stopTeleop(); command("reset"); };
+  $("btn-land-all").onclick = () => { stopTeleop(); landAll(); };
   $("btn-mode").onclick = () => command("mode", { mode: $("mode-select").value });
   for (const b of document.querySelectorAll(".seg button")) b.onclick = () => {
     station.camera = b.dataset.camera;

@@ -7,8 +7,8 @@ and parameter lists due on each link with :meth:`Autopilot.poll`. Links are name
 ``gcs``); STATUSTEXT goes only to links where a MAV_TYPE_GCS heartbeat was seen in the last
 few seconds, as PX4 does.
 
-Size: over 400 lines: one handler per MAVLink message PX4 answers, beside the state it changes;
-physics, the commander and the parameters are their own modules.
+One handler per MAVLink message PX4 answers, beside the state it changes; physics, the
+commander and the parameters are their own modules.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from dronewrapper_sim.dynamics import GRAVITY, QuadParams, QuadState, WindModel,
 from dronewrapper_sim.px4 import modes, offboard, telemetry
 from dronewrapper_sim.px4.commander import FORCE_MAGIC, Commander, StatusText
 from dronewrapper_sim.px4.flight_control import Gains, PositionController
+from dronewrapper_sim.px4.mission import Geofence, MissionRunner, MissionStore
 from dronewrapper_sim.px4.params import ParamStore
 
 log = logging.getLogger("sim.autopilot")
@@ -134,6 +135,11 @@ class Autopilot:
         self.quad = quad or QuadParams()
         self.state = QuadState(x=cfg.start_x, y=cfg.start_y, yaw=cfg.start_yaw)
         self.commander = Commander(self.params, self.state)
+        self.missions = MissionStore(cfg.sysid)  # mission.py: missions, fence, AUTO.MISSION
+        self.commander.mission = MissionRunner(
+            self.missions, self.local_of, lambda: self.commander.home, self._acceptance_radius
+        )
+        self.commander.geofence = Geofence(self.missions, self.local_of)
         self.controller = PositionController()
         self.battery = Battery(
             cells=int(self.params["BAT1_N_CELLS"]), capacity_mah=self.params["BAT1_CAPACITY"]
@@ -201,6 +207,13 @@ class Autopilot:
         self.controller.reset()
         return QuadState(x=last.x, y=last.y, yaw=last.yaw)
 
+    def reset_to_start(self) -> None:
+        """Back at the start pose, on the ground, disarmed, at rest (battery and params stay)."""
+        cfg = self.config
+        self.commander.disarm(self.time_s, self.state, force=True, reason="Disarmed: reset")
+        self.controller.reset()
+        self.state = QuadState(x=cfg.start_x, y=cfg.start_y, yaw=cfg.start_yaw)
+
     @property
     def armed(self) -> bool:
         return self.commander.armed
@@ -215,6 +228,8 @@ class Autopilot:
     def handle(self, link: str, msg: mavlink.MAVLink_message) -> list[mavlink.MAVLink_message]:
         """Process one message received on ``link``; returns the replies for that link."""
         kind = msg.get_type()
+        if kind.startswith("MISSION_"):
+            return self.missions.handle(msg, self.time_s)
         handler = getattr(self, f"_on_{kind.lower()}", None)
         if handler is None:
             return []
@@ -353,6 +368,12 @@ class Autopilot:
             result = cmd.set_mode(modes.Mode.LAND, now, state)
         elif command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH:
             result = cmd.set_mode(modes.Mode.RTL, now, state)
+        elif command == mavlink.MAV_CMD_DO_SET_MISSION_CURRENT:
+            ok = math.isfinite(p[0]) and self.missions.set_current(int(p[0]))
+            result = mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_DENIED
+            replies.append(self.missions.current_message())
+        elif command == mavlink.MAV_CMD_MISSION_START:
+            result = cmd.set_mode(modes.Mode.MISSION, now, state)
         elif command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
             ok = math.isfinite(p[0]) and link.scheduler.set_interval(int(p[0]), p[1], now)
             result = mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_FAILED
@@ -385,6 +406,7 @@ class Autopilot:
         """Everything due now on each link: replies queued earlier, status texts (GCS links
         only), due telemetry streams and the next chunk of a parameter list."""
         texts = self.commander.drain_texts()
+        mission_events = self.commander.mission.drain() if self.commander.mission else []
         out: dict[str, list[mavlink.MAVLink_message]] = {}
         now = self.time_s
         for name, link in self.links.items():
@@ -392,6 +414,7 @@ class Autopilot:
             if texts and now - link.gcs_heartbeat_at <= GCS_HEARTBEAT_TIMEOUT_S:
                 for text in texts:
                     msgs.extend(self.statustext(text))
+            msgs.extend(mission_events)
             msgs.extend(self._builders[msgid]() for msgid in link.scheduler.due(now))
             for _ in range(min(PARAMS_PER_POLL, len(link.param_queue))):
                 name_at = self.params.name_at(link.param_queue.popleft())
@@ -428,6 +451,15 @@ class Autopilot:
     @property
     def _usec(self) -> int:
         return int(self.time_s * 1e6)
+
+    def local_of(self, lat: float, lon: float) -> tuple[float, float]:
+        """Local ENU (x, y) m of latitude/longitude (deg)."""
+        cfg = self.config
+        north, east = frames.geodetic_to_offset(lat, lon, cfg.home_lat_deg, cfg.home_lon_deg)
+        return east, north
+
+    def _acceptance_radius(self) -> float:
+        return self.params["NAV_ACC_RAD"]
 
     def geodetic(self, x: float, y: float) -> tuple[float, float]:
         """Latitude/longitude (deg) of local ENU point (x, y)."""

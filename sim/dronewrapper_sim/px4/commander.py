@@ -19,8 +19,8 @@ Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
   default; not latched: the vehicle is back in OFFBOARD as soon as setpoints resume;
 - after a disarm, a LAND or RTL intention reverts to the mode intended before it.
 
-Size: over 400 lines: PX4's mode and arming rules are one state machine, each rule next to the
-PX4 behaviour it reproduces.
+PX4's mode and arming rules are one state machine, each rule next to the PX4 behaviour it
+reproduces.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from enum import IntEnum
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_sim.dynamics import QuadState
+from dronewrapper_sim.px4 import mission
 from dronewrapper_sim.px4.flight_control import NAN, Target
 from dronewrapper_sim.px4.modes import Mode
 from dronewrapper_sim.px4.offboard import OffboardSetpoint
@@ -119,6 +120,8 @@ class Commander:
         self._rtl_phase = ""
         self._rtl_z = 0.0
         self._rtl_wait_since = 0.0
+        self.mission: mission.MissionRunner | None = None  # set by the autopilot
+        self.geofence: mission.Geofence | None = None
 
     # ---- helpers ----
 
@@ -135,6 +138,8 @@ class Commander:
         return now - self.setpoint_at <= self.params["COM_OF_LOSS_T"]
 
     def _can_run(self, mode: Mode, now: float) -> bool:
+        if mode is Mode.MISSION and self.mission is not None:
+            return self.mission.runnable()
         if mode.needs_rc or mode in (Mode.MISSION, Mode.FOLLOWME, Mode.PRECLAND):
             return False
         return mode is not Mode.OFFBOARD or self.offboard_available(now)
@@ -243,6 +248,7 @@ class Commander:
             if timeout > 0 and now - self.landed_at >= timeout:
                 self.disarm(now, state, force=True, reason=reason)
         self._offboard_failsafe(now, state)
+        mission.check_geofence(self, now, state)
         self._navigate(now, state)
 
     def _land_detector(self, now: float, state: QuadState) -> None:
@@ -365,6 +371,8 @@ class Commander:
             target = self._land_target(x0, y0, yaw0, state)
         elif mode is Mode.RTL:
             target = self._rtl_target(state, now)
+        elif mode is Mode.MISSION and self.mission is not None:
+            target = mission.mission_target(self, now, state)
         else:  # LOITER and anything that cannot fly: hold where the mode started
             target = Target(
                 position=(x0, y0, z0),

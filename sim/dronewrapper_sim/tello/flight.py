@@ -114,6 +114,7 @@ class TelloFlight:
         battery_percent: float = 100.0,
     ) -> None:
         self.env = envelope
+        self.start = start
         self.state = QuadState(x=start[0], y=start[1], yaw=start[2])
         self.origin_yaw = start[2]  # heading at power-on: the Tello's yaw 0 and x axis
         self.controller = PositionController(TELLO_GAINS)
@@ -158,6 +159,19 @@ class TelloFlight:
         return done
 
     # ---- commands (validated by the protocol; these assume sane values) ----
+
+    def reset_to_start(self) -> None:
+        """Back at the start pose, on the ground, motors off, at rest (the battery stays)."""
+        self.state = QuadState(x=self.start[0], y=self.start[1], yaw=self.start[2])
+        self.controller = PositionController(TELLO_GAINS)
+        self.phase = Phase.LANDED
+        self.ground_z = 0.0
+        self._path = None
+        self._hold = None
+        self._rc = (0.0, 0.0, 0.0, 0.0)
+        self._yaw_target = self.start[2]
+        self._yaw_to_go = 0.0
+        self._finished = False
 
     def takeoff(self) -> None:
         """Spin up and climb to the take-off height; blocking."""

@@ -9,8 +9,7 @@ server owns both. Replies are the real drone's texts: ``ok``, ``error``, ``error
 (a flight command while a blocking one is still running), ``out of range``,
 ``unknown command: <text>``, or the value of a read command.
 
-Size: over 400 lines: the SDK's command table (a small handler per command, with the real
-drone's replies) reads best as one file.
+The SDK's command table: a small handler per command, with the real drone's replies.
 """
 
 from __future__ import annotations

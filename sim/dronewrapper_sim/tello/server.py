@@ -98,7 +98,9 @@ class TelloServer:
         self.send_errors = 0
         self._snapshot = self._make_snapshot()
         self.world_topics = (
-            WorldTopics(node, self.world, self.world_lock, seed=seed_override)
+            WorldTopics(
+                node, self.world, self.world_lock, seed=seed_override, reset_vehicle=self.reset
+            )
             if node is not None
             else None
         )
@@ -169,6 +171,14 @@ class TelloServer:
                 next_obj = max(next_obj + 1.0 / OBJECT_POSE_RATE_HZ, now)
                 if self.world_topics is not None:
                     self.world_topics.publish_objects()
+
+    def reset(self) -> str:
+        """Put the Tello back at its start pose, landed, motors off."""
+        with self.lock:
+            self.flight.reset_to_start()
+            self._snapshot = self._make_snapshot()
+        x, y, _ = self.flight.start
+        return f"Tello back at its start ({x:g}, {y:g}) m, landed, motors off"
 
     def _receive(self) -> None:
         for _ in range(MAX_DATAGRAMS_PER_WAKE):

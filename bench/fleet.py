@@ -1,0 +1,394 @@
+"""How the cost grows with the number of drones: N simulated Iris without cameras on one router.
+
+For each N (1, 5, 10 and 20, then +10 until the knee or ``--max``) it starts ``compose/sim_fleet``
+through ``dronewrapper up`` (its own process: the launcher holds the router), lets it settle,
+and over ``--seconds`` measures:
+
+* CPU (% of one core, ``/proc/PID/stat`` utime + stime) and memory (RSS) of every sim, every
+  bridge and the router (the launcher process: the router, and a thread per child's log);
+* each drone's pose age at one subscriber (this process, a client of the router): our wall
+  clock at arrival minus the pose's ``header.stamp``, p50/p99 per drone;
+* the command round trip of the arming service (a disarm on the ground: answered, changes
+  nothing), each drone in turn, p50/p99;
+* setpoint -> MAVLink: one more bridge in namespace ``probe``, against a PX4 stand-in in this
+  process (``bench.bridge_latency``), commanded at 30 Hz while the fleet runs, p99;
+* the SDK's fleet object (``dronewrapper.fleet.Fleet`` over all N drones, a process of its
+  own) and its CPU.
+
+The knee is the first N where the machine no longer keeps up: a drone's pose age p99 over
+50 ms, a start that fails, or the processes' CPU over 90 % of the machine's cores. A plot of
+the cost per drone against N goes to bench/results/fleet.png. Targets: bridge <= 3 % of a core
+per drone at full telemetry; 20 drones each with pose age p99 <= 50 ms; cost linear in N.
+
+    nice -n 5 python -m bench.fleet [--seconds 10] [--max 60] [--counts 1 5 10 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from bench.common import RESULTS, percentiles, print_table, write_results
+from dronewrapper.msgs import codec, registry
+from dronewrapper.msgs.geometry import PoseStamped, Vector3
+from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, CommandBool, PositionTarget
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper_compose.ports import free_port
+
+REPO = Path(__file__).resolve().parents[1]
+TICKS = os.sysconf("SC_CLK_TCK")
+PAGE = os.sysconf("SC_PAGE_SIZE")
+POSE_AGE_P99_MS = 50.0
+BRIDGE_SHARE_PER_DRONE = 3.0
+MACHINE_BUSY = 0.9
+"""The knee: the processes use more than this share of every core."""
+
+
+# ---------------------------------------------------------------------------- processes
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of a process so far (0 when it is gone)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / TICKS
+
+
+def rss_mb(pid: int) -> float:
+    """Resident memory of a process (MB; 0 when it is gone)."""
+    try:
+        return int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * PAGE / 1e6
+    except OSError:
+        return 0.0
+
+
+def children_of(pid: int) -> dict[int, str]:
+    """{pid: role} of the launcher's children: ``sim`` or ``bridge``."""
+    found = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            cmdline = (stat.parent / "cmdline").read_bytes().decode().split("\0")
+        except OSError:
+            continue
+        if int(fields[1]) != pid:
+            continue
+        module = cmdline[cmdline.index("-m") + 1] if "-m" in cmdline else ""
+        found[int(stat.parent.name)] = "sim" if module == "dronewrapper_sim" else "bridge"
+    return found
+
+
+# ---------------------------------------------------------------------------- one fleet
+
+
+class PoseAges:
+    """Ages of every drone's poses at this subscriber (s), by namespace."""
+
+    def __init__(self) -> None:
+        self.ages: dict[str, list[float]] = defaultdict(list)
+        self.recording = False
+
+    def on_sample(self, sample) -> None:
+        if not self.recording:
+            return
+        now = time.time()
+        try:
+            pose = codec.decode(PoseStamped, sample.payload.to_bytes())
+        except Exception:
+            return
+        self.ages[str(sample.key_expr).split("/", 1)[0]].append(now - pose.header.stamp)
+
+
+def arming_round_trips(session, names: list[str], until: float) -> tuple[list[float], int]:
+    """Disarm requests (answered on the ground, change nothing) to each drone in turn."""
+    from dronewrapper.runtime.node import call_service
+
+    rtts, failures = [], 0
+    while time.monotonic() < until:
+        for ns in names:
+            t0 = time.perf_counter()
+            try:
+                call_service(session, registry.ARMING, CommandBool(value=False), ns=ns, timeout=2)
+                rtts.append(time.perf_counter() - t0)
+            except (ServiceError, ServiceUnavailable):
+                failures += 1
+            time.sleep(0.02)
+    return rtts, failures
+
+
+def setpoint_probe(endpoint: str, stop: threading.Event):
+    """One more bridge (namespace ``probe``) against a PX4 stand-in here; returns the stand-in,
+    the bridge process and a function that streams marked setpoints until ``stop``."""
+    from bench.bridge_latency import PX4StandIn
+    from dronewrapper.runtime import Node, ZenohOptions
+
+    port = free_port("udp")
+    bridge = subprocess.Popen(
+        [sys.executable, "-m", "dronewrapper_bridge_mavlink", "--connect", endpoint,
+         "--namespace", "probe", "--set", f"connection=udpin:127.0.0.1:{port}",
+         "--log-level", "WARNING", "--set", "commander_lost_timeout=3600"],
+        cwd=REPO,
+    )  # fmt: skip
+    px4 = PX4StandIn(port)
+    threading.Thread(target=px4.recv_loop, daemon=True).start()
+    threading.Thread(target=px4.send_loop, args=(3600.0,), daemon=True).start()
+    options = ZenohOptions(mode="client", connect=[endpoint], namespace="probe", name="bench")
+    node = Node("bench_probe", options, handle_signals=False)
+    pub = node.publisher(registry.SETPOINT_RAW_LOCAL)
+    published: dict[int, float] = {}
+
+    def stream() -> None:
+        marker = 0
+        while not stop.is_set():
+            marker += 1
+            target = PositionTarget(coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_VELOCITY,
+                                    velocity=Vector3(x=marker * 1e-3 % 10.0))  # fmt: skip
+            published[marker] = time.monotonic()
+            pub.put(target)
+            stop.wait(1.0 / 30.0)
+
+    def latencies() -> list[float]:
+        arrivals = px4.setpoint_arrivals
+        return [arrivals[m] - t for m, t in published.items() if m in arrivals and m < 10000]
+
+    def close() -> None:
+        px4.stop.set()
+        node.close()
+        bridge.send_signal(signal.SIGINT)
+        try:
+            bridge.wait(10)
+        except subprocess.TimeoutExpired:
+            bridge.kill()
+
+    return stream, latencies, close
+
+
+def hold_fleet(endpoint: str, count: int, seconds: float) -> None:
+    """In a child: open the SDK's fleet over every drone, hold it ``seconds``, print its CPU."""
+    from dronewrapper.fleet import Fleet
+
+    with Fleet.connect(connect=endpoint, count=count, timeout=120, cameras=()) as fleet:
+        print("ready", flush=True)
+        c0, t0 = time.process_time(), time.monotonic()
+        time.sleep(seconds)
+        share = (time.process_time() - c0) / (time.monotonic() - t0)
+        healthy = sum(info.healthy for info in fleet.online())
+        print(json.dumps({"cpu_percent": 100 * share, "rss_mb": rss_mb(os.getpid()),
+                          "healthy": healthy}), flush=True)  # fmt: skip
+
+
+def measure(
+    count: int, seconds: float, settle: float, log_dir: Path, kind: str = "iris"
+) -> dict[str, object]:
+    """Start a fleet of ``count`` drones, measure it, stop it."""
+    import zenoh
+
+    from dronewrapper.runtime.node import open_session
+    from dronewrapper.runtime.options import ZenohOptions
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    log_path = log_dir / f"fleet_{count}.log"
+    argv = [sys.executable, "-m", "dronewrapper", "up", "sim_fleet", "--router", endpoint,
+            "--var", f"drones={count}", "--var", f"kind={kind}"]  # fmt: skip
+    out: dict[str, object] = {"drones": count, "kind": kind}
+    started = time.monotonic()
+    with open(log_path, "w") as log:
+        up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
+    stop, probe = threading.Event(), None
+    session = None
+    try:
+        while "all processes ready" not in log_path.read_text():
+            if up.poll() is not None or time.monotonic() - started > 60 + 5 * count:
+                out["error"] = f"the fleet did not start (see {log_path})"
+                return out
+            time.sleep(0.2)
+        out["start_s"] = time.monotonic() - started
+        names = [f"drone{i}" for i in range(1, count + 1)]
+        session = open_session(ZenohOptions(mode="client", connect=[endpoint]))
+        ages = PoseAges()
+        session.declare_subscriber(
+            registry.LOCAL_POSE.wildcard("*"), zenoh.handlers.Callback(ages.on_sample)
+        )
+        stream, setpoint_latencies, close_probe = setpoint_probe(endpoint, stop)
+        probe = close_probe
+        holder = subprocess.Popen(
+            [sys.executable, "-m", "bench.fleet", "--hold", endpoint, str(count),
+             str(seconds)], stdout=subprocess.PIPE, text=True, cwd=REPO,
+        )  # fmt: skip
+        if holder.stdout.readline().strip() != "ready":
+            out["error"] = "the SDK's fleet did not connect"
+            return out
+        time.sleep(settle)
+        pids = {**children_of(up.pid), up.pid: "router"}
+        before = {pid: cpu_seconds(pid) for pid in pids}
+        threading.Thread(target=stream, daemon=True).start()
+        ages.recording = True
+        t0 = time.monotonic()
+        rtts, failures = arming_round_trips(session, names, t0 + seconds)
+        elapsed = time.monotonic() - t0
+        ages.recording = False
+        stop.set()
+        usage: dict[str, list[float]] = defaultdict(list)
+        memory: dict[str, list[float]] = defaultdict(list)
+        for pid, role in pids.items():
+            usage[role].append(100 * (cpu_seconds(pid) - before[pid]) / elapsed)
+            memory[role].append(rss_mb(pid))
+        sdk = json.loads(holder.stdout.readline())
+        holder.wait(30)
+        per_drone = {ns: percentiles(ages.ages.get(ns, [])) for ns in names}
+        out.update(
+            cpu_percent={role: sum(v) for role, v in usage.items()},
+            cpu_percent_per_process={role: sum(v) / len(v) for role, v in usage.items()},
+            rss_mb={role: sum(v) for role, v in memory.items()},
+            rss_mb_per_process={role: sum(v) / len(v) for role, v in memory.items()},
+            sdk_fleet=sdk,
+            pose_age=per_drone,
+            pose_age_worst_p99_ms=max(p.get("p99_ms", float("inf")) for p in per_drone.values()),
+            pose_age_p50_ms=percentiles([a for v in ages.ages.values() for a in v]).get("p50_ms"),
+            arming_rtt={**percentiles(rtts), "failures": failures},
+            setpoint_to_mavlink=percentiles(setpoint_latencies()),
+            loadavg=os.getloadavg()[0],
+        )
+        return out
+    finally:
+        stop.set()
+        if probe is not None:
+            probe()
+        if session is not None:
+            session.close()
+        up.send_signal(signal.SIGINT)
+        try:
+            up.wait(60 + count)
+        except subprocess.TimeoutExpired:
+            up.kill()
+
+
+# ---------------------------------------------------------------------------- report
+
+
+def knee_reason(result: dict[str, object]) -> str:
+    """Why this N is past what the machine holds ("" if it holds it)."""
+    if "error" in result:
+        return str(result["error"])
+    if result["pose_age_worst_p99_ms"] > POSE_AGE_P99_MS:
+        return f"a pose age p99 of {result['pose_age_worst_p99_ms']:.0f} ms"
+    total = sum(result["cpu_percent"].values()) + result["sdk_fleet"]["cpu_percent"]
+    if total > 100 * MACHINE_BUSY * (os.cpu_count() or 1):
+        return f"{total:.0f} % of one core in all, on {os.cpu_count()} cores"
+    return ""
+
+
+def plot(results: list[dict[str, object]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = [r for r in results if "error" not in r]
+    counts = [r["drones"] for r in ok]
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for role in ("sim", "bridge", "router"):
+        ax.plot(counts, [r["cpu_percent"].get(role, 0) / r["drones"] for r in ok], "o-",
+                label=role)  # fmt: skip
+    ax.plot(counts, [r["sdk_fleet"]["cpu_percent"] / r["drones"] for r in ok], "o-",
+            label="SDK fleet object")  # fmt: skip
+    ax.axhline(BRIDGE_SHARE_PER_DRONE, color="grey", ls="--", label="bridge target (3 %)")
+    ax.set_xlabel("drones on one router (N)")
+    ax.set_ylabel("CPU per drone (% of one core)")
+    ax.set_title(f"Cost per drone against N ({os.cpu_count()} cores, shared machine)")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
+def report(results: list[dict[str, object]]) -> None:
+    rows = []
+    for r in results:
+        if "error" in r:
+            rows.append([r["drones"], r["error"], "", "", "", "", "", "", "", "", ""])
+            continue
+        n, cpu, each = r["drones"], r["cpu_percent"], r["cpu_percent_per_process"]
+        rows.append([
+            n, r["start_s"], each["sim"], each["bridge"], cpu["router"],
+            r["sdk_fleet"]["cpu_percent"], sum(r["rss_mb"].values()) / n,
+            r["pose_age_p50_ms"], r["pose_age_worst_p99_ms"],
+            f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}",
+            r["setpoint_to_mavlink"].get("p99_ms", float("nan")),
+        ])  # fmt: skip
+    print_table(
+        f"A fleet of N simulated drones ({results[0].get('kind', 'iris')}, no cameras) on one "
+        "router: CPU % of one core, memory, latency (ms)",
+        ["N", "start s", "sim %/each", "bridge %/each", "router %", "SDK fleet %",
+         "MB/drone", "pose age p50", "worst p99", "arming p50/p99", "sp->MAVLink p99"],
+        rows,
+    )  # fmt: skip
+    print(
+        "  (router = the launcher process holding it; SDK fleet = one Fleet over all N drones,\n"
+        "   a process of its own; pose age = arrival here - header.stamp, worst drone's p99)"
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--counts", type=int, nargs="+", default=[1, 5, 10, 20])
+    parser.add_argument("--max", type=int, default=60, help="most drones to try for the knee")
+    parser.add_argument("--step", type=int, default=10, help="drones added past the counts")
+    parser.add_argument("--seconds", type=float, default=10.0, help="measuring window (s)")
+    parser.add_argument("--settle", type=float, default=3.0, help="wait after start (s)")
+    parser.add_argument("--kind", default="iris", help="iris, tello, or a list (iris,tello)")
+    parser.add_argument("--hold", nargs=3, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.hold:
+        endpoint, count, seconds = args.hold
+        hold_fleet(endpoint, int(count), float(seconds))
+        return 0
+
+    log_dir = REPO / "out" / "bench"
+    log_dir.mkdir(parents=True, exist_ok=True)
+    results, knee = [], None
+    counts = list(args.counts)
+    while counts:
+        n = counts.pop(0)
+        print(f"... {n} drone(s)", flush=True)
+        result = measure(n, args.seconds, args.settle, log_dir, args.kind)
+        results.append(result)
+        reason = knee_reason(result)
+        if reason and knee is None:
+            knee = {"drones": n, "reason": reason}
+            print(f"    the machine no longer keeps up at {n}: {reason}", flush=True)
+        if knee is None and not counts and n + args.step <= args.max:
+            counts.append(n + args.step)  # the fixed counts all run; beyond them, to the knee
+    report(results)
+    ok = [r for r in results if "error" not in r]
+    at20 = next((r for r in ok if r["drones"] == 20), None)
+    per_drone_bridge = max((r["cpu_percent_per_process"]["bridge"] for r in ok), default=0)
+    targets = {
+        "bridge_percent_per_drone<=3": per_drone_bridge <= BRIDGE_SHARE_PER_DRONE,
+        "20_drones_pose_age_p99<=50ms": bool(
+            at20 and at20["pose_age_worst_p99_ms"] <= POSE_AGE_P99_MS
+        ),
+    }
+    print_table("targets", ["target", "met"], [[k, v] for k, v in targets.items()])
+    last = ok[-1]["drones"] if ok else 0
+    print(f"knee: {knee['drones']} drones ({knee['reason']})" if knee else f"knee: above {last}")
+    if ok:
+        plot(ok, RESULTS / ("fleet.png" if args.kind == "iris" else f"fleet_{args.kind}.png"))
+    name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
+    write_results(name, {"results": results, "knee": knee, "targets": targets})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,77 @@
+"""Whether a router listens where a command looks for one, asked with one TCP connect each
+(milliseconds): ``echo``, ``alive``, ``record``, ``doctor`` and ``up --use-router`` fail at
+once, saying what to do, instead of retrying a session for seconds and printing Zenoh's error.
+
+Only a refused connection counts as "no router": an endpoint that answers, one that does not
+answer in time (a far network, a firewall) and one that is not TCP (``udp/``, ``unixsock``) are
+left to the session, which retries and reports on its own.
+"""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Callable, Sequence
+
+import zenoh
+
+from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.options import ZenohOptions
+
+NO_ROUTER_HINT = (
+    "start one with `dronewrapper up compose/GRAPH.yaml` (or `dronewrapper router`), "
+    "or point --connect at the one that runs"
+)
+PROBE_TIMEOUT_S = 1.0
+"""Seconds one TCP connect may take before the endpoint is left to the session."""
+
+
+def tcp_address(endpoint: str) -> tuple[str, int] | None:
+    """``(host, port)`` of a ``tcp/`` or ``tls/`` endpoint, else None (pure).
+
+    >>> tcp_address("tcp/127.0.0.1:7447"), tcp_address("tls/[::1]:7448#iface=lo")
+    (('127.0.0.1', 7447), ('::1', 7448))
+    """
+    protocol, _, address = endpoint.partition("/")
+    if protocol not in ("tcp", "tls"):
+        return None
+    host, _, port = address.split("#", 1)[0].split("?", 1)[0].rpartition(":")
+    if not host or not port.isdigit():
+        return None
+    return host.strip("[]"), int(port)
+
+
+def refuses(address: tuple[str, int], timeout: float = PROBE_TIMEOUT_S) -> bool:
+    """True if nothing listens at ``address``: the connection was refused at once."""
+    try:
+        with socket.create_connection(address, timeout=timeout):
+            return False
+    except ConnectionRefusedError:
+        return True
+    except OSError:  # unreachable, timed out, unknown host: the session will say
+        return False
+
+
+def no_router(
+    endpoints: Sequence[str], refused: Callable[[tuple[str, int]], bool] = refuses
+) -> str | None:
+    """A sentence when no router listens at any of ``endpoints`` (every one a TCP endpoint
+    that refused a connection), else None."""
+    addresses = [tcp_address(endpoint) for endpoint in endpoints]
+    if not endpoints or None in addresses:
+        return None
+    if not all(refused(address) for address in addresses):
+        return None
+    where = ", ".join(endpoints)
+    return f"no router at {where} (connection refused): {NO_ROUTER_HINT}"
+
+
+def open_client_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Session:
+    """:func:`open_session` for a command that needs a router: fails at once when none listens.
+
+    Raises:
+        ConnectionError: no router listens at ``options.connect`` (with what to do), or no
+            session could be opened within ``timeout`` seconds.
+    """
+    if options.mode == "client" and (sentence := no_router(options.connect)):
+        raise ConnectionError(sentence)
+    return open_session(options, timeout=timeout)

@@ -1,0 +1,490 @@
+"""Missions, home and the safety envelope in bridge_mavlink (pure, over the core).
+
+:class:`MissionState` is what the core knows: the envelope in force, home (local ENU m and
+geodetic), the mission the autopilot holds, the item being flown, and the one mission transfer
+allowed at a time. The core calls three hooks: :func:`refuse_setpoint` (a setpoint outside
+the envelope is refused, the limit named), :func:`refuse_takeoff` and :func:`tick` (a breach
+starts the envelope's action: hold, return or land; home, envelope and mission are published).
+:data:`HANDLERS` are the receive side of the mission protocol; the service operations
+(:func:`push`, :func:`pull`, :func:`clear`, :func:`set_current`, :func:`control`,
+:func:`set_envelope`, :func:`push_fence`) run the pure machines of :mod:`mission_transfer`.
+
+Frames: the envelope is ENU m in the home frame; a local position minus home (local ENU, from
+HOME_POSITION; the local origin until it arrives) is in that frame. Mission items and the
+fence uploaded to the autopilot are WGS-84 (home's geodetic position plus a flat-earth
+offset: fine within the envelope's kilometre).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Generator
+from typing import TYPE_CHECKING, Any
+
+import msgspec
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper import envelope as env
+from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import PositionTarget, SetMode
+from dronewrapper.msgs.mission import (
+    EnvelopeResult,
+    EnvelopeSet,
+    HomePosition,
+    MissionControl,
+    MissionResult,
+    Waypoint,
+    WaypointClear,
+    WaypointList,
+    WaypointPull,
+    WaypointPullResult,
+    WaypointPush,
+    WaypointPushResult,
+    WaypointReached,
+    WaypointSetCurrent,
+)
+from dronewrapper.msgs.std import Header
+from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.operation import Steps
+from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_mavlink import mission_transfer as mt
+from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink.modes import (
+    AUTOPILOT_ARDUPILOT,
+    AUTOPILOT_PX4,
+    HOLD_MODE,
+    RETURN_MODE,
+    is_guided,
+)
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core import BridgeCore
+
+log = logging.getLogger("bridge_mavlink")
+
+MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", AUTOPILOT_ARDUPILOT: "AUTO"}
+PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
+REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
+MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
+FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's breach
+TRANSFER_TIMEOUT_S = 1.5
+TRANSFER_ATTEMPTS = 5
+FENCE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
+FENCE_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
+FENCE_CIRCLE = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
+
+
+class MissionState:
+    """What the bridge knows about missions, home and its envelope (see module docstring)."""
+
+    def __init__(self, envelope: Envelope) -> None:
+        self.envelope = envelope
+        self.monitor = BreachMonitor()
+        self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)  # ENU m
+        self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
+        self.waypoints: list[Waypoint] = []
+        self.current_seq = 0
+        self.last_reached = -1  # the item last reported on mission/reached
+        self.transfer: mt.Transfer | None = None
+        self.last_refusal_text = -math.inf
+        self._next_publish = -math.inf
+
+
+# ---------------------------------------------------------------- frames
+
+
+def relative(core: BridgeCore, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """Local ENU (m) -> ENU m from home."""
+    hx, hy, hz = core.missions.home_local
+    return (x - hx, y - hy, z - hz)
+
+
+# ---------------------------------------------------------------- hooks the core calls
+
+
+def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> str:
+    """Why the envelope refuses ``target`` (valid, of control ``kind``), or ""."""
+    state = core.missions
+    try:
+        if kind is Kind.POSITION:
+            p = target.position
+            env.check_position(state.envelope, *relative(core, p.x, p.y, p.z))
+        else:
+            v = target.velocity
+            env.check_velocity(state.envelope, v.x, v.y, v.z)
+            if kind is Kind.MIXED:
+                z = target.position.z - state.home_local[2]
+                if z > state.envelope.max_altitude:
+                    raise EnvelopeError(
+                        f"altitude {z:g} m above the envelope's {state.envelope.max_altitude:g} m"
+                    )
+    except EnvelopeError as exc:
+        reason = f"setpoint refused: {exc}"
+        if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
+            state.last_refusal_text = core.now
+            core.bridge_text(reason)
+        return reason
+    return ""
+
+
+def refuse_takeoff(core: BridgeCore, height: float) -> None:
+    """ServiceError (refused) when a take-off to ``height`` m climbs above the envelope."""
+    try:
+        env.check_takeoff(core.missions.envelope, height)
+    except EnvelopeError as exc:
+        raise ServiceError(str(exc), "refused") from None
+
+
+def refuse_mode(core: BridgeCore, mode: str) -> None:
+    """ServiceError (refused) for the guided mode while the aircraft is outside the envelope
+    (its breach action must not be undone by a commander's mode change; once back inside,
+    the guided mode may be entered again)."""
+    if is_guided(mode) and core.missions.monitor.outside:
+        raise ServiceError(
+            f"{mode} refused: the aircraft is outside the envelope (breach action "
+            f"{core.missions.envelope.breach_action} in progress)",
+            "refused",
+        )
+
+
+def tick(core: BridgeCore) -> None:
+    """Each stream tick: act on a breach, publish envelope, home and mission periodically."""
+    state = core.missions
+    pose = core.pose()
+    if pose is not None and core.failsafe.airborne and core.failsafe.armed:
+        reason = state.monitor.update(state.envelope, relative(core, *pose[0]))
+        if reason:
+            action = state.envelope.breach_action
+            core.bridge_text(f"envelope breach: {reason}; {action}")
+            core.start(breach_action(core, action), core.now, core.stamp, background=True)
+    if core.now >= state._next_publish:
+        state._next_publish = core.now + PUBLISH_PERIOD_S
+        publish_all(core)
+
+
+def publish_all(core: BridgeCore) -> None:
+    state = core.missions
+    core.publish(registry.ENVELOPE, state.envelope)
+    publish_home(core)
+    publish_waypoints(core)
+
+
+def publish_home(core: BridgeCore) -> None:
+    state = core.missions
+    lat, lon, alt = state.home_geo or (math.nan, math.nan, math.nan)
+    x, y, z = state.home_local
+    home = HomePosition(
+        header=Header(stamp=core.stamp), latitude=lat, longitude=lon, altitude=alt, x=x, y=y, z=z
+    )
+    core.publish(registry.HOME_POSITION, home)
+
+
+def publish_waypoints(core: BridgeCore) -> None:
+    state = core.missions
+    listing = WaypointList(
+        header=Header(stamp=core.stamp),
+        current_seq=state.current_seq,
+        waypoints=[
+            msgspec.structs.replace(wp, is_current=i == state.current_seq)
+            for i, wp in enumerate(state.waypoints)
+        ],
+    )
+    core.publish(registry.MISSION_WAYPOINTS, listing)
+
+
+def breach_action(core: BridgeCore, action: str) -> Steps:
+    """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
+    requests), or ``hold`` (the autopilot's hold mode)."""
+    if action in ("land", "return"):
+        return (yield from ops.failsafe_action(core, action))
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    reply = yield from ops.set_mode(core, SetMode(custom_mode=HOLD_MODE[autopilot]))
+    return reply.result
+
+
+# ---------------------------------------------------------------- receive side
+
+
+def on_home_position(core: BridgeCore, msg: Any) -> None:
+    core.telemetry.on_home_position(msg)
+    state = core.missions
+    before = (state.home_local, state.home_geo)
+    state.home_local = (float(msg.y), float(msg.x), -float(msg.z))  # NED -> ENU
+    state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
+    if (state.home_local, state.home_geo) != before:
+        publish_home(core)
+    if before[1] is None and core.config.upload_fence:  # home known: the autopilot's fence
+        core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+
+
+def on_transfer_message(core: BridgeCore, msg: Any) -> None:
+    transfer = core.missions.transfer
+    if transfer is not None:
+        transfer.on_message(msg, core.now)
+    if msg.get_type() == "MISSION_ACK":
+        log.debug("MISSION_ACK %s", mt.result_name(msg.type))
+
+
+def on_mission_current(core: BridgeCore, msg: Any) -> None:
+    state = core.missions
+    if int(msg.seq) != state.current_seq:
+        state.current_seq = int(msg.seq)
+        publish_waypoints(core)
+
+
+def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
+    """MISSION_ITEM_REACHED, published once per item (PX4 repeats it for a while)."""
+    if int(msg.seq) == core.missions.last_reached:
+        return
+    core.missions.last_reached = int(msg.seq)
+    reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=int(msg.seq))
+    core.publish(registry.MISSION_REACHED, reached)
+
+
+HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
+    "HOME_POSITION": on_home_position,
+    "MISSION_REQUEST_INT": on_transfer_message,
+    "MISSION_REQUEST": on_transfer_message,
+    "MISSION_ACK": on_transfer_message,
+    "MISSION_COUNT": on_transfer_message,
+    "MISSION_ITEM_INT": on_transfer_message,
+    "MISSION_CURRENT": on_mission_current,
+    "MISSION_ITEM_REACHED": on_mission_item_reached,
+}
+
+
+# ---------------------------------------------------------------- operations
+
+
+def run_transfer(core: BridgeCore, transfer: mt.Transfer) -> Generator[float, None, None]:
+    """Drive ``transfer`` to its end (one transfer at a time; the others wait)."""
+    state = core.missions
+    while state.transfer is not None and not state.transfer.done:
+        yield core.now + 0.05
+    state.transfer = transfer
+    try:
+        while True:
+            for name, fields in transfer.due(core.now):
+                core.send(name, *fields)
+            if transfer.done:
+                return
+            yield transfer.wake_at()
+    finally:
+        state.transfer = None
+
+
+def _transfer_args() -> dict[str, Any]:
+    return {"timeout": TRANSFER_TIMEOUT_S, "attempts": TRANSFER_ATTEMPTS}
+
+
+def item_of(waypoint: Waypoint) -> mt.Item:
+    """A Waypoint as MISSION_ITEM_INT content (degrees * 1e7)."""
+    return mt.Item(
+        frame=waypoint.frame,
+        command=waypoint.command,
+        current=int(waypoint.is_current),
+        autocontinue=int(waypoint.autocontinue),
+        param1=waypoint.param1,
+        param2=waypoint.param2,
+        param3=waypoint.param3,
+        param4=waypoint.param4,
+        x=round(waypoint.x_lat * 1e7),
+        y=round(waypoint.y_long * 1e7),
+        z=waypoint.z_alt,
+    )
+
+
+def waypoint_of(item: mt.Item) -> Waypoint:
+    return Waypoint(
+        frame=item.frame,
+        command=item.command,
+        is_current=bool(item.current),
+        autocontinue=bool(item.autocontinue),
+        param1=item.param1,
+        param2=item.param2,
+        param3=item.param3,
+        param4=item.param4,
+        x_lat=item.x / 1e7,
+        y_long=item.y / 1e7,
+        z_alt=item.z,
+    )
+
+
+def check_mission(core: BridgeCore, waypoints: list[Waypoint]) -> None:
+    """ValueError naming the first item outside the envelope (positions need home)."""
+    state = core.missions
+    for seq, wp in enumerate(waypoints):
+        positional = wp.x_lat != 0.0 or wp.y_long != 0.0
+        if positional and state.home_geo is None:
+            raise ServiceError(
+                "home is not known yet: the mission cannot be checked against the envelope",
+                "refused",
+            )
+        east, north = to_enu(state.home_geo, wp.x_lat, wp.y_long) if positional else (0.0, 0.0)
+        try:
+            env.check_position(state.envelope, east, north, wp.z_alt)
+        except EnvelopeError as exc:
+            raise ServiceError(f"mission item {seq}: {exc}", "refused") from None
+
+
+def push(core: BridgeCore, request: WaypointPush) -> Steps:
+    """mission/push: check every item against the envelope, then upload them."""
+    core.require_connected()
+    check_mission(core, request.waypoints)
+    items = [item_of(wp) for wp in request.waypoints]
+    upload = mt.Upload(items, core.target(), core.now, **_transfer_args())
+    yield from run_transfer(core, upload)
+    if not upload.error:
+        core.missions.waypoints = list(request.waypoints)
+        core.missions.current_seq = 0
+        core.missions.last_reached = -1
+        publish_waypoints(core)
+    message = upload.error or f"{len(items)} item(s) uploaded"
+    return WaypointPushResult(
+        success=not upload.error, wp_transfered=upload.transferred, message=message
+    )
+
+
+def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
+    """mission/pull: download the autopilot's mission."""
+    core.require_connected()
+    download = mt.Download(core.target(), core.now, **_transfer_args())
+    yield from run_transfer(core, download)
+    waypoints = [waypoint_of(item) for item in download.items]
+    if not download.error:
+        core.missions.waypoints = waypoints
+        publish_waypoints(core)
+    return WaypointPullResult(
+        success=not download.error,
+        wp_received=len(waypoints),
+        message=download.error or f"{len(waypoints)} item(s) received",
+        waypoints=waypoints,
+    )
+
+
+def clear(core: BridgeCore, _request: WaypointClear) -> Steps:
+    """mission/clear: MISSION_CLEAR_ALL."""
+    core.require_connected()
+    transfer = mt.Clear(core.target(), core.now, **_transfer_args())
+    yield from run_transfer(core, transfer)
+    if not transfer.error:
+        core.missions.waypoints = []
+        core.missions.current_seq = 0
+        publish_waypoints(core)
+    return MissionResult(success=not transfer.error, message=transfer.error or "cleared")
+
+
+def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
+    """mission/set_current: MAV_CMD_DO_SET_MISSION_CURRENT."""
+    core.require_connected()
+    count = len(core.missions.waypoints)
+    if count and request.wp_seq >= count:
+        raise ValueError(f"wp_seq {request.wp_seq} is beyond the mission's {count} item(s)")
+    result, message = yield from ops.command(
+        core, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, float(request.wp_seq)
+    )
+    return MissionResult(success=result == ops.ACCEPTED, message=message)
+
+
+def control(core: BridgeCore, request: MissionControl) -> Steps:
+    """mission/control: start (the autopilot's mission mode), pause (its hold mode) or return
+    (its return mode)."""
+    autopilot = core.require_connected()
+    if request.action == "start" and not core.missions.waypoints:
+        raise ServiceError("no mission uploaded", "refused")
+    if request.action == "start":
+        core.missions.last_reached = -1
+    mode = {
+        "start": MISSION_MODE,
+        "pause": HOLD_MODE,
+        "return": RETURN_MODE,
+    }[request.action][autopilot]
+    deadline = core.now + MISSION_CHECK_WAIT_S
+    while True:
+        reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
+        busy = reply.result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+        if reply.mode_sent or request.action != "start" or not busy or core.now >= deadline:
+            return MissionResult(success=reply.mode_sent, message=reply.message)
+        retry = core.now + 0.5  # PX4 refuses the mission mode until it has checked the upload
+        while core.now < retry:
+            yield retry
+
+
+def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
+    """envelope/set: replace the envelope (None: read it); the fence follows to the autopilot
+    when one is connected and home is known."""
+    state = core.missions
+    if request.envelope is not None:
+        state.envelope = request.envelope
+        state.monitor = BreachMonitor()
+        core.publish(registry.ENVELOPE, state.envelope)
+        log.info("envelope set: %s", state.envelope)
+        if core.connected and state.home_geo is not None and core.config.upload_fence:
+            core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+    yield from ()
+    return EnvelopeResult(success=True, message="envelope in force", envelope=state.envelope)
+
+
+def fence_items(state: MissionState) -> list[mt.Item]:
+    """The envelope as MAV_MISSION_TYPE_FENCE items: a circle around home of max_distance
+    plus the margin and :data:`FENCE_BACKUP_M` (the autopilot's fence is the backstop: the
+    bridge acts first), the inclusion polygon, the exclusion zones (needs home's geodetic
+    position)."""
+    assert state.home_geo is not None
+    home = state.home_geo
+    envelope = state.envelope
+    frame = mavlink.MAV_FRAME_GLOBAL
+    items = [
+        mt.Item(
+            frame=frame,
+            command=FENCE_CIRCLE,
+            param1=envelope.max_distance + envelope.margin + FENCE_BACKUP_M,
+            x=round(home[0] * 1e7),
+            y=round(home[1] * 1e7),
+        )
+    ]
+    polygons = [(FENCE_INCLUSION, envelope.fence)] if envelope.fence else []
+    polygons += [(FENCE_EXCLUSION, zone) for zone in envelope.exclusions]
+    for command, polygon in polygons:
+        for east, north in polygon:
+            lat, lon = to_geodetic(home, east, north)
+            items.append(
+                mt.Item(
+                    frame=frame,
+                    command=command,
+                    param1=float(len(polygon)),
+                    x=round(lat * 1e7),
+                    y=round(lon * 1e7),
+                )
+            )
+    return items
+
+
+def push_fence(core: BridgeCore, _request: WaypointClear) -> Steps:
+    """geofence/push: upload the envelope's fence to the autopilot (MAV_MISSION_TYPE_FENCE),
+    so it holds even if this bridge stops."""
+    core.require_connected()
+    if core.missions.home_geo is None:
+        raise ServiceError("home is not known yet: the fence cannot be placed", "refused")
+    items = fence_items(core.missions)
+    upload = mt.Upload(items, core.target(), core.now, mission_type=mt.FENCE, **_transfer_args())
+    yield from run_transfer(core, upload)
+    if upload.error:
+        log.warning("fence upload: %s", upload.error)
+    message = upload.error or f"fence of {len(items)} item(s) uploaded"
+    return MissionResult(success=not upload.error, message=message)
+
+
+SERVICES: tuple[tuple[Any, Callable[..., Steps], str], ...] = (
+    (registry.MISSION_PUSH, push, "mission"),
+    (registry.MISSION_PULL, pull, ""),
+    (registry.MISSION_CLEAR, clear, "mission"),
+    (registry.MISSION_SET_CURRENT, set_current, "mission"),
+    (registry.MISSION_CONTROL, control, "mission"),
+    (registry.GEOFENCE_PUSH, push_fence, "mission"),
+    (registry.ENVELOPE_SET, set_envelope, "envelope"),
+)
+"""(service, operation, the command-lease action that guards it; "" unguarded)."""

@@ -1,0 +1,281 @@
+"""The safety envelope and missions on the Tello (pure, over the core).
+
+Home is the take-off point (the Tello has no GPS; the bridge's position is dead-reckoned from
+the take-off, x and y drifting by some decimetres a minute), so the envelope (ENU m in the home
+frame, :mod:`dronewrapper.envelope`) is checked against that position.
+
+* :func:`refuse_setpoint`, :func:`refuse_takeoff`: targets outside the envelope are refused
+  with the limit named.
+* :func:`tick`: a breach makes the Tello ``land`` (for ``land`` and ``return``: the Tello has
+  no return-to-home) or ``stop`` (hover, for ``hold``).
+* Missions are local: each :class:`~dronewrapper.msgs.mission.Waypoint` has frame
+  MAV_FRAME_LOCAL_ENU (4) with ``x_lat``/``y_long``/``z_alt`` the point's east/north/up metres
+  from home. They are flown as the Tello's own ``go x y z speed`` moves (forward, left, up cm
+  in its heading frame, at most 5 m each: a longer leg is several moves), one after the other
+  from the dead-reckoned position. What the Tello cannot do: global (GPS) waypoints, loiter
+  times, a yaw per item, changing a move once sent (a pause takes effect after the current
+  move), and ``return`` is a flight to home at the current height followed by ``land``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from dronewrapper import envelope as env
+from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, PositionTarget
+from dronewrapper.msgs.mission import (
+    EnvelopeResult,
+    EnvelopeSet,
+    HomePosition,
+    MissionControl,
+    MissionResult,
+    Waypoint,
+    WaypointClear,
+    WaypointList,
+    WaypointPush,
+    WaypointPushResult,
+    WaypointReached,
+)
+from dronewrapper.msgs.std import Header
+from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.operation import Operation, Steps
+from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_tello import operations as ops
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_tello.core import TelloCore
+
+log = logging.getLogger("bridge_tello")
+
+FRAME_LOCAL_ENU = 4
+MAX_MOVE_CM = 500
+MIN_MOVE_CM = 20  # go refuses a move with all three axes within ±20 cm
+PUBLISH_PERIOD_S = 2.0
+REFUSAL_TEXT_PERIOD_S = 2.0
+MOVE_SPEED_CM_S = 50  # go's speed, cm/s
+MOVE_TIMEOUT_S = 15.0  # s for one move's "ok" (5 m at 50 cm/s and its settling)
+
+
+class TelloMissions:
+    """The envelope, the local mission and its progress (see module docstring)."""
+
+    def __init__(self, envelope: Envelope) -> None:
+        self.envelope = envelope
+        self.monitor = BreachMonitor()
+        self.waypoints: list[Waypoint] = []
+        self.current_seq = 0
+        self.running: Operation | None = None
+        self.paused = False
+        self.last_refusal_text = -math.inf
+        self._next_publish = -math.inf
+
+
+def go_moves(east: float, north: float, up: float, yaw_enu: float) -> list[tuple[int, int, int]]:
+    """The ``go`` moves (forward, left, up cm) that fly the ENU offset (m) from a Tello
+    heading ``yaw_enu`` (rad): legs of at most 5 m per axis; none for an offset within 20 cm."""
+    forward = east * math.cos(yaw_enu) + north * math.sin(yaw_enu)
+    left = -east * math.sin(yaw_enu) + north * math.cos(yaw_enu)
+    cm = [round(forward * 100), round(left * 100), round(up * 100)]
+    if all(abs(v) <= MIN_MOVE_CM for v in cm):
+        return []
+    legs = max(1, math.ceil(max(abs(v) for v in cm) / MAX_MOVE_CM))
+    moves = []
+    done = [0, 0, 0]
+    for leg in range(1, legs + 1):
+        step = [round(v * leg / legs) - d for v, d in zip(cm, done, strict=True)]
+        done = [d + s for d, s in zip(done, step, strict=True)]
+        moves.append((step[0], step[1], step[2]))
+    return moves
+
+
+# ---------------------------------------------------------------- hooks the core calls
+
+
+def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> str:
+    """Why the envelope refuses ``target``, or ""."""
+    state = core.missions
+    try:
+        if kind is Kind.POSITION:
+            p = target.position
+            env.check_position(state.envelope, p.x, p.y, p.z)
+        else:
+            v = target.velocity
+            env.check_velocity(state.envelope, v.x, v.y, v.z)
+            if kind is Kind.MIXED:
+                env.check_position(state.envelope, 0.0, 0.0, target.position.z)
+    except EnvelopeError as exc:
+        reason = f"setpoint refused: {exc}"
+        if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
+            state.last_refusal_text = core.now
+            log.warning("%s", reason)
+            core.text(4, f"bridge: {reason}")
+        return reason
+    return ""
+
+
+def refuse_takeoff(core: TelloCore, height: float) -> None:
+    try:
+        env.check_takeoff(core.missions.envelope, height)
+    except EnvelopeError as exc:
+        raise ServiceError(str(exc), "refused") from None
+
+
+def tick(core: TelloCore) -> None:
+    """Each control tick: act on a breach; publish envelope, home and mission periodically."""
+    state = core.missions
+    position = core.telemetry.position_enu
+    if position is not None and core.telemetry.landed.state == LANDED_STATE_IN_AIR:
+        reason = state.monitor.update(state.envelope, position)
+        if reason:
+            action = state.envelope.breach_action
+            done = "stop (hover)" if action == "hold" else "land"
+            core.text(4, f"bridge: envelope breach: {reason}; {done}")
+            log.warning("envelope breach: %s; %s", reason, done)
+            state.paused = True
+            core.start(breach_action(core, action), core.now, core.stamp, background=True)
+    if core.now >= state._next_publish:
+        state._next_publish = core.now + PUBLISH_PERIOD_S
+        core.publish(registry.ENVELOPE, state.envelope)
+        core.publish(registry.HOME_POSITION, HomePosition(header=Header(stamp=core.stamp)))
+        publish_waypoints(core)
+
+
+def breach_action(core: TelloCore, action: str) -> Steps:
+    if action == "hold":
+        reply = yield from ops.exchange(core, "stop")
+        return reply
+    return (yield from ops.failsafe_land(core))
+
+
+def publish_waypoints(core: TelloCore) -> None:
+    state = core.missions
+    listing = WaypointList(
+        header=Header(stamp=core.stamp), current_seq=state.current_seq, waypoints=state.waypoints
+    )
+    core.publish(registry.MISSION_WAYPOINTS, listing)
+
+
+# ---------------------------------------------------------------- services
+
+
+def push(core: TelloCore, request: WaypointPush) -> Steps:
+    """mission/push: local waypoints only, each inside the envelope."""
+    for seq, wp in enumerate(request.waypoints):
+        if wp.frame != FRAME_LOCAL_ENU:
+            raise ServiceError(
+                f"mission item {seq}: the Tello has no GPS; give local waypoints "
+                f"(frame {FRAME_LOCAL_ENU}, MAV_FRAME_LOCAL_ENU: east, north, up m from home)",
+                "refused",
+            )
+        try:
+            env.check_position(core.missions.envelope, wp.x_lat, wp.y_long, wp.z_alt)
+        except EnvelopeError as exc:
+            raise ServiceError(f"mission item {seq}: {exc}", "refused") from None
+    state = core.missions
+    if state.running is not None and not state.running.done:
+        raise ServiceError("a mission is being flown: pause it first", "refused")
+    state.waypoints = list(request.waypoints)
+    state.current_seq = 0
+    publish_waypoints(core)
+    yield from ()
+    count = len(state.waypoints)
+    return WaypointPushResult(success=True, wp_transfered=count, message=f"{count} item(s) kept")
+
+
+def clear(core: TelloCore, _request: WaypointClear) -> Steps:
+    state = core.missions
+    if state.running is not None and not state.running.done:
+        raise ServiceError("a mission is being flown: pause it first", "refused")
+    state.waypoints, state.current_seq = [], 0
+    publish_waypoints(core)
+    yield from ()
+    return MissionResult(success=True, message="cleared")
+
+
+def control(core: TelloCore, request: MissionControl) -> Steps:
+    """start (from the current item), pause (after the current move) or return (fly home at
+    the current height, then land)."""
+    core.require_connected()
+    state = core.missions
+    if core.telemetry.landed.state != LANDED_STATE_IN_AIR:
+        raise ServiceError("the Tello is not flying: take off first", "refused")
+    flying = state.running is not None and not state.running.done
+    if request.action == "pause":
+        state.paused = True
+        yield from ()
+        return MissionResult(success=True, message="pausing after the current move")
+    if flying:
+        raise ServiceError("a mission or a return is being flown already", "refused")
+    state.paused = False
+    if request.action == "start":
+        if not state.waypoints:
+            raise ServiceError("no mission uploaded", "refused")
+        steps = fly_mission(core)
+    else:
+        steps = fly_home(core)
+    state.running = core.start(steps, core.now, core.stamp, background=True)
+    yield from ()
+    return MissionResult(success=True, message=f"{request.action}: flying")
+
+
+def fly_to(core: TelloCore, target: tuple[float, float, float]) -> Steps:
+    """Fly to ``target`` (ENU m from home) with go moves; False when paused or refused."""
+    position = core.telemetry.position_enu or (0.0, 0.0, 0.0)
+    offset = [t - p for t, p in zip(target, position, strict=True)]
+    for move in go_moves(*offset, core.telemetry.yaw_enu):
+        if core.missions.paused:
+            return False
+        command = f"go {move[0]} {move[1]} {move[2]} {MOVE_SPEED_CM_S}"
+        reply = yield from ops.exchange(core, command, timeout=MOVE_TIMEOUT_S, attempts=1)
+        if reply is None or not ops.is_ok(reply):
+            core.text(4, f"bridge: mission: {command} -> {reply or 'no reply'}")
+            return False
+    return True
+
+
+def fly_mission(core: TelloCore) -> Steps:
+    state = core.missions
+    while state.current_seq < len(state.waypoints) and not state.paused:
+        wp = state.waypoints[state.current_seq]
+        arrived = yield from fly_to(core, (wp.x_lat, wp.y_long, wp.z_alt))
+        if not arrived:
+            return False
+        core.publish(
+            registry.MISSION_REACHED,
+            WaypointReached(header=Header(stamp=core.stamp), wp_seq=state.current_seq),
+        )
+        state.current_seq += 1
+        publish_waypoints(core)
+    return True
+
+
+def fly_home(core: TelloCore) -> Steps:
+    z = (core.telemetry.position_enu or (0.0, 0.0, 1.0))[2]
+    arrived = yield from fly_to(core, (0.0, 0.0, z))
+    if arrived:
+        yield from ops.landing(core)
+    return arrived
+
+
+def set_envelope(core: TelloCore, request: EnvelopeSet) -> Steps:
+    state = core.missions
+    if request.envelope is not None:
+        state.envelope = request.envelope
+        state.monitor = BreachMonitor()
+        core.publish(registry.ENVELOPE, state.envelope)
+    yield from ()
+    return EnvelopeResult(success=True, message="envelope in force", envelope=state.envelope)
+
+
+SERVICES: tuple[tuple[Any, Callable[..., Steps], str], ...] = (
+    (registry.MISSION_PUSH, push, "mission"),
+    (registry.MISSION_CLEAR, clear, "mission"),
+    (registry.MISSION_CONTROL, control, "mission"),
+    (registry.ENVELOPE_SET, set_envelope, "envelope"),
+)
+"""(service, operation, the command-lease action that guards it)."""

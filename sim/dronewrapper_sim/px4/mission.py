@@ -1,0 +1,415 @@
+"""PX4's mission side: the MAVLink mission protocol (autopilot end), AUTO.MISSION, the geofence.
+
+:class:`MissionStore` answers the protocol as PX4 does: an upload (MISSION_COUNT) is asked
+item by item with MISSION_REQUEST_INT and ended by MISSION_ACK; an item PX4 would not take
+(an unsupported command or frame) ends it with the matching MAV_MISSION_RESULT; a download
+(MISSION_REQUEST_LIST) is answered with MISSION_COUNT and each item asked; MISSION_CLEAR_ALL
+empties a list. Missions, fences (MAV_MISSION_TYPE_FENCE) and rally points are separate lists.
+An upload not finished within :data:`UPLOAD_TIMEOUT_S` is dropped (PX4's is 5 s), and an item
+asked again is answered again.
+
+:class:`MissionRunner` flies the mission in AUTO.MISSION: NAV_TAKEOFF climbs, NAV_WAYPOINT
+flies to the item (acceptance radius param2, else NAV_ACC_RAD; hold param1 s), NAV_LAND
+lands there, NAV_RETURN_TO_LAUNCH returns; each item reached is MISSION_ITEM_REACHED, and the
+item being flown is MISSION_CURRENT. After the last item the vehicle holds (AUTO.LOITER).
+
+:class:`Geofence` checks the uploaded fence (circle and polygon inclusion, polygon exclusion)
+against the vehicle's position; a breach in the air starts GF_ACTION (2 hold, 3 return,
+5 land) once per excursion, as PX4's geofence does.
+
+Pure: time is the caller's (s), positions local ENU m; ``to_local(lat, lon)`` gives the local
+(east, north) of a geodetic point.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper_sim.px4.flight_control import Target
+from dronewrapper_sim.px4.modes import Mode
+
+if TYPE_CHECKING:
+    from dronewrapper_sim.dynamics import QuadState
+    from dronewrapper_sim.px4.commander import Commander
+
+MISSION = mavlink.MAV_MISSION_TYPE_MISSION
+FENCE = mavlink.MAV_MISSION_TYPE_FENCE
+RALLY = mavlink.MAV_MISSION_TYPE_RALLY
+UPLOAD_TIMEOUT_S = 5.0
+MAX_ITEMS = 500
+NAV_COMMANDS = {
+    MISSION: {
+        mavlink.MAV_CMD_NAV_WAYPOINT,
+        mavlink.MAV_CMD_NAV_TAKEOFF,
+        mavlink.MAV_CMD_NAV_LAND,
+        mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH,
+        mavlink.MAV_CMD_NAV_LOITER_TIME,
+        mavlink.MAV_CMD_DO_CHANGE_SPEED,
+    },
+    FENCE: {
+        mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+        mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION,
+        mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION,
+        mavlink.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
+        mavlink.MAV_CMD_NAV_FENCE_RETURN_POINT,
+    },
+    RALLY: {mavlink.MAV_CMD_NAV_RALLY_POINT},
+}
+FRAMES = {
+    mavlink.MAV_FRAME_GLOBAL,
+    mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    mavlink.MAV_FRAME_GLOBAL_INT,
+    mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+    mavlink.MAV_FRAME_MISSION,
+}
+
+Message = mavlink.MAVLink_message
+
+
+@dataclass
+class Upload:
+    """An upload in progress: the items so far and when the last one came."""
+
+    mission_type: int
+    count: int
+    items: list[Message] = field(default_factory=list)
+    last_at: float = 0.0
+
+
+class MissionStore:
+    """The lists the autopilot holds and the protocol that fills them (see module docstring)."""
+
+    def __init__(self, sysid: int) -> None:
+        self.sysid = sysid
+        self.lists: dict[int, list[Message]] = {MISSION: [], FENCE: [], RALLY: []}
+        self.current = 0
+        self.version = 0  # changes with every new mission list
+        self.fence_version = 0
+        self._upload: Upload | None = None
+
+    def _ack(self, msg: Message, result: int, mission_type: int) -> Message:
+        return mavlink.MAVLink_mission_ack_message(
+            msg.get_srcSystem(), msg.get_srcComponent(), result, mission_type
+        )
+
+    def _request(self, msg: Message, seq: int, mission_type: int) -> Message:
+        return mavlink.MAVLink_mission_request_int_message(
+            msg.get_srcSystem(), msg.get_srcComponent(), seq, mission_type
+        )
+
+    def handle(self, msg: Message, now: float) -> list[Message]:
+        """The replies to one mission-protocol message (addressed to this vehicle)."""
+        if getattr(msg, "target_system", 0) not in (0, self.sysid):
+            return []
+        kind = msg.get_type()
+        mission_type = getattr(msg, "mission_type", MISSION)
+        if mission_type not in self.lists:
+            return [self._ack(msg, mavlink.MAV_MISSION_UNSUPPORTED, mission_type)]
+        upload = self._upload
+        if upload is not None and now - upload.last_at > UPLOAD_TIMEOUT_S:
+            self._upload = upload = None
+        if kind == "MISSION_COUNT":
+            if msg.count > MAX_ITEMS:
+                return [self._ack(msg, mavlink.MAV_MISSION_NO_SPACE, mission_type)]
+            if msg.count == 0:
+                self._store(mission_type, [])
+                return [self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, mission_type)]
+            self._upload = Upload(mission_type, msg.count, last_at=now)
+            return [self._request(msg, 0, mission_type)]
+        if kind in ("MISSION_ITEM_INT", "MISSION_ITEM"):
+            return self._on_item(msg, now, upload)
+        if kind == "MISSION_REQUEST_LIST":
+            count = len(self.lists[mission_type])
+            return [
+                mavlink.MAVLink_mission_count_message(
+                    msg.get_srcSystem(), msg.get_srcComponent(), count, mission_type
+                )
+            ]
+        if kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
+            items = self.lists[mission_type]
+            if not 0 <= msg.seq < len(items):
+                return [self._ack(msg, mavlink.MAV_MISSION_INVALID_SEQUENCE, mission_type)]
+            return [self._item_to(msg, items[msg.seq])]
+        if kind == "MISSION_CLEAR_ALL":
+            self._store(mission_type, [])
+            return [self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, mission_type)]
+        if kind == "MISSION_SET_CURRENT":
+            self.set_current(int(msg.seq))
+            return [self.current_message()]
+        return []
+
+    def _on_item(self, msg: Message, now: float, upload: Upload | None) -> list[Message]:
+        mission_type = getattr(msg, "mission_type", MISSION)
+        if upload is None or upload.mission_type != mission_type:
+            return []
+        expected = len(upload.items)
+        if msg.seq < expected:
+            return []  # a duplicate: already taken
+        if msg.seq > expected:
+            return [self._request(msg, expected, mission_type)]
+        if msg.command not in NAV_COMMANDS[mission_type]:
+            self._upload = None
+            return [self._ack(msg, mavlink.MAV_MISSION_UNSUPPORTED, mission_type)]
+        if msg.frame not in FRAMES:
+            self._upload = None
+            return [self._ack(msg, mavlink.MAV_MISSION_UNSUPPORTED_FRAME, mission_type)]
+        upload.items.append(msg)
+        upload.last_at = now
+        if len(upload.items) < upload.count:
+            return [self._request(msg, len(upload.items), mission_type)]
+        self._store(mission_type, upload.items)
+        self._upload = None
+        return [self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, mission_type)]
+
+    def _store(self, mission_type: int, items: list[Message]) -> None:
+        self.lists[mission_type] = list(items)
+        if mission_type == MISSION:
+            self.current = 0
+            self.version += 1
+        elif mission_type == FENCE:
+            self.fence_version += 1
+
+    def _item_to(self, request: Message, item: Message) -> Message:
+        return mavlink.MAVLink_mission_item_int_message(
+            request.get_srcSystem(),
+            request.get_srcComponent(),
+            item.seq,
+            item.frame,
+            item.command,
+            int(item.seq == self.current),
+            item.autocontinue,
+            item.param1,
+            item.param2,
+            item.param3,
+            item.param4,
+            item.x,
+            item.y,
+            item.z,
+            item.mission_type,
+        )
+
+    @property
+    def mission(self) -> list[Message]:
+        return self.lists[MISSION]
+
+    def set_current(self, seq: int) -> bool:
+        """Fly item ``seq`` next; False when there is no such item."""
+        if not 0 <= seq < len(self.mission):
+            return False
+        self.current = seq
+        return True
+
+    def current_message(self) -> Message:
+        return mavlink.MAVLink_mission_current_message(self.current, len(self.mission))
+
+
+@dataclass
+class Leg:
+    """What the runner asks of the commander now: a position to fly to (local ENU m; NaN
+    z: keep the altitude), or a mode to switch to."""
+
+    position: tuple[float, float, float] | None = None
+    mode: str = ""  # "loiter", "land", "rtl"
+    land_at: tuple[float, float] | None = None
+
+
+class MissionRunner:
+    """Flies the store's mission item by item (see module docstring)."""
+
+    def __init__(
+        self,
+        store: MissionStore,
+        to_local: Callable[[float, float], tuple[float, float]],
+        home: Callable[[], tuple[float, float, float]],
+        acceptance_radius: Callable[[], float],
+    ) -> None:
+        self.store = store
+        self.to_local = to_local
+        self.home = home
+        self.acceptance_radius = acceptance_radius
+        self.events: list[Message] = []  # MISSION_ITEM_REACHED / MISSION_CURRENT to send
+        self._arrived_at: float | None = None
+        self._announced = -1
+        self._version = store.version
+
+    def runnable(self) -> bool:
+        return self.store.current < len(self.store.mission)
+
+    def _target_of(self, item: Message, z_now: float) -> tuple[float, float, float]:
+        hx, hy, hz = self.home()
+        if item.x == 0 and item.y == 0:
+            east, north = hx, hy
+        else:
+            east, north = self.to_local(item.x / 1e7, item.y / 1e7)
+        relative = item.frame in (
+            mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+            mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        )
+        z = hz + item.z if relative else item.z
+        return (east, north, z if math.isfinite(z) else z_now)
+
+    def step(self, now: float, position: tuple[float, float, float]) -> Leg:
+        """The leg to fly now, advancing past reached items."""
+        store = self.store
+        if store.version != self._version:  # a new mission: start afresh
+            self._version, self._announced, self._arrived_at = store.version, -1, None
+        while store.current < len(store.mission):
+            if self._announced != store.current:
+                self._announced = store.current
+                self.events.append(store.current_message())
+            item = store.mission[store.current]
+            if item.command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH:
+                self._reached(store.current)
+                return Leg(mode="rtl")
+            if item.command == mavlink.MAV_CMD_DO_CHANGE_SPEED:
+                self._advance()
+                continue
+            target = self._target_of(item, position[2])
+            if item.command == mavlink.MAV_CMD_NAV_TAKEOFF:
+                target = (position[0], position[1], target[2])
+            if item.command == mavlink.MAV_CMD_NAV_LAND:
+                self._reached(store.current)
+                return Leg(mode="land", land_at=(target[0], target[1]))
+            radius = item.param2 if item.param2 > 0 else self.acceptance_radius()
+            distance = math.dist(position, target)
+            if distance > radius:
+                self._arrived_at = None
+                return Leg(position=target)
+            if self._arrived_at is None:
+                self._arrived_at = now
+            hold = item.param1 if item.command != mavlink.MAV_CMD_NAV_TAKEOFF else 0.0
+            if now - self._arrived_at < hold:
+                return Leg(position=target)
+            self._reached(store.current)
+            self._advance()
+        return Leg(mode="loiter")
+
+    def _reached(self, seq: int) -> None:
+        self.events.append(mavlink.MAVLink_mission_item_reached_message(seq))
+
+    def _advance(self) -> None:
+        self.store.current += 1
+        self._arrived_at = None
+
+    def drain(self) -> list[Message]:
+        out, self.events = self.events, []
+        return out
+
+
+def _inside(polygon: list[tuple[float, float]], x: float, y: float) -> bool:
+    result = False
+    n = len(polygon)
+    for i in range(n):
+        x1, y1 = polygon[i]
+        x2, y2 = polygon[(i - 1) % n]
+        if (y1 > y) != (y2 > y) and x < (x2 - x1) * (y - y1) / (y2 - y1) + x1:
+            result = not result
+    return result
+
+
+class Geofence:
+    """The uploaded fence as local shapes, and its breach check (see module docstring)."""
+
+    def __init__(self, store: MissionStore, to_local: Callable[[float, float], tuple]) -> None:
+        self.store = store
+        self.to_local = to_local
+        self._version = -1
+        self.circles: list[tuple[bool, float, float, float]] = []  # inclusion, x, y, r
+        self.polygons: list[tuple[bool, list[tuple[float, float]]]] = []
+        self.outside = False
+
+    def _load(self) -> None:
+        self._version = self.store.fence_version
+        self.circles, self.polygons = [], []
+        items = self.store.lists[FENCE]
+        i = 0
+        while i < len(items):
+            item = items[i]
+            x, y = self.to_local(item.x / 1e7, item.y / 1e7)
+            if item.command in (
+                mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION,
+                mavlink.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
+            ):
+                inclusion = item.command == mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
+                self.circles.append((inclusion, x, y, item.param1))
+                i += 1
+            elif item.command in (
+                mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+                mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION,
+            ):
+                count = max(1, int(item.param1))
+                vertices = [self.to_local(v.x / 1e7, v.y / 1e7) for v in items[i : i + count]]
+                inclusion = item.command == mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
+                self.polygons.append((inclusion, vertices))
+                i += count
+            else:
+                i += 1
+
+    def violated(self, x: float, y: float) -> bool:
+        """True when (x, y) (local ENU m) is outside an inclusion or inside an exclusion."""
+        if self._version != self.store.fence_version:
+            self._load()
+        for inclusion, cx, cy, radius in self.circles:
+            if (math.hypot(x - cx, y - cy) <= radius) != inclusion:
+                return True
+        return any(_inside(vertices, x, y) != inclusion for inclusion, vertices in self.polygons)
+
+    def breach(self, x: float, y: float) -> bool:
+        """True once per excursion: the first check outside after being inside."""
+        violated = self.violated(x, y)
+        first = violated and not self.outside
+        self.outside = violated
+        return first
+
+
+# ---------------------------------------------------------------- the commander's side
+
+GF_ACTIONS = {2: "LOITER", 3: "RTL", 5: "LAND"}  # PX4's GF_ACTION values this vehicle flies
+
+
+def mission_target(cmd: Commander, now: float, state: QuadState) -> Target:
+    """AUTO.MISSION's target for the commander now: the runner's leg, or a switch to the mode
+    the mission ends in (hold, land, return)."""
+    p = cmd.params
+    position = (state.x, state.y, state.z)
+    leg = cmd.mission.step(now, position)
+    limits = {
+        "max_xy": p["MPC_XY_CRUISE"],
+        "max_up": p["MPC_Z_V_AUTO_UP"],
+        "max_down": p["MPC_Z_V_AUTO_DN"],
+        "max_yaw_rate": math.radians(p["MPC_YAWRAUTO_MAX"]),
+    }
+    if leg.position is not None:
+        x, y, z = leg.position
+        far = math.hypot(x - state.x, y - state.y) > 3.0
+        yaw = math.atan2(y - state.y, x - state.x) if far else cmd._hold[3]
+        if far:
+            cmd._hold = (*cmd._hold[:3], yaw)
+        return Target(position=(x, y, z), yaw=yaw, **limits)
+    mode = {"loiter": Mode.LOITER, "land": Mode.LAND, "rtl": Mode.RTL}[leg.mode]
+    if leg.mode == "loiter":
+        cmd._say(mavlink.MAV_SEVERITY_INFO, "Mission finished, loitering")
+    cmd.set_mode(mode, now, state)
+    if leg.land_at is not None:
+        cmd._hold = (leg.land_at[0], leg.land_at[1], state.z, state.yaw)
+    return Target(position=(cmd._hold[0], cmd._hold[1], cmd._hold[2]), yaw=cmd._hold[3], **limits)
+
+
+def check_geofence(cmd: Commander, now: float, state: QuadState) -> None:
+    """A fence breach in the air starts GF_ACTION once per excursion (PX4's geofence)."""
+    if cmd.geofence is None or not cmd.armed or cmd.landed:
+        return
+    if not cmd.geofence.breach(state.x, state.y):
+        return
+    action = GF_ACTIONS.get(int(cmd.params["GF_ACTION"]))
+    cmd._say(mavlink.MAV_SEVERITY_CRITICAL, "Geofence exceeded")
+    if action is None:
+        return
+    mode = {"LOITER": Mode.LOITER, "RTL": Mode.RTL, "LAND": Mode.LAND}[action]
+    if cmd.nav_mode is not mode:
+        cmd.set_mode(mode, now, state)

@@ -1,0 +1,143 @@
+"""The simulator's mission side (sim/dronewrapper_sim/px4/mission.py): PX4's answers to the
+mission protocol, and its geofence action."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper_sim.px4 import mission
+from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
+from dronewrapper_sim.px4.mission import FENCE, MISSION, Geofence, MissionStore
+from dronewrapper_sim.px4.modes import Mode
+
+HOME = (47.397742, 8.545594)
+
+
+def gcs(msg):
+    """``msg`` as if it came from a ground station (system 255, component 190)."""
+    msg._header = mavlink.MAVLink_header(msg.id, 0, 0, 255, 190)
+    return msg
+
+
+def item(seq: int, command: int = 16, frame: int = 3, mission_type: int = MISSION, **kw):
+    fields = {"x": 473977420, "y": 85455940, "z": 5.0, "param1": 0.0}
+    fields.update(kw)
+    return gcs(
+        mavlink.MAVLink_mission_item_int_message(
+            1,
+            1,
+            seq,
+            frame,
+            command,
+            0,
+            1,
+            fields["param1"],
+            0,
+            0,
+            math.nan,
+            fields["x"],
+            fields["y"],
+            fields["z"],
+            mission_type,
+        )
+    )
+
+
+def kinds(msgs) -> list[str]:
+    return [m.get_type() for m in msgs]
+
+
+def test_an_upload_is_asked_item_by_item_and_accepted():
+    store = MissionStore(1)
+    (req,) = store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 2, MISSION)), 0.0)
+    assert (req.get_type(), req.seq) == ("MISSION_REQUEST_INT", 0)
+    (req,) = store.handle(item(0), 0.1)
+    assert req.seq == 1
+    assert store.handle(item(0), 0.1) == []  # a duplicate: already taken
+    (ack,) = store.handle(item(1), 0.2)
+    assert (ack.get_type(), ack.type) == ("MISSION_ACK", mavlink.MAV_MISSION_ACCEPTED)
+    assert len(store.mission) == 2 and store.version == 1
+
+
+def test_an_item_ahead_of_the_expected_one_asks_again_for_the_missing_one():
+    store = MissionStore(1)
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 3, MISSION)), 0.0)
+    (req,) = store.handle(item(1), 0.1)
+    assert req.seq == 0
+
+
+def test_an_unsupported_command_or_frame_ends_the_upload_with_its_result():
+    store = MissionStore(1)
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 2, MISSION)), 0.0)
+    (ack,) = store.handle(item(0, command=183), 0.1)
+    assert ack.type == mavlink.MAV_MISSION_UNSUPPORTED
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 1, MISSION)), 0.2)
+    (ack,) = store.handle(item(0, frame=1), 0.3)  # MAV_FRAME_LOCAL_NED
+    assert ack.type == mavlink.MAV_MISSION_UNSUPPORTED_FRAME
+    assert store.mission == []
+
+
+def test_a_stale_upload_is_dropped():
+    store = MissionStore(1)
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 2, MISSION)), 0.0)
+    assert store.handle(item(0), 6.0) == []  # past the 5 s upload timeout
+
+
+def test_download_and_clear():
+    store = MissionStore(1)
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 1, MISSION)), 0.0)
+    store.handle(item(0), 0.1)
+    (count,) = store.handle(gcs(mavlink.MAVLink_mission_request_list_message(1, 1, MISSION)), 1)
+    assert count.count == 1
+    (got,) = store.handle(gcs(mavlink.MAVLink_mission_request_int_message(1, 1, 0, MISSION)), 1)
+    assert (got.get_type(), got.x, got.current) == ("MISSION_ITEM_INT", 473977420, 1)
+    (bad,) = store.handle(gcs(mavlink.MAVLink_mission_request_int_message(1, 1, 4, MISSION)), 1)
+    assert bad.type == mavlink.MAV_MISSION_INVALID_SEQUENCE
+    (ack,) = store.handle(gcs(mavlink.MAVLink_mission_clear_all_message(1, 1, MISSION)), 2)
+    assert ack.type == mavlink.MAV_MISSION_ACCEPTED and store.mission == []
+
+
+def test_a_circle_fence_is_violated_outside_its_radius():
+    store = MissionStore(1)
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 1, FENCE)), 0.0)
+    store.handle(item(0, command=5003, frame=0, mission_type=FENCE, param1=20.0), 0.1)
+    autopilot = Autopilot()
+    fence = Geofence(store, autopilot.local_of)
+    origin = autopilot.local_of(47.397742, 8.545594)
+    assert not fence.violated(origin[0] + 19.0, origin[1])
+    assert fence.violated(origin[0] + 21.0, origin[1])
+    assert fence.breach(origin[0] + 21.0, origin[1])
+    assert not fence.breach(origin[0] + 22.0, origin[1])  # once per excursion
+
+
+def test_mission_mode_is_refused_in_the_air_without_a_mission():
+    autopilot = Autopilot()
+    cmd = autopilot.commander
+    cmd.armed = True
+    result = cmd.set_mode(Mode.MISSION, 1.0, autopilot.state)
+    assert result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+
+
+def test_a_fence_breach_in_the_air_starts_gf_action_once():
+    autopilot = Autopilot(AutopilotConfig(params={"GF_ACTION": 3}))  # 3: return
+    store = autopilot.missions
+    store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, 1, FENCE)), 0.0)
+    lat, lon = HOME
+    fence = item(0, command=5003, frame=0, mission_type=FENCE, param1=20.0,
+                 x=round(lat * 1e7), y=round(lon * 1e7))  # fmt: skip
+    store.handle(fence, 0.1)
+    cmd = autopilot.commander
+    cmd.armed, cmd.landed = True, False
+    inside = dataclasses.replace(autopilot.state, x=5.0, z=5.0)
+    mission.check_geofence(cmd, 1.0, inside)
+    assert cmd.nav_mode is Mode.LOITER
+    outside = dataclasses.replace(autopilot.state, x=25.0, z=5.0)
+    mission.check_geofence(cmd, 1.1, outside)
+    assert cmd.nav_mode is Mode.RTL and cmd.user_mode is Mode.RTL
+    assert any(t.text == "Geofence exceeded" for t in cmd.drain_texts())
+    cmd.set_mode(Mode.LOITER, 1.2, outside)  # a pilot takes it back: no second action
+    mission.check_geofence(cmd, 1.3, outside)
+    assert cmd.nav_mode is Mode.LOITER
