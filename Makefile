@@ -3,15 +3,17 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+# every distribution of the repository: the SDK, one per service, the simulator and the graphs
+DISTS  := sdk $(patsubst %/pyproject.toml,%,$(wildcard services/*/pyproject.toml)) sim compose
 
 .PHONY: setup demo test test-unit test-fast bench lint format clean
 
 setup: $(STAMP)
 
-$(STAMP): pyproject.toml sdk/pyproject.toml
+$(STAMP): pyproject.toml $(DISTS:%=%/pyproject.toml)
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ./sdk -e '.[dev]'
+	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) -e '.[dev]'
 	$(BIN)/python -m pip install -q --no-deps 'djitellopy==2.5.0'  # test client; its opencv-python would shadow our headless cv2
 	@touch $(STAMP)
 

@@ -69,7 +69,7 @@ def in_process(scenario_name: str, detector: str, frames: int) -> dict[str, obje
     servo = Servo(
         load_config(
             ControllerConfig,
-            REPO / "services/dronewrapper_controller/config/iris_sim.yaml",
+            REPO / "services/controller/dronewrapper_controller/config/iris_sim.yaml",
             [f"mode={mode}"],
         )
     )

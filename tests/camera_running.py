@@ -14,7 +14,9 @@ from dronewrapper_camera_victure.node import CLOSE_WAIT_S, run
 from support import ASSETS, REPO, client_node, wait_for
 
 VIDEO = ASSETS / "video" / "vtest.avi"
-CALIBRATION = REPO / "services" / "dronewrapper_camera_victure" / "config" / "victure_640x480.yaml"
+CALIBRATION = (
+    REPO / "services/camera_victure/dronewrapper_camera_victure" / "config" / "victure_640x480.yaml"
+)
 
 
 class Running:

@@ -43,7 +43,9 @@ from dronewrapper_sim.evaluation.metrics import (
 from dronewrapper_sim.evaluation.monitor import FollowMonitor
 
 GRAPH = REPO / "compose" / "sim_follow_color.yaml"
-CONTROLLER_CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml"
+CONTROLLER_CONFIG = (
+    REPO / "services/controller/dronewrapper_controller" / "config" / "iris_sim.yaml"
+)
 CENTRED_TOLERANCE = math.radians(10.0)
 DISTANCE_TOLERANCE = 1.5
 

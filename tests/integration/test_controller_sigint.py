@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from support import REPO, python_module, wait_for
 
-CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml"
+CONFIG = REPO / "services/controller/dronewrapper_controller" / "config" / "iris_sim.yaml"
 
 
 def test_sigint_while_waiting_for_the_bridge_exits_0(router, spawn):

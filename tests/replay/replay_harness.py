@@ -96,7 +96,7 @@ def replay_controller(name: str) -> list[dict[str, Any]]:
     _, overrides = RECORDINGS[name]
     config = load_config(
         ControllerConfig,
-        REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml",
+        REPO / "services/controller/dronewrapper_controller" / "config" / "iris_sim.yaml",
         data=overrides,
     )
     recorded = list(read_bus(recording(name), [registry.DETECTIONS.key()]))

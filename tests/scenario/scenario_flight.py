@@ -34,7 +34,9 @@ from dronewrapper_sim.evaluation.monitor import FollowMonitor
 from dronewrapper_sim.world.scenario import load_scenario
 from support import REPO, free_port
 
-CONTROLLER_CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml"
+CONTROLLER_CONFIG = (
+    REPO / "services/controller/dronewrapper_controller" / "config" / "iris_sim.yaml"
+)
 CENTRED_TOLERANCE = math.radians(10.0)
 DISTANCE_TOLERANCE = 1.5  # m
 # A person's box, as a multiple of their height (tall, wide). YOLOX: the box fits the person

@@ -29,12 +29,12 @@ from support import REPO
 
 pytestmark = [pytest.mark.scenario, pytest.mark.timeout(240)]
 
-TELLO_CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "tello.yaml"
+TELLO_CONFIG = REPO / "services/controller/dronewrapper_controller" / "config" / "tello.yaml"
 
 # scenario -> (graph, seconds of servoing after the take-off, max acquire s, min centred,
 # min within distance). The hardest case of each kind flies here (the abrupt beacon, the moving
 # person, a crossing); the static and smooth cases passed with the same tuning (figures in
-# services/dronewrapper_controller/config/tello.yaml) and fly on the Iris with the same
+# services/controller/dronewrapper_controller/config/tello.yaml) and fly on the Iris with the same
 # controller code, so the tier stays inside CI's time.
 CASES = {
     "beacon_abrupt": ("sim_tello_follow_color", 27, 15, 0.6, 0.6),

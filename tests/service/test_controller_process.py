@@ -12,7 +12,7 @@ from dronewrapper_controller.config import Config
 from dronewrapper_controller.node import run
 from support import REPO
 
-CONFIG = REPO / "services" / "dronewrapper_controller" / "config" / "iris_sim.yaml"
+CONFIG = REPO / "services/controller/dronewrapper_controller" / "config" / "iris_sim.yaml"
 
 
 def main(*argv: str) -> int:

@@ -33,7 +33,11 @@ from dronewrapper.runtime.fake import FakeNode
 from support import wait_for
 
 pytestmark = pytest.mark.timeout(60)
-STATIC = Path(__file__).resolve().parents[2] / "services" / "dronewrapper_ground_station" / "static"
+STATIC = (
+    Path(__file__).resolve().parents[2]
+    / "services/ground_station/dronewrapper_ground_station"
+    / "static"
+)
 
 POSE = (X, 0.0, 2.0)
 

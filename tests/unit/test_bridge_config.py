@@ -12,7 +12,9 @@ from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.link import network_exposure
 
 CONFIG_DIR = (
-    Path(__file__).resolve().parents[2] / "services" / "dronewrapper_bridge_mavlink" / "config"
+    Path(__file__).resolve().parents[2]
+    / "services/bridge_mavlink/dronewrapper_bridge_mavlink"
+    / "config"
 )
 
 

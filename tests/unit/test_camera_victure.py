@@ -300,7 +300,7 @@ def test_the_shipped_config_and_calibration_load():
     from support import REPO
 
     config = load_config(
-        Config, REPO / "services/dronewrapper_camera_victure/config/victure.yaml", []
+        Config, REPO / "services/camera_victure/dronewrapper_camera_victure/config/victure.yaml", []
     )
     assert (config.source_kind, config.rotate, config.pixel_format) == ("device", 180, "MJPG")
     cal = load_calibration(REPO / config.calibration_file)

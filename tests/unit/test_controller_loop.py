@@ -18,7 +18,9 @@ from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_controller.config import Config, ServoConfig
 from dronewrapper_controller.loop import ControlLoop
 
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "services" / "dronewrapper_controller" / "config"
+CONFIG_DIR = (
+    Path(__file__).resolve().parents[2] / "services/controller/dronewrapper_controller" / "config"
+)
 
 
 def frame(stamp, *xs):

@@ -1,5 +1,6 @@
-"""Every package's folder has its import name, so a reader (or a tool) can go from
-``import dronewrapper_x`` to the file without a mapping table."""
+"""Every distribution is a folder with its ``pyproject.toml`` and one package inside, and every
+package's folder has its import name, so a reader (or a tool) goes from ``import dronewrapper_x``
+to the file without a mapping table: ``services/<name>/dronewrapper_<name>/``."""
 
 from __future__ import annotations
 
@@ -8,29 +9,25 @@ import pkgutil
 from pathlib import Path
 
 import pytest
+import tomllib
 
 REPO = Path(__file__).resolve().parents[2]
-ROOTS = ("sdk", "services", "sim", "compose")
+SERVICES = sorted(p.parent for p in (REPO / "services").glob("*/pyproject.toml"))
+DISTRIBUTIONS = [REPO / "sdk", *SERVICES, REPO / "sim", REPO / "compose"]
 
 
 def packages_in_repo() -> list[tuple[str, Path]]:
     found = []
-    for root in ROOTS:
-        for info in pkgutil.iter_modules([str(REPO / root)]):
+    for root in DISTRIBUTIONS:
+        for info in pkgutil.iter_modules([str(root)]):
             if info.ispkg:
-                found.append((info.name, REPO / root / info.name))
+                found.append((info.name, root / info.name))
     return found
 
 
-def test_every_root_holds_packages():
-    names = {name for name, _ in packages_in_repo()}
-    assert {
-        "dronewrapper",
-        "dronewrapper_sim",
-        "dronewrapper_compose",
-        "dronewrapper_bridge_mavlink",
-        "dronewrapper_bridge_tello",
-    } <= names
+def test_the_design_names_each_service_folder():
+    names = {p.name for p in SERVICES}
+    assert {"bridge_mavlink", "bridge_tello", "camera_victure", "perception", "controller"} <= names
 
 
 @pytest.mark.parametrize("name,folder", packages_in_repo(), ids=lambda v: str(v))
@@ -39,8 +36,25 @@ def test_the_import_name_is_the_folder_name(name: str, folder: Path):
     assert Path(module.__file__).resolve().parent == folder.resolve()
 
 
-def test_services_are_all_packages_named_for_import():
+@pytest.mark.parametrize("service", SERVICES, ids=lambda p: p.name)
+def test_a_service_is_a_distribution_holding_its_package(service: Path):
+    project = tomllib.loads((service / "pyproject.toml").read_text())["project"]
+    assert project["name"] == "dronewrapper-" + service.name.replace("_", "-")
+    assert (service / f"dronewrapper_{service.name}" / "__init__.py").is_file()
+    assert any(dep.startswith("dronewrapper") for dep in project["dependencies"])
+
+
+def test_every_folder_under_services_is_a_distribution():
     for entry in (REPO / "services").iterdir():
         if entry.is_dir() and not entry.name.startswith((".", "__")):
-            assert entry.name.startswith("dronewrapper_"), entry
-            assert (entry / "__init__.py").is_file(), entry
+            assert (entry / "pyproject.toml").is_file(), entry
+
+
+def test_setup_installs_every_distribution():
+    makefile = (REPO / "Makefile").read_text()
+    assert "services/*/pyproject.toml" in makefile
+    root = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    named = {dep.split("[")[0] for dep in root["dependencies"]}
+    for dist in DISTRIBUTIONS:
+        name = tomllib.loads((dist / "pyproject.toml").read_text())["project"]["name"]
+        assert name in named or name == "dronewrapper", name

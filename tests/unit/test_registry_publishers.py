@@ -24,20 +24,20 @@ SDK = REPO / "sdk" / "dronewrapper"
 
 SOURCES: dict[str, list[Path]] = {
     "bridge": [
-        REPO / "services" / "dronewrapper_bridge_mavlink",
-        REPO / "services" / "dronewrapper_bridge_tello",
+        REPO / "services/bridge_mavlink/dronewrapper_bridge_mavlink",
+        REPO / "services/bridge_tello/dronewrapper_bridge_tello",
     ],
-    "bridge_tello": [REPO / "services" / "dronewrapper_bridge_tello"],
+    "bridge_tello": [REPO / "services/bridge_tello/dronewrapper_bridge_tello"],
     "sdk": [
         p for p in SDK.rglob("*.py") if p.name != "mavlink_forward.py" and "record" not in p.parts
     ],
     "gcs": [SDK / "mavlink_forward.py"],
     "replay": [SDK / "record"],
-    "controller": [REPO / "services" / "dronewrapper_controller"],
-    "perception": [REPO / "services" / "dronewrapper_perception"],
-    "camera_victure": [REPO / "services" / "dronewrapper_camera_victure"],
+    "controller": [REPO / "services/controller/dronewrapper_controller"],
+    "perception": [REPO / "services/perception/dronewrapper_perception"],
+    "camera_victure": [REPO / "services/camera_victure/dronewrapper_camera_victure"],
     "sim": [REPO / "sim" / "dronewrapper_sim"],
-    "teleop": [REPO / "services" / "dronewrapper_ground_station"],
+    "teleop": [REPO / "services/ground_station/dronewrapper_ground_station"],
     "tests": [REPO / "tests"],
 }
 """Where each process the registry names lives."""

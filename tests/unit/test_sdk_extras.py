@@ -1,4 +1,4 @@
-"""The SDK's optional extras pin the same ranges as the on-board stack."""
+"""The SDK's optional extras pin the same ranges as the on-board distributions."""
 
 import tomllib
 
@@ -10,9 +10,11 @@ def requirement(requirements: list[str], name: str) -> str:
     return found
 
 
-def test_images_extra_uses_the_stacks_opencv_range():
+def test_images_extra_uses_every_distributions_opencv_range():
     sdk = tomllib.loads((REPO / "sdk" / "pyproject.toml").read_text())["project"]
-    stack = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     extra = requirement(sdk["optional-dependencies"]["images"], "opencv-python-headless")
-    assert extra == requirement(stack["dependencies"], "opencv-python-headless")
     assert "<5" in extra
+    for project in [*REPO.glob("services/*/pyproject.toml"), REPO / "sim" / "pyproject.toml"]:
+        deps = tomllib.loads(project.read_text())["project"]["dependencies"]
+        if any(d.startswith("opencv-python-headless") for d in deps):
+            assert requirement(deps, "opencv-python-headless") == extra, project

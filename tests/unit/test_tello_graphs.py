@@ -33,7 +33,9 @@ def test_tello_graph_resolves_and_configs_load(name):
 
 def test_tello_controller_config_is_for_the_tello():
     config = load_config(
-        ControllerConfig, str(REPO / "services/dronewrapper_controller/config/tello.yaml"), []
+        ControllerConfig,
+        str(REPO / "services/controller/dronewrapper_controller/config/tello.yaml"),
+        [],
     )
     assert config.aircraft == "tello"
 
@@ -49,5 +51,7 @@ def test_bridge_config_is_strict_and_names_the_bad_key(tmp_path):
         load_config(BridgeConfig, None, ["scale.max_stick=300"])
     for shipped in ("sim.yaml", "tello.yaml"):
         load_config(
-            BridgeConfig, str(REPO / "services/dronewrapper_bridge_tello/config" / shipped), []
+            BridgeConfig,
+            str(REPO / "services/bridge_tello/dronewrapper_bridge_tello/config" / shipped),
+            [],
         )

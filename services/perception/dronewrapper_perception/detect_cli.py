@@ -39,7 +39,7 @@ YOLOX_DETECTORS = ("yolox", "person")  # ``person`` here is YOLOX's person class
 
 def shipped_model() -> Path:
     """The model that ships: ``$DRONEWRAPPER_ASSETS/models/``, else the repository's assets."""
-    assets = os.environ.get("DRONEWRAPPER_ASSETS") or Path(__file__).resolve().parents[2] / "assets"
+    assets = os.environ.get("DRONEWRAPPER_ASSETS") or Path(__file__).resolve().parents[3] / "assets"
     return Path(assets) / "models" / SHIPPED_MODEL
 
 
