@@ -192,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
                     continue
             else:
                 raise Timeout("the benchmark's frame never reached the SDK within 10 s")
-            drone.wait_for(lambda: drone._pose.value is not None, 10, "pose")
+            drone.wait_for(lambda: drone.inputs.pose.value is not None, 10, "pose")
             getters = time_getters(drone, args.calls)
             time_commands(drone, autopilot, 20)  # warm-up
             latencies, call_times, lost = time_commands(drone, autopilot, args.samples)

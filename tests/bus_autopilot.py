@@ -102,10 +102,10 @@ def drive(bus: FakeBus, until: float, *steppers, stop: Callable[[], bool] = lamb
 
 class SdkRig:
     """A :class:`DroneWrapper` on the fake bus with a :class:`BusAutopilot` behind it: its
-    blocking calls (take-off, landing, ``wait_for``) move the bus time, ticking the aircraft
-    and running what :meth:`at` scheduled, instead of sleeping; the getters' ages are bus time
-    too. Its setpoint stream repeats on its own thread (tests/unit/test_sdk_streamer* test
-    that); a new setpoint goes out at once.
+    blocking calls (take-off, landing, ``wait_for``) wait on the bus clock, whose stepper moves
+    the bus time, ticking the aircraft and running what :meth:`at` scheduled; the getters' ages
+    are bus time too. Its setpoint stream repeats on its own thread in the same virtual time
+    (tests/unit/test_sdk_streamer* test that); a new setpoint goes out at once.
 
     ``autopilot`` takes :class:`BusAutopilot`'s arguments; ``drone`` DroneWrapper's
     (:meth:`options`); ``open_drone=False`` leaves ``drone`` None (an aio Drone opens one).
@@ -115,19 +115,14 @@ class SdkRig:
         self.bus = FakeBus(start=T0)
         self.pilot = BusAutopilot(self.bus, **{"flying": False, **(autopilot or {})})
         self.node = FakeNode("app", self.bus)
+        self.bus.clock.stepper = self.run_until  # the wrapper's waits tick the aircraft
         self._actions: list[tuple[float, Callable[[], None]]] = []
         self.drone = DroneWrapper("drone", **self.options(**drone)) if open_drone else None
         self.run(TELEMETRY_PERIOD_S)  # the first telemetry is in
 
     def options(self, **drone) -> dict:
         """DroneWrapper's arguments for a wrapper on this bus, in its time."""
-        return {
-            "node": self.node,
-            "clock": self.bus.clock,
-            "sleep": self.run,
-            "wait": False,
-            **drone,
-        }
+        return {"node": self.node, "wait": False, **drone}
 
     def at(self, delay: float, action: Callable[[], None]) -> None:
         """Run ``action`` once ``delay`` s of bus time have passed (while a call blocks)."""
@@ -145,6 +140,10 @@ class SdkRig:
     def run(self, seconds: float) -> None:
         """Move the bus ``seconds`` on, ticking the aircraft."""
         drive(self.bus, self.bus.clock() + seconds, self, self.pilot)
+
+    def run_until(self, until: float, done: Callable[[], bool]) -> None:
+        """The bus clock's stepper: tick the aircraft until ``until`` or ``done()``."""
+        drive(self.bus, until, self, self.pilot, stop=done)
 
     def close(self) -> None:
         self.drone.close()

@@ -9,6 +9,7 @@ is the DroneWrapper on that bus, its blocking calls moving the bus time.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from bus_autopilot import drive
@@ -89,14 +90,17 @@ class SimSdk:
         self.bus = FakeBus(start=EPOCH)
         self.bridge = BusBridge(self.bus, self.pair)
         self.node = FakeNode("app", self.bus)
-        self.drone = DroneWrapper(
-            "drone", node=self.node, clock=self.bus.clock, sleep=self.run, wait=False
-        )
+        self.bus.clock.stepper = self.run_until  # the wrapper's waits fly the simulator
+        self.drone = DroneWrapper("drone", node=self.node, wait=False)
         self.pair.streaming = lambda: self.drone.commanding is not None
         self.run(3.0)  # connected, home and envelope known
 
     def run(self, seconds: float) -> None:
         drive(self.bus, self.bus.clock() + seconds, self.bridge)
+
+    def run_until(self, until: float, done: Callable[[], bool]) -> None:
+        """The bus clock's stepper: the simulator runs until ``until`` or ``done()``."""
+        drive(self.bus, until, self.bridge, stop=done)
 
     def close(self) -> None:
         self.drone.close()

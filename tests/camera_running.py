@@ -44,7 +44,7 @@ class Running:
             self.node = client_node(router, name="camera_victure", mode="client")
         else:
             self.clock = clock or VirtualClock()
-            bus = FakeBus(clock=self.clock)  # type: ignore[arg-type]
+            bus = FakeBus(clock=self.clock)
             self.tester, self.node = FakeNode("tester", bus), FakeNode("camera_victure", bus)
         camera = self.config.camera
         self.raw: list = []
@@ -56,7 +56,7 @@ class Running:
         kwargs = {"factory": factory} if factory else {}
 
         def service() -> None:
-            self.result.append(run(self.node, self.config, clock=self.clock, **kwargs))
+            self.result.append(run(self.node, self.config, **kwargs))
 
         self.thread = self.clock.thread(service, "camera-service")
 

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.1.0"
 
 __all__ = [
+    "Cancelled",
     "CommandRefused",
     "DroneError",
     "DroneWrapper",
@@ -30,6 +31,7 @@ __all__ = [
 _LAZY = {
     "DroneWrapper": "dronewrapper.drone",
     "list_drones": "dronewrapper.discovery",
+    "Cancelled": "dronewrapper.errors",
     "CommandRefused": "dronewrapper.errors",
     "DroneError": "dronewrapper.errors",
     "InvalidArgument": "dronewrapper.errors",
@@ -42,6 +44,7 @@ if TYPE_CHECKING:
     from dronewrapper.discovery import list_drones
     from dronewrapper.drone import DroneWrapper
     from dronewrapper.errors import (
+        Cancelled,
         CommandRefused,
         DroneError,
         InvalidArgument,

@@ -17,8 +17,10 @@
 One core, two fronts: :class:`Drone` drives a :class:`~dronewrapper.drone.DroneWrapper` and adds
 no flight logic of its own. Blocking calls (take-off, landing, mode changes, parameters, waits)
 run on a worker thread and are awaited, so the event loop keeps running; getters and setpoints
-return at once, as in the sync API. Telemetry and frames are async iterators of the newest
-values: a slow consumer skips values instead of queueing them (never a backlog).
+return at once, as in the sync API. Cancelling an awaited take-off or landing stops it: no
+further step is taken and the setpoint stream stops (the bridge holds position); the awaiting
+task sees CancelledError once the worker has stopped. Telemetry and frames are async iterators
+of the newest values: a slow consumer skips values instead of queueing them (never a backlog).
 
 Many drones at once: :class:`Fleet` (:mod:`dronewrapper.fleet_aio`).
 """
@@ -26,6 +28,7 @@ Many drones at once: :class:`Fleet` (:mod:`dronewrapper.fleet_aio`).
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import threading
 from collections.abc import AsyncIterator, Callable
 from typing import Any, TypeVar
@@ -35,39 +38,17 @@ import numpy as np
 from dronewrapper import telemetry
 from dronewrapper.drone import DroneWrapper
 from dronewrapper.fleet_aio import Fleet
+from dronewrapper.inputs import camera_key_name
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
+from dronewrapper.runtime.latest import Latest
 
 __all__ = ["Drone", "Fleet"]
 
 T = TypeVar("T")
 V = TypeVar("V")
-
-
-class _Newest:
-    """A one-slot mailbox from a Zenoh thread to an event loop: ``put`` keeps only the newest."""
-
-    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
-        self._loop = loop
-        self._event = asyncio.Event()
-        self._value: Any = None
-        self._lock = threading.Lock()
-        self.closed = False
-
-    def put(self, value: Any) -> None:
-        """Called from any thread."""
-        with self._lock:
-            self._value = value
-        if not self.closed:
-            self._loop.call_soon_threadsafe(self._event.set)
-
-    async def get(self) -> Any:
-        await self._event.wait()
-        self._event.clear()
-        with self._lock:
-            return self._value
 
 
 class Drone:
@@ -119,13 +100,28 @@ class Drone:
     async def _run(self, method: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         return await asyncio.to_thread(method, *args, **kwargs)
 
+    async def _run_cancellable(self, method: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        """``method(..., cancel=event)`` on a worker thread; a cancelled await sets the event
+        and waits for the worker to stop before CancelledError goes on."""
+        cancel = threading.Event()
+        worker = asyncio.ensure_future(asyncio.to_thread(method, *args, cancel=cancel, **kwargs))
+        try:
+            return await asyncio.shield(worker)
+        except asyncio.CancelledError:
+            cancel.set()
+            with contextlib.suppress(Exception):  # Cancelled, or what it raised on the way
+                await worker
+            raise
+
     async def takeoff(self, h: float = 3.0, **kwargs: Any) -> None:
-        """Take off to ``h`` m and return there (see :meth:`DroneWrapper.takeoff`)."""
-        await self._run(self.sync.takeoff, h, **kwargs)
+        """Take off to ``h`` m and return there (see :meth:`DroneWrapper.takeoff`); cancel
+        the await to stop it."""
+        await self._run_cancellable(self.sync.takeoff, h, **kwargs)
 
     async def land(self, **kwargs: Any) -> None:
-        """Land and return on the ground, disarmed (see :meth:`DroneWrapper.land`)."""
-        await self._run(self.sync.land, **kwargs)
+        """Land and return on the ground, disarmed (see :meth:`DroneWrapper.land`); cancel
+        the await to stop it."""
+        await self._run_cancellable(self.sync.land, **kwargs)
 
     async def arm(self, **kwargs: Any) -> None:
         await self._run(self.sync.arm, **kwargs)
@@ -180,15 +176,35 @@ class Drone:
 
     # ------------------------------------------------------------------ async iterators
 
-    async def _stream(self, topic: Topic[V], convert: Callable[[V], T], **parts: str):
-        mailbox = _Newest(asyncio.get_running_loop())
-        subscription = self.sync.subscribe(topic, mailbox.put, **parts)
+    async def _newest(self, topic: Topic[V], **parts: str) -> AsyncIterator[V]:
+        """The messages on ``topic`` as they arrive, the newest each time (a Latest holder
+        whose listener wakes the event loop)."""
+        loop = asyncio.get_running_loop()
+        holder: Latest[V] = Latest(name=topic.key(self.sync.ns, **parts), clock=self.sync.clock)
+        arrived = asyncio.Event()
+
+        def notify() -> None:
+            with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
+                loop.call_soon_threadsafe(arrived.set)
+
+        holder.listen(notify)
+        subscription = self.sync.subscribe(topic, holder.update, **parts)
+        seen = 0
         try:
             while True:
-                yield convert(await mailbox.get())
+                await arrived.wait()
+                arrived.clear()
+                got = holder.take(0.0, seen)
+                if got is not None:
+                    seen, value = got
+                    yield value
         finally:
-            mailbox.closed = True
+            holder.unlisten(notify)
             subscription.undeclare()
+
+    async def _stream(self, topic: Topic[V], convert: Callable[[V], T], **parts: str):
+        async for msg in self._newest(topic, **parts):
+            yield convert(msg)
 
     def position(self) -> AsyncIterator[np.ndarray]:
         """Positions ``[x, y, z]`` (local ENU m) as they arrive."""
@@ -216,16 +232,9 @@ class Drone:
 
     async def frames(self, camera: str = "frontal") -> AsyncIterator[np.ndarray]:
         """Camera frames (BGR ``uint8``), the newest each time; slow consumers skip frames."""
-        mailbox = _Newest(asyncio.get_running_loop())
         topic = registry.IMAGE_COMPRESSED if self.sync.compressed_images else registry.IMAGE_RAW
-        key_name = {"frontal": "cam_frontal", "ventral": "cam_ventral"}.get(camera, camera)
-        subscription = self.sync.subscribe(topic, mailbox.put, camera=key_name)
-        try:
-            while True:
-                yield self.sync.decode_image(await mailbox.get())
-        finally:
-            mailbox.closed = True
-            subscription.undeclare()
+        async for msg in self._newest(topic, camera=camera_key_name(camera)):
+            yield self.sync.decode_image(msg)
 
 
 def _same(value: T) -> T:

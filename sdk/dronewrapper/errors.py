@@ -47,3 +47,8 @@ class NoData(DroneError):
 
 class InvalidArgument(DroneError, ValueError, TypeError):
     """A command argument is not a finite real number (NaN, inf, bool, str, None ...)."""
+
+
+class Cancelled(DroneError):
+    """A blocking take-off or landing was cancelled (its ``cancel`` event set, or its asyncio
+    task cancelled): it took no further step and the wrapper stopped commanding."""

@@ -9,8 +9,9 @@
         fleet.land()
 
 A :class:`Fleet` holds one :class:`~dronewrapper.drone.DroneWrapper` per drone, all on one
-Zenoh session. Every drone has its own worker thread: a command to all is one call per drone,
-each on that drone's worker, so a drone that answers slowly (or not at all) delays only itself.
+node (one Zenoh session). Every drone has its own worker thread: a command to all is one call
+per drone, each on that drone's worker, so a drone that answers slowly (or not at all) delays
+only itself.
 A call returns a :class:`FleetResult`, a mapping of drone name to :class:`Outcome` (the value,
 or the exception that drone's call raised, and how long it took). Setpoints never block, as in
 the one-drone API; they are returned as outcomes too (a refused setpoint is an error there).
@@ -27,7 +28,8 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeVar
 
-from dronewrapper.discovery import BRIDGE_PREFIX, default_connect, open_client
+from dronewrapper.connection import open_node
+from dronewrapper.discovery import BRIDGE_PREFIX, default_connect
 from dronewrapper.drone import DroneWrapper
 from dronewrapper.errors import NotConnected, Timeout
 from dronewrapper.fleet_online import (
@@ -38,7 +40,8 @@ from dronewrapper.fleet_online import (
     wait_for_bridges,
 )
 from dronewrapper.fleet_results import FleetError, FleetResult, Outcome, timed
-from dronewrapper.runtime.node import alive_services
+from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
+from dronewrapper.runtime.contract import NodeApi
 
 __all__ = ["DroneInfo", "Fleet", "FleetError", "FleetResult", "Outcome"]
 
@@ -52,9 +55,9 @@ class Fleet:
         drones: {name: DroneWrapper}, already open (:meth:`connect` opens them from the router).
         bridges: {name: bridge process name}, for :meth:`online` (default: each drone's bridge
             is looked up by liveliness).
-        alive: returns the liveliness keys online now (default: the first drone's session's).
-        owns: close the drones (and ``session``) in :meth:`close`.
-        session: a Zenoh session to close in :meth:`close` when ``owns``.
+        alive: returns the liveliness keys online now (default: each drone's own bridge).
+        owns: close the drones (and ``node``) in :meth:`close`.
+        node: the node the drones stand on, closed in :meth:`close` when ``owns``.
     """
 
     def __init__(
@@ -64,7 +67,7 @@ class Fleet:
         bridges: Mapping[str, str] | None = None,
         alive: Callable[[], set[str]] | None = None,
         owns: bool = False,
-        session: Any = None,
+        node: NodeApi | None = None,
     ) -> None:
         if not drones:
             raise NotConnected("a fleet needs at least one drone")
@@ -72,7 +75,7 @@ class Fleet:
         self._bridges = dict(bridges or {})
         self._alive = alive
         self._owns = owns
-        self._session = session
+        self._node = node
         self._workers = {
             name: concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix=f"fleet-{name}")
             for name in self.drones
@@ -93,7 +96,7 @@ class Fleet:
         identity: str = "",
         **drone_options: Any,
     ) -> Fleet:
-        """Find the drones online and open each (one session for all).
+        """Find the drones online and open each (one node for all).
 
         Args:
             names: the drones to open; None: every drone whose bridge is online.
@@ -108,10 +111,10 @@ class Fleet:
         """
         endpoint = connect or default_connect()
         deadline = time.monotonic() + timeout
-        session = open_client(endpoint, timeout, mode=mode, identity=identity)
+        node = open_node(DEFAULT_NAMESPACE, endpoint, timeout, mode=mode, identity=identity)
         try:
             bridges = wait_for_bridges(
-                lambda: alive_services(session, "*", timeout=1.0), names, count, deadline
+                lambda: node.alive_services("*", timeout=1.0), names, count, deadline
             )
             drones = open_drones(
                 list(bridges),
@@ -119,20 +122,20 @@ class Fleet:
                     name,
                     endpoint,
                     max(0.5, deadline - time.monotonic()),
-                    session=session,
+                    node=node,
                     identity=identity,
                     **drone_options,
                 ),
             )
         except BaseException:
-            session.close()
+            node.close()
             raise
         return cls(
             drones,
             bridges=bridges,
-            alive=lambda: alive_services(session, "*", timeout=1.0),
+            alive=lambda: node.alive_services("*", timeout=1.0),
             owns=True,
-            session=session,
+            node=node,
         )
 
     def __enter__(self) -> Fleet:
@@ -154,9 +157,9 @@ class Fleet:
                 drone.stop_commanding()
                 if self._owns:
                     drone.close()
-        if self._owns and self._session is not None:
+        if self._owns and self._node is not None:
             with contextlib.suppress(Exception):
-                self._session.close()
+                self._node.close()
 
     @property
     def names(self) -> list[str]:

@@ -1,11 +1,10 @@
 """The SDK's blocking take-off and landing: the runtime's flight steps, driven to the end.
 
-``DroneWrapper.takeoff`` / ``land`` build the
-:mod:`dronewrapper.runtime.flight` ``Takeoff`` / ``Landing`` that a service's loop steps, on a
-:class:`WrapperAircraft` (the wrapper's telemetry, setpoint stream and service calls), and
-:func:`fly` steps them on the caller's thread until done. A service call blocks its step (up
-to the wrapper's ``service_timeout``, like every other call of the SDK); the climb and the
-descent are watched every ``interval`` s of the wrapper's clock. A :class:`FlightError`
+``DroneWrapper.takeoff`` / ``land`` build the :mod:`dronewrapper.runtime.flight` ``Takeoff`` /
+``Landing`` that a service's loop steps, on a :class:`WrapperAircraft` (the wrapper's telemetry,
+setpoint stream and service calls), and :func:`fly` steps them on the caller's thread until
+done. A service call blocks its step (up to the wrapper's ``service_timeout``); the climb and
+the descent are watched every ``interval`` s of the wrapper's clock. A :class:`FlightError`
 becomes the SDK's exception (:func:`drone_error`), with the same text.
 """
 
@@ -16,7 +15,7 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from typing import Any
 
-from dronewrapper.errors import CommandRefused, DroneError, NoData, NotConnected, Timeout
+from dronewrapper.errors import Cancelled, CommandRefused, DroneError, NoData, NotConnected, Timeout
 from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State, StatusText
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime.commander import STATE_FRESH_S, Pending
@@ -116,14 +115,18 @@ def fly(
     sleep: Callable[[float], Any],
     no_reply: Callable[[str, str, float], DroneError],
     interval: float = POLL_INTERVAL_S,
+    cancelled: Callable[[], bool] = lambda: False,
 ) -> None:
     """Step ``sequence`` until it is done, sleeping ``interval`` s between steps.
 
     Raises:
         DroneError: the sequence failed (see :func:`drone_error`).
+        Cancelled: ``cancelled()`` became true: no further step was taken.
     """
     try:
         while not sequence.step(clock()):
             sleep(interval)
+            if cancelled():
+                raise Cancelled(f"{type(sequence).__name__.lower()} cancelled")
     except FlightError as exc:
         raise drone_error(exc, no_reply) from None

@@ -68,10 +68,10 @@ class MissionsMixin:
     """Missions, go-to and the envelope (see module docstring); mixed into DroneWrapper."""
 
     def _declare_mission_inputs(self: Any) -> None:
-        self._home = self._latest(registry.HOME_POSITION)
-        self._envelope = self._latest(registry.ENVELOPE)
-        self._waypoints: Latest[WaypointList] = self._latest(registry.MISSION_WAYPOINTS)
-        self._reached: Latest[WaypointReached] = self._latest(registry.MISSION_REACHED)
+        self._home = self.inputs.latest(registry.HOME_POSITION)
+        self._envelope = self.inputs.latest(registry.ENVELOPE)
+        self._waypoints: Latest[WaypointList] = self.inputs.latest(registry.MISSION_WAYPOINTS)
+        self._reached: Latest[WaypointReached] = self.inputs.latest(registry.MISSION_REACHED)
 
     # ------------------------------------------------------------------ envelope
 
@@ -179,7 +179,7 @@ class MissionsMixin:
         guided = GUIDED.get(state.autopilot)
         if guided is not None and state.mode != guided:
             self.set_mode(guided)
-        deadline = self._clock() + timeout
+        deadline = self.clock.monotonic() + timeout
         while True:
             position = self.get_position()
             if math.dist(position, target) <= tolerance:
@@ -189,15 +189,15 @@ class MissionsMixin:
             ]
             if refused:
                 raise CommandRefused("goto", refused[-1])
-            state = self._state.value
+            state = self.inputs.state.value
             if guided is not None and state is not None and state.mode != guided:
                 raise CommandRefused("goto", f"the autopilot left {guided} for {state.mode}")
-            if self._clock() >= deadline:
+            if self.clock.monotonic() >= deadline:
                 raise Timeout(
                     f"goto: not within {tolerance:g} m of ({x:g}, {y:g}, {z:g}) after "
                     f"{timeout:g} s; {math.dist(position, target):.1f} m away"
                 )
-            self._sleep(POLL_S)
+            self.clock.sleep(POLL_S)
 
     # ------------------------------------------------------------------ return
 
@@ -214,15 +214,15 @@ class MissionsMixin:
         self._command(
             registry.MISSION_CONTROL, MissionControl(action="return"), "return_to_launch", None
         )
-        deadline = self._clock() + timeout
+        deadline = self.clock.monotonic() + timeout
         while True:
-            state, extended = self._state.value, self._extended.value
+            state, extended = self.inputs.state.value, self.inputs.extended.value
             landed = extended is not None and extended.landed_state == LANDED_STATE_ON_GROUND
             if state is not None and not state.armed and landed:
                 return
-            if self._clock() >= deadline:
+            if self.clock.monotonic() >= deadline:
                 raise Timeout(f"return_to_launch: not landed and disarmed after {timeout:g} s")
-            self._sleep(POLL_S)
+            self.clock.sleep(POLL_S)
 
     # ------------------------------------------------------------------ missions
 

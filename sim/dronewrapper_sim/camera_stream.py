@@ -1,5 +1,7 @@
 """The cameras' thread: renders the frontal and ventral images from the vehicle's pose at the
-camera rate and publishes them (raw or JPEG, each while someone subscribes to it)."""
+camera rate and publishes them (raw or JPEG, each while someone subscribes to it) through the
+node's publishers (the registry's QoS; raw frames written straight into shared memory when the
+node has it). Stamps and pacing are on the node's clock."""
 
 from __future__ import annotations
 
@@ -11,40 +13,14 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import zenoh
 
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
-from dronewrapper.msgs import codec, registry
-from dronewrapper.msgs.sensor import CompressedImage, Image
-from dronewrapper.runtime import Node, Ratekeeper, encoding_for
+from dronewrapper.msgs import registry
+from dronewrapper.runtime import Ratekeeper
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 
 log = logging.getLogger("sim")
-
-
-class _WatchedPublisher:
-    """A Zenoh publisher that knows whether any subscriber matches it."""
-
-    def __init__(self, session: zenoh.Session, key: str, msg_type: type, shm=None) -> None:
-        self.key = key
-        self.count = 0
-        self._shm = shm  # the node's ShmWriter: frames written straight into shared memory
-        self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type))
-
-    def watched(self) -> bool:
-        try:
-            return bool(self._pub.matching_status.matching)
-        except zenoh.ZError:
-            return False
-
-    def put(self, msg: Any) -> None:
-        payload = self._shm.payload(msg) if self._shm is not None else None
-        self._pub.put(codec.encode(msg) if payload is None else payload)
-        self.count += 1
-
-    def undeclare(self) -> None:
-        with contextlib.suppress(zenoh.ZError):
-            self._pub.undeclare()
 
 
 class CameraStreamer(threading.Thread):
@@ -52,7 +28,7 @@ class CameraStreamer(threading.Thread):
 
     def __init__(
         self,
-        node: Node,
+        node: NodeApi,
         renderer: Any,
         mounts: list[Any],
         rate_hz: float,
@@ -74,25 +50,13 @@ class CameraStreamer(threading.Thread):
         self.frames = {m.name: 0 for m in mounts}
         self.render_s = 0.0
         self.errors = 0
-        ns = node.ns
-        self._raw = {
-            m.name: _WatchedPublisher(
-                node.session,
-                registry.IMAGE_RAW.key(ns, camera=m.name),
-                Image,
-                getattr(node, "shm_writer", None),
-            )
-            for m in mounts
-        }
+        self._raw = {m.name: node.publisher(registry.IMAGE_RAW, camera=m.name) for m in mounts}
         self._jpeg = {
-            m.name: _WatchedPublisher(
-                node.session, registry.IMAGE_COMPRESSED.key(ns, camera=m.name), CompressedImage
-            )
-            for m in mounts
+            m.name: node.publisher(registry.IMAGE_COMPRESSED, camera=m.name) for m in mounts
         }
 
     def run(self) -> None:
-        rate = Ratekeeper(self.rate_hz, stop=self.node.stop_event)
+        rate = Ratekeeper(self.rate_hz, stop=self.node.stop_event, clock=self.node.clock)
         while rate.sleep():
             for mount in self.mounts:
                 try:
@@ -109,8 +73,8 @@ class CameraStreamer(threading.Thread):
         if not (want_raw or want_jpeg):
             return
         snap = self.pose_source()
-        stamp = time.time()
-        started = time.perf_counter()
+        stamp = self.node.clock.time()
+        started = time.perf_counter()  # the render's CPU cost, not the simulation's time
         image = self.renderer.render(mount, np.asarray(snap.position), np.asarray(snap.quaternion))
         self.render_s += time.perf_counter() - started
         seq = self.frames[mount.name]
@@ -122,4 +86,5 @@ class CameraStreamer(threading.Thread):
 
     def close(self) -> None:
         for pub in [*self._raw.values(), *self._jpeg.values()]:
-            pub.undeclare()
+            with contextlib.suppress(Exception):  # already gone with the session
+                pub.undeclare()

@@ -22,8 +22,8 @@ import os
 from collections.abc import Sequence
 
 from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
-from dronewrapper.runtime import Node
 from dronewrapper.runtime.config import ConfigError
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.options import ENV_PREFIX
 from dronewrapper.runtime.service import run_service
 from dronewrapper_sim.config import SimConfig
@@ -101,7 +101,7 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         args.namespace = f"{DEFAULT_NAMESPACE}{args.instance}"
 
 
-def run(node: Node, config: SimConfig) -> int:
+def run(node: NodeApi, config: SimConfig) -> int:
     """Run the simulator on ``node`` until SIGINT/SIGTERM."""
     from dronewrapper_sim.runner import SimRunner
     from dronewrapper_sim.world.scenario import load_scenario

@@ -18,12 +18,13 @@ import logging
 import math
 import select
 import threading
-import time
 from pathlib import Path
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node, ServiceError
+from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.clock import REAL, Clock
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.security.keystore import read_mavlink_key
 from dronewrapper_sim.camera_stream import CameraStreamer
 from dronewrapper_sim.config import SimConfig
@@ -59,12 +60,14 @@ class SimRunner:
         node: the Zenoh node to publish on (None: MAVLink only, no Zenoh, no cameras).
     """
 
-    def __init__(self, config: SimConfig, scenario: Scenario, node: Node | None) -> None:
+    def __init__(self, config: SimConfig, scenario: Scenario, node: NodeApi | None) -> None:
         from dronewrapper_sim.world.world import World
 
         self.config = config
         self.scenario = scenario
         self.node = node
+        self.time: Clock = REAL if node is None else node.clock
+        """The process's time: the node's clock (the real clocks without a node)."""
         seed = scenario.seed if config.seed is None else config.seed
         self.world = World(scenario, seed=seed)
         self.world_lock = threading.Lock()
@@ -106,20 +109,20 @@ class SimRunner:
         self._reset_done = threading.Event()
         self.slipped_s = 0.0  # wall-clock seconds the simulated clock gave up after stalls
         # (monotonic wall s, simulated s, slipped_s) taken together after each stepping
-        self.clock: tuple[float, float, float] = (time.monotonic(), 0.0, 0.0)
+        self.clock: tuple[float, float, float] = (self.time.monotonic(), 0.0, 0.0)
         if node is not None:
             self._setup_zenoh(node)
 
     # ---- setup ----
 
-    def _setup_zenoh(self, node: Node) -> None:
+    def _setup_zenoh(self, node: NodeApi) -> None:
         self.world_topics = WorldTopics(
             node, self.world, self.world_lock, seed=self.config.seed, reset_vehicle=self.reset
         )
         if self.config.cameras:
             self.cameras = self._make_cameras(node)
 
-    def _make_cameras(self, node: Node) -> CameraStreamer:
+    def _make_cameras(self, node: NodeApi) -> CameraStreamer:
         from dronewrapper_sim.render.camera import FRONTAL, VENTRAL, PinholeCamera
         from dronewrapper_sim.render.renderer import Renderer
 
@@ -149,7 +152,9 @@ class SimRunner:
 
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.autopilot.state
-        return PoseSnapshot((s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), time.time())
+        return PoseSnapshot(
+            (s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), self.time.time()
+        )
 
     def describe(self) -> str:
         """One line saying what runs where."""
@@ -186,7 +191,7 @@ class SimRunner:
             self.cameras.start()
         dt = 1.0 / self.config.physics_rate_hz
         rtf = self.config.realtime_factor
-        start = time.monotonic()
+        start = self.time.monotonic()
         t0 = start
         steps = 0
         gt_period = 1.0 / self.config.ground_truth_rate_hz
@@ -194,7 +199,7 @@ class SimRunner:
         next_gt = next_obj = start
         socks = list(self.links.values())
         while not stop.is_set():
-            now = time.monotonic()
+            now = self.time.monotonic()
             if duration_s is not None and now - start >= duration_s:
                 break
             next_tick = t0 + (steps + 1) * dt / rtf
@@ -204,8 +209,8 @@ class SimRunner:
                 for link in readable:
                     self._receive(link)
             elif wait > 0:
-                stop.wait(wait)
-            now = time.monotonic()
+                self.time.wait(stop, wait)
+            now = self.time.monotonic()
             if now < next_tick:
                 continue
             owed = int((now - t0) * rtf / dt) - steps
@@ -252,7 +257,7 @@ class SimRunner:
             self._set_signing_key(decision.key)
 
     def _note_rejections(self, link: MavlinkUdpLink) -> None:
-        rejected, now = link.rejected, time.monotonic()
+        rejected, now = link.rejected, self.time.monotonic()
         logged, at = self._rejections_logged.get(link.name, (0, -math.inf))
         if rejected > logged and now - at >= 2.0:
             self._rejections_logged[link.name] = (rejected, now)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -15,7 +14,8 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist
 from dronewrapper.msgs.simulation import VehicleResetResult, WorldLoad, WorldState
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node, ServiceError
+from dronewrapper.runtime import ServiceError
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.pose_snapshot import PoseSnapshot, pose_msg
 from dronewrapper_sim.world.scenario import SCENARIO_NAMES, load_scenario
 
@@ -36,7 +36,7 @@ class WorldTopics:
 
     def __init__(
         self,
-        node: Node,
+        node: NodeApi,
         world: Any,
         world_lock: threading.Lock,
         *,
@@ -106,7 +106,7 @@ class WorldTopics:
 
     def publish_objects(self) -> None:
         """Publish the true pose of every world object (stamped now)."""
-        stamp = time.time()
+        stamp = self.node.clock.time()
         for obj in self.world.objects:
             pub = self._object_pubs.get(obj.name)
             if pub is None:

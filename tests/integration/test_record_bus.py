@@ -88,7 +88,7 @@ def test_record_a_simulated_aircraft_and_read_it_back(router, spawn, tmp_path):
             return schemas[channels[topic].schema_id].name
 
         assert schema_of("/drone/cam_frontal/image_raw") == "foxglove.CompressedImage"
-        assert schema_of("/drone/mavros/local_position/pose") == "dronewrapper/PoseStamped"
+        assert schema_of("/drone/mavros/local_position/pose") == "dronewrapper/v1/PoseStamped"
         assert schema_of("/tf") == "foxglove.FrameTransform"
         assert schema_of("/drone/mavros/global_position/global/fix") == "foxglove.LocationFix"
         assert channels["drone/mavros/state"].message_encoding == "msgpack"
@@ -295,7 +295,8 @@ def test_foxglove_server_answers_a_websocket_client(router, spawn):
     advertised = channels["/drone/mavros/local_position/pose"]
     assert info["op"] == "serverInfo"
     assert (
-        advertised["encoding"] == "json" and advertised["schemaName"] == "dronewrapper/PoseStamped"
+        advertised["encoding"] == "json"
+        and advertised["schemaName"] == "dronewrapper/v1/PoseStamped"
     )
     assert "properties" in json.loads(advertised["schema"])
     tf = channels["/tf"]  # the pose as a transform, same as the recorder writes

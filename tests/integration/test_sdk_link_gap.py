@@ -35,8 +35,8 @@ def test_a_stale_command_is_not_resent_after_a_router_restart():
         bridge.subscribe(registry.SETPOINT_RAW_LOCAL, received)
         drone = DroneWrapper(connect=endpoint, cameras=(), wait=False)
         try:
-            streamer = drone._streamer
-            wait_for(lambda: drone._bridge_matched, 20, what="the setpoint route")
+            streamer = drone._streamer.core
+            wait_for(lambda: streamer._matched_once, 20, what="the setpoint route")
             drone.set_cmd_vel(vx=1.0)
             wait_for(lambda: len(received.since(0)) >= 5, 20, what="setpoints at the bridge")
             stopped = True
@@ -58,7 +58,7 @@ def test_a_stale_command_is_not_resent_after_a_router_restart():
             assert streamer.dropped_after_gap == 1, vars(streamer)
             assert drone.commanding is None  # the stale 1 m/s is forgotten
             # the link works: a new command goes through, and only that one
-            wait_for(lambda: drone._bridge_matched, 5)
+            wait_for(lambda: streamer.link_ok, 5)
             time.sleep(0.5)
             assert received.since(back) == [], len(received.since(back))
             drone.set_cmd_vel(vx=0.2)

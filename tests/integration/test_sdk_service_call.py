@@ -15,7 +15,7 @@ import pytest
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamValue
 from dronewrapper.runtime import ServiceUnavailable
-from dronewrapper.runtime.node import ROUTE_WAIT_S
+from dronewrapper.runtime.session import ROUTE_WAIT_S
 from support import client_node
 
 pytestmark = pytest.mark.integration

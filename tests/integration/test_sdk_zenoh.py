@@ -120,15 +120,15 @@ def test_wrong_namespace_hints_at_the_drones_online(router, bridge):
         DroneWrapper("drone7", router, timeout=1.0)
 
 
-def test_embedding_on_an_existing_session(router, bridge):
+def test_embedding_on_an_existing_node(router, bridge):
     node = client_node(router, name="embedder")
     try:
-        drone = DroneWrapper(name="drone", session=node.session, cameras=(), wait=False)
+        drone = DroneWrapper(name="drone", node=node, cameras=(), wait=False)
         drone.wait_for_connection(10)
         drone.set_cmd_vel(vz=0.1)
         wait_for(lambda: bridge.setpoints, 10, what="setpoint from the embedded SDK")
         drone.close()
-        assert not node.session.is_closed()  # the owner's session stays open
+        assert not node.session.is_closed()  # the owner's node stays open
     finally:
         node.close()
 

@@ -89,7 +89,7 @@ def test_the_app_over_http_websockets_and_a_real_router(router) -> None:
         slot = env.fleet.get("drone").slots["frontal"]
         with _ws(env, "/ws/video/drone/frontal") as ws:
             k = 0
-            while slot.latest() is None:  # until the station's new subscription hears one
+            while slot.value is None:  # until the station's new subscription hears one
                 k += 1
                 pub.put(_frame(k))
                 time.sleep(0.02)

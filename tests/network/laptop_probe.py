@@ -18,7 +18,7 @@ import threading
 import time
 
 from dronewrapper import DroneWrapper, NoData
-from dronewrapper.runtime import ZenohOptions, open_session
+from dronewrapper.runtime import Node, ZenohOptions
 
 SAMPLE_S = 6.0
 CAMERAS = ("frontal", "ventral")
@@ -32,7 +32,7 @@ def pose_ages(drone: DroneWrapper, seconds: float) -> dict[str, float]:
     ages = []
     end = time.monotonic() + seconds
     while time.monotonic() < end:
-        pose = drone._pose.value
+        pose = drone.inputs.pose.value
         if pose is not None:
             ages.append(time.time() - pose.header.stamp)
         time.sleep(0.02)
@@ -47,11 +47,10 @@ def pose_ages(drone: DroneWrapper, seconds: float) -> dict[str, float]:
 
 def main(endpoint: str, jpeg: bool) -> int:
     # no shared memory: this "laptop" shares the drone's /dev/shm, a real one does not
-    session = open_session(
-        ZenohOptions(mode="client", connect=[endpoint], shared_memory=False), timeout=60
-    )
+    options = ZenohOptions(mode="client", connect=[endpoint], shared_memory=False)
+    node = Node("laptop_probe", options, handle_signals=False, open_timeout=60)
     drone = DroneWrapper(
-        "drone", endpoint, timeout=60, session=session, cameras=CAMERAS, compressed_images=jpeg
+        "drone", endpoint, timeout=60, node=node, cameras=CAMERAS, compressed_images=jpeg
     )
     frames = dict.fromkeys(CAMERAS, 0)
     stop = threading.Event()
@@ -82,7 +81,7 @@ def main(endpoint: str, jpeg: bool) -> int:
     stop.set()
     reader.join(2)
     drone.close()
-    session.close()
+    node.close()
     return 0
 
 

@@ -3,9 +3,9 @@ time on the runtime's fake bus, and the comparison of their outputs with stored 
 
 Perception: every recorded frontal-camera frame is delivered on a :class:`FakeBus` at its
 recorded time and the real :class:`PerceptionService` (subscriber, newest-frame slot, pipeline,
-publisher) processes it. Controller: the recorded detections are delivered the same way to a
-``latest`` holder and the real :class:`ControlLoop` ticks as the controller node does (on each
-new detections message, or each control period without one), with the bus clock as its time.
+publisher) processes it. Controller: the recorded detections are delivered the same way to the
+real :class:`Controller` (dry run: no aircraft), stepped at each of its wakes and each delivery,
+with the bus clock as its time; every command its control loop gives is recorded.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dronewrapper.record.reader import read_bus
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config as ControllerConfig
-from dronewrapper_controller.loop import ControlLoop
+from dronewrapper_controller.node import Controller
 from dronewrapper_perception.config import Config as PerceptionConfig
 from dronewrapper_perception.node import PerceptionService
 
@@ -97,26 +97,17 @@ def replay_controller(name: str) -> list[dict[str, Any]]:
     config = load_config(
         ControllerConfig,
         REPO / "services/controller/dronewrapper_controller" / "config" / "iris_sim.yaml",
-        data=overrides,
+        data={**overrides, "dry_run": True},
     )
     recorded = list(read_bus(recording(name), [registry.DETECTIONS.key()]))
     t0 = recorded[0].log_time_ns / 1e9
     bus = FakeBus(start=t0)
-    node = FakeNode("controller", bus)
-    detections = node.latest(registry.DETECTIONS)
-    for msg in recorded:
-        bus.schedule(msg.log_time_ns / 1e9, msg.key, msg.payload)
-    loop = ControlLoop(config)
-    period = 1.0 / config.rate_hz
-    out = []
-    while bus.pending:
-        due = bus.clock() + period
-        if bus.next_time() <= due:
-            bus.step()
-        else:
-            bus.run_until(due)
-        now = bus.clock()
-        cmd = loop.tick(now, detections.value, detections.age())
+    controller = Controller(FakeNode("controller", bus), config, None)
+    out: list[dict[str, Any]] = []
+    tick = controller.loop.tick
+
+    def recorded_tick(now: float, detections: Detections | None, age: float) -> Any:
+        cmd = tick(now, detections, age)
         if cmd is not None:
             out.append(
                 {
@@ -128,6 +119,18 @@ def replay_controller(name: str) -> list[dict[str, Any]]:
                     "source_stamp": cmd.source_stamp,
                 }
             )
+        return cmd
+
+    controller.loop.tick = recorded_tick  # type: ignore[method-assign]
+    for msg in recorded:
+        bus.schedule(msg.log_time_ns / 1e9, msg.key, msg.payload)
+    while bus.pending:
+        now = bus.clock()
+        bus.run_until(now)  # what arrives now wakes the controller before its step
+        controller.step(now)
+        wake = max(controller.next_wake(now), now + 1e-6)
+        queued = bus.next_time()
+        bus.clock.advance_to(wake if queued is None else min(wake, queued))
     return out
 
 

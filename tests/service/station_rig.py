@@ -58,7 +58,6 @@ class StationRig:
         self,
         *,
         autopilot: dict[str, Any] | None = None,
-        router_linked: Any = None,
         **config: Any,
     ) -> None:
         self.bus = FakeBus(start=T0)
@@ -67,13 +66,8 @@ class StationRig:
         self.world = WorldObjects(self.bus)
         self.node = FakeNode("station", self.bus)
         self.config = Config(port=0, command_timeout=5.0, **config)
-        self.fleet = Fleet(
-            self.node,
-            self.config,
-            clock=self.bus.clock,
-            sleep=self.run,
-            router_linked=router_linked,
-        )
+        self.bus.clock.stepper = self.run_until  # blocking commands tick the aircraft
+        self.fleet = Fleet(self.node, self.config)
         self.client = AsgiClient(create_app(self.fleet, self.config, Access(TOKEN)))
         self.fleet.discover()
         self.run(2 * TELEMETRY_PERIOD_S)  # the first telemetry and object poses are in
@@ -85,6 +79,11 @@ class StationRig:
     def run(self, seconds: float) -> None:
         """Move the bus ``seconds`` on: the aircraft and the world tick."""
         drive(self.bus, self.bus.clock() + seconds, self.pilot, self.world)
+
+    def run_until(self, until: float, done) -> None:
+        """The bus clock's stepper: the aircraft and the world tick until ``until`` or
+        ``done()``."""
+        drive(self.bus, until, self.pilot, self.world, stop=done)
 
     def http(self, method: str, path: str, body: Any = None, headers: dict | None = None):
         return self.client.http(method, path, body, headers)

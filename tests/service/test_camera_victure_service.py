@@ -1,7 +1,7 @@
 """The camera_victure service in this process, on the fake bus and in virtual time: a real video
 file, the test pattern, truncated and damaged files, calibration, and start-up errors (a fake
 V4L2 capture stands in for a device). Time (pacing, stale frames, timeouts, backoff, status
-period, stamps) is the service's injected clock, so what it does in time is judged exactly,
+period, stamps) is its node's clock (virtual), so what it does in time is judged exactly,
 however loaded the machine. The same service on a real Zenoh router (the wiring):
 tests/integration/test_camera_victure_router.py."""
 

@@ -10,7 +10,6 @@ test_controller_process.py.
 from __future__ import annotations
 
 import itertools
-import threading
 
 import pytest
 from bus_autopilot import BusAutopilot, drive
@@ -55,13 +54,12 @@ class Rig:
             None if self.config.dry_run else BusAutopilot(self.bus, flying=flying, **autopilot)
         )
         self.node = FakeNode("controller", self.bus)
-        clock = self.bus.clock
         commander = (
             None
             if self.config.dry_run
-            else Commander(self.node, name="controller", clock=clock, wall=clock, inline_calls=True)
+            else Commander(self.node, name="controller", inline_calls=True)
         )
-        self.ctl = Controller(self.node, self.config, commander, clock(), clock=clock, wall=clock)
+        self.ctl = Controller(self.node, self.config, commander)
 
     def now(self) -> float:
         return self.bus.clock()
@@ -234,8 +232,8 @@ def test_no_bridge_gives_up_after_ready_timeout_with_exit_1():
     bus = FakeBus(start=T0)
     node = FakeNode("controller", bus)
     config = load_config(Config, None, ["ready_timeout=1.5", "takeoff.on_start=false"])
-    commander = Commander(node, name="c", clock=bus.clock, wall=bus.clock, inline_calls=True)
-    ctl = Controller(node, config, commander, bus.clock(), clock=bus.clock, wall=bus.clock)
+    commander = Commander(node, name="c", inline_calls=True)
+    ctl = Controller(node, config, commander)
     drive(bus, T0 + 10, ctl, stop=lambda: ctl.finished)
     assert ctl.finished and ctl.exit_code == 1
     assert bus.clock() == pytest.approx(T0 + 1.5, abs=0.11)
@@ -248,8 +246,8 @@ def test_a_stop_while_waiting_for_the_bridge_exits_0_at_once():
     bus = FakeBus(start=T0)
     node = FakeNode("controller", bus)
     config = load_config(Config, None, ["ready_timeout=60"])
-    commander = Commander(node, name="c", clock=bus.clock, wall=bus.clock, inline_calls=True)
-    ctl = Controller(node, config, commander, bus.clock(), clock=bus.clock, wall=bus.clock)
+    commander = Commander(node, name="c", inline_calls=True)
+    ctl = Controller(node, config, commander)
     drive(bus, T0 + 1.0, ctl)
     node.stop()
     drive(bus, T0 + 2.0, ctl, stop=lambda: ctl.finished)
@@ -295,14 +293,16 @@ def test_a_stop_during_the_takeoff_lands_at_once():
 
 @pytest.mark.parametrize("dry_run", [True, False])
 def test_run_returns_0_soon_after_a_stop(dry_run):
-    """The real-clock loop (``run``) on a fake node: a stop ends it (bounded join, no timing)."""
+    """The service's loop (``run``) on a fake node, its thread in the bus's virtual time: a
+    stop ends it within one control period."""
     node = FakeNode("controller", FakeBus(start=T0))
     config = load_config(Config, None, [f"dry_run={str(dry_run).lower()}", "ready_timeout=60"])
     result: list[int] = []
-    thread = threading.Thread(target=lambda: result.append(run(node, config)), daemon=True)
-    thread.start()
+    node.clock.thread(lambda: result.append(run(node, config)), "controller").start()
+    node.clock.run_for(1.0)
+    assert result == []
     node.stop()
-    thread.join(10.0)
+    node.clock.run_until(lambda: result, 1 / config.rate_hz + 1e-6, "the loop's exit")
     assert result == [0]
 
 
@@ -331,6 +331,28 @@ def test_a_takeoff_still_refused_when_wait_ready_ends_fails():
     rig.run(20.0)
     assert rig.ctl.finished and rig.ctl.exit_code == 1
     assert rig.now() - start <= 5.5 and rig.autopilot.called("arming") >= 2
+
+
+def test_a_stale_command_is_not_resent_after_a_router_gap():
+    """The commander's stream keeps the link-gap rule (runtime.setpoint_stream): a command
+    older than the bridge's expiry when the route returns is dropped, never resent."""
+    rig = Rig(["takeoff.on_start=false", "on_exit=stop", "detection_timeout=3.0"])
+    rig.feed(blob(520, 200, 15), seconds=1.0)
+    rig.run(1.0)
+    _, stale = rig.velocity()[-1]
+    assert stale.yaw_rate != 0  # tracking: the command the loop holds
+    rig.bus.link_gap(True)  # the router restarts: the bridge's subscriber unreachable
+    rig.run(1.0)
+    assert rig.velocity(since=rig.now() - 0.9) == []  # withheld meanwhile
+    rig.bus.link_gap(False)
+    back = rig.now()
+    rig.run(0.5)
+    assert rig.velocity(since=back) == [], "the stale command was resent after the gap"
+    assert rig.ctl.commander.stream.dropped_after_gap == 1
+    rig.feed(blob(520, 200, 15), seconds=0.2)  # a new detection: a new command goes out
+    rig.run(0.2)
+    assert rig.velocity(since=back)
+    assert rig.stop() == 0
 
 
 def test_a_landing_by_another_commander_stops_the_commanding_until_started_again(caplog):

@@ -61,14 +61,14 @@ def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(rig):
     async def main():
         loop = asyncio.get_running_loop()
 
-        def sleep_while_the_loop_runs(seconds: float) -> None:
+        def step_while_the_loop_runs(until: float, done) -> None:
             nonlocal answered
             asyncio.run_coroutine_threadsafe(asyncio.sleep(0), loop).result(timeout=30)
             answered += 1
-            rig.run(seconds)
+            rig.run_until(until, done)
 
-        options = rig.options(sleep=sleep_while_the_loop_runs)
-        async with Drone(**options) as drone:
+        rig.bus.clock.stepper = step_while_the_loop_runs
+        async with Drone(**rig.options()) as drone:
             rig.run(TELEMETRY_PERIOD_S)
             await drone.takeoff(h=1.0, timeout=20)
             climbed = drone.get_position()[2]
@@ -79,6 +79,43 @@ def test_takeoff_and_land_are_awaitable_and_the_loop_keeps_running(rig):
     assert answered >= 10  # the loop ran at each of the climb's waits
     names = [name for _, name in rig.pilot.calls]
     assert names == ["set_mode", "arming", "land"]
+
+
+def test_cancelling_an_awaited_takeoff_stops_it(rig):
+    """The take-off runs on a worker thread; cancelling its await stops the climb's steps and
+    the setpoint stream before CancelledError reaches the awaiting code. The cancel comes
+    mid-climb: the worker's wait hands it to the event loop and goes on once the loop ran it."""
+    heights: list[float] = []
+
+    async def main():
+        loop = asyncio.get_running_loop()
+        takeoff: asyncio.Task | None = None
+
+        async def cancel_takeoff() -> None:
+            takeoff.cancel()
+            await asyncio.sleep(0)  # the task's wake-up runs first (FIFO): it sets the cancel
+
+        def step(until: float, done) -> None:
+            if not heights and rig.pilot.z > 0.3:
+                heights.append(rig.pilot.z)
+                asyncio.run_coroutine_threadsafe(cancel_takeoff(), loop).result(timeout=30)
+            rig.run_until(until, done)
+
+        rig.bus.clock.stepper = step
+        async with Drone(**rig.options()) as drone:
+            rig.run(TELEMETRY_PERIOD_S)
+            takeoff = asyncio.create_task(drone.takeoff(h=2.0, timeout=20))
+            with pytest.raises(asyncio.CancelledError):
+                await takeoff
+            stopped_at, height = rig.bus.clock(), rig.pilot.z
+            assert drone.commanding is None
+            rig.run(1.0)
+            return stopped_at, height
+
+    stopped_at, height = run(main())
+    assert height == heights[0] < 1.0  # no bus time passed after the cancel: stopped mid-climb
+    assert rig.pilot.setpoints(since=stopped_at + 1e-9) == []  # nothing streamed after
+    assert [name for _, name in rig.pilot.calls] == ["set_mode", "arming"]
 
 
 def test_async_iterators_yield_newest_telemetry_and_stop_cleanly(rig):

@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 from collections.abc import Iterator
 
 import numpy as np
 import pytest
 from bus_autopilot import REFUSED, TELEMETRY_PERIOD_S, SdkRig
 
-from dronewrapper import CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper import Cancelled, CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_ON_GROUND,
@@ -358,3 +359,17 @@ def test_every_getter_says_its_age_and_stale_telemetry_is_warned_once(rig, caplo
         drone.get_position()
     stale = [r for r in caplog.records if "stale after 0.5 s" in r.message]
     assert len(stale) == 1 and "drone/mavros/local_position/pose" in stale[0].message
+
+
+def test_a_cancelled_takeoff_takes_no_further_step_and_stops_commanding(rig):
+    drone = rig.drone
+    cancel = threading.Event()
+    rig.at(0.4, cancel.set)  # another thread's cancel, mid-climb
+    start = rig.bus.clock()
+    with pytest.raises(Cancelled, match="takeoff cancelled"):
+        drone.takeoff(h=2.0, timeout=20, cancel=cancel)
+    assert rig.bus.clock() - start == pytest.approx(0.4, abs=0.03)  # at once, in bus time
+    assert drone.commanding is None and names(rig) == ["set_mode", "arming"]
+    stopped = rig.bus.clock()
+    rig.run(1.0)
+    assert rig.pilot.setpoints(since=stopped + 1e-9) == []

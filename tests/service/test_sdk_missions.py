@@ -96,7 +96,7 @@ def test_a_mission_item_outside_the_envelope_is_refused(sim):
 
 def test_the_aio_front_awaits_the_envelope_and_goto(sim):
     async def ask() -> None:
-        drone = Drone("drone", node=sim.node, clock=sim.bus.clock, sleep=sim.run, wait=False)
+        drone = Drone("drone", node=sim.node, wait=False)
         await drone.connect()
         try:
             envelope = await drone.set_envelope(max_distance=50.0)

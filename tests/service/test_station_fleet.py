@@ -35,6 +35,11 @@ class ClassroomRig(StationRig):
         with self._lock:
             drive(self.bus, self.bus.clock() + seconds, self.pilot, self.world, *self.others)
 
+    def run_until(self, until: float, done) -> None:
+        """The bus clock's stepper (each landing's waits): every aircraft ticks."""
+        with self._lock:
+            drive(self.bus, until, self.pilot, self.world, *self.others, stop=done)
+
 
 def test_land_all_lands_every_drone_and_says_how_each_went():
     rig = ClassroomRig()

@@ -32,13 +32,17 @@ class Station:
         self.bridge = BusBridge(self.bus, self.pair)
         self.node = FakeNode("station", self.bus)
         config = Config(port=0, command_timeout=120.0)
-        self.fleet = Fleet(self.node, config, clock=self.bus.clock, sleep=self.run)
+        self.bus.clock.stepper = self.run_until  # blocking commands fly the simulator
+        self.fleet = Fleet(self.node, config)
         self.client = AsgiClient(create_app(self.fleet, config, Access("operator-token-0123")))
         self.fleet.discover()
         self.run(3.0)
 
     def run(self, seconds: float) -> None:
         drive(self.bus, self.bus.clock() + seconds, self.bridge)
+
+    def run_until(self, until: float, done) -> None:
+        drive(self.bus, until, self.bridge, stop=done)
 
     def post(self, command: str, body: dict | None = None):
         return self.client.http("POST", f"/api/drones/drone/{command}", body or {})

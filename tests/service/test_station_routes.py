@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import threading
 import time
 from pathlib import Path
 
@@ -30,7 +31,6 @@ from dronewrapper.msgs.simulation import WorldLoad, WorldState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.fake import FakeNode
-from support import wait_for
 
 pytestmark = pytest.mark.timeout(60)
 STATIC = (
@@ -291,14 +291,24 @@ def _sent(rig: StationRig, velocity: bool, what: str) -> PositionTarget:
         sp = setpoints[-1][1] if setpoints else None
         return sp if sp is not None and (sp.type_mask != MASK_POSITION) == velocity else None
 
-    return wait_for(newest, 5, what=what)
+    arrived = threading.Event()  # set by the publication itself (the fake bus delivers at once)
+    sub = rig.bus.subscribe(
+        registry.SETPOINT_RAW_LOCAL.key("drone"),
+        lambda _key, _payload: newest() is not None and arrived.set(),
+    )
+    try:
+        if newest() is None:
+            assert arrived.wait(5), f"timed out waiting for {what}"
+        return newest()
+    finally:
+        sub.undeclare()
 
 
 def test_telemetry_socket_pushes_snapshots(rig: StationRig) -> None:
     with rig.websocket("/ws/telemetry") as ws:
         first, second = _telemetry(ws), _telemetry(ws)
     assert first["role"] == "operator"
-    assert second["t"] > first["t"]
+    assert first["t"] == second["t"] == rig.bus.clock.time()  # the node's clock: bus time
     drone = second["drones"]["drone"]
     assert drone["pose"]["z"] == POSE[2] and drone["pose"]["stale"] is False
     assert second["fleet"][0]["health"] == "ok"
@@ -307,12 +317,11 @@ def test_telemetry_socket_pushes_snapshots(rig: StationRig) -> None:
 
 def test_the_page_is_told_when_the_stations_router_is_unreachable() -> None:
     """A green badge beside "no drone online" hid a lost router: the snapshot says it."""
-    linked = [True]
-    rig = StationRig(router_linked=lambda: linked[0])
+    rig = StationRig()
     try:
         with rig.websocket("/ws/telemetry") as ws:
             assert _telemetry(ws)["router"]["linked"] is True
-            linked[0] = False
+            rig.bus.link_gap(True)  # the station's node loses its router
             rig.fleet.discover()
             router = _telemetry(ws)["router"]
         assert router["linked"] is False and router["endpoint"]
@@ -422,8 +431,10 @@ def test_video_is_latest_only_one_frame_in_flight(rig: StationRig) -> None:
     camera = FakeNode("camera", rig.bus)
     pub = camera.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
     assert not pub.watched()  # nobody watches: the sim would not even encode
+    watched = threading.Event()
+    pub.on_matching(lambda matching: matching and watched.set())
     with rig.websocket("/ws/video/drone/frontal") as ws:
-        wait_for(pub.watched, 5, what="the station to subscribe once the socket is accepted")
+        assert watched.wait(5), "the station to subscribe once the socket is accepted"
         pub.put(_frame(1))
         header, jpeg = _unpack(ws.recv(timeout=5))
         assert header["ns"] == "drone" and header["camera"] == "frontal"

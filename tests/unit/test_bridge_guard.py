@@ -7,15 +7,8 @@ import pytest
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.caller import commander_attachment, handling
+from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.security.guard import CommandGuard
-
-
-class Clock:
-    def __init__(self) -> None:
-        self.now = 100.0
-
-    def __call__(self) -> float:
-        return self.now
 
 
 def as_commander(name: str):
@@ -32,7 +25,7 @@ def test_off_admits_everyone():
 
 
 def test_holder_only_until_taken_over():
-    clock, changes = Clock(), []
+    clock, changes = VirtualClock(monotonic=100.0), []
     guard = CommandGuard(enabled=True, ttl_s=10.0, on_change=lambda: changes.append(1), clock=clock)
     with as_commander("alice"):
         assert guard.admit_setpoint()
@@ -49,7 +42,7 @@ def test_holder_only_until_taken_over():
     assert (guard.refused_setpoints, guard.refused_commands) == (1, 1)
     with as_commander("alice"):
         assert not guard.admit_setpoint()
-    clock.now += 10.0  # carol silent for the ttl: the lease lapses
+    clock.advance_to(clock() + 10.0)  # carol silent for the ttl: the lease lapses
     assert guard.holder() == ""
     with as_commander("alice"):
         assert guard.admit_setpoint()
@@ -60,7 +53,7 @@ def test_holder_only_until_taken_over():
 
 
 def test_commands_without_a_name_are_one_anonymous_commander():
-    guard = CommandGuard(enabled=True, ttl_s=10.0, clock=Clock())
+    guard = CommandGuard(enabled=True, ttl_s=10.0, clock=VirtualClock(monotonic=100.0))
     assert guard.admit_setpoint()  # e.g. the on-board controller (no attachment)
     assert guard.holder() == "anonymous"
     with as_commander("alice"):

@@ -330,7 +330,7 @@ def _captured(n: int) -> Captured:
 def test_slot_keeps_only_the_newest():
     slot = FrameSlot()
     for n in range(5):
-        slot.put(_captured(n))
+        slot.update(_captured(n))
     number, item = slot.take(0.0, 0)
     assert (number, item.number) == (5, 4)
     assert slot.take(0.01, number) is None
@@ -338,9 +338,9 @@ def test_slot_keeps_only_the_newest():
 
 def test_lossless_slot_waits_until_taken():
     clock = VirtualClock()
-    slot, stop = FrameSlot(clock), threading.Event()
-    slot.put(_captured(0), wait_taken=stop)
-    second = clock.thread(lambda: slot.put(_captured(1), wait_taken=stop), "second")
+    slot, stop = FrameSlot(clock=clock), threading.Event()
+    slot.update(_captured(0), wait_taken=stop)
+    second = clock.thread(lambda: slot.update(_captured(1), wait_taken=stop), "second")
     second.start()
     clock.run_for(5.0)
     assert not second.finished  # blocked: frame 0 not taken yet, 5 s (virtual) on
@@ -351,9 +351,9 @@ def test_lossless_slot_waits_until_taken():
 
 def test_lossless_slot_gives_up_waiting_on_stop():
     clock = VirtualClock()
-    slot, stop = FrameSlot(clock), threading.Event()
-    slot.put(_captured(0), wait_taken=stop)
-    second = clock.thread(lambda: slot.put(_captured(1), wait_taken=stop), "second")
+    slot, stop = FrameSlot(clock=clock), threading.Event()
+    slot.update(_captured(0), wait_taken=stop)
+    second = clock.thread(lambda: slot.update(_captured(1), wait_taken=stop), "second")
     second.start()
     clock.run_for(1.0)
     stop.set()

@@ -64,12 +64,18 @@ def test_inputs_get_the_time_and_effects_run_outside_the_lock():
 def test_a_call_returns_when_another_threads_input_ends_its_operation():
     core = EchoCore()
     driver = CoreDriver(core, lambda out: None, threading.Event())
-    feeder = threading.Timer(0.05, lambda: driver.feed(core.on_input, "ok"))
+    started = threading.Event()
+
+    def operation() -> Steps:
+        started.set()  # the call runs its operation: the input may come now
+        return (yield from wait_for_answer(core))
+
+    feeder = threading.Thread(
+        target=lambda: started.wait(10) and driver.feed(core.on_input, "ok"), daemon=True
+    )
     feeder.start()
-    try:
-        assert driver.call(wait_for_answer(core)) == "ok"
-    finally:
-        feeder.cancel()
+    assert driver.call(operation()) == "ok"
+    feeder.join(10)
     assert core.operations.finished == 1 and len(core.operations) == 0
 
 

@@ -87,14 +87,17 @@ def test_views_of_each_kind_of_message():
     key = registry.LOCAL_POSE.key("drone")
     got = views(key, registry.LOCAL_POSE, pose)
     assert [(v.topic, v.schema.name) for v in got] == [
-        ("/" + key, "dronewrapper/PoseStamped"),
+        ("/" + key, "dronewrapper/v1/PoseStamped"),
         ("/tf", "foxglove.FrameTransform"),
     ]
     assert json.loads(got[0].data)["pose"]["position"] == {"x": 1.0, "y": 2.0, "z": 3.0}
 
     key = registry.DETECTIONS.key("drone")
     got = views(key, registry.DETECTIONS, _detections(T0))
-    assert [v.schema.name for v in got] == ["dronewrapper/Detections", "foxglove.ImageAnnotations"]
+    assert [v.schema.name for v in got] == [
+        "dronewrapper/v1/Detections",
+        "foxglove.ImageAnnotations",
+    ]
 
     key = registry.GLOBAL_POSITION.key("drone")
     got = views(key, registry.GLOBAL_POSITION, NavSatFix(latitude=47.4, longitude=8.5))
@@ -150,7 +153,7 @@ def test_recording_reads_back_with_the_mcap_reader(tmp_path):
             "foxglove.RawImage",
             "foxglove.FrameTransform",
             "foxglove.ImageAnnotations",
-            "dronewrapper/ControllerStatus",
+            "dronewrapper/v1/ControllerStatus",
         }
         assert counts[topics["drone/mavros/local_position/pose"].id] == 10
         assert counts[topics["/drone/controller/status"].id] == 10

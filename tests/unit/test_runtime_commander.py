@@ -30,7 +30,7 @@ SETPOINTS = registry.SETPOINT_RAW_LOCAL.key("drone")
 def commander(bus: FakeBus, **kwargs) -> Commander:
     node = FakeNode("svc", bus)
     kwargs.setdefault("inline_calls", True)
-    return Commander(node, name="svc", clock=bus.clock, wall=bus.clock, **kwargs)
+    return Commander(node, name="svc", **kwargs)
 
 
 def published(bus: FakeBus) -> list:
@@ -127,7 +127,7 @@ def test_calls_on_the_worker_thread_do_not_block_the_caller():
     bridge = FakeNode("bridge", bus)
     bridge.serve(registry.ARMING, slow_arming)
     bridge.serve(registry.SET_MODE, lambda _req: SetModeResult(mode_sent=True, result=0))
-    c = Commander(node, name="svc", clock=bus.clock, wall=bus.clock)
+    c = Commander(node, name="svc")
     try:
         pending = c.call(registry.ARMING, CommandBool(value=True), T0, timeout=5.0)
         assert not pending.done(T0)  # returned while the server still works

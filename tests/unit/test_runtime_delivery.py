@@ -7,16 +7,10 @@ import logging
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime.caller import commander_attachment, current_commander
+from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 
 KEY = "drone/mavros/state"
-
-
-class Clock:
-    now = 0.0
-
-    def __call__(self) -> float:
-        return self.now
 
 
 def test_a_sample_is_decoded_with_its_commander_recorded():
@@ -31,7 +25,7 @@ def test_a_sample_is_decoded_with_its_commander_recorded():
 
 
 def test_failures_are_counted_per_key_and_logged_at_most_once_a_period(caplog):
-    clock = Clock()
+    clock = VirtualClock(monotonic=0.0)
     errors = SampleErrors(logging.getLogger("test"), clock=clock, period=5.0)
 
     def fail(msg: State) -> None:
@@ -42,7 +36,7 @@ def test_failures_are_counted_per_key_and_logged_at_most_once_a_period(caplog):
         for _ in range(3):
             deliver(KEY, b"\xc1", None)  # not msgpack
             deliver(KEY, codec.encode(State()), None)
-        clock.now = 5.0
+        clock.advance_to(5.0)
         deliver(KEY, b"\xc1", None)
     assert errors.decode[KEY] == 4 and errors.callback[KEY] == 3
     lines = [r.getMessage() for r in caplog.records]

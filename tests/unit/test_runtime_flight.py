@@ -48,7 +48,7 @@ def rig(**autopilot) -> tuple[FakeBus, BusAutopilot, Commander]:
     pilot = BusAutopilot(bus, **{"flying": False, **autopilot})
     pilot.tick(T0)
     node = FakeNode("svc", bus)
-    commander = Commander(node, name="svc", clock=bus.clock, wall=bus.clock, inline_calls=True)
+    commander = Commander(node, name="svc", inline_calls=True)
     pilot.tick(T0)
     return bus, pilot, commander
 

@@ -1,112 +1,99 @@
-"""The setpoint stream: one thread, >= 20 Hz, until changed or stopped; the optional deadman."""
+"""The SDK's setpoint stream: one thread, >= 20 Hz, until changed or stopped; the optional
+deadman. In virtual time: every period and stamp below is exact."""
 
 from __future__ import annotations
 
-import itertools
 import threading
-import time
 
 import pytest
 
 from dronewrapper.msgs.mavros import PositionTarget
+from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.setpoints import velocity_target
 from dronewrapper.streamer import SetpointStreamer
-from support import wait_for
 
 
 class Recorder:
-    def __init__(self) -> None:
+    """Every publication: (clock time, message, seq, thread name)."""
+
+    def __init__(self, clock: VirtualClock) -> None:
+        self.clock = clock
         self.sent: list[tuple[float, PositionTarget, int, str]] = []
-        self.lock = threading.Lock()
 
     def __call__(self, msg: PositionTarget) -> None:
-        with self.lock:
-            name = threading.current_thread().name
-            self.sent.append((time.monotonic(), msg, msg.header.seq, name))
+        name = threading.current_thread().name
+        self.sent.append((self.clock(), msg, msg.header.seq, name))
 
-    def count(self) -> int:
-        with self.lock:
-            return len(self.sent)
-
-    def since(self, index: int) -> list[PositionTarget]:
-        with self.lock:
-            return [msg for _, msg, *_ in self.sent[index:]]
+    def times(self, since: int = 0) -> list[float]:
+        return [round(t - 1000.0, 9) for t, *_ in self.sent[since:]]
 
 
-def test_set_publishes_at_once_then_repeats_at_rate():
-    rec = Recorder()
-    stream = SetpointStreamer(rec, rate_hz=30.0, name="stream-under-test")
+@pytest.fixture
+def clock() -> VirtualClock:
+    return VirtualClock(monotonic=1000.0)
+
+
+def test_set_publishes_at_once_then_repeats_at_rate(clock):
+    rec = Recorder(clock)
+    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0, name="stream-under-test")
     try:
-        target = velocity_target(0, 0, 0, 1.0, stamp=42.0)
-        before = time.monotonic()
-        stream.set(target)
-        returned = time.monotonic()
-        # the first one went out on the caller's thread, before set() returned
-        first_at, _, first_seq, first_thread = rec.sent[0]
-        assert before <= first_at <= returned and first_seq == 0
-        assert first_thread == threading.current_thread().name
-        wait_for(lambda: rec.count() >= 31, 10.0, what="30 repetitions")
-        with rec.lock:
-            sent = list(rec.sent)
-        # 30 Hz nominal, >= 20 Hz required: the median gap is robust to a few scheduler stalls
-        gaps = sorted(b[0] - a[0] for a, b in itertools.pairwise(sent))
-        median = gaps[len(gaps) // 2]
-        assert median <= 1.0 / 20.0, f"median gap {median * 1000:.0f} ms"
-        assert all(msg.yaw_rate == 1.0 and msg.header.stamp == 42.0 for _, msg, *_ in sent)
-        assert [seq for _, _, seq, _ in sent] == list(range(len(sent)))
-        assert {name for *_, name in sent[1:]} == {"stream-under-test"}
+        stream.set(velocity_target(0, 0, 0, 1.0, stamp=42.0))
+        assert rec.sent[0][3] == threading.current_thread().name  # out on the caller's thread
+        clock.run_for(0.1)
+        assert rec.times() == pytest.approx([0.0, 0.02, 0.04, 0.06, 0.08, 0.1])
+        assert all(msg.yaw_rate == 1.0 and msg.header.stamp == 42.0 for _, msg, *_ in rec.sent)
+        assert [seq for _, _, seq, _ in rec.sent] == list(range(6))
+        assert {name for *_, name in rec.sent[1:]} == {"stream-under-test"}
     finally:
         stream.close()
 
 
-def test_changed_setpoint_replaces_the_old_one():
-    rec = Recorder()
-    stream = SetpointStreamer(rec, rate_hz=50.0)
+def test_changed_setpoint_replaces_the_old_one_and_restarts_the_period(clock):
+    rec = Recorder(clock)
+    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0)
     try:
         stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
-        wait_for(lambda: rec.count() >= 3, 10.0, what="the first setpoint repeated")
+        clock.run_for(0.05)
         stream.set(velocity_target(0, 0, 0, -1, stamp=2.0))
-        mark = rec.count()  # set() published under the stream's lock: all later ones are new
-        wait_for(lambda: rec.count() >= mark + 5, 10.0, what="the new setpoint repeated")
-        later = rec.since(mark)
-        assert all(msg.yaw_rate == -1 and msg.velocity.x == 0 for msg in later)
+        mark = len(rec.sent)
+        clock.run_for(0.1)
+        assert rec.times(mark - 1) == pytest.approx([0.05, 0.07, 0.09, 0.11, 0.13, 0.15])
+        assert all(msg.yaw_rate == -1 for _, msg, *_ in rec.sent[mark - 1 :])
     finally:
         stream.close()
 
 
-def test_stop_stops_publishing_and_a_new_set_resumes():
-    rec = Recorder()
-    stream = SetpointStreamer(rec, rate_hz=50.0)
+def test_stop_stops_publishing_and_a_new_set_resumes(clock):
+    rec = Recorder(clock)
+    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0)
     try:
         stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
-        wait_for(lambda: rec.count() >= 3, 10.0, what="streaming")
+        clock.run_for(0.05)
         stream.stop()
         assert not stream.active
-        mark = rec.count()  # stop() took the stream's lock: nothing is half-published
-        time.sleep(0.4)  # 20 periods
-        assert rec.count() == mark
+        mark = len(rec.sent)
+        clock.run_for(0.4)  # 20 periods
+        assert len(rec.sent) == mark
         stream.set(velocity_target(0, 1, 0, 0, stamp=1.0))
-        wait_for(lambda: rec.count() >= mark + 5, 10.0, what="stream resumed")
+        clock.run_for(0.1)
+        assert len(rec.sent) == mark + 6
     finally:
         stream.close()
 
 
-def test_idle_timeout_is_a_deadman():
-    rec = Recorder()
-    stream = SetpointStreamer(rec, rate_hz=50.0, idle_timeout=0.3)
+def test_idle_timeout_is_a_deadman(clock):
+    rec = Recorder(clock)
+    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0, idle_timeout=0.3)
     try:
         stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
-        wait_for(lambda: not stream.active, 10.0, what="deadman")
-        mark = rec.count()
-        time.sleep(0.3)
-        assert rec.count() == mark
-        # the last repetition went out within the 0.3 s deadman (3x margin for a busy machine)
-        assert rec.sent[-1][0] - rec.sent[0][0] < 1.0
+        clock.run_for(1.0)
+        assert not stream.active
+        assert rec.times()[-1] == pytest.approx(0.3)  # the last repetition within 0.3 s
     finally:
         stream.close()
 
 
-def test_publish_errors_are_counted_not_fatal():
+def test_publish_errors_are_counted_not_fatal(clock):
     calls = []
 
     def flaky(msg: PositionTarget) -> None:
@@ -114,10 +101,11 @@ def test_publish_errors_are_counted_not_fatal():
         if len(calls) % 2:
             raise RuntimeError("transport hiccup")
 
-    stream = SetpointStreamer(flaky, rate_hz=50.0)
+    stream = SetpointStreamer(flaky, clock=clock, rate_hz=50.0)
     try:
         stream.set(velocity_target(0, 0, 0, 0, stamp=1.0))
-        wait_for(lambda: stream.published >= 3 and stream.errors >= 3, 10.0, what="retries")
+        clock.run_for(0.1)
+        assert stream.published == 3 and stream.core.errors == 3
     finally:
         stream.close()
 

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 
-from dronewrapper_ground_station.frames import FrameSlot, pack
+from dronewrapper.msgs.sensor import CompressedImage
+from dronewrapper.msgs.std import Header
+from dronewrapper_ground_station.frames import pack
 from dronewrapper_ground_station.teleop import DeadMan
 
 
@@ -34,35 +36,10 @@ def test_release_says_whether_to_stop() -> None:
     assert deadman.owner is None and not deadman.expired(10.0)
 
 
-def test_slot_keeps_only_the_newest_frame() -> None:
-    slot, told = FrameSlot(), []
-    assert slot.latest() is None
-    slot.listen(lambda: told.append(1))
-    for k in range(5):
-        slot.put(1000.0 + k, bytes([k]), received=float(k))
-    frame = slot.latest()
-    assert (frame.seq, frame.stamp, frame.jpeg) == (5, 1004.0, b"\x04")
-    assert len(told) == 5
-
-
-def test_unlisten() -> None:
-    slot, told = FrameSlot(), []
-
-    def notify() -> None:
-        told.append(1)
-
-    slot.listen(notify)
-    assert slot.listeners == 1
-    slot.unlisten(notify)
-    slot.put(1.0, b"x", 0.0)
-    assert told == [] and slot.listeners == 0
-
-
 def test_pack_is_length_header_then_jpeg() -> None:
-    slot = FrameSlot()
-    slot.put(12.5, b"\xff\xd8jpeg", 0.0)
+    frame = CompressedImage(header=Header(stamp=12.5), format="jpeg", data=b"\xff\xd8jpeg")
     header = json.dumps({"seq": 1}).encode()
-    data = pack(slot.latest(), header)
+    data = pack(frame, header)
     n = int.from_bytes(data[:4], "big")
     assert json.loads(data[4 : 4 + n]) == {"seq": 1}
     assert data[4 + n :] == b"\xff\xd8jpeg"

@@ -31,7 +31,7 @@ def test_commands_outrank_telemetry_which_outranks_images():
 
 def test_a_topic_with_an_unknown_class_is_refused():
     with pytest.raises(ValueError, match="transport must be one of"):
-        registry.Topic("x/{ns}", registry.State, transport="fast")
+        registry.Topic("x/{ns}", type=registry.State, transport="fast")
 
 
 @pytest.mark.parametrize(

@@ -36,9 +36,19 @@ def decode(msg_type: type[T], data: bytes | bytearray | memoryview) -> T:
     return decoder(msg_type).decode(data)
 
 
+SCHEMA_VERSION = 1
+"""The version of the message schemas (the msgs package): a change that old readers cannot
+decode (a field removed, renamed or retyped) takes the next number."""
+
+
 def schema_name(msg_type: type) -> str:
-    """The schema id carried in the Zenoh encoding, e.g. ``dronewrapper/PoseStamped``."""
-    return f"dronewrapper/{msg_type.__name__}"
+    """The schema id carried in the Zenoh encoding and in recordings, e.g.
+    ``dronewrapper/v1/PoseStamped``.
+
+    Messages are decoded by their key's registry type, never by this name, so recordings
+    whose names carry no version (``dronewrapper/PoseStamped``) decode too.
+    """
+    return f"dronewrapper/v{SCHEMA_VERSION}/{msg_type.__name__}"
 
 
 def to_builtins(msg: Any) -> Any:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import re
 import string
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, dataclass, field
 from functools import cached_property
 from typing import Any, Generic, TypeVar
 
@@ -78,6 +78,22 @@ Rep = TypeVar("Rep")
 
 DEFAULT_NAMESPACE = "drone"
 CAMERAS = ("cam_frontal", "cam_ventral")
+CAMERA_SHORT_NAMES = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
+"""The SDK's camera names (``get_image("frontal")``) and the key names they stand for."""
+
+
+def camera_key_name(camera: str) -> str:
+    """The key name (``cam_frontal``) of a camera given by short or key name.
+
+    Raises:
+        ValueError: an unknown camera.
+    """
+    if camera in CAMERA_SHORT_NAMES:
+        return CAMERA_SHORT_NAMES[camera]
+    if camera in CAMERAS:
+        return camera
+    raise ValueError(f"unknown camera {camera!r}: use 'frontal' or 'ventral'")
+
 
 _FIELD_VALUE = r"[A-Za-z0-9_\-.]+"  # one chunk: no '/', no wildcard
 
@@ -145,8 +161,10 @@ TRANSPORTS = (COMMAND, TELEMETRY, STREAM)
 @dataclass(frozen=True)
 class Topic(_Template, Generic[T]):
     """A pub/sub key: template, message type, nominal rate (Hz, 0 = event-driven), publishers,
-    and its transport class (``command``, ``telemetry`` or ``stream``)."""
+    and its transport class (``command``, ``telemetry`` or ``stream``); all but the template are
+    keyword entries."""
 
+    _: KW_ONLY
     type: type[T] = field(default=object)  # type: ignore[assignment]
     rate_hz: float = 0.0
     publishers: tuple[str, ...] = ()
@@ -160,8 +178,9 @@ class Topic(_Template, Generic[T]):
 
 @dataclass(frozen=True)
 class Service(_Template, Generic[Req, Rep]):
-    """A request/reply key served by a Zenoh queryable."""
+    """A request/reply key served by a Zenoh queryable (keyword entries after the template)."""
 
+    _: KW_ONLY
     request: type[Req] = field(default=object)  # type: ignore[assignment]
     reply: type[Rep] = field(default=object)  # type: ignore[assignment]
     server: str = ""
@@ -172,216 +191,339 @@ class Service(_Template, Generic[Req, Rep]):
 class Liveliness(_Template):
     """A liveliness token key: present while the process holding it is alive."""
 
+    _: KW_ONLY
     doc: str = ""
 
 
 # ---- telemetry (bridge -> everyone) ----
-STATE = Topic("{ns}/mavros/state", State, 1.0, ("bridge",), "autopilot state, on change too")
+STATE = Topic(
+    "{ns}/mavros/state",
+    type=State,
+    rate_hz=1.0,
+    publishers=("bridge",),
+    doc="autopilot state, on change too",
+)
 EXTENDED_STATE = Topic(
-    "{ns}/mavros/extended_state", ExtendedState, 2.0, ("bridge",), "landed state, on change too"
+    "{ns}/mavros/extended_state",
+    type=ExtendedState,
+    rate_hz=2.0,
+    publishers=("bridge",),
+    doc="landed state, on change too",
 )
 LOCAL_POSE = Topic(
-    "{ns}/mavros/local_position/pose", PoseStamped, 30.0, ("bridge",), "pose, local ENU"
+    "{ns}/mavros/local_position/pose",
+    type=PoseStamped,
+    rate_hz=30.0,
+    publishers=("bridge",),
+    doc="pose, local ENU",
 )
 VELOCITY_BODY = Topic(
     "{ns}/mavros/local_position/velocity_body",
-    TwistStamped,
-    30.0,
-    ("bridge",),
-    "velocity and angular rates, body FLU",
+    type=TwistStamped,
+    rate_hz=30.0,
+    publishers=("bridge",),
+    doc="velocity and angular rates, body FLU",
 )
 VELOCITY_LOCAL = Topic(
     "{ns}/mavros/local_position/velocity_local",
-    TwistStamped,
-    30.0,
-    ("bridge",),
-    "velocity, local ENU",
+    type=TwistStamped,
+    rate_hz=30.0,
+    publishers=("bridge",),
+    doc="velocity, local ENU",
 )
 GLOBAL_POSITION = Topic(
-    "{ns}/mavros/global_position/global", NavSatFix, 5.0, ("bridge",), "WGS-84 fix"
+    "{ns}/mavros/global_position/global",
+    type=NavSatFix,
+    rate_hz=5.0,
+    publishers=("bridge",),
+    doc="WGS-84 fix",
 )
-BATTERY = Topic("{ns}/mavros/battery", BatteryState, 1.0, ("bridge",), "battery, 0..1")
+BATTERY = Topic(
+    "{ns}/mavros/battery",
+    type=BatteryState,
+    rate_hz=1.0,
+    publishers=("bridge",),
+    doc="battery, 0..1",
+)
 STATUSTEXT = Topic(
-    "{ns}/mavros/statustext/recv", StatusText, 0.0, ("bridge",), "autopilot text messages"
+    "{ns}/mavros/statustext/recv",
+    type=StatusText,
+    rate_hz=0.0,
+    publishers=("bridge",),
+    doc="autopilot text messages",
 )
 
 # ---- commands (SDK, controller -> bridge) ----
 SETPOINT_RAW_LOCAL = Topic(
     "{ns}/mavros/setpoint_raw/local",
-    PositionTarget,
-    20.0,
-    ("sdk", "controller"),
-    "setpoint, ENU/FLU; re-published at >= 20 Hz while commanding",
-    COMMAND,
+    type=PositionTarget,
+    rate_hz=20.0,
+    publishers=("sdk", "controller"),
+    doc="setpoint, ENU/FLU; re-published at >= 20 Hz while commanding",
+    transport=COMMAND,
 )
 
 # ---- raw MAVLink for a ground station (bridge_mavlink's gcs_over_zenoh) ----
 MAVLINK_FROM_AUTOPILOT = Topic(
     "{ns}/mavlink/from_autopilot",
-    MavlinkFrames,
-    0.0,
-    ("bridge",),
-    "the autopilot's MAVLink frames, for a ground station (when enabled)",
+    type=MavlinkFrames,
+    rate_hz=0.0,
+    publishers=("bridge",),
+    doc="the autopilot's MAVLink frames, for a ground station (when enabled)",
 )
 MAVLINK_TO_AUTOPILOT = Topic(
     "{ns}/mavlink/to_autopilot",
-    MavlinkFrames,
-    0.0,
-    ("gcs",),
-    "a ground station's MAVLink frames for the autopilot (when enabled)",
-    COMMAND,
+    type=MavlinkFrames,
+    rate_hz=0.0,
+    publishers=("gcs",),
+    doc="a ground station's MAVLink frames for the autopilot (when enabled)",
+    transport=COMMAND,
 )
 
 # ---- cameras and perception ----
 IMAGE_RAW = Topic(
     "{ns}/{camera}/image_raw",
-    Image,
-    30.0,
-    ("sim", "camera_victure", "bridge_tello"),
-    "bgr8",
-    STREAM,
+    type=Image,
+    rate_hz=30.0,
+    publishers=("sim", "camera_victure", "bridge_tello"),
+    doc="bgr8",
+    transport=STREAM,
 )
 IMAGE_COMPRESSED = Topic(
     "{ns}/{camera}/image_raw/compressed",
-    CompressedImage,
-    30.0,
-    ("sim", "camera_victure", "bridge_tello"),
-    "JPEG, on request/config",
-    STREAM,
+    type=CompressedImage,
+    rate_hz=30.0,
+    publishers=("sim", "camera_victure", "bridge_tello"),
+    doc="JPEG, on request/config",
+    transport=STREAM,
 )
 CAMERA_INFO = Topic(
     "{ns}/{camera}/camera_info",
-    CameraInfo,
-    30.0,
-    ("camera_victure",),
-    "intrinsics of the published frames, with each frame (when calibrated)",
+    type=CameraInfo,
+    rate_hz=30.0,
+    publishers=("camera_victure",),
+    doc="intrinsics of the published frames, with each frame (when calibrated)",
 )
 CAMERA_STATUS = Topic(
-    "{ns}/{camera}/camera_status", CameraStatus, 1.0, ("camera_victure",), "camera service state"
+    "{ns}/{camera}/camera_status",
+    type=CameraStatus,
+    rate_hz=1.0,
+    publishers=("camera_victure",),
+    doc="camera service state",
 )
 DETECTIONS = Topic(
-    "{ns}/perception/detections", Detections, 0.0, ("perception",), "per processed frame"
+    "{ns}/perception/detections",
+    type=Detections,
+    rate_hz=0.0,
+    publishers=("perception",),
+    doc="per processed frame",
 )
 DETECTIONS_DEBUG_IMAGE = Topic(
     "{ns}/perception/debug_image/compressed",
-    CompressedImage,
-    0.0,
-    ("perception",),
-    "annotated frame for people to watch (optional)",
-    STREAM,
+    type=CompressedImage,
+    rate_hz=0.0,
+    publishers=("perception",),
+    doc="annotated frame for people to watch (optional)",
+    transport=STREAM,
 )
 CONTROLLER_STATUS = Topic(
-    "{ns}/controller/status", ControllerStatus, 5.0, ("controller",), "controller state"
+    "{ns}/controller/status",
+    type=ControllerStatus,
+    rate_hz=5.0,
+    publishers=("controller",),
+    doc="controller state",
 )
 
 # ---- simulator ground truth and world control ----
 SIM_GROUND_TRUTH = Topic(
-    "{ns}/sim/ground_truth", PoseStamped, 30.0, ("sim",), "true vehicle pose, local ENU"
+    "{ns}/sim/ground_truth",
+    type=PoseStamped,
+    rate_hz=30.0,
+    publishers=("sim",),
+    doc="true vehicle pose, local ENU",
 )
 SIM_POSE_SOURCE = Topic(
     "{ns}/sim/pose_source",
-    PoseSourceStatus,
-    1.0,
-    ("sim",),
-    "where the vehicle pose comes from (an external autopilot's truth) and its age in frames",
+    type=PoseSourceStatus,
+    rate_hz=1.0,
+    publishers=("sim",),
+    doc="where the vehicle pose comes from (an external autopilot's truth) and its age in frames",
 )
 SIM_OBJECT_POSE = Topic(
-    "sim/objects/{name}/pose", PoseStamped, 10.0, ("sim",), "true pose of a world object, ENU"
+    "sim/objects/{name}/pose",
+    type=PoseStamped,
+    rate_hz=10.0,
+    publishers=("sim",),
+    doc="true pose of a world object, ENU",
 )
 SIM_OBJECT_CMD_VEL = Topic(
     "sim/objects/{name}/cmd_vel",
-    Twist,
-    0.0,
-    ("tests", "teleop"),
-    "teleoperates an object",
-    COMMAND,
+    type=Twist,
+    rate_hz=0.0,
+    publishers=("tests", "teleop"),
+    doc="teleoperates an object",
+    transport=COMMAND,
 )
 
 # ---- replay ----
 CLOCK = Topic(
     "clock",
-    Header,
-    0.0,
-    ("replay",),
-    "recorded time during a replay (header.stamp, s since the epoch), like ROS /clock",
+    type=Header,
+    rate_hz=0.0,
+    publishers=("replay",),
+    doc="recorded time during a replay (header.stamp, s since the epoch), like ROS /clock",
 )
 
 # ---- services ----
-ARMING = Service("{ns}/mavros/cmd/arming", CommandBool, CommandBoolResult, "bridge", "arm/disarm")
-TAKEOFF = Service("{ns}/mavros/cmd/takeoff", CommandTOL, CommandTOLResult, "bridge", "take off")
-LAND = Service("{ns}/mavros/cmd/land", CommandTOL, CommandTOLResult, "bridge", "land here")
-SET_MODE = Service("{ns}/mavros/set_mode", SetMode, SetModeResult, "bridge", "change mode")
-PARAM_GET = Service("{ns}/mavros/param/get", ParamGet, ParamGetResult, "bridge", "read param")
-PARAM_SET = Service("{ns}/mavros/param/set", ParamSet, ParamSetResult, "bridge", "write param")
+ARMING = Service(
+    "{ns}/mavros/cmd/arming",
+    request=CommandBool,
+    reply=CommandBoolResult,
+    server="bridge",
+    doc="arm/disarm",
+)
+TAKEOFF = Service(
+    "{ns}/mavros/cmd/takeoff",
+    request=CommandTOL,
+    reply=CommandTOLResult,
+    server="bridge",
+    doc="take off",
+)
+LAND = Service(
+    "{ns}/mavros/cmd/land",
+    request=CommandTOL,
+    reply=CommandTOLResult,
+    server="bridge",
+    doc="land here",
+)
+SET_MODE = Service(
+    "{ns}/mavros/set_mode", request=SetMode, reply=SetModeResult, server="bridge", doc="change mode"
+)
+PARAM_GET = Service(
+    "{ns}/mavros/param/get",
+    request=ParamGet,
+    reply=ParamGetResult,
+    server="bridge",
+    doc="read param",
+)
+PARAM_SET = Service(
+    "{ns}/mavros/param/set",
+    request=ParamSet,
+    reply=ParamSetResult,
+    server="bridge",
+    doc="write param",
+)
 COMMAND_LEASE = Service(
-    "{ns}/dronewrapper/lease", LeaseRequest, LeaseReply, "bridge", "take or give back the lease"
+    "{ns}/dronewrapper/lease",
+    request=LeaseRequest,
+    reply=LeaseReply,
+    server="bridge",
+    doc="take or give back the lease",
 )
 
 # ---- missions, home and the safety envelope (MAVROS's mission/geofence/home keys) ----
 MISSION_WAYPOINTS = Topic(
-    "{ns}/mavros/mission/waypoints", WaypointList, 0.5, ("bridge",), "the mission, on change too"
+    "{ns}/mavros/mission/waypoints",
+    type=WaypointList,
+    rate_hz=0.5,
+    publishers=("bridge",),
+    doc="the mission, on change too",
 )
 MISSION_REACHED = Topic(
-    "{ns}/mavros/mission/reached", WaypointReached, 0.0, ("bridge",), "a mission item reached"
+    "{ns}/mavros/mission/reached",
+    type=WaypointReached,
+    rate_hz=0.0,
+    publishers=("bridge",),
+    doc="a mission item reached",
 )
 HOME_POSITION = Topic(
-    "{ns}/mavros/home_position/home", HomePosition, 0.5, ("bridge",), "home, on change too"
+    "{ns}/mavros/home_position/home",
+    type=HomePosition,
+    rate_hz=0.5,
+    publishers=("bridge",),
+    doc="home, on change too",
 )
 ENVELOPE = Topic(
-    "{ns}/dronewrapper/envelope", Envelope, 0.5, ("bridge",), "the safety envelope in force"
+    "{ns}/dronewrapper/envelope",
+    type=Envelope,
+    rate_hz=0.5,
+    publishers=("bridge",),
+    doc="the safety envelope in force",
 )
 MISSION_PUSH = Service(
-    "{ns}/mavros/mission/push", WaypointPush, WaypointPushResult, "bridge", "upload a mission"
+    "{ns}/mavros/mission/push",
+    request=WaypointPush,
+    reply=WaypointPushResult,
+    server="bridge",
+    doc="upload a mission",
 )
 MISSION_PULL = Service(
-    "{ns}/mavros/mission/pull", WaypointPull, WaypointPullResult, "bridge", "download it"
+    "{ns}/mavros/mission/pull",
+    request=WaypointPull,
+    reply=WaypointPullResult,
+    server="bridge",
+    doc="download it",
 )
 MISSION_CLEAR = Service(
-    "{ns}/mavros/mission/clear", WaypointClear, MissionResult, "bridge", "clear the mission"
+    "{ns}/mavros/mission/clear",
+    request=WaypointClear,
+    reply=MissionResult,
+    server="bridge",
+    doc="clear the mission",
 )
 MISSION_SET_CURRENT = Service(
     "{ns}/mavros/mission/set_current",
-    WaypointSetCurrent,
-    MissionResult,
-    "bridge",
-    "fly this item next",
+    request=WaypointSetCurrent,
+    reply=MissionResult,
+    server="bridge",
+    doc="fly this item next",
 )
 MISSION_CONTROL = Service(
     "{ns}/dronewrapper/mission/control",
-    MissionControl,
-    MissionResult,
-    "bridge",
-    "start, pause or return",
+    request=MissionControl,
+    reply=MissionResult,
+    server="bridge",
+    doc="start, pause or return",
 )
 GEOFENCE_PUSH = Service(
     "{ns}/mavros/geofence/push",
-    WaypointClear,
-    MissionResult,
-    "bridge",
-    "upload the envelope's fence to the autopilot",
+    request=WaypointClear,
+    reply=MissionResult,
+    server="bridge",
+    doc="upload the envelope's fence to the autopilot",
 )
 ENVELOPE_SET = Service(
     "{ns}/dronewrapper/envelope/set",
-    EnvelopeSet,
-    EnvelopeResult,
-    "bridge",
-    "replace or read the safety envelope",
+    request=EnvelopeSet,
+    reply=EnvelopeResult,
+    server="bridge",
+    doc="replace or read the safety envelope",
 )
 
 SIM_WORLD_LOAD = Service(
-    "sim/world/load", WorldLoad, WorldState, "sim", "load a scenario's world, or reset it"
+    "sim/world/load",
+    request=WorldLoad,
+    reply=WorldState,
+    server="sim",
+    doc="load a scenario's world, or reset it",
 )
-SIM_WORLD = Service("sim/world/info", WorldQuery, WorldState, "sim", "the world the sim runs")
+SIM_WORLD = Service(
+    "sim/world/info",
+    request=WorldQuery,
+    reply=WorldState,
+    server="sim",
+    doc="the world the sim runs",
+)
 SIM_RESET = Service(
     "{ns}/sim/world/reset",
-    VehicleReset,
-    VehicleResetResult,
-    "sim",
-    "put this simulated vehicle back at its start pose, on the ground, motors off",
+    request=VehicleReset,
+    reply=VehicleResetResult,
+    server="sim",
+    doc="put this simulated vehicle back at its start pose, on the ground, motors off",
 )
 
 # ---- liveliness ----
-ALIVE = Liveliness("{ns}/alive/{service}", "held by every running service")
+ALIVE = Liveliness("{ns}/alive/{service}", doc="held by every running service")
 
 
 def _collect(kind: type) -> dict[str, Any]:

@@ -24,17 +24,17 @@ SCHEMA_ENCODING = "jsonschema"
 """MCAP/Foxglove schema encoding of the JSON schemas."""
 
 
-def _inline(node: Any, defs: dict[str, Any], depth: int = 0) -> Any:
+def _inline(schema: Any, defs: dict[str, Any], depth: int = 0) -> Any:
     if depth > 32:
         raise ValueError("message schema nests deeper than 32 levels (recursive type?)")
-    if isinstance(node, dict):
-        ref = node.get("$ref")
+    if isinstance(schema, dict):
+        ref = schema.get("$ref")
         if isinstance(ref, str) and ref.startswith("#/$defs/"):
             return _inline(defs[ref.removeprefix("#/$defs/")], defs, depth + 1)
-        return {k: _inline(v, defs, depth + 1) for k, v in node.items() if k != "$defs"}
-    if isinstance(node, list):
-        return [_inline(v, defs, depth + 1) for v in node]
-    return node
+        return {k: _inline(v, defs, depth + 1) for k, v in schema.items() if k != "$defs"}
+    if isinstance(schema, list):
+        return [_inline(v, defs, depth + 1) for v in schema]
+    return schema
 
 
 @cache

@@ -21,6 +21,14 @@ machine. The test drives it from its own thread::
 
 A thread of the service must wait only through the clock (a wait elsewhere, e.g. a plain
 ``time.sleep``, counts as work: time does not move meanwhile).
+
+The same clock serves stepped use, where the test's own thread is the service (the fake bus,
+a DroneWrapper's blocking calls): a wait on a thread that is not one of its workers drives
+time itself, up to the wait's deadline or its condition. With a :attr:`VirtualClock.stepper`
+(``stepper(until, done)``, e.g. the fake bus delivering its scheduled messages and ticking a
+simulated aircraft), that stepper moves time; without one the workers run as in
+:meth:`VirtualClock.run_until`. :meth:`VirtualClock.advance_to` lets the workers do what is due
+on the way, in deadline order.
 """
 
 from __future__ import annotations
@@ -89,13 +97,16 @@ class VirtualClock(Clock):
     :meth:`thread` waits.
     """
 
-    def __init__(self, monotonic: float = 1000.0, time: float = 1.8e9) -> None:
+    def __init__(self, monotonic: float = 1000.0, time: float | None = None) -> None:
         self._now = monotonic
-        self._offset = time - monotonic
+        self._offset = (1.8e9 if time is None else time) - monotonic
         self._cv = threading.Condition(threading.Lock())
         self._waiters: dict[threading.Thread, _Waiter] = {}
         self._workers: set[threading.Thread] = set()
         self._order = itertools.count()
+        self.stepper: Callable[[float, Callable[[], bool]], None] | None = None
+        """``stepper(until, done)``: moves time to ``until`` or until ``done()`` for a wait on
+        the driving thread (stepped use); None: the workers run, as in :meth:`run_until`."""
 
     def monotonic(self) -> float:
         return self._now
@@ -104,7 +115,11 @@ class VirtualClock(Clock):
         return self._now + self._offset
 
     def advance_to(self, t: float) -> None:
-        """Jump to ``t`` (never back); for single-threaded use, as ``FakeClock`` (FakeBus)."""
+        """Move to ``t`` (never back), the workers doing what falls due on the way (deadline
+        order); from the driving thread only."""
+        driving = threading.current_thread() not in self._workers
+        if driving and self._workers and self._run(lambda: False, t, 60.0) == "busy":
+            raise AssertionError("virtual clock: workers still busy after 60 s (real)")
         with self._cv:
             self._now = max(self._now, t)
             self._cv.notify_all()
@@ -131,12 +146,15 @@ class VirtualClock(Clock):
         return _Worker(self, target, name)
 
     def _wait(self, predicate: Callable[[], bool], timeout: float | None) -> bool:
-        """Wait until ``predicate()`` or until the driver wakes this waiter at its deadline."""
+        """Wait until ``predicate()`` or until the driver wakes this waiter at its deadline
+        (on the driving thread: drive time there, see the module doc)."""
         if predicate():
             return True
         if timeout is not None and timeout <= 0:
             return False
         me = threading.current_thread()
+        if me not in self._workers:
+            return self._drive(predicate, timeout)
         with self._cv:
             deadline = math.inf if timeout is None else self._now + timeout
             waiter = _Waiter(predicate, deadline, next(self._order))
@@ -151,6 +169,19 @@ class VirtualClock(Clock):
         return predicate()
 
     # ---- the driver (the test's thread) ----
+
+    def _drive(self, predicate: Callable[[], bool], timeout: float | None) -> bool:
+        """A wait on the driving thread: move time until ``predicate()`` or the deadline."""
+        if timeout is None:
+            raise AssertionError("virtual clock: a wait without end on the driving thread")
+        until = self._now + timeout
+        if self.stepper is not None:
+            self.stepper(until, predicate)
+        elif self._run(predicate, until, 60.0) == "busy":
+            raise AssertionError("virtual clock: workers still busy after 60 s (real)")
+        if not predicate():
+            self.advance_to(until)
+        return predicate()
 
     def _settled(self) -> bool:
         """Every worker waits, and no waiter can go on before time moves (under ``_cv``)."""

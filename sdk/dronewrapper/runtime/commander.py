@@ -8,9 +8,12 @@ gives that loop three things, each taking the time as an argument:
 
 - **setpoints the loop streams**: :meth:`Commander.set` publishes a PositionTarget at once,
   :meth:`Commander.poll` re-publishes it every ``1 / rate_hz`` s (>= 20 Hz, the contract's
-  setpoint rate) until it is changed or :meth:`Commander.stop`-ped. The stream lives in the
-  loop: a loop that hangs stops streaming, and the bridge holds position after its setpoint
-  expiry (a deadman for free). :meth:`Commander.next_due` says when the loop must wake next.
+  setpoint rate) until it is changed or :meth:`Commander.stop`-ped. The rules are the SDK's
+  (:class:`~dronewrapper.runtime.setpoint_stream.SetpointStream`), the link-gap rule included:
+  after a router gap a command older than the bridge's expiry is dropped, never resent. The
+  stream lives in the loop: a loop that hangs stops streaming, and the bridge holds position
+  after its setpoint expiry (a deadman for free). :meth:`Commander.next_due` says when the
+  loop must wake next.
 - **service calls with a deadline**: :meth:`Commander.call` returns a :class:`Pending` at
   once; the loop polls it (``done(now)``, then ``result(now)``). On a real Node the request
   waits on a worker thread owned here; on the fake bus it is answered inline.
@@ -20,20 +23,17 @@ gives that loop three things, each taking the time as an argument:
   present).
 
 Every setpoint and request carries the ``commander=NAME`` attachment, as the SDK's do, so a
-bridge with the command lease on knows who sends it. Units: seconds (``now``: the loop's
+bridge with the command lease on knows who sends it. Units: seconds (``now``: the node's
 monotonic clock; ``stamp``: Unix time of the data the command comes from), metres, m/s, rad/s.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
-import time
-from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, Generic, TypeVar
-
-import msgspec
+from typing import Generic, TypeVar
 
 from dronewrapper import setpoints
 from dronewrapper.msgs import registry
@@ -41,14 +41,15 @@ from dronewrapper.msgs.geometry import PoseStamped
 from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State, StatusText
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.setpoint_stream import MIN_RATE_HZ, SetpointStream
 
 Req = TypeVar("Req")
 Rep = TypeVar("Rep")
 
 log = logging.getLogger("dronewrapper.commander")
 
-MIN_SETPOINT_RATE_HZ = 20.0
 CALL_WORKERS = 4
 """Calls under way at once: a call left waiting for a silent server never holds up the next
 one (a landing after a take-off step that got no reply)."""
@@ -95,37 +96,38 @@ class Commander:
     """Setpoints, service calls and bridge state for one aircraft, driven by a service's loop.
 
     Args:
-        node: the service's Node (or FakeNode); its namespace is the aircraft's.
+        node: the service's node; its namespace is the aircraft's, its clock the loop's time
+            (the input holders' ages, the stamp of a setpoint given without one).
         name: our name on the command lease (the ``commander`` attachment).
-        clock: the loop's monotonic clock (s), for the input holders' ages.
-        wall: Unix time (s), the stamp of a setpoint given without one.
         rate_hz: setpoint repetition rate (>= 20 Hz).
+        expiry: the bridge's setpoint expiry (s): a command older than this after a link gap
+            is dropped.
         inline_calls: answer calls on the caller's thread (the fake bus, whose services answer
             synchronously) instead of on this commander's worker thread.
     """
 
     def __init__(
         self,
-        node: Any,
+        node: NodeApi,
         *,
         name: str,
-        clock: Callable[[], float] = time.monotonic,
-        wall: Callable[[], float] = time.time,
         rate_hz: float = 30.0,
+        expiry: float = 0.5,
         inline_calls: bool = False,
     ) -> None:
-        if not rate_hz >= MIN_SETPOINT_RATE_HZ:
-            raise ValueError(f"setpoint rate must be >= {MIN_SETPOINT_RATE_HZ:g} Hz, got {rate_hz}")
+        if not rate_hz >= MIN_RATE_HZ:
+            raise ValueError(f"setpoint rate must be >= {MIN_RATE_HZ:g} Hz, got {rate_hz}")
         self.ns = node.ns
         self.name = name
         self.period = 1.0 / rate_hz
-        self.published = 0
         self._node = node
-        self.wall = wall
+        self.clock = node.clock
         self._attachment = commander_attachment(name)
         self._setpoints = node.publisher(registry.SETPOINT_RAW_LOCAL)
-        self._target: PositionTarget | None = None
-        self._next_due = math.inf
+        self.stream = SetpointStream(self._put, rate_hz=rate_hz, expiry=expiry)
+        self._matching = self._setpoints.on_matching(
+            lambda matching: self.stream.link(matching, self.clock.monotonic())
+        )
         self._pool = (
             None
             if inline_calls
@@ -133,15 +135,14 @@ class Commander:
                 max_workers=CALL_WORKERS, thread_name_prefix=f"{node.name}-calls"
             )
         )
-        self.state: Latest[State] = self._latest(registry.STATE, clock)
-        self.extended: Latest[ExtendedState] = self._latest(registry.EXTENDED_STATE, clock)
-        self.pose: Latest[PoseStamped] = self._latest(registry.LOCAL_POSE, clock)
-        self.status_text: Latest[StatusText] = self._latest(registry.STATUSTEXT, clock)
+        self.state: Latest[State] = node.latest(registry.STATE)
+        self.extended: Latest[ExtendedState] = node.latest(registry.EXTENDED_STATE)
+        self.pose: Latest[PoseStamped] = node.latest(registry.LOCAL_POSE)
+        self.status_text: Latest[StatusText] = node.latest(registry.STATUSTEXT)
 
-    def _latest(self, topic: registry.Topic[Any], clock: Callable[[], float]) -> Latest[Any]:
-        holder: Latest[Any] = Latest(name=topic.key(self.ns), clock=clock)
-        self._node.subscribe(topic, holder.update)
-        return holder
+    def wall(self) -> float:
+        """Unix time now on the node's clock (s)."""
+        return self.clock.time()
 
     # ---- bridge state ----
 
@@ -181,12 +182,16 @@ class Commander:
     @property
     def target(self) -> PositionTarget | None:
         """The setpoint being streamed, or None."""
-        return self._target
+        return self.stream.target
+
+    @property
+    def published(self) -> int:
+        """Setpoints published so far."""
+        return self.stream.published
 
     def set(self, target: PositionTarget, now: float) -> None:
         """Publish ``target`` now and re-publish it from :meth:`poll` until changed."""
-        self._target = target
-        self._publish(now, repeat=False)
+        self.stream.set(target, now)
 
     def set_velocity(
         self,
@@ -205,32 +210,18 @@ class Commander:
 
     def stop(self) -> None:
         """Stop streaming (the bridge holds position after its setpoint expiry)."""
-        self._target = None
-        self._next_due = math.inf
+        self.stream.stop()
 
     def poll(self, now: float) -> bool:
         """Re-publish the setpoint if one is due; True if it did."""
-        if self._target is None or now < self._next_due:
-            return False
-        self._publish(now, repeat=True)
-        return True
+        return self.stream.poll(now)
 
     def next_due(self) -> float:
-        """When the next re-publication is due (loop clock, s; inf when not streaming)."""
-        return self._next_due
+        """When the next re-publication is due (node clock, s; inf when not streaming)."""
+        return self.stream.next_due()
 
-    def _publish(self, now: float, *, repeat: bool) -> None:
-        target = self._target
-        assert target is not None
-        header = msgspec.structs.replace(target.header, seq=self.published)
-        self._setpoints.put(
-            msgspec.structs.replace(target, header=header), attachment=self._attachment
-        )
-        self.published += 1
-        if repeat and self._next_due + self.period > now:
-            self._next_due += self.period  # on schedule
-        else:
-            self._next_due = now + self.period  # a new setpoint, or after a stall (no burst)
+    def _put(self, target: PositionTarget) -> None:
+        self._setpoints.put(target, attachment=self._attachment)
 
     # ---- services ----
 
@@ -268,5 +259,7 @@ class Commander:
         """Stop streaming and drop calls not started yet (a call under way ends by its
         timeout, or when the node's session closes)."""
         self.stop()
+        with contextlib.suppress(Exception):  # already gone with the session
+            self._matching.undeclare()
         if self._pool is not None:
             self._pool.shutdown(wait=False, cancel_futures=True)

@@ -3,9 +3,11 @@
 :class:`FakeNode` has the surface of :class:`~dronewrapper.runtime.node.Node` a service uses
 (``publisher``, ``subscribe``, ``latest``, ``serve``, ``call``, ``stop_event``, ``announce`` ...)
 but no Zenoh session: messages go through a :class:`FakeBus` in process. The bus delivers
-scheduled messages in time order on the caller's thread, moving its :class:`FakeClock` to each
-message's time first, so a service fed through it sees recorded time, deterministically, however
-loaded the machine is (openpilot's process replay idea).
+scheduled messages in time order on the caller's thread, moving its clock (a
+:class:`~dronewrapper.runtime.clock.VirtualClock`) to each message's time first, so a service fed
+through it sees recorded time, deterministically, however loaded the machine is (openpilot's
+process replay idea). A wait on that clock from the test's thread (``node.sleep``, a holder's
+``wait``) delivers what is scheduled meanwhile.
 
     bus = FakeBus(start=t0)
     node = FakeNode("perception", bus)
@@ -18,11 +20,13 @@ loaded the machine is (openpilot's process replay idea).
 
 Payloads are encoded and decoded with the registry's types exactly as on the real bus, so a
 malformed one is counted in ``decode_errors`` the same way. Key expressions with wildcards
-match as Zenoh matches them.
+match as Zenoh matches them, and a publisher's matching listener hears subscribers come and go
+(a router gap, as seen from a publisher: :meth:`FakeBus.link_gap`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import heapq
 import itertools
 import logging
@@ -38,6 +42,7 @@ import zenoh
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.runtime import caller
+from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
@@ -45,24 +50,6 @@ from dronewrapper.runtime.latest import Latest
 T = TypeVar("T")
 Req = TypeVar("Req")
 Rep = TypeVar("Rep")
-
-
-class FakeClock:
-    """Time that moves only when told to (s; any epoch, e.g. recorded wall-clock time)."""
-
-    def __init__(self, start: float = 0.0) -> None:
-        self._now = start
-
-    def __call__(self) -> float:
-        return self._now
-
-    def now(self) -> float:
-        return self._now
-
-    def advance_to(self, t: float) -> None:
-        """Move to ``t``; time never goes back."""
-        if t > self._now:
-            self._now = t
 
 
 @dataclass(frozen=True)
@@ -74,13 +61,32 @@ class Delivered(Generic[T]):
 
 
 class _Subscription:
-    def __init__(self, keyexpr: str, on_payload: Callable[[str, bytes], None]) -> None:
+    def __init__(
+        self, bus: FakeBus, keyexpr: str, on_payload: Callable[[str, bytes], None]
+    ) -> None:
         self.keyexpr = zenoh.KeyExpr(keyexpr)
         self.on_payload = on_payload
         self.active = True
+        self._bus = bus
 
     def undeclare(self) -> None:
-        self.active = False
+        if self.active:
+            self.active = False
+            self._bus._matching_changed()
+
+
+class _MatchingListener:
+    """A publisher's matching listener: ``callback(matching)`` on every change."""
+
+    def __init__(self, bus: FakeBus, key: str, callback: Callable[[bool], None]) -> None:
+        self.key = key
+        self.callback = callback
+        self.matching = bus.matched(key)
+        self._bus = bus
+
+    def undeclare(self) -> None:
+        with contextlib.suppress(ValueError):
+            self._bus._listeners.remove(self)
 
 
 class FakeBus:
@@ -94,10 +100,14 @@ class FakeBus:
     callbacks are. ``schedule``/``step``/``run_until`` belong to one thread, the test's.
     """
 
-    def __init__(self, start: float = 0.0, clock: FakeClock | None = None) -> None:
-        self.clock = clock or FakeClock(start)
+    def __init__(self, start: float = 0.0, clock: VirtualClock | None = None) -> None:
+        self.clock = clock or VirtualClock(monotonic=start, time=start)
+        if self.clock.stepper is None:
+            self.clock.stepper = self.run_until
         self.published: defaultdict[str, list[Delivered[Any]]] = defaultdict(list)
         self._subs: list[_Subscription] = []
+        self._listeners: list[_MatchingListener] = []
+        self._gap = False
         self._queue: list[tuple[float, int, str, bytes]] = []
         self._seq = itertools.count()
         self._services: dict[str, Callable[[bytes], Any]] = {}
@@ -106,21 +116,49 @@ class FakeBus:
         :meth:`FakeNode.announce`)."""
 
     def subscribe(self, keyexpr: str, on_payload: Callable[[str, bytes], None]) -> _Subscription:
-        sub = _Subscription(keyexpr, on_payload)
+        sub = _Subscription(self, keyexpr, on_payload)
         self._subs.append(sub)
+        self._matching_changed()
         return sub
 
     def put(self, key: str, payload: bytes) -> None:
-        """Deliver ``payload`` on concrete ``key`` to every matching subscriber, now."""
+        """Deliver ``payload`` on concrete ``key`` to every matching subscriber, now (nothing
+        during a :meth:`link_gap`)."""
+        if self._gap:
+            return
         ke = zenoh.KeyExpr(key)
         for sub in list(self._subs):
             if sub.active and sub.keyexpr.intersects(ke):
                 sub.on_payload(key, payload)
 
     def matched(self, key: str) -> bool:
-        """True while at least one active subscription matches ``key``."""
+        """True while at least one active subscription matches ``key`` (none in a gap)."""
         ke = zenoh.KeyExpr(key)
-        return any(sub.active and sub.keyexpr.intersects(ke) for sub in list(self._subs))
+        return not self._gap and any(
+            sub.active and sub.keyexpr.intersects(ke) for sub in list(self._subs)
+        )
+
+    def on_matching(self, key: str, callback: Callable[[bool], None]) -> _MatchingListener:
+        """Call ``callback(matching)`` whenever subscribers start or stop matching ``key`` (at
+        once with True when some already match, as Zenoh's listener does)."""
+        listener = _MatchingListener(self, key, callback)
+        self._listeners.append(listener)
+        if listener.matching:
+            callback(True)
+        return listener
+
+    def link_gap(self, down: bool) -> None:
+        """Cut (``down``) or restore every route, as a router restart does: nothing is
+        delivered meanwhile and publishers' matching listeners hear it."""
+        self._gap = down
+        self._matching_changed()
+
+    def _matching_changed(self) -> None:
+        for listener in list(self._listeners):
+            matching = self.matched(listener.key)
+            if matching != listener.matching:
+                listener.matching = matching
+                listener.callback(matching)
 
     def schedule(self, at: float, key: str, msg: Any) -> None:
         """Queue ``msg`` (a message Struct or encoded bytes) for delivery at bus time ``at``."""
@@ -144,12 +182,15 @@ class FakeBus:
         self.put(key, payload)
         return True
 
-    def run_until(self, t: float) -> int:
-        """Deliver every message scheduled up to ``t`` and move the clock to ``t``."""
+    def run_until(self, t: float, done: Callable[[], bool] = lambda: False) -> int:
+        """Deliver every message scheduled up to ``t`` and move the clock to ``t``; stop early
+        once ``done()`` after a delivery. The clock's stepper (see the module doc)."""
         count = 0
         while self._queue and self._queue[0][0] <= t:
             self.step()
             count += 1
+            if done():
+                return count
         self.clock.advance_to(t)
         return count
 
@@ -176,18 +217,20 @@ class FakePublisher(Generic[T]):
         status)."""
         return self._bus.matched(self.key)
 
-    def on_matching(self, callback: Callable[[bool], None]) -> None:
-        """The fake bus has no link to lose: ``callback`` is never called."""
+    def on_matching(self, callback: Callable[[bool], None]) -> _MatchingListener:
+        """Call ``callback(matching)`` whenever subscribers start or stop matching this key."""
+        return self._bus.on_matching(self.key, callback)
 
     def undeclare(self) -> None:
         pass
 
 
 class FakeNode:
-    """A :class:`~dronewrapper.runtime.node.Node` on a :class:`FakeBus` (no network, no threads).
+    """The node contract (:class:`~dronewrapper.runtime.contract.NodeApi`) on a
+    :class:`FakeBus`: no network, no threads of its own.
 
     Subscriber callbacks run on the thread that delivers (``FakeBus.step``); ``latest`` holders
-    age by the bus clock; services answer synchronously.
+    age and wait on the bus clock; services answer synchronously.
     """
 
     def __init__(self, name: str, bus: FakeBus, *, ns: str = "drone") -> None:
@@ -201,7 +244,6 @@ class FakeNode:
         self.decode_errors: Counter[str] = self.sample_errors.decode
         self.callback_errors: Counter[str] = self.sample_errors.callback
         self.announced = False
-        self.session = None  # no Zenoh session: code that needs one cannot run here
 
     def __enter__(self) -> FakeNode:
         return self
@@ -217,9 +259,9 @@ class FakeNode:
         self.stop_event.set()
 
     def sleep(self, seconds: float) -> bool:
-        """Move the bus to ``seconds`` later (delivering what is due); False if stopped."""
-        self.bus.run_until(self.clock() + seconds)
-        return not self.stopping
+        """Let ``seconds`` of bus time pass (delivering what is due) unless stopped; False if
+        stopped."""
+        return not self.clock.wait(self.stop_event, seconds)
 
     def spin(self) -> None:
         """Deliver everything scheduled, then return."""
@@ -236,6 +278,10 @@ class FakeNode:
         bus's counterpart of :func:`dronewrapper.discovery.alive_services`)."""
         wanted = zenoh.KeyExpr(ALIVE.wildcard(ns))
         return {key for key in self.bus.tokens if wanted.intersects(zenoh.KeyExpr(key))}
+
+    def linked(self) -> bool:
+        """The fake bus is in process: linked but during a :meth:`FakeBus.link_gap`."""
+        return not self.bus._gap
 
     def close(self) -> None:
         self.stop_event.set()

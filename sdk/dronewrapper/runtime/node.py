@@ -4,7 +4,7 @@
         detections = node.publisher(registry.DETECTIONS)
         frames = node.latest(registry.IMAGE_RAW, camera="cam_frontal")
         node.announce()                     # liveliness token: "ready"
-        rate = Ratekeeper(30, stop=node.stop_event)
+        rate = Ratekeeper(30, stop=node.stop_event, clock=node.clock)
         while rate.sleep():
             ...
 
@@ -14,8 +14,8 @@ Zenoh queryables whose handlers run on a worker pool; a bad request gets an erro
 what is wrong, never silence. SIGINT and SIGTERM set ``stop_event``; the session is always
 closed on exit (an unclosed session can hang the interpreter).
 
-This module is the Node's whole surface (publishers, subscribers, services, liveliness,
-shutdown) and ``call_service``: the one module every process imports.
+A Node satisfies the node contract (:class:`~dronewrapper.runtime.contract.NodeApi`): the bus
+and the clock (``node.clock``, the real clocks unless given another).
 """
 
 from __future__ import annotations
@@ -38,16 +38,19 @@ from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service, Topic
 from dronewrapper.msgs.std import ErrorReply
 from dronewrapper.runtime import caller
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
-from dronewrapper.runtime.errors import (
-    ServiceError,
-    ServiceTimeout,
-    ServiceUnavailable,
-    zenoh_error_text,
-)
+from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.latest import Latest
-from dronewrapper.runtime.options import ZenohOptions, zenoh_config
-from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
+from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.qos import qos_for
+from dronewrapper.runtime.session import (
+    ERROR_ENCODING,
+    alive_services,
+    call_service,
+    encoding_for,
+    open_session,
+)
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.runtime.shm_put import BLOCK_WAIT_S, ShmWriter
 
@@ -57,43 +60,7 @@ Rep = TypeVar("Rep")
 
 log = logging.getLogger("dronewrapper.runtime")
 
-_ERROR_ENCODING = zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(ErrorReply))
-
-ZENOH_QUERY_TIMEOUT = b"Timeout"
-"""The error reply Zenoh itself gives a query whose server did not answer before its timeout."""
-
-ROUTE_WAIT_S = 2.0
-"""How long a service call keeps asking again while its query ends at once, unanswered (s).
-
-Right after a session opens (or a server starts), Zenoh may not have learnt the server's
-queryable yet; a query then finishes immediately with no reply. Asking again for a moment
-(never beyond the call's timeout) covers that, so ``timeout`` means what it says."""
-
-
-def encoding_for(msg_type: type) -> zenoh.Encoding:
-    """The Zenoh encoding of a message type: ``application/msgpack;dronewrapper/<Type>``."""
-    return zenoh.Encoding("application/msgpack").with_schema(codec.schema_name(msg_type))
-
-
-def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Session:
-    """Open a Zenoh session, retrying while the router is not up yet.
-
-    Raises:
-        ConnectionError: no session could be opened within ``timeout`` seconds.
-    """
-    deadline = time.monotonic() + timeout
-    while True:
-        try:
-            return zenoh.open(zenoh_config(options))
-        except zenoh.ZError as exc:
-            # a router that cannot listen fails at once; a client/peer waits for its router
-            if options.mode == "router" or time.monotonic() >= deadline:
-                where = ", ".join(options.connect or options.listen)
-                raise ConnectionError(
-                    f"cannot open a zenoh {options.mode} session on {where}: "
-                    f"{zenoh_error_text(exc)}"
-                ) from exc
-            time.sleep(0.2)
+__all__ = ["Node", "Publisher", "alive_services", "call_service", "encoding_for", "open_session"]
 
 
 class Publisher(Generic[T]):
@@ -153,6 +120,11 @@ class Node:
         handle_signals: turn SIGINT/SIGTERM into ``stop_event`` (main thread only).
         linger: seconds to wait before closing so the last messages leave (Zenoh drops
             messages still queued when a session closes).
+        open_timeout: seconds to keep trying to open the session.
+        clock: the process's time (ages, waits, stamps); the real clocks by default.
+        direct_callbacks: run subscriber callbacks on Zenoh's own thread (no Python thread
+            per subscriber; keep them short): for a library inside someone else's process,
+            where no thread of ours may hold up the interpreter's exit.
     """
 
     def __init__(
@@ -163,13 +135,17 @@ class Node:
         handle_signals: bool = True,
         linger: float = 0.05,
         open_timeout: float = 10.0,
+        clock: Clock = REAL,
+        direct_callbacks: bool = False,
     ) -> None:
         self.options = options or ZenohOptions()
+        self.clock = clock
+        self._direct = direct_callbacks
         self.name = self.options.name or name
         self.ns = self.options.namespace
         self.log = logging.getLogger(self.name)
         self.stop_event = threading.Event()
-        self.sample_errors = SampleErrors(self.log)
+        self.sample_errors = SampleErrors(self.log, clock=clock)
         self.decode_errors: Counter[str] = self.sample_errors.decode
         self.callback_errors: Counter[str] = self.sample_errors.callback
         self._linger = linger
@@ -226,11 +202,11 @@ class Node:
 
     def sleep(self, seconds: float) -> bool:
         """Sleep unless stopped; False if a stop was requested."""
-        return not self.stop_event.wait(seconds)
+        return not self.clock.wait(self.stop_event, seconds)
 
     def spin(self) -> None:
         """Block until a stop is requested."""
-        while not self.stop_event.wait(0.5):
+        while not self.clock.wait(self.stop_event, 0.5):
             pass
 
     def announce(self) -> None:
@@ -243,6 +219,14 @@ class Node:
     def alive_services(self, ns: str = "*", timeout: float = 1.0) -> set[str]:
         """The liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
         return alive_services(self.session, ns, timeout)
+
+    def linked(self) -> bool:
+        """True while the session reaches a router or a peer."""
+        try:
+            info = self.session.info
+            return bool(list(info.routers_zid()) or list(info.peers_zid()))
+        except zenoh.ZError:
+            return False
 
     def close(self) -> None:
         """Withdraw the token, undeclare everything and close the session (idempotent)."""
@@ -310,13 +294,14 @@ class Node:
         def on_sample(sample: zenoh.Sample) -> None:
             deliver(str(sample.key_expr), sample.payload.to_bytes(), sample.attachment)
 
-        sub = self.session.declare_subscriber(keyexpr, on_sample)
+        handler = zenoh.handlers.Callback(on_sample, indirect=not self._direct)
+        sub = self.session.declare_subscriber(keyexpr, handler)
         self._declared.append(sub)
         return sub
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
-        """Subscribe to ``topic`` and keep only its newest value and its age."""
-        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts))
+        """Subscribe to ``topic`` and keep only its newest value and its age (node clock)."""
+        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)
         self.subscribe(topic, holder.update, key=key, **parts)
         return holder
 
@@ -356,14 +341,14 @@ class Node:
                 query.reply(key, codec.encode(reply), encoding=reply_encoding)
             except ServiceError as exc:
                 err = ErrorReply(message=exc.message, code=exc.code)
-                query.reply_err(codec.encode(err), encoding=_ERROR_ENCODING)
+                query.reply_err(codec.encode(err), encoding=ERROR_ENCODING)
             except ValueError as exc:
                 err = ErrorReply(message=f"{key}: {exc}", code="bad_request")
-                query.reply_err(codec.encode(err), encoding=_ERROR_ENCODING)
+                query.reply_err(codec.encode(err), encoding=ERROR_ENCODING)
             except Exception as exc:
                 self.log.exception("service %s failed", key)
                 err = ErrorReply(message=f"{key}: internal error: {exc}", code="internal")
-                query.reply_err(codec.encode(err), encoding=_ERROR_ENCODING)
+                query.reply_err(codec.encode(err), encoding=ERROR_ENCODING)
             finally:
                 query.drop()
 
@@ -404,66 +389,3 @@ class Node:
             attachment=attachment,
             **parts,
         )
-
-
-def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:
-    """The concrete liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
-    keys = set()
-    for reply in session.liveliness().get(ALIVE.wildcard(ns), timeout=timeout):
-        if reply.ok is not None:
-            keys.add(str(reply.ok.key_expr))
-    return keys
-
-
-def call_service(
-    session: zenoh.Session,
-    service: Service[Req, Rep],
-    request: Req,
-    *,
-    ns: str,
-    timeout: float = 5.0,
-    attachment: bytes | None = None,
-    **parts: str,
-) -> Rep:
-    """Request/reply on a plain session (see :meth:`Node.call`); ``attachment`` travels with
-    the request (the SDK names its commander there, see :mod:`dronewrapper.runtime.caller`)."""
-    if type(request) is not service.request:
-        raise TypeError(
-            f"{service.template} takes {service.request.__name__}, got {type(request).__name__}"
-        )
-    key = service.key(ns, **parts)
-    payload = codec.encode(request)
-    start = time.monotonic()
-    deadline = start + timeout
-    ask_until = start + min(timeout, ROUTE_WAIT_S)
-    while True:
-        # A query that reached a server waits for its reply (up to the deadline); one that
-        # reached none ends at once and is asked again until ``ask_until``.
-        replies = session.get(
-            key,
-            payload=payload,
-            encoding=encoding_for(service.request),
-            timeout=max(0.001, deadline - time.monotonic()),
-            **SERVICE_QOS,
-            attachment=attachment,
-        )
-        for reply in replies:
-            if reply.ok is not None:
-                return codec.decode(service.reply, reply.ok.payload.to_bytes())
-            raw = reply.err.payload.to_bytes()
-            try:
-                err = codec.decode(ErrorReply, raw)
-            except (msgspec.DecodeError, msgspec.ValidationError):
-                if raw == ZENOH_QUERY_TIMEOUT:
-                    raise ServiceTimeout(
-                        f"no reply from {key} within {timeout:g} s (Zenoh ended the query: "
-                        f"the {service.server or 'server'} is busy, stuck or not running)"
-                    ) from None
-                err = ErrorReply(message=raw.decode("utf-8", "replace"), code="internal")
-            raise ServiceError(err.message, err.code)
-        if time.monotonic() + 0.05 >= ask_until:
-            break
-        time.sleep(0.05)
-    raise ServiceUnavailable(
-        f"no reply from {key} within {timeout:g} s: is the {service.server or 'server'} running?"
-    )

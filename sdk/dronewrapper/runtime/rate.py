@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import threading
-import time
-from collections.abc import Callable
+
+from dronewrapper.runtime.clock import REAL, Clock
 
 
 class Ratekeeper:
-    """Keeps a loop at ``hz`` ticks per second on the monotonic clock.
+    """Keeps a loop at ``hz`` ticks per second on ``clock`` (the node's; waits through it).
 
     ``sleep()`` waits for the next tick (returning early if ``stop`` is set) and returns False
     when the loop should end, so a loop reads ``while rate.sleep(): ...``. A tick that starts
@@ -21,24 +21,24 @@ class Ratekeeper:
         hz: float,
         *,
         stop: threading.Event | None = None,
-        clock: Callable[[], float] = time.monotonic,
+        clock: Clock = REAL,
     ) -> None:
         if not hz > 0:
             raise ValueError(f"rate must be > 0 Hz, got {hz}")
         self.period = 1.0 / hz
         self._stop = stop or threading.Event()
         self._clock = clock
-        self._next = clock() + self.period
+        self._next = clock.monotonic() + self.period
         self.frame = 0
         self.lagged = 0
         self.remaining = 0.0
 
     def sleep(self) -> bool:
         """Sleep until the next tick; False if the loop should stop."""
-        now = self._clock()
+        now = self._clock.monotonic()
         self.remaining = self._next - now
         if self.remaining > 0:
-            if self._stop.wait(self.remaining):
+            if self._clock.wait(self._stop, self.remaining):
                 return False
         else:
             self.lagged += 1

@@ -26,9 +26,12 @@ def _configure(args: argparse.Namespace, _overrides: list[str]) -> None:
         raise SystemExit(list_devices())
 
 
-if __name__ == "__main__":
-    raise SystemExit(
-        run_service(
-            "camera_victure", __doc__, Config, run, add_args=_add_args, configure=_configure
-        )
+def main(argv: list[str] | None = None) -> int:
+    """Entry point (``python -m dronewrapper_camera_victure``)."""
+    return run_service(
+        "camera_victure", __doc__, Config, run, argv, add_args=_add_args, configure=_configure
     )
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

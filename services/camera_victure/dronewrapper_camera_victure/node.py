@@ -13,7 +13,8 @@ a clear error naming it, exit 2. A stream that is not up yet is retried (state
 ``connecting``). The process announces itself ready after its first published frame.
 
 Time (stamps, pacing, periods, timeouts, backoff) is read and waited on only through the
-injected ``clock`` (the real clocks by default; tests run the service in virtual time).
+node's clock (the real clocks on a Node; tests run the service in virtual time on the fake
+bus).
 """
 
 from __future__ import annotations
@@ -26,8 +27,7 @@ from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.sensor import CameraInfo, CameraStatus
 from dronewrapper.msgs.std import Header
-from dronewrapper.runtime import Node
-from dronewrapper.runtime.clock import REAL, Clock
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_camera_victure.calibration import (
     CalibrationError,
     Intrinsics,
@@ -70,14 +70,13 @@ class CameraService:
 
     def __init__(
         self,
-        node: Node,
+        node: NodeApi,
         config: Config,
         factory: Factory = opencv_factory,
-        clock: Clock = REAL,
     ) -> None:
         self.node = node
         self.config = config
-        self.clock = clock
+        self.clock = clock = node.clock
         self.transform = transform_of(config)
         self.calibration = (
             load_calibration(config.calibration_file) if config.calibration_file else None
@@ -91,7 +90,7 @@ class CameraService:
         )
         self.status_pub = node.publisher(registry.CAMERA_STATUS, camera=camera)
         self.source = make_source(config, factory, clock)
-        self.slot = FrameSlot(clock)
+        self.slot = FrameSlot(name="captured frames", clock=clock)
         self.reader: Reader | None = None
         self.published = 0
         self.dropped = 0
@@ -271,11 +270,11 @@ class CameraService:
         )
 
 
-def run(node: Node, config: Config, factory: Factory = opencv_factory, clock: Clock = REAL) -> int:
+def run(node: NodeApi, config: Config, factory: Factory = opencv_factory) -> int:
     """The camera service (see the module doc). Exit 0 on a stop or the end of a file played
     once, 2 for a source or calibration that cannot be used, 1 when reading failed unexpectedly."""
     try:
-        service = CameraService(node, config, factory, clock)
+        service = CameraService(node, config, factory)
         service.start()
     except (SourceError, CalibrationError) as exc:
         log.error("%s", exc)

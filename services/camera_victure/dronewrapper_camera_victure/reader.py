@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from dronewrapper.runtime.clock import REAL, Clock
+from dronewrapper.runtime.latest import Latest
 from dronewrapper_camera_victure.capture import Grab
 from dronewrapper_camera_victure.config import Config
 from dronewrapper_camera_victure.sources import Mode, SourceError, SourceUnavailable
@@ -42,39 +43,9 @@ class Captured:
     number: int
 
 
-class FrameSlot:
-    """Thread-safe one-slot holder of the newest captured frame (waits on ``clock``)."""
-
-    def __init__(self, clock: Clock = REAL) -> None:
-        self._clock = clock
-        self._cond = threading.Condition()
-        self._item: Captured | None = None
-        self._taken = True
-        self.count = 0
-
-    def put(self, item: Captured, *, wait_taken: threading.Event | None = None) -> None:
-        """Replace the held frame. With ``wait_taken`` (a stop event), first wait until the
-        previous frame was taken or the event is set (lossless hand-over)."""
-        with self._cond:
-            while wait_taken is not None and not self._taken and not wait_taken.is_set():
-                self._clock.wait_for(self._cond, lambda: self._taken or wait_taken.is_set(), 0.1)
-            self._item = item
-            self._taken = False
-            self.count += 1
-            self._cond.notify_all()
-
-    def take(self, timeout: float, newer_than: int) -> tuple[int, Captured] | None:
-        """Wait up to ``timeout`` s for a frame numbered above ``newer_than`` (numbers from 1).
-
-        Returns:
-            (its number, the frame), or None on timeout.
-        """
-        with self._cond:
-            if not self._clock.wait_for(self._cond, lambda: self.count > newer_than, timeout):
-                return None
-            self._taken = True
-            self._cond.notify_all()
-            return self.count, self._item  # type: ignore[return-value]
+FrameSlot = Latest[Captured]
+"""The one-slot hand-over from the reader to the publisher: the runtime's newest-value holder
+(``update(frame, wait_taken=stop)`` for a lossless hand-over, ``take`` for the newest)."""
 
 
 class Backoff:
@@ -253,7 +224,7 @@ class Reader:
         self.stats.frames_captured += 1
         self._pass_frames += 1
         self.stats.state = STREAMING
-        self.slot.put(
+        self.slot.update(
             Captured(frame, grab.stamp, number), wait_taken=self.stop if self._lossless else None
         )
         return True

@@ -8,4 +8,11 @@ from dronewrapper.runtime.service import run_service
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.node import run
 
-raise SystemExit(run_service("controller", __doc__, Config, run))
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point (``python -m dronewrapper_controller``)."""
+    return run_service("controller", __doc__, Config, run, argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -15,9 +15,9 @@ watches meanwhile) -> servo until stopped -> land (``on_exit: land``) or send a 
 controller servos (:mod:`~dronewrapper_controller.yielding`) ends its commanding at once: it
 yields, reports ``idle`` and, when stopped, neither lands nor commands. With ``dry_run`` no
 aircraft is involved: announce ready -> servo until stopped, the commands only in the status.
-:func:`run` drives it on the real clock: it wakes on each new detections message and otherwise
-at the next control period, setpoint or status due, so a stop request is seen within one
-control period.
+:func:`run` drives it on its node: it wakes on each new detections message and otherwise at the
+next control period, setpoint or status due, so a stop request is seen within one control
+period. All time is the node's clock.
 """
 
 from __future__ import annotations
@@ -26,15 +26,13 @@ import contextlib
 import logging
 import math
 import os
-import time
-from collections.abc import Callable
-from typing import Any
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import CONTROLLER_IDLE, CONTROLLER_LANDING, CONTROLLER_TAKEOFF
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime import Latest
 from dronewrapper.runtime.commander import Commander
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
@@ -65,16 +63,16 @@ STATUS_PHASE = {
 """The state the status reports in each phase (others: the servo's own state)."""
 
 
-def subscribe_detections(node: Any, clock: Callable[[], float]) -> Latest[Detections]:
-    """The newest usable Detections, aged on ``clock``: non-finite or out-of-range messages are
-    counted in ``node.callback_errors`` under ``detections refused`` and dropped (logged at
-    most every 2 s)."""
-    holder: Latest[Detections] = Latest(name=registry.DETECTIONS.key(node.ns), clock=clock)
+def subscribe_detections(node: NodeApi) -> Latest[Detections]:
+    """The newest usable Detections, aged on the node's clock: non-finite or out-of-range
+    messages are counted in ``node.callback_errors`` under ``detections refused`` and dropped
+    (logged at most every 2 s)."""
+    holder: Latest[Detections] = Latest(name=registry.DETECTIONS.key(node.ns), clock=node.clock)
     last_log = [-math.inf]
 
     def on_drop(count: int, problem: str) -> None:
         node.callback_errors["detections refused"] += 1
-        now = clock()
+        now = node.clock.monotonic()
         if now - last_log[0] >= 2.0:
             last_log[0] = now
             log.warning("detections refused (%d so far): %s", count, problem)
@@ -87,34 +85,23 @@ class Controller:
     """The controller's life cycle as non-blocking steps (see the module doc).
 
     Args:
-        node: the process's Node (or a FakeNode); its ``stopping`` starts the shutdown.
+        node: the process's node: its ``stopping`` starts the shutdown, its clock is the
+            loop's time (``monotonic`` for the steps and ages, ``time`` for the status stamp).
         config: the controller config.
         commander: commands the aircraft; None for ``dry_run``.
-        now: the loop's monotonic clock now (s).
-        clock: that clock (ages of the detections).
-        wall: Unix time (s), the stamp of the status.
     """
 
-    def __init__(
-        self,
-        node: Any,
-        config: Config,
-        commander: Commander | None,
-        now: float,
-        *,
-        clock: Callable[[], float] = time.monotonic,
-        wall: Callable[[], float] = time.time,
-    ) -> None:
+    def __init__(self, node: NodeApi, config: Config, commander: Commander | None) -> None:
         if (commander is None) != config.dry_run:
             raise ValueError("a commander is needed unless dry_run, and none with it")
+        now = node.clock.monotonic()
         self.node = node
         self.config = config
         self.commander = commander
         self.loop = ControlLoop(config)
-        self.detections = subscribe_detections(node, clock)
+        self.detections = subscribe_detections(node)
         self.exit_code = 0
         self.phase = WAIT
-        self._wall = wall
         self._status = node.publisher(registry.CONTROLLER_STATUS)
         self._period = 1.0 / config.rate_hz
         self._status_period = 1.0 / config.status_rate_hz
@@ -187,7 +174,7 @@ class Controller:
         return wake
 
     def wait(self, timeout: float) -> None:
-        """Block up to ``timeout`` s (real time) for a new detections message."""
+        """Block up to ``timeout`` s (node clock) for a new detections message."""
         with contextlib.suppress(TimeoutError):
             self.detections.wait(max(0.0, timeout), newer_than=self._seen)
 
@@ -331,7 +318,7 @@ class Controller:
 
     def _publish_status(self, phase: str | None) -> None:
         self._status_shown = phase
-        status = self.loop.status(self._wall(), state=phase, seq=self._status.count)
+        status = self.loop.status(self.node.clock.time(), state=phase, seq=self._status.count)
         self._status.put(status)
 
 
@@ -343,18 +330,18 @@ def commander_name() -> str:
     return default_commander(os.environ.get("DRONEWRAPPER_IDENTITY", ""))
 
 
-def run(node: Any, config: Config) -> int:
-    """The controller service on the real clock (see the module doc); the exit status."""
-    clock = time.monotonic
-    commander = None if config.dry_run else Commander(node, name=commander_name(), clock=clock)
+def run(node: NodeApi, config: Config) -> int:
+    """The controller service on the node's clock (see the module doc); the exit status."""
+    clock = node.clock
+    commander = None if config.dry_run else Commander(node, name=commander_name())
     try:
-        controller = Controller(node, config, commander, clock(), clock=clock)
+        controller = Controller(node, config, commander)
         while True:
-            now = clock()
+            now = clock.monotonic()
             controller.step(now)
             if controller.finished:
                 return controller.exit_code
-            controller.wait(controller.next_wake(now) - clock())
+            controller.wait(controller.next_wake(now) - clock.monotonic())
     finally:
         if commander is not None:
             commander.close()

@@ -22,7 +22,6 @@ import asyncio
 import contextlib
 import json
 import logging
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -181,7 +180,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
             return _error(400, f"{name}: {exc}")
         except KeyError:
             return _error(404, f"unknown command {name!r}")
-        started = time.monotonic()
+        started = link.clock.monotonic()
         try:
             await run_in_threadpool(action)
         except CommandRefused as exc:
@@ -192,8 +191,9 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
             return _error(503, str(exc))
         except (NoData, InvalidArgument, RuntimeError) as exc:
             return _error(409, str(exc))
-        log.info("%s %s done in %.1f s", ns, name, time.monotonic() - started)
-        return _ok({"ok": True, "command": name, "seconds": time.monotonic() - started})
+        seconds = link.clock.monotonic() - started
+        log.info("%s %s done in %.1f s", ns, name, seconds)
+        return _ok({"ok": True, "command": name, "seconds": seconds})
 
     async def land_all(request: Request) -> Response:
         refused = _operator_check(request)
@@ -284,7 +284,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
             while True:
                 payload = {
                     "type": "telemetry",
-                    "t": time.time(),
+                    "t": fleet.clock.time(),
                     "role": role,
                     "router": fleet.router(),
                     "fleet": fleet.summary(),
@@ -330,7 +330,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                 loop.call_soon_threadsafe(new_frame.set)
 
         slot.listen(notify)
-        if slot.latest() is not None:
+        if slot.value is not None:
             new_frame.set()
 
         async def send_frames() -> None:
@@ -339,20 +339,20 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                 await acked.wait()
                 await new_frame.wait()
                 new_frame.clear()
-                frame = slot.latest()
-                if frame is None or frame.seq == sent_seq:
+                got = slot.take(0.0, sent_seq)
+                if got is None:
                     continue
+                sent_seq, frame = got
                 header = {
                     "ns": ns,
                     "camera": camera,
-                    "seq": frame.seq,
-                    "stamp": frame.stamp,
-                    "sent": time.time(),
-                    "held": link.clock() - frame.received,
+                    "seq": sent_seq,
+                    "stamp": frame.header.stamp,
+                    "sent": link.clock.time(),
+                    "held": slot.age(),
                 }
                 acked.clear()
                 await ws.send_bytes(pack(frame, json.dumps(header).encode()))
-                sent_seq = frame.seq
 
         sender = asyncio.create_task(send_frames())
         try:

@@ -11,7 +11,6 @@ from __future__ import annotations
 import collections
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -22,12 +21,13 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.sensor import CompressedImage
 from dronewrapper.msgs.simulation import VehicleReset, WorldLoad, WorldQuery, WorldState
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
-from dronewrapper_ground_station.frames import FrameSlot
 from dronewrapper_ground_station.requests import VelocityCommand
 from dronewrapper_ground_station.teleop import DeadMan
 
@@ -35,7 +35,7 @@ T = TypeVar("T")
 
 log = logging.getLogger("station")
 
-CAMERAS = {"frontal": "cam_frontal", "ventral": "cam_ventral"}
+CAMERAS = registry.CAMERA_SHORT_NAMES
 
 # (snapshot section, topic, message -> fields)
 TELEMETRY: tuple[tuple[str, Topic[Any], Callable[[Any], dict[str, Any]]], ...] = (
@@ -59,32 +59,23 @@ class DroneLink:
     """One drone as the station sees it: telemetry holders, video slots, commands.
 
     Args:
-        node: the station's runtime Node (shared by every drone), or a FakeNode in tests.
+        node: the station's node (shared by every drone); its clock times the ages, the
+            dead-man and the blocking commands.
         ns: the drone's namespace.
         config: the station config.
-        clock: monotonic clock (s) of the ages and the dead-man, injectable.
-        sleep: how the blocking commands (take-off, landing) wait, injectable.
     """
 
-    def __init__(
-        self,
-        node: Any,
-        ns: str,
-        config: Config,
-        *,
-        clock: Callable[[], float] = time.monotonic,
-        sleep: Callable[[float], Any] = time.sleep,
-    ) -> None:
+    def __init__(self, node: NodeApi, ns: str, config: Config) -> None:
         self.ns = ns
         self.config = config
-        self.clock = clock
+        self.clock = node.clock
         self.services: list[str] = []
         self.online = True
         self._node = node
         self._subs: list[Any] = []
         self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {}
         for name, topic, fields in TELEMETRY:
-            holder: Latest[Any] = Latest(name=topic.key(ns), clock=clock)
+            holder: Latest[Any] = Latest(name=topic.key(ns), clock=node.clock)
             self._subscribe(topic, holder.update)
             self._latest[name] = (holder, topic.rate_hz, fields)
         self.status_texts: collections.deque[dict[str, Any]] = collections.deque(maxlen=50)
@@ -92,13 +83,16 @@ class DroneLink:
             registry.STATUSTEXT,
             lambda m: self.status_texts.append(snapshot.status_text_entry(m)),
         )
-        self.slots = {camera: FrameSlot() for camera in CAMERAS}
+        self.slots: dict[str, Latest[CompressedImage]] = {
+            camera: Latest(name=f"{ns} {camera} video", clock=node.clock) for camera in CAMERAS
+        }
+        self._viewers = dict.fromkeys(CAMERAS, 0)
         self._video_subs: dict[str, Any] = {}
         self._video_lock = threading.Lock()
         self.deadman = DeadMan(config.teleop.timeout)
         self._command_lock = threading.Lock()
         self.last_command: dict[str, Any] | None = None
-        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False, clock=clock, sleep=sleep)
+        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False)
 
     def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
         sub = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
@@ -125,8 +119,7 @@ class DroneLink:
         out["command"] = self.last_command
         out["teleop"] = self.deadman.active
         for camera, slot in self.slots.items():
-            frame = slot.latest()
-            out[f"video_{camera}_age"] = None if frame is None else self.clock() - frame.received
+            out[f"video_{camera}_age"] = None if slot.value is None else slot.age()
         return out
 
     def health(self) -> str:
@@ -141,24 +134,23 @@ class DroneLink:
 
     # ---- video (subscribed only while someone watches; the sim encodes JPEG only then)
 
-    def watch(self, camera: str) -> FrameSlot:
+    def watch(self, camera: str) -> Latest[CompressedImage]:
         """Start receiving ``camera``'s JPEG frames (counted per viewer)."""
         key_name = CAMERAS[camera]
         slot = self.slots[camera]
         with self._video_lock:
+            self._viewers[camera] += 1
             if camera not in self._video_subs:
                 self._video_subs[camera] = self._subscribe(
-                    registry.IMAGE_COMPRESSED,
-                    lambda m: slot.put(m.header.stamp, bytes(m.data), self.clock()),
-                    camera=key_name,
+                    registry.IMAGE_COMPRESSED, slot.update, camera=key_name
                 )
         return slot
 
     def unwatch(self, camera: str) -> None:
         """Stop receiving ``camera`` when its last viewer left."""
         with self._video_lock:
-            slot = self.slots[camera]
-            if slot.listeners == 0 and camera in self._video_subs:
+            self._viewers[camera] = max(0, self._viewers[camera] - 1)
+            if self._viewers[camera] == 0 and camera in self._video_subs:
                 sub = self._video_subs.pop(camera)
                 self._subs.remove(sub)
                 sub.undeclare()
@@ -166,7 +158,7 @@ class DroneLink:
     # ---- commands (blocking: run them on a worker thread)
 
     def _note(self, what: str, **fields: Any) -> None:
-        self.last_command = {"what": what, "at": time.time(), **fields}
+        self.last_command = {"what": what, "at": self.clock.time(), **fields}
 
     def teleop(self, cmd: VelocityCommand, owner: object) -> None:
         """Velocity teleop, body FLU; must be renewed within the teleop timeout."""
@@ -284,9 +276,9 @@ class SimObjects:
     WORLD_NS = registry.DEFAULT_NAMESPACE
     """The world's keys (``sim/...``) belong to no vehicle; the namespace is not used."""
 
-    def __init__(self, node: Any, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, node: NodeApi) -> None:
         self.node = node
-        self.clock = clock
+        self.clock = node.clock
         self._poses: dict[str, tuple[dict[str, Any], float]] = {}
         self._publishers: dict[str, Any] = {}
         topic = registry.SIM_OBJECT_POSE
@@ -342,40 +334,28 @@ class Fleet:
     """Every drone the station shows, found by their bridges' liveliness tokens.
 
     Args:
-        node: the station's runtime Node, or a FakeNode on the fake bus (tests).
+        node: the station's node (``linked()`` says whether its router is reachable).
         config: the station config (``namespaces`` fixes the list; empty: discover).
-        clock: monotonic clock (s) of ages and dead-men; sleep: how blocking commands wait
-            (both injected in tests: bus time).
     """
 
-    def __init__(
-        self,
-        node: Any,
-        config: Config,
-        *,
-        clock: Callable[[], float] = time.monotonic,
-        sleep: Callable[[float], Any] = time.sleep,
-        router_linked: Callable[[], bool] | None = None,
-    ) -> None:
+    def __init__(self, node: NodeApi, config: Config) -> None:
         self.node = node
         self.config = config
-        self.clock = clock
-        self._sleep = sleep
-        self._router_linked = router_linked or (lambda: session_linked(node))
+        self.clock = node.clock
         self.router_linked = True
         self.links: dict[str, DroneLink] = {}
-        self.objects = SimObjects(node, clock)
+        self.objects = SimObjects(node)
         self._lock = threading.Lock()
         for ns in config.namespaces:
             self.links[ns] = self._link(ns)
 
     def _link(self, ns: str) -> DroneLink:
-        return DroneLink(self.node, ns, self.config, clock=self.clock, sleep=self._sleep)
+        return DroneLink(self.node, ns, self.config)
 
     def discover(self) -> None:
         """Whether the router is linked; list the processes alive now; add new drones, mark
         vanished ones offline."""
-        self.router_linked = self._router_linked()
+        self.router_linked = self.node.linked()
         by_ns = services_by_namespace(self.node.alive_services("*"))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)
@@ -437,15 +417,6 @@ class Fleet:
         for link in self.links.values():
             link.close()
         self.objects.close()
-
-
-def session_linked(node: Any) -> bool:
-    """True while ``node``'s Zenoh session has a router or a peer (the fake bus: always)."""
-    session = getattr(node, "session", None)
-    if session is None:
-        return True
-    info = session.info
-    return bool(list(info.routers_zid()) or list(info.peers_zid()))
 
 
 def _undeclare(entities: list[Any]) -> None:

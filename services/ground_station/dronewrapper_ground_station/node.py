@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 import threading
 
-from dronewrapper.runtime.node import Node
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_ground_station.access import Access, is_loopback, new_token
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
@@ -44,7 +44,7 @@ def operator_token(config: Config) -> str:
     return config.token or ("" if is_loopback(config.host) else new_token())
 
 
-def run(node: Node, config: Config) -> int:
+def run(node: NodeApi, config: Config) -> int:
     """Serve the station until SIGINT/SIGTERM."""
     token = operator_token(config)
     fleet = Fleet(node, config)

@@ -4,5 +4,11 @@ from dronewrapper.runtime.service import run_service
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.node import run
 
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point (``python -m dronewrapper_perception``)."""
+    return run_service("perception", __doc__, Config, run, argv)
+
+
 if __name__ == "__main__":
-    raise SystemExit(run_service("perception", __doc__, Config, run))
+    raise SystemExit(main())

@@ -54,8 +54,9 @@ from dronewrapper.ros2.names import (
 )
 from dronewrapper.ros2.typehash import type_hash
 from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
-from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.node import Node, open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper.runtime.qos import qos_for
 from dronewrapper.setpoint_limits import SetpointError, validate
@@ -113,7 +114,7 @@ class Outgoing:
 class Gateway:
     """The gateway's declarations on one node and one ROS 2 session (see the module doc)."""
 
-    def __init__(self, node: Any, config: Config, ros_session: zenoh.Session) -> None:
+    def __init__(self, node: NodeApi, config: Config, ros_session: zenoh.Session) -> None:
         self.node = node
         self.config = config
         self.session = ros_session
@@ -234,7 +235,7 @@ class Gateway:
 
     def _refuse(self, what: str, reason: str) -> None:
         self.refused[what] = self.refused.get(what, 0) + 1
-        now = time.monotonic()
+        now = self.node.clock.monotonic()
         if now - self._last_refusal_log >= 2.0:
             self._last_refusal_log = now
             log.warning("refused a ROS 2 %s (%d so far): %s", what, self.refused[what], reason)
@@ -330,7 +331,7 @@ def _raw(value: Any) -> bytes | None:
     return None if value is None else value.to_bytes()
 
 
-def ros_session_for(node: Any, config: Config) -> tuple[zenoh.Session, bool]:
+def ros_session_for(node: Node, config: Config) -> tuple[zenoh.Session, bool]:
     """The session the ROS 2 entities live on, and whether it is the gateway's own to close."""
     if not config.ros_connect:
         return node.session, False
@@ -338,7 +339,7 @@ def ros_session_for(node: Any, config: Config) -> tuple[zenoh.Session, bool]:
     return open_session(options), True
 
 
-def run(node: Any, config: Config) -> int:
+def run(node: Node, config: Config) -> int:
     """The gateway until stopped; the exit status."""
     session, own = ros_session_for(node, config)
     gateway = Gateway(node, config, session)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import os
 
-from dronewrapper.runtime import Node
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.tello.config import default_address
 from dronewrapper_sim.tello.server import COMMAND_PORT, TelloServer, bind_udp
@@ -14,7 +14,7 @@ from dronewrapper_sim.world.scenario import Scenario
 log = logging.getLogger("sim.tello")
 
 
-def run_tello(node: Node, config: SimConfig, scenario: Scenario) -> int:
+def run_tello(node: NodeApi, config: SimConfig, scenario: Scenario) -> int:
     """Run the simulated Tello on ``node`` until SIGINT/SIGTERM. Exit codes: 0 clean stop,
     1 the address cannot be bound, 2 ``--netns`` without root."""
     if config.netns:

@@ -1,0 +1,169 @@
+"""A DroneWrapper's setpoints: position, velocity and mixed commands, streamed until changed.
+
+Each ``set_cmd_*`` checks its arguments (finite numbers, yaw within a turn), builds the
+PositionTarget (local ENU positions in metres, body FLU velocities in m/s, yaw in rad, yaw
+rate in rad/s CCW positive) and hands it to the wrapper's setpoint stream, which publishes it
+at once and repeats it at the stream rate (:mod:`dronewrapper.streamer`).
+"""
+
+from __future__ import annotations
+
+import logging
+
+from dronewrapper import setpoints, telemetry
+from dronewrapper.errors import NoData, NotConnected
+from dronewrapper.inputs import Inputs
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_ON_GROUND,
+    MASK_MIXED,
+    MASK_POSITION,
+    PositionTarget,
+)
+from dronewrapper.runtime.clock import Clock
+from dronewrapper.streamer import SetpointStreamer
+
+log = logging.getLogger("dronewrapper")
+
+
+class Motion:
+    """The setpoint commands of a DroneWrapper (a part of it, see the module doc)."""
+
+    ns: str
+    clock: Clock
+    inputs: Inputs
+    _streamer: SetpointStreamer
+    _closed: bool
+    _warned_grounded: bool
+
+    def set_cmd_pos(
+        self,
+        x: float = 0.0,
+        y: float = 0.0,
+        z: float | None = None,
+        az: float | None = None,
+        *,
+        stamp: float | None = None,
+    ) -> None:
+        """Position control: fly to (x, y, z) local ENU metres facing yaw ``az`` (rad, ENU).
+
+        Left out, ``z`` keeps the altitude (the one being commanded, else the current one) and
+        ``az`` keeps the heading, so ``set_cmd_pos(1, 0)`` moves sideways instead of diving to
+        the ground and turning east. Re-published at the stream rate until another command or
+        :meth:`stop_commanding`. ``stamp`` (seconds since the Unix epoch) is carried in
+        ``header.stamp`` (default now).
+
+        Raises:
+            InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
+                (degrees by mistake); nothing is sent.
+            NoData: ``z`` or ``az`` left out before any position arrived.
+        """
+        stamp = setpoints.check_stamp(stamp, self.clock.time())
+        z = self._kept_altitude("set_cmd_pos") if z is None else z
+        az = self._kept_yaw("set_cmd_pos") if az is None else az
+        target = setpoints.position_target(x, y, z, az, stamp=stamp)
+        self._warn_if_grounded("set_cmd_pos")
+        self._command_setpoint(target)
+
+    def set_cmd_vel(
+        self,
+        vx: float = 0.0,
+        vy: float = 0.0,
+        vz: float = 0.0,
+        az: float = 0.0,
+        *,
+        stamp: float | None = None,
+    ) -> None:
+        """Velocity control: body FLU velocity (m/s) and yaw rate ``az`` (rad/s, CCW +).
+
+        ``vx`` is forward, ``vy`` left, ``vz`` up on every aircraft. Re-published at the
+        stream rate until changed: ``set_cmd_vel(az=1); sleep(5)`` spins for 5 s.
+
+        Raises:
+            InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
+                per second (degrees by mistake); nothing is sent.
+        """
+        stamp = setpoints.check_stamp(stamp, self.clock.time())
+        target = setpoints.velocity_target(vx, vy, vz, az, stamp=stamp)
+        self._warn_if_grounded("set_cmd_vel")
+        self._command_setpoint(target)
+
+    def set_cmd_mix(
+        self,
+        vx: float = 0.0,
+        vy: float = 0.0,
+        z: float | None = None,
+        az: float = 0.0,
+        *,
+        stamp: float | None = None,
+    ) -> None:
+        """Mixed control: body FLU vx, vy (m/s), altitude ``z`` (local ENU m), yaw rate (rad/s).
+
+        Left out, ``z`` keeps the altitude (the one being commanded, else the current one).
+
+        Raises:
+            InvalidArgument: an argument is not a finite number (nothing is sent).
+            NoData: ``z`` left out before any position arrived.
+        """
+        stamp = setpoints.check_stamp(stamp, self.clock.time())
+        z = self._kept_altitude("set_cmd_mix") if z is None else z
+        target = setpoints.mixed_target(vx, vy, z, az, stamp=stamp)
+        self._warn_if_grounded("set_cmd_mix")
+        self._command_setpoint(target)
+
+    def _kept_altitude(self, what: str) -> float:
+        """The altitude a setpoint without ``z`` keeps: the commanded one, else the current."""
+        commanded = self._streamer.target
+        if commanded is not None and commanded.type_mask in (MASK_POSITION, MASK_MIXED):
+            return float(commanded.position.z)
+        pose = self.inputs.pose.value
+        if pose is None:
+            raise NoData(f"{what}: z left out, and no position yet to keep the altitude of")
+        return float(pose.pose.position.z)
+
+    def _kept_yaw(self, what: str) -> float:
+        """The heading a position setpoint without ``az`` keeps: the commanded, else current."""
+        commanded = self._streamer.target
+        if commanded is not None and commanded.type_mask == MASK_POSITION:
+            return float(commanded.yaw)
+        pose = self.inputs.pose.value
+        if pose is None:
+            raise NoData(f"{what}: az left out, and no attitude yet to keep the heading of")
+        return float(telemetry.orientation_of(pose)[2])
+
+    def _warn_if_grounded(self, what: str) -> None:
+        """Say once per landing that setpoints do nothing to a disarmed drone on the ground."""
+        state, extended = self.inputs.state.value, self.inputs.extended.value
+        grounded = (
+            state is not None
+            and not state.armed
+            and extended is not None
+            and extended.landed_state == LANDED_STATE_ON_GROUND
+        )
+        if grounded and not self._warned_grounded:
+            self._warned_grounded = True
+            log.warning(
+                "%s: drone %r is disarmed on the ground, so nothing moves until takeoff()",
+                what,
+                self.ns,
+            )
+        elif not grounded:
+            self._warned_grounded = False
+
+    def _command_setpoint(self, target: PositionTarget) -> None:
+        if self._closed:
+            raise NotConnected(f"DroneWrapper {self.ns!r} is closed")
+        self._streamer.set(target)
+
+    def stop_commanding(self) -> None:
+        """Stop the setpoint stream. The bridge hovers after its ``setpoint_timeout``."""
+        self._streamer.stop()
+
+    @property
+    def commanding(self) -> PositionTarget | None:
+        """The setpoint being streamed, or None."""
+        return self._streamer.target
+
+    @property
+    def setpoints_sent(self) -> int:
+        """How many setpoint messages were published so far."""
+        return self._streamer.published

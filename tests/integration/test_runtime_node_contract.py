@@ -1,0 +1,23 @@
+"""The node contract on a real router: Node keeps every promise FakeNode keeps (the same checks
+run on the fake bus in tests/unit/test_node_contract.py)."""
+
+from __future__ import annotations
+
+import pytest
+from node_contract import check_node
+
+from support import client_node, wait_for
+
+pytestmark = pytest.mark.integration
+
+
+def settled(predicate, what: str) -> None:
+    wait_for(predicate, 10.0, what=what)
+
+
+def test_node_keeps_the_node_contract(router):
+    with (
+        client_node(router, "a", mode="client") as a,
+        client_node(router, "b", mode="client") as b,
+    ):
+        check_node(a, b, settled)
