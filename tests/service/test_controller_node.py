@@ -372,11 +372,11 @@ def test_a_takeoff_refused_while_the_autopilot_gets_ready_is_tried_again():
     rig = Rig(
         ["takeoff.height=1.5", "takeoff.wait_ready=20", "on_exit=land"],
         flying=False,
-        refuse={"arming": "Arm: Need Position Estimate"},
+        refuse={"flight_takeoff": "Arm: Need Position Estimate"},
     )
     rig.run(7.0)  # refused, tried again every 2 s
     assert not rig.ctl.finished and rig.state() == CONTROLLER_TAKEOFF
-    assert rig.autopilot.called("arming") >= 3 and rig.autopilot.z == 0.0
+    assert rig.autopilot.called("flight_takeoff") >= 3 and rig.autopilot.z == 0.0
     rig.autopilot.refuse.clear()  # the autopilot is ready now
     rig.run(6.0)
     assert rig.autopilot.z >= 1.4 and rig.state() == CONTROLLER_HOVER  # up; no target yet
@@ -387,12 +387,12 @@ def test_a_takeoff_still_refused_when_wait_ready_ends_fails():
     rig = Rig(
         ["takeoff.height=1.5", "takeoff.wait_ready=5", "on_exit=land"],
         flying=False,
-        refuse={"arming": "no GPS"},
+        refuse={"flight_takeoff": "no GPS"},
     )
     start = rig.now()
     rig.run(20.0)
     assert rig.ctl.finished and rig.ctl.exit_code == 1
-    assert rig.now() - start <= 5.5 and rig.autopilot.called("arming") >= 2
+    assert rig.now() - start <= 5.5 and rig.autopilot.called("flight_takeoff") >= 2
 
 
 def test_a_stale_command_is_not_resent_after_a_router_gap():
