@@ -3,7 +3,7 @@
 Only I/O here: the three sockets, the video, the threads. Everything the bridge decides (the
 commander lease included) is in :class:`~dronewrapper_bridge_tello.core.TelloCore` (pure, time
 as an argument); the wiring every bridge shares (driver, publishers, services, setpoints, tick
-loop) is :class:`~dronewrapper.runtime.bridge_node.BridgeNode`. Threads: replies
+loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: replies
 (command socket -> core), state (state strings -> core), control at ``rc_rate_hz`` (the core's
 tick: failsafe, ``rc`` sticks, keep-alive, link supervision, periodic State), video (datagrams
 -> decoder -> newest frame) and its publisher, plus the Node's service workers, which start an
@@ -22,8 +22,8 @@ from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
-from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper.security.wifi import open_wifi_warning
+from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_tello import flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config

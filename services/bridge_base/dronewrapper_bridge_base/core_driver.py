@@ -3,7 +3,7 @@
 
 A bridge's core (bridge_mavlink's ``BridgeCore``, bridge_tello's ``TelloCore``) takes inputs
 with the time as arguments and queues what to send and publish in an outbox. It applies the
-commander lease itself (:class:`~dronewrapper.security.lease.LeaseGate`): a setpoint or command
+commander lease itself (:class:`~.commander_lease.LeaseGate`): a setpoint or command
 from anyone but the lease holder is refused in the core, so the rule is held by the core's
 tests. :class:`CoreDriver` is the only place a node touches a core: every input goes through
 :meth:`CoreDriver.feed` (the core called under the lock with the monotonic and wall-clock time,
@@ -23,8 +23,8 @@ from typing import Any, Generic, TypeVar
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.runtime.operation import Operation, Operations, Steps
-from dronewrapper.security.lease import LeaseGate
+from dronewrapper_bridge_base.commander_lease import LeaseGate
+from dronewrapper_bridge_base.operation import Operation, Operations, Steps
 
 MAX_WAIT_S = 0.05
 """A waiting service call looks at its operation at least this often (s)."""
