@@ -121,6 +121,21 @@ PLAN: dict[str, Run | Excluded] = {
         "the opt-in SITL tier (needs ArduPilot's SITL binary)"
     ),
     "docs/ardupilot.md: python -m dronewrapper_bridge_mavlink --config ser": Excluded(HARDWARE),
+    "docs/sitl_world.md: rm -f parameters*.bson dataman": Excluded(
+        "runs PX4's SITL from a PX4 build (not installed here)"
+    ),
+    "docs/sitl_world.md: build/sitl/bin/arducopter --model quad --speedup 1": Excluded(
+        "runs ArduPilot's SITL from an ArduPilot build (not installed here)"
+    ),
+    "docs/sitl_world.md: .venv/bin/dronewrapper up compose/px4_sitl_follow_": Excluded(
+        "the graphs wait for PX4's SITL on its fixed ports (tests/sitl flies them, opt-in)"
+    ),
+    "docs/sitl_world.md: from dronewrapper import DroneWrapper": Excluded(
+        "flies the firmware of the world-and-bridge graph above (needs a PX4 or ArduPilot build)"
+    ),
+    "docs/sitl_world.md: PX4_SITL_DIR=/path/to/PX4-Autopilot AP_SITL_DIR=/p": Excluded(
+        "the opt-in firmware tier (needs PX4 and ArduPilot SITL builds)"
+    ),
     "docs/px4_real.md: git clone <this repository> dronewrapper && cd dro": Excluded(
         "sets up a Jetson (apt groups, GPU wheels, the model)"
     ),

@@ -9,6 +9,8 @@ scenario's world and the frontal and ventral cameras published on Zenoh.
     dronewrapper sim --udp-onboard 15000:0 --udp-gcs off  # test ports (LOCAL 0 = ephemeral)
     dronewrapper sim --aircraft tello                   # a DJI Tello on 127.0.0.1:8889
     sudo dronewrapper sim --aircraft tello --netns      # ... at 192.168.10.1, as a real one
+    dronewrapper sim --autopilot px4-sih                # the world around real PX4 SIH
+    dronewrapper sim --autopilot ardupilot              # ... around real ArduCopter SITL
 """
 
 from __future__ import annotations
@@ -56,6 +58,14 @@ def add_args(parser: argparse.ArgumentParser) -> None:
         "--netns", action="store_true", help="tello: own network namespace at 192.168.10.1 (root)"
     )
     group.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key at boot")
+    group.add_argument(
+        "--autopilot",
+        choices=("px4-sih", "ardupilot"),
+        help="no autopilot of ours: the vehicle pose comes from this external autopilot's truth",
+    )
+    group.add_argument(
+        "--autopilot-link", metavar="udp|tcp:HOST:PORT", help="where the external truth arrives"
+    )
 
 
 def configure(args: argparse.Namespace, overrides: list[str]) -> None:
@@ -74,6 +84,8 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         "aircraft": args.aircraft,
         "address": args.address,
         "signing_key_file": args.signing_key,
+        "autopilot": args.autopilot,
+        "autopilot_link": args.autopilot_link,
     }
     for key, value in flags.items():
         if value is not None:
@@ -103,6 +115,10 @@ def run(node: NodeApi, config: SimConfig) -> int:
         from dronewrapper_sim.tello.main import run_tello
 
         return run_tello(node, config, scenario)
+    if config.autopilot:
+        from dronewrapper_sim.external.main import run_external
+
+        return run_external(node, config, scenario)
     try:
         runner = SimRunner(config, scenario, node)
     except OSError as exc:

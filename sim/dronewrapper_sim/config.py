@@ -44,6 +44,15 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         signing_key_file: MAVLink 2 signing key provisioned at boot, like PX4's key file on the
             SD card (64 hex digits, ``dronewrapper keys mavlink``); "" = none until a
             SETUP_SIGNING arrives [--signing-key].
+        autopilot: "" = the simulator's own PX4-like autopilot and physics; ``px4-sih`` or
+            ``ardupilot`` = no autopilot of ours: the vehicle pose comes from that external
+            autopilot's own simulation (``dronewrapper_sim.external``) [--autopilot].
+        autopilot_link: where its truth arrives, ``udp:HOST:PORT`` (bound) or
+            ``tcp:HOST:PORT`` (connected to); "" = ``udp:127.0.0.1:19410`` for PX4 SIH,
+            ``tcp:127.0.0.1:5762`` (SERIAL1) for ArduCopter SITL [--autopilot-link].
+        truth_rate_hz: the truth rate asked of the external autopilot (Hz).
+        max_extrapolation_s: a frame's pose is extrapolated at most this far past the newest
+            truth (s).
     """
 
     scenario: str = "beacon_static"
@@ -69,6 +78,10 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     netns: bool = False
     tello: TelloConfig = msgspec.field(default_factory=TelloConfig)
     signing_key_file: str = ""
+    autopilot: str = ""
+    autopilot_link: str = ""
+    truth_rate_hz: float = 50.0
+    max_extrapolation_s: float = 0.1
 
     def __post_init__(self) -> None:
         if self.instance < 0:
@@ -100,5 +113,28 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
                 ipaddress.IPv4Address(self.address)
             except ValueError as exc:
                 raise ValueError(f"address: {exc}") from None
+        self._check_autopilot()
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
+
+    def _check_autopilot(self) -> None:
+        from dronewrapper_sim.external.links import AUTOPILOTS, parse_link
+
+        if self.autopilot and self.autopilot not in AUTOPILOTS:
+            raise ValueError(
+                f"autopilot must be one of {', '.join(AUTOPILOTS)} (or empty), "
+                f"got {self.autopilot!r}"
+            )
+        if self.autopilot and self.aircraft != "iris":
+            raise ValueError("autopilot: an external autopilot flies the iris aircraft only")
+        if self.autopilot_link:
+            try:
+                parse_link(self.autopilot_link)
+            except ValueError as exc:
+                raise ValueError(f"autopilot_link: {exc}") from None
+        if not (self.truth_rate_hz > 0 and self.truth_rate_hz <= 1000):
+            raise ValueError(f"truth_rate_hz must be in (0, 1000], got {self.truth_rate_hz}")
+        if not 0 <= self.max_extrapolation_s <= 1:
+            raise ValueError(
+                f"max_extrapolation_s must be in [0, 1], got {self.max_extrapolation_s}"
+            )

@@ -117,6 +117,36 @@ def intended_distance(
     return d, height / 2.0
 
 
+RESULTS_ENV = "DRONEWRAPPER_CAPABILITIES"  # a JSON-lines file: each app flight's result
+
+
+def record_result(flight: Flight, app: str, backend: str, firmware: str, passed: bool) -> None:
+    """Append ``flight``'s result to ``$DRONEWRAPPER_CAPABILITIES`` when it is set (for
+    docs/capabilities.md, ``python -m bench.capabilities render``)."""
+    import datetime
+    import json
+    import os
+
+    path = os.environ.get(RESULTS_ENV, "").strip()
+    if not path:
+        return
+    s = flight.summary
+    entry = {
+        "kind": "app",
+        "app": app,
+        "scenario": flight.scenario,
+        "backend": backend,
+        "firmware": firmware,
+        "date": datetime.date.today().isoformat(),
+        "passed": passed,
+        "acquire_s": s.time_to_acquire if math.isfinite(s.time_to_acquire) else None,
+        "centred": s.centred_share,
+        "within_distance": s.distance_share,
+    }
+    with open(path, "a") as out:
+        out.write(json.dumps(entry) + "\n")
+
+
 START_TIMEOUT_S = 60.0  # from the graph being up to the controller servoing (after take-off)
 MIN_TRACKED_S = 8.0  # a flight goes on at least this long after the target was acquired
 
@@ -135,10 +165,11 @@ def fly(
     seconds: float,
     tmp_path: Path,
     variables: dict[str, str] | None = None,
+    start_timeout: float = START_TIMEOUT_S,
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record until the controller has been
     servoing (after its take-off) for ``seconds`` and, when it acquired the target late, for
-    MIN_TRACKED_S after that; or until START_TIMEOUT_S passed without servoing."""
+    MIN_TRACKED_S after that; or until ``start_timeout`` s passed without servoing."""
     router = f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
@@ -160,7 +191,7 @@ def fly(
             launcher.start()
             session = open_session(ZenohOptions(mode="client", connect=[router]))
             monitor = FollowMonitor(session, launcher.ns, aim_height=aim).start()
-            deadline = time.monotonic() + START_TIMEOUT_S  # until servoing starts
+            deadline = time.monotonic() + start_timeout  # until servoing starts
             servoing = acquired = False
             while time.monotonic() < deadline:
                 dead = [c.name for c in launcher.children if c.poll() is not None]

@@ -17,7 +17,7 @@ import math
 
 import pytest
 from busy_core import one_core_busy
-from scenario_flight import fly
+from scenario_flight import fly, record_result
 
 from dronewrapper.rotations import wrap_pi
 from dronewrapper_sim.evaluation.metrics import bearing_error
@@ -49,6 +49,17 @@ def crossed(sample) -> bool:
     )
 
 
+def passes(flight, max_acquire, min_centred, min_distance) -> bool:
+    s = flight.summary
+    return (
+        flight.exit_code == 0
+        and s.samples > 50
+        and s.time_to_acquire <= max_acquire
+        and s.centred_share >= min_centred
+        and s.distance_share >= min_distance
+    )
+
+
 def check_flight(flight, max_acquire, min_centred, min_distance):
     s = flight.summary
     print(flight.describe())
@@ -70,6 +81,9 @@ def test_follow(scenario, tmp_path):
             flight = fly(graph, scenario, seconds, tmp_path, variables)
     else:
         flight = fly(graph, scenario, seconds, tmp_path, variables)
+    app = "follow_color" if graph == "sim_follow_color" else "follow_person"
+    ok = passes(flight, max_acquire, min_centred, min_distance)
+    record_result(flight, app, "sim", "dronewrapper_sim (ours)", ok)
     check_flight(flight, max_acquire, min_centred, min_distance)
     if scenario in CROSSING:
         crossings = sum(crossed(s) for s in flight.samples)

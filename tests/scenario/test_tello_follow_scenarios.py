@@ -11,7 +11,7 @@ import math
 import random
 
 import pytest
-from scenario_flight import CENTRED_TOLERANCE, DISTANCE_TOLERANCE, PERSON_BOX, fly
+from scenario_flight import CENTRED_TOLERANCE, DISTANCE_TOLERANCE, PERSON_BOX, fly, record_result
 
 from dronewrapper.rotations import wrap_pi
 from dronewrapper.runtime.config import load_config
@@ -75,6 +75,15 @@ def test_tello_follow(scenario, tmp_path):
     )
     flight.summary = s
     print(flight.describe())
+    passed = (
+        flight.exit_code == 0
+        and s.samples > 50
+        and s.time_to_acquire <= max_acquire
+        and s.centred_share >= min_centred
+        and s.distance_share >= min_distance
+    )
+    app = "follow_color" if graph.endswith("color") else "follow_person"
+    record_result(flight, app, "tello", "dronewrapper_sim Tello (ours)", passed)
     assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{flight.log[-3000:]}"
     assert s.samples > 50, f"too few samples: {flight.describe()}\n{flight.log[-3000:]}"
     detail = f"{flight.describe()}\n{flight.timeline()}"

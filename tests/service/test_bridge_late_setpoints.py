@@ -10,10 +10,10 @@ import pytest
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper.runtime.commander import Commander
-from dronewrapper.runtime.core_driver import CoreDriver
 from dronewrapper.runtime.fake import FakeBus, FakeNode
+from dronewrapper_bridge_base.bridge_node import BridgeNode
+from dronewrapper_bridge_base.core_driver import CoreDriver
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
 from dronewrapper_bridge_mavlink.core import BridgeCore

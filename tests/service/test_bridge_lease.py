@@ -8,8 +8,8 @@ import logging
 import pytest
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.flight import CancelRequest
+from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -19,9 +19,9 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.bridge_node import BridgeNode
 from dronewrapper.runtime.caller import commander_attachment, handling
 from dronewrapper.runtime.fake import FakeBus, FakeNode
+from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
 from dronewrapper_bridge_mavlink.core import BridgeCore

@@ -368,6 +368,33 @@ def test_run_returns_0_soon_after_a_stop(dry_run):
     assert result == [0]
 
 
+def test_a_takeoff_refused_while_the_autopilot_gets_ready_is_tried_again():
+    rig = Rig(
+        ["takeoff.height=1.5", "takeoff.wait_ready=20", "on_exit=land"],
+        flying=False,
+        refuse={"flight_takeoff": "Arm: Need Position Estimate"},
+    )
+    rig.run(7.0)  # refused, tried again every 2 s
+    assert not rig.ctl.finished and rig.state() == CONTROLLER_TAKEOFF
+    assert rig.autopilot.called("flight_takeoff") >= 3 and rig.autopilot.z == 0.0
+    rig.autopilot.refuse.clear()  # the autopilot is ready now
+    rig.run(6.0)
+    assert rig.autopilot.z >= 1.4 and rig.state() == CONTROLLER_HOVER  # up; no target yet
+    assert rig.stop() == 0
+
+
+def test_a_takeoff_still_refused_when_wait_ready_ends_fails():
+    rig = Rig(
+        ["takeoff.height=1.5", "takeoff.wait_ready=5", "on_exit=land"],
+        flying=False,
+        refuse={"flight_takeoff": "no GPS"},
+    )
+    start = rig.now()
+    rig.run(20.0)
+    assert rig.ctl.finished and rig.ctl.exit_code == 1
+    assert rig.now() - start <= 5.5 and rig.autopilot.called("flight_takeoff") >= 2
+
+
 def test_a_stale_command_is_not_resent_after_a_router_gap():
     """The commander's stream keeps the link-gap rule (runtime.setpoint_stream): a command
     older than the bridge's expiry when the route returns is dropped, never resent."""

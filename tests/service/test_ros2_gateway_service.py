@@ -22,7 +22,7 @@ from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text, topic_key
 from dronewrapper.ros2.typehash import type_hash
 from dronewrapper.runtime.caller import commander_of, current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper.security.lease import LeaseGate
+from dronewrapper_bridge_base.commander_lease import LeaseGate
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import ENTITIES
 from dronewrapper_ros2_gateway.node import Gateway

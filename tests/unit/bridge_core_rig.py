@@ -20,8 +20,8 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.runtime.bridge_node import COMMANDS
-from dronewrapper.runtime.operation import Operation
+from dronewrapper_bridge_base.bridge_node import COMMANDS
+from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore

@@ -16,8 +16,8 @@ from tello_peer import STATE
 
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.runtime.bridge_node import COMMANDS
-from dronewrapper.runtime.operation import Operation
+from dronewrapper_bridge_base.bridge_node import COMMANDS
+from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import TelloCore
 

@@ -32,7 +32,7 @@ from dronewrapper.msgs.flight import (
     LandRequest,
     TakeoffRequest,
 )
-from dronewrapper.runtime.core_driver import cancel_steps
+from dronewrapper_bridge_base.core_driver import cancel_steps
 from dronewrapper_bridge_mavlink import flight
 
 SET_MODE = mavlink.MAV_CMD_DO_SET_MODE

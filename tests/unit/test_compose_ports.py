@@ -58,12 +58,18 @@ def test_the_simulated_graphs_pick_free_ports_and_px4_sitl_does_not():
 PEER_PORTS = {
     "gcs_port": "the simulator sends its ground-station link there (QGroundControl binds it)",
     "sitl_port": "ArduPilot SITL's TCP server; the bridge connects to it",
+    "truth_port": "ArduPilot SITL's SERIAL1 TCP server; the world connects to it for SIM_STATE",
 }
 # graphs whose ports are fixed by the aircraft's protocol, bound without address reuse: a second
 # such graph on the same address fails at its first bind (the Tello SDK's 8889/8890/11111;
 # tests/integration/test_launcher_ports.py holds it)
 FIXED_BY_PROTOCOL = {"sim_tello", "sim_tello_follow_color", "sim_tello_follow_person"}
-FIXED_BY_PEER = {"px4_sitl": "PX4 SITL sends to 14540"}  # the other end's port: refused if taken
+FIXED_BY_PEER = {  # the other end's port: refused if taken
+    "px4_sitl": "PX4 SITL sends to 14540",
+    "px4_sitl_world": "PX4 SITL sends to 14540 and its SIH truth to 19410",
+    "px4_sitl_follow_color": "PX4 SITL sends to 14540 and its SIH truth to 19410",
+    "px4_sitl_follow_person": "PX4 SITL sends to 14540 and its SIH truth to 19410",
+}
 # fleet graphs: each drone's autopilot port is a free one the launcher picks per drone
 # (``${drone_port}``, dronewrapper_compose.fleet), and each Tello has an address of its own
 CHOSEN_PER_DRONE = {"sim_fleet"}

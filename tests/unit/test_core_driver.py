@@ -10,9 +10,9 @@ import threading
 import pytest
 
 from dronewrapper.msgs.lease import LeaseRequest
-from dronewrapper.runtime.core_driver import CoreDriver, PureCore
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_base.core_driver import CoreDriver, PureCore
+from dronewrapper_bridge_base.operation import Steps
 
 
 class EchoCore(PureCore):

@@ -8,7 +8,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.router import InsecureEndpoint, check_endpoints, is_loopback, router_options
 from dronewrapper.runtime import caller
 from dronewrapper.security.acl import access_control, acl_rules
-from dronewrapper.security.lease import CommanderLease
+from dronewrapper_bridge_base.commander_lease import CommanderLease
 
 
 @pytest.mark.parametrize(

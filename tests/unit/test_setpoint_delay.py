@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from dronewrapper.runtime.caller import commander_attachment, commander_of, origin_of
-from dronewrapper.runtime.setpoint_delay import SetpointDelay
+from dronewrapper_bridge_base.setpoint_delay import SetpointDelay
 
 OFFSET = 1234.5  # s: the publisher's clock ahead of ours (unsynchronised clocks)
 PERIOD = 1 / 30  # s: the SDK's setpoint stream

@@ -1,4 +1,4 @@
-"""The setpoint watchdog every bridge shares (dronewrapper.runtime.setpoint_watchdog), in given
+"""The setpoint watchdog every bridge shares (dronewrapper_bridge_base.setpoint_watchdog), in given
 time."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.runtime.setpoint_watchdog import (
+from dronewrapper_bridge_base.setpoint_watchdog import (
     HOLD,
     LAND,
     NONE,

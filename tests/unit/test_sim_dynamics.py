@@ -143,7 +143,8 @@ def test_position_target_is_reached_and_held():
 
 def test_yaw_rate_command_turns_counter_clockwise():
     final = fly(Target(velocity=(0.0, 0.0, 0.0), yaw_rate=0.5), 2.0)
-    assert final.yaw == pytest.approx(1.0 - 0.5 * 0.08, abs=0.05)  # minus the response lag
+    lag = QuadParams().yaw_rate_tau_s
+    assert final.yaw == pytest.approx(0.5 * (2.0 - lag), abs=0.05)  # minus the response lag
 
 
 def test_nan_target_holds_instead_of_diverging():

@@ -16,7 +16,7 @@ from dronewrapper.msgs.flight import (
     TakeoffRequest,
 )
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
-from dronewrapper.runtime.core_driver import cancel_steps
+from dronewrapper_bridge_base.core_driver import cancel_steps
 from dronewrapper_bridge_tello import flight
 
 

@@ -8,7 +8,6 @@ import numpy as np
 from dronewrapper_bridge_tello.video import (
     FrameAssembler,
     H264Decoder,
-    NewestFrame,
     starts_access_unit,
 )
 
@@ -101,12 +100,3 @@ def test_access_unit_starts():
     assert all(starts_access_unit(u) for u in units)
     assert not starts_access_unit(units[1][100:200])
     assert not starts_access_unit(b"\x00\x00\x01")
-
-
-def test_newest_frame_only():
-    box = NewestFrame()
-    assert box.take(0.01) is None
-    for i in range(5):
-        box.put(i, float(i))
-    assert box.take(0.01) == (4, 4.0) and box.dropped == 4
-    assert box.take(0.01) is None

@@ -1,4 +1,4 @@
-"""The command lease service's messages (see :mod:`dronewrapper.security.lease`)."""
+"""The command lease service's messages (see :mod:`dronewrapper_bridge_base.commander_lease`)."""
 
 from __future__ import annotations
 

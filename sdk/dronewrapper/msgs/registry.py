@@ -63,6 +63,7 @@ from dronewrapper.msgs.sensor import (
     NavSatFix,
 )
 from dronewrapper.msgs.simulation import (
+    PoseSourceStatus,
     VehicleReset,
     VehicleResetResult,
     WorldLoad,
@@ -341,6 +342,13 @@ SIM_GROUND_TRUTH = Topic(
     rate_hz=30.0,
     publishers=("sim",),
     doc="true vehicle pose, local ENU",
+)
+SIM_POSE_SOURCE = Topic(
+    "{ns}/sim/pose_source",
+    type=PoseSourceStatus,
+    rate_hz=1.0,
+    publishers=("sim",),
+    doc="where the vehicle pose comes from (an external autopilot's truth) and its age in frames",
 )
 SIM_OBJECT_POSE = Topic(
     "sim/objects/{name}/pose",

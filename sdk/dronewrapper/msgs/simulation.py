@@ -52,3 +52,35 @@ class WorldState(msgspec.Struct, kw_only=True, frozen=True):
     objects: list[str] = msgspec.field(default_factory=list)
     available: list[str] = msgspec.field(default_factory=list)
     loads: int = 0
+
+
+class PoseSourceStatus(msgspec.Struct, kw_only=True, frozen=True):
+    """Where a simulated world takes its vehicle pose from, and how fresh it was in the frames.
+
+    Attributes:
+        source: ``builtin`` (the simulator's own physics) or the external autopilot
+            (``px4-sih``, ``ardupilot``).
+        link: the link the truth arrives on (``udp:127.0.0.1:19410`` ...).
+        truth_rate_hz: truth samples received over the last second.
+        truth_age_s: how old the newest truth is now (s; NaN before the first).
+        frames: camera frames rendered since the last status.
+        age_mean_s, age_p95_s, age_max_s: age of the truth each of those frames was rendered
+            from, at its capture time (s).
+        extrapolated_share: share of those frames whose pose was extrapolated past the newest
+            truth (the rest were interpolated between two).
+        aligned: the autopilot's start was placed at the scenario's vehicle start.
+        rotation_rad: the turn (about the vertical, CCW) from the autopilot's local ENU to the
+            scenario's frame.
+    """
+
+    source: str
+    link: str = ""
+    truth_rate_hz: float = 0.0
+    truth_age_s: float = float("nan")
+    frames: int = 0
+    age_mean_s: float = float("nan")
+    age_p95_s: float = float("nan")
+    age_max_s: float = float("nan")
+    extrapolated_share: float = float("nan")
+    aligned: bool = False
+    rotation_rad: float = 0.0

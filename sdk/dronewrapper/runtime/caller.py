@@ -2,10 +2,10 @@
 
 The SDK attaches ``commander=NAME`` (UTF-8) to every setpoint and command it sends; a setpoint
 also carries its send time, ``commander=NAME\nsent=SECONDS`` (the publisher's clock, Unix s),
-which the bridges' late-setpoint rule reads (:mod:`dronewrapper.runtime.setpoint_delay`). The
-runtime records both around each subscriber callback and service handler, so a handler can ask
-:func:`current_commander` and :func:`current_sent_at` without changing its signature. Handlers
-run on the thread that called them, so a thread-local is enough.
+which the bridges' late-setpoint rule reads (``dronewrapper_bridge_base.setpoint_delay``).
+The runtime records both around each subscriber callback and service handler, so a handler can
+ask :func:`current_commander` and :func:`current_sent_at` without changing its signature.
+Handlers run on the thread that called them, so a thread-local is enough.
 """
 
 from __future__ import annotations

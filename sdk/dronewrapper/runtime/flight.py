@@ -39,7 +39,8 @@ from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 
 log = logging.getLogger("dronewrapper.flight")
 
-Steps = Generator[None, None, Any]
+# a flight's steps: a generator the caller steps on each new input until it returns the result
+FlightSteps = Generator[None, None, Any]
 
 CALL_TIMEOUT_S = 10.0
 """How long a reply may take beyond the manoeuvre's own timeout (s), as the SDK's
@@ -138,7 +139,7 @@ class FlightSequence:
         self.result: FlightResult | None = None
         self._steps = self._run()
 
-    def _run(self) -> Steps:
+    def _run(self) -> FlightSteps:
         raise NotImplementedError
 
     def step(self, now: float) -> bool:
@@ -159,7 +160,7 @@ class FlightSequence:
             raise
         return self.done
 
-    def _request(self, service: Service[Any, FlightResult], request: Any) -> Steps:
+    def _request(self, service: Service[Any, FlightResult], request: Any) -> FlightSteps:
         """Ask the bridge and wait (yielding) for its reply; raises the failure it reports."""
         c = self.commander
         if c.connected_state() is None:
@@ -207,7 +208,7 @@ class Takeoff(FlightSequence):
         self.tolerance = tolerance
         super().__init__(aircraft, timeout, now, call_timeout=call_timeout)
 
-    def _run(self) -> Steps:
+    def _run(self) -> FlightSteps:
         log.info("takeoff: drone %r to %.2f m", self.commander.ns, self.height)
         request = TakeoffRequest(
             height=self.height, timeout=self.timeout, tolerance=min(self.tolerance, self.height / 2)
@@ -220,6 +221,6 @@ class Landing(FlightSequence):
 
     what = "land"
 
-    def _run(self) -> Steps:
+    def _run(self) -> FlightSteps:
         self.commander.stop()
         yield from self._request(registry.FLIGHT_LAND, LandRequest(timeout=self.timeout))

@@ -55,7 +55,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     limits: Limits = msgspec.field(default_factory=Limits)
     envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly (envelope.py)
     upload_fence: bool = True  # give the autopilot the envelope as its fence once home is known
-    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease: bool = (
+        False  # obey one commander at a time (dronewrapper_bridge_base.commander_lease)
+    )
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off

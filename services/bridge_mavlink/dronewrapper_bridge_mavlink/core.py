@@ -36,7 +36,7 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.core_driver import PureCore
+from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive
 from dronewrapper_bridge_mavlink import operations as ops

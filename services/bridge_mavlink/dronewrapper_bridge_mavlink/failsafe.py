@@ -1,7 +1,8 @@
 """The failsafe contract of docs/design.md for a MAVLink autopilot (pure; time injected, s).
 
 The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
-config's shape) is the shared :mod:`dronewrapper.runtime.setpoint_watchdog`; this module adds what
+config's shape) is the shared
+:mod:`~dronewrapper_bridge_base.setpoint_watchdog`; this module adds what
 is MAVLink's: the guided mode, priming, and never fighting the pilot.
 
 What the bridge streams to the autopilot each tick, and when it acts on its own:
@@ -52,7 +53,7 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     PositionTarget,
 )
-from dronewrapper.runtime.setpoint_watchdog import (
+from dronewrapper_bridge_base.setpoint_watchdog import (
     ACTIONS,
     HOLD,
     LAND,

@@ -40,7 +40,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE

@@ -48,8 +48,8 @@ from dronewrapper.msgs.mission import (
 )
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Steps
 from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import (

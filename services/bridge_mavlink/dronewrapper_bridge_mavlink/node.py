@@ -3,7 +3,7 @@
 Only I/O here: the link, the ground-station forwarding, the threads. Everything the bridge
 decides (the commander lease included) is in :class:`~dronewrapper_bridge_mavlink.core.BridgeCore`
 (pure, time as an argument); the wiring every bridge shares (driver, publishers, services,
-setpoints, tick loop) is :class:`~dronewrapper.runtime.bridge_node.BridgeNode`. Threads: a
+setpoints, tick loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a
 receive loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
 stream, our heartbeat, periodic samples), Zenoh callbacks (setpoints forwarded at once) and the
 Node's service workers, which start an operation in the core and wait until it is done.
@@ -20,7 +20,7 @@ from typing import Any
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
-from dronewrapper.runtime.bridge_node import BridgeNode
+from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_mavlink import flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config

@@ -6,7 +6,7 @@ and yields the time (monotonic s) it wants to be resumed at the latest; the core
 whenever a message or a tick arrives, so every wait is a loop that re-checks its condition.
 Its return value is the service reply; an exception it raises (``ValueError`` for a bad
 request, ``ServiceError``) is the call's error. No sockets, threads or clock here: the node
-waits on :attr:`dronewrapper.runtime.operation.Operation.done`.
+waits on :attr:`dronewrapper_bridge_base.operation.Operation.done`.
 
 The rules they carry: a take-off while flying does nothing; PX4's OFFBOARD is asked for only
 after > ``offboard_prime_s`` of streaming; PX4's DO_SET_MODE is answered by its second ack (a
@@ -34,7 +34,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned

@@ -53,7 +53,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     state_rate_hz: float = 2.0  # periodic State (also on change)
     extended_state_rate_hz: float = 4.0
     battery_rate_hz: float = 1.0
-    command_lease: bool = False  # obey one commander at a time (security.lease)
+    command_lease: bool = (
+        False  # obey one commander at a time (dronewrapper_bridge_base.commander_lease)
+    )
     command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
     late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
     scale: StickScale = msgspec.field(default_factory=StickScale)

@@ -30,8 +30,8 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.core_driver import PureCore
-from dronewrapper.runtime.operation import Operation
+from dronewrapper_bridge_base.core_driver import PureCore
+from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config

@@ -1,7 +1,8 @@
 """The failsafe contract of docs/design.md for a Tello, as a pure state machine (time injected).
 
 The aircraft-independent part (setpoint fresh or stale, commander lost, the lost action, the
-config's shape) is the shared :mod:`dronewrapper.runtime.setpoint_watchdog`; this module adds what
+config's shape) is the shared
+:mod:`~dronewrapper_bridge_base.setpoint_watchdog`; this module adds what
 is the Tello's: the repeated stop and the keep-alive.
 
 A Tello has no flight modes to fight over and hovers by itself on its optical-flow sensor when
@@ -28,7 +29,7 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from dronewrapper.msgs.mavros import PositionTarget
-from dronewrapper.runtime.setpoint_watchdog import (
+from dronewrapper_bridge_base.setpoint_watchdog import (
     HOLD,
     LAND,
     NONE,

@@ -25,7 +25,7 @@ from dronewrapper.msgs.flight import (
 )
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, LANDED_STATE_ON_GROUND, CommandTOL
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 

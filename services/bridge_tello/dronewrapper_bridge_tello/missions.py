@@ -43,8 +43,8 @@ from dronewrapper.msgs.mission import (
 )
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Operation, Steps
 from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base.operation import Operation, Steps
 from dronewrapper_bridge_tello import operations as ops
 
 if TYPE_CHECKING:

@@ -3,7 +3,7 @@
 Only I/O here: the three sockets, the video, the threads. Everything the bridge decides (the
 commander lease included) is in :class:`~dronewrapper_bridge_tello.core.TelloCore` (pure, time
 as an argument); the wiring every bridge shares (driver, publishers, services, setpoints, tick
-loop) is :class:`~dronewrapper.runtime.bridge_node.BridgeNode`. Threads: replies
+loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: replies
 (command socket -> core), state (state strings -> core), control at ``rc_rate_hz`` (the core's
 tick: failsafe, ``rc`` sticks, keep-alive, link supervision, periodic State), video (datagrams
 -> decoder -> newest frame) and its publisher, plus the Node's service workers, which start an
@@ -21,9 +21,9 @@ from typing import Any
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
-from dronewrapper.runtime import Node
-from dronewrapper.runtime.bridge_node import BridgeNode
+from dronewrapper.runtime import Latest, Node
 from dronewrapper.security.wifi import open_wifi_warning
+from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_tello import flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
@@ -31,7 +31,7 @@ from dronewrapper_bridge_tello.core import Outbox, TelloCore
 from dronewrapper_bridge_tello.failsafe import Failsafe
 from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
 from dronewrapper_bridge_tello.telemetry import Telemetry
-from dronewrapper_bridge_tello.video import FrameAssembler, H264Decoder, NewestFrame
+from dronewrapper_bridge_tello.video import FrameAssembler, H264Decoder
 
 log = logging.getLogger("bridge_tello")
 
@@ -83,7 +83,8 @@ class Bridge(BridgeNode[TelloCore]):
         self.pub_jpeg = node.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
         self.assembler = FrameAssembler(chunk=config.video_chunk)
         self.decoder = H264Decoder()
-        self.newest = NewestFrame()
+        # the newest decoded frame and its stamp: the publisher skips what it could not keep up with
+        self.newest: Latest[tuple[Any, float]] = Latest("decoded frame", node.clock)
         self.frames_published = 0
 
     # ---- what the core knows, for tests and tools
@@ -189,16 +190,16 @@ class Bridge(BridgeNode[TelloCore]):
             stamp = time.time()
             for frame in self.assembler.feed(data):
                 for decoded in self.decoder.decode(frame):
-                    self.newest.put(decoded, stamp)
+                    self.newest.update((decoded, stamp))
 
     def _image_loop(self) -> None:
         stop = self.node.stop_event
-        seq = 0
+        seq = taken = 0
         while not stop.is_set():
-            item = self.newest.take(0.2)
+            item = self.newest.take(0.2, newer_than=taken)
             if item is None:
                 continue
-            frame, stamp = item
+            taken, (frame, stamp) = item
             try:
                 image = frame.to_ndarray(format="bgr24")
             except Exception:

@@ -41,7 +41,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper.runtime.operation import Steps
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello.replies import Pending, is_ok
 
 if TYPE_CHECKING:

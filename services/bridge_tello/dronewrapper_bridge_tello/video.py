@@ -6,15 +6,14 @@ frame (no parser: it would hold every frame back until the next one starts, +33 
 whose size is a multiple of the chunk has no short datagram; it ends where a datagram starts a
 new access unit (a start code followed by an SPS, PPS, AUD or a slice with first_mb 0).
 :class:`H264Decoder` decodes each frame; corrupt or partial data is counted and skipped, never
-raised. :class:`NewestFrame` is a one-slot mailbox: the publisher takes the newest decoded frame,
-older unpublished ones are dropped (counted), so a slow consumer never builds a backlog (the most
-reported Tello video problem).
+raised. The bridge hands decoded frames to its publisher through a
+:class:`~dronewrapper.runtime.Latest`: the publisher takes the newest, older unpublished ones are
+skipped, so a slow consumer never builds a backlog (the most reported Tello video problem).
 """
 
 from __future__ import annotations
 
 import logging
-import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -118,30 +117,6 @@ def _has_picture(data: bytes) -> bool:
             return True
         index = data.find(b"\x00\x00\x01", index + 3)
     return False
-
-
-class NewestFrame:
-    """A one-slot mailbox: ``put`` replaces, ``take`` waits for the newest (thread-safe)."""
-
-    def __init__(self) -> None:
-        self._cond = threading.Condition()
-        self._item: tuple[Any, float] | None = None
-        self.dropped = 0
-
-    def put(self, frame: Any, stamp: float) -> None:
-        with self._cond:
-            if self._item is not None:
-                self.dropped += 1
-            self._item = (frame, stamp)
-            self._cond.notify()
-
-    def take(self, timeout: float) -> tuple[Any, float] | None:
-        """The newest frame and its stamp, or None after ``timeout`` s."""
-        with self._cond:
-            if self._item is None:
-                self._cond.wait(timeout)
-            item, self._item = self._item, None
-            return item
 
 
 log = logging.getLogger("bridge_tello.video")

@@ -129,15 +129,21 @@ class TakeoffConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         on_start: take off when the controller starts (False: the aircraft is already flying).
         height: take-off height above the current position (m).
         timeout: give up (and exit with an error) after this many seconds (s).
+        wait_ready: a take-off the autopilot refuses (not ready yet: PX4's estimator settling,
+            ArduCopter waiting for its GPS fix) is tried again every 2 s for this long (s)
+            after the first try; 0 = the first refusal fails.
     """
 
     on_start: bool = True
     height: float = 2.0
     timeout: float = 60.0
+    wait_ready: float = 0.0
 
     def __post_init__(self) -> None:
         _positive("takeoff.height", self.height)
         _positive("takeoff.timeout", self.timeout)
+        if not 0 <= self.wait_ready <= 600:
+            raise ValueError(f"takeoff.wait_ready must be in [0, 600] s, got {self.wait_ready}")
 
 
 class Config(ServoConfig, kw_only=True, forbid_unknown_fields=True):

@@ -33,7 +33,7 @@ from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime import Latest
 from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.flight import FlightError, Landing, Takeoff
+from dronewrapper.runtime.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop
@@ -42,6 +42,7 @@ from dronewrapper_controller.yielding import ForeignLanding
 log = logging.getLogger("controller")
 
 STOP_ZERO_S = 0.2
+TAKEOFF_RETRY_S = 2.0  # a take-off refused while the autopilot gets ready is tried again after
 """``on_exit: stop``: how long the zero command is streamed before commanding stops (s)."""
 
 WAIT, TAKEOFF, SERVO, LANDING, STOPPING, YIELDED, DONE = (
@@ -111,6 +112,8 @@ class Controller:
         self._logged_state = ""
         self._ready_deadline = now + config.ready_timeout
         self._takeoff: Takeoff | None = None
+        self._takeoff_retry_at = math.inf
+        self._takeoff_wait_until = math.inf
         self._landing: Landing | None = None
         self._stop_commanding_at = math.inf
         self._foreign_landing = ForeignLanding()
@@ -183,9 +186,8 @@ class Controller:
             self.node.announce()
             if self.config.takeoff.on_start:
                 log.info("taking off to %.1f m", self.config.takeoff.height)
-                self._takeoff = Takeoff(
-                    self.commander, self.config.takeoff.height, self.config.takeoff.timeout, now
-                )
+                self._takeoff_wait_until = now + self.config.takeoff.wait_ready
+                self._start_takeoff(now)
                 self.phase = TAKEOFF
                 self._take_off(now)
             else:
@@ -200,13 +202,39 @@ class Controller:
             self.exit_code = 1
             self.phase = DONE
 
+    def _start_takeoff(self, now: float) -> None:
+        assert self.commander is not None
+        self._takeoff = Takeoff(
+            self.commander, self.config.takeoff.height, self.config.takeoff.timeout, now
+        )
+        self._takeoff_retry_at = math.inf
+
+    def _retry_takeoff(self, now: float, exc: FlightError) -> bool:
+        """A take-off the autopilot refused, or that found it not connected, is tried again
+        after TAKEOFF_RETRY_S while ``takeoff.wait_ready`` lasts (the autopilot getting
+        ready: PX4's estimator, ArduCopter's GPS fix); True when a retry is scheduled."""
+        if not isinstance(exc, (StepRefused, NotReady)):
+            return False
+        if now + TAKEOFF_RETRY_S > self._takeoff_wait_until:
+            return False
+        log.warning("takeoff refused (%s): trying again in %g s", exc, TAKEOFF_RETRY_S)
+        self._takeoff = None
+        self._takeoff_retry_at = now + TAKEOFF_RETRY_S
+        return True
+
     def _take_off(self, now: float) -> None:
-        assert self._takeoff is not None
         if self._new_input(now):  # taking off, the servo only watches where the target is
             self.loop.servo.observe(now, self.detections.value, self.detections.age())
+        if self._takeoff is None:
+            if now < self._takeoff_retry_at:
+                return
+            self._start_takeoff(now)
+        assert self._takeoff is not None
         try:
             done = self._takeoff.step(now)
         except FlightError as exc:
+            if self._retry_takeoff(now, exc):
+                return
             log.error("takeoff failed: %s", exc)
             self.exit_code = 1
             self._shut_down(now)

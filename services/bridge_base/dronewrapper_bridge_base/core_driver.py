@@ -3,7 +3,7 @@
 
 A bridge's core (bridge_mavlink's ``BridgeCore``, bridge_tello's ``TelloCore``) takes inputs
 with the time as arguments and queues what to send and publish in an outbox. It applies the
-commander lease itself (:class:`~dronewrapper.security.lease.LeaseGate`): a setpoint or command
+commander lease itself (:class:`~.commander_lease.LeaseGate`): a setpoint or command
 from anyone but the lease holder is refused in the core, so the rule is held by the core's
 tests. :class:`CoreDriver` is the only place a node touches a core: every input goes through
 :meth:`CoreDriver.feed` (the core called under the lock with the monotonic and wall-clock time,
@@ -25,9 +25,9 @@ from dronewrapper.msgs.flight import CANCELLED, CancelRequest, FlightResult
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.runtime.operation import Operation, Operations, Steps
-from dronewrapper.runtime.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
-from dronewrapper.security.lease import LeaseGate
+from dronewrapper_bridge_base.commander_lease import LeaseGate
+from dronewrapper_bridge_base.operation import Operation, Operations, Steps
+from dronewrapper_bridge_base.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
 
 MAX_WAIT_S = 0.05
 """A waiting service call looks at its operation at least this often (s)."""
@@ -45,7 +45,7 @@ class PureCore:
         log: where a background operation's failure and the lease's changes are logged.
         lease_ttl_s: the commander lease's ttl (s); None: no lease, every commander obeyed.
         late_setpoint_s: a setpoint arriving this much later after its sending than its
-            commander's usually do is refused (:mod:`~dronewrapper.runtime.setpoint_delay`).
+            commander's usually do is refused (:mod:`~dronewrapper_bridge_base.setpoint_delay`).
     """
 
     def __init__(

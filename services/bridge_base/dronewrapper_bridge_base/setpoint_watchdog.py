@@ -16,7 +16,7 @@ centred sticks and keeps its link alive): their failsafe modules subclass
 :class:`SetpointWatchdog` and :class:`WatchdogConfig`. Every state change is queued as a
 :class:`Transition` so the bridge logs and publishes it (:meth:`SetpointWatchdog.transitions`).
 
-It watches *how* the commander commands; :mod:`dronewrapper.security.lease` decides *who* may.
+It watches *how* the commander commands; :mod:`.commander_lease` decides *who* may.
 """
 
 from __future__ import annotations

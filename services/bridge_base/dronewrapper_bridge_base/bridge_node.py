@@ -1,6 +1,6 @@
 """What a bridge's node does around its pure core, for every aircraft: the wiring.
 
-A bridge process is its pure core (a :class:`~dronewrapper.runtime.core_driver.PureCore`), the
+A bridge process is its pure core (a :class:`~dronewrapper_bridge_base.core_driver.PureCore`), the
 aircraft's link, and a :class:`BridgeNode`, which owns the rest: the core's driver (one lock,
 the time), the publishers of the core's samples, the setpoint subscription, the services (the
 take-off and landing operations, the MAVROS-parity ones, the command lease), each request fed
@@ -20,10 +20,10 @@ from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import current_commander, current_sent_at
-from dronewrapper.runtime.core_driver import CoreDriver, PureCore, cancel_steps
 from dronewrapper.runtime.node import Node
-from dronewrapper.runtime.operation import Steps
 from dronewrapper.runtime.rate import Ratekeeper
+from dronewrapper_bridge_base.core_driver import CoreDriver, PureCore, cancel_steps
+from dronewrapper_bridge_base.operation import Steps
 
 C = TypeVar("C", bound=PureCore)
 

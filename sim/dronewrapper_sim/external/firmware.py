@@ -1,0 +1,174 @@
+"""Start a user's own firmware build for the world to fly around: PX4 SITL (SIH) or ArduCopter
+SITL, as a free instance number in a working directory of its own, stopped at the end.
+
+Nothing here builds or fetches firmware: it runs a build that exists. An instance number shifts
+the firmware's fixed ports out of the way of anything else on the machine (PX4 ``-i N``: onboard
+link UDP 14540+N, SIH truth 19410+N; ArduCopter ``-I N``: SERIAL0/1/2 on TCP 5760/5762/5763 +
+10 N). :attr:`Firmware.variables` are the graph variables that reach it
+(compose/{px4,ardupilot}_sitl_*.yaml).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import signal
+import socket
+import subprocess
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+PX4_UDP_PORTS = (14540, 14580, 18570, 19410, 19450)  # + N: every UDP port PX4 instance N uses
+AP_TCP_BASE = 5760  # SERIAL0 of ArduCopter instance N: 5760 + 10 N; SERIAL1 + 2, SERIAL2 + 3
+
+
+@dataclass(frozen=True)
+class Firmware:
+    """A running firmware: ``px4`` or ``ardupilot``, its instance, the graph variables that
+    reach it, its log file and its version."""
+
+    autopilot: str
+    instance: int
+    variables: dict[str, str]
+    log: Path
+    version: str
+
+
+def px4_build_dir(root: Path) -> Path:
+    """``build/px4_sitl_default`` of a PX4-Autopilot tree (or ``root`` itself if it is one)."""
+    for build in (root, root / "build" / "px4_sitl_default"):
+        if (build / "bin" / "px4").is_file():
+            return build
+    raise FileNotFoundError(
+        f"{root}: no PX4 SITL build (bin/px4) here or in build/px4_sitl_default"
+    )
+
+
+def arducopter_binary(root: Path) -> Path:
+    """``build/sitl/bin/arducopter`` of an ArduPilot tree."""
+    binary = root / "build" / "sitl" / "bin" / "arducopter"
+    if not binary.is_file():
+        raise FileNotFoundError(f"{binary}: no ArduCopter SITL build")
+    return binary
+
+
+def _free(kind: int, port: int) -> bool:
+    with socket.socket(socket.AF_INET, kind) as sock:
+        try:
+            sock.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
+def free_px4_instance() -> int:
+    """An instance 1..9 whose UDP ports are all free now (PX4 shifts them only up to 9)."""
+    for n in range(1, 10):
+        if all(_free(socket.SOCK_DGRAM, port + n) for port in PX4_UDP_PORTS):
+            return n
+    raise RuntimeError("no free PX4 SITL instance (1..9)")
+
+
+def free_ardupilot_instance() -> int:
+    """An instance 1..59 whose SERIAL0..2 TCP ports are free now."""
+    for n in range(1, 60):
+        if all(_free(socket.SOCK_STREAM, AP_TCP_BASE + 10 * n + k) for k in range(4)):
+            return n
+    raise RuntimeError("no free ArduCopter SITL instance")
+
+
+def px4_version(build: Path) -> str:
+    """``PX4 <tag> (<commit>)`` from the build's generated version header."""
+    header = build / "src" / "lib" / "version" / "build_git_version.h"
+    text = header.read_text() if header.is_file() else ""
+    commit = re.search(r'PX4_GIT_VERSION_STR\s+"([0-9a-f]+)"', text)
+    tag = re.search(r'PX4_GIT_TAG_STR\s+"([^"]*)"', text)
+    return f"PX4 {tag.group(1) if tag else '?'} ({commit.group(1)[:10] if commit else '?'})"
+
+
+def ardupilot_version(root: Path) -> str:
+    """``ArduCopter V…`` from the tree's ArduCopter/version.h."""
+    header = root / "ArduCopter" / "version.h"
+    text = header.read_text() if header.is_file() else ""
+    found = re.search(r'#define THISFIRMWARE "([^"]+)"', text)
+    return found.group(1) if found else "ArduCopter ?"
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    from dronewrapper_compose.launcher import die_with_parent
+
+    die_with_parent()
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    proc.send_signal(signal.SIGTERM)
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(5)
+
+
+@contextlib.contextmanager
+def px4_sih(root: Path, workdir: Path) -> Iterator[Firmware]:
+    """PX4 SITL with its SIH quadrotor (``sihsim_quadx``), a free instance, in ``workdir``."""
+    build = px4_build_dir(root)
+    instance = free_px4_instance()
+    home = workdir / "px4"
+    (home / "rootfs").mkdir(parents=True, exist_ok=True)
+    for name in ("bin", "etc"):
+        if not (home / name).exists():
+            (home / name).symlink_to(build / name)
+    env = {
+        **os.environ,
+        "PX4_SIM_MODEL": "sihsim_quadx",
+        "PX4_SIMULATOR": "sihsim",
+        "HEADLESS": "1",
+    }
+    log_path = workdir / "px4.log"
+    with open(log_path, "wb") as log:
+        proc = subprocess.Popen(
+            ["../bin/px4", "-i", str(instance), "-d"],
+            cwd=home / "rootfs",
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            preexec_fn=_die_with_parent,
+        )
+        try:
+            variables = {"onboard_port": str(14540 + instance), "truth_port": str(19410 + instance)}
+            yield Firmware("px4", instance, variables, log_path, px4_version(build))
+        finally:
+            _stop(proc)
+
+
+@contextlib.contextmanager
+def arducopter(root: Path, workdir: Path) -> Iterator[Firmware]:
+    """ArduCopter SITL (quad model, the copter defaults, wiped parameters), a free instance, in
+    ``workdir``. It waits for a client on SERIAL0 before it starts flying."""
+    binary = arducopter_binary(root)
+    defaults = root / "Tools" / "autotest" / "default_params" / "copter.parm"
+    instance = free_ardupilot_instance()
+    log_path = workdir / "arducopter.log"
+    argv = [
+        str(binary), "--model", "quad", "--speedup", "1", f"-I{instance}", "-w",
+        "--defaults", str(defaults),
+    ]  # fmt: skip
+    with open(log_path, "wb") as log:
+        proc = subprocess.Popen(
+            argv,
+            cwd=workdir,
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            preexec_fn=_die_with_parent,
+        )
+        try:
+            port = AP_TCP_BASE + 10 * instance
+            variables = {"sitl_port": str(port), "truth_port": str(port + 2)}
+            yield Firmware("ardupilot", instance, variables, log_path, ardupilot_version(root))
+        finally:
+            _stop(proc)

@@ -1,0 +1,27 @@
+"""Where the opt-in tier finds real firmware: ``PX4_SITL_DIR`` names a PX4-Autopilot tree (or
+its ``build/px4_sitl_default``) built for SITL, ``AP_SITL_DIR`` an ArduPilot tree with
+``build/sitl/bin/arducopter``. Unset, the tier's tests are deselected (conftest.py). Starting a
+build is dronewrapper_sim.external.firmware's."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+PX4_ENV = "PX4_SITL_DIR"
+AP_ENV = "AP_SITL_DIR"
+
+
+def _dir(env: str) -> Path | None:
+    value = os.environ.get(env, "").strip()
+    return Path(value).expanduser() if value else None
+
+
+def px4_dir() -> Path | None:
+    """The PX4 tree ``PX4_SITL_DIR`` names (None: tier off)."""
+    return _dir(PX4_ENV)
+
+
+def ardupilot_dir() -> Path | None:
+    """The ArduPilot tree ``AP_SITL_DIR`` names (None: tier off)."""
+    return _dir(AP_ENV)
