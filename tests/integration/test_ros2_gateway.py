@@ -98,11 +98,15 @@ def test_peer_discovers_topics_and_services_by_liveliness(ros):
     wait_for(found, 10, interval=0.3, what="the gateway's entities in the ROS 2 graph")
 
 
-def _first(ros, topic: str, msg_type: str, timeout: float = 10.0):
+def _first(ros, topic: str, msg_type: str, timeout: float = 10.0, where=lambda msg: True):
+    """The first message on ``topic`` for which ``where`` holds."""
     from zenoh_ros2_sdk import ROS2Subscriber
 
     got: list = []
-    sub = ROS2Subscriber(topic, msg_type, got.append, router_ip=ros[0], router_port=ros[1])
+    sub = ROS2Subscriber(
+        topic, msg_type, lambda msg: where(msg) and got.append(msg),
+        router_ip=ros[0], router_port=ros[1],
+    )  # fmt: skip
     try:
         return wait_for(lambda: got[:1], timeout, what=f"a message on {topic}")[0]
     finally:
@@ -110,7 +114,8 @@ def _first(ros, topic: str, msg_type: str, timeout: float = 10.0):
 
 
 def test_peer_echoes_state_pose_and_an_image(ros):
-    state = _first(ros, STATE, "mavros_msgs/msg/State")
+    # the bridge says connected once the autopilot's first heartbeat is in: wait for that State
+    state = _first(ros, STATE, "mavros_msgs/msg/State", 20.0, where=lambda s: s.connected)
     assert state.connected and state.mode
     pose = _first(ros, POSE, "geometry_msgs/msg/PoseStamped")
     assert pose.header.frame_id == "map" and abs(pose.header.stamp.sec - time.time()) < 30

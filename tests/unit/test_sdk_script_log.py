@@ -11,6 +11,8 @@ def test_a_script_sees_the_sdks_progress_and_a_configured_app_does_not(capsys, m
     logger = logging.getLogger("dronewrapper.progress_test")
     monkeypatch.setattr(logger, "handlers", [])
     monkeypatch.setattr(logger, "level", logging.NOTSET)
+    # alone: a ProgressHandler another test left on the "dronewrapper" parent would print twice
+    monkeypatch.setattr(logger, "propagate", False)
     show_progress(logger)
     show_progress(logger)  # once
     assert sum(isinstance(h, ProgressHandler) for h in logger.handlers) == 1
