@@ -66,7 +66,7 @@ def _judge(report: dict) -> None:
 
 
 @pytest.mark.timeout(TIMEOUT_S + 60)
-@pytest.mark.skipif(not os.environ.get("PX4_SITL_DIR"), reason="PX4_SITL_DIR is not set (opt-in)")
+@pytest.mark.px4_sih  # opt-in: deselected unless PX4_SITL_DIR is set (tests/sitl/conftest.py)
 @pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
 def test_px4_sitl_mission_rtl_and_fence(tmp_path):
     build = Path(os.environ["PX4_SITL_DIR"]) / "build" / "px4_sitl_default"
@@ -80,7 +80,7 @@ def test_px4_sitl_mission_rtl_and_fence(tmp_path):
 
 
 @pytest.mark.timeout(TIMEOUT_S + 60)
-@pytest.mark.skipif(not os.environ.get("AP_SITL_DIR"), reason="AP_SITL_DIR is not set (opt-in)")
+@pytest.mark.ap_sitl  # opt-in: deselected unless AP_SITL_DIR is set (tests/sitl/conftest.py)
 @pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
 def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
     tree = Path(os.environ["AP_SITL_DIR"])
