@@ -25,6 +25,7 @@ from dronewrapper.msgs.flight import CANCELLED, CancelRequest, FlightResult
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.errors import ServiceError
+from dronewrapper.setpoint_limits import SetpointError
 from dronewrapper_bridge_base.commander_lease import LeaseGate
 from dronewrapper_bridge_base.operation import Operation, Operations, Steps
 from dronewrapper_bridge_base.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
@@ -67,6 +68,8 @@ class PureCore:
         self.commander = ""  # the lease's holder as State shows it ("": nobody)
         self.setpoint_delay = SetpointDelay(late_setpoint_s)
         self._late_log_at = -math.inf
+        self.rejected_setpoints = 0  # setpoints refused by validation or the envelope
+        self._last_reject_log = -math.inf
 
     def _at(self, now: float, stamp: float) -> None:
         self.now, self.stamp = now, stamp
@@ -99,6 +102,34 @@ class PureCore:
         raise NotImplementedError
 
     # ---- the commander lease
+
+    def screen_setpoint(
+        self,
+        target: Any,
+        commander: str,
+        sent: float | None,
+        check: Callable[[Any], Any],
+        refuse: Callable[[Any, Any, Any], bool],
+    ) -> Any:
+        """The kind of a setpoint that may fly, or None: refused when it arrives late or the
+        lease refuses it (:meth:`admit_setpoint`), when ``check(target)`` (the bridge's own
+        validation) raises SetpointError, or when ``refuse(core, target, kind)`` (the
+        envelope) says so. Every refusal but the lease's is counted in
+        ``rejected_setpoints``; a validation refusal is logged at most every 2 s."""
+        if not self.admit_setpoint(commander, sent):
+            return None
+        try:
+            kind = check(target)
+        except SetpointError as exc:
+            self.rejected_setpoints += 1
+            if self.now - self._last_reject_log >= 2.0:
+                self._last_reject_log = self.now
+                self._log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
+            return None
+        if refuse(self, target, kind):
+            self.rejected_setpoints += 1
+            return None
+        return kind
 
     def admit_setpoint(self, commander: str, sent: float | None = None) -> bool:
         """True if a setpoint from ``commander``, sent at ``sent`` (its clock, Unix s; None:

@@ -114,7 +114,6 @@ class BridgeCore(PureCore):
         self.heartbeat_state: State | None = None
         self.ext = ExtendedState()
         self.battery: BatteryState | None = None
-        self.rejected_setpoints = 0
         self.setpoints_sent = 0
         self.messages_received = 0
         self._t0 = now
@@ -125,7 +124,6 @@ class BridgeCore(PureCore):
         self.last_ext_pub = -math.inf
         self._last_battery_pub = -math.inf
         self.last_global_pub = -math.inf
-        self._last_reject_log = -math.inf
         self._last_send = -math.inf
         self._stream_since = -math.inf
         self.rates_round = 0
@@ -416,18 +414,10 @@ class BridgeCore(PureCore):
         if it arrives late (:meth:`admit_setpoint`) or the lease refuses it, then
         validated, remembered and forwarded at once."""
         self._at(now, stamp)
-        if not self.admit_setpoint(commander, sent):
-            return
-        try:
-            kind = validate(target, self.limits)
-        except SetpointError as exc:
-            self.rejected_setpoints += 1
-            if now - self._last_reject_log >= 2.0:
-                self._last_reject_log = now
-                log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
-            return
-        if missions.refuse_setpoint(self, target, kind):
-            self.rejected_setpoints += 1
+        kind = self.screen_setpoint(
+            target, commander, sent, lambda t: validate(t, self.limits), missions.refuse_setpoint
+        )
+        if kind is None:
             return
         self.failsafe.on_setpoint(target, kind, now)
         self._act(self.failsafe.tick(now, self.pose()), send=True)

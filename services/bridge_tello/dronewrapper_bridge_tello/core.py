@@ -40,7 +40,6 @@ from dronewrapper_bridge_tello.replies import ReplyMatcher
 from dronewrapper_bridge_tello.state import StateError, parse_state
 from dronewrapper_bridge_tello.sticks import (
     STOP,
-    SetpointError,
     Sticks,
     body_velocity,
     rc_command,
@@ -94,7 +93,6 @@ class TelloCore(PureCore):
         self.malformed_states = 0
         self.states_received = 0
         self.rc_sent = 0
-        self.rejected_setpoints = 0
         self.last_sticks: Sticks = STOP
         self._connect_op: Operation | None = None
         self._land_op: Operation | None = None
@@ -105,7 +103,6 @@ class TelloCore(PureCore):
         self._last_ext_pub = -math.inf
         self._last_ext_value = -1
         self._last_battery_pub = -math.inf
-        self._last_reject_log = -math.inf
 
     # ------------------------------------------------------------------ plumbing
 
@@ -228,18 +225,10 @@ class TelloCore(PureCore):
         if it arrives late (:meth:`admit_setpoint`) or the lease refuses it, then
         validated and flown by the tick."""
         self._at(now, stamp)
-        if not self.admit_setpoint(commander, sent):
-            return
-        try:
-            kind = validate(target, self.scale)
-        except SetpointError as exc:
-            self.rejected_setpoints += 1
-            if now - self._last_reject_log >= 2.0:
-                self._last_reject_log = now
-                log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
-            return
-        if missions.refuse_setpoint(self, target, kind):
-            self.rejected_setpoints += 1
+        kind = self.screen_setpoint(
+            target, commander, sent, lambda t: validate(t, self.scale), missions.refuse_setpoint
+        )
+        if kind is None:
             return
         self.failsafe.on_setpoint(target, kind, now)
 
