@@ -8,9 +8,13 @@ when it finds it: ``/usr/bin/python3 bench/rospy_transport.py [--small N] [--ima
 
 * the round trip of a 64-byte ``std_msgs/UInt8MultiArray`` payload (64 bytes of data) and of a
   640x480 ``bgr8`` ``sensor_msgs/Image``;
-* images per second from this node to a counting subscriber in the child.
+* images and 64-byte messages per second from this node to a counting subscriber in the
+  child.
 
-Prints one JSON object: ``{"small_rtt_ms": {...}, "image_rtt_ms": {...}, "images_per_s": x}``.
+Prints one JSON object: ``{"small_rtt_ms": {...}, "image_rtt_ms": {...}, "images_per_s": x,
+"small_per_s": x, "small_switches_per_rtt": n}`` (the last: the context switches of both
+nodes' threads per 64-byte round trip, from ``/proc``, as ``bench.transport_breakdown``
+counts the thread hand-offs).
 It does not import the project (the system Python has none of its dependencies).
 """
 
@@ -44,13 +48,13 @@ def free_port() -> int:
 
 
 def pong() -> None:
-    """The child: echo pings back, count images, until stdin closes."""
+    """The child: echo pings back, count flooded messages by kind, until stdin closes."""
     import rospy
     from sensor_msgs.msg import Image
     from std_msgs.msg import UInt8MultiArray
 
     rospy.init_node("bench_pong", anonymous=True, disable_signals=True)
-    counts = {"n": 0, "first": 0.0, "last": 0.0}
+    counts = {kind: {"n": 0, "first": 0.0, "last": 0.0} for kind in ("small", "image")}
     pubs = {
         "small": rospy.Publisher("/pong_small", UInt8MultiArray, queue_size=10, tcp_nodelay=True),
         "image": rospy.Publisher("/pong_image", Image, queue_size=10, tcp_nodelay=True),
@@ -58,22 +62,46 @@ def pong() -> None:
     rospy.Subscriber("/ping_small", UInt8MultiArray, pubs["small"].publish, tcp_nodelay=True)
     rospy.Subscriber("/ping_image", Image, pubs["image"].publish, tcp_nodelay=True)
 
-    def count(_msg) -> None:
-        now = time.perf_counter()
-        if counts["n"] == 0:
-            counts["first"] = now
-        counts["last"] = now
-        counts["n"] += 1
+    def counter(kind: str):
+        def count(_msg) -> None:
+            now = time.perf_counter()
+            if counts[kind]["n"] == 0:
+                counts[kind]["first"] = now
+            counts[kind]["last"] = now
+            counts[kind]["n"] += 1
 
-    rospy.Subscriber("/flood", Image, count, queue_size=1000, tcp_nodelay=True)
+        return count
+
+    rospy.Subscriber("/flood_image", Image, counter("image"), queue_size=1000, tcp_nodelay=True)
+    rospy.Subscriber(
+        "/flood_small", UInt8MultiArray, counter("small"), queue_size=1000, tcp_nodelay=True
+    )
     print("ready", flush=True)
     for line in sys.stdin:
-        if line.strip() == "count":
-            print(json.dumps(counts), flush=True)
+        kind = line.strip()
+        if kind in counts:
+            print(json.dumps(counts[kind]), flush=True)
     rospy.signal_shutdown("done")
 
 
-def round_trips(rospy, topic: str, msg_type, make, samples: int, warmup: int = 50) -> list[float]:
+def context_switches(pid: int) -> int:
+    """Voluntary + involuntary context switches of every thread of ``pid`` so far."""
+    total = 0
+    for task in os.listdir(f"/proc/{pid}/task"):
+        try:
+            with open(f"/proc/{pid}/task/{task}/status") as status:
+                total += sum(int(line.split()[-1]) for line in status if "ctxt_switches:" in line)
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+    return total
+
+
+SWITCHES: dict[str, float] = {}
+"""Context switches of both nodes per round trip, by topic (filled by ``round_trips``)."""
+
+
+def round_trips(rospy, topic: str, msg_type, make, samples: int, warmup: int = 50,
+                pids: tuple[int, ...] = ()) -> list[float]:  # fmt: skip
     got = threading.Event()
     sub = rospy.Subscriber(f"/pong_{topic}", msg_type, lambda _m: got.set(), tcp_nodelay=True)
     pub = rospy.Publisher(f"/ping_{topic}", msg_type, queue_size=10, tcp_nodelay=True)
@@ -84,7 +112,10 @@ def round_trips(rospy, topic: str, msg_type, make, samples: int, warmup: int = 5
         time.sleep(0.05)
     time.sleep(0.5)
     rtts = []
+    switches = 0
     for i in range(warmup + samples):
+        if i == warmup:
+            switches = sum(context_switches(pid) for pid in pids)
         got.clear()
         msg = make()
         t0 = time.perf_counter()
@@ -93,9 +124,31 @@ def round_trips(rospy, topic: str, msg_type, make, samples: int, warmup: int = 5
             raise RuntimeError(f"rospy {topic} ping {i} got no pong within 2 s")
         if i >= warmup:
             rtts.append(time.perf_counter() - t0)
+    if pids and samples:
+        SWITCHES[topic] = (sum(context_switches(pid) for pid in pids) - switches) / samples
     sub.unregister()
     pub.unregister()
     return rtts
+
+
+def flood(rospy, child, kind: str, msg_type, msg, seconds: float) -> float:
+    """Publish ``msg`` as fast as rospy takes it for ``seconds``; messages per second the
+    child received."""
+    pub = rospy.Publisher(f"/flood_{kind}", msg_type, queue_size=1000, tcp_nodelay=True)
+    deadline = time.monotonic() + 20
+    while pub.get_num_connections() == 0 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        pub.publish(msg)
+    time.sleep(1.0)
+    child.stdin.write(kind + "\n")
+    child.stdin.flush()
+    counts = json.loads(child.stdout.readline())
+    span = counts["last"] - counts["first"]
+    pub.unregister()
+    return (counts["n"] - 1) / span if span > 0 else 0.0
 
 
 def main() -> int:
@@ -143,26 +196,18 @@ def main() -> int:
 
         result = {
             "small_rtt_ms": percentiles_ms(round_trips(
-                rospy, "small", UInt8MultiArray, lambda: UInt8MultiArray(data=small), args.small
+                rospy, "small", UInt8MultiArray, lambda: UInt8MultiArray(data=small), args.small,
+                pids=(os.getpid(), child.pid),
             )),
             "image_rtt_ms": percentiles_ms(
                 round_trips(rospy, "image", Image, make_image, args.image)
             ),
         }  # fmt: skip
-        flood = rospy.Publisher("/flood", Image, queue_size=1000, tcp_nodelay=True)
-        while flood.get_num_connections() == 0:
-            time.sleep(0.05)
-        time.sleep(0.5)
-        msg = make_image()
-        end = time.monotonic() + args.seconds
-        while time.monotonic() < end:
-            flood.publish(msg)
-        time.sleep(1.0)
-        child.stdin.write("count\n")
-        child.stdin.flush()
-        counts = json.loads(child.stdout.readline())
-        span = counts["last"] - counts["first"]
-        result["images_per_s"] = (counts["n"] - 1) / span if span > 0 else 0.0
+        result["images_per_s"] = flood(rospy, child, "image", Image, make_image(), args.seconds)
+        result["small_per_s"] = flood(
+            rospy, child, "small", UInt8MultiArray, UInt8MultiArray(data=small), args.seconds
+        )
+        result["small_switches_per_rtt"] = SWITCHES.get("small")
         print(json.dumps(result), flush=True)
         return 0
     finally:

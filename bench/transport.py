@@ -1,17 +1,21 @@
 """Transport benchmark: round-trip latency and throughput between two processes over Zenoh.
 
 Measures the whole middleware path (typed publisher -> msgspec MessagePack -> Zenoh -> decode at
-the boundary -> callback) for a PoseStamped (~170 B) and a 640x480 bgr8 Image (921,600 B of
-pixels), through the loopback router (client -> router -> client) and peer to peer (two peers,
-direct link), with Zenoh shared memory on (the default for local processes).
+the boundary -> callback) for 64 bytes of data, a PoseStamped (~170 B) and a 640x480 bgr8 Image
+(921,600 B of pixels), through the loopback router (client -> router -> client), peer to peer
+(two peers, direct link), and peer to peer with ``ZenohOptions.low_latency`` on both ends, with
+Zenoh shared memory on (the default for local processes).
 
 With Debian's ROS 1 installed (``apt-get install python3-rospy python3-sensor-msgs
 python3-rosmaster``; it runs under the system Python) it measures rospy in the same run
-(``bench/rospy_transport.py``) and prints ours / rospy for the 64-byte and 640x480 round trips
-and for images per second. Targets: images <= 0.65 ms and >= 3,700 images/s between local
+(``bench/rospy_transport.py``) and prints ours / rospy for the 64-byte and 640x480 messages,
+round trips and messages per second, for both peer-to-peer paths. It ends with the 64-byte
+round trip's breakdown (``bench.transport_breakdown``: plain zenoh-python variants, thread
+hand-offs per round trip). Targets: images <= 0.65 ms and >= 3,700 images/s between local
 processes; small messages <= 0.3 ms.
 
     python -m bench.transport [--samples-small 2000] [--samples-image 400] [--seconds 4]
+                              [--breakdown-rounds 3]
 """
 
 from __future__ import annotations
@@ -28,7 +32,9 @@ from pathlib import Path
 import numpy as np
 import zenoh
 
+from bench import transport_breakdown
 from bench.common import percentiles, print_table, write_results
+from bench.transport_breakdown import SUMMARY
 from dronewrapper.msgs import CompressedImage, Header, Image, PoseStamped, codec, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
@@ -172,8 +178,12 @@ def raw_round_trips(session: zenoh.Session, kind: str, samples: int, warmup: int
 class Peer:
     """The child process (pong or sink) over a pipe."""
 
-    def __init__(self, role: str, mode: str, connect: list[str], listen: list[str]) -> None:
+    def __init__(
+        self, role: str, mode: str, connect: list[str], listen: list[str], low_latency: bool
+    ) -> None:
         args = [sys.executable, "-m", "bench.transport", "--serve", role, "--mode", mode]
+        if low_latency:
+            args.append("--low-latency")
         for ep in connect:
             args += ["--connect", ep]
         for ep in listen:
@@ -238,6 +248,12 @@ def throughput(node: Node, sink: Peer, kind: str, seconds: float) -> dict[str, f
 
 
 def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
+    """Every figure of one path: ``router`` (both through a loopback router), ``p2p`` (peer to
+    peer), ``p2p_low_latency`` (peer to peer with ``ZenohOptions.low_latency`` on both ends;
+    measured from a fresh process, see :func:`low_latency_topology`; small messages only: the
+    low-latency transport carries no message over 64 KB outside shared memory)."""
+    low_latency = name == "p2p_low_latency"
+    kinds = ("small", "pose") if low_latency else KINDS
     stop, ready = threading.Event(), threading.Event()
     router_thread = None
     if name == "router":
@@ -252,36 +268,32 @@ def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
     else:  # peer to peer: the child listens, this process connects to it directly
         endpoint = _free_endpoint()
         peer_mode, peer_connect, peer_listen = "peer", [], [endpoint]
-        mine = ZenohOptions(mode="peer", connect=[endpoint])
+        mine = ZenohOptions(mode="peer", connect=[endpoint], low_latency=low_latency)
     result: dict[str, object] = {}
-    raw = Peer("rawpong", peer_mode, peer_connect, peer_listen)
+    raw = Peer("rawpong", peer_mode, peer_connect, peer_listen, low_latency)
     with Node("bench_rawping", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
-        for kind in ("small", "pose"):
-            result[f"raw_{kind}_rtt"] = percentiles(
-                raw_round_trips(node.session, kind, args.samples_small)
-            )
-        result["raw_image_rtt"] = percentiles(
-            raw_round_trips(node.session, "image", args.samples_image)
-        )
+        for kind in kinds:
+            samples = args.samples_image if kind == "image" else args.samples_small
+            result[f"raw_{kind}_rtt"] = percentiles(raw_round_trips(node.session, kind, samples))
     raw.close()
-    pong = Peer("pong", peer_mode, peer_connect, peer_listen)
+    pong = Peer("pong", peer_mode, peer_connect, peer_listen, low_latency)
     with Node("bench_ping", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
-        for kind in ("small", "pose"):
-            result[f"{kind}_rtt"] = percentiles(round_trips(node, kind, args.samples_small))
-        result["image_rtt"] = percentiles(round_trips(node, "image", args.samples_image))
+        for kind in kinds:
+            samples = args.samples_image if kind == "image" else args.samples_small
+            result[f"{kind}_rtt"] = percentiles(round_trips(node, kind, samples))
         fallbacks = {"ping": shm_fallbacks(node)}
-    for kind in KINDS:
+    for kind in kinds:
         result[f"{kind}_one_way"] = pong.one_way(kind)
     fallbacks["pong"] = pong.fallbacks()
     pong.close()
-    sink = Peer("sink", peer_mode, peer_connect, peer_listen)
+    sink = Peer("sink", peer_mode, peer_connect, peer_listen, low_latency)
     with Node("bench_source", mine, handle_signals=False, linger=0.0) as node:
         time.sleep(1.0)
-        result["image_throughput"] = throughput(node, sink, "image", args.seconds)
-        result["pose_throughput"] = throughput(node, sink, "pose", args.seconds)
-        result["small_throughput"] = throughput(node, sink, "small", args.seconds)
+        for kind in ("image", "pose", "small"):
+            if kind in kinds:
+                result[f"{kind}_throughput"] = throughput(node, sink, kind, args.seconds)
         fallbacks["source"] = shm_fallbacks(node)
     sink.close()
     result["shm_fallbacks"] = fallbacks
@@ -289,6 +301,18 @@ def run_topology(name: str, args: argparse.Namespace) -> dict[str, object]:
     if router_thread:
         router_thread.join(10)
     return result
+
+
+def low_latency_topology(args: argparse.Namespace) -> dict[str, object]:
+    """``run_topology("p2p_low_latency")`` in a fresh process: a low-latency session sets
+    Zenoh's runtime up (one receive thread) only when it is its process's first session."""
+    done = subprocess.run(
+        [sys.executable, "-m", "bench.transport", "--topology", "p2p_low_latency",
+         "--samples-small", str(args.samples_small), "--samples-image", str(args.samples_image),
+         "--seconds", str(args.seconds)],
+        capture_output=True, text=True, timeout=600, check=True,
+    )  # fmt: skip
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 LABELS = {"small": "64 B", "pose": "PoseStamped", "image": "Image 640x480"}
@@ -323,25 +347,35 @@ def rospy_side_by_side(results: dict, args: argparse.Namespace) -> dict | None:
         print(f"\nrospy: failed: {done.stderr[-500:]}")
         return None
     ros = json.loads(done.stdout.strip().splitlines()[-1])
-    p2p = results["p2p"]
-    ours = {
-        "small_rtt_p50_ms": p2p["small_rtt"]["p50_ms"],
-        "image_rtt_p50_ms": p2p["image_rtt"]["p50_ms"],
-        "images_per_s": max(r["image_throughput"]["msgs_per_s"] for r in results.values()),
-    }
     theirs = {
-        "small_rtt_p50_ms": ros["small_rtt_ms"]["p50_ms"],
-        "image_rtt_p50_ms": ros["image_rtt_ms"]["p50_ms"],
-        "images_per_s": ros["images_per_s"],
+        "64 B RTT p50 (ms)": ros["small_rtt_ms"]["p50_ms"],
+        "640x480 RTT p50 (ms)": ros["image_rtt_ms"]["p50_ms"],
+        "64 B msgs/s": ros["small_per_s"],
+        "640x480 images/s": ros["images_per_s"],
     }
-    rows = [[what, ours[what], theirs[what], ours[what] / theirs[what]] for what in ours]
+    rows, ratios = [], {}
+    for path in ("p2p", "p2p_low_latency"):
+        res = results[path]
+        ours = {
+            "64 B RTT p50 (ms)": res["small_rtt"]["p50_ms"],
+            "640x480 RTT p50 (ms)": res.get("image_rtt", {}).get("p50_ms"),
+            "64 B msgs/s": res["small_throughput"]["msgs_per_s"],
+            "640x480 images/s": res.get("image_throughput", {}).get("msgs_per_s"),
+        }
+        ours = {what: value for what, value in ours.items() if value is not None}
+        ratios[path] = {what: ours[what] / theirs[what] for what in ours}
+        rows += [[path, what, ours[what], theirs[what], ratios[path][what]] for what in ours]
     print_table(
-        "ours (Zenoh p2p) side by side with rospy (TCPROS), same run, same machine",
-        ["figure", "ours", "rospy", "ours / rospy"],
+        "ours (Zenoh peer to peer) side by side with rospy (TCPROS), same run, same machine",
+        ["path", "figure", "ours", "rospy", "ours / rospy"],
         rows,
     )
-    print("  (round trips: lower is better; images/s: higher is better)")
-    return {"rospy": ros, "ours": ours, "ratio": {r[0]: r[3] for r in rows}}
+    print(
+        "  (round trips: lower is better; msgs/s: higher is better. rospy's thread hand-offs\n"
+        f"   per 64 B round trip: {ros.get('small_switches_per_rtt') or 0:.1f} context switches; "
+        "ours: python -m bench.transport_breakdown)"
+    )
+    return {"rospy": ros, "ratio": ratios}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -349,19 +383,34 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples-small", type=int, default=2000)
     parser.add_argument("--samples-image", type=int, default=400)
     parser.add_argument("--seconds", type=float, default=4.0)
+    parser.add_argument(
+        "--breakdown-rounds", type=int, default=3,
+        help="rounds of the 64-byte breakdown (bench.transport_breakdown); 0: none",
+    )  # fmt: skip
     parser.add_argument("--serve", choices=("pong", "sink", "rawpong"), help=argparse.SUPPRESS)
     parser.add_argument("--mode", default="client", help=argparse.SUPPRESS)
     parser.add_argument("--connect", action="append", default=[], help=argparse.SUPPRESS)
     parser.add_argument("--listen", action="append", default=[], help=argparse.SUPPRESS)
+    parser.add_argument("--low-latency", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--topology", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.serve:
-        serve(args.serve, ZenohOptions(mode=args.mode, connect=args.connect, listen=args.listen))
+        options = ZenohOptions(
+            mode=args.mode, connect=args.connect, listen=args.listen, low_latency=args.low_latency
+        )
+        serve(args.serve, options)
+        return 0
+    if args.topology:
+        print(json.dumps(run_topology(args.topology, args)), flush=True)
         return 0
 
     results = {name: run_topology(name, args) for name in ("router", "p2p")}
+    results["p2p_low_latency"] = low_latency_topology(args)
     rows = []
     for name, res in results.items():
         for kind, label in LABELS.items():
+            if f"{kind}_rtt" not in res:
+                continue
             rtt, one = res[f"{kind}_rtt"], res[f"{kind}_one_way"]
             raw = res[f"raw_{kind}_rtt"]
             rate = res[f"{kind}_throughput"]["msgs_per_s"]
@@ -375,13 +424,15 @@ def main(argv: list[str] | None = None) -> int:
     )  # fmt: skip
     print(
         "  (ms; RTT = ping -> typed echo that decodes and re-publishes -> ping; raw = the same\n"
-        "   sizes as plain bytes through plain Zenoh, measured in the same run: the floor; SHM on)"
+        "   sizes as plain bytes through plain Zenoh, measured in the same run: the floor;\n"
+        "   SHM on; p2p_low_latency: ZenohOptions.low_latency on both ends, small messages only)"
     )
     for name, res in results.items():
         counts = ", ".join(f"{who} {n}" for who, n in res["shm_fallbacks"].items())
         print(f"  shared-memory puts that fell back to ordinary ones ({name}): {counts}")
-    best_image_rtt = min(r["image_rtt"]["p50_ms"] for r in results.values())
-    best_image_rate = max(r["image_throughput"]["msgs_per_s"] for r in results.values())
+    with_images = [r for r in results.values() if "image_rtt" in r]
+    best_image_rtt = min(r["image_rtt"]["p50_ms"] for r in with_images)
+    best_image_rate = max(r["image_throughput"]["msgs_per_s"] for r in with_images)
     best_pose_rtt = min(r["pose_rtt"]["p50_ms"] for r in results.values())
     targets = {
         "image_rtt_p50_ms<=0.65": best_image_rtt <= 0.65,
@@ -392,7 +443,14 @@ def main(argv: list[str] | None = None) -> int:
         "targets (best local path)", ["target", "met"], [[k, v] for k, v in targets.items()]
     )
     rospy_result = rospy_side_by_side(results, args)
-    write_results("transport", {"results": results, "targets": targets, "rospy": rospy_result})
+    breakdown = None
+    if args.breakdown_rounds > 0:
+        breakdown = transport_breakdown.run(500, args.breakdown_rounds, list(SUMMARY))
+        transport_breakdown.report(breakdown)
+    write_results(
+        "transport",
+        {"results": results, "targets": targets, "rospy": rospy_result, "breakdown": breakdown},
+    )
     return 0
 
 

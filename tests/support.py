@@ -50,14 +50,23 @@ def zenoh_router(endpoint: str | None = None) -> Iterator[str]:
 
 
 def client_node(
-    endpoint: str, name: str = "test", namespace: str = "drone", *, mode: str = "peer", **kw
+    endpoint: str,
+    name: str = "test",
+    namespace: str = "drone",
+    *,
+    mode: str = "peer",
+    options_extra: dict | None = None,
+    **kw,
 ) -> Node:
-    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers).
+    """A Node for the test process itself, connected to ``endpoint`` (no signal handlers;
+    ``options_extra``: more ZenohOptions fields).
 
     ``mode="client"`` opens at once; a peer waits Zenoh's scouting delay (0.5 s) whenever
     other peers are already on the router.
     """
-    options = ZenohOptions(mode=mode, connect=[endpoint], namespace=namespace, name=name)
+    options = ZenohOptions(
+        mode=mode, connect=[endpoint], namespace=namespace, name=name, **(options_extra or {})
+    )
     return Node(name, options, handle_signals=False, **kw)
 
 

@@ -124,3 +124,19 @@ def test_a_second_sigint_exits_at_once(router, spawn):
     toy.proc.send_signal(signal.SIGINT)
     assert toy.proc.wait(20) == 130, toy.output()
     assert "second SIGINT: exiting now" in toy.output()
+
+
+def test_a_low_latency_service_serves_ordinary_and_low_latency_peers(router, spawn):
+    """``--low-latency`` is negotiated per link: a low-latency peer talks to a low-latency
+    one over the low-latency transport, and to an ordinary one the ordinary way."""
+    spawn(toy_argv(router, "--low-latency"), "toy")
+    with (
+        client_node(router, name="ordinary") as ordinary,
+        client_node(router, name="fast", options_extra={"low_latency": True}) as fast,
+    ):
+        wait_for(lambda: alive(ordinary, "toy"), 20, what="toy liveliness")
+        for node in (ordinary, fast):
+            received: list[ControllerStatus] = []
+            node.subscribe(registry.CONTROLLER_STATUS, received.append)
+            wait_for(lambda r=received: len(r) >= 3, 10, what=f"status at {node.name}")
+            assert node.call(registry.ARMING, CommandBool(value=True), timeout=5).success

@@ -9,6 +9,12 @@ import pytest
 
 from dronewrapper.runtime import ZenohOptions, add_zenoh_args, options_from_args, zenoh_config
 from dronewrapper.runtime.config import ConfigError, load_config
+from dronewrapper.runtime.node import Publisher
+from dronewrapper.runtime.options import (
+    LOW_LATENCY_MAX_BYTES,
+    LOW_LATENCY_RUNTIME,
+    zenoh_runtime_env,
+)
 
 
 class Pid(msgspec.Struct, forbid_unknown_fields=True):
@@ -95,3 +101,71 @@ def test_a_router_opens_without_waiting_to_scout():
 def test_bad_zenoh_options(kwargs):
     with pytest.raises(ValueError):
         ZenohOptions(**kwargs)
+
+
+def test_low_latency_asks_for_the_low_latency_transport_without_qos():
+    plain = zenoh_config(ZenohOptions(mode="peer"))
+    assert plain.get_json("transport/unicast/lowlatency") == "false"
+    assert plain.get_json("transport/unicast/qos/enabled") == "true"
+    fast = zenoh_config(ZenohOptions(mode="peer", low_latency=True))
+    assert fast.get_json("transport/unicast/lowlatency") == "true"
+    assert fast.get_json("transport/unicast/qos/enabled") == "false"
+
+
+def test_low_latency_is_refused_on_a_session_that_leaves_the_machine():
+    """A slow link needs priorities (control before camera frames), which it turns off."""
+    with pytest.raises(ValueError, match=r"low_latency.*tls/192\.168\.1\.50:7447"):
+        ZenohOptions(connect=["tls/192.168.1.50:7447"], low_latency=True)
+    with pytest.raises(ValueError, match="low_latency"):
+        ZenohOptions(connect=[], listen=["tcp/0.0.0.0:7448"], low_latency=True)
+
+
+def test_low_latency_flag_and_environment(monkeypatch):
+    parser = argparse.ArgumentParser()
+    add_zenoh_args(parser)
+    assert not options_from_args(parser.parse_args([])).low_latency
+    assert options_from_args(parser.parse_args(["--low-latency"])).low_latency
+    monkeypatch.setenv("DRONEWRAPPER_LOW_LATENCY", "1")
+    assert options_from_args(parser.parse_args([])).low_latency
+
+
+def test_a_low_latency_peer_takes_one_receive_thread_unless_told_otherwise():
+    fast = ZenohOptions(mode="peer", low_latency=True)
+    assert zenoh_runtime_env(fast, {}) == {"ZENOH_RUNTIME": LOW_LATENCY_RUNTIME}
+    assert zenoh_runtime_env(fast, {"ZENOH_RUNTIME": "(rx: (worker_threads: 3))"}) == {}
+    assert zenoh_runtime_env(ZenohOptions(mode="peer"), {}) == {}
+    router = ZenohOptions(mode="router", listen=["tcp/127.0.0.1:7447"], low_latency=True)
+    assert zenoh_runtime_env(router, {}) == {}
+
+
+class _Declared:
+    """What a Zenoh session's publisher is to Publisher: a ``put`` (recorded)."""
+
+    def __init__(self) -> None:
+        self.puts: list[bytes] = []
+
+    def put(self, payload: bytes, **_kw: object) -> None:
+        self.puts.append(payload)
+
+
+class _Session:
+    def __init__(self) -> None:
+        self.declared = _Declared()
+
+    def declare_publisher(self, _key: str, **_kw: object) -> _Declared:
+        return self.declared
+
+
+def test_a_low_latency_publisher_refuses_what_the_transport_would_drop():
+    """The low-latency transport does not fragment: a payload over one batch outside shared
+    memory would vanish without a word, so it is refused; a small one goes."""
+    from dronewrapper.msgs import CompressedImage, Header
+
+    session = _Session()
+    pub = Publisher(session, "drone/cam", CompressedImage, max_bytes=LOW_LATENCY_MAX_BYTES)
+    pub.put(CompressedImage(header=Header(), format="jpeg", data=bytes(1000)))
+    with pytest.raises(ValueError, match="over the 64000 bytes a low-latency session carries"):
+        pub.put(CompressedImage(header=Header(), format="jpeg", data=bytes(70_000)))
+    assert len(session.declared.puts) == 1 and pub.count == 1
+    unlimited = Publisher(_Session(), "drone/cam", CompressedImage)
+    unlimited.put(CompressedImage(header=Header(), format="jpeg", data=bytes(70_000)))

@@ -6,7 +6,7 @@ import logging
 
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.mavros import State
-from dronewrapper.runtime.caller import commander_attachment, current_commander
+from dronewrapper.runtime.caller import commander_attachment, current_commander, current_sent_at
 from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 
@@ -42,3 +42,21 @@ def test_failures_are_counted_per_key_and_logged_at_most_once_a_period(caplog):
     lines = [r.getMessage() for r in caplog.records]
     assert sum("undecodable sample" in line for line in lines) == 2  # t = 0 and t = 5
     assert sum("callback error" in line and "boom" in line for line in lines) == 1
+
+
+def test_a_sample_without_attachment_inside_a_handled_one_has_no_commander():
+    """The no-op path for samples without attachment must still hide an outer commander."""
+    seen: list[tuple[str, object]] = []
+    errors = SampleErrors(logging.getLogger("test"))
+    inner = decoding(
+        State, lambda _m: seen.append((current_commander(), current_sent_at())), errors
+    )
+
+    def outer_callback(_msg: State) -> None:
+        inner(KEY, codec.encode(State()), None)
+        seen.append((current_commander(), current_sent_at()))
+
+    outer = decoding(State, outer_callback, errors)
+    outer(KEY, codec.encode(State()), commander_attachment("alice", sent=12.5))
+    assert seen == [("", None), ("alice", 12.5)]
+    assert (current_commander(), current_sent_at()) == ("", None)

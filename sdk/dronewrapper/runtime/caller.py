@@ -69,9 +69,22 @@ def current_sent_at() -> float | None:
     return getattr(_local, "sent", None)
 
 
+_NOTHING_TO_RECORD = contextlib.nullcontext()
+
+
+def handling(attachment: Any) -> contextlib.AbstractContextManager[None]:
+    """Record ``attachment``'s commander and send time while a callback or handler runs.
+
+    Without an attachment, on a thread that records nothing already (most telemetry), there
+    is nothing to record nor to restore: a shared no-op context is returned (the generator
+    context costs about a microsecond per sample)."""
+    if attachment is None and current_commander() == "" and current_sent_at() is None:
+        return _NOTHING_TO_RECORD
+    return _recording(attachment)
+
+
 @contextlib.contextmanager
-def handling(attachment: Any) -> Iterator[None]:
-    """Record ``attachment``'s commander and send time while a callback or handler runs."""
+def _recording(attachment: Any) -> Iterator[None]:
     previous = current_commander(), current_sent_at()
     _local.commander, _local.sent = origin_of(attachment)
     try:

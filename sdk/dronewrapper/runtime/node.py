@@ -42,7 +42,7 @@ from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.latest import Latest
-from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.options import LOW_LATENCY_MAX_BYTES, ZenohOptions
 from dronewrapper.runtime.qos import qos_for
 from dronewrapper.runtime.session import (
     ERROR_ENCODING,
@@ -65,7 +65,9 @@ __all__ = ["Node", "Publisher", "alive_services", "call_service", "encoding_for"
 
 class Publisher(Generic[T]):
     """A typed publisher on one concrete key; images go through ``shm`` (written straight into
-    shared memory, see :mod:`dronewrapper.runtime.shm_put`) when given."""
+    shared memory, see :mod:`dronewrapper.runtime.shm_put`) when given. ``max_bytes``: the
+    largest payload it may put outside shared memory (a low-latency session's limit, see
+    :data:`~dronewrapper.runtime.options.LOW_LATENCY_MAX_BYTES`); None: any size."""
 
     def __init__(
         self,
@@ -74,9 +76,11 @@ class Publisher(Generic[T]):
         msg_type: type[T],
         *,
         shm: ShmWriter | None = None,
+        max_bytes: int | None = None,
         **qos: Any,
     ) -> None:
         self.key = key
+        self._max_bytes = max_bytes
         self.type = msg_type
         self.count = 0
         self._shm = shm
@@ -86,11 +90,27 @@ class Publisher(Generic[T]):
 
     def put(self, msg: T, *, attachment: bytes | None = None) -> None:
         """Publish ``msg`` (must be of this publisher's type); ``attachment`` travels with it
-        (see :mod:`dronewrapper.runtime.caller`)."""
+        (see :mod:`dronewrapper.runtime.caller`).
+
+        Raises:
+            TypeError: ``msg`` is not of this publisher's type.
+            ValueError: the encoded message is over ``max_bytes`` outside shared memory.
+        """
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
         payload = self._shm.payload(msg, wait_s=self._shm_wait_s) if self._shm else None
-        self._pub.put(codec.encode(msg) if payload is None else payload, attachment=attachment)
+        if payload is None:
+            payload = codec.encode(msg)
+            if self._max_bytes is not None and len(payload) > self._max_bytes:
+                raise ValueError(
+                    f"{self.key}: a {len(payload)}-byte {self.type.__name__} is over the "
+                    f"{self._max_bytes} bytes a low-latency session carries outside shared "
+                    "memory (it does not fragment); not sent"
+                )
+        if attachment is None:
+            self._pub.put(payload)  # quicker in the binding than attachment=None
+        else:
+            self._pub.put(payload, attachment=attachment)
         self.count += 1
 
     def watched(self) -> bool:
@@ -266,8 +286,14 @@ class Node:
         """
         options = {**qos_for(topic), **(qos or {})}
         shm = self.shm_writer if "data" in getattr(topic.type, "__struct_fields__", ()) else None
+        max_bytes = LOW_LATENCY_MAX_BYTES if self.options.low_latency else None
         pub = Publisher(
-            self.session, key or topic.key(self.ns, **parts), topic.type, shm=shm, **options
+            self.session,
+            key or topic.key(self.ns, **parts),
+            topic.type,
+            shm=shm,
+            max_bytes=max_bytes,
+            **options,
         )
         self._declared.append(pub)
         return pub

@@ -44,6 +44,12 @@ class ZenohOptions:
             ``~/.config/dronewrapper/keys``).
         access_control: a Zenoh ``access_control`` section (routers; see
             ``dronewrapper.security.acl``).
+        low_latency: speak Zenoh's low-latency transport where the other end does too (see
+            :data:`LOW_LATENCY_CONFIG`): each message is written to the socket by the
+            thread that puts it, with no batching, no priorities and no fragmentation
+            (:data:`LOW_LATENCY_MAX_BYTES`). Only for sessions that stay on this machine,
+            in processes that publish small messages (a controller, a bridge's
+            setpoints), never a camera's.
     """
 
     mode: str = "peer"
@@ -55,6 +61,7 @@ class ZenohOptions:
     identity: str = ""
     keys_dir: str = ""
     access_control: dict[str, Any] | None = None
+    low_latency: bool = False
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
@@ -64,6 +71,12 @@ class ZenohOptions:
         for endpoint in [*self.connect, *self.listen]:
             if "/" not in endpoint:
                 raise ValueError(f"endpoint {endpoint!r} is not PROTO/ADDRESS (tcp/127.0.0.1:7447)")
+        if self.low_latency and leaves_machine(self):
+            raise ValueError(
+                "low_latency is for sessions that stay on this machine (it turns priorities "
+                "off, and a slow link needs them to put control before camera frames); "
+                f"endpoints: {', '.join([*self.listen, *self.connect])}"
+            )
 
 
 def _split(value: str | None) -> list[str] | None:
@@ -111,6 +124,13 @@ def add_zenoh_args(parser: argparse.ArgumentParser, *, default_mode: str = "peer
     group.add_argument(
         "--no-shm", action="store_true", help="disable Zenoh shared memory for large payloads"
     )
+    group.add_argument(
+        "--low-latency",
+        action="store_true",
+        default=None,
+        help="Zenoh's low-latency transport on local links (no batching, no priorities; "
+        f"env {ENV_PREFIX}LOW_LATENCY=1)",
+    )
 
 
 def options_from_args(args: argparse.Namespace, *, name: str = "") -> ZenohOptions:
@@ -127,6 +147,8 @@ def options_from_args(args: argparse.Namespace, *, name: str = "") -> ZenohOptio
         name=args.name or name,
         shared_memory=not args.no_shm,
         identity=getattr(args, "identity", None) or env.get(f"{ENV_PREFIX}IDENTITY", ""),
+        low_latency=bool(getattr(args, "low_latency", None))
+        or env.get(f"{ENV_PREFIX}LOW_LATENCY", "") in ("1", "true", "yes"),
     )
 
 
@@ -156,6 +178,34 @@ in the kernel are beyond Zenoh's priorities: 1 MB of camera frames there made te
 late on a 5 Mbit/s link; 32 KB keeps it under 0.2 s."""
 
 
+LOW_LATENCY_CONFIG = {"transport/unicast/lowlatency": True, "transport/unicast/qos/enabled": False}
+"""Zenoh's low-latency unicast transport, and QoS off (which it requires). Both are negotiated
+when a link opens: a link uses them only where both of its ends ask for them, so a
+low-latency process still links to every other process, the ordinary way. On such a link a
+put is written to the socket by the putting thread (no transmit thread, no batching) and all
+priorities share one lane."""
+
+
+LOW_LATENCY_MAX_BYTES = 64_000
+"""The largest payload a low-latency session puts outside shared memory (bytes). The
+low-latency transport does not fragment: a message over one batch (64 KiB less headers) that
+does not travel in shared memory would be lost without a word, so the runtime's publishers
+refuse it (ValueError). Images travel in shared memory and are not concerned while the pool
+has room."""
+
+LOW_LATENCY_RUNTIME = "(rx: (worker_threads: 1))"
+"""Zenoh's receive runtime on one thread instead of two (``ZENOH_RUNTIME``, read once, when
+a process opens its first session): a sample then wakes one receiving thread, not two. A
+low-latency peer or client takes it unless ``ZENOH_RUNTIME`` is set; a router keeps two."""
+
+
+def zenoh_runtime_env(options: ZenohOptions, environ: dict[str, str]) -> dict[str, str]:
+    """The environment ``open_session`` adds before Zenoh starts its threads (pure)."""
+    if options.low_latency and options.mode != "router" and "ZENOH_RUNTIME" not in environ:
+        return {"ZENOH_RUNTIME": LOW_LATENCY_RUNTIME}
+    return {}
+
+
 def leaves_machine(options: ZenohOptions) -> bool:
     """True if this session listens on or connects to an endpoint beyond this machine."""
     return not all(is_local_endpoint(e) for e in [*options.listen, *options.connect])
@@ -179,6 +229,9 @@ def zenoh_config(options: ZenohOptions) -> zenoh.Config:
         # keep trying the router in the background instead of failing the process
         conf.insert_json5("connect/exit_on_failure", "false")
     conf.insert_json5("transport/shared_memory/enabled", json.dumps(options.shared_memory))
+    if options.low_latency:
+        for key, value in LOW_LATENCY_CONFIG.items():
+            conf.insert_json5(key, json.dumps(value))
     if leaves_machine(options):
         # camera frames must not sit in front of telemetry where priorities cannot reorder them
         conf.insert_json5("transport/link/tx/batch_size", str(SLOW_LINK_BATCH_BYTES))

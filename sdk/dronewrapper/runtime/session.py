@@ -8,6 +8,7 @@ back as :class:`~dronewrapper.runtime.errors.ServiceError` with the server's mes
 
 from __future__ import annotations
 
+import os
 import time
 from typing import TypeVar
 
@@ -23,7 +24,7 @@ from dronewrapper.runtime.errors import (
     ServiceUnavailable,
     zenoh_error_text,
 )
-from dronewrapper.runtime.options import ZenohOptions, zenoh_config
+from dronewrapper.runtime.options import ZenohOptions, zenoh_config, zenoh_runtime_env
 from dronewrapper.runtime.qos import SERVICE_QOS
 
 Req = TypeVar("Req")
@@ -50,9 +51,23 @@ def encoding_for(msg_type: type) -> zenoh.Encoding:
 def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Session:
     """Open a Zenoh session, retrying while the router is not up yet.
 
+    A low-latency session's process runs Zenoh's receive runtime on one thread (see
+    :data:`~dronewrapper.runtime.options.LOW_LATENCY_RUNTIME`; effective when it is the
+    process's first session).
+
     Raises:
         ConnectionError: no session could be opened within ``timeout`` seconds.
     """
+    added = zenoh_runtime_env(options, dict(os.environ))
+    os.environ.update(added)  # read by Zenoh as it starts its threads, at the first open
+    try:
+        return _open(options, timeout)
+    finally:
+        for key in added:  # not for the processes this one starts
+            os.environ.pop(key, None)
+
+
+def _open(options: ZenohOptions, timeout: float) -> zenoh.Session:
     deadline = time.monotonic() + timeout
     while True:
         try:
