@@ -27,6 +27,7 @@ of that design in this Python.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import socket
@@ -428,14 +429,16 @@ def run_socket(samples: int, placement: str = "any"):
     got = threading.Event()
 
     def loop() -> None:
-        while True:
-            head = conn.recv(4, socket.MSG_WAITALL)
-            if len(head) < 4:
-                return
-            conn.recv(struct.unpack("<I", head)[0], socket.MSG_WAITALL)
-            got.set()
+        with contextlib.suppress(OSError):  # the socket closed: the measurement is over
+            while True:
+                head = conn.recv(4, socket.MSG_WAITALL)
+                if len(head) < 4:
+                    return
+                conn.recv(struct.unpack("<I", head)[0], socket.MSG_WAITALL)
+                got.set()
 
-    threading.Thread(target=loop, daemon=True).start()
+    reader = threading.Thread(target=loop, daemon=True)
+    reader.start()
     frame = struct.pack("<I", len(PAYLOAD)) + PAYLOAD
 
     def wait() -> None:
@@ -448,6 +451,7 @@ def run_socket(samples: int, placement: str = "any"):
         return measure(lambda: conn.sendall(frame), wait, samples, pids)
     finally:
         conn.shutdown(socket.SHUT_RDWR)
+        reader.join(2.0)
         conn.close()
         echo.close()
         os.sched_setaffinity(0, mine)
