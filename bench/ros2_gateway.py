@@ -119,10 +119,27 @@ def telemetry(pubs, seconds: float) -> int:
     return sent
 
 
+def timed_poses(publisher, seconds: float) -> tuple[int, float, float]:
+    """Put a marked pose at ``POSE_HZ`` for ``seconds``; the number put and the p50 and p90 of
+    each ``put`` call's time (µs)."""
+    puts: list[float] = []
+
+    def put(i: int) -> None:
+        msg = PoseStamped(header=Header.now("map"), pose=Pose(position=Point(x=float(i))))
+        t0 = time.perf_counter()
+        publisher.put(msg)
+        puts.append((time.perf_counter() - t0) * 1e6)
+
+    n = stream(put, POSE_HZ, seconds)
+    p50, p90 = np.percentile(puts, [50, 90])
+    return n, float(p50), float(p90)
+
+
 def publisher_main(endpoint: str, ns: str, hosted: bool) -> int:
     """The child: a stand-in for a bridge on ``endpoint`` (drone ``ns``; hosting the gateway
     when ``hosted``). Reads ``pose|image|telemetry SECONDS`` lines on stdin, answers each with
-    ``done N`` once published; ``ready`` once declared."""
+    ``done N`` once published (a pose phase adds the p50 and p90 of its ``put`` calls' time,
+    µs: what a bridge's thread spends in them); ``ready`` once declared."""
     from dronewrapper_ros2_gateway.config import Config
     from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
@@ -139,13 +156,9 @@ def publisher_main(endpoint: str, ns: str, hosted: bool) -> int:
         for line in sys.stdin:
             what, seconds = line.split()
             if what == "pose":
-                n = stream(
-                    lambda i: pose.put(
-                        PoseStamped(header=Header.now("map"), pose=Pose(position=Point(x=float(i))))
-                    ),
-                    POSE_HZ,
-                    float(seconds),
-                )
+                n, p50, p90 = timed_poses(pose, float(seconds))
+                print(f"done {n} {p50:.2f} {p90:.2f}", flush=True)
+                continue
             elif what == "image":
                 n = stream(
                     lambda i: image.put(
@@ -175,11 +188,13 @@ class Publisher:
         )
         self.ready = self.proc.stdout.readline().strip() == "ready"
 
-    def run(self, what: str, seconds: float) -> int:
-        """Ask for ``what`` for ``seconds``; the number of messages put."""
+    def run(self, what: str, seconds: float) -> tuple[int, list[float]]:
+        """Ask for ``what`` for ``seconds``; the number of messages put, and the phase's
+        figures (pose: the put time's p50 and p90, µs)."""
         self.proc.stdin.write(f"{what} {seconds}\n")
         self.proc.stdin.flush()
-        return int(self.proc.stdout.readline().split()[1])
+        _, n, *figures = self.proc.stdout.readline().split()
+        return int(n), [float(f) for f in figures]
 
     def cpu(self) -> float:
         return cpu_seconds(self.proc.pid)
@@ -265,7 +280,7 @@ def latency_phase(receiver: Node, publisher: Publisher, ns: str, seconds: float)
     """Pose and image added latency of one drone's publisher (its mode: who relays ``ns``)."""
     pose = pose_arrivals(receiver, ns)
     time.sleep(0.5)
-    publisher.run("pose", seconds)
+    _, (put_p50, put_p90) = publisher.run("pose", seconds)
     time.sleep(0.3)
     pose.close()
     image = image_arrivals(receiver, ns)
@@ -277,6 +292,7 @@ def latency_phase(receiver: Node, publisher: Publisher, ns: str, seconds: float)
     return {
         "pose": {**percentiles(pose.added()), "sent": len(pose.direct)},
         "image": {**percentiles(image.added()), "sent": len(image.direct)},
+        "pose_put_us": {"p50": put_p50, "p90": put_p90},
     }
 
 
@@ -294,7 +310,7 @@ def cpu_phase(receiver: Node, publisher: Publisher, ns: str, seconds: float, *pi
     ]
     time.sleep(1.0)
     c0, w0 = [cpu_seconds(pid) for pid in pids], time.monotonic()
-    sent = publisher.run("telemetry", seconds)
+    sent, _ = publisher.run("telemetry", seconds)
     elapsed = time.monotonic() - w0
     shares = [(cpu_seconds(pid) - c) / elapsed for pid, c in zip(pids, c0, strict=True)]
     time.sleep(0.2)
@@ -385,6 +401,8 @@ def main(argv: list[str] | None = None) -> int:
             "bare_relay_pose_added_latency": relay_added,
             "image_640x480_added_latency": standalone["image"],
             "hosted_image_640x480_added_latency": in_bridge["image"],
+            "publisher_pose_put_us": standalone["pose_put_us"],
+            "hosted_publisher_pose_put_us": in_bridge["pose_put_us"],
             "gateway_work_pose": pose_work,
             "gateway_work_image_640x480": image_work,
             "cpu_one_core": {
@@ -418,6 +436,14 @@ def main(argv: list[str] | None = None) -> int:
             "ROS 2 gateway: added latency (ROS 2 arrival - direct arrival)",
             ["message", "n", "p50 ms", "p90 ms", "p99 ms", "max ms"],
             rows,
+        )
+        print_table(
+            "The publisher's put of a pose (its thread's time in put)",
+            ["publisher", "p50 us", "p90 us"],
+            [
+                ["plain (the standalone gateway relays it)", *standalone["pose_put_us"].values()],
+                ["hosting the gateway", *in_bridge["pose_put_us"].values()],
+            ],
         )
         print_table(
             "ROS 2 gateway: its own work per message (no I/O)",

@@ -7,13 +7,16 @@ and one Zenoh declaration on the ROS 2 key:
 - out (telemetry, images): our sample -> CDR -> ``put`` with the rmw_zenoh attachment (cameras
   are subscribed only while a ROS 2 subscriber matches);
 - in (``setpoint_raw/local``): CDR -> PositionTarget -> the project's setpoint rules -> our
-  setpoint key, under the gateway's commander name, so the bridge's lease and failsafe apply;
+  setpoint key, under the gateway's commander name and with the ROS 2 publisher's send time,
+  so the bridge's lease, late-setpoint rule and failsafe apply;
 - services: CDR request -> our request -> the bridge's service -> its reply as the ROS 2
   response; a refusal (lease, bad request) is ``success: false`` with MAV_RESULT_DENIED, no
   reply from the bridge is MAV_RESULT_FAILED (ROS 2 clients get no error channel).
 
 It also reads every ROS 2 endpoint's token on its domain and logs each type disagreement with
-one of its own entities (:mod:`dronewrapper.ros2.mismatch`).
+one of its own entities (:mod:`dronewrapper.ros2.mismatch`). :func:`run` is the gateway as a
+process of its own; :mod:`dronewrapper_ros2_gateway.hosted` runs the same :class:`Gateway`
+inside a bridge.
 """
 
 from __future__ import annotations
