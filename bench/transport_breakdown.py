@@ -6,7 +6,8 @@ peer unless it says router. What a variant changes:
 
 * how the ping side waits for its pong: an ``Event`` set by a subscriber callback run on a
   Python thread of the binding's (``indirect``, the binding's default), or run directly on
-  Zenoh's receive thread (``direct``), or the main thread blocked in a FIFO channel's
+  Zenoh's receive thread (``direct``; ``kept``: and that thread keeps its Python thread state,
+  see ``dronewrapper.runtime.thread_state``), or the main thread blocked in a FIFO channel's
   ``recv()`` (``recv``: no callback at all);
 * how the echo answers: the same three (``recv`` = a Python thread blocked in ``recv()``);
 * how it publishes: a declared publisher, an ``express`` one (no batching), ``session.put``;
@@ -46,6 +47,7 @@ from dronewrapper.msgs import CompressedImage, Header, codec, registry
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
 from dronewrapper.runtime.session import encoding_for
+from dronewrapper.runtime.thread_state import KEPT
 
 PING_KEY, PONG_KEY = "bench/breakdown/ping", "bench/breakdown/pong"
 DATA = bytes(64)
@@ -56,6 +58,8 @@ ONE_RX = {"ZENOH_RUNTIME": "(rx: (worker_threads: 1))"}
 TWO_RX = {"ZENOH_RUNTIME": "(rx: (worker_threads: 2))"}  # the binding's default
 SUMMARY = (
     "binding defaults",
+    "direct callbacks both",
+    "thread states kept",
     "lowlatency transport",
     "one rx thread",
     "recv ping, direct echo, lowlatency, one rx thread",
@@ -100,6 +104,8 @@ VARIANTS = (
     Variant("lowlatency transport (QoS off)", config=LOW_LATENCY),
     Variant("direct callbacks both ends", ping="direct", echo="direct"),
     Variant("recv threads both ends", ping="recv", echo="recv"),
+    Variant("direct, thread states kept", ping="kept", echo="kept"),
+    Variant("direct, thread states kept, lowlatency", ping="kept", echo="kept", config=LOW_LATENCY),
     Variant("recv ping, direct echo", ping="recv", echo="direct"),
     Variant("recv ping, direct echo, lowlatency", ping="recv", echo="direct", config=LOW_LATENCY),
     Variant("direct both ends, lowlatency", ping="direct", echo="direct", config=LOW_LATENCY),
@@ -172,6 +178,13 @@ def subscribe(session: zenoh.Session, key: str, how: str, on_payload):
     and the caller receives itself."""
     if how == "recv":
         return session.declare_subscriber(key, zenoh.handlers.FifoChannel(64))
+    if how == "kept":  # direct, and Zenoh's thread keeps its Python thread state
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            KEPT.keep()
+            on_payload(sample.payload.to_bytes())
+
+        return session.declare_subscriber(key, zenoh.handlers.Callback(on_sample, indirect=False))
     handler = zenoh.handlers.Callback(
         lambda sample: on_payload(sample.payload.to_bytes()), indirect=how == "indirect"
     )

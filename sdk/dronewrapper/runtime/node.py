@@ -53,6 +53,7 @@ from dronewrapper.runtime.session import (
 )
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.runtime.shm_put import BLOCK_WAIT_S, ShmWriter
+from dronewrapper.runtime.thread_state import KEPT
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -321,10 +322,13 @@ class Node:
         keyexpr = key or topic.key(self.ns, **parts)
         deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
 
+        inline = self._direct if direct is None else direct
+
         def on_sample(sample: zenoh.Sample) -> None:
+            if inline:  # on a Zenoh thread: keep its Python thread state (see thread_state)
+                KEPT.keep()
             deliver(str(sample.key_expr), sample.payload.to_bytes(), sample.attachment)
 
-        inline = self._direct if direct is None else direct
         handler = zenoh.handlers.Callback(on_sample, indirect=not inline)
         sub = self.session.declare_subscriber(keyexpr, handler)
         self._declared.append(sub)
