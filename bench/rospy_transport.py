@@ -12,9 +12,9 @@ when it finds it: ``/usr/bin/python3 bench/rospy_transport.py [--small N] [--ima
   child.
 
 Prints one JSON object: ``{"small_rtt_ms": {...}, "image_rtt_ms": {...}, "images_per_s": x,
-"small_per_s": x, "small_switches_per_rtt": n}`` (the last: the context switches of both
-nodes' threads per 64-byte round trip, from ``/proc``, as ``bench.transport_breakdown``
-counts the thread hand-offs).
+"small_per_s": x, "small_switches_per_rtt": n, "small_migrations_per_rtt": n}`` (the last
+two: both nodes' threads' context switches and moves between CPUs per 64-byte round trip,
+from ``/proc``, as ``bench.transport_breakdown`` counts them).
 It does not import the project (the system Python has none of its dependencies).
 """
 
@@ -96,6 +96,21 @@ def context_switches(pid: int) -> int:
     return total
 
 
+def migrations(pid: int) -> int:
+    """Moves of ``pid``'s threads from one CPU to another so far (``se.nr_migrations``)."""
+    total = 0
+    for task in os.listdir(f"/proc/{pid}/task"):
+        try:
+            with open(f"/proc/{pid}/task/{task}/sched") as sched:
+                total += sum(int(line.split()[-1]) for line in sched if "nr_migrations" in line)
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+    return total
+
+
+MIGRATIONS: dict[str, float] = {}
+"""Both nodes' threads' moves from one CPU to another per round trip, by topic."""
+
 SWITCHES: dict[str, float] = {}
 """Context switches of both nodes per round trip, by topic (filled by ``round_trips``)."""
 
@@ -112,10 +127,11 @@ def round_trips(rospy, topic: str, msg_type, make, samples: int, warmup: int = 5
         time.sleep(0.05)
     time.sleep(0.5)
     rtts = []
-    switches = 0
+    switches = moves = 0
     for i in range(warmup + samples):
         if i == warmup:
             switches = sum(context_switches(pid) for pid in pids)
+            moves = sum(migrations(pid) for pid in pids)
         got.clear()
         msg = make()
         t0 = time.perf_counter()
@@ -126,6 +142,7 @@ def round_trips(rospy, topic: str, msg_type, make, samples: int, warmup: int = 5
             rtts.append(time.perf_counter() - t0)
     if pids and samples:
         SWITCHES[topic] = (sum(context_switches(pid) for pid in pids) - switches) / samples
+        MIGRATIONS[topic] = (sum(migrations(pid) for pid in pids) - moves) / samples
     sub.unregister()
     pub.unregister()
     return rtts
@@ -208,6 +225,7 @@ def main() -> int:
             rospy, child, "small", UInt8MultiArray, UInt8MultiArray(data=small), args.seconds
         )
         result["small_switches_per_rtt"] = SWITCHES.get("small")
+        result["small_migrations_per_rtt"] = MIGRATIONS.get("small")
         print(json.dumps(result), flush=True)
         return 0
     finally:

@@ -371,9 +371,10 @@ def rospy_side_by_side(results: dict, args: argparse.Namespace) -> dict | None:
         rows,
     )
     print(
-        "  (round trips: lower is better; msgs/s: higher is better. rospy's thread hand-offs\n"
-        f"   per 64 B round trip: {ros.get('small_switches_per_rtt') or 0:.1f} context switches; "
-        "ours: python -m bench.transport_breakdown)"
+        "  (round trips: lower is better; msgs/s: higher is better. rospy per 64 B round trip:\n"
+        f"   {ros.get('small_switches_per_rtt') or 0:.1f} context switches, "
+        f"{ros.get('small_migrations_per_rtt') or 0:.2f} moves between CPUs; ours: the "
+        "breakdown below)"
     )
     return {"rospy": ros, "ratio": ratios}
 

@@ -1,8 +1,8 @@
 """Where a 64-byte round trip's time goes: the same ping/echo over plain zenoh-python, one
 variant changed at a time, with the thread hand-offs counted.
 
-Each variant is a pinging process (this one) and an echo process (a child) on loopback, peer to
-peer unless it says router. What a variant changes:
+Each variant is two fresh processes on loopback, a ping and an echo, peer to peer unless it
+says router. What a variant changes:
 
 * how the ping side waits for its pong: an ``Event`` set by a subscriber callback run on a
   Python thread of the binding's (``indirect``, the binding's default), or run directly on
@@ -12,17 +12,23 @@ peer unless it says router. What a variant changes:
 * how the echo answers: the same three (``recv`` = a Python thread blocked in ``recv()``);
 * how it publishes: a declared publisher, an ``express`` one (no batching), ``session.put``;
 * Zenoh configuration on every session of the variant (``lowlatency`` transport, QoS off,
-  batching off, priority).
+  batching off, priority) and Zenoh's receive runtime on one thread (``ZENOH_RUNTIME``);
+* ``ours``: our runtime's Node on both ends (or on one), a typed 64-byte CompressedImage
+  encoded and decoded, the ways ``ZenohOptions`` and ``Node`` offer.
 
 Besides the round trip's p50/p99 it reports the context switches of both processes per round
 trip (``/proc/PID/task/*/status``, voluntary + involuntary): each is a thread going to sleep
-and being woken, so it counts the hand-offs whatever the load. Rounds are interleaved (every
-variant once per round) and the table gives the median of the rounds' p50, so a burst of load
-from other processes hits every variant alike. ``socket`` is a plain Python TCP echo built the
-way rospy's TCPROS is (a reader thread per connection, an ``Event`` to the caller): the floor
-of that design in this Python.
+and being woken, so it counts the hand-offs whatever the load; and their threads' moves from
+one CPU to another (``se.nr_migrations`` in ``/proc/PID/task/*/sched``): a thread woken on
+the other CPU, which on a virtual machine may have to be woken from its halt first. Rounds
+are interleaved (every variant once per round) and the table gives the median of the rounds'
+p50, so a burst of load from other processes hits every variant alike. ``socket`` is a plain
+Python TCP echo built the way rospy's TCPROS is (a reader thread per connection, an ``Event``
+to the caller): the floor of that design in this Python. ``--placement`` pins the two
+processes: ``same`` (both on CPU 0), ``split`` (CPU 0 and CPU 1).
 
     python -m bench.transport_breakdown [--samples 1000] [--rounds 3] [--only NAME ...]
+                                        [--placement any|same|split] [--threads]
 """
 
 from __future__ import annotations
@@ -289,6 +295,18 @@ def thread_switches(pid: int) -> dict[str, int]:
     return counts
 
 
+def migrations(pid: int) -> int:
+    """Moves of ``pid``'s threads from one CPU to another so far (``se.nr_migrations``)."""
+    total = 0
+    for task in os.listdir(f"/proc/{pid}/task"):
+        try:
+            with open(f"/proc/{pid}/task/{task}/sched") as sched:
+                total += sum(int(line.split()[-1]) for line in sched if "nr_migrations" in line)
+        except (FileNotFoundError, ProcessLookupError):
+            continue  # a thread that ended meanwhile
+    return total
+
+
 class Child:
     """A child process of this module (an echo, a ping); its first line of output is kept."""
 
@@ -321,6 +339,7 @@ def measure(send, wait, samples: int, pids: dict[str, int], warmup: int = 100):
         wait()
     before = {role: thread_switches(pid) for role, pid in pids.items()}
     cpu_before = sum(cpu_seconds(pid) for pid in pids.values())
+    moves_before = sum(migrations(pid) for pid in pids.values())
     rtts = np.empty(samples)
     for i in range(samples):
         t0 = time.perf_counter()
@@ -328,11 +347,12 @@ def measure(send, wait, samples: int, pids: dict[str, int], warmup: int = 100):
         wait()
         rtts[i] = time.perf_counter() - t0
     cpu_us = (sum(cpu_seconds(pid) for pid in pids.values()) - cpu_before) / samples * 1e6
+    moves = (sum(migrations(pid) for pid in pids.values()) - moves_before) / samples
     per_rtt = {}
     for role, pid in pids.items():
         for name, count in thread_switches(pid).items():
             per_rtt[f"{role}/{name}"] = (count - before[role].get(name, 0)) / samples
-    return rtts, per_rtt, cpu_us
+    return rtts, per_rtt, cpu_us, moves
 
 
 def serve_ping(variant: Variant, mode: str, connect: list[str], samples: int, echo_pid: int):
@@ -361,11 +381,14 @@ def serve_ping(variant: Variant, mode: str, connect: list[str], samples: int, ec
 
         time.sleep(0.5)  # let the routes settle
         pids = {"ping": os.getpid(), "echo": echo_pid}
-        rtts, per_rtt, cpu_us = measure(lambda: put(PAYLOAD), wait, samples, pids)
+        rtts, per_rtt, cpu_us, moves = measure(lambda: put(PAYLOAD), wait, samples, pids)
         if variant.ping == "recv":
             watchdog.cancel()
         print(
-            json.dumps({"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us}), flush=True
+            json.dumps(
+                {"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us, "migrations": moves}
+            ),
+            flush=True,
         )
     finally:
         session.close()
@@ -385,9 +408,14 @@ def serve_ping_ours(variant: Variant, mode: str, connect: list[str], samples: in
 
         time.sleep(0.5)  # let the routes settle
         pids = {"ping": os.getpid(), "echo": echo_pid}
-        rtts, per_rtt, cpu_us = measure(lambda: pub.put(small_message()), wait, samples, pids)
+        rtts, per_rtt, cpu_us, moves = measure(
+            lambda: pub.put(small_message()), wait, samples, pids
+        )
         print(
-            json.dumps({"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us}), flush=True
+            json.dumps(
+                {"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us, "migrations": moves}
+            ),
+            flush=True,
         )
 
 
@@ -424,7 +452,7 @@ def run_zenoh(variant: Variant, samples: int, placement: str = "any"):
         switches = result["switches"]
         if router is not None:
             switches.update({f"router/{t}": n for t, n in result.get("router", {}).items()})
-        return np.asarray(result["rtts"]), switches, result["cpu_us"]
+        return np.asarray(result["rtts"]), switches, result["cpu_us"], result["migrations"]
     finally:
         echo.close()
         if router is not None:
@@ -515,12 +543,14 @@ def run(
     pooled: dict[str, list[np.ndarray]] = {name: [] for name in names}
     switches: dict[str, list[dict[str, float]]] = {name: [] for name in names}
     cpu: dict[str, list[float]] = {name: [] for name in names}
+    moved: dict[str, list[float]] = {name: [] for name in names}
     for _ in range(rounds):
         runs = [(v.name, lambda v=v: run_zenoh(v, samples, placement)) for v in chosen]
         if with_socket:
             runs.append((SOCKET, lambda: run_socket(samples, placement)))
         for name, run_once in runs:
-            rtts, per_rtt, cpu_us = run_once()
+            rtts, per_rtt, cpu_us, moves = run_once()
+            moved[name].append(moves)
             pooled[name].append(rtts)
             switches[name].append(per_rtt)
             cpu[name].append(cpu_us)
@@ -537,6 +567,7 @@ def run(
             "switches_per_rtt": float(np.median([sum(c.values()) for c in switches[name]])),
             "switches_per_rtt_by_thread": {t: n for t, n in by_thread.items() if n >= 0.05},
             "cpu_us_per_rtt": float(np.median(cpu[name])),
+            "migrations_per_rtt": float(np.median(moved[name])),
         }
     return results
 
@@ -547,17 +578,27 @@ def report(results: dict[str, dict], threads: bool = False) -> None:
     base = next(iter(results.values()))["p50_ms"]
     rows = [
         [name, r["p50_ms"], min(r["p50_ms_rounds"]), r["p99_ms"], r["p50_ms"] / base,
-         r["switches_per_rtt"], r["cpu_us_per_rtt"]]
+         r["switches_per_rtt"], r["migrations_per_rtt"], r["cpu_us_per_rtt"]]
         for name, r in results.items()
     ]  # fmt: skip
     print_table(
         "64-byte round trip between two processes, plain zenoh-python, one change at a time",
-        ["variant", "p50", "best p50", "p99", "vs defaults", "switches / RTT", "CPU µs / RTT"],
+        [
+            "variant",
+            "p50",
+            "best p50",
+            "p99",
+            "vs defaults",
+            "switches / RTT",
+            "moves / RTT",
+            "CPU µs / RTT",
+        ],
         rows,
     )
     print(
         "  (ms; p50 = median of the rounds' medians, best = lowest round; p99 over all rounds;\n"
         "   context switches of both processes per round trip: threads woken and put to sleep;\n"
+        "   moves: their threads' migrations from one CPU to the other per round trip;\n"
         "   CPU: both processes' user + system time per round trip)"
     )
     if threads:
