@@ -121,11 +121,18 @@ class Rig(BridgeUser):
         wait_for(lambda: self.state.value and not self.state.value.armed, 5, what="disarmed")
 
 
-def start_sim(spawn, router: str, address: str):
+AUTO_LAND_S = 8.0
+"""The simulated Tello's auto-land timeout in the tests that wait for it (the real drone's 15 s
+is the default): a keep-alive every ``keepalive_s`` (3 s) must still beat it."""
+
+
+def start_sim(spawn, router: str, address: str, auto_land_s: float | None = None):
+    """The simulated Tello on ``address``; ``auto_land_s`` shortens its 15 s auto-land."""
+    extra = ["--set", f"tello.auto_land_s={auto_land_s}"] if auto_land_s else []
     return spawn(
         python_module(
             "dronewrapper_sim", "--aircraft", "tello", "--scenario", "empty",
-            "--address", address, "--connect", router, "--name", "sim",
+            "--address", address, "--connect", router, "--name", "sim", *extra,
         ),
         "sim",
     )  # fmt: skip
@@ -141,9 +148,11 @@ def start_bridge(spawn, router: str, tello: str, local: str, *extra: str):
     )  # fmt: skip
 
 
-def make_rig(router, spawn, *bridge_args: str, tello: str | None = None) -> Rig:
+def make_rig(
+    router, spawn, *bridge_args: str, tello: str | None = None, auto_land_s: float | None = None
+) -> Rig:
     address = loopback_address()
-    sim = start_sim(spawn, router, address)
+    sim = start_sim(spawn, router, address, auto_land_s)
     bridge = start_bridge(spawn, router, tello or address, address, *bridge_args)
     user = client_node(router, name="test")
     rig = Rig(router, address, user, sim, bridge)
@@ -245,10 +254,20 @@ def test_takeoff_axes_yaw_stop_position_land(rig):
     rig.wait_landed()
 
 
-def test_keepalive_then_failsafe_hold_and_commander_lost_land(rig):
+@pytest.fixture
+def short_auto_land_rig(router, spawn) -> Iterator[Rig]:
+    """A rig whose Tello lands after AUTO_LAND_S without a command."""
+    r = make_rig(router, spawn, "--set", "video=false", auto_land_s=AUTO_LAND_S)
+    yield r
+    r.close()
+    r.user.close()
+
+
+def test_keepalive_then_failsafe_hold_and_commander_lost_land(short_auto_land_rig):
+    rig = short_auto_land_rig
     rig.take_off(1.0)
-    # nobody commands for 18 s: the Tello would land after 15 s; the bridge keeps it alive
-    deadline = time.monotonic() + 18.0
+    # nobody commands for 1.5 auto-land timeouts: the Tello would land; the bridge keeps it alive
+    deadline = time.monotonic() + 1.5 * AUTO_LAND_S
     while time.monotonic() < deadline:
         assert rig.true_xyz()[2] > 0.7, "the Tello landed by itself: no keep-alive"
         time.sleep(0.5)
@@ -268,14 +287,16 @@ def test_keepalive_then_failsafe_hold_and_commander_lost_land(rig):
 
 
 def test_killed_bridge_the_tello_lands_by_itself(router, spawn):
-    rig = make_rig(router, spawn, "--set", "video=false")
+    rig = make_rig(router, spawn, "--set", "video=false", auto_land_s=AUTO_LAND_S)
     try:
         rig.take_off(1.0)
         rig.bridge.proc.send_signal(signal.SIGKILL)
         rig.bridge.proc.wait(5)
         killed = time.monotonic()
         wait_for(lambda: rig.true_xyz()[2] < 0.05, 35, what="auto-land after the bridge died")
-        assert time.monotonic() - killed > 10.0  # the Tello's own 15 s timeout, not a crash
+        # the Tello's own timeout, not a crash: the bridge's last command (a keep-alive at
+        # most keepalive_s = 3 s before the kill) is AUTO_LAND_S old before the descent starts
+        assert time.monotonic() - killed > AUTO_LAND_S - 3.0
     finally:
         rig.close()
         rig.user.close()
