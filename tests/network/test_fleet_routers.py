@@ -28,6 +28,7 @@ import contextlib
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -144,6 +145,15 @@ def key_folders(root, net: FieldLinkGround) -> dict[str, str]:
     return folders
 
 
+def stop_together(processes: list[Process]) -> None:
+    """SIGINT to every process at once, then wait for each (up to 60 s, then SIGKILL)."""
+    for process in processes:
+        if process.alive():
+            process.proc.send_signal(signal.SIGINT)
+    for process in processes:
+        process.stop(60)
+
+
 def answer(probe: subprocess.Popen) -> None:
     probe.stdin.write("go\n")
     probe.stdin.flush()
@@ -158,10 +168,12 @@ def flight(tmp_path_factory) -> dict:
         py = sys.executable
         lf, lg = net.link_field_address, net.link_ground_address
 
+        processes: list[Process] = []
+        stack.callback(stop_together, processes)
+
         def start(ns: str, name: str, argv: list[str]) -> Process:
-            process = Process(net.argv(ns, argv), tmp_path / f"{name}.log")
-            stack.callback(process.stop, 60)
-            return process
+            processes.append(Process(net.argv(ns, argv), tmp_path / f"{name}.log"))
+            return processes[-1]
 
         measure_server = start(net.ground, "measure_server", [
             py, "tests/network/link_measure.py", "serve", f"{net.ground_address}:{MEASURE_PORT}",
