@@ -1,0 +1,262 @@
+"""A classroom's cost on the laptop: N Tello bridges with video on, or on demand with nobody
+watching, as one bridge process per Tello or as one process for all N.
+
+N Tello stand-ins live in this process, each on a loopback address of its own: they answer
+``command``, ``streamon``/``streamoff`` and reads at once, send a state string at 10 Hz and,
+while ``streamon`` is in force, 960x720 H.264 at 30 fps (the simulated Tello's own encoder,
+libx264 ultrafast/zerolatency at 1.5 Mbit/s, a key frame every 30 frames, encoded once before
+the run and replayed in a loop, so the stand-ins cost little next to the bridges). Each
+arrangement is started afresh on one loopback Zenoh router (in this process) with nobody
+subscribing to a camera; after the bridges are connected and settled, the bridges' CPU (user +
+system, share of one core) is measured over ``--seconds``, with their memory (RSS):
+
+* ``per Tello, video on``: N ``python -m dronewrapper_bridge_tello`` processes, ``video=on``;
+* ``per Tello, on demand``: the same with ``video=on_demand`` (the classroom graph's default);
+* ``one process, ...``: the N bridges in one process (``--host``: N nodes, N bridges, one
+  interpreter), each mode.
+
+Run: ``.venv/bin/python -m bench.tello_classroom [--tellos 3] [--seconds 20]``; writes
+bench/results/tello_classroom.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bench.common import LoopbackRouter, cpu_seconds, print_table, stop_process, write_results
+from dronewrapper_sim.tello.video import H264Encoder, packetise
+
+REPO = Path(__file__).resolve().parents[1]
+W, H, FPS, LOOP_FRAMES = 960, 720, 30.0, 60
+STATE = (
+    "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;"
+    "templ:60;temph:62;tof:10;h:0;bat:87;baro:100.00;time:0;agx:0.00;agy:0.00;agz:-1000.00;\r\n"
+)
+ARRANGEMENTS = (  # (label, one process for all, video mode)
+    ("per Tello, video on", False, "on"),
+    ("per Tello, on demand", False, "on_demand"),
+    ("one process, video on", True, "on"),
+    ("one process, on demand", True, "on_demand"),
+)
+
+
+def encoded_loop() -> list[list[bytes]]:
+    """``LOOP_FRAMES`` frames of a moving gradient, H.264, each as its 1460-byte datagrams."""
+    encoder = H264Encoder(W, H, FPS, 1500, 30)
+    frames = []
+    for i in range(LOOP_FRAMES):
+        img = np.empty((H, W, 3), np.uint8)
+        img[:] = ((np.arange(W) + 8 * i) % 256).astype(np.uint8)[None, :, None]
+        img[:, :, 2] = (np.arange(H) // 3 % 256).astype(np.uint8)[:, None]
+        frames.append(packetise(encoder.encode(img)))
+    encoder.close()
+    return frames
+
+
+class StandInTello:
+    """One Tello: replies at once, state at 10 Hz, the replayed video while streaming."""
+
+    def __init__(self, address: str, video: list[list[bytes]]) -> None:
+        self.address = address
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind((address, 8889))
+        self.sock.settimeout(0.1)
+        self.out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.video = video
+        self.client: str | None = None
+        self.streaming = False
+        self.switches: list[str] = []  # streamon / streamoff received, in order
+        self.datagrams = 0  # video datagrams sent
+        self.stop = threading.Event()
+        self.threads = [
+            threading.Thread(target=loop, daemon=True)
+            for loop in (self._commands, self._state, self._stream)
+        ]
+        for thread in self.threads:
+            thread.start()
+
+    def _commands(self) -> None:
+        while not self.stop.is_set():
+            try:
+                data, source = self.sock.recvfrom(2048)
+            except TimeoutError:
+                continue
+            text = data.decode("ascii", "replace").strip()
+            if text.startswith("rc "):
+                continue
+            self.client = source[0]
+            if text in ("streamon", "streamoff"):
+                self.streaming = text == "streamon"
+                self.switches.append(text)
+            self.sock.sendto(b"87" if text.endswith("?") else b"ok", source)
+
+    def _state(self) -> None:
+        while not self.stop.wait(0.1):
+            if self.client is not None:
+                self.out.sendto(STATE.encode(), (self.client, 8890))
+
+    def _stream(self) -> None:
+        start, index = time.monotonic(), 0
+        while not self.stop.is_set():
+            delay = start + index / FPS - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            if self.streaming and self.client is not None:
+                for datagram in self.video[index % LOOP_FRAMES]:
+                    self.out.sendto(datagram, (self.client, 11111))
+                    self.datagrams += 1
+            index += 1
+
+    def close(self) -> None:
+        self.stop.set()
+        for thread in self.threads:
+            thread.join(2)
+        self.sock.close()
+        self.out.close()
+
+
+def rss_mb(pid: int) -> float:
+    """Resident memory of ``pid``, MB."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def bridge_args(endpoint: str, address: str, video: str) -> list[str]:
+    return [
+        "--connect", endpoint, "--tello", address, "--local", address,
+        "--set", f"video={video}", "--set", "commander_lost_timeout=3600",
+    ]  # fmt: skip
+
+
+def host(endpoint: str, addresses: list[str], video: str) -> int:
+    """One process for N Tellos: a node and a bridge per Tello, until SIGINT/SIGTERM."""
+    from dronewrapper.runtime import Node, ZenohOptions
+    from dronewrapper.runtime.config import load_config
+    from dronewrapper_bridge_tello.config import Config
+    from dronewrapper_bridge_tello.node import Bridge
+
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    running = []
+    for i, address in enumerate(addresses, 1):
+        options = ZenohOptions(connect=[endpoint], namespace=f"drone{i}", name="bridge_tello")
+        node = Node("bridge_tello", options, handle_signals=False)
+        overrides = [f"tello_address={address}", f"local_address={address}", f"video={video}"]
+        config = load_config(Config, None, [*overrides, "commander_lost_timeout=3600"])
+        bridge = Bridge(node, config)
+        running.append((node, bridge, bridge.start()))
+        node.announce()
+    stop.wait()
+    for node, bridge, threads in running:
+        node.stop()
+        for thread in threads:
+            thread.join(2)
+        bridge.camera.close()
+        bridge.link.close()
+        node.close()
+    return 0
+
+
+def measure(
+    endpoint: str, tellos: list[StandInTello], one_process: bool, video: str, seconds: float
+) -> dict[str, object]:
+    """Start the bridges, wait until each Tello is switched, settle, measure, stop."""
+    for tello in tellos:
+        tello.client, tello.streaming, tello.switches, tello.datagrams = None, False, [], 0
+    if one_process:
+        addresses = ",".join(t.address for t in tellos)
+        argv = [[sys.executable, "-m", "bench.tello_classroom", "--host", addresses,
+                 "--endpoint", endpoint, "--video", video]]  # fmt: skip
+    else:
+        argv = [
+            [sys.executable, "-m", "dronewrapper_bridge_tello", "--log-level", "WARNING",
+             *bridge_args(endpoint, t.address, video)]
+            for t in tellos
+        ]  # fmt: skip
+    procs = [subprocess.Popen(a, cwd=REPO) for a in argv]
+    try:
+        wanted = "streamon" if video == "on" else "streamoff"
+        deadline = time.monotonic() + 60
+        while not all(wanted in t.switches for t in tellos):
+            if time.monotonic() > deadline or any(p.poll() is not None for p in procs):
+                raise RuntimeError(f"the bridges did not switch every Tello's video ({wanted})")
+            time.sleep(0.2)
+        time.sleep(3.0)  # settle: imports done, decoders warm
+        sent0 = sum(t.datagrams for t in tellos)
+        c0, w0 = sum(cpu_seconds(p.pid) for p in procs), time.monotonic()
+        time.sleep(seconds)
+        cpu = (sum(cpu_seconds(p.pid) for p in procs) - c0) / (time.monotonic() - w0)
+        rss = sum(rss_mb(p.pid) for p in procs)
+        datagrams = sum(t.datagrams for t in tellos) - sent0
+    finally:
+        for proc in procs:
+            stop_process(proc, signal.SIGTERM)
+    n = len(tellos)
+    return {
+        "cpu_share_one_core": round(cpu, 4),
+        "cpu_share_per_tello": round(cpu / n, 4),
+        "rss_mb": round(rss, 1),
+        "rss_mb_per_tello": round(rss / n, 1),
+        "video_datagrams_per_s": round(datagrams / seconds, 1),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tellos", type=int, default=3, help="how many Tellos (N)")
+    parser.add_argument("--seconds", type=float, default=20.0, help="CPU measuring window, s")
+    parser.add_argument("--host", help=argparse.SUPPRESS)  # one process: the Tellos' addresses
+    parser.add_argument("--endpoint", help=argparse.SUPPRESS)
+    parser.add_argument("--video", default="on_demand", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.host:
+        return host(args.endpoint, args.host.split(","), args.video)
+
+    video = encoded_loop()
+    net = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}"
+    tellos = [StandInTello(f"{net}.{i}", video) for i in range(1, args.tellos + 1)]
+    router = LoopbackRouter()
+    if not router.start():
+        print("router did not start", file=sys.stderr)
+        return 1
+    results: dict[str, object] = {"tellos": args.tellos, "seconds": args.seconds}
+    try:
+        for label, one_process, mode in ARRANGEMENTS:
+            results[label] = measure(router.endpoint, tellos, one_process, mode, args.seconds)
+            print(f"{label}: {results[label]}", flush=True)
+    finally:
+        for tello in tellos:
+            tello.close()
+        router.stop(5)
+    rows = [
+        [label, f"{r['cpu_share_one_core']:.1%}", f"{r['cpu_share_per_tello']:.1%}",
+         r["rss_mb"], r["video_datagrams_per_s"]]
+        for label, r in ((label, results[label]) for label, _, _ in ARRANGEMENTS)
+    ]  # fmt: skip
+    print_table(
+        f"{args.tellos} Tello bridges, nobody watching a camera ({args.seconds:g} s windows)",
+        ["arrangement", "CPU (1 core)", "per Tello", "RSS MB", "video datagrams/s"],
+        rows,
+    )
+    on, demand = results["per Tello, video on"], results["per Tello, on demand"]
+    saved = on["cpu_share_one_core"] - demand["cpu_share_one_core"]  # type: ignore[index]
+    print(f"\non demand saves {saved:.1%} of a core for {args.tellos} Tellos nobody watches")
+    write_results("tello_classroom", results)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
