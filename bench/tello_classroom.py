@@ -15,6 +15,11 @@ system, share of one core) is measured over ``--seconds``, with their memory (RS
 * ``one process, ...``: the N bridges in one process (``--host``: N nodes, N bridges, one
   interpreter), each mode.
 
+After the ``per Tello, on demand`` window a viewer subscribes to drone1's camera: the time from
+its subscription to ``streamon`` at the Tello and to the first decoded frame, and from its
+leaving to ``streamoff`` (the bridge's ``video_idle_s``, 10 s), are printed too. The machine's
+load average is recorded with each window (the figures are shares of a shared machine).
+
 Run: ``.venv/bin/python -m bench.tello_classroom [--tellos 3] [--seconds 20]``; writes
 bench/results/tello_classroom.json.
 """
@@ -22,6 +27,7 @@ bench/results/tello_classroom.json.
 from __future__ import annotations
 
 import argparse
+import os
 import random
 import signal
 import socket
@@ -75,7 +81,7 @@ class StandInTello:
         self.video = video
         self.client: str | None = None
         self.streaming = False
-        self.switches: list[str] = []  # streamon / streamoff received, in order
+        self.switches: list[tuple[float, str]] = []  # (monotonic s, streamon / streamoff)
         self.datagrams = 0  # video datagrams sent
         self.stop = threading.Event()
         self.threads = [
@@ -97,7 +103,7 @@ class StandInTello:
             self.client = source[0]
             if text in ("streamon", "streamoff"):
                 self.streaming = text == "streamon"
-                self.switches.append(text)
+                self.switches.append((time.monotonic(), text))
             self.sock.sendto(b"87" if text.endswith("?") else b"ok", source)
 
     def _state(self) -> None:
@@ -133,9 +139,9 @@ def rss_mb(pid: int) -> float:
     return float("nan")
 
 
-def bridge_args(endpoint: str, address: str, video: str) -> list[str]:
+def bridge_args(endpoint: str, ns: str, address: str, video: str) -> list[str]:
     return [
-        "--connect", endpoint, "--tello", address, "--local", address,
+        "--connect", endpoint, "--namespace", ns, "--tello", address, "--local", address,
         "--set", f"video={video}", "--set", "commander_lost_timeout=3600",
     ]  # fmt: skip
 
@@ -171,9 +177,15 @@ def host(endpoint: str, addresses: list[str], video: str) -> int:
 
 
 def measure(
-    endpoint: str, tellos: list[StandInTello], one_process: bool, video: str, seconds: float
+    endpoint: str,
+    tellos: list[StandInTello],
+    one_process: bool,
+    video: str,
+    seconds: float,
+    viewer: bool = False,
 ) -> dict[str, object]:
-    """Start the bridges, wait until each Tello is switched, settle, measure, stop."""
+    """Start the bridges, wait until each Tello is switched, settle, measure (then, with
+    ``viewer``, :func:`watch_once`), stop."""
     for tello in tellos:
         tello.client, tello.streaming, tello.switches, tello.datagrams = None, False, [], 0
     if one_process:
@@ -183,14 +195,14 @@ def measure(
     else:
         argv = [
             [sys.executable, "-m", "dronewrapper_bridge_tello", "--log-level", "WARNING",
-             *bridge_args(endpoint, t.address, video)]
-            for t in tellos
+             *bridge_args(endpoint, f"drone{i}", t.address, video)]
+            for i, t in enumerate(tellos, 1)
         ]  # fmt: skip
     procs = [subprocess.Popen(a, cwd=REPO) for a in argv]
     try:
         wanted = "streamon" if video == "on" else "streamoff"
         deadline = time.monotonic() + 60
-        while not all(wanted in t.switches for t in tellos):
+        while not all(wanted in [w for _, w in t.switches] for t in tellos):
             if time.monotonic() > deadline or any(p.poll() is not None for p in procs):
                 raise RuntimeError(f"the bridges did not switch every Tello's video ({wanted})")
             time.sleep(0.2)
@@ -201,16 +213,49 @@ def measure(
         cpu = (sum(cpu_seconds(p.pid) for p in procs) - c0) / (time.monotonic() - w0)
         rss = sum(rss_mb(p.pid) for p in procs)
         datagrams = sum(t.datagrams for t in tellos) - sent0
+        n = len(tellos)
+        out: dict[str, object] = {
+            "cpu_share_one_core": round(cpu, 4),
+            "cpu_share_per_tello": round(cpu / n, 4),
+            "rss_mb": round(rss, 1),
+            "rss_mb_per_tello": round(rss / n, 1),
+            "video_datagrams_per_s": round(datagrams / seconds, 1),
+            "loadavg_1min_after": round(os.getloadavg()[0], 2),
+        }
+        if viewer:
+            out["viewer"] = watch_once(endpoint, tellos[0])
     finally:
         for proc in procs:
             stop_process(proc, signal.SIGTERM)
-    n = len(tellos)
+    return out
+
+
+def watch_once(endpoint: str, tello: StandInTello) -> dict[str, float]:
+    """A viewer subscribes to drone1's camera until its first frame, then leaves: the times
+    (s) to ``streamon``, to the first frame, and from leaving to ``streamoff``."""
+    from dronewrapper.msgs import registry
+    from dronewrapper.runtime import Node, ZenohOptions
+
+    options = ZenohOptions(connect=[endpoint], namespace="drone1", name="viewer")
+    first = threading.Event()
+    with Node("viewer", options, handle_signals=False) as node:
+        t0 = time.monotonic()
+        node.subscribe(registry.IMAGE_RAW, lambda _msg: first.set(), camera="cam_frontal")
+        if not first.wait(30):
+            raise RuntimeError("no frame within 30 s of subscribing")
+        t_frame = time.monotonic()
+    gone = time.monotonic()
+    deadline = gone + 60
+    while not any(w == "streamoff" and at > gone for at, w in tello.switches):
+        if time.monotonic() > deadline:
+            raise RuntimeError("no streamoff within 60 s of the viewer leaving")
+        time.sleep(0.05)
+    t_on = next(at for at, w in tello.switches if w == "streamon" and at > t0)
+    t_off = next(at for at, w in tello.switches if w == "streamoff" and at > gone)
     return {
-        "cpu_share_one_core": round(cpu, 4),
-        "cpu_share_per_tello": round(cpu / n, 4),
-        "rss_mb": round(rss, 1),
-        "rss_mb_per_tello": round(rss / n, 1),
-        "video_datagrams_per_s": round(datagrams / seconds, 1),
+        "subscribe_to_streamon_s": round(t_on - t0, 3),
+        "subscribe_to_first_frame_s": round(t_frame - t0, 3),
+        "leave_to_streamoff_s": round(t_off - gone, 3),
     }
 
 
@@ -235,7 +280,10 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, object] = {"tellos": args.tellos, "seconds": args.seconds}
     try:
         for label, one_process, mode in ARRANGEMENTS:
-            results[label] = measure(router.endpoint, tellos, one_process, mode, args.seconds)
+            viewer = label == "per Tello, on demand"
+            results[label] = measure(
+                router.endpoint, tellos, one_process, mode, args.seconds, viewer
+            )
             print(f"{label}: {results[label]}", flush=True)
     finally:
         for tello in tellos:
@@ -254,6 +302,12 @@ def main(argv: list[str] | None = None) -> int:
     on, demand = results["per Tello, video on"], results["per Tello, on demand"]
     saved = on["cpu_share_one_core"] - demand["cpu_share_one_core"]  # type: ignore[index]
     print(f"\non demand saves {saved:.1%} of a core for {args.tellos} Tellos nobody watches")
+    seen = demand["viewer"]  # type: ignore[index]
+    print(
+        f"a viewer of drone1: streamon {seen['subscribe_to_streamon_s']:.2f} s and first frame "
+        f"{seen['subscribe_to_first_frame_s']:.2f} s after subscribing; streamoff "
+        f"{seen['leave_to_streamoff_s']:.1f} s after leaving"
+    )
     write_results("tello_classroom", results)
     return 0
 
