@@ -8,9 +8,12 @@ libx264 ultrafast/zerolatency at 1.5 Mbit/s, a key frame every 30 frames, encode
 the run and replayed in a loop, so the stand-ins cost little next to the bridges). Each
 arrangement is started afresh on one loopback Zenoh router (in this process) with nobody
 subscribing to a camera; after the bridges are connected and settled, the bridges' CPU (user +
-system, share of one core) is measured over ``--seconds``, with their memory (RSS):
+system, share of one core) is measured over ``--seconds``, with their memory (RSS) and the
+reconnections the Tellos saw meanwhile (a ``command`` after the first: a bridge that missed
+state strings for ``link_timeout``, 1.5 s):
 
-* ``per Tello, video on``: N ``python -m dronewrapper_bridge_tello`` processes, ``video=on``;
+* ``per Tello, video on``: N ``python -m dronewrapper_bridge_tello`` processes, ``video=on``
+  (and ``video=off``, the floor);
 * ``per Tello, on demand``: the same with ``video=on_demand`` (the classroom graph's default);
 * ``one process, ...``: the N bridges in one process (``--host``: N nodes, N bridges, one
   interpreter), each mode.
@@ -49,6 +52,7 @@ STATE = (
     "templ:60;temph:62;tof:10;h:0;bat:87;baro:100.00;time:0;agx:0.00;agy:0.00;agz:-1000.00;\r\n"
 )
 ARRANGEMENTS = (  # (label, one process for all, video mode)
+    ("per Tello, video off", False, "off"),
     ("per Tello, video on", False, "on"),
     ("per Tello, on demand", False, "on_demand"),
     ("one process, video on", True, "on"),
@@ -82,6 +86,7 @@ class StandInTello:
         self.client: str | None = None
         self.streaming = False
         self.switches: list[tuple[float, str]] = []  # (monotonic s, streamon / streamoff)
+        self.commands = 0  # ``command`` received (SDK mode: the first, then reconnections)
         self.datagrams = 0  # video datagrams sent
         self.stop = threading.Event()
         self.threads = [
@@ -101,6 +106,7 @@ class StandInTello:
             if text.startswith("rc "):
                 continue
             self.client = source[0]
+            self.commands += text == "command"
             if text in ("streamon", "streamoff"):
                 self.streaming = text == "streamon"
                 self.switches.append((time.monotonic(), text))
@@ -166,8 +172,9 @@ def host(endpoint: str, addresses: list[str], video: str) -> int:
         running.append((node, bridge, bridge.start()))
         node.announce()
     stop.wait()
-    for node, bridge, threads in running:
+    for node, _, _ in running:
         node.stop()
+    for node, bridge, threads in running:
         for thread in threads:
             thread.join(2)
         bridge.camera.close()
@@ -188,6 +195,7 @@ def measure(
     ``viewer``, :func:`watch_once`), stop."""
     for tello in tellos:
         tello.client, tello.streaming, tello.switches, tello.datagrams = None, False, [], 0
+        tello.commands = 0
     if one_process:
         addresses = ",".join(t.address for t in tellos)
         argv = [[sys.executable, "-m", "bench.tello_classroom", "--host", addresses,
@@ -200,19 +208,26 @@ def measure(
         ]  # fmt: skip
     procs = [subprocess.Popen(a, cwd=REPO) for a in argv]
     try:
-        wanted = "streamon" if video == "on" else "streamoff"
+        wanted = {"on": "streamon", "on_demand": "streamoff"}.get(video)
+
+        def ready(tello: StandInTello) -> bool:
+            if wanted is None:  # off: connected is all there is to wait for
+                return tello.commands > 0
+            return wanted in [w for _, w in tello.switches]
+
         deadline = time.monotonic() + 60
-        while not all(wanted in [w for _, w in t.switches] for t in tellos):
+        while not all(ready(t) for t in tellos):
             if time.monotonic() > deadline or any(p.poll() is not None for p in procs):
                 raise RuntimeError(f"the bridges did not switch every Tello's video ({wanted})")
             time.sleep(0.2)
         time.sleep(3.0)  # settle: imports done, decoders warm
-        sent0 = sum(t.datagrams for t in tellos)
+        sent0, commands0 = sum(t.datagrams for t in tellos), sum(t.commands for t in tellos)
         c0, w0 = sum(cpu_seconds(p.pid) for p in procs), time.monotonic()
         time.sleep(seconds)
         cpu = (sum(cpu_seconds(p.pid) for p in procs) - c0) / (time.monotonic() - w0)
         rss = sum(rss_mb(p.pid) for p in procs)
         datagrams = sum(t.datagrams for t in tellos) - sent0
+        reconnections = sum(t.commands for t in tellos) - commands0
         n = len(tellos)
         out: dict[str, object] = {
             "cpu_share_one_core": round(cpu, 4),
@@ -220,6 +235,7 @@ def measure(
             "rss_mb": round(rss, 1),
             "rss_mb_per_tello": round(rss / n, 1),
             "video_datagrams_per_s": round(datagrams / seconds, 1),
+            "reconnections": reconnections,
             "loadavg_1min_after": round(os.getloadavg()[0], 2),
         }
         if viewer:
@@ -291,12 +307,12 @@ def main(argv: list[str] | None = None) -> int:
         router.stop(5)
     rows = [
         [label, f"{r['cpu_share_one_core']:.1%}", f"{r['cpu_share_per_tello']:.1%}",
-         r["rss_mb"], r["video_datagrams_per_s"]]
+         r["rss_mb"], r["video_datagrams_per_s"], r["reconnections"]]
         for label, r in ((label, results[label]) for label, _, _ in ARRANGEMENTS)
     ]  # fmt: skip
     print_table(
         f"{args.tellos} Tello bridges, nobody watching a camera ({args.seconds:g} s windows)",
-        ["arrangement", "CPU (1 core)", "per Tello", "RSS MB", "video datagrams/s"],
+        ["arrangement", "CPU (1 core)", "per Tello", "RSS MB", "video datagrams/s", "reconn."],
         rows,
     )
     on, demand = results["per Tello, video on"], results["per Tello, on demand"]
