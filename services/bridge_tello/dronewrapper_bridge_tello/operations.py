@@ -43,6 +43,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello.replies import Pending, is_ok
+from dronewrapper_bridge_tello.video_demand import STREAMON
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_tello.core import TelloCore
@@ -141,7 +142,7 @@ def switch_video(core: TelloCore, command: str) -> Steps:
     """``streamon`` or ``streamoff``, tried once (video_demand.py spaces and bounds the tries,
     so the command slot is free for flight commands in between). Before a ``streamon`` the
     video receiver is told to start afresh, so the new stream's first datagram finds it empty."""
-    if command == "streamon":
+    if command == STREAMON:
         core.out.video_restart = True
     reply = yield from exchange(core, command, attempts=1)
     core.video_answered(command, reply)
