@@ -387,9 +387,9 @@ def test_video_on_demand_decoded_and_published(router, spawn):
             jpeg = viewer.latest(registry.IMAGE_COMPRESSED, camera="cam_frontal")
             assert jpeg.wait(10).format == "jpeg"  # compressed on request
             assert rig.sim.output().count("video: streaming") == 1
-        gone = time.monotonic()
+            leaving = time.monotonic()  # closing the viewer's session undeclares its subscribers
         wait_for(lambda: "video: stream off" in rig.sim.output(), 20, what="the stream off")
-        assert time.monotonic() - gone >= 1.0  # not before the idle time
+        assert time.monotonic() - leaving >= 1.0  # not before the idle time
     finally:
         rig.close()
         rig.user.close()
