@@ -159,7 +159,7 @@ def test_a_reconnected_tello_gets_its_stream_switched_again():
     assert [t for _, t in video_commands(rig, since)] == ["streamon"] and rig.video_on
 
 
-def test_the_video_waits_for_a_flight_command_and_never_overlaps_one():
+def test_the_video_never_goes_ahead_of_a_flight_command_nor_between_one_and_its_reply():
     rig, viewers = video_rig()
     rig.connect()
     rig.run(1.0)
@@ -168,20 +168,21 @@ def test_the_video_waits_for_a_flight_command_and_never_overlaps_one():
     viewers.subscribe()  # while the take-off waits for its ok
     rig.run(1.0)
     assert "streamon" not in rig.commands()
-    rig.run(3.0, until=lambda: takeoff.done)
-    assert takeoff.result().success
+    land = rig.start(ops.land, CommandTOL.land())  # asked later than the viewer came
+    rig.run(10.0, until=lambda: land.done)
+    assert takeoff.result().success and land.result().success
     rig.run(0.5)
-    assert rig.commands()[-1] == "streamon"
-    rig.delays["streamon"] = 0.5  # a take-off asked while streamon waits goes after its reply
-    viewers.bus.link_gap(True)
+    assert rig.commands()[-3:] == ["takeoff", "land", "streamon"]  # the flight first
+    viewers.bus.link_gap(True)  # the viewer gone: streamoff after the idle time
     rig.run(IDLE + 0.5)
     viewers.bus.link_gap(False)
-    rig.run(0.06)
-    land = rig.start(ops.land, CommandTOL.land())
-    rig.run(5.0, until=lambda: land.done)
-    sent = [(at, t) for at, t in rig.sent if t in ("streamon", "land")]
-    assert [t for _, t in sent[-2:]] == ["streamon", "land"]
-    assert sent[-1][0] - sent[-2][0] >= 0.5  # land only once streamon was answered
+    rig.delays["streamon"] = 0.5
+    rig.run(0.06)  # streamon sent, its reply 0.5 s away
+    takeoff = rig.start(ops.takeoff, CommandTOL.takeoff())
+    rig.run(5.0, until=lambda: takeoff.done)
+    sent = [(at, t) for at, t in rig.sent if t in ("streamon", "takeoff")]
+    assert [t for _, t in sent[-2:]] == ["streamon", "takeoff"]
+    assert sent[-1][0] - sent[-2][0] >= 0.5  # the take-off only once streamon was answered
 
 
 def test_mode_on_streams_at_connection_and_mode_off_never_touches_the_stream():
