@@ -12,75 +12,21 @@ from typing import Any
 
 import pytest
 import zenoh
+from ros2_session import PT, ZID, RosSession, ros_key
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import CommandBoolResult, PositionTarget, State
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text, topic_key
+from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text
 from dronewrapper.ros2.typehash import type_hash
 from dronewrapper.runtime.caller import commander_of, current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_base.commander_lease import LeaseGate
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import ENTITIES
-from dronewrapper_ros2_gateway.node import Gateway
-
-ZID = "c0ffee00c0ffee00c0ffee00c0ffee00"
-PT = "mavros_msgs/msg/PositionTarget"
-
-
-class RosPublisher:
-    def __init__(self, key: str) -> None:
-        self.key = key
-        self.sent: list[tuple[bytes, bytes]] = []
-        self.matching_status = SimpleNamespace(matching=False)
-
-    def put(self, payload: bytes, *, attachment: bytes) -> None:
-        self.sent.append((payload, attachment))
-
-    def undeclare(self) -> None:
-        pass
-
-
-class RosSession:
-    """Records what the gateway declares on the ROS 2 side (keys, callbacks, tokens)."""
-
-    def __init__(self) -> None:
-        self.publishers: dict[str, RosPublisher] = {}
-        self.subscribers: dict[str, Any] = {}
-        self.queryables: dict[str, Any] = {}
-        self.tokens: list[str] = []
-        self.watchers: dict[str, Any] = {}
-
-    def zid(self) -> str:
-        return ZID
-
-    def declare_publisher(self, key: str, **_qos: Any) -> RosPublisher:
-        self.publishers[key] = RosPublisher(key)
-        return self.publishers[key]
-
-    def declare_subscriber(self, key: str, callback: Any, **_kw: Any) -> Any:
-        target = self.watchers if key.startswith("@ros2_lv") else self.subscribers
-        target[key] = callback
-        return SimpleNamespace(undeclare=lambda: None)
-
-    def declare_queryable(self, key: str, callback: Any, *, complete: bool) -> Any:
-        assert complete  # rmw_zenoh's services are complete queryables
-        self.queryables[key] = callback
-        return SimpleNamespace(undeclare=lambda: None)
-
-    def liveliness(self) -> RosSession:
-        return self
-
-    def declare_token(self, key: str) -> Any:
-        self.tokens.append(key)
-        return SimpleNamespace(undeclare=lambda: None)
-
-
-def ros_key(name: str, ros_type: str) -> str:
-    return topic_key(0, name, ros_type, type_hash(ros_type))
+from dronewrapper_ros2_gateway.node import Gateway, commander_name
 
 
 class Rig:
@@ -288,10 +234,7 @@ def test_a_type_mismatch_announced_by_a_peer_is_named(rig):
     ],
 )
 def test_the_commander_name_is_the_identity_s_unless_configured(identity, configured, name):
-    node = FakeNode("ros2_gateway", FakeBus())
-    node.options = SimpleNamespace(identity=identity)  # type: ignore[attr-defined]
-    gateway = Gateway(node, Config(commander=configured), RosSession())  # type: ignore[arg-type]
-    assert gateway.commander == name
+    assert commander_name(Config(commander=configured), identity) == name
 
 
 def test_each_drone_is_its_own_node_with_ids_unique_in_the_session():

@@ -111,10 +111,12 @@ class NodeApi(Protocol):
         *,
         key: str | None = None,
         keyed: bool = False,
+        direct: bool | None = None,
         **parts: str,
     ) -> Declared:
         """Call ``callback(msg)`` (``keyed``: ``callback(key, msg)``) for every decodable
-        sample; errors are counted, never end the subscription."""
+        sample; errors are counted, never end the subscription. ``direct``: on the thread that
+        delivers the sample (the putting thread for the node's own puts)."""
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
         """Subscribe to ``topic`` and keep its newest value, aged on :attr:`clock`."""

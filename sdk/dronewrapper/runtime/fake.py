@@ -322,6 +322,7 @@ class FakeNode:
         *,
         key: str | None = None,
         keyed: bool = False,
+        direct: bool | None = None,  # the fake bus always delivers on the publishing thread
         **parts: str,
     ) -> _Subscription:
         keyexpr = key or topic.key(self.ns, **parts)

@@ -279,12 +279,16 @@ class Node:
         *,
         key: str | None = None,
         keyed: bool = False,
+        direct: bool | None = None,
         **parts: str,
     ) -> zenoh.Subscriber:
         """Call ``callback(msg)`` for every decodable sample on ``topic``.
 
         ``key`` may be a key expression with wildcards instead of this node's namespace;
-        ``keyed``: call ``callback(key, msg)`` with each sample's concrete key instead.
+        ``keyed``: call ``callback(key, msg)`` with each sample's concrete key instead;
+        ``direct``: run the callback on the thread that delivers the sample (for this
+        session's own puts, the putting thread, before ``put`` returns; keep it short),
+        None: the node's ``direct_callbacks``.
         Undecodable samples are counted in ``decode_errors`` and logged; exceptions in the
         callback are counted in ``callback_errors`` and logged; neither ends the subscription.
         """
@@ -294,7 +298,8 @@ class Node:
         def on_sample(sample: zenoh.Sample) -> None:
             deliver(str(sample.key_expr), sample.payload.to_bytes(), sample.attachment)
 
-        handler = zenoh.handlers.Callback(on_sample, indirect=not self._direct)
+        inline = self._direct if direct is None else direct
+        handler = zenoh.handlers.Callback(on_sample, indirect=not inline)
         sub = self.session.declare_subscriber(keyexpr, handler)
         self._declared.append(sub)
         return sub

@@ -28,6 +28,7 @@ from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
 from dronewrapper_bridge_mavlink.link import MavLink, network_exposure
 from dronewrapper_bridge_mavlink.modes import canonical_mode
+from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -230,12 +231,13 @@ def run(node: Node, config: Config) -> int:
     exposure = network_exposure(config.connection)
     if exposure is not None:
         log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
-    threads = bridge.start()
-    node.announce()
-    log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
-    node.spin()
-    for thread in threads:
-        thread.join(timeout=2.0)
+    with hosted_gateway(node, config.ros2):  # ROS 2 from this process, when configured
+        threads = bridge.start()
+        node.announce()
+        log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
+        node.spin()
+        for thread in threads:
+            thread.join(timeout=2.0)
     bridge.link.close()
     if bridge.gcs is not None:
         bridge.gcs.close()

@@ -9,6 +9,7 @@ import msgspec
 from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig
 from dronewrapper_bridge_tello.sticks import StickScale
+from dronewrapper_ros2_gateway.config import Config as Ros2Config
 
 TELLO_ENVELOPE = Envelope(
     max_altitude=10.0,
@@ -60,6 +61,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
     scale: StickScale = msgspec.field(default_factory=StickScale)
     envelope: Envelope = msgspec.field(default_factory=lambda: TELLO_ENVELOPE)  # envelope.py
+    ros2: Ros2Config | None = None  # present this drone to ROS 2 from this process (docs/ros2.md)
 
     def __post_init__(self) -> None:
         if not 0 < self.late_setpoint_s <= 5:

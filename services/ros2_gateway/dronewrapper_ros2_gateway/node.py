@@ -7,13 +7,16 @@ and one Zenoh declaration on the ROS 2 key:
 - out (telemetry, images): our sample -> CDR -> ``put`` with the rmw_zenoh attachment (cameras
   are subscribed only while a ROS 2 subscriber matches);
 - in (``setpoint_raw/local``): CDR -> PositionTarget -> the project's setpoint rules -> our
-  setpoint key, under the gateway's commander name, so the bridge's lease and failsafe apply;
+  setpoint key, under the gateway's commander name and with the ROS 2 publisher's send time,
+  so the bridge's lease, late-setpoint rule and failsafe apply;
 - services: CDR request -> our request -> the bridge's service -> its reply as the ROS 2
   response; a refusal (lease, bad request) is ``success: false`` with MAV_RESULT_DENIED, no
   reply from the bridge is MAV_RESULT_FAILED (ROS 2 clients get no error channel).
 
 It also reads every ROS 2 endpoint's token on its domain and logs each type disagreement with
-one of its own entities (:mod:`dronewrapper.ros2.mismatch`).
+one of its own entities (:mod:`dronewrapper.ros2.mismatch`). :func:`run` is the gateway as a
+process of its own; :mod:`dronewrapper_ros2_gateway.hosted` runs the same :class:`Gateway`
+inside a bridge.
 """
 
 from __future__ import annotations
@@ -111,18 +114,42 @@ class Outgoing:
             return False
 
 
-class Gateway:
-    """The gateway's declarations on one node and one ROS 2 session (see the module doc)."""
+def commander_name(config: Config, identity: str) -> str:
+    """The name the gateway commands under: ``config.commander``, else the name of
+    ``identity`` (a name or a path to ``NAME.crt``), else :data:`DEFAULT_COMMANDER`."""
+    name = config.commander or identity or DEFAULT_COMMANDER
+    return name.rsplit("/", 1)[1].removesuffix(".crt") if "/" in name else name
 
-    def __init__(self, node: NodeApi, config: Config, ros_session: zenoh.Session) -> None:
+
+class Gateway:
+    """The gateway's declarations on one node and one ROS 2 session (see the module doc).
+
+    Args:
+        node: the bus our keys live on.
+        config: what it presents.
+        ros_session: the Zenoh session of the ROS 2 entities.
+        commander: the name its setpoints and commands carry (:func:`commander_name`).
+        inline: take our telemetry with direct callbacks: on the node's own session, each of
+            its puts is converted and sent on to ROS 2 on the putting thread, before the put
+            returns (:mod:`dronewrapper_ros2_gateway.hosted`); cameras stay on Zenoh's
+            callback threads either way.
+    """
+
+    def __init__(
+        self,
+        node: NodeApi,
+        config: Config,
+        ros_session: zenoh.Session,
+        *,
+        commander: str = DEFAULT_COMMANDER,
+        inline: bool = False,
+    ) -> None:
         self.node = node
         self.config = config
         self.session = ros_session
         self.zid = str(ros_session.zid())
-        identity = getattr(getattr(node, "options", None), "identity", "")
-        self.commander = config.commander or identity or DEFAULT_COMMANDER
-        if "/" in self.commander:  # a path to NAME.crt: the name
-            self.commander = self.commander.rsplit("/", 1)[1].removesuffix(".crt")
+        self.commander = commander
+        self.inline = inline
         self.refused: dict[str, int] = {}
         self.mismatches: list[str] = []
         self.outgoing: list[tuple[str, Entity, Outgoing]] = []
@@ -196,7 +223,8 @@ class Gateway:
             out.subscription = self._subscribe(ns, entity, out)
 
     def _subscribe(self, ns: str, entity: Entity, out: Outgoing) -> Any:
-        return self.node.subscribe(entity.registry_entry, out, key=entity.key(ns))
+        direct = self.inline and entity.registry_entry.transport != registry.STREAM
+        return self.node.subscribe(entity.registry_entry, out, key=entity.key(ns), direct=direct)
 
     def follow_demand(self) -> None:
         """Subscribe to each camera while a ROS 2 subscriber wants it, and only then."""
@@ -242,9 +270,13 @@ class Gateway:
 
     def on_setpoint(self, ns: str, payload: bytes, raw_attachment: bytes | None) -> bool:
         """One ROS 2 PositionTarget: forwarded under our commander name if it is well formed
-        and passes the project's setpoint rules; else counted and dropped. True if forwarded."""
+        and passes the project's setpoint rules; else counted and dropped. True if forwarded.
+
+        Its send time for the bridges' late-setpoint rule is the ROS 2 publisher's source
+        timestamp (rmw_zenoh's attachment), so a burst held on the ROS 2 side's link is refused
+        as an SDK app's would be; our clock's now when the publisher gave none (0)."""
         try:
-            attachment.unpack(raw_attachment)
+            meta = attachment.unpack(raw_attachment)
             target = position_target(cdr.decode("mavros_msgs/msg/PositionTarget", payload))
             validate(target, WideBounds())
         except (attachment.AttachmentError, cdr.CdrError, SetpointError) as exc:
@@ -253,7 +285,7 @@ class Gateway:
         except (KeyError, TypeError, ValueError) as exc:
             self._refuse("setpoint", f"malformed PositionTarget: {exc}")
             return False
-        sent = self.node.clock.time()  # the send time: the bridges' late-setpoint rule
+        sent = meta.timestamp_ns / 1e9 if meta.timestamp_ns > 0 else self.node.clock.time()
         self._setpoint_publishers[ns].put(
             target, attachment=commander_attachment(self.commander, sent)
         )
@@ -342,22 +374,37 @@ def ros_session_for(node: Node, config: Config) -> tuple[zenoh.Session, bool]:
     return open_session(options), True
 
 
+def follow_demand_until_stopped(gateway: Gateway, done: threading.Event | None = None) -> None:
+    """:meth:`Gateway.follow_demand` every ``image_check_s`` until the node stops (or
+    ``done`` is set)."""
+    node, period = gateway.node, gateway.config.image_check_s
+    while not node.clock.wait(done or node.stop_event, period) and not node.stopping:
+        gateway.follow_demand()
+
+
+def log_started(gateway: Gateway, how: str) -> None:
+    """Log what the gateway presents, to which domain, under which commander name."""
+    config = gateway.config
+    log.info(
+        "ROS 2 domain %d: %s as %s (commander %r, %s)",
+        config.domain_id,
+        ", ".join(config.drones or [gateway.node.ns]),
+        config.node_name,
+        gateway.commander,
+        how,
+    )
+
+
 def run(node: Node, config: Config) -> int:
     """The gateway until stopped; the exit status."""
     session, own = ros_session_for(node, config)
-    gateway = Gateway(node, config, session)
+    commander = commander_name(config, node.options.identity)
+    gateway = Gateway(node, config, session, commander=commander)
     try:
         gateway.start()
         node.announce()
-        log.info(
-            "ROS 2 domain %d: %s as %s (commander %r)",
-            config.domain_id,
-            ", ".join(config.drones or [node.ns]),
-            config.node_name,
-            gateway.commander,
-        )
-        while node.sleep(config.image_check_s):
-            gateway.follow_demand()
+        log_started(gateway, "its own process")
+        follow_demand_until_stopped(gateway)
     finally:
         gateway.close()
         if own:
