@@ -383,25 +383,34 @@ def test_lost_replies_and_malformed_state_strings_survived(router, spawn):
         relay.close()
 
 
-def test_video_frames_decoded_and_published(router, spawn):
-    rig = make_rig(router, spawn)
+def test_video_on_demand_decoded_and_published(router, spawn):
+    """No stream until a viewer subscribes; live decoded frames while it watches; the sim
+    reports the stream off once the viewer has been gone for the idle time."""
+    rig = make_rig(router, spawn, "--set", "video=on_demand", "--set", "video_idle_s=1.0")
     try:
-        frames = rig.user.latest(registry.IMAGE_RAW, camera="cam_frontal")
-        first = frames.wait(30)
-        assert (first.width, first.height, first.encoding) == (960, 720, "bgr8")
-        assert first.header.frame_id == "cam_frontal"
-        seqs, ages = [], []
-        deadline = time.monotonic() + 3.0
-        while time.monotonic() < deadline:
-            msg = frames.wait(5, newer_than=frames.count)
-            seqs.append(msg.header.seq)
-            ages.append(time.time() - msg.header.stamp)
-        assert len(set(seqs)) > 10  # a live stream, not one frame
-        assert float(np.median(ages)) < 0.5
-        image = np.frombuffer(first.data, np.uint8).reshape(720, 960, 3)
-        assert image.std() > 5.0  # a rendered scene, not a blank frame
-        jpeg = rig.user.latest(registry.IMAGE_COMPRESSED, camera="cam_frontal")
-        assert jpeg.wait(10).format == "jpeg"  # compressed on request
+        wait_for(lambda: "video: stream off" in rig.bridge.output(), 10, what="streamoff ok")
+        assert "video: streaming" not in rig.sim.output()  # connected, nobody watching
+        with client_node(router, name="viewer") as viewer:
+            frames = viewer.latest(registry.IMAGE_RAW, camera="cam_frontal")
+            first = frames.wait(30)
+            assert (first.width, first.height, first.encoding) == (960, 720, "bgr8")
+            assert first.header.frame_id == "cam_frontal"
+            seqs, ages = [], []
+            deadline = time.monotonic() + 3.0
+            while time.monotonic() < deadline:
+                msg = frames.wait(5, newer_than=frames.count)
+                seqs.append(msg.header.seq)
+                ages.append(time.time() - msg.header.stamp)
+            assert len(set(seqs)) > 10  # a live stream, not one frame
+            assert float(np.median(ages)) < 0.5
+            image = np.frombuffer(first.data, np.uint8).reshape(720, 960, 3)
+            assert image.std() > 5.0  # a rendered scene, not a blank frame
+            jpeg = viewer.latest(registry.IMAGE_COMPRESSED, camera="cam_frontal")
+            assert jpeg.wait(10).format == "jpeg"  # compressed on request
+            assert rig.sim.output().count("video: streaming") == 1
+            leaving = time.monotonic()  # closing the viewer's session undeclares its subscribers
+        wait_for(lambda: "video: stream off" in rig.sim.output(), 20, what="the stream off")
+        assert time.monotonic() - leaving >= 1.0  # not before the idle time
     finally:
         rig.close()
         rig.user.close()
