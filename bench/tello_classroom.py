@@ -33,7 +33,6 @@ import argparse
 import os
 import random
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -43,14 +42,11 @@ from pathlib import Path
 import numpy as np
 
 from bench.common import LoopbackRouter, cpu_seconds, print_table, stop_process, write_results
+from bench.tello_standin import TelloStandIn
 from dronewrapper_sim.tello.video import H264Encoder, packetise
 
 REPO = Path(__file__).resolve().parents[1]
 W, H, FPS, LOOP_FRAMES = 960, 720, 30.0, 60
-STATE = (
-    "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;"
-    "templ:60;temph:62;tof:10;h:0;bat:87;baro:100.00;time:0;agx:0.00;agy:0.00;agz:-1000.00;\r\n"
-)
 ARRANGEMENTS = (  # (label, one process for all, video mode)
     ("per Tello, video off", False, "off"),
     ("per Tello, video on", False, "on"),
@@ -71,70 +67,6 @@ def encoded_loop() -> list[list[bytes]]:
         frames.append(packetise(encoder.encode(img)))
     encoder.close()
     return frames
-
-
-class StandInTello:
-    """One Tello: replies at once, state at 10 Hz, the replayed video while streaming."""
-
-    def __init__(self, address: str, video: list[list[bytes]]) -> None:
-        self.address = address
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind((address, 8889))
-        self.sock.settimeout(0.1)
-        self.out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.video = video
-        self.client: str | None = None
-        self.streaming = False
-        self.switches: list[tuple[float, str]] = []  # (monotonic s, streamon / streamoff)
-        self.commands = 0  # ``command`` received (SDK mode: the first, then reconnections)
-        self.datagrams = 0  # video datagrams sent
-        self.stop = threading.Event()
-        self.threads = [
-            threading.Thread(target=loop, daemon=True)
-            for loop in (self._commands, self._state, self._stream)
-        ]
-        for thread in self.threads:
-            thread.start()
-
-    def _commands(self) -> None:
-        while not self.stop.is_set():
-            try:
-                data, source = self.sock.recvfrom(2048)
-            except TimeoutError:
-                continue
-            text = data.decode("ascii", "replace").strip()
-            if text.startswith("rc "):
-                continue
-            self.client = source[0]
-            self.commands += text == "command"
-            if text in ("streamon", "streamoff"):
-                self.streaming = text == "streamon"
-                self.switches.append((time.monotonic(), text))
-            self.sock.sendto(b"87" if text.endswith("?") else b"ok", source)
-
-    def _state(self) -> None:
-        while not self.stop.wait(0.1):
-            if self.client is not None:
-                self.out.sendto(STATE.encode(), (self.client, 8890))
-
-    def _stream(self) -> None:
-        start, index = time.monotonic(), 0
-        while not self.stop.is_set():
-            delay = start + index / FPS - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            if self.streaming and self.client is not None:
-                for datagram in self.video[index % LOOP_FRAMES]:
-                    self.out.sendto(datagram, (self.client, 11111))
-                    self.datagrams += 1
-            index += 1
-
-    def close(self) -> None:
-        self.stop.set()
-        for thread in self.threads:
-            thread.join(2)
-        self.sock.close()
-        self.out.close()
 
 
 def rss_mb(pid: int) -> float:
@@ -185,7 +117,7 @@ def host(endpoint: str, addresses: list[str], video: str) -> int:
 
 def measure(
     endpoint: str,
-    tellos: list[StandInTello],
+    tellos: list[TelloStandIn],
     one_process: bool,
     video: str,
     seconds: float,
@@ -194,8 +126,7 @@ def measure(
     """Start the bridges, wait until each Tello is switched, settle, measure (then, with
     ``viewer``, :func:`watch_once`), stop."""
     for tello in tellos:
-        tello.client, tello.streaming, tello.switches, tello.datagrams = None, False, [], 0
-        tello.commands = 0
+        tello.reset()
     if one_process:
         addresses = ",".join(t.address for t in tellos)
         argv = [[sys.executable, "-m", "bench.tello_classroom", "--host", addresses,
@@ -210,7 +141,7 @@ def measure(
     try:
         wanted = {"on": "streamon", "on_demand": "streamoff"}.get(video)
 
-        def ready(tello: StandInTello) -> bool:
+        def ready(tello: TelloStandIn) -> bool:
             if wanted is None:  # off: connected is all there is to wait for
                 return tello.commands > 0
             return wanted in [w for _, w in tello.switches]
@@ -246,7 +177,7 @@ def measure(
     return out
 
 
-def watch_once(endpoint: str, tello: StandInTello) -> dict[str, float]:
+def watch_once(endpoint: str, tello: TelloStandIn) -> dict[str, float]:
     """A viewer subscribes to drone1's camera until its first frame, then leaves: the times
     (s) to ``streamon``, to the first frame, and from leaving to ``streamoff``."""
     from dronewrapper.msgs import registry
@@ -288,7 +219,11 @@ def main(argv: list[str] | None = None) -> int:
 
     video = encoded_loop()
     net = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}"
-    tellos = [StandInTello(f"{net}.{i}", video) for i in range(1, args.tellos + 1)]
+
+    def replay(index: int) -> list[bytes]:
+        return video[index % LOOP_FRAMES]
+
+    tellos = [TelloStandIn(f"{net}.{i}", replay) for i in range(1, args.tellos + 1)]
     router = LoopbackRouter()
     if not router.start():
         print("router did not start", file=sys.stderr)
