@@ -9,7 +9,7 @@ and over ``--seconds`` measures:
 * each drone's pose age at one subscriber (this process, a client of the router): our wall
   clock at arrival minus the pose's ``header.stamp``, p50/p99 per drone;
 * the command round trip of the arming service (a disarm on the ground: answered, changes
-  nothing), each drone in turn, p50/p99;
+  nothing), each drone in turn and each at most every 0.5 s, p50/p99 over all the calls;
 * setpoint -> MAVLink: one more bridge in namespace ``probe``, against a PX4 stand-in in this
   process (``bench.bridge_latency``), commanded at 30 Hz while the fleet runs, p99;
 * the SDK's fleet object (``dronewrapper.fleet.Fleet`` over all N drones, a process of its
@@ -49,6 +49,8 @@ PAGE = os.sysconf("SC_PAGE_SIZE")
 POSE_AGE_P99_MS = 50.0
 BRIDGE_SHARE_PER_DRONE = 3.0
 MACHINE_BUSY = 0.9
+ARMING_SPACING_S = 0.5
+"""Calls of the arming service to one drone are at least this far apart (s)."""
 """The knee: the processes use more than this share of every core."""
 
 
@@ -110,18 +112,27 @@ class PoseAges:
 
 
 def arming_round_trips(session, names: list[str], until: float) -> tuple[list[float], int]:
-    """Disarm requests (answered on the ground, change nothing) to each drone in turn."""
+    """Disarm requests (answered on the ground, change nothing) to each drone in turn, one
+    drone at a time, each drone at most every :data:`ARMING_SPACING_S`: the bridge holds a
+    command back until late duplicate acks of the previous one with the same id can have
+    passed (``AckRouter.dedup_window``, 0.3 s), so calls closer together would measure that
+    hold, not the round trip."""
     from dronewrapper.runtime.node import call_service
 
     rtts, failures = [], 0
+    last: dict[str, float] = {}
     while time.monotonic() < until:
         for ns in names:
+            wait = last.get(ns, -ARMING_SPACING_S) + ARMING_SPACING_S - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
             t0 = time.perf_counter()
             try:
                 call_service(session, registry.ARMING, CommandBool(value=False), ns=ns, timeout=2)
                 rtts.append(time.perf_counter() - t0)
             except (ServiceError, ServiceUnavailable):
                 failures += 1
+            last[ns] = time.monotonic()
             time.sleep(0.02)
     return rtts, failures
 
@@ -324,14 +335,15 @@ def report(results: list[dict[str, object]]) -> None:
             n, r["start_s"], each["sim"], each["bridge"], cpu["router"],
             r["sdk_fleet"]["cpu_percent"], sum(r["rss_mb"].values()) / n,
             r["pose_age_p50_ms"], r["pose_age_worst_p99_ms"],
-            f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}",
+            f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}"
+            f" ({r['arming_rtt'].get('n', 0)})",
             r["setpoint_to_mavlink"].get("p99_ms", float("nan")),
         ])  # fmt: skip
     print_table(
         f"A fleet of N simulated drones ({results[0].get('kind', 'iris')}, no cameras) on one "
         "router: CPU % of one core, memory, latency (ms)",
         ["N", "start s", "sim %/each", "bridge %/each", "router %", "SDK fleet %",
-         "MB/drone", "pose age p50", "worst p99", "arming p50/p99", "sp->MAVLink p99"],
+         "MB/drone", "pose age p50", "worst p99", "arming p50/p99 (n)", "sp->MAVLink p99"],
         rows,
     )  # fmt: skip
     print(

@@ -23,10 +23,8 @@ from __future__ import annotations
 import argparse
 import random
 import signal
-import socket
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -40,6 +38,7 @@ from bench.common import (
     stop_process,
     write_results,
 )
+from bench.tello_standin import TelloStandIn
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet
 from dronewrapper.runtime import Node, ZenohOptions
@@ -48,10 +47,6 @@ from dronewrapper_sim.tello.video import H264Encoder, packetise
 REPO = Path(__file__).resolve().parents[1]
 W, H, FPS = 960, 720, 30.0
 BITS, BLOCK = 20, 40  # frame index as 20 blocks of 40x40 px along the top
-STATE = (
-    "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;pitch:0;roll:0;yaw:0;vgx:0;vgy:0;vgz:0;"
-    "templ:60;temph:62;tof:10;h:0;bat:87;baro:100.00;time:0;agx:0.00;agy:0.00;agz:-1000.00;\r\n"
-)
 
 
 def stamped_image(index: int) -> np.ndarray:
@@ -75,60 +70,18 @@ def read_index(img: np.ndarray) -> int:
     return index
 
 
-class TelloStandIn:
-    """The Tello side: replies at once, a state string at 10 Hz, the video."""
+class StampedVideo:
+    """The stand-in's frames: each a :func:`stamped_image` of its index, encoded as the
+    simulated Tello encodes, with the time (monotonic s) its encoding started."""
 
-    def __init__(self, address: str) -> None:
-        self.address = address
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind((address, 8889))
-        self.sock.settimeout(0.1)
-        self.out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.client: tuple[str, int] | None = None
-        self.streaming = threading.Event()
+    def __init__(self) -> None:
+        self.encoder = H264Encoder(W, H, FPS, 1500, 30)
         self.sent_at: dict[int, float] = {}
-        self.frames = 0
-        self.stop = threading.Event()
 
-    def command_loop(self) -> None:
-        while not self.stop.is_set():
-            try:
-                data, source = self.sock.recvfrom(2048)
-            except TimeoutError:
-                continue
-            text = data.decode("ascii", "replace").strip()
-            if text.startswith("rc "):
-                continue
-            self.client = source
-            if text == "streamon":
-                self.streaming.set()
-            reply = "87" if text.endswith("?") else "ok"
-            self.sock.sendto(reply.encode(), source)
-
-    def state_loop(self) -> None:
-        while not self.stop.wait(0.1):
-            if self.client is not None:
-                self.out.sendto(STATE.encode(), (self.client[0], 8890))
-
-    def video_loop(self, seconds: float) -> None:
-        encoder = H264Encoder(W, H, FPS, 1500, 30)
-        self.streaming.wait(30)
-        start = time.monotonic()
-        index = 0
-        while not self.stop.is_set() and time.monotonic() - start < seconds:
-            due = start + index / FPS
-            delay = due - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            image = stamped_image(index)
-            self.sent_at[index] = time.monotonic()
-            unit = encoder.encode(image)
-            if unit and self.client is not None:
-                for datagram in packetise(unit):
-                    self.out.sendto(datagram, (self.client[0], 11111))
-                self.frames += 1
-            index += 1
-        encoder.close()
+    def __call__(self, index: int) -> list[bytes]:
+        image = stamped_image(index)
+        self.sent_at[index] = time.monotonic()
+        return packetise(self.encoder.encode(image))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -142,13 +95,8 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     endpoint = router.endpoint
     address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
-    tello = TelloStandIn(address)
-    threads = [
-        threading.Thread(target=tello.command_loop, daemon=True),
-        threading.Thread(target=tello.state_loop, daemon=True),
-    ]
-    for thread in threads:
-        thread.start()
+    video = StampedVideo()
+    tello = TelloStandIn(address, video, FPS)
     bridge = subprocess.Popen(
         [sys.executable, "-m", "dronewrapper_bridge_tello", "--connect", endpoint,
          "--tello", address, "--local", address, "--log-level", "WARNING",
@@ -169,11 +117,10 @@ def main(argv: list[str] | None = None) -> int:
     node.subscribe(registry.IMAGE_RAW, on_image, camera="cam_frontal")
     results: dict[str, object] = {}
     try:
-        video = threading.Thread(target=tello.video_loop, args=(args.seconds,), daemon=True)
-        video.start()
         if not tello.streaming.wait(30):
             print("the bridge never sent streamon", file=sys.stderr)
             return 1
+        end = time.monotonic() + args.seconds
         time.sleep(2.0)
         c0, w0 = cpu_seconds(bridge.pid), time.monotonic()
 
@@ -185,12 +132,11 @@ def main(argv: list[str] | None = None) -> int:
             if reply.success:
                 rtts.append(time.monotonic() - t0)
             time.sleep(0.1)
-        video.join(args.seconds + 30)
-        time.sleep(1.0)
+        time.sleep(max(0.0, end - time.monotonic()))
         cpu = (cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
 
         latencies = [
-            (tello.sent_at[i], at - tello.sent_at[i]) for i, at in arrivals if i in tello.sent_at
+            (video.sent_at[i], at - video.sent_at[i]) for i, at in arrivals if i in video.sent_at
         ]
         latencies.sort()
         values = [lat for _, lat in latencies]
@@ -227,7 +173,8 @@ def main(argv: list[str] | None = None) -> int:
         )
         write_results("tello_video", results)
     finally:
-        tello.stop.set()
+        tello.close()
+        video.encoder.close()
         node.close()
         stop_process(bridge, signal.SIGTERM)
         router.stop(5)

@@ -118,6 +118,7 @@ class Launcher:
         namespace: str | None = None,
         out: TextIO | None = None,
         listen: Sequence[str] = (),
+        connect: Sequence[str] = (),
         identity: str = "",
         keys_dir: str = "",
         insecure: bool = False,
@@ -126,6 +127,7 @@ class Launcher:
         # the router's endpoints for other machines (tls/ with the drone's identity); the
         # graph's own processes always use ``router``
         self.listen = list(listen)
+        self.connect = list(connect)  # other routers this one joins (a relay, another field)
         self.identity = identity
         self.keys_dir = keys_dir
         self.insecure = insecure
@@ -249,6 +251,7 @@ class Launcher:
         if self.start_router:
             options = router_options(
                 [self.router, *self.listen],
+                self.connect,
                 identity=self.identity,
                 keys_dir=self.keys_dir,
                 insecure=self.insecure,
@@ -260,6 +263,8 @@ class Launcher:
         self._session = (open_session if self.start_router else open_client_session)(options)
         where = ", ".join([self.router, *self.listen]) if self.start_router else self.router
         acl = " (access control on)" if options.access_control else ""
+        if self.start_router and self.connect:
+            where += f"; joining {', '.join(self.connect)}"
         self._say(f"{'router listening on' if self.start_router else 'using router'} {where}{acl}")
         watched = self.namespaces[0] if len(self.namespaces) == 1 else "*"
         self._token_sub = self._session.liveliness().declare_subscriber(
@@ -390,6 +395,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="ENDPOINT",
         help="also listen here for other machines, e.g. tls/0.0.0.0:7448 (needs --identity)",
     )
+    parser.add_argument(
+        "--connect",
+        action="append",
+        default=[],
+        metavar="ENDPOINT",
+        help="also join this router, e.g. a relay's tls/RELAY:7448 (needs --identity)",
+    )
     parser.add_argument("--identity", default="", help="the drone's certificate (keys)")
     parser.add_argument("--keys", default="", metavar="DIR", help="key store folder")
     parser.add_argument(
@@ -409,6 +421,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             variables=variables,
             namespace=args.namespace,
             listen=args.listen,
+            connect=args.connect,
             identity=args.identity,
             keys_dir=args.keys,
             insecure=args.insecure,

@@ -90,3 +90,28 @@ def test_serial_device_with_baud_over_a_pty():
         link.close()
         os.close(master)
         os.close(slave)
+
+
+def test_udp_link_reads_every_frame_of_a_datagram_and_times_out_when_silent():
+    from pymavlink.dialects.v20 import common as mavlink
+
+    port = free_port(socket.SOCK_DGRAM)
+    link = MavLink(f"udpin:127.0.0.1:{port}")
+    link.open()
+    sender = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        packer = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+        frames = [
+            mavlink.MAVLink_heartbeat_message(2, 12, 0, 0, 3, 3).pack(packer),
+            mavlink.MAVLink_local_position_ned_message(10, 1.0, 2.0, -3.0, 0, 0, 0).pack(packer),
+        ]
+        sender.sendto(b"".join(frames), ("127.0.0.1", port))  # PX4 packs frames like this
+        kinds = [getattr(link.recv(2.0), "get_type", lambda: None)() for _ in frames]
+        assert kinds == ["HEARTBEAT", "LOCAL_POSITION_NED"]
+        assert link.last_source == ("127.0.0.1", sender.getsockname()[1])
+        start = time.monotonic()
+        assert link.recv(0.1) is None
+        assert 0.09 <= time.monotonic() - start < 1.0  # waited its timeout, not more
+    finally:
+        sender.close()
+        link.close()

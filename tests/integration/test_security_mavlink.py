@@ -42,11 +42,12 @@ class Station:
             mav.signing.timestamp = timestamp or signing_timestamp(time.time())
         return mav
 
-    def pump(self, seconds: float) -> list:
-        """Read for ``seconds``; returns the COMMAND_ACKs seen (tracks HEARTBEAT's armed bit)."""
+    def pump(self, seconds: float, until=None) -> list:
+        """Read for ``seconds``, or until ``until(acks)`` holds; returns the COMMAND_ACKs seen
+        (tracks HEARTBEAT's armed bit)."""
         acks = []
         end = time.monotonic() + seconds
-        while time.monotonic() < end:
+        while time.monotonic() < end and not (until and until(acks)):
             try:
                 data, addr = self.sock.recvfrom(65535)
             except (TimeoutError, OSError):
@@ -73,10 +74,14 @@ class Station:
         return data
 
     def obeyed(self, mav: mavlink.MAVLink, arm: bool) -> bool:
-        """Send arm/disarm and wait for its ack: True if acknowledged ACCEPTED."""
+        """Send arm/disarm and wait for its ack: True if acknowledged ACCEPTED (as soon as it
+        is), False after ACK_WAIT_S without that ack."""
+
+        def accepted(acks: list) -> bool:
+            return any(a.command == ARM and a.result == mavlink.MAV_RESULT_ACCEPTED for a in acks)
+
         self.command(mav, arm)
-        acks = self.pump(ACK_WAIT_S)
-        return any(a.command == ARM and a.result == mavlink.MAV_RESULT_ACCEPTED for a in acks)
+        return accepted(self.pump(ACK_WAIT_S, until=accepted))
 
     def setup_signing(self, mav: mavlink.MAVLink, key: bytes) -> None:
         msg = mavlink.MAVLink_setup_signing_message(

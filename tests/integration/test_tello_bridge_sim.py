@@ -121,11 +121,18 @@ class Rig(BridgeUser):
         wait_for(lambda: self.state.value and not self.state.value.armed, 5, what="disarmed")
 
 
-def start_sim(spawn, router: str, address: str):
+AUTO_LAND_S = 8.0
+"""The simulated Tello's auto-land timeout in the tests that wait for it (the real drone's 15 s
+is the default): a keep-alive every ``keepalive_s`` (3 s) must still beat it."""
+
+
+def start_sim(spawn, router: str, address: str, auto_land_s: float | None = None):
+    """The simulated Tello on ``address``; ``auto_land_s`` shortens its 15 s auto-land."""
+    extra = ["--set", f"tello.auto_land_s={auto_land_s}"] if auto_land_s else []
     return spawn(
         python_module(
             "dronewrapper_sim", "--aircraft", "tello", "--scenario", "empty",
-            "--address", address, "--connect", router, "--name", "sim",
+            "--address", address, "--connect", router, "--name", "sim", *extra,
         ),
         "sim",
     )  # fmt: skip
@@ -141,9 +148,11 @@ def start_bridge(spawn, router: str, tello: str, local: str, *extra: str):
     )  # fmt: skip
 
 
-def make_rig(router, spawn, *bridge_args: str, tello: str | None = None) -> Rig:
+def make_rig(
+    router, spawn, *bridge_args: str, tello: str | None = None, auto_land_s: float | None = None
+) -> Rig:
     address = loopback_address()
-    sim = start_sim(spawn, router, address)
+    sim = start_sim(spawn, router, address, auto_land_s)
     bridge = start_bridge(spawn, router, tello or address, address, *bridge_args)
     user = client_node(router, name="test")
     rig = Rig(router, address, user, sim, bridge)
@@ -245,10 +254,20 @@ def test_takeoff_axes_yaw_stop_position_land(rig):
     rig.wait_landed()
 
 
-def test_keepalive_then_failsafe_hold_and_commander_lost_land(rig):
+@pytest.fixture
+def short_auto_land_rig(router, spawn) -> Iterator[Rig]:
+    """A rig whose Tello lands after AUTO_LAND_S without a command."""
+    r = make_rig(router, spawn, "--set", "video=false", auto_land_s=AUTO_LAND_S)
+    yield r
+    r.close()
+    r.user.close()
+
+
+def test_keepalive_then_failsafe_hold_and_commander_lost_land(short_auto_land_rig):
+    rig = short_auto_land_rig
     rig.take_off(1.0)
-    # nobody commands for 18 s: the Tello would land after 15 s; the bridge keeps it alive
-    deadline = time.monotonic() + 18.0
+    # nobody commands for 1.5 auto-land timeouts: the Tello would land; the bridge keeps it alive
+    deadline = time.monotonic() + 1.5 * AUTO_LAND_S
     while time.monotonic() < deadline:
         assert rig.true_xyz()[2] > 0.7, "the Tello landed by itself: no keep-alive"
         time.sleep(0.5)
@@ -268,14 +287,16 @@ def test_keepalive_then_failsafe_hold_and_commander_lost_land(rig):
 
 
 def test_killed_bridge_the_tello_lands_by_itself(router, spawn):
-    rig = make_rig(router, spawn, "--set", "video=false")
+    rig = make_rig(router, spawn, "--set", "video=false", auto_land_s=AUTO_LAND_S)
     try:
         rig.take_off(1.0)
         rig.bridge.proc.send_signal(signal.SIGKILL)
         rig.bridge.proc.wait(5)
         killed = time.monotonic()
         wait_for(lambda: rig.true_xyz()[2] < 0.05, 35, what="auto-land after the bridge died")
-        assert time.monotonic() - killed > 10.0  # the Tello's own 15 s timeout, not a crash
+        # the Tello's own timeout, not a crash: the bridge's last command (a keep-alive at
+        # most keepalive_s = 3 s before the kill) is AUTO_LAND_S old before the descent starts
+        assert time.monotonic() - killed > AUTO_LAND_S - 3.0
     finally:
         rig.close()
         rig.user.close()
@@ -362,25 +383,34 @@ def test_lost_replies_and_malformed_state_strings_survived(router, spawn):
         relay.close()
 
 
-def test_video_frames_decoded_and_published(router, spawn):
-    rig = make_rig(router, spawn)
+def test_video_on_demand_decoded_and_published(router, spawn):
+    """No stream until a viewer subscribes; live decoded frames while it watches; the sim
+    reports the stream off once the viewer has been gone for the idle time."""
+    rig = make_rig(router, spawn, "--set", "video=on_demand", "--set", "video_idle_s=1.0")
     try:
-        frames = rig.user.latest(registry.IMAGE_RAW, camera="cam_frontal")
-        first = frames.wait(30)
-        assert (first.width, first.height, first.encoding) == (960, 720, "bgr8")
-        assert first.header.frame_id == "cam_frontal"
-        seqs, ages = [], []
-        deadline = time.monotonic() + 3.0
-        while time.monotonic() < deadline:
-            msg = frames.wait(5, newer_than=frames.count)
-            seqs.append(msg.header.seq)
-            ages.append(time.time() - msg.header.stamp)
-        assert len(set(seqs)) > 10  # a live stream, not one frame
-        assert float(np.median(ages)) < 0.5
-        image = np.frombuffer(first.data, np.uint8).reshape(720, 960, 3)
-        assert image.std() > 5.0  # a rendered scene, not a blank frame
-        jpeg = rig.user.latest(registry.IMAGE_COMPRESSED, camera="cam_frontal")
-        assert jpeg.wait(10).format == "jpeg"  # compressed on request
+        wait_for(lambda: "video: stream off" in rig.bridge.output(), 10, what="streamoff ok")
+        assert "video: streaming" not in rig.sim.output()  # connected, nobody watching
+        with client_node(router, name="viewer") as viewer:
+            frames = viewer.latest(registry.IMAGE_RAW, camera="cam_frontal")
+            first = frames.wait(30)
+            assert (first.width, first.height, first.encoding) == (960, 720, "bgr8")
+            assert first.header.frame_id == "cam_frontal"
+            seqs, ages = [], []
+            deadline = time.monotonic() + 3.0
+            while time.monotonic() < deadline:
+                msg = frames.wait(5, newer_than=frames.count)
+                seqs.append(msg.header.seq)
+                ages.append(time.time() - msg.header.stamp)
+            assert len(set(seqs)) > 10  # a live stream, not one frame
+            assert float(np.median(ages)) < 0.5
+            image = np.frombuffer(first.data, np.uint8).reshape(720, 960, 3)
+            assert image.std() > 5.0  # a rendered scene, not a blank frame
+            jpeg = viewer.latest(registry.IMAGE_COMPRESSED, camera="cam_frontal")
+            assert jpeg.wait(10).format == "jpeg"  # compressed on request
+            assert rig.sim.output().count("video: streaming") == 1
+            leaving = time.monotonic()  # closing the viewer's session undeclares its subscribers
+        wait_for(lambda: "video: stream off" in rig.sim.output(), 20, what="the stream off")
+        assert time.monotonic() - leaving >= 1.0  # not before the idle time
     finally:
         rig.close()
         rig.user.close()

@@ -15,9 +15,10 @@ import json
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 
 import pytest
-from shaped_link import DRONE_ADDRESS, is_root, shaped_link
+from shaped_link import DRONE_ADDRESS, Link, is_root, shaped_link
 
 from support import REPO, Process, wait_for
 
@@ -42,9 +43,12 @@ def read_events(probe: subprocess.Popen, on_reshape, timeout: float) -> list[dic
     return events
 
 
-@pytest.mark.parametrize("images", ["raw", "jpeg"])
-def test_control_survives_a_slow_link_with_cameras_on(tmp_path, images):
-    with shaped_link(20) as link, contextlib.ExitStack() as stack:
+@pytest.fixture(scope="module")
+def drone(tmp_path_factory) -> Iterator[tuple[Link, str]]:
+    """The shaped link and the drone graph on it, shared by the raw and JPEG cases: each case
+    flies its own take-off and landing, and the link is reshaped to 20 Mbit/s before each."""
+    log_dir = tmp_path_factory.mktemp("slow_link")
+    with shaped_link(20) as link:
         endpoint = f"tcp/{DRONE_ADDRESS}:7447"
         graph = Process(
             link.argv(
@@ -60,35 +64,44 @@ def test_control_survives_a_slow_link_with_cameras_on(tmp_path, images):
                     "--insecure",  # plain TCP on a test link: transport behaviour, not security
                 ],
             ),
-            tmp_path / "graph.log",
+            log_dir / "graph.log",
         )
         try:
             wait_for(lambda: "all processes ready" in graph.output(), 90, what="drone graph")
-            errors = stack.enter_context(open(tmp_path / "probe.err", "w"))
-            probe = subprocess.Popen(
-                link.argv(
-                    link.laptop, [sys.executable, "tests/network/laptop_probe.py", endpoint, images]
-                ),
-                cwd=REPO,
-                stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE,
-                stderr=errors,
-                text=True,
-            )
-
-            def to_five_mbit() -> None:
-                link.shape(5)
-                probe.stdin.write("go\n")
-                probe.stdin.flush()
-
-            try:
-                events = read_events(probe, to_five_mbit, timeout=240)
-                assert probe.wait(60) == 0, (tmp_path / "probe.err").read_text()[-3000:]
-            finally:
-                if probe.poll() is None:
-                    probe.kill()
+            yield link, endpoint
+            assert graph.alive(), graph.output()[-3000:]
         finally:
             graph.stop(30)
+
+
+@pytest.mark.parametrize("images", ["raw", "jpeg"])
+def test_control_survives_a_slow_link_with_cameras_on(tmp_path, drone, images):
+    link, endpoint = drone
+    link.shape(20)
+    with contextlib.ExitStack() as stack:
+        errors = stack.enter_context(open(tmp_path / "probe.err", "w"))
+        probe = subprocess.Popen(
+            link.argv(
+                link.laptop, [sys.executable, "tests/network/laptop_probe.py", endpoint, images]
+            ),
+            cwd=REPO,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=errors,
+            text=True,
+        )
+
+        def to_five_mbit() -> None:
+            link.shape(5)
+            probe.stdin.write("go\n")
+            probe.stdin.flush()
+
+        try:
+            events = read_events(probe, to_five_mbit, timeout=240)
+            assert probe.wait(60) == 0, (tmp_path / "probe.err").read_text()[-3000:]
+        finally:
+            if probe.poll() is None:
+                probe.kill()
     by_name = {}
     for event in events:
         by_name.setdefault(event["event"], []).append(event)

@@ -58,7 +58,7 @@ class RealPair:
             self._execute()
         if self.setpoint is not None and now >= self._next_setpoint:
             self._next_setpoint = now + 1.0 / SETPOINT_HZ
-            self.core.on_setpoint(self.setpoint, now, time.time())
+            self.core.on_setpoint(self.setpoint, "", now, time.time())
             self._execute()
         if now >= self._next_tick:
             self._next_tick = now + 1.0 / self.config.stream_rate_hz

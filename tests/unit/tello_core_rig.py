@@ -41,7 +41,9 @@ class TelloRig:
     """A :class:`TelloCore` (``config`` overrides; no video) and the Tello it talks to.
 
     ``script`` maps a command to its reply (``None``: never answered; default ``ok``);
-    ``delays`` maps a command to its reply delay in s (default ``reply_delay``).
+    ``delays`` maps a command to its reply delay in s (default ``reply_delay``);
+    ``watched()`` says whether a subscriber matches the camera at each tick (the node's
+    CameraWatch); ``video_on`` is the Tello's stream as its accepted switches left it.
     """
 
     def __init__(self, *, reply_delay: float = 0.02, **config: Any) -> None:
@@ -56,6 +58,9 @@ class TelloRig:
         self.flying = False
         self.height_cm = 0
         self.streaming_state = True  # the Tello sends its state string (False: link lost)
+        self.watched: Callable[[], bool] = lambda: False
+        self.video_on = False
+        self.video_restarts: list[float] = []  # times the core told the receiver to restart
         self._replies: list[tuple[float, str]] = []  # (due, text)
         self._next_state = self.now
         self._next_tick = self.now
@@ -75,6 +80,8 @@ class TelloRig:
             self.flying, self.height_cm = True, 100
         if text == "land" and reply == "ok":
             self.flying, self.height_cm = False, 0
+        if text in ("streamon", "streamoff") and reply == "ok":
+            self.video_on = text == "streamon"
         verb, _, cm = text.partition(" ")
         if verb in ("up", "down") and reply == "ok":
             self.height_cm += int(cm) if verb == "up" else -int(cm)
@@ -93,6 +100,8 @@ class TelloRig:
     def collect(self) -> None:
         """Take the core's outbox: record and answer its sends, record its samples."""
         out = self.core.take()
+        if out.video_restart:
+            self.video_restarts.append(self.now)
         for text in out.sends:
             self.sent.append((self.now, text))
             self._answer(text)
@@ -114,7 +123,7 @@ class TelloRig:
                 self.collect()
         if self.now >= self._next_tick:
             self._next_tick += 1.0 / self.core.config.rc_rate_hz
-            self.core.tick(self.now, stamp)
+            self.core.tick(self.now, stamp, camera_watched=self.watched())
             self.collect()
 
     def run(self, seconds: float, until: Callable[[], bool] | None = None) -> None:

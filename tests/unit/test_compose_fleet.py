@@ -68,7 +68,7 @@ def test_the_fleet_graph_expands_per_drone_with_processes_of_one_kind_started_to
     assert port1 not in " ".join(sim3)
     assert "cameras=false" in sim1  # cameras off unless asked
     tello_bridge = launcher.argv_of(launcher.groups[3][1])[0]
-    assert "tello_address=127.0.42.4" in tello_bridge and "video=false" in tello_bridge
+    assert "tello_address=127.0.42.4" in tello_bridge and "video=on_demand" in tello_bridge
 
 
 def test_a_bad_drone_count_is_a_graph_error():
@@ -109,5 +109,5 @@ def test_a_classroom_lists_its_tellos_and_this_machines_address_for_each():
     labels = [[inst.label for inst in group] for group in launcher.groups]
     assert labels == [["drone1/bridge_tello", "drone2/bridge_tello"], ["station"]]
     bridge2 = " ".join(launcher.argv_of(launcher.groups[0][1])[0])
-    assert "tello_address=127.0.43.2" in bridge2 and "video=false" in bridge2
+    assert "tello_address=127.0.43.2" in bridge2 and "video=on_demand" in bridge2
     assert "config/sim.yaml" in bridge2

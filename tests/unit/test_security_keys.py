@@ -57,7 +57,8 @@ def test_roles_exclude_revoked_and_expired(store):
     past = dt.datetime.now(dt.timezone.utc) - dt.timedelta(days=3)
     store.issue("old", "operator", days=1, now=past)
     store.revoke("bob")
-    assert store.names_by_role() == {"drone": ["drone1"], "operator": ["alice"], "observer": []}
+    roles = store.names_by_role()
+    assert roles == {"drone": ["drone1"], "operator": ["alice"], "observer": [], "relay": []}
     with pytest.raises(KeyStoreError, match="revoked"):
         store.issue("bob", "observer")
 
@@ -104,6 +105,18 @@ def test_export_copies_what_a_laptop_needs_and_never_the_ca_key(store, tmp_path)
     store.revoke("alice")
     with pytest.raises(KeyStoreError, match="revoked"):
         store.export("alice", tmp_path / "again")
+
+
+def test_export_for_a_router_carries_the_roles_its_access_control_grants(store, tmp_path):
+    store.issue("link", "relay", hosts=["10.0.0.7"])
+    store.issue("field", "drone")
+    out = tmp_path / "relay_box"
+    written = store.export("link", out, router=True)
+    assert sorted(p.name for p in written) == ["ca.crt", "index.json", "link.crt", "link.key"]
+    assert all(_mode(p) == 0o600 for p in written) and not (out / "ca.key").exists()
+    roles = KeyStore(out).names_by_role()
+    assert roles["relay"] == ["link"] and roles["drone"] == ["field"]
+    assert KeyStore(tmp_path / "laptop").names_by_role()["drone"] == []  # without: nobody
 
 
 def test_cli_round_trip(tmp_path, capsys):

@@ -64,6 +64,25 @@ def test_rules_follow_the_registry():
     assert every_service <= _allowed(rules["operator"], "query", "ingress")
 
 
+def test_a_relay_forwards_what_the_drone_and_the_operator_may_send():
+    """A router between the field and the ground carries telemetry one way and setpoints and
+    calls the other: its rules are the drone's and the operator's, and nothing more."""
+    rules = acl_rules(["drone"])
+    ids = lambda role: {r["id"] for r in rules[role]}  # noqa: E731
+    assert ids("relay") == ids("drone") | ids("operator")
+    for message, flow in (
+        ("put", "ingress"),
+        ("query", "ingress"),
+        ("declare_queryable", "ingress"),
+    ):
+        assert _allowed(rules["relay"], message, flow) == (
+            _allowed(rules["drone"], message, flow) | _allowed(rules["operator"], message, flow)
+        )
+    acl = access_control({"drone": ["field"], "operator": ["ground"], "relay": ["link"]})
+    policies = {p["id"]: p for p in acl["policies"]}
+    assert set(policies["role_relay"]["rules"]) == {f"relay_{i}" for i in ids("relay")}
+
+
 def test_policy_is_deny_by_default_and_binds_names():
     acl = access_control({"drone": ["drone1"], "operator": ["alice", "carol"], "observer": []})
     assert acl["enabled"] and acl["default_permission"] == "deny"

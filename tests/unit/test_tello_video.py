@@ -8,23 +8,31 @@ import numpy as np
 from dronewrapper_bridge_tello.video import (
     FrameAssembler,
     H264Decoder,
+    VideoReceiver,
     starts_access_unit,
 )
 
 W, H = 320, 240
 
 
-def encode(n: int) -> list[bytes]:
-    """``n`` access units of a moving gradient, Annex-B, as a Tello-like encoder makes them."""
+def scene(i: int, shade: int = 0) -> np.ndarray:
+    """Image ``i`` of a moving gradient (``shade`` sets the red channel: another scene)."""
+    img = np.zeros((H, W, 3), np.uint8)
+    img[:, :, 1] = (np.arange(W) + 8 * i) % 256
+    img[:, :, 2] = shade
+    return img
+
+
+def encode(n: int, shade: int = 0) -> list[bytes]:
+    """``n`` access units of a moving gradient, Annex-B, as a Tello-like encoder makes them (a
+    key frame every 10)."""
     codec = av.CodecContext.create("libx264", "w")
     codec.width, codec.height, codec.pix_fmt = W, H, "yuv420p"
     codec.framerate = 30
     codec.options = {"tune": "zerolatency", "preset": "ultrafast", "g": "10"}
     units = []
     for i in range(n):
-        img = np.zeros((H, W, 3), np.uint8)
-        img[:, :, 1] = (np.arange(W) + 8 * i) % 256
-        frame = av.VideoFrame.from_ndarray(img, format="bgr24")
+        frame = av.VideoFrame.from_ndarray(scene(i, shade), format="bgr24")
         frame.pts = i
         units += [bytes(p) for p in codec.encode(frame)]
     return units
@@ -93,6 +101,38 @@ def test_a_frame_of_a_whole_number_of_chunks_ends_at_the_next_access_unit():
     assert frames[4] == units[4]  # not merged with the next frame
     decoded = sum(len(dec.decode(f)) for f in frames)
     assert decoded == 12 and dec.counts.corrupt == 0
+
+
+def test_decoding_starts_at_the_first_key_frame():
+    units = encode(20)
+    dec = H264Decoder()
+    out = [(i, f) for i, unit in enumerate(units[3:], 3) for f in dec.decode(unit)]
+    assert dec.counts.before_keyframe == 7 and dec.counts.corrupt == 0  # 3..9 wait for 10
+    first, frame = out[0]
+    assert first == 10 and len(out) == 10
+    error = np.abs(frame.to_ndarray(format="bgr24").astype(int) - scene(10)).mean()
+    assert error < 3.0  # a clean picture, not one predicted from nothing
+
+
+def test_a_restarted_receiver_waits_for_the_new_streams_key_frame():
+    # a real Tello's stream resumes where its encoder is: mid-GOP, P frames first
+    old, new = encode(6), encode(12, shade=200)[3:]
+    for restart in (True, False):
+        receiver = VideoReceiver()
+        for unit in old:
+            for d in datagrams(unit):
+                receiver.feed(d)
+        if restart:
+            receiver.restart()
+        pictures = [p for unit in new for d in datagrams(unit) for p in receiver.feed(d)]
+        error = np.abs(pictures[0].to_ndarray(format="bgr24").astype(int) - scene(3, 200))
+        if restart:  # nothing until the key frame (image 10), then a clean picture
+            assert len(pictures) == 2 and receiver.runs == 2
+            assert receiver.counts.before_keyframe == 7
+            error = np.abs(pictures[0].to_ndarray(format="bgr24").astype(int) - scene(10, 200))
+            assert error.mean() < 3.0
+        else:  # the new P frames predicted from the old stream's pictures: not the new scene
+            assert error.mean() > 30.0
 
 
 def test_access_unit_starts():

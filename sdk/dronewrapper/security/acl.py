@@ -7,13 +7,16 @@ certificate common names from the key store (``index.json``: valid, not revoked,
 
 What each role may do, per namespace, everything else denied (``default_permission: deny``):
 
-- every role (``drone``, ``operator``, ``observer``): subscribe to every registry topic and see
-  who is alive (liveliness queries and subscribers);
+- every role (``drone``, ``operator``, ``observer``, ``relay``): subscribe to every registry
+  topic and see who is alive (liveliness queries and subscribers);
 - ``drone``: publish the topics its processes publish (telemetry, images, detections), declare
   the services' queryables and answer them, hold ``{ns}/alive/*`` tokens;
 - ``operator``: publish the topics an SDK app publishes (setpoints, world teleop) and call
   every service (arm, take off, land, modes, parameters, the command lease);
-- ``observer``: nothing more.
+- ``observer``: nothing more;
+- ``relay``: a router between the field and the ground (a radio's base station, a cloud
+  relay) forwards what both ends may send, so it gets the ``drone`` and the ``operator`` rules;
+  each end's router checks the certificates of the processes that connect to it.
 
 Processes on the drone itself connect on loopback (``lo``); loopback links get the drone and
 operator rules (the machine is trusted as a whole; remote links must show a certificate).
@@ -92,7 +95,12 @@ def acl_rules(namespaces: list[str]) -> dict[str, list[dict[str, Any]]]:
         _rule("operator_replies", ["reply"], ["egress"], services),
         _rule("operator_servers", ["declare_queryable"], ["egress"], services),
     ]
-    return {"observer": watch, "operator": watch + operator, "drone": watch + drone}
+    return {
+        "observer": watch,
+        "operator": watch + operator,
+        "drone": watch + drone,
+        "relay": watch + drone + operator,
+    }
 
 
 def access_control(

@@ -4,15 +4,19 @@
     dronewrapper keys issue drone1 --role drone [--host IP] the drone's certificate (its router)
     dronewrapper keys issue alice --role operator           an operator (may fly)
     dronewrapper keys issue bob --role observer             an observer (may only watch)
+    dronewrapper keys issue relay1 --role relay --host IP   a router between field and ground
     dronewrapper keys list                                  what was issued, valid or not
     dronewrapper keys revoke bob                            bob loses every permission
     dronewrapper keys export alice /media/usb/keys          alice's files for her laptop
+    dronewrapper keys export relay1 DIR --router            its files and the roles (a router)
     dronewrapper keys mavlink                               the 32-byte MAVLink 2 signing key
 
 Files live in ``--keys DIR`` (default ``$DRONEWRAPPER_KEYS`` or ``~/.config/dronewrapper/keys``),
 each with mode 0600. A laptop needs ``ca.crt``, ``NAME.crt`` and ``NAME.key`` in its own key
-folder (``export`` copies exactly those); ``ca.key`` stays where the CA was made. Restart
-the router after ``issue`` or ``revoke``: its access control is generated when it starts.
+folder (``export`` copies exactly those; ``--router`` adds ``index.json``, the roles a router's
+access control grants); ``ca.key`` stays where the CA was made. Restart the router after
+``issue`` or ``revoke`` (and export ``index.json`` again to other routers): its access control
+is generated when it starts.
 """
 
 from __future__ import annotations
@@ -45,6 +49,9 @@ def _parser() -> argparse.ArgumentParser:
     export = sub.add_parser("export", help="copy an identity's files for another machine")
     export.add_argument("name")
     export.add_argument("dest", help="folder to write ca.crt, NAME.crt, NAME.key into")
+    export.add_argument(
+        "--router", action="store_true", help="also index.json: that machine runs a router"
+    )
     mav = sub.add_parser("mavlink", help="make the 32-byte MAVLink 2 signing key")
     mav.add_argument("--force", action="store_true", help="replace an existing key")
     return parser
@@ -70,7 +77,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             entry = store.revoke(args.name)
             print(f"revoked {entry.name} ({entry.role}); restart the router to apply")
         elif args.command == "export":
-            paths = store.export(args.name, args.dest)
+            paths = store.export(args.name, args.dest, router=args.router)
             print("wrote " + ", ".join(str(p) for p in paths))
             print(
                 "on that machine, put them in ~/.config/dronewrapper/keys (or $DRONEWRAPPER_KEYS)"

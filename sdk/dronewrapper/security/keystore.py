@@ -4,7 +4,7 @@ One folder (``~/.config/dronewrapper/keys``, or ``$DRONEWRAPPER_KEYS``, or ``--k
 holds everything; no online service is involved:
 
     ca.key, ca.crt          the project CA (ECDSA P-256, 10 years); ca.key never leaves this folder
-    NAME.key, NAME.crt      one identity per drone, operator or observer (ECDSA P-256)
+    NAME.key, NAME.crt      one identity per drone, operator, observer or relay router (P-256)
     index.json              who was issued what: name, role, serial, expiry, revoked
     mavlink.key             the 32-byte MAVLink 2 signing key, as 64 hex digits
 
@@ -25,7 +25,7 @@ import secrets
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-ROLES = ("drone", "operator", "observer")
+ROLES = ("drone", "operator", "observer", "relay")
 ENV_KEYS = "DRONEWRAPPER_KEYS"
 NAME_PATTERN = r"[A-Za-z0-9][A-Za-z0-9_\-.]{0,62}"
 CA_DAYS = 3650
@@ -238,10 +238,16 @@ class KeyStore:
                 return entry
         raise KeyStoreError(f"no certificate named {name!r} in {self.root}")
 
-    def export(self, name: str, dest: Path | str) -> list[Path]:
+    def export(self, name: str, dest: Path | str, *, router: bool = False) -> list[Path]:
         """Copy what ``name`` needs elsewhere (``ca.crt``, ``NAME.crt``, ``NAME.key``; never
-        ``ca.key``) into the folder ``dest``, each 0600: a key folder for that machine."""
+        ``ca.key``) into the folder ``dest``, each 0600: a key folder for that machine.
+
+        ``router``: that machine runs a router with access control, which grants each
+        certificate its role from ``index.json`` (names, roles, expiry; no secret): copy it too.
+        """
         files = [self.ca_cert, self.cert(name), self.key(name)]
+        if router:
+            files.append(self.index_path)
         for path in files:
             if not path.is_file():
                 raise KeyStoreError(f"{path} is missing: issue {name!r} first")

@@ -9,6 +9,7 @@ from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
 from dronewrapper_bridge_mavlink.setpoints import Limits
+from dronewrapper_bridge_mavlink.streams import message_id
 from dronewrapper_ros2_gateway.config import Config as Ros2Config
 
 DEFAULT_MESSAGE_RATES = {
@@ -21,6 +22,8 @@ DEFAULT_MESSAGE_RATES = {
     "GPS_RAW_INT": 2.0,
     "HOME_POSITION": 0.5,
 }
+UNUSED_STREAMS = ["ALTITUDE", "VFR_HUD", "POSITION_TARGET_LOCAL_NED"]
+"""Streams of PX4's onboard link the bridge never reads: asked to stop (see streams.py)."""
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -53,6 +56,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     message_rates: dict[str, float] = msgspec.field(
         default_factory=lambda: dict(DEFAULT_MESSAGE_RATES)
     )  # Hz asked with SET_MESSAGE_INTERVAL
+    unused_streams: list[str] = msgspec.field(
+        default_factory=lambda: list(UNUSED_STREAMS)
+    )  # messages asked to stop (SET_MESSAGE_INTERVAL -1) unless forwarding to a ground station
     limits: Limits = msgspec.field(default_factory=Limits)
     envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly (envelope.py)
     upload_fence: bool = True  # give the autopilot the envelope as its fence once home is known
@@ -79,6 +85,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError("command_attempts and param_attempts must be >= 1")
         if self.gcs_url:
             parse_gcs_url(self.gcs_url)  # raises ValueError naming the expected form
+        for name in self.unused_streams:
+            if message_id(name) is None:
+                raise ValueError(f"unused_streams: {name!r} is not a MAVLink message name")
         for name in ("final_ack_timeout", "mode_confirm_timeout"):
             if not 0 < getattr(self, name) <= 30:
                 raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")

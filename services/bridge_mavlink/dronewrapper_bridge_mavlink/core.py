@@ -54,6 +54,7 @@ from dronewrapper_bridge_mavlink.setpoints import (
     validate,
 )
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
+from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import (
     StatusTextAssembler,
     Telemetry,
@@ -104,6 +105,11 @@ class BridgeCore(PureCore):
         self.acks = cmds.AckRouter()
         self.missions = missions.MissionState(config.envelope)
         self.params = ParamCache()
+        self.streams = StreamRequests(
+            config.message_rates,
+            config.unused_streams,
+            forwarding=bool(config.gcs_url) or config.gcs_over_zenoh,
+        )
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
             maxlen=32
         )
@@ -386,18 +392,18 @@ class BridgeCore(PureCore):
         for text in self.statustexts.flush(now, stamp=self.stamp):
             self.publish_text(text)
         if now >= self.next_rates and self.connected:
-            self._request_message_rates()
+            self._request_message_intervals(self.streams.round(now))
             self.rates_round += 1
             self.next_rates = now + 2.0 if self.rates_round < 3 else math.inf
+        if self.connected:
+            self._request_message_intervals(self.streams.due(now))
 
-    def _request_message_rates(self) -> None:
-        """Ask for the message rates we need (fire and forget: re-sent 3 times)."""
-        for name, hz in self.config.message_rates.items():
-            msg_id = getattr(mavlink, f"MAVLINK_MSG_ID_{name}", None)
-            if msg_id is None or hz <= 0:
-                continue
-            command = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
-            params = (float(msg_id), 1e6 / hz, 0, 0, 0, 0, 0)  # message id, interval us
+    def _request_message_intervals(self, requests: list[tuple[int, float]]) -> None:
+        """Send SET_MESSAGE_INTERVAL for each (message id, interval µs) (fire and forget: the
+        rounds are re-sent 3 times, see :mod:`~dronewrapper_bridge_mavlink.streams`)."""
+        command = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
+        for msg_id, interval_us in requests:
+            params = (float(msg_id), interval_us, 0, 0, 0, 0, 0)
             self.send("command_long", *self.target(), command, 0, *params)
 
     # ------------------------------------------------------------------ setpoints

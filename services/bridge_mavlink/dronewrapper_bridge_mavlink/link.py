@@ -184,12 +184,29 @@ class MavLink:
 
         ``last_source`` is then the UDP address it came from. When ``peer`` is set, replies of
         a listening UDP link keep going to it even if someone else sent last (pymavlink would
-        send to every recent sender: a second autopilot would receive our commands)."""
+        send to every recent sender: a second autopilot would receive our commands).
+
+        A UDP link waits in ``select`` only when nothing is buffered and reads once per
+        wake-up (pymavlink's ``recv_match`` reads again after every message: a failed
+        non-blocking read per datagram); serial and TCP links go through ``recv_match``, which
+        also reconnects a TCP link whose socket was replaced."""
         conn = self._conn
         if conn is None:
             time.sleep(timeout)
             return None
-        return conn.recv_match(blocking=True, timeout=timeout)
+        if not isinstance(conn, mavutil.mavudp):
+            return conn.recv_match(blocking=True, timeout=timeout)
+        deadline = time.monotonic() + timeout
+        buffered = conn.mav.buf_len() > 0  # the rest of a datagram or stream read before
+        while True:
+            if not buffered and not conn.select(max(0.0, deadline - time.monotonic())):
+                return None
+            msg = conn.recv_msg()
+            if msg is not None:
+                return msg
+            if time.monotonic() >= deadline:
+                return None
+            buffered = False  # what is left is part of a frame: wait for more bytes
 
     def time_boot_ms(self) -> int:
         """Milliseconds since this link was created (our ``time_boot_ms``)."""

@@ -75,6 +75,7 @@ def on_attitude(core: BridgeCore, msg: Any) -> None:
 
 def on_attitude_quaternion(core: BridgeCore, msg: Any) -> None:
     core.telemetry.on_attitude_quaternion(msg)
+    core.streams.on_quaternion(core.now)
 
 
 def on_local_position_ned(core: BridgeCore, msg: Any) -> None:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import msgspec
 
 from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig
 from dronewrapper_bridge_tello.sticks import StickScale
+from dronewrapper_bridge_tello.video_demand import VideoPolicy
 from dronewrapper_ros2_gateway.config import Config as Ros2Config
 
 TELLO_ENVELOPE = Envelope(
@@ -30,7 +32,12 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     local_command_port: int = 0  # 0: any
     state_port: int = 8890
     video_port: int = 11111
-    video: bool = True  # streamon and publish cam_frontal/image_raw
+    # on | off | on_demand (video_demand.py): when to streamon and publish cam_frontal/image_raw
+    # (YAML's true/false and on/off read as on/off)
+    video: bool | Literal["on", "off", "on_demand"] = "on"
+    video_idle_s: float = 10.0  # s the stream runs on after the last subscriber (on_demand)
+    video_retry_s: float = 2.0  # s between tries of a refused or unanswered streamon/streamoff
+    video_attempts: int = 3  # tries in a row before waiting for a new demand or a reconnection
     compressed: bool = False  # also publish JPEG on image_raw/compressed (else only on request)
     jpeg_quality: int = 80
     video_chunk: int = 1460  # bytes of a full video datagram (a shorter one ends a frame)
@@ -64,6 +71,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     ros2: Ros2Config | None = None  # present this drone to ROS 2 from this process (docs/ros2.md)
 
     def __post_init__(self) -> None:
+        if isinstance(self.video, bool):
+            self.video = "on" if self.video else "off"
+        self.video_policy()  # raises ValueError naming a bad video key
         if not 0 < self.late_setpoint_s <= 5:
             raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
@@ -86,6 +96,15 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError("command_lease_ttl_s must be > 0")
         if not 1 <= self.jpeg_quality <= 100:
             raise ValueError("jpeg_quality must be in [1, 100]")
+
+    def video_policy(self) -> VideoPolicy:
+        """How the video follows its demand, from this config's video keys (validated there)."""
+        return VideoPolicy(
+            mode=str(self.video),
+            idle_s=self.video_idle_s,
+            retry_s=self.video_retry_s,
+            attempts=self.video_attempts,
+        )
 
     def failsafe_config(self) -> FailsafeConfig:
         """The failsafe's settings, from this config's flat keys (validated there)."""

@@ -36,7 +36,7 @@ from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
-from dronewrapper_bridge_tello.replies import ReplyMatcher
+from dronewrapper_bridge_tello.replies import ReplyMatcher, is_ok
 from dronewrapper_bridge_tello.state import StateError, parse_state
 from dronewrapper_bridge_tello.sticks import (
     STOP,
@@ -47,6 +47,7 @@ from dronewrapper_bridge_tello.sticks import (
     validate,
 )
 from dronewrapper_bridge_tello.telemetry import Telemetry
+from dronewrapper_bridge_tello.video_demand import STREAMON, VideoDemand
 
 log = logging.getLogger("bridge_tello")
 
@@ -61,10 +62,13 @@ class Outbox:
     Attributes:
         sends: SDK command strings for the Tello (``command``, ``rc 0 0 0 0`` ...), in order.
         samples: (registry topic, message) to publish on Zenoh.
+        video_restart: a ``streamon`` is sent: the video receiver starts a new run (what
+            arrives from now on is the new stream, decoded from its first key frame).
     """
 
     sends: list[str] = field(default_factory=list)
     samples: list[tuple[Topic, Any]] = field(default_factory=list)
+    video_restart: bool = False
 
 
 class TelloCore(PureCore):
@@ -89,7 +93,7 @@ class TelloCore(PureCore):
         self.matcher = ReplyMatcher()
         self.connected = False
         self.sdk_mode = False
-        self.streaming = False
+        self.video = VideoDemand(config.video_policy())
         self.malformed_states = 0
         self.states_received = 0
         self.rc_sent = 0
@@ -117,9 +121,26 @@ class TelloCore(PureCore):
             log.info("Tello in SDK mode")
         self.sdk_mode = True
 
-    def video_streaming(self, streaming: bool) -> None:
-        """Whether the Tello accepted ``streamon``."""
-        self.streaming = streaming
+    @property
+    def streaming(self) -> bool:
+        """True once the Tello has accepted ``streamon`` (and no ``streamoff`` since)."""
+        return self.video.streaming is True
+
+    def video_answered(self, command: str, reply: str | None) -> None:
+        """The Tello's reply (None: none came) to ``streamon``/``streamoff``."""
+        accepted = reply is not None and is_ok(reply)
+        self.video.on_result(command, accepted, self.now)
+        if accepted:
+            log.info("video: %s", "streaming" if command == STREAMON else "stream off")
+            return
+        video, attempts = self.video, self.video.policy.attempts
+        why = f"{command} {'refused: ' + reply if reply else 'unanswered'}"
+        if video.gave_up:
+            self.text(
+                SEVERITY_WARNING,
+                f"bridge: video: {why} {attempts} times; tried again when the demand changes",
+            )
+        log.warning("video: %s (%d of %d tries)", why, video.failures, attempts)
 
     def require_connected(self) -> None:
         """ServiceError when no state string is arriving."""
@@ -232,9 +253,11 @@ class TelloCore(PureCore):
             return
         self.failsafe.on_setpoint(target, kind, now)
 
-    def tick(self, now: float, stamp: float) -> None:
+    def tick(self, now: float, stamp: float, *, camera_watched: bool = False) -> None:
         """The control tick (``rc_rate_hz``): link supervision, the failsafe, the sticks or the
-        stop, keep-alive, the failsafe's landing, reconnection, periodic State, operations."""
+        stop, keep-alive, the failsafe's landing, reconnection, periodic State, operations,
+        then the video's switch when the command slot is free (``camera_watched``: a
+        subscriber matches the camera's keys now)."""
         self._at(now, stamp)
         if self.connected and now - self._last_state_at > self.config.link_timeout:
             self.connected = False
@@ -261,6 +284,19 @@ class TelloCore(PureCore):
         missions.tick(self)
         self.publish_state()
         self.advance(now, stamp)
+        self._switch_video(camera_watched)
+
+    def _switch_video(self, watched: bool) -> None:
+        """Start ``streamon``/``streamoff`` when the demand asks for it. Called after the
+        operations have moved on, so a flight command waiting for the slot has taken it."""
+        command = self.video.next_command(
+            self.now,
+            watched=watched,
+            connected=self.connected and self.sdk_mode,
+            slot_free=not self.command_busy,
+        )
+        if command is not None:
+            self.start(ops.switch_video(self, command), self.now, self.stamp, background=True)
 
     def _sticks(self, tick: Tick) -> Sticks | None:
         """The sticks of the fresh setpoint, a stop, or None (send nothing)."""

@@ -5,9 +5,10 @@ commander lease included) is in :class:`~dronewrapper_bridge_tello.core.TelloCor
 as an argument); the wiring every bridge shares (driver, publishers, services, setpoints, tick
 loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: replies
 (command socket -> core), state (state strings -> core), control at ``rc_rate_hz`` (the core's
-tick: failsafe, ``rc`` sticks, keep-alive, link supervision, periodic State), video (datagrams
--> decoder -> newest frame) and its publisher, plus the Node's service workers, which start an
-operation in the core and wait until it is done.
+tick: failsafe, ``rc`` sticks, keep-alive, link supervision, periodic State, and the video's
+``streamon``/``streamoff`` as the camera's subscribers come and go), video (datagrams -> decoder
+-> newest frame) and its publisher, plus the Node's service workers, which start an operation in
+the core and wait until it is done.
 """
 
 from __future__ import annotations
@@ -21,17 +22,19 @@ from typing import Any
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
-from dronewrapper.runtime import Latest, Node
+from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_tello import flight, missions
 from dronewrapper_bridge_tello import operations as ops
+from dronewrapper_bridge_tello.camera_watch import CameraWatch
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import Outbox, TelloCore
 from dronewrapper_bridge_tello.failsafe import Failsafe
 from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
 from dronewrapper_bridge_tello.telemetry import Telemetry
-from dronewrapper_bridge_tello.video import FrameAssembler, H264Decoder
+from dronewrapper_bridge_tello.video import VideoReceiver
+from dronewrapper_bridge_tello.video_demand import OFF
 from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
 log = logging.getLogger("bridge_tello")
@@ -78,12 +81,13 @@ class Bridge(BridgeNode[TelloCore]):
                 state_port=config.state_port,
                 video_port=config.video_port,
             ),
-            video=config.video,
+            video=config.video != OFF,
         )
         self.pub_image = node.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         self.pub_jpeg = node.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
-        self.assembler = FrameAssembler(chunk=config.video_chunk)
-        self.decoder = H264Decoder()
+        self.camera = CameraWatch([self.pub_image, self.pub_jpeg] if config.video != OFF else [])
+        self.receiver = VideoReceiver(chunk=config.video_chunk)
+        self._runs = 0  # streamons sent: the video thread restarts its receiver at each
         # the newest decoded frame and its stamp: the publisher skips what it could not keep up with
         self.newest: Latest[tuple[Any, float]] = Latest("decoded frame", node.clock)
         self.frames_published = 0
@@ -118,6 +122,8 @@ class Bridge(BridgeNode[TelloCore]):
     # ---- feeding the core
 
     def send(self, out: Outbox) -> None:
+        if out.video_restart:
+            self._runs += 1  # the video thread restarts its receiver
         for text in out.sends:
             try:
                 self.link.send(text)
@@ -135,15 +141,26 @@ class Bridge(BridgeNode[TelloCore]):
         loops = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),
             (self._receive_loop, (self.link.state, self._on_state, "state"), "tello-state"),
-            (self.tick_loop, (self.config.rc_rate_hz, "control"), "tello-control"),
+            (self._control_loop, (), "tello-control"),
         ]
-        if self.config.video:
+        if self.config.video != OFF:
             loops += [(self._video_loop, (), "tello-video"), (self._image_loop, (), "tello-images")]
         threads = [threading.Thread(target=f, args=a, name=n, daemon=True) for f, a, n in loops]
         for thread in threads:
             thread.start()
         self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
         return threads
+
+    def _control_loop(self) -> None:
+        """The core's tick at ``rc_rate_hz`` with whether the camera is watched (errors counted
+        under ``control`` and logged; the loop goes on)."""
+        rate = Ratekeeper(self.config.rc_rate_hz, stop=self.node.stop_event)
+        while rate.sleep():
+            try:
+                self.driver.feed(self.core.tick, camera_watched=self.camera.watched)
+            except Exception:
+                self.node.callback_errors["control"] += 1
+                log.exception("control loop error")
 
     def _on_reply(self, data: bytes) -> None:
         self.driver.feed(self.core.on_reply, data.decode("utf-8", "replace"))
@@ -179,6 +196,7 @@ class Bridge(BridgeNode[TelloCore]):
         stop = self.node.stop_event
         sock = self.link.video
         assert sock is not None
+        receiver, run = self.receiver, self._runs
         while not stop.is_set():
             try:
                 data = sock.recv(65535)
@@ -188,10 +206,12 @@ class Bridge(BridgeNode[TelloCore]):
                 if stop.wait(0.2):
                     return
                 continue
+            if run != self._runs:  # a streamon was sent: a clean start at its key frame
+                run = self._runs
+                receiver.restart()
             stamp = time.time()
-            for frame in self.assembler.feed(data):
-                for decoded in self.decoder.decode(frame):
-                    self.newest.update((decoded, stamp))
+            for decoded in receiver.feed(data):
+                self.newest.update((decoded, stamp))
 
     def _image_loop(self) -> None:
         stop = self.node.stop_event
@@ -204,7 +224,7 @@ class Bridge(BridgeNode[TelloCore]):
             try:
                 image = frame.to_ndarray(format="bgr24")
             except Exception:
-                self.decoder.counts.corrupt += 1
+                self.receiver.counts.corrupt += 1
                 continue
             self.pub_image.put(bgr_to_image(image, stamp, "cam_frontal", seq))  # a view: no copy
             if self._jpeg_wanted():
@@ -237,6 +257,7 @@ def run(node: Node, config: Config) -> int:
         node.spin()
         for thread in threads:
             thread.join(timeout=2.0)
+    bridge.camera.close()
     bridge.link.close()
     return 0
 

@@ -43,6 +43,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello.replies import Pending, is_ok
+from dronewrapper_bridge_tello.video_demand import STREAMON
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_tello.core import TelloCore
@@ -127,16 +128,25 @@ def result_of(reply: str | None, what: str) -> tuple[int, str]:
 
 
 def connect(core: TelloCore) -> Steps:
-    """``command`` until ``ok`` (SDK mode), then ``streamon`` for the video (the bridge's own)."""
+    """``command`` until ``ok`` (SDK mode; the bridge's own). The video follows on the next
+    tick (video_demand.py)."""
     reply = yield from exchange(core, "command", attempts=1)
     if reply is None or not is_ok(reply):
         return False
     core.in_sdk_mode()
-    if core.config.video:
-        reply = yield from exchange(core, "streamon")
-        core.video_streaming(reply is not None and is_ok(reply))
     core.publish_state(force=True)
     return True
+
+
+def switch_video(core: TelloCore, command: str) -> Steps:
+    """``streamon`` or ``streamoff``, tried once (video_demand.py spaces and bounds the tries,
+    so the command slot is free for flight commands in between). Before a ``streamon`` the
+    video receiver is told to start afresh, so the new stream's first datagram finds it empty."""
+    if command == STREAMON:
+        core.out.video_restart = True
+    reply = yield from exchange(core, command, attempts=1)
+    core.video_answered(command, reply)
+    return reply
 
 
 def arming(core: TelloCore, request: CommandBool) -> Steps:

@@ -6,7 +6,9 @@ frames, each key frame carrying SPS and PPS so that a decoder can join at any ke
 thread (no slice threads), the rate capped by a one-second VBV buffer.
 :func:`packetise` cuts an access unit into datagrams of at most 1460 bytes, as the real Tello
 sends its stream (a frame's last datagram is the short one). :class:`VideoStreamer` is the
-thread that renders, encodes and sends at the frame rate while ``streamon`` is in force.
+thread that renders, encodes and sends at the frame rate while ``streamon`` is in force; it logs
+each start (``video: streaming to HOST:PORT``) and stop (``video: stream off after N frames``)
+of the stream, and ``runs`` counts the starts.
 """
 
 from __future__ import annotations
@@ -131,6 +133,8 @@ class VideoStreamer(threading.Thread):
         self.encoder: H264Encoder | None = None
         self.frames = 0
         self.datagrams = 0
+        self.runs = 0  # starts of the stream (streamon after streamoff or power-on)
+        self._run_frames = 0  # frames sent in this run
         self.send_errors = 0
         self.errors = 0
         self.encode_s = 0.0  # render + encode + send, s, all frames
@@ -145,9 +149,19 @@ class VideoStreamer(threading.Thread):
                 if self.encoder is not None:  # streamoff: the next streamon starts afresh
                     self.encoder.close()
                     self.encoder = None
+                    log.info("video: stream off after %d frames", self._run_frames)
                 continue
+            destination = (session.client[0], session.video_port)
             try:
-                self._one((session.client[0], session.video_port))
+                if self.encoder is None:  # streamon: a new run, starting with a key frame
+                    cfg = self.config
+                    self.encoder = H264Encoder(
+                        cfg.width, cfg.height, cfg.fps, cfg.bitrate_kbps, cfg.keyframe_interval
+                    )
+                    self.runs += 1
+                    self._run_frames = 0
+                    log.info("video: streaming to %s:%d", *destination)
+                self._one(destination)
             except Exception:  # a rendering or encoding bug must not stop the simulator
                 self.errors += 1
                 if self.errors <= 3:
@@ -155,10 +169,7 @@ class VideoStreamer(threading.Thread):
 
     def _one(self, destination: tuple[str, int]) -> None:
         cfg = self.config
-        if self.encoder is None:
-            self.encoder = H264Encoder(
-                cfg.width, cfg.height, cfg.fps, cfg.bitrate_kbps, cfg.keyframe_interval
-            )
+        assert self.encoder is not None
         started = time.perf_counter()
         snap = self.server.snapshot()
         with self.server.world_lock:
@@ -179,6 +190,7 @@ class VideoStreamer(threading.Thread):
                 self.send_errors += 1
         done = time.perf_counter()
         self.frames += 1
+        self._run_frames += 1
         self.encode_s += done - started
         self.latency_s.append(done - encoding)
         if len(self.latency_s) > 300:
