@@ -14,9 +14,9 @@ import math
 import socket
 import threading
 import time
-from pathlib import Path
 
 import pytest
+from ros2_peer import ros2_peer
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import PoseStamped
@@ -27,7 +27,6 @@ from support import Process, client_node, free_endpoint, free_port, python_modul
 
 pytestmark = pytest.mark.integration
 
-UPSTREAM = Path(__file__).resolve().parents[1] / "data" / "ros2_interfaces"
 NS = "drone"
 STATE = f"/{NS}/mavros/state"
 POSE = f"/{NS}/mavros/local_position/pose"
@@ -71,13 +70,9 @@ def graph(tmp_path_factory):
 @pytest.fixture(scope="module")
 def ros(graph):
     """zenoh-ros2-sdk's session on the graph's router (host, port), closed at the end."""
-    from zenoh_ros2_sdk import ZenohSession, get_registry
-
-    get_registry(str(UPSTREAM))
     host, port = graph[0].split("/", 1)[1].rsplit(":", 1)
-    ZenohSession.get_instance(host, int(port))
-    yield host, int(port)
-    ZenohSession.get_instance().close()
+    with ros2_peer(host, int(port)):
+        yield host, int(port)
 
 
 def test_peer_discovers_topics_and_services_by_liveliness(ros):

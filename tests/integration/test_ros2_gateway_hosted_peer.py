@@ -8,9 +8,9 @@ done on the putting thread before ``put`` returns."""
 from __future__ import annotations
 
 import socket
-from pathlib import Path
 
 import pytest
+from ros2_peer import ros2_peer
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import PoseStamped
@@ -20,7 +20,6 @@ from support import client_node, free_endpoint, free_port, python_module, wait_f
 
 pytestmark = pytest.mark.integration
 
-UPSTREAM = Path(__file__).resolve().parents[1] / "data" / "ros2_interfaces"
 NS = "drone"
 
 
@@ -28,8 +27,6 @@ def test_a_ros2_peer_sees_and_commands_the_bridge_hosted_gateway(spawn):
     from zenoh_ros2_sdk import (
         ROS2ServiceClient,
         ROS2Subscriber,
-        ZenohSession,
-        get_registry,
         get_topic_names_and_types,
     )
 
@@ -46,9 +43,7 @@ def test_a_ros2_peer_sees_and_commands_the_bridge_hosted_gateway(spawn):
     wait_for(lambda: "all processes ready" in graph.output() or not graph.alive(), 90, what="up")
     assert graph.alive(), graph.output()[-3000:]
     host, port = router.split("/", 1)[1].rsplit(":", 1)
-    get_registry(str(UPSTREAM))
-    ZenohSession.get_instance(host, int(port))
-    try:
+    with ros2_peer(host, int(port)):
 
         def discovered() -> bool:
             topics = dict(get_topic_names_and_types(router_ip=host, router_port=int(port)))
@@ -74,8 +69,6 @@ def test_a_ros2_peer_sees_and_commands_the_bridge_hosted_gateway(spawn):
             assert reply is not None and reply.success, reply
         finally:
             arming.close()
-    finally:
-        ZenohSession.get_instance().close()
     wait_for(lambda: "command lease acquired: ros2_gateway" in graph.output(), 10, what="lease")
 
     # the hosted conversion runs inside put(): on a real session, no thread in between

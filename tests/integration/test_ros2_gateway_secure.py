@@ -7,20 +7,18 @@ the bridge sees the gateway's identity as the commander."""
 from __future__ import annotations
 
 import socket
-from pathlib import Path
 
 import pytest
+from ros2_peer import ros2_peer
 
 from dronewrapper.security.keystore import KeyStore
 from support import free_endpoint, free_port, python_module, wait_for, zenoh_router
 
 pytestmark = pytest.mark.integration
 
-UPSTREAM = Path(__file__).resolve().parents[1] / "data" / "ros2_interfaces"
-
 
 def test_gateway_commands_with_its_own_identity(spawn, tmp_path, monkeypatch):
-    from zenoh_ros2_sdk import ROS2ServiceClient, ZenohSession, get_registry
+    from zenoh_ros2_sdk import ROS2ServiceClient
 
     store = KeyStore(tmp_path / "keys")
     store.init()
@@ -50,10 +48,8 @@ def test_gateway_commands_with_its_own_identity(spawn, tmp_path, monkeypatch):
             ),
             "gateway",
         )  # fmt: skip
-        get_registry(str(UPSTREAM))
         host, port = ros_router.split("/", 1)[1].rsplit(":", 1)
-        ZenohSession.get_instance(host, int(port))
-        try:
+        with ros2_peer(host, int(port)):
             arming = ROS2ServiceClient(
                 "/drone/mavros/cmd/arming", "mavros_msgs/srv/CommandBool",
                 router_ip=host, router_port=int(port), timeout=10,
@@ -68,8 +64,6 @@ def test_gateway_commands_with_its_own_identity(spawn, tmp_path, monkeypatch):
             reply = arming.call(value=False)
             assert reply is not None and reply.success
             arming.close()
-        finally:
-            ZenohSession.get_instance().close()
         gateway.stop()
     graph.stop()
     assert "command lease acquired: ros2-gw" in graph.output()
