@@ -134,8 +134,8 @@ def test_a_low_latency_service_serves_ordinary_and_low_latency_peers(router, spa
         client_node(router, name="ordinary") as ordinary,
         client_node(router, name="fast", options_extra={"low_latency": True}) as fast,
     ):
-        wait_for(lambda: alive(ordinary, "toy"), 20, what="toy liveliness")
         for node in (ordinary, fast):
+            wait_for(lambda n=node: alive(n, "toy"), 20, what=f"toy liveliness at {node.name}")
             received: list[ControllerStatus] = []
             node.subscribe(registry.CONTROLLER_STATUS, received.append)
             wait_for(lambda r=received: len(r) >= 3, 10, what=f"status at {node.name}")
