@@ -43,6 +43,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -373,25 +374,37 @@ def serve_ping(variant: Variant, mode: str, connect: list[str], samples: int, ec
                 sub.recv().payload.to_bytes()
 
         else:
-
-            def wait() -> None:
-                if not got.wait(2.0):
-                    raise RuntimeError(f"{variant.name}: no pong within 2 s")
-                got.clear()
+            wait = pong_wait(got, variant.name)
 
         time.sleep(0.5)  # let the routes settle
         pids = {"ping": os.getpid(), "echo": echo_pid}
         rtts, per_rtt, cpu_us, moves = measure(lambda: put(PAYLOAD), wait, samples, pids)
         if variant.ping == "recv":
             watchdog.cancel()
-        print(
-            json.dumps(
-                {"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us, "migrations": moves}
-            ),
-            flush=True,
-        )
+        print_figures(rtts, per_rtt, cpu_us, moves)
     finally:
         session.close()
+
+
+def pong_wait(got: threading.Event, name: str) -> Callable[[], None]:
+    """A wait for the next pong that ``got`` signals (RuntimeError after 2 s)."""
+
+    def wait() -> None:
+        if not got.wait(2.0):
+            raise RuntimeError(f"{name}: no pong within 2 s")
+        got.clear()
+
+    return wait
+
+
+def print_figures(rtts, per_rtt, cpu_us, moves) -> None:
+    """One ping process's figures: a JSON line on stdout, read by the parent."""
+    print(
+        json.dumps(
+            {"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us, "migrations": moves}
+        ),
+        flush=True,
+    )
 
 
 def serve_ping_ours(variant: Variant, mode: str, connect: list[str], samples: int, echo_pid: int):
@@ -400,23 +413,13 @@ def serve_ping_ours(variant: Variant, mode: str, connect: list[str], samples: in
         got = threading.Event()
         pub = node.publisher(registry.IMAGE_COMPRESSED, key=PING_KEY, qos=qos(variant))
         node.subscribe(registry.IMAGE_COMPRESSED, lambda _msg: got.set(), key=PONG_KEY)
-
-        def wait() -> None:
-            if not got.wait(2.0):
-                raise RuntimeError(f"{variant.name}: no pong within 2 s")
-            got.clear()
-
+        wait = pong_wait(got, variant.name)
         time.sleep(0.5)  # let the routes settle
         pids = {"ping": os.getpid(), "echo": echo_pid}
         rtts, per_rtt, cpu_us, moves = measure(
             lambda: pub.put(small_message()), wait, samples, pids
         )
-        print(
-            json.dumps(
-                {"rtts": rtts.tolist(), "switches": per_rtt, "cpu_us": cpu_us, "migrations": moves}
-            ),
-            flush=True,
-        )
+        print_figures(rtts, per_rtt, cpu_us, moves)
 
 
 PLACEMENTS = {"any": {}, "same": {"ping": {0}, "echo": {0}}, "split": {"ping": {0}, "echo": {1}}}
