@@ -149,6 +149,22 @@ def stages(frame: FrameTimes, render_s: float, publish_s: float) -> dict[str, fl
     return out
 
 
+def split_all(
+    frames: Iterable[FrameTimes], render_s: float, publish_s: float
+) -> tuple[list[dict[str, float]], list[FrameTimes], list[str]]:
+    """:func:`stages` of every frame: (the stages of each frame kept, those frames, why each
+    other one was left out: its path instants out of order)."""
+    per_frame, kept, left_out = [], [], []
+    for frame in frames:
+        try:
+            per_frame.append(stages(frame, render_s, publish_s))
+        except OutOfOrder as exc:  # a wrong join, or a stepped clock: not a figure
+            left_out.append(str(exc))
+        else:
+            kept.append(frame)
+    return per_frame, kept, left_out
+
+
 def first_datagram(
     sent: float,
     key: Sequence[float],

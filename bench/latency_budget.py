@@ -36,15 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.budget import (
-    FrameTimes,
-    OutOfOrder,
-    budget_rows,
-    first_datagram,
-    growth,
-    stages,
-    summarise,
-)
+from bench.budget import FrameTimes, budget_rows, first_datagram, growth, split_all, summarise
 from bench.common import percentiles, print_table, write_results
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
@@ -330,13 +322,7 @@ def measure(app: str, seconds: float, frames: int = 120) -> dict[str, object]:
     seen, facts = run_graph(app, seconds)
     render_s = local["render"]["p50_ms"] / 1e3
     publish_s = local["publish"]["p50_ms"] / 1e3
-    per_frame, kept, out_of_order = [], [], []
-    for f in seen:
-        try:
-            per_frame.append(stages(f, render_s, publish_s))
-            kept.append(f)
-        except OutOfOrder as exc:  # wrongly joined, or the clock stepped: not a figure
-            out_of_order.append(str(exc))
+    per_frame, kept, out_of_order = split_all(seen, render_s, publish_s)
     summary = summarise(per_frame)
     to_setpoint = [f.setpoint_arrival - f.stamp for f in kept]
     result: dict[str, object] = {

@@ -21,6 +21,7 @@ from bench.budget import (
     budget_rows,
     first_datagram,
     growth,
+    split_all,
     stages,
     summarise,
 )
@@ -93,6 +94,13 @@ def test_stages_between_path_instants_are_never_negative():
 def test_a_frame_out_of_path_order_is_refused_not_counted(changes, named):
     with pytest.raises(OutOfOrder, match=named):
         stages(frame(**changes), render_s=4.0 * MS, publish_s=0.5 * MS)
+
+
+def test_a_run_keeps_the_frames_in_order_and_names_those_left_out():
+    bad = frame(t0=2000.0, mavlink_out=2000.0 + 23.0 * MS)
+    per_frame, kept, left_out = split_all([frame(), bad, frame(t0=3000.0)], 4.0 * MS, 0.5 * MS)
+    assert [f.stamp for f in kept] == [1000.0, 3000.0] and len(per_frame) == 2
+    assert len(left_out) == 1 and "MAVLink out" in left_out[0]
 
 
 def test_missing_fields_stay_missing_and_total_ends_at_the_last_instant_seen():
