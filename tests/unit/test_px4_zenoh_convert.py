@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 
 import pytest
-from dronewrapper_bridge_px4_zenoh import commands, modes, telemetry, trajectory
 
 from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
@@ -20,6 +19,7 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
 )
 from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_px4_zenoh import commands, modes, telemetry, trajectory
 
 LEVEL_NORTH = {"q": [1.0, 0.0, 0.0, 0.0]}  # body FRD aligned with NED: nose north
 

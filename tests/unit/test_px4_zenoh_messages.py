@@ -9,11 +9,11 @@ import math
 
 import numpy as np
 import pytest
-from dronewrapper_bridge_px4_zenoh import px4_msgs
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from dronewrapper.ros2 import cdr, interfaces
 from dronewrapper.ros2.typehash import type_hash
+from dronewrapper_bridge_px4_zenoh import px4_msgs
 
 
 @pytest.fixture(scope="module")
