@@ -307,6 +307,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     def wait_for_connection(self, timeout: float = 10.0) -> State:
         """Block until the bridge reports its autopilot connected and every telemetry stream the
         getters read (landed state, position, velocities, battery) has arrived; returns the State.
+        Then reads the envelope in force (held for the setpoint checks) and warns when a
+        commander's ``set_envelope`` put it there rather than the bridge's configuration.
 
         Raises:
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
