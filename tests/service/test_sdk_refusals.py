@@ -16,6 +16,7 @@ from dronewrapper import DroneWrapper
 from dronewrapper.aio import Drone
 from dronewrapper.envelope import Envelope
 from dronewrapper.errors import CommandRefused, InvalidArgument
+from dronewrapper.fleet import Fleet
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.std import Header
@@ -143,3 +144,21 @@ def test_aio_refusals_are_an_async_iterator_that_keeps_each_one():
 
     got = asyncio.run(asyncio.wait_for(main(), 60))
     assert [r.kind for r in got] == ["lease", "late"]
+
+
+def test_a_fleet_names_the_drone_each_refusal_came_from():
+    bus = FakeBus(start=1_700_000_000.0)
+    node = FakeNode("app", bus)
+    drones = {ns: DroneWrapper(ns, node=node, wait=False, commander="ada") for ns in ("d1", "d2")}
+    fleet = Fleet(drones, owns=True)
+    heard: list[tuple[str, str]] = []
+    stop = fleet.on_refusal(lambda name, refusal: heard.append((name, refusal.kind)))
+    try:
+        FakeNode("bridge", bus, ns="d2").publisher(registry.REFUSAL).put(LEASE)
+        assert heard == [("d2", "lease")]
+        assert fleet.refusals() == {"d1": [], "d2": [LEASE]}
+        stop()
+        FakeNode("bridge", bus, ns="d1").publisher(registry.REFUSAL).put(LEASE)
+        assert heard == [("d2", "lease")] and fleet.refusals()["d1"] == [LEASE]
+    finally:
+        fleet.close()
