@@ -218,14 +218,11 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
 
     @property
     def refusals(self) -> list[Refusal]:
-        """The bridge's last 20 refusals of our setpoints and overrides of our commands (newest
-        last): each names its rule (``kind``), the ``limit`` and the figures (``message``);
-        ``count`` says how many identical ones it stands for (:mod:`dronewrapper.refusals`)."""
+        """The bridge's last 20 refusals of our setpoints, newest last (``msgs.refusal``)."""
         return list(self._refusals.recent)
 
     def on_refusal(self, callback: Callable[[Refusal], None]) -> Callable[[], None]:
-        """Call ``callback(refusal)`` as each refusal addressed to us arrives (on a Zenoh
-        thread: keep it short). Returns a function that stops the calls."""
+        """``callback(refusal)`` as each of ours arrives (a Zenoh thread); returns a stop."""
         return self._refusals.listen(callback)
 
     @property
@@ -307,15 +304,13 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     def wait_for_connection(self, timeout: float = 10.0) -> State:
         """Block until the bridge reports its autopilot connected and every telemetry stream the
         getters read (landed state, position, velocities, battery) has arrived; returns the State.
-        Then reads the envelope in force (held for the setpoint checks) and warns when a
-        commander's ``set_envelope`` put it there rather than the bridge's configuration.
 
         Raises:
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
                 after ``timeout`` s (the message names the missing keys).
         """
         state = connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
-        self._warn_of_envelope()  # held for the setpoint checks; a commander's one is named
+        self._warn_of_envelope()  # held for set_cmd_*; warns if a commander's is in force
         return state
 
     def _require_connected(self, what: str) -> State:
