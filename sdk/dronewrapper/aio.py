@@ -168,6 +168,9 @@ class Drone:
     async def envelope(self, **kwargs: Any) -> Any:
         return await self._run(self.sync.envelope, **kwargs)
 
+    async def reset_envelope(self, **kwargs: Any) -> Any:
+        return await self._run(self.sync.reset_envelope, **kwargs)
+
     async def wait_for_connection(self, timeout: float = 10.0) -> State:
         return await self._run(self.sync.wait_for_connection, timeout)
 
