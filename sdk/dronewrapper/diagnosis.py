@@ -89,7 +89,7 @@ def forbidden(identity: str, connect: str, keys_dir: str | Path | None = None) -
     if not identity or not connect.startswith("tls/"):
         return ""
     role = certificate_role(identity, keys_dir)
-    return role_refusal(role, identity) if role in WATCH_ONLY_ROLES else ""
+    return f"{role_refusal(role, identity)} (not sent)" if role in WATCH_ONLY_ROLES else ""
 
 
 def identity_facts(identity: str, connect: str) -> dict[str, object]:

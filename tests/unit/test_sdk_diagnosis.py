@@ -109,7 +109,7 @@ def test_the_role_comes_from_the_certificate_without_the_index(tmp_path, monkeyp
     assert not (laptop / "index.json").exists()
     monkeypatch.setenv("DRONEWRAPPER_KEYS", str(laptop))
     assert local_standing("olga") == ("observer", False)
-    assert forbidden("olga", TLS) == role_refusal("observer", "olga")
+    assert forbidden("olga", TLS) == role_refusal("observer", "olga") + " (not sent)"
     assert "not permitted for role observer (identity 'olga', as its certificate says)" in (
         forbidden("olga", TLS)
     )
