@@ -46,6 +46,7 @@ from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.session import ROUTE_WAIT_S
 from dronewrapper.security import acl  # a module: acl imports the runtime's caller
 
 T = TypeVar("T")
@@ -376,6 +377,9 @@ class FakeNode:
         key = service.key(ns or self.ns, **parts)
         answer = self.bus._services.get(key)
         if answer is None:
-            raise ServiceUnavailable(f"no reply from {key}: nothing serves it on the fake bus")
+            waited = min(timeout, ROUTE_WAIT_S)  # as long as a real call asks an absent server
+            raise ServiceUnavailable(
+                f"no reply from {key}: nothing serves it on the fake bus", waited
+            )
         reply = answer(codec.encode(request), attachment, caller.bound_key(key, self.bound_name))
         return codec.decode(service.reply, codec.encode(reply))
