@@ -74,8 +74,9 @@ class HandshakeRefused(ConnectionError):
 
 RETRY_FIRST_S = 0.2
 RETRY_MAX_S = 2.0
-"""A client waiting for its router asks again after 0.2 s, then twice as long each time, up to
-2 s (a refused handshake is never retried: certificates do not change while it waits)."""
+"""A session waiting for its router asks again after 0.2 s; on a ``tls/`` endpoint each wait is
+twice the last, up to 2 s, so a router is not handed a failing handshake five times a second
+(a refused handshake is not retried at all: certificates do not change while it waits)."""
 
 
 def _open(options: ZenohOptions, timeout: float) -> zenoh.Session:
@@ -99,7 +100,8 @@ def _open(options: ZenohOptions, timeout: float) -> zenoh.Session:
                 if cause is not None:
                     raise HandshakeRefused(cause) from exc
             time.sleep(max(0.0, min(pause, deadline - time.monotonic())))
-            pause = min(pause * 2, RETRY_MAX_S)
+            if any(e.startswith(("tls/", "quic/")) for e in options.connect):
+                pause = min(pause * 2, RETRY_MAX_S)
 
 
 def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:
