@@ -58,6 +58,13 @@ SERVICES = {
 }
 
 
+def serve_services(bridge: BridgeNode[Any]) -> None:
+    """Serve this bridge's services on ``bridge``: :data:`SERVICES`, and
+    ``missions.SERVICES`` (the mission services, the fence upload and the envelope), which
+    only the command lease's holder may call."""
+    bridge.serve(SERVICES, missions.SERVICES)
+
+
 class Bridge(BridgeNode[BridgeCore]):
     """The core wired to one Node and one MAVLink link."""
 
@@ -133,10 +140,7 @@ class Bridge(BridgeNode[BridgeCore]):
     def start(self) -> list[threading.Thread]:
         """Open the link, subscribe, serve, and start the loops (returns the threads)."""
         self._open_link()
-        self.serve(
-            {**SERVICES, **{service: steps for service, steps, _ in missions.SERVICES}},
-            guarded={service: what for service, _, what in missions.SERVICES if what},
-        )
+        serve_services(self)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(

@@ -64,6 +64,13 @@ SERVICES = {
 }
 
 
+def serve_services(bridge: BridgeNode[Any]) -> None:
+    """Serve this bridge's services on ``bridge``: :data:`SERVICES`, and
+    ``missions.SERVICES`` (the mission services and the envelope), which only the command
+    lease's holder may call."""
+    bridge.serve(SERVICES, missions.SERVICES)
+
+
 class Bridge(BridgeNode[TelloCore]):
     """The core wired to one Node and one Tello (its three sockets open at construction:
     ``OSError`` when an address is taken)."""
@@ -134,10 +141,7 @@ class Bridge(BridgeNode[TelloCore]):
 
     def start(self) -> list[threading.Thread]:
         """Subscribe, serve, and start the loops (returns the threads)."""
-        self.serve(
-            {**SERVICES, **{service: steps for service, steps, _ in missions.SERVICES}},
-            guarded={service: what for service, _, what in missions.SERVICES if what},
-        )
+        serve_services(self)
         loops = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),
             (self._receive_loop, (self.link.state, self._on_state, "state"), "tello-state"),
