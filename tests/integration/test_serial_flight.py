@@ -1,0 +1,111 @@
+"""Listing 1 over a serial line at real speed: the simulator's autopilot <- a pseudo-terminal
+paced at 57600 or 921600 baud (dronewrapper_sim.serial_relay) -> the bridge on that device.
+
+The bridge is configured as on a drone (``connection`` = the device, ``baud``); it fits its
+stream requests to the line and reports the line's load on ``{ns}/bridge/link``. Each run
+prints its figures (pose rate, load, the frames' time on the line, drops) for docs/serial.md.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import time
+
+import pytest
+
+from dronewrapper import DroneWrapper
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper_sim.serial_relay import SerialRelay
+from support import client_node, free_port, python_module
+
+pytestmark = pytest.mark.integration
+
+
+def start_sim(spawn, router: str, port: int, *extra: str):
+    return spawn(
+        python_module(
+            "dronewrapper_sim", "--scenario", "empty", "--no-cameras",
+            "--udp-onboard", f"{port}:0", "--udp-gcs", "off",
+            "--connect", router, "--name", "sim", *extra,
+        ),
+        "sim",
+    )  # fmt: skip
+
+
+def start_bridge(spawn, router: str, device: str, baud: int, *extra: str):
+    return spawn(
+        python_module(
+            "dronewrapper_bridge_mavlink", "--connect", router,
+            "--connection", device, "--baud", str(baud), *extra,
+        ),
+        "bridge",
+    )  # fmt: skip
+
+
+class Arrivals:
+    """Arrival times of a topic's samples."""
+
+    def __init__(self) -> None:
+        self.times: list[float] = []
+
+    def __call__(self, _msg) -> None:
+        self.times.append(time.monotonic())
+
+    def rate(self, since: float) -> float:
+        recent = [t for t in self.times if t >= since]
+        return (len(recent) - 1) / (recent[-1] - recent[0]) if len(recent) > 2 else 0.0
+
+
+@pytest.mark.parametrize("baud", [57600, 921600])
+def test_listing_1_flies_over_a_serial_line(baud, router, spawn):
+    port = free_port(socket.SOCK_DGRAM)
+    with SerialRelay(baud, udp_listen=("127.0.0.1", port)) as relay:
+        start_bridge(spawn, router, relay.path, baud)
+        start_sim(spawn, router, port)
+        user = client_node(router, name="watcher")
+        links: list = []
+        poses = Arrivals()
+        user.subscribe(registry.LINK_STATUS, links.append)
+        user.subscribe(registry.LOCAL_POSE, poses)
+        try:
+            with DroneWrapper("drone", router, timeout=30, land_on_exit=True) as drone:
+                started = time.monotonic()
+                drone.takeoff(h=2.5)  # Listing 1, with a 2 s spin instead of 5
+                takeoff_s = time.monotonic() - started
+                dropped_before = relay.down.dropped_frames  # the streams are fitted by now
+                relay.down.delays.clear()
+                yaw0 = drone.get_yaw()
+                drone.set_cmd_vel(az=1)
+                spin_from = time.monotonic()
+                drone.wait_for(
+                    lambda: (drone.get_yaw() - yaw0) % (2 * math.pi) > 1.0, 10, "1 rad turned"
+                )
+                time.sleep(max(0.0, 2.0 - (time.monotonic() - spin_from)))
+                flying_links = list(links)
+                pose_rate = poses.rate(spin_from)
+                dropped_flying = relay.down.dropped_frames - dropped_before
+                delays = sorted(relay.down.delays)
+                drone.land()
+                assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
+        finally:
+            user.close()
+    assert flying_links, "no link status from the bridge"
+    link = flying_links[-1]
+    assert (link.kind, link.baud, link.capacity) == ("serial", baud, baud / 10)
+    assert 0.0 < link.load < 1.0, link
+    assert link.reconnects == 0
+    line_ms = [delays[int(q * (len(delays) - 1))] * 1000 for q in (0.5, 0.95)]
+    print(
+        f"\n{baud} baud: take-off {takeoff_s:.1f} s; pose {pose_rate:.0f} Hz; frames' time on "
+        f"the line (autopilot to bridge) median {line_ms[0]:.0f} ms, 95 % {line_ms[1]:.0f} ms; "
+        f"{link.describe()}; frames dropped by the line {relay.down.dropped_frames} "
+        f"({dropped_flying} after take-off), {relay.up.dropped_frames} toward the autopilot"
+    )
+    assert dropped_flying == 0 and relay.up.dropped_frames == 0
+    if baud == 57600:
+        assert link.stream_scale < 1.0  # the default rates were fitted to the line
+        assert pose_rate >= 15.0, pose_rate  # the controller's pose still arrives often
+    else:
+        assert link.stream_scale == 1.0 and link.load < 0.2
