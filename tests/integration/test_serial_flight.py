@@ -17,6 +17,9 @@ import pytest
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper.security.keystore import KeyStore
+from dronewrapper_bridge_mavlink.config import DEFAULT_MESSAGE_RATES
+from dronewrapper_bridge_mavlink.link_budget import fit_rates
 from dronewrapper_sim.serial_relay import SerialRelay
 from support import client_node, free_port, python_module
 
@@ -109,3 +112,30 @@ def test_listing_1_flies_over_a_serial_line(baud, router, spawn):
         assert pose_rate >= 15.0, pose_rate  # the controller's pose still arrives often
     else:
         assert link.stream_scale == 1.0 and link.load < 0.2
+
+
+def test_signed_mavlink_over_a_serial_line(router, spawn, tmp_path):
+    """The same line at 57600 with MAVLink 2 signing on both ends: every frame carries 13 bytes
+    more, the bridge fits its streams for that, and nothing is rejected."""
+    store = KeyStore(tmp_path / "keys")
+    store.new_mavlink_key()
+    key = str(store.mavlink_key)
+    port = free_port(socket.SOCK_DGRAM)
+    with SerialRelay(57600, udp_listen=("127.0.0.1", port)) as relay:
+        start_bridge(spawn, router, relay.path, 57600, "--set", f"signing_key_file={key}")
+        start_sim(spawn, router, port, "--signing-key", key)
+        user = client_node(router, name="watcher")
+        links: list = []
+        user.subscribe(registry.LINK_STATUS, links.append)
+        try:
+            with DroneWrapper("drone", router, timeout=30, land_on_exit=True) as drone:
+                drone.takeoff(h=1.5)
+                drone.land()
+                assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
+        finally:
+            user.close()
+    link = links[-1]
+    assert link.rejected == 0 and link.load < 1.0, link
+    unsigned = fit_rates(DEFAULT_MESSAGE_RATES, 57600, signed=False)
+    assert link.stream_scale < unsigned.scale  # the signatures' bytes were budgeted
+    print(f"\n57600 baud, signed: {link.describe()}")
