@@ -44,7 +44,7 @@ def parse_requirement(text: str) -> tuple[str, list[str]]:
 
 def local_projects(repo: Path = REPO) -> dict[str, dict]:
     """Each distribution of the repository (normalized name -> its ``[project]`` table)."""
-    import tomllib  # Python 3.11+: the check runs on the CI machine, not on the Jetson
+    import tomllib  # novermin (Python 3.11: the check runs on the CI machine, not on a Jetson)
 
     files = [repo / "pyproject.toml", *sorted(repo.glob("*/pyproject.toml"))]
     files += sorted(repo.glob("services/*/pyproject.toml"))
@@ -86,7 +86,7 @@ def pip_download_argv(requirements: list[str], dest: Path) -> list[str]:
     return [
         sys.executable, "-m", "pip", "download", "--dest", str(dest),
         "--only-binary=:all:", "--python-version", PYTHON_VERSION, "--implementation", "cp",
-        *platforms, "--quiet", "--no-cache-dir", *requirements,
+        *platforms, "--quiet", *requirements,
     ]  # fmt: skip
 
 

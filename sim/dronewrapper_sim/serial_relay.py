@@ -85,6 +85,7 @@ class SerialRelay:
             self._down_frames = FrameCutter()
         self._sock.setblocking(False)
         self.unwritten = 0  # bytes the pseudo-terminal would not take (nobody reading)
+        self.unplugged = False  # set: the cable is out, every byte either way is lost
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -139,6 +140,8 @@ class SerialRelay:
                 frames = self._down_frames.feed(data) if data else []
         except (BlockingIOError, InterruptedError, ConnectionRefusedError):
             return
+        if self.unplugged:
+            return
         for frame in frames:
             self.down.offer(frame, now)
 
@@ -146,6 +149,8 @@ class SerialRelay:
         try:
             data = os.read(self._master, 4096)
         except (BlockingIOError, InterruptedError):
+            return
+        if self.unplugged:
             return
         for frame in self._up_frames.feed(data):
             self.up.offer(frame, now)

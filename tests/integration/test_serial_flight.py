@@ -21,7 +21,7 @@ from dronewrapper.security.keystore import KeyStore
 from dronewrapper_bridge_mavlink.config import DEFAULT_MESSAGE_RATES
 from dronewrapper_bridge_mavlink.link_budget import fit_rates
 from dronewrapper_sim.serial_relay import SerialRelay
-from support import client_node, free_port, python_module
+from support import client_node, free_port, python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -73,7 +73,7 @@ def test_listing_1_flies_over_a_serial_line(baud, router, spawn):
         user.subscribe(registry.LINK_STATUS, links.append)
         user.subscribe(registry.LOCAL_POSE, poses)
         try:
-            with DroneWrapper("drone", router, timeout=30, land_on_exit=True) as drone:
+            with DroneWrapper("drone", router, timeout=60, land_on_exit=True) as drone:
                 started = time.monotonic()
                 drone.takeoff(h=2.5)  # Listing 1, with a 2 s spin instead of 5
                 takeoff_s = time.monotonic() - started
@@ -128,7 +128,7 @@ def test_signed_mavlink_over_a_serial_line(router, spawn, tmp_path):
         links: list = []
         user.subscribe(registry.LINK_STATUS, links.append)
         try:
-            with DroneWrapper("drone", router, timeout=30, land_on_exit=True) as drone:
+            with DroneWrapper("drone", router, timeout=60, land_on_exit=True) as drone:
                 drone.takeoff(h=1.5)
                 drone.land()
                 assert drone.get_landed_state() == LANDED_STATE_ON_GROUND
@@ -139,3 +139,30 @@ def test_signed_mavlink_over_a_serial_line(router, spawn, tmp_path):
     unsigned = fit_rates(DEFAULT_MESSAGE_RATES, 57600, signed=False)
     assert link.stream_scale < unsigned.scale  # the signatures' bytes were budgeted
     print(f"\n57600 baud, signed: {link.describe()}")
+
+
+def test_a_line_cut_for_4_s_comes_back_as_one_reconnect(router, spawn):
+    """The cable out for 4 s (the relay carries nothing): the bridge loses the heartbeat, finds
+    it again by itself when the bytes flow, and counts one reconnect."""
+    port = free_port(socket.SOCK_DGRAM)
+    with SerialRelay(921600, udp_listen=("127.0.0.1", port)) as relay:
+        start_bridge(spawn, router, relay.path, 921600)
+        start_sim(spawn, router, port)
+        user = client_node(router, name="watcher")
+        links: list = []
+        states: list = []
+        user.subscribe(registry.LINK_STATUS, links.append)
+        user.subscribe(registry.STATE, lambda s: states.append((time.monotonic(), s.connected)))
+        try:
+            wait_for(lambda: states and states[-1][1], 60, what="connected")
+            relay.unplugged = True
+            time.sleep(4.0)
+            wait_for(lambda: not states[-1][1], 10, what="the heartbeat lost")
+            relay.unplugged = False
+            plugged = time.monotonic()
+            wait_for(lambda: states[-1][1], 10, what="connected again")
+            back_s = next(t for t, connected in states if t >= plugged and connected) - plugged
+            wait_for(lambda: links[-1].reconnects == 1, 5, what="the reconnect counted")
+        finally:
+            user.close()
+    print(f"\nline cut for 4 s: connected again {back_s:.1f} s after; {links[-1].describe()}")

@@ -6,7 +6,7 @@ from dronewrapper.doctor import describe_link
 from dronewrapper.health import FAIL, OK, WARN
 from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.registry import LINK_STATUS
-from dronewrapper_bridge_mavlink.link_load import CLEAR_MARGIN, LinkLoad, LoadAlarm
+from dronewrapper_bridge_mavlink.link_load import CLEAR_MARGIN, LinkLoad, LoadAlarm, Reconnects
 
 
 def test_rates_over_the_window_and_load_of_the_busier_direction():
@@ -65,3 +65,21 @@ def test_doctor_says_how_full_the_link_is():
 def test_a_network_link_is_described_without_a_load():
     text = LinkStatus(kind="udp", received_rate=12000.0, sent_rate=900.0).describe()
     assert text == "link (udp: 12.0 / 0.9 kB/s down/up), 0 lost, 0 reconnects"
+
+
+def test_reconnects_count_each_return_once():
+    links = Reconnects()
+    links.opened()  # the first open
+    for connected in (False, True, True):  # heartbeats start: no reconnect
+        links.heartbeat(connected)
+    assert links.count == 0
+    for connected in (False, False, True):  # lost, then back: one
+        links.heartbeat(connected)
+    assert links.count == 1
+    links.heartbeat(False)  # lost, the device reopened, heartbeats back: still one event
+    links.opened()
+    links.heartbeat(True)
+    assert links.count == 2
+    links.opened()  # reopened while heartbeats never stopped being seen
+    links.heartbeat(True)
+    assert links.count == 3

@@ -4,6 +4,7 @@
 sliding window, and a serial line's load: the busier direction's rate over the line's
 capacity (``baud / 10`` B/s each way; a line is full at 1.0). :class:`LoadAlarm` says, once,
 when the load crosses the warning threshold, and once when it is back below it by a margin.
+:class:`Reconnects` counts the times the link came back.
 """
 
 from __future__ import annotations
@@ -65,3 +66,28 @@ class LoadAlarm:
             self.raised = False
             return f"link back to {load * 100:.0f} % ({what})"
         return None
+
+
+class Reconnects:
+    """Times the link came back: the device or socket reopened after an error, or heartbeats
+    again after they had stopped (one event counted once when both happen)."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self._opened = False
+        self._was_connected = False  # heartbeats arrived at the last look
+        self._lost = False  # they stopped after arriving, and have not come back
+
+    def opened(self) -> None:
+        """The link was opened (the first time is no reconnect)."""
+        if self._opened:
+            self.count += 1
+            self._lost = False  # the heartbeats' return is this reconnect
+        self._opened = True
+
+    def heartbeat(self, connected: bool) -> None:
+        """Whether heartbeats arrive now (looked at about once a second)."""
+        if connected and self._lost:
+            self.count += 1
+        self._lost = (self._was_connected or self._lost) and not connected
+        self._was_connected = connected

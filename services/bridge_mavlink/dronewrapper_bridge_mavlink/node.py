@@ -29,7 +29,7 @@ from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
 from dronewrapper_bridge_mavlink.link import MavLink, network_exposure
-from dronewrapper_bridge_mavlink.link_load import LinkLoad, LoadAlarm
+from dronewrapper_bridge_mavlink.link_load import LinkLoad, LoadAlarm, Reconnects
 from dronewrapper_bridge_mavlink.modes import canonical_mode
 from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
@@ -80,10 +80,8 @@ class Bridge(BridgeNode[BridgeCore]):
         self.link_status = publishers[registry.LINK_STATUS]
         self.load = LinkLoad(self.core.budget.capacity)
         self.load_alarm = LoadAlarm(config.link_warn_load)
-        self.reconnects = 0
-        self._opened_before = False
-        self._was_connected = False  # heartbeats arrived at the last measure
-        self._lost_heartbeats = False  # they stopped after arriving, and have not come back
+        self.reconnects = Reconnects()  # under _reconnects_lock (receive and status threads)
+        self._reconnects_lock = threading.Lock()
 
     # ---- what the core knows, for tests and tools
 
@@ -203,10 +201,8 @@ class Bridge(BridgeNode[BridgeCore]):
             self.link.close()
             return False
         log.info("MAVLink link open on %s", self.config.connection)
-        if self._opened_before:
-            self.reconnects += 1
-            self._lost_heartbeats = False  # their return is this reconnect, counted once
-        self._opened_before = True
+        with self._reconnects_lock:
+            self.reconnects.opened()
         return True
 
     def _link_status_loop(self) -> None:
@@ -223,11 +219,8 @@ class Bridge(BridgeNode[BridgeCore]):
 
     def measure_link(self, now: float) -> LinkStatus:
         """The link as it is now (counts heartbeats regained as a reconnect)."""
-        connected = self.core.connected
-        if connected and self._lost_heartbeats:
-            self.reconnects += 1
-        self._lost_heartbeats = (self._was_connected or self._lost_heartbeats) and not connected
-        self._was_connected = connected
+        with self._reconnects_lock:
+            self.reconnects.heartbeat(self.core.connected)
         counts = self.link.counts()
         self.load.add(now, counts.received, counts.sent)
         received, sent = self.load.rates()
@@ -241,7 +234,7 @@ class Bridge(BridgeNode[BridgeCore]):
             sent_rate=sent,
             load=self.load.load(),
             lost=counts.lost,
-            reconnects=self.reconnects,
+            reconnects=self.reconnects.count,
             rejected=self.link.rejected,
             stream_scale=budget.scale,
         )
