@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import socket
+import subprocess
 import time
 
 import pytest
@@ -166,3 +167,37 @@ def test_a_line_cut_for_4_s_comes_back_as_one_reconnect(router, spawn):
         finally:
             user.close()
     print(f"\nline cut for 4 s: connected again {back_s:.1f} s after; {links[-1].describe()}")
+
+
+def test_a_nearly_full_line_is_told_in_the_log_and_by_doctor(router, spawn):
+    """57600 baud with the configured rates (``link_share`` 1.0: no room kept): the bridge
+    warns that the line is nearly full, and ``dronewrapper doctor`` shows how full it is (a
+    ``warn`` from 80 %; the load it sees depends on how fast the simulator runs on this
+    machine, so its verdict is checked against the figure it prints)."""
+    port = free_port(socket.SOCK_DGRAM)
+    with SerialRelay(57600, udp_listen=("127.0.0.1", port)) as relay:
+        bridge = start_bridge(spawn, router, relay.path, 57600, "--set", "link_share=1.0")
+        start_sim(spawn, router, port)
+        user = client_node(router, name="watcher")
+        links: list = []
+        user.subscribe(registry.LINK_STATUS, links.append)
+        try:
+            wait_for(  # past the first second's burst (the autopilot's own rates): steady
+                lambda: len(links) > 3 and all(0.8 <= s.load < 1.0 for s in links[-3:]),
+                60,
+                what="a line steadily 80 to 100 % full",
+            )
+            doctor = subprocess.run(
+                python_module("dronewrapper", "doctor", "--connect", router, "--seconds", "2",
+                              "--no-bandwidth"),
+                capture_output=True, text=True, timeout=60,
+            )  # fmt: skip
+        finally:
+            user.close()
+    said = [line for line in doctor.stdout.splitlines() if "% full (serial 57600 baud" in line]
+    assert said, doctor.stdout
+    percent = int(said[0].split("link ", 1)[1].split(" %", 1)[0])
+    verdict = "FAIL" if percent >= 100 else "warn" if percent >= 80 else "ok  "
+    assert said[0].startswith(f"{verdict} drone 'drone': link {percent} % full"), said[0]
+    assert "WARNING bridge_mavlink: link " in bridge.output(), bridge.output()[-2000:]
+    print(f"\n{said[0]}")
