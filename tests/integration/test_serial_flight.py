@@ -16,6 +16,7 @@ import time
 import pytest
 
 from dronewrapper import DroneWrapper
+from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.security.keystore import KeyStore
@@ -201,3 +202,35 @@ def test_a_nearly_full_line_is_told_in_the_log_and_by_doctor(router, spawn):
     assert said[0].startswith(f"{verdict} drone 'drone': link {percent} % full"), said[0]
     assert "WARNING bridge_mavlink: link " in bridge.output(), bridge.output()[-2000:]
     print(f"\n{said[0]}")
+
+
+@pytest.mark.parametrize("baud", [57600, 921600])
+def test_a_mission_and_parameters_over_a_serial_line(baud, router, spawn):
+    """A 20-waypoint mission uploaded (each item asked for and acked over the line), read
+    back as the bridge publishes it, and a parameter read and written; figures printed."""
+    port = free_port(socket.SOCK_DGRAM)
+    with SerialRelay(baud, udp_listen=("127.0.0.1", port)) as relay:
+        start_bridge(spawn, router, relay.path, baud)
+        start_sim(spawn, router, port)
+        user = client_node(router, name="watcher")
+        homes: list = []
+        user.subscribe(registry.HOME_POSITION, homes.append)
+        with user, DroneWrapper("drone", router, timeout=60) as drone:
+            wait_for(lambda: homes and math.isfinite(homes[-1].latitude), 30, what="home")
+            lat, lon = homes[-1].latitude, homes[-1].longitude
+            plan = [
+                (*to_geodetic((lat, lon), 10 * math.cos(a), 10 * math.sin(a)), 5.0)
+                for a in (2 * math.pi * i / 20 for i in range(20))
+            ]
+            started = time.monotonic()
+            assert drone.upload_mission(plan) == 20
+            upload_s = time.monotonic() - started
+            started = time.monotonic()
+            assert drone.param_set("MPC_XY_VEL_MAX", 5.0) == pytest.approx(5.0)
+            assert drone.param_get("MPC_XY_VEL_MAX") == pytest.approx(5.0)
+            params_s = time.monotonic() - started
+    assert relay.up.dropped_frames == 0
+    print(
+        f"\n{baud} baud: 20-item mission uploaded in {upload_s:.2f} s; a parameter written and "
+        f"read back in {params_s:.2f} s"
+    )
