@@ -69,7 +69,7 @@ def local_standing(identity: str, keys_dir: str | Path | None = None) -> tuple[s
     with contextlib.suppress(OSError, ValueError, TypeError):
         for entry in KeyStore(keys_dir).entries():
             if entry.name == name:
-                refused = entry.revoked or entry.expired(dt.datetime.now(dt.UTC))
+                refused = entry.revoked or entry.expired(dt.datetime.now(dt.timezone.utc))
                 return role or entry.role, refused
     return (role, False) if role else None
 
