@@ -25,7 +25,6 @@ install './sdk[record]'``).
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import os
 import signal
@@ -33,8 +32,9 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
-from dronewrapper.runtime.service import plain_text, setup_logging
+from dronewrapper.runtime.service import setup_logging
 
 # subcommand -> (module, function) in the on-board stack, imported only when used
 _STACK_COMMANDS = {
@@ -63,7 +63,7 @@ def _stop_on_signals() -> threading.Event:
 def _router(argv: Sequence[str]) -> int:
     from dronewrapper.router import router_options, run_router
 
-    parser = argparse.ArgumentParser(prog="dronewrapper router", description="a Zenoh router")
+    parser = CommandParser(prog="dronewrapper router", description="a Zenoh router")
     parser.add_argument(
         "--listen", action="append", metavar="ENDPOINT", help=f"default {DEFAULT_ROUTER}"
     )
@@ -120,7 +120,7 @@ def _echo(argv: Sequence[str]) -> int:
     from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
 
-    parser = argparse.ArgumentParser(prog="dronewrapper echo", description="print messages")
+    parser = CommandParser(prog="dronewrapper echo", description="print messages")
     parser.add_argument("keyexpr", help="key expression, e.g. drone/mavros/state or drone/**")
     parser.add_argument("--count", "-n", type=int, default=0, help="stop after N messages")
     parser.add_argument("--duration", type=float, default=0.0, help="stop after S seconds")
@@ -165,7 +165,7 @@ def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.doctor import describe_drone, listen, topic_families
     from dronewrapper.router_reach import open_client_session
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
     )
     parser.add_argument(
@@ -196,7 +196,7 @@ def _alive(argv: Sequence[str]) -> int:
 def _doctor(argv: Sequence[str]) -> int:
     from dronewrapper.doctor import run_doctor
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper doctor", description="diagnose a setup and say what to fix"
     )
     parser.add_argument(
@@ -224,7 +224,7 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
     from dronewrapper.mavlink_forward import forward, parse_udp
     from dronewrapper.runtime.node import Node
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper mavlink-forward",
         description="a drone's MAVLink (bridge gcs_over_zenoh) as UDP for QGroundControl",
     )
