@@ -54,7 +54,7 @@ POLL_S = 0.05
 class MissionProgress:
     """Where the mission stands: ``current`` (the item being flown, 0-based), ``total``
     items, and ``reached`` (the last item reached, 0-based; None until this object has heard
-    an item reached, as before a start)."""
+    an item reached, so while the mission has not started)."""
 
     current: int
     total: int
