@@ -26,6 +26,7 @@ install './sdk[record]'``).
 from __future__ import annotations
 
 import importlib
+import logging
 import os
 import signal
 import sys
@@ -91,6 +92,10 @@ def _router(argv: Sequence[str]) -> int:
             insecure=args.insecure,
             acl_namespaces=args.namespace,
         )
+        if options.identity:  # say what a rejected TLS handshake means, not Zenoh's hint
+            from dronewrapper.zenoh_log import relay_zenoh_log
+
+            relay_zenoh_log(logging.getLogger("router"))
         run_router(options, _stop_on_signals())
     except (ValueError, ConnectionError, FileNotFoundError) as exc:
         print(f"dronewrapper router: {exc}", file=sys.stderr)

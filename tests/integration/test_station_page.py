@@ -153,9 +153,11 @@ def test_at_1280_px_the_log_sits_by_the_buttons_and_plots_are_sharp(env: Station
         wait_for(lambda: driver.find_elements(By.CSS_SELECTOR, "#log li"), 10, what="a log line")
         box = driver.execute_script(
             "const r = (id) => document.getElementById(id).getBoundingClientRect();"
-            "return {result: r('result'), log: r('log'), viewport: window.innerHeight};"
+            "const buttons = document.getElementById('btn-arm').closest('.panel');"
+            "return {buttons: buttons.getBoundingClientRect(), log: r('log'),"
+            " viewport: window.innerHeight};"
         )
-        gap = box["log"]["top"] - box["result"]["bottom"]
+        gap = box["log"]["top"] - box["buttons"]["bottom"]
         assert 0 <= gap <= 80, f"the log starts {gap:.0f} px below the buttons"
         assert box["log"]["top"] < box["viewport"], "the log is off the first screen"
         plots = driver.execute_script(
