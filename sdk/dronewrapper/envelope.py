@@ -112,20 +112,30 @@ def distance_outside(polygon: Polygon, x: float, y: float) -> float:
     return best
 
 
+def metres(value: float) -> str:
+    """A length as people read it: ``4.5 m``, ``1113.19 m``, ``8843.4 km`` (never
+    ``8.84341e+06 m``)."""
+    if abs(value) >= 10_000:
+        return f"{value / 1000:.1f} km"
+    return f"{value:g} m"
+
+
 def violation(envelope: Envelope, x: float, y: float, z: float, margin: float = 0.0) -> str:
     """The limit (x, y, z) (ENU m from home) is beyond by more than ``margin`` m, or ""."""
     if z > envelope.max_altitude + margin:
-        return f"altitude {z:g} m above the envelope's {envelope.max_altitude:g} m"
+        return f"altitude {metres(z)} above the envelope's {envelope.max_altitude:g} m"
     distance = math.hypot(x, y)
     if distance > envelope.max_distance + margin:
         return (
-            f"distance {distance:g} m from home beyond the envelope's {envelope.max_distance:g} m"
+            f"distance {metres(distance)} from home beyond the envelope's "
+            f"{envelope.max_distance:g} m"
         )
+    where = f"({metres(x).removesuffix(' m')}, {metres(y)})"
     if envelope.fence and distance_outside(envelope.fence, x, y) > margin:
-        return f"position ({x:g}, {y:g}) m outside the envelope's fence"
+        return f"position {where} outside the envelope's fence"
     for number, zone in enumerate(envelope.exclusions, start=1):
         if inside(zone, x, y):
-            return f"position ({x:g}, {y:g}) m inside the envelope's exclusion zone {number}"
+            return f"position {where} inside the envelope's exclusion zone {number}"
     return ""
 
 
@@ -198,5 +208,6 @@ __all__ = [
     "check_velocity",
     "distance_outside",
     "inside",
+    "metres",
     "violation",
 ]
