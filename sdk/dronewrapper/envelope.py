@@ -120,6 +120,10 @@ def metres(value: float) -> str:
     return f"{value:g} m"
 
 
+def _plain(value: float) -> str:
+    return f"{value:.0f}" if abs(value) >= 100_000 else f"{value:g}"
+
+
 def violation(envelope: Envelope, x: float, y: float, z: float, margin: float = 0.0) -> str:
     """The limit (x, y, z) (ENU m from home) is beyond by more than ``margin`` m, or ""."""
     if z > envelope.max_altitude + margin:
@@ -130,7 +134,7 @@ def violation(envelope: Envelope, x: float, y: float, z: float, margin: float = 
             f"distance {metres(distance)} from home beyond the envelope's "
             f"{envelope.max_distance:g} m"
         )
-    where = f"({metres(x).removesuffix(' m')}, {metres(y)})"
+    where = f"({_plain(x)}, {_plain(y)}) m"
     if envelope.fence and distance_outside(envelope.fence, x, y) > margin:
         return f"position {where} outside the envelope's fence"
     for number, zone in enumerate(envelope.exclusions, start=1):

@@ -92,17 +92,17 @@ def _simple_items(items: list[Any], name: str) -> list[tuple[str, dict[str, Any]
             continue
         if kind != "ComplexItem":
             raise PlanError(f"{name}: {where}: a {kind} is not a SimpleItem or ComplexItem")
-        complex_type = item.get("complexItemType", "?")
+        complex_type = f"{item.get('complexItemType') or ''} ComplexItem".lstrip()
         transect = item.get("TransectStyleComplexItem")
         expanded = transect.get("Items") if isinstance(transect, dict) else None
         if not isinstance(expanded, list) or not expanded:
             raise PlanError(
-                f"{name}: {where}: a {complex_type} ComplexItem without its expanded items "
+                f"{name}: {where}: a {complex_type} without its expanded items "
                 "(TransectStyleComplexItem.Items, which QGroundControl writes for surveys and "
                 "corridor scans): QGroundControl computes them only when it uploads"
             )
         for inner, sub in enumerate(expanded):
-            sub_where = f"{where} ({complex_type}) Items[{inner}]"
+            sub_where = f"{where} ({complex_type.removesuffix(' ComplexItem')}) Items[{inner}]"
             if not isinstance(sub, dict) or sub.get("type", "SimpleItem") != "SimpleItem":
                 raise PlanError(f"{name}: {sub_where}: not a SimpleItem")
             flat.append((sub_where, sub))
