@@ -51,6 +51,7 @@ PUBLISHED = (
     registry.HOME_POSITION,
     registry.MISSION_WAYPOINTS,
     registry.MISSION_REACHED,
+    registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
