@@ -316,15 +316,12 @@ class MissionsMixin:
         of ``(lat, lon, alt)`` (degrees, m above home); ``frame="local"``: ``(x, y, z)`` ENU
         m from home (the Tello's only kind). Returns the number of items.
 
-        A plan's ``geoFence`` is folded into the bridge's envelope first
-        (:func:`dronewrapper.plan_fence.fold`: its inclusion zone becomes the fence, its
-        exclusion zones join the exclusions; the envelope stays so after the mission, and is
-        put back if the upload fails). Rally points and a breach-return point are refused
-        unless ``returns_home`` accepts that returns fly home.
+        A plan's ``geoFence`` is folded into the envelope first (:mod:`dronewrapper.plan_fence`;
+        it stays after the mission, put back if the upload fails); rally points and a
+        breach-return point are refused unless ``returns_home`` accepts returns to home.
 
         Raises:
-            InvalidArgument: the plan cannot be read or flown, or holds a fence the envelope
-                cannot (the message says where).
+            InvalidArgument: the plan cannot be read or flown, or its fence cannot be held.
             NoData: the plan has a fence and home's position is not known yet.
             CommandRefused: an item is outside the envelope, or the autopilot refused the
                 upload (naming the item it refused and its command).
@@ -333,11 +330,7 @@ class MissionsMixin:
             loaded = load_plan(plan, frame=frame)
         except PlanError as exc:
             raise InvalidArgument(f"upload_mission: {exc}") from None
-        before = (
-            self._fold_fence(loaded.fence, returns_home, timeout)
-            if not loaded.fence.empty
-            else None
-        )
+        before = None if loaded.fence.empty else self._fold(loaded.fence, returns_home, timeout)
         push = WaypointPush(waypoints=loaded.waypoints)
         try:
             reply = self._command(registry.MISSION_PUSH, push, "upload_mission", timeout)
@@ -350,14 +343,11 @@ class MissionsMixin:
         self._reached_items.clear()
         return reply.wp_transfered
 
-    def _fold_fence(self: Any, fence: PlanFence, returns_home: bool, timeout: float) -> Envelope:
+    def _fold(self: Any, fence: PlanFence, returns_home: bool, timeout: float) -> Envelope:
         """Carry a plan's fence into the bridge's envelope; returns the envelope before."""
         home = self._home.value
         if home is None or math.isnan(home.latitude):
-            raise NoData(
-                "upload_mission: the plan has a geoFence or rally points, and home's latitude "
-                f"and longitude are not known yet on {registry.HOME_POSITION.key(self.ns)}"
-            )
+            raise NoData("upload_mission: the plan has a fence, and home is not known yet")
         current = self.envelope(timeout=timeout)
         try:
             wanted = plan_fence.fold(
