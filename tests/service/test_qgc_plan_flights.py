@@ -14,7 +14,8 @@ import pytest
 from bus_bridge import SimSdk
 
 from dronewrapper.errors import CommandRefused, InvalidArgument
-from dronewrapper.geodesy import to_geodetic
+from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.plan import read_plan
 
 PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans"
 HOME = (47.397742, 8.545594)
@@ -88,3 +89,22 @@ def test_payload_items_are_skipped_and_the_speed_change_is_flown(sim):
     assert 8.0 < max(speeds) < 10.8  # the 10 m/s asked, where the default is 5 m/s
     texts = [t.text for t in sim.drone.status_texts]
     assert any("DO_MOUNT_CONTROL skipped" in t for t in texts)
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["square_relative.plan", "survey.plan", "corridor_scan.plan", "fence_polygon_circle.plan"],
+)
+def test_a_plan_is_flown_through_each_of_its_waypoints(sim, name):
+    plan = read_plan(PLANS / name)
+    assert sim.drone.upload_mission(PLANS / name) == len(plan.waypoints)
+    sim.drone.takeoff(5.0)
+    start = sim.pair.t
+    fly_mission(sim, 240.0)
+    progress = sim.drone.mission_progress()
+    assert progress.finished and progress.reached_count >= 2
+    for wp in plan.waypoints:
+        if wp.command == 16:  # NAV_WAYPOINT, frame 3: m above home
+            east, north = to_enu(HOME, wp.x_lat, wp.y_long)
+            # within the autopilot's acceptance radius (NAV_ACC_RAD, 2 m)
+            assert sim.pair.closest_approach((east, north, wp.z_alt), start) <= 2.0, wp
