@@ -63,7 +63,8 @@ POLL_S = 0.05
 class MissionProgress:
     """Where the mission stands: ``current`` (the item being flown, 0-based), ``total``
     items, ``reached`` (the last item reached, -1 before any) and ``reached_items`` (every
-    item reported reached since the mission was uploaded, in order, each once)."""
+    item the autopilot reported reached since the upload, in order, each once: PX4 and our
+    simulator report the items that fly somewhere, not speed or camera items)."""
 
     current: int
     total: int
