@@ -13,7 +13,7 @@ setup: $(STAMP)
 $(STAMP): pyproject.toml $(DISTS:%=%/pyproject.toml)
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) -e '.[dev]'
+	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) '.[dev]'  # the root holds no code: not editable
 	$(BIN)/python -m pip install -q --no-deps 'djitellopy==2.5.0'  # test client; its opencv-python would shadow our headless cv2
 	@touch $(STAMP)
 
@@ -46,4 +46,4 @@ format: setup
 	$(BIN)/ruff format .
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache bench/results/*.json
+	rm -rf $(VENV) build .pytest_cache .ruff_cache bench/results/*.json

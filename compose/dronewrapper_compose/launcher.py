@@ -16,8 +16,8 @@ here; one running process and its prefixed output is ``child.py``, the graph fil
 
 from __future__ import annotations
 
-import argparse
 import logging
+import os
 import signal
 import sys
 import threading
@@ -31,6 +31,7 @@ import zenoh
 from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.router import InsecureEndpoint, router_options
 from dronewrapper.router_reach import open_client_session
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
@@ -366,6 +367,16 @@ class Launcher:
         return self.exit_code
 
 
+def simulated_drones(launcher: Launcher) -> int:
+    """How many simulated aircraft the graph runs (its ``dronewrapper_sim`` processes)."""
+    return sum(inst.spec.module == fleet.SIM_MODULE for group in launcher.groups for inst in group)
+
+
+def usable_cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
 def _parse_vars(pairs: Sequence[str]) -> dict[str, str]:
     out = {}
     for pair in pairs:
@@ -378,7 +389,7 @@ def _parse_vars(pairs: Sequence[str]) -> dict[str, str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``dronewrapper up GRAPH [--router EP] [--scenario NAME] [--duration S] [--var K=V]``."""
-    parser = argparse.ArgumentParser(prog="dronewrapper up", description="run a process graph")
+    parser = CommandParser(prog="dronewrapper up", description="run a process graph")
     parser.add_argument("graph", help="compose/NAME.yaml, or a bare graph name")
     parser.add_argument("--router", default=DEFAULT_ROUTER, help="router endpoint to start")
     parser.add_argument(
@@ -427,6 +438,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             keys_dir=args.keys,
             insecure=args.insecure,
         )
+        if warning := fleet.load_warning(simulated_drones(launcher), usable_cores()):
+            print(f"dronewrapper up: warning: {warning}", file=sys.stderr)
         if args.check:
             for group in launcher.groups:
                 for inst in group:

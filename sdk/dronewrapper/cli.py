@@ -28,7 +28,6 @@ on-board stack (``make setup``); the SDK alone (``pip install ./sdk``) has ``rou
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import logging
 import os
@@ -37,8 +36,9 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
-from dronewrapper.runtime.service import plain_text, setup_logging
+from dronewrapper.runtime.service import setup_logging
 
 # subcommand -> (module, function) in the on-board stack, imported only when used
 _STACK_COMMANDS = {
@@ -69,7 +69,7 @@ def _stop_on_signals() -> threading.Event:
 def _router(argv: Sequence[str]) -> int:
     from dronewrapper.router import router_options, run_router
 
-    parser = argparse.ArgumentParser(prog="dronewrapper router", description="a Zenoh router")
+    parser = CommandParser(prog="dronewrapper router", description="a Zenoh router")
     parser.add_argument(
         "--listen", action="append", metavar="ENDPOINT", help=f"default {DEFAULT_ROUTER}"
     )
@@ -130,7 +130,7 @@ def _echo(argv: Sequence[str]) -> int:
     from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
 
-    parser = argparse.ArgumentParser(prog="dronewrapper echo", description="print messages")
+    parser = CommandParser(prog="dronewrapper echo", description="print messages")
     parser.add_argument("keyexpr", help="key expression, e.g. drone/mavros/state or drone/**")
     parser.add_argument("--count", "-n", type=int, default=0, help="stop after N messages")
     parser.add_argument("--duration", type=float, default=0.0, help="stop after S seconds")
@@ -175,7 +175,7 @@ def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.doctor import describe_drone, listen, topic_families
     from dronewrapper.router_reach import open_client_session
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
     )
     parser.add_argument(
@@ -206,7 +206,7 @@ def _alive(argv: Sequence[str]) -> int:
 def _doctor(argv: Sequence[str]) -> int:
     from dronewrapper.doctor import run_doctor
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper doctor", description="diagnose a setup and say what to fix"
     )
     parser.add_argument(
@@ -254,7 +254,7 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
     from dronewrapper.mavlink_forward import forward, parse_udp
     from dronewrapper.runtime.node import Node
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper mavlink-forward",
         description="a drone's MAVLink (bridge gcs_over_zenoh) as UDP for QGroundControl",
     )

@@ -62,13 +62,13 @@ POLL_S = 0.05
 @dataclass(frozen=True)
 class MissionProgress:
     """Where the mission stands: ``current`` (the item being flown, 0-based), ``total``
-    items, ``reached`` (the last item reached, -1 before any) and ``reached_items`` (every
-    item the autopilot reported reached since the upload, in order, each once: PX4 and our
-    simulator report the items that fly somewhere, not speed or camera items)."""
+    items, ``reached`` (the last item reached, 0-based; None until one is heard reached) and
+    ``reached_items`` (every item reported reached since the upload, in order, each once:
+    PX4 and our simulator report the items that fly somewhere, not speed or camera items)."""
 
     current: int
     total: int
-    reached: int
+    reached: int | None = None
     reached_items: tuple[int, ...] = ()
 
     @property
@@ -78,7 +78,8 @@ class MissionProgress:
 
     @property
     def finished(self) -> bool:
-        return self.total > 0 and self.reached >= self.total - 1
+        """The last item was reached."""
+        return self.total > 0 and self.reached is not None and self.reached >= self.total - 1
 
 
 class MissionsMixin:
@@ -385,7 +386,7 @@ class MissionsMixin:
         return MissionProgress(
             current=listing.current_seq,
             total=len(listing.waypoints),
-            reached=-1 if reached is None else reached.wp_seq,
+            reached=None if reached is None else reached.wp_seq,
             reached_items=tuple(self._reached_items),
         )
 
