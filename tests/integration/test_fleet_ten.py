@@ -44,7 +44,7 @@ def test_ten_drones_five_to_a_process_take_off_and_land_together():
             def on_pose(key: str, pose) -> None:
                 ages[key.split("/", 1)[0]].append(time.time() - pose.header.stamp)
 
-            watcher.subscribe(registry.LOCAL_POSE, on_pose, key="*/local_position/pose",
+            watcher.subscribe(registry.LOCAL_POSE, on_pose, key=registry.LOCAL_POSE.wildcard("*"),
                               keyed=True)  # fmt: skip
             topic = registry.SIM_GROUND_TRUTH
             truth = {ns: watcher.latest(topic, key=topic.key(ns)) for ns in NAMES}
