@@ -205,14 +205,17 @@ def hold_fleet(endpoint: str, count: int, seconds: float, fly: bool) -> None:
     with ``fly``, then take off all together and land all together, and print how it went."""
     from dronewrapper.fleet import Fleet
 
-    with Fleet.connect(connect=endpoint, count=count, timeout=120, cameras=()) as fleet:
+    names = [f"drone{i}" for i in range(1, count + 1)]  # not the setpoint probe's bridge
+    with Fleet.connect(names, connect=endpoint, timeout=120, cameras=()) as fleet:
         print("ready", flush=True)
         c0, t0 = time.process_time(), time.monotonic()
         time.sleep(seconds)
         share = (time.process_time() - c0) / (time.monotonic() - t0)
         healthy = sum(info.healthy for info in fleet.online())
+        print(json.dumps({"cpu_percent": 100 * share, "rss_mb": rss_mb(os.getpid()),
+                          "healthy": healthy}), flush=True)  # fmt: skip
         flight: dict[str, object] = {}
-        if fly:
+        if fly and sys.stdin.readline().strip() == "fly":  # after the window's arming calls
             t0 = time.monotonic()
             up = fleet.takeoff(h=1.5, timeout=60)
             flight["takeoff_ok"], flight["takeoff_s"] = len(up.results()), time.monotonic() - t0
@@ -221,8 +224,7 @@ def hold_fleet(endpoint: str, count: int, seconds: float, fly: bool) -> None:
             down = fleet.land(timeout=90)
             flight["land_ok"], flight["land_s"] = len(down.results()), time.monotonic() - t0
             flight["land_failed"] = {k: str(v) for k, v in down.failed.items()}
-        print(json.dumps({"cpu_percent": 100 * share, "rss_mb": rss_mb(os.getpid()),
-                          "healthy": healthy, "flight": flight}), flush=True)  # fmt: skip
+        print(json.dumps(flight), flush=True)
 
 
 def measure(
@@ -268,7 +270,8 @@ def measure(
         probe = close_probe
         holder = subprocess.Popen(
             [sys.executable, "-m", "bench.fleet", "--hold", endpoint, str(count),
-             str(seconds), "1" if fly else "0"], stdout=subprocess.PIPE, text=True, cwd=REPO,
+             str(seconds), "1" if fly else "0"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            text=True, cwd=REPO,
         )  # fmt: skip
         if holder.stdout.readline().strip() != "ready":
             out["error"] = "the SDK's fleet did not connect"
@@ -289,6 +292,17 @@ def measure(
             usage[role].append(100 * (cpu_seconds(pid) - before[pid]) / elapsed)
             memory[role].append(rss_mb(pid))
         sdk = json.loads(holder.stdout.readline())
+        if fly:  # all take off and land together; the poses' ages meanwhile
+            window_ages, ages.ages = ages.ages, defaultdict(list)
+            ages.recording = True
+            holder.stdin.write("fly\n")
+            holder.stdin.flush()
+            sdk["flight"] = json.loads(holder.stdout.readline())
+            ages.recording = False
+            flight_ages = [a for v in ages.ages.values() for a in v]
+            sdk["flight"]["pose_age"] = percentiles(flight_ages)
+            ages.ages = window_ages
+        holder.stdin.close()
         holder.wait(30)
         hosts = usage.pop("host", None)
         if hosts is not None:  # a host's CPU and memory, split evenly over its drones
@@ -388,7 +402,10 @@ def report(results: list[dict[str, object]], title: str) -> None:
             continue
         n, cpu, each = r["drones"], r["cpu_percent"], r["cpu_percent_per_process"]
         flight = r["sdk_fleet"].get("flight") or {}
-        flown = f"{flight['takeoff_ok']}/{flight['land_ok']}" if flight else "-"
+        flown = "-"
+        if flight:
+            p99 = flight["pose_age"].get("p99_ms", float("nan"))
+            flown = f"{flight['takeoff_ok']}/{flight['land_ok']}, p99 {p99:.0f} ms"
         rows.append([
             n, r["start_s"], each.get("sim", float("nan")), each.get("bridge", float("nan")),
             per_drone(r, "cpu_percent"), cpu["router"], r["sdk_fleet"]["cpu_percent"],
@@ -406,7 +423,7 @@ def report(results: list[dict[str, object]], title: str) -> None:
         "  (drone % / MB = sim + bridge per drone, without the router; router = the launcher\n"
         "   process holding it; SDK fleet = one Fleet over all N drones, a process of its own;\n"
         "   pose age = arrival here - header.stamp, worst drone's p99; up/down = drones that\n"
-        "   took off / landed through the Fleet, with --fly)"
+        "   took off / landed through the Fleet, with --fly, and the pose age p99 meanwhile)"
     )
 
 
@@ -442,6 +459,9 @@ def main(argv: list[str] | None = None) -> int:
         hold_fleet(endpoint, int(count), float(seconds), fly == "1")
         return 0
 
+    name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
+    name += f"_pp{args.per_process}" if args.per_process > 1 else ""
+    name += "_busy" if args.busy else ""
     log_dir = REPO / "out" / "bench"
     log_dir.mkdir(parents=True, exist_ok=True)
     results, knee = [], None
@@ -454,6 +474,7 @@ def main(argv: list[str] | None = None) -> int:
                              args.per_process, args.fly)  # fmt: skip
             result["busy_core"] = args.busy
             results.append(result)
+            write_results(name, {"results": results, "partial": True})  # kept if interrupted
             reason = knee_reason(result)
             if reason and knee is None:
                 knee = {"drones": n, "reason": reason}
@@ -483,9 +504,6 @@ def main(argv: list[str] | None = None) -> int:
     print_table("targets", ["target", "met"], [[k, v] for k, v in targets.items()])
     last = ok[-1]["drones"] if ok else 0
     print(f"knee: {knee['drones']} drones ({knee['reason']})" if knee else f"knee: above {last}")
-    name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
-    name += f"_pp{args.per_process}" if args.per_process > 1 else ""
-    name += "_busy" if args.busy else ""
     if ok:
         plot(ok, RESULTS / f"{name}.png", title.split(":")[0])
     write_results(name, {"results": results, "knee": knee, "targets": targets})

@@ -25,6 +25,7 @@ from __future__ import annotations
 import ipaddress
 import logging
 import os
+import sys
 import threading
 import time
 from typing import Any
@@ -32,6 +33,8 @@ from typing import Any
 os.environ.setdefault("MAVLINK20", "1")
 os.environ.setdefault("MAVLINK_DIALECT", "common")  # what the bridge reads and sends; "all"
 # (pymavlink's default) would load a second, larger copy of the message tables
+if "pymavlink.dialects.v10.all" not in sys.modules:  # mavutil imports MAVLink 1's "all" only
+    sys.modules["pymavlink.dialects.v10.all"] = None  # for freezers, and lets it fail (6 MB)
 
 import contextlib
 from collections import deque
