@@ -142,6 +142,7 @@ class MavLink:
         self.counts = LinkCounts()
         self._cutter = FrameCutter()
         self._pending: deque[Received] = deque()
+        self._socket: Any = None  # a TCP link's socket (a new one after a reconnect)
         self.signing_key: bytes | None = None
         if signing_key_file:
             from dronewrapper.security.keystore import read_mavlink_key
@@ -255,6 +256,9 @@ class MavLink:
         if conn is None:
             time.sleep(timeout)
             return []
+        if isinstance(conn, mavutil.mavtcp) and (port := _tcp_socket(conn)) is not self._socket:
+            self._socket = port  # a new connection: what the old one left of a frame is none
+            self._cutter.clear()
         if not conn.select(max(0.0, timeout)):
             return []
         self.counts.wakeups += 1
@@ -318,6 +322,18 @@ class MavLink:
                 return False
         self.sent += 1
         return True
+
+
+def _tcp_socket(conn: Any) -> Any:
+    """The socket a TCP link has now, which ``select`` then waits on: pymavlink reconnects the
+    link inside ``recv`` (after the peer closed it) with a new socket but keeps the old one's
+    descriptor in ``fd``."""
+    if conn.port is None:  # the last reconnect failed: try again (OSError when it fails)
+        conn.reconnect()
+    if conn.port is None:
+        raise OSError(f"{conn.address}: the TCP link is closed")
+    conn.fd = conn.port.fileno()
+    return conn.port
 
 
 def _allow_unsigned(_mav: Any, msg_id: int) -> bool:
