@@ -6,7 +6,7 @@ Every line a process prints is prefixed with its name. A fleet graph's ``each_dr
 runs once per drone (``drone1/sim``, ``drone2/sim`` ...), all of them started together and
 waited for together (:mod:`dronewrapper_compose.fleet`); with the graph variable
 ``per_process`` = N > 1 the ``each_drone`` processes of N drones share one process
-(:mod:`dronewrapper.runtime.host`: ``drone1-5/host`` holds drone1..drone5's sims and bridges),
+(:mod:`dronewrapper.runtime.host`: ``drone1-drone5/host`` holds their sims and bridges),
 which costs less memory than a process each and isolates less. On Ctrl-C, SIGTERM or after
 ``--duration`` it stops the processes in reverse order (SIGINT, then SIGKILL after a grace
 period) and closes the router. Exit status: 0 when every process started and stopped cleanly,
@@ -173,7 +173,8 @@ class Launcher:
 
     def plan(self) -> list[list[Instance]]:
         """The processes to start, in groups started together: one group per spec, holding
-        one instance, or one per drone for an ``each_drone`` spec."""
+        one instance, or one per drone for an ``each_drone`` spec; with ``per_process`` > 1,
+        one group of host processes in place of the ``each_drone`` specs."""
         size = per_process(self.values, self.graph_path)
         groups: list[list[Instance]] = []
         hosted: list[Instance] = []
