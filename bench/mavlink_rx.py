@@ -137,12 +137,12 @@ def measure(
                 batch_loop(link, until, into, period)
 
         loop(time.monotonic() + 0.5, {"wakeups": 0, "decoded": 0})  # warm-up
-        c0, counts0 = time.thread_time(), (link.counts.wakeups, link.counts.reads)
+        c0, counts0 = time.thread_time(), (link.reading.wakeups, link.reading.reads)
         loop(time.monotonic() + seconds, out)
         cpu.append(time.thread_time() - c0)
         if not legacy:
-            out["wakeups"] = link.counts.wakeups - counts0[0]
-            out["reads"] = link.counts.reads - counts0[1]
+            out["wakeups"] = link.reading.wakeups - counts0[0]
+            out["reads"] = link.reading.reads - counts0[1]
 
     thread = threading.Thread(target=receive)
     thread.start()

@@ -20,6 +20,7 @@ here; one running process and its prefixed output is ``child.py``, the graph fil
 from __future__ import annotations
 
 import argparse
+import logging
 import signal
 import sys
 import threading
@@ -459,6 +460,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
 
     setup_logging()  # the graph runs: log lines from here on (a bad graph only printed above)
+    if args.identity and not args.use_router:  # what a rejected TLS handshake means
+        from dronewrapper.zenoh_log import relay_zenoh_log
+
+        relay_zenoh_log(logging.getLogger("router"))
+        launcher.out = sys.stdout  # where fd 1 went before Zenoh's log took it
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

@@ -5,7 +5,10 @@
     dronewrapper echo KEYEXPR [--count N]            print decoded messages
     dronewrapper alive [--connect ENDPOINT]          drones and processes online, with health
     dronewrapper doctor [--connect ENDPOINT]         diagnose a setup and say what to fix
+    dronewrapper doctor --hardware [--serial DEV]    this computer's serial port, camera, clock
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
+    dronewrapper install GRAPH [--user USER] [...]   start the graph at boot (systemd unit)
+    dronewrapper uninstall GRAPH                     remove that unit
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
     dronewrapper station [--host H] [--port P]       the web ground station (loopback)
@@ -17,16 +20,17 @@
     dronewrapper bench --quick [--target-ms MS]      this computer's speed, settings to use (stack)
     dronewrapper --version                           the installed version
 
-``up``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the on-board stack (``make
-setup``); the SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and
-``doctor``; ``record``, ``replay`` and ``foxglove`` come with its ``record`` extra (``pip
-install './sdk[record]'``).
+``up``, ``install``, ``uninstall``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the
+on-board stack (``make setup``); the SDK alone (``pip install ./sdk``) has ``router``,
+``echo``, ``alive`` and ``doctor``; ``record``, ``replay`` and ``foxglove`` come with its
+``record`` extra (``pip install './sdk[record]'``).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import os
 import signal
 import sys
@@ -39,6 +43,8 @@ from dronewrapper.runtime.service import plain_text, setup_logging
 # subcommand -> (module, function) in the on-board stack, imported only when used
 _STACK_COMMANDS = {
     "up": ("dronewrapper_compose.launcher", "main"),
+    "install": ("dronewrapper_compose.install_cli", "install_main"),
+    "uninstall": ("dronewrapper_compose.install_cli", "uninstall_main"),
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
     "station": ("dronewrapper_ground_station.cli", "main"),
@@ -91,6 +97,10 @@ def _router(argv: Sequence[str]) -> int:
             insecure=args.insecure,
             acl_namespaces=args.namespace,
         )
+        if options.identity:  # say what a rejected TLS handshake means, not Zenoh's hint
+            from dronewrapper.zenoh_log import relay_zenoh_log
+
+            relay_zenoh_log(logging.getLogger("router"))
         run_router(options, _stop_on_signals())
     except (ValueError, ConnectionError, FileNotFoundError) as exc:
         print(f"dronewrapper router: {exc}", file=sys.stderr)
@@ -204,12 +214,32 @@ def _doctor(argv: Sequence[str]) -> int:
     )
     parser.add_argument("--images", action="store_true", help="also measure camera streams")
     parser.add_argument("--no-bandwidth", action="store_true", help="skip the bandwidth probe")
+    hardware = parser.add_argument_group("this computer's hardware (--hardware)")
+    hardware.add_argument(
+        "--hardware", action="store_true", help="check the serial port, camera, clock, disk, boot"
+    )
+    hardware.add_argument("--serial", metavar="DEV", help="the autopilot's serial device")
+    hardware.add_argument("--baud", type=int, default=57600, help="its baud rate (57600)")
+    hardware.add_argument(
+        "--recordings", default=".", metavar="DIR", help="where recordings go (.)"
+    )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
     labels = {"ok": "ok  ", "warn": "warn", "fail": "FAIL"}
 
     def report(verdict: str, text: str) -> None:
         print(f"{labels[verdict]} {text}", flush=True)
+
+    if args.hardware:
+        from dronewrapper.hardware_probe import run_hardware
+
+        return run_hardware(
+            report,
+            serial=args.serial,
+            baud=args.baud,
+            listen_s=max(args.seconds, 2.0),  # a heartbeat is 1 Hz: two of them at least
+            recordings=args.recordings,
+        )
 
     return run_doctor(
         options_from_args(args),

@@ -39,7 +39,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
-from dronewrapper import connection, flying, images, setpoints
+from dronewrapper import connection, diagnosis, flying, images, setpoints
 from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
 from dronewrapper.errors import Cancelled, DroneError, InvalidArgument
@@ -53,7 +53,9 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.refusals import RefusalInbox
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.flight import Landing, Takeoff
@@ -117,6 +119,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             NAME.crt, see ``dronewrapper keys``; env ``DRONEWRAPPER_IDENTITY``).
         commander: our name on the command lease (default: the identity's name, or
             ``user@host``); the bridge obeys one commander at a time, see take_command().
+            With an identity the certificate's name is the commander, whatever this says
+            (the router binds every command to it, see docs/security.md).
         node: the node to stand on (a service's ``Node``, or a ``FakeNode`` on the fake bus);
             not closed by :meth:`close`. None: the wrapper opens its own (``connect``, ``mode``
             and ``identity`` are for that one).
@@ -155,6 +159,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         identity = self._identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
         self.commander = commander or default_commander(identity)
         self._attachment = commander_attachment(self.commander)
+        self._forbidden = diagnosis.forbidden(identity, self.connect) if node is None else ""
         self.compressed_images = self._choose_compression(compressed_images, node, cameras)
         self._own_node = node is None
         if node is None:
@@ -163,6 +168,11 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             )
         self.node: NodeApi = node
         self.clock = node.clock
+        bound = getattr(node, "bound_name", "")
+        if bound and bound != self.commander:  # the router binds our commands to it
+            log.warning("commander %r: the certificate's name %r commands", self.commander, bound)
+        self.commander = bound or self.commander
+        self._attachment = commander_attachment(self.commander)
         deadline = self.clock.monotonic() + timeout
         _open_wrappers.add(self)
         try:
@@ -170,6 +180,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
                 node, self.ns, compressed_images=self.compressed_images, cameras=cameras
             )
             self._declare_mission_inputs()  # home, envelope, mission (missions.py)
+            self._refusals = RefusalInbox(self.ns, self.commander, self.clock)
+            self.inputs.subscribe(registry.REFUSAL, self._refusals.on_refusal)
             self._setpoints = node.publisher(
                 registry.SETPOINT_RAW_LOCAL, key=registry.SETPOINT_RAW_LOCAL.key(self.ns)
             )
@@ -211,6 +223,15 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     def status_texts(self) -> collections.deque[StatusText]:
         """The autopilot's last 20 text messages (newest last)."""
         return self.inputs.status_texts
+
+    @property
+    def refusals(self) -> list[Refusal]:
+        """The bridge's last 20 refusals of our setpoints, newest last (``msgs.refusal``)."""
+        return list(self._refusals.recent)
+
+    def on_refusal(self, callback: Callable[[Refusal], None]) -> Callable[[], None]:
+        """``callback(refusal)`` as each of ours arrives (a Zenoh thread); returns a stop."""
+        return self._refusals.listen(callback)
 
     @property
     def decode_errors(self) -> collections.Counter[str]:
@@ -296,7 +317,9 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
                 after ``timeout`` s (the message names the missing keys).
         """
-        return connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
+        state = connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
+        self._warn_of_envelope()  # held for set_cmd_*; warns if a commander's is in force
+        return state
 
     def _require_connected(self, what: str) -> State:
         """The connected State, or NotConnected saying why ``what`` cannot be done."""

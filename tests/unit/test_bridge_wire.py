@@ -9,7 +9,13 @@ import random
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_bridge_mavlink.core import BridgeCore
-from dronewrapper_bridge_mavlink.wire import FrameCutter, cut_datagram, message_id, wanted_ids
+from dronewrapper_bridge_mavlink.wire import (
+    FrameCutter,
+    SequenceGaps,
+    cut_datagram,
+    message_id,
+    wanted_ids,
+)
 
 KEY = bytes(range(32))
 
@@ -130,3 +136,19 @@ def test_the_bridge_decodes_what_it_reads_and_drops_what_it_never_reads() -> Non
     for name in ("ALTITUDE", "VFR_HUD", "POSITION_TARGET_LOCAL_NED"):
         assert getattr(mavlink, f"MAVLINK_MSG_ID_{name}") not in wanted  # streams.py stops them
     assert wanted_ids(["NO_SUCH_MESSAGE", "HEARTBEAT"], mavlink) == {0}
+
+
+def test_gaps_in_each_senders_sequence_count_the_frames_lost_read_or_not() -> None:
+    mav, frames = encoder(), []
+    for seq in range(12):  # one sender, seq 0..11
+        mav.seq = seq
+        frames.append(frames_of(mav)[seq % 6])
+    gaps = SequenceGaps()
+    kept = frames[:3] + frames[5:9] + frames[10:]  # 2 + 1 lost
+    assert [gaps.add(f) for f in kept] == [0, 0, 0, 2, 0, 0, 0, 1, 0]
+    other = mavlink.MAVLink(None, srcSystem=7, srcComponent=1)
+    assert gaps.add(bytes(frames_of(other)[0])) == 0  # another sender starts its own count
+    wrapped = bytearray(frames[0])
+    wrapped[4] = 1  # after seq 11 of sender (1, 1): 1 means 245 lost (mod 256)
+    assert gaps.add(wrapped) == 245
+    assert gaps.lost == 248

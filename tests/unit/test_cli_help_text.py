@@ -10,7 +10,8 @@ import pytest
 from dronewrapper.cli import main
 
 SUBCOMMANDS = [
-    "router", "keys", "echo", "alive", "doctor", "mavlink-forward", "up", "sim", "detect",
+    "router", "keys", "echo", "alive", "doctor", "mavlink-forward", "up", "install",
+    "uninstall", "sim", "detect",
     "station", "record", "replay", "foxglove",
 ]  # fmt: skip
 SERVICES = [

@@ -22,6 +22,7 @@ from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.flight import CancelRequest, FlightResult, LandRequest, TakeoffRequest
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
+from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavlink import MavlinkFrames
 from dronewrapper.msgs.mavros import (
     CommandBool,
@@ -54,6 +55,7 @@ from dronewrapper.msgs.mission import (
     WaypointReached,
     WaypointSetCurrent,
 )
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.sensor import (
     BatteryState,
     CameraInfo,
@@ -245,6 +247,13 @@ BATTERY = Topic(
     rate_hz=1.0,
     publishers=("bridge",),
     doc="battery, 0..1",
+)
+LINK_STATUS = Topic(
+    "{ns}/bridge/link",
+    type=LinkStatus,
+    rate_hz=1.0,
+    publishers=("bridge",),
+    doc="the autopilot link's load, losses and reconnects (bridge_mavlink)",
 )
 STATUSTEXT = Topic(
     "{ns}/mavros/statustext/recv",
@@ -472,6 +481,12 @@ ENVELOPE = Topic(
     rate_hz=0.5,
     publishers=("bridge",),
     doc="the safety envelope in force",
+)
+REFUSAL = Topic(
+    "{ns}/dronewrapper/refusal",
+    type=Refusal,
+    publishers=("bridge",),
+    doc="a setpoint refused or a command overridden, named to its commander (msgs.refusal)",
 )
 MISSION_PUSH = Service(
     "{ns}/mavros/mission/push",

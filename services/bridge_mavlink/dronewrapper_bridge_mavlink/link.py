@@ -16,8 +16,10 @@ Reading pays only for what is read: each wake-up of the receive thread drains ev
 waiting on a UDP socket (or every byte waiting on a serial or TCP link), cuts the bytes into
 frames by their headers (:mod:`~dronewrapper_bridge_mavlink.wire`) and decodes only the frames
 whose message id is in ``wanted``; the others are dropped undecoded (and handed, raw, to
-``tap``, the ground-station forwarder, with every other frame). ``counts`` says how many
-wake-ups, reads, frames and decoded messages that took.
+``tap``, the ground-station forwarder, with every other frame). ``reading`` says how many
+wake-ups, reads, frames and decoded messages that took. pymavlink's own counts, which
+:meth:`MavLink.counts` reads (bytes received, sequence gaps, bad frames), are kept up to date
+from the frames, decoded or not.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ import os
 import sys
 import threading
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 os.environ.setdefault("MAVLINK20", "1")
 os.environ.setdefault("MAVLINK_DIALECT", "common")  # what the bridge reads and sends; "all"
@@ -44,13 +46,13 @@ from dataclasses import dataclass
 from pymavlink import mavutil
 
 from dronewrapper.security.mavlink_signing import verify_signed_frame
-from dronewrapper_bridge_mavlink.wire import Frame, FrameCutter, cut_datagram
+from dronewrapper_bridge_mavlink.link_budget import NETWORK_SCHEMES
+from dronewrapper_bridge_mavlink.wire import Frame, FrameCutter, SequenceGaps, cut_datagram
 
 log = logging.getLogger("bridge_mavlink.link")
 
 UNSIGNED_ALLOWED = frozenset({mavutil.mavlink.MAVLINK_MSG_ID_RADIO_STATUS})  # radios add it
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
-NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
 MAX_READS_PER_WAKEUP = 256  # datagrams (or stream reads) drained per wake-up, at most
 STREAM_READ_BYTES = 4096  # one read of a serial or TCP link
 
@@ -93,7 +95,7 @@ class _SourceNotingSocket:
 
 
 @dataclass
-class LinkCounts:
+class ReadCounts:
     """What the receive side did since the link was made: ``wakeups`` (select returned),
     ``reads`` (datagrams or stream reads), ``frames`` cut, ``decoded`` messages, ``dropped``
     undecoded for their id, ``bad`` frames that failed to decode (CRC, signature, length)."""
@@ -139,8 +141,9 @@ class MavLink:
         self.wanted = wanted
         self.tap: Callable[[bytes], None] | None = None
         """Called with every frame's bytes as received, decoded or not (forwarding)."""
-        self.counts = LinkCounts()
+        self.reading = ReadCounts()
         self._cutter = FrameCutter()
+        self._gaps = SequenceGaps()
         self._pending: deque[Received] = deque()
         self._socket: Any = None  # a TCP link's socket (a new one after a reconnect)
         self.signing_key: bytes | None = None
@@ -159,6 +162,7 @@ class MavLink:
         self.peer: Any = None  # UDP listen: the address replies go to (None: the last sender)
         self.sent = 0
         self.send_errors = 0
+        self._closed_counts = LinkCounts(0, 0, 0)  # what connections closed before counted
 
     @property
     def mav(self) -> Any:
@@ -179,6 +183,7 @@ class MavLink:
             kwargs["baud"] = self.baud
         self._cutter.clear()
         self._pending.clear()
+        self._gaps = SequenceGaps()  # a new connection: each sender's count starts afresh
         conn = mavutil.mavlink_connection(self.url, **kwargs)
         if hasattr(conn, "mav"):
             conn.mav.robust_parsing = True
@@ -220,10 +225,18 @@ class MavLink:
         signing = conn.mav.signing
         return int(signing.reject_count)
 
+    def counts(self) -> LinkCounts:
+        """Bytes received and sent, and frames lost, since this link was made (over reopens).
+
+        Frames lost are gaps in the autopilot's MAVLink sequence numbers plus bytes that did
+        not parse (pymavlink's counts)."""
+        return self._closed_counts + _counts_of(self._conn)
+
     def close(self) -> None:
         """Close the connection (idempotent)."""
         conn, self._conn = self._conn, None
         if conn is not None:
+            self._closed_counts = self._closed_counts + _counts_of(conn)
             with contextlib.suppress(OSError):
                 conn.close()
 
@@ -261,25 +274,30 @@ class MavLink:
             self._cutter.clear()
         if not conn.select(max(0.0, timeout)):
             return []
-        self.counts.wakeups += 1
+        self.reading.wakeups += 1
         datagrams = isinstance(conn, mavutil.mavudp)
         out: list[Received] = []
         for _ in range(MAX_READS_PER_WAKEUP):
             data = conn.recv() if datagrams else conn.recv(STREAM_READ_BYTES)
             if not data:
                 break
-            self.counts.reads += 1
+            self.reading.reads += 1
+            conn.mav.total_bytes_received += len(data)
+            skipped = self._cutter.skipped
             if datagrams:
                 self._decode(conn, cut_datagram(data, self._cutter), self.last_source, out)
             else:
                 self._decode(conn, self._cutter.feed(data), None, out)
+            if self._cutter.skipped > skipped:  # bytes that were no frame: an error, as
+                conn.mav.total_receive_errors += 1  # pymavlink counts a bad prefix
         return out
 
     def _decode(self, conn: Any, frames: list[Frame], source: Any, out: list[Received]) -> None:
         """Decode the wanted ``frames`` into ``out``; hand every frame to ``tap``."""
-        counts, wanted, tap = self.counts, self.wanted, self.tap
+        counts, wanted, tap, gaps = self.reading, self.wanted, self.tap, self._gaps
         counts.frames += len(frames)
         for frame in frames:
+            conn.mav_loss += gaps.add(frame.data)
             if tap is not None:
                 tap(frame.data)
             if wanted is not None and frame.msg_id not in wanted:
@@ -289,6 +307,7 @@ class MavLink:
                 msg = conn.mav.decode(bytearray(frame.data))
             except mavutil.mavlink.MAVError:
                 counts.bad += 1
+                conn.mav.total_receive_errors += 1
                 continue
             counts.decoded += 1
             out.append(Received(msg, source))
@@ -307,6 +326,7 @@ class MavLink:
             raise OSError("the autopilot link is not open")
         with self._send_lock:
             conn.write(frame)
+            conn.mav.total_bytes_sent += len(frame)
 
     def send(self, name: str, *args: Any, **kwargs: Any) -> bool:
         """Send message ``name`` (e.g. ``heartbeat``) with its fields; False if not sent."""
@@ -334,6 +354,26 @@ def _tcp_socket(conn: Any) -> Any:
         raise OSError(f"{conn.address}: the TCP link is closed")
     conn.fd = conn.port.fileno()
     return conn.port
+
+
+class LinkCounts(NamedTuple):
+    """Bytes received, bytes sent, frames lost (sequence gaps and unparsable bytes)."""
+
+    received: int
+    sent: int
+    lost: int
+
+    def __add__(self, other: tuple) -> LinkCounts:  # type: ignore[override]
+        return LinkCounts(*(a + b for a, b in zip(self, other, strict=True)))
+
+
+def _counts_of(conn: Any) -> LinkCounts:
+    """pymavlink's counts of one connection (zeros for None)."""
+    mav = getattr(conn, "mav", None)
+    if mav is None:
+        return LinkCounts(0, 0, 0)
+    lost = int(getattr(conn, "mav_loss", 0)) + int(getattr(mav, "total_receive_errors", 0))
+    return LinkCounts(int(mav.total_bytes_received), int(mav.total_bytes_sent), lost)
 
 
 def _allow_unsigned(_mav: Any, msg_id: int) -> bool:

@@ -129,3 +129,31 @@ def wanted_ids(names: Iterable[str], dialect: object) -> frozenset[int]:
     module; a name the dialect lacks is left out."""
     ids = (getattr(dialect, f"MAVLINK_MSG_ID_{name}", None) for name in names)
     return frozenset(i for i in ids if i is not None)
+
+
+def sequence_of(frame: bytes | bytearray) -> tuple[int, int, int]:
+    """(system id, component id, seq) from a whole frame's header."""
+    if frame[0] == MARKER_V1:
+        return frame[3], frame[4], frame[2]
+    return frame[5], frame[6], frame[4]
+
+
+class SequenceGaps:
+    """Frames lost on the way, from the gaps in each sender's 8-bit ``seq``, counted over every
+    frame (read or dropped), as pymavlink counts them (``mav_loss``): a sender's first frame
+    starts its count; a step of k > 1 means k - 1 frames lost."""
+
+    def __init__(self) -> None:
+        self._last: dict[tuple[int, int], int] = {}
+        self.lost = 0
+
+    def add(self, frame: bytes | bytearray) -> int:
+        """Count ``frame``; the frames lost just before it."""
+        system, component, seq = sequence_of(frame)
+        last = self._last.get((system, component))
+        self._last[(system, component)] = seq
+        if last is None:
+            return 0
+        gap = (seq - last - 1) % 256
+        self.lost += gap
+        return gap
