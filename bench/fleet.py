@@ -13,19 +13,29 @@ and over ``--seconds`` measures:
 * setpoint -> MAVLink: one more bridge in namespace ``probe``, against a PX4 stand-in in this
   process (``bench.bridge_latency``), commanded at 30 Hz while the fleet runs, p99;
 * the SDK's fleet object (``dronewrapper.fleet.Fleet`` over all N drones, a process of its
-  own) and its CPU.
+  own) and its CPU;
+* with ``--fly``, after the window: all N take off together through that ``Fleet`` (1.5 m),
+  then land together, how many made it and how long each took.
+
+``--per-process N`` runs N drones' sims and bridges in one process (the graph's
+``per_process``; a process then counts as ``host``, its CPU and memory split evenly over its
+drones). ``--busy`` keeps one core busy with an unrelated program (a Python ``while True``
+loop) for the whole run, as a laptop doing other things.
 
 The knee is the first N where the machine no longer keeps up: a drone's pose age p99 over
 50 ms, a start that fails, or the processes' CPU over 90 % of the machine's cores. A plot of
-the cost per drone against N goes to bench/results/fleet.png. Targets: bridge <= 3 % of a core
-per drone at full telemetry; 20 drones each with pose age p99 <= 50 ms; cost linear in N.
+the cost per drone against N goes to bench/results/fleet.png. Targets: bridge <= 2 % of a core
+per drone at full telemetry, 80 MB per drone (sim + bridge); 30 drones each with pose age p99
+<= 50 ms, with one core busy; cost flat per drone in N.
 
     nice -n 5 python -m bench.fleet [--seconds 10] [--max 60] [--counts 1 5 10 20]
+        [--per-process N] [--busy] [--fly]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import signal
@@ -34,6 +44,7 @@ import sys
 import threading
 import time
 from collections import defaultdict
+from collections.abc import Iterator
 from pathlib import Path
 
 from bench.common import RESULTS, percentiles, print_table, write_results
@@ -48,7 +59,8 @@ REPO = Path(__file__).resolve().parents[1]
 TICKS = os.sysconf("SC_CLK_TCK")
 PAGE = os.sysconf("SC_PAGE_SIZE")
 POSE_AGE_P99_MS = 50.0
-BRIDGE_SHARE_PER_DRONE = 3.0
+BRIDGE_SHARE_PER_DRONE = 2.0
+MEMORY_PER_DRONE_MB = 80.0
 MACHINE_BUSY = 0.9
 ARMING_SPACING_S = 0.5
 """Calls of the arming service to one drone are at least this far apart (s)."""
@@ -75,8 +87,12 @@ def rss_mb(pid: int) -> float:
         return 0.0
 
 
+ROLES = {"dronewrapper_sim": "sim", "dronewrapper.runtime.host": "host"}
+
+
 def children_of(pid: int) -> dict[int, str]:
-    """{pid: role} of the launcher's children: ``sim`` or ``bridge``."""
+    """{pid: role} of the launcher's children: ``sim``, ``bridge`` or ``host`` (both, for
+    several drones)."""
     found = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
@@ -87,7 +103,7 @@ def children_of(pid: int) -> dict[int, str]:
         if int(fields[1]) != pid:
             continue
         module = cmdline[cmdline.index("-m") + 1] if "-m" in cmdline else ""
-        found[int(stat.parent.name)] = "sim" if module == "dronewrapper_sim" else "bridge"
+        found[int(stat.parent.name)] = ROLES.get(module, "bridge")
     return found
 
 
@@ -185,11 +201,13 @@ def setpoint_probe(endpoint: str, stop: threading.Event):
     return stream, latencies, close
 
 
-def hold_fleet(endpoint: str, count: int, seconds: float) -> None:
-    """In a child: open the SDK's fleet over every drone, hold it ``seconds``, print its CPU."""
+def hold_fleet(endpoint: str, count: int, seconds: float, fly: bool) -> None:
+    """In a child: open the SDK's fleet over every drone, hold it ``seconds``, print its CPU;
+    with ``fly``, then take off all together and land all together, and print how it went."""
     from dronewrapper.fleet import Fleet
 
-    with Fleet.connect(connect=endpoint, count=count, timeout=120, cameras=()) as fleet:
+    names = [f"drone{i}" for i in range(1, count + 1)]  # not the setpoint probe's bridge
+    with Fleet.connect(names, connect=endpoint, timeout=120, cameras=()) as fleet:
         print("ready", flush=True)
         c0, t0 = time.process_time(), time.monotonic()
         time.sleep(seconds)
@@ -197,10 +215,27 @@ def hold_fleet(endpoint: str, count: int, seconds: float) -> None:
         healthy = sum(info.healthy for info in fleet.online())
         print(json.dumps({"cpu_percent": 100 * share, "rss_mb": rss_mb(os.getpid()),
                           "healthy": healthy}), flush=True)  # fmt: skip
+        flight: dict[str, object] = {}
+        if fly and sys.stdin.readline().strip() == "fly":  # after the window's arming calls
+            t0 = time.monotonic()
+            up = fleet.takeoff(h=1.5, timeout=60)
+            flight["takeoff_ok"], flight["takeoff_s"] = len(up.results()), time.monotonic() - t0
+            flight["takeoff_failed"] = {k: str(v) for k, v in up.failed.items()}
+            t0 = time.monotonic()
+            down = fleet.land(timeout=90)
+            flight["land_ok"], flight["land_s"] = len(down.results()), time.monotonic() - t0
+            flight["land_failed"] = {k: str(v) for k, v in down.failed.items()}
+        print(json.dumps(flight), flush=True)
 
 
 def measure(
-    count: int, seconds: float, settle: float, log_dir: Path, kind: str = "iris"
+    count: int,
+    seconds: float,
+    settle: float,
+    log_dir: Path,
+    kind: str = "iris",
+    per_process: int = 1,
+    fly: bool = False,
 ) -> dict[str, object]:
     """Start a fleet of ``count`` drones, measure it, stop it."""
     import zenoh
@@ -211,8 +246,9 @@ def measure(
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     log_path = log_dir / f"fleet_{count}.log"
     argv = [sys.executable, "-m", "dronewrapper", "up", "sim_fleet", "--router", endpoint,
-            "--var", f"drones={count}", "--var", f"kind={kind}"]  # fmt: skip
-    out: dict[str, object] = {"drones": count, "kind": kind}
+            "--var", f"drones={count}", "--var", f"kind={kind}",
+            "--var", f"per_process={per_process}"]  # fmt: skip
+    out: dict[str, object] = {"drones": count, "kind": kind, "per_process": per_process}
     started = time.monotonic()
     with open(log_path, "w") as log:
         up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
@@ -235,7 +271,8 @@ def measure(
         probe = close_probe
         holder = subprocess.Popen(
             [sys.executable, "-m", "bench.fleet", "--hold", endpoint, str(count),
-             str(seconds)], stdout=subprocess.PIPE, text=True, cwd=REPO,
+             str(seconds), "1" if fly else "0"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            text=True, cwd=REPO,
         )  # fmt: skip
         if holder.stdout.readline().strip() != "ready":
             out["error"] = "the SDK's fleet did not connect"
@@ -256,7 +293,22 @@ def measure(
             usage[role].append(100 * (cpu_seconds(pid) - before[pid]) / elapsed)
             memory[role].append(rss_mb(pid))
         sdk = json.loads(holder.stdout.readline())
+        if fly:  # all take off and land together; the poses' ages meanwhile
+            window_ages, ages.ages = ages.ages, defaultdict(list)
+            ages.recording = True
+            holder.stdin.write("fly\n")
+            holder.stdin.flush()
+            sdk["flight"] = json.loads(holder.stdout.readline())
+            ages.recording = False
+            flight_ages = [a for v in ages.ages.values() for a in v]
+            sdk["flight"]["pose_age"] = percentiles(flight_ages)
+            ages.ages = window_ages
+        holder.stdin.close()
         holder.wait(30)
+        hosts = usage.pop("host", None)
+        if hosts is not None:  # a host's CPU and memory, split evenly over its drones
+            usage["drone (sim+bridge)"] = [sum(hosts) / count] * count
+            memory["drone (sim+bridge)"] = [sum(memory.pop("host")) / count] * count
         per_drone = {ns: percentiles(ages.ages.get(ns, [])) for ns in names}
         out.update(
             cpu_percent={role: sum(v) for role, v in usage.items()},
@@ -292,6 +344,10 @@ def knee_reason(result: dict[str, object]) -> str:
     """Why this N is past what the machine holds ("" if it holds it)."""
     if "error" in result:
         return str(result["error"])
+    flight = result["sdk_fleet"].get("flight") or {}
+    if flight and (flight["takeoff_failed"] or flight["land_failed"]):
+        failed = {**flight["takeoff_failed"], **flight["land_failed"]}
+        return f"take-off or landing failed for {', '.join(sorted(failed))}"
     if result["pose_age_worst_p99_ms"] > POSE_AGE_P99_MS:
         return f"a pose age p99 of {result['pose_age_worst_p99_ms']:.0f} ms"
     total = sum(result["cpu_percent"].values()) + result["sdk_fleet"]["cpu_percent"]
@@ -300,7 +356,15 @@ def knee_reason(result: dict[str, object]) -> str:
     return ""
 
 
-def plot(results: list[dict[str, object]], path: Path) -> None:
+DRONE_ROLES = ("sim", "bridge", "drone (sim+bridge)")
+
+
+def per_drone(result: dict[str, object], table: str) -> float:
+    """A drone's share (sim and bridge, without the router) of ``cpu_percent`` or ``rss_mb``."""
+    return sum(result[table].get(role, 0.0) for role in DRONE_ROLES) / result["drones"]
+
+
+def plot(results: list[dict[str, object]], path: Path, title: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -308,49 +372,74 @@ def plot(results: list[dict[str, object]], path: Path) -> None:
 
     ok = [r for r in results if "error" not in r]
     counts = [r["drones"] for r in ok]
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for role in ("sim", "bridge", "router"):
-        ax.plot(counts, [r["cpu_percent"].get(role, 0) / r["drones"] for r in ok], "o-",
-                label=role)  # fmt: skip
-    ax.plot(counts, [r["sdk_fleet"]["cpu_percent"] / r["drones"] for r in ok], "o-",
-            label="SDK fleet object")  # fmt: skip
-    ax.axhline(BRIDGE_SHARE_PER_DRONE, color="grey", ls="--", label="bridge target (3 %)")
-    ax.set_xlabel("drones on one router (N)")
-    ax.set_ylabel("CPU per drone (% of one core)")
-    ax.set_title(f"Cost per drone against N ({os.cpu_count()} cores, shared machine)")
-    ax.legend()
-    ax.grid(alpha=0.3)
+    fig, (cpu, mem) = plt.subplots(1, 2, figsize=(9, 3.6))
+    roles = [role for role in (*DRONE_ROLES, "router") if any(role in r["cpu_percent"] for r in ok)]
+    for role in roles:
+        cpu.plot(counts, [r["cpu_percent"].get(role, 0) / r["drones"] for r in ok], "o-",
+                 label=role)  # fmt: skip
+    cpu.axhline(BRIDGE_SHARE_PER_DRONE, color="grey", ls="--", label="bridge target")
+    cpu.set_xlabel("drones (N)")
+    cpu.set_ylabel("CPU per drone (% of one core)")
+    cpu.legend(fontsize=8)
+    mem.plot(counts, [per_drone(r, "rss_mb") for r in ok], "o-", label="sim + bridge")
+    mem.axhline(MEMORY_PER_DRONE_MB, color="grey", ls="--", label="target")
+    mem.set_xlabel("drones (N)")
+    mem.set_ylabel("memory per drone (MB RSS)")
+    mem.set_ylim(bottom=0)
+    mem.legend(fontsize=8)
+    for ax in (cpu, mem):
+        ax.grid(alpha=0.3)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=80)
     print(f"wrote {path}")
 
 
-def report(results: list[dict[str, object]]) -> None:
+def report(results: list[dict[str, object]], title: str) -> None:
     rows = []
     for r in results:
         if "error" in r:
-            rows.append([r["drones"], r["error"], "", "", "", "", "", "", "", "", ""])
+            rows.append([r["drones"], r["error"], *[""] * 10])
             continue
         n, cpu, each = r["drones"], r["cpu_percent"], r["cpu_percent_per_process"]
+        flight = r["sdk_fleet"].get("flight") or {}
+        flown = "-"
+        if flight:
+            p99 = flight["pose_age"].get("p99_ms", float("nan"))
+            flown = f"{flight['takeoff_ok']}/{flight['land_ok']}, p99 {p99:.0f} ms"
         rows.append([
-            n, r["start_s"], each["sim"], each["bridge"], cpu["router"],
-            r["sdk_fleet"]["cpu_percent"], sum(r["rss_mb"].values()) / n,
-            r["pose_age_p50_ms"], r["pose_age_worst_p99_ms"],
-            f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}"
-            f" ({r['arming_rtt'].get('n', 0)})",
-            r["setpoint_to_mavlink"].get("p99_ms", float("nan")),
+            n, r["start_s"], each.get("sim", float("nan")), each.get("bridge", float("nan")),
+            per_drone(r, "cpu_percent"), cpu["router"], r["sdk_fleet"]["cpu_percent"],
+            per_drone(r, "rss_mb"), r["pose_age_p50_ms"], r["pose_age_worst_p99_ms"],
+            f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}",
+            flown,
         ])  # fmt: skip
     print_table(
-        f"A fleet of N simulated drones ({results[0].get('kind', 'iris')}, no cameras) on one "
-        "router: CPU % of one core, memory, latency (ms)",
-        ["N", "start s", "sim %/each", "bridge %/each", "router %", "SDK fleet %",
-         "MB/drone", "pose age p50", "worst p99", "arming p50/p99 (n)", "sp->MAVLink p99"],
+        title,
+        ["N", "start s", "sim %/each", "bridge %/each", "drone %", "router %", "SDK fleet %",
+         "MB/drone", "pose age p50", "worst p99", "arming p50/p99", "up/down"],
         rows,
     )  # fmt: skip
     print(
-        "  (router = the launcher process holding it; SDK fleet = one Fleet over all N drones,\n"
-        "   a process of its own; pose age = arrival here - header.stamp, worst drone's p99)"
+        "  (drone % / MB = sim + bridge per drone, without the router; router = the launcher\n"
+        "   process holding it; SDK fleet = one Fleet over all N drones, a process of its own;\n"
+        "   pose age = arrival here - header.stamp, worst drone's p99; up/down = drones that\n"
+        "   took off / landed through the Fleet, with --fly, and the pose age p99 meanwhile)"
     )
+
+
+@contextlib.contextmanager
+def busy_core(busy: bool) -> Iterator[None]:
+    """An unrelated program keeping one core busy (a Python busy loop) while the block runs."""
+    if not busy:
+        yield
+        return
+    process = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        yield
+    finally:
+        process.kill()
+        process.wait(10)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -361,44 +450,63 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=10.0, help="measuring window (s)")
     parser.add_argument("--settle", type=float, default=3.0, help="wait after start (s)")
     parser.add_argument("--kind", default="iris", help="iris, tello, or a list (iris,tello)")
-    parser.add_argument("--hold", nargs=3, help=argparse.SUPPRESS)
+    parser.add_argument("--per-process", type=int, default=1, help="drones per process")
+    parser.add_argument("--busy", action="store_true", help="keep one core busy meanwhile")
+    parser.add_argument("--fly", action="store_true", help="all take off and land, each N")
+    parser.add_argument("--hold", nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.hold:
-        endpoint, count, seconds = args.hold
-        hold_fleet(endpoint, int(count), float(seconds))
+        endpoint, count, seconds, fly = args.hold
+        hold_fleet(endpoint, int(count), float(seconds), fly == "1")
         return 0
 
+    name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
+    name += f"_pp{args.per_process}" if args.per_process > 1 else ""
+    name += "_busy" if args.busy else ""
     log_dir = REPO / "out" / "bench"
     log_dir.mkdir(parents=True, exist_ok=True)
     results, knee = [], None
     counts = list(args.counts)
-    while counts:
-        n = counts.pop(0)
-        print(f"... {n} drone(s)", flush=True)
-        result = measure(n, args.seconds, args.settle, log_dir, args.kind)
-        results.append(result)
-        reason = knee_reason(result)
-        if reason and knee is None:
-            knee = {"drones": n, "reason": reason}
-            print(f"    the machine no longer keeps up at {n}: {reason}", flush=True)
-        if knee is None and not counts and n + args.step <= args.max:
-            counts.append(n + args.step)  # the fixed counts all run; beyond them, to the knee
-    report(results)
+    with busy_core(args.busy):
+        while counts:
+            n = counts.pop(0)
+            print(f"... {n} drone(s)", flush=True)
+            result = measure(n, args.seconds, args.settle, log_dir, args.kind,
+                             args.per_process, args.fly)  # fmt: skip
+            result["busy_core"] = args.busy
+            results.append(result)
+            write_results(name, {"results": results, "partial": True})  # kept if interrupted
+            reason = knee_reason(result)
+            if reason and knee is None:
+                knee = {"drones": n, "reason": reason}
+                print(f"    the machine no longer keeps up at {n}: {reason}", flush=True)
+            if knee is None and not counts and n + args.step <= args.max:
+                counts.append(n + args.step)  # the fixed counts all run; beyond, to the knee
+    arrangement = "a process each" if args.per_process == 1 else f"{args.per_process} per process"
+    load = "one core kept busy" if args.busy else "no extra load"
+    title = (f"A fleet of N simulated drones ({args.kind}, no cameras, {arrangement}, {load}, "
+             f"load {os.getloadavg()[0]:.1f}): CPU % of one core, memory, latency ms")  # fmt: skip
+    report(results, title)
     ok = [r for r in results if "error" not in r]
-    at20 = next((r for r in ok if r["drones"] == 20), None)
-    per_drone_bridge = max((r["cpu_percent_per_process"]["bridge"] for r in ok), default=0)
+    bridge_share = max((per_drone(r, "cpu_percent") for r in ok), default=0)
+    if args.per_process == 1:
+        bridge_share = max((r["cpu_percent_per_process"]["bridge"] for r in ok), default=0)
+    biggest = max(ok, key=lambda r: r["drones"], default=None)
     targets = {
-        "bridge_percent_per_drone<=3": per_drone_bridge <= BRIDGE_SHARE_PER_DRONE,
-        "20_drones_pose_age_p99<=50ms": bool(
-            at20 and at20["pose_age_worst_p99_ms"] <= POSE_AGE_P99_MS
+        f"bridge <= {BRIDGE_SHARE_PER_DRONE:g} % of a core per drone": bridge_share
+        <= BRIDGE_SHARE_PER_DRONE,
+        f"{biggest['drones'] if biggest else 0} drones: pose age p99 <= 50 ms": bool(
+            biggest and biggest["pose_age_worst_p99_ms"] <= POSE_AGE_P99_MS
+        ),
+        f"memory <= {MEMORY_PER_DRONE_MB:g} MB per drone": bool(
+            biggest and per_drone(biggest, "rss_mb") <= MEMORY_PER_DRONE_MB
         ),
     }
     print_table("targets", ["target", "met"], [[k, v] for k, v in targets.items()])
     last = ok[-1]["drones"] if ok else 0
     print(f"knee: {knee['drones']} drones ({knee['reason']})" if knee else f"knee: above {last}")
     if ok:
-        plot(ok, RESULTS / ("fleet.png" if args.kind == "iris" else f"fleet_{args.kind}.png"))
-    name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
+        plot(ok, RESULTS / f"{name}.png", title.split(":")[0])
     write_results(name, {"results": results, "knee": knee, "targets": targets})
     return 0
 

@@ -29,10 +29,13 @@ class Child:
         *,
         label: str = "",
         ns: str = "",
+        tokens: list[tuple[str, str]] | None = None,
     ) -> None:
         self.spec = spec
         self.name = label or spec.name  # a fleet's process: ``drone2/sim``
         self.ns = ns  # the namespace it runs under (its liveliness token's)
+        # the liveliness tokens (namespace, name) that say it is ready: a host's, one a member
+        self.tokens = tokens if tokens is not None else [(ns, spec.name)]
         self.argv = argv
         self.stopping = False
         self.proc = subprocess.Popen(

@@ -4,7 +4,10 @@ It starts a Zenoh router (a router-mode session in this process) on ``--router``
 process in order, waiting for its liveliness token ``{ns}/alive/{name}`` before starting the next.
 Every line a process prints is prefixed with its name. A fleet graph's ``each_drone`` process
 runs once per drone (``drone1/sim``, ``drone2/sim`` ...), all of them started together and
-waited for together (:mod:`dronewrapper_compose.fleet`). On Ctrl-C, SIGTERM or after
+waited for together (:mod:`dronewrapper_compose.fleet`); with the graph variable
+``per_process`` = N > 1 the ``each_drone`` processes of N drones share one process
+(:mod:`dronewrapper.runtime.host`: ``drone1-drone5/host`` holds their sims and bridges),
+which costs less memory than a process each and isolates less. On Ctrl-C, SIGTERM or after
 ``--duration`` it stops the processes in reverse order (SIGINT, then SIGKILL after a grace
 period) and closes the router. Exit status: 0 when every process started and stopped cleanly,
 1 when a process died or failed to become ready, 2 for a bad graph file or bad flags.
@@ -24,7 +27,7 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import NamedTuple, TextIO
+from typing import TextIO
 
 import zenoh
 
@@ -32,6 +35,7 @@ from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.router import InsecureEndpoint, router_options
 from dronewrapper.router_reach import open_client_session
 from dronewrapper.runtime.arguments import CommandParser
+from dronewrapper.runtime.host import SEPARATOR
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
@@ -51,6 +55,7 @@ from dronewrapper_compose.graph import (
     resolve_graph_path,
     substitute,
 )
+from dronewrapper_compose.hosting import HOST_MODULE, Instance, host_instances, per_process
 from dronewrapper_compose.ports import (
     PortInUse,
     check_ports_free,
@@ -87,16 +92,6 @@ def build_argv(
         argv += ["--connect", router, "--namespace", ns, "--name", spec.name, "--mode", "peer"]
     env = {key: substitute(value, values, where) for key, value in spec.env.items()}
     return argv, env
-
-
-class Instance(NamedTuple):
-    """One process to start: a spec under a namespace, with its variables; ``label`` names it
-    in the output (``sim``, or ``drone2/sim`` for a fleet's)."""
-
-    spec: ProcessSpec
-    label: str
-    ns: str
-    values: Mapping[str, str]
 
 
 class Launcher:
@@ -163,7 +158,10 @@ class Launcher:
             except fleet.FleetError as exc:
                 raise GraphError(f"{graph_path}: {exc}") from exc
         self.groups = self.plan()
-        self.namespaces = sorted({inst.ns for group in self.groups for inst in group})
+        self.namespaces = sorted(
+            {ns for group in self.groups for inst in group for ns, _ in inst.tokens()}
+            | {inst.ns for group in self.groups for inst in group if inst.ns}
+        )
         self.children: list[Child] = []
         self._started: list[list[Child]] = []  # the children, in the groups they started in
         self.failures: list[str] = []
@@ -177,24 +175,46 @@ class Launcher:
 
     def plan(self) -> list[list[Instance]]:
         """The processes to start, in groups started together: one group per spec, holding
-        one instance, or one per drone for an ``each_drone`` spec."""
-        groups = []
+        one instance, or one per drone for an ``each_drone`` spec; with ``per_process`` > 1,
+        one group of host processes in place of the ``each_drone`` specs."""
+        size = per_process(self.values, self.graph_path)
+        groups: list[list[Instance]] = []
+        hosted: list[Instance] = []
+        hosts_at = None
         for spec in self.graph.processes:
             if spec.each_drone is None:
                 groups.append([Instance(spec, spec.name, self.ns, self.values)])
                 continue
             drones = fleet.drones_of(self.drones, spec.each_drone)
-            groups.append(
-                [
-                    Instance(spec, f"{d.ns}/{spec.name}", d.ns, {**self.values, **d.values})
-                    for d in drones
-                ]
-            )
+            group = [
+                Instance(spec, f"{d.ns}/{spec.name}", d.ns, {**self.values, **d.values})
+                for d in drones
+            ]
+            if size == 1:
+                groups.append(group)
+                continue
+            if hosts_at is None:  # the hosts start where the first each_drone process did
+                hosts_at = len(groups)
+                groups.append([])
+            hosted += group
+        if hosts_at is not None:
+            try:
+                groups[hosts_at] = host_instances(hosted, [d.ns for d in self.drones], size)
+            except GraphError as exc:
+                raise GraphError(f"{self.graph_path}: {exc}") from exc
         return [group for group in groups if group]
 
     def argv_of(self, inst: Instance) -> tuple[list[str], dict[str, str]]:
-        """The argv and extra environment of one instance."""
-        return build_argv(inst.spec, inst.values, self.graph_path, inst.ns, self.router)
+        """The argv and extra environment of one instance (a host's: its members' argvs,
+        without the interpreter, one after the other)."""
+        if not inst.members:
+            return build_argv(inst.spec, inst.values, self.graph_path, inst.ns, self.router)
+        argv, env = [sys.executable, "-m", HOST_MODULE], {}
+        for i, member in enumerate(inst.members):
+            member_argv, member_env = self.argv_of(member)
+            argv += ([SEPARATOR] if i else []) + member_argv[1:]
+            env.update(member_env)
+        return argv, env
 
     @classmethod
     def from_file(cls, path: str | Path, **kwargs) -> Launcher:
@@ -288,6 +308,7 @@ class Launcher:
                     self._width,
                     label=inst.label,
                     ns=inst.ns,
+                    tokens=inst.tokens(),
                 )
                 self.children.append(child)
                 started.append(child)
@@ -300,15 +321,17 @@ class Launcher:
         deadline = time.monotonic() + child.spec.ready_timeout_s
         started = time.monotonic()
         with self._alive_cond:
-            while (child.ns, child.spec.name) not in self._alive:
+            while not set(child.tokens) <= self._alive:
                 code = child.poll()
                 if code is not None:
                     raise LaunchError(f"{child.name} exited with code {code} before it was ready")
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
+                    missing = sorted(set(child.tokens) - self._alive)
+                    keys = ", ".join(ALIVE.key(ns, service=name) for ns, name in missing)
                     raise LaunchError(
                         f"{child.name} not ready after {child.spec.ready_timeout_s:g} s "
-                        f"(no liveliness token {ALIVE.key(child.ns, service=child.spec.name)})"
+                        f"(no liveliness token {keys})"
                     )
                 self._alive_cond.wait(min(remaining, 0.2))
         self._say(f"{child.name} ready in {time.monotonic() - started:.1f} s")

@@ -152,6 +152,9 @@ class Node:
         direct_callbacks: run subscriber callbacks on Zenoh's own thread (no Python thread
             per subscriber; keep them short): for a library inside someone else's process,
             where no thread of ours may hold up the interpreter's exit.
+        session: an open session to share (several services in one process, see
+            :mod:`dronewrapper.runtime.host`): this node declares on it and undeclares what it
+            declared when it closes, and leaves the session open for the others.
     """
 
     def __init__(
@@ -164,6 +167,7 @@ class Node:
         open_timeout: float = 10.0,
         clock: Clock = REAL,
         direct_callbacks: bool = False,
+        session: zenoh.Session | None = None,
     ) -> None:
         self.options = options or ZenohOptions()
         self.clock = clock
@@ -189,7 +193,8 @@ class Node:
         if handle_signals and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
                 self._old_handlers[sig] = signal.signal(sig, self._on_signal)
-        self.session = open_session(self.options, timeout=open_timeout)
+        self._owns_session = session is None
+        self.session = session or open_session(self.options, timeout=open_timeout)
 
     # ---- lifecycle ----
 
@@ -245,6 +250,11 @@ class Node:
                 ALIVE.key(self.ns, service=self.name)
             )
 
+    @property
+    def announced(self) -> bool:
+        """True once :meth:`announce` declared the liveliness token."""
+        return self._token is not None
+
     def alive_services(self, ns: str = "*", timeout: float = 1.0) -> set[str]:
         """The liveliness keys (``ns/alive/name``) present now, in ``ns`` or all."""
         return alive_services(self.session, ns, timeout)
@@ -273,7 +283,8 @@ class Node:
                 with contextlib.suppress(Exception):  # already gone with the session
                     entity.undeclare()
         finally:
-            self.session.close()
+            if self._owns_session:
+                self.session.close()
             for sig, handler in self._old_handlers.items():
                 signal.signal(sig, handler)
             remove_stale_segments()

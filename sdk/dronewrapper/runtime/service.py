@@ -9,7 +9,9 @@ A service's ``__main__`` is three lines::
 
 ``run_service`` parses the common flags (Zenoh flags, ``--config FILE``, ``--set KEY=VALUE``,
 ``--log-level``), loads the config strictly, opens the Node (SIGINT/SIGTERM -> stop), calls
-``run(node, config)`` and closes the session whatever happens. Exit status: 0 after a clean
+``run(node, config)`` and closes the session whatever happens. Hosted with other services in
+one process (:mod:`dronewrapper.runtime.host`), the Node joins the process's shared session
+and closes only what it declared. Exit status: 0 after a clean
 stop, 2 for a bad config or bad flags, 1 when ``run`` raised.
 """
 
@@ -22,6 +24,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TypeVar
 
+from dronewrapper.runtime import host
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper.runtime.config_help import config_help
@@ -110,8 +113,16 @@ def run_service(
     except ValueError as exc:
         print(f"{name}: {exc}", file=sys.stderr)
         return 2
+    member = host.current()  # hosted with other services in one process (runtime/host.py)
     try:
-        with Node(name, options) as node:
+        if member is None:
+            node = Node(name, options)
+        else:
+            node = Node(
+                name, options, session=member.host.session_for(options), handle_signals=False
+            )
+            member.attach(node)
+        with node:
             code = run(node, config)
     except ConnectionError as exc:
         log.error("%s", exc)

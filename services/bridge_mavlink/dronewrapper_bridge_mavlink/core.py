@@ -257,6 +257,11 @@ class BridgeCore(PureCore):
         "BATTERY_STATUS": _on_battery_status,
     }
 
+    @classmethod
+    def read_messages(cls) -> frozenset[str]:
+        """The MAVLink messages the core reads; the link decodes only these."""
+        return frozenset({"HEARTBEAT", *cls._OWN_HANDLERS, *receive.HANDLERS})
+
     def bridge_text(self, text: str) -> None:
         """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""
         log.warning("%s", text)

@@ -11,6 +11,15 @@ units since 2015) and every message received must carry a valid signature with a
 newer than the last one of its stream; unsigned, wrongly signed or replayed messages are
 dropped and counted (``rejected``), except RADIO_STATUS, which radios insert unsigned. A keyed
 link never falls back to MAVLink 1 (it cannot carry a signature).
+
+Reading pays only for what is read: each wake-up of the receive thread drains every datagram
+waiting on a UDP socket (or every byte waiting on a serial or TCP link), cuts the bytes into
+frames by their headers (:mod:`~dronewrapper_bridge_mavlink.wire`) and decodes only the frames
+whose message id is in ``wanted``; the others are dropped undecoded (and handed, raw, to
+``tap``, the ground-station forwarder, with every other frame). ``reading`` says how many
+wake-ups, reads, frames and decoded messages that took. pymavlink's own counts, which
+:meth:`MavLink.counts` reads (bytes received, sequence gaps, bad frames), are kept up to date
+from the frames, decoded or not.
 """
 
 from __future__ import annotations
@@ -18,23 +27,34 @@ from __future__ import annotations
 import ipaddress
 import logging
 import os
+import sys
 import threading
 import time
 from typing import Any, NamedTuple
 
 os.environ.setdefault("MAVLINK20", "1")
+os.environ.setdefault("MAVLINK_DIALECT", "common")  # what the bridge reads and sends; "all"
+# (pymavlink's default) would load a second, larger copy of the message tables
+if "pymavlink.dialects.v10.all" not in sys.modules:  # mavutil imports MAVLink 1's "all" only
+    sys.modules["pymavlink.dialects.v10.all"] = None  # for freezers, and lets it fail (6 MB)
 
 import contextlib
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from pymavlink import mavutil
 
 from dronewrapper.security.mavlink_signing import verify_signed_frame
 from dronewrapper_bridge_mavlink.link_budget import NETWORK_SCHEMES
+from dronewrapper_bridge_mavlink.wire import Frame, FrameCutter, SequenceGaps, cut_datagram
 
 log = logging.getLogger("bridge_mavlink.link")
 
 UNSIGNED_ALLOWED = frozenset({mavutil.mavlink.MAVLINK_MSG_ID_RADIO_STATUS})  # radios add it
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
+MAX_READS_PER_WAKEUP = 256  # datagrams (or stream reads) drained per wake-up, at most
+STREAM_READ_BYTES = 4096  # one read of a serial or TCP link
 
 
 def network_exposure(url: str) -> str | None:
@@ -74,6 +94,28 @@ class _SourceNotingSocket:
         return getattr(self._sock, name)
 
 
+@dataclass
+class ReadCounts:
+    """What the receive side did since the link was made: ``wakeups`` (select returned),
+    ``reads`` (datagrams or stream reads), ``frames`` cut, ``decoded`` messages, ``dropped``
+    undecoded for their id, ``bad`` frames that failed to decode (CRC, signature, length)."""
+
+    wakeups: int = 0
+    reads: int = 0
+    frames: int = 0
+    decoded: int = 0
+    dropped: int = 0
+    bad: int = 0
+
+
+@dataclass(frozen=True)
+class Received:
+    """One decoded message and the UDP address it came from (None on serial and TCP)."""
+
+    msg: Any
+    source: Any
+
+
 class MavLink:
     """One MAVLink connection with a send lock (sends come from several threads).
 
@@ -82,6 +124,8 @@ class MavLink:
         baud: serial baud rate (ignored for network URLs).
         source_system, source_component: our MAVLink ids.
         signing_key_file: the 32-byte MAVLink 2 signing key (64 hex digits); "" = unsigned.
+        wanted: the message ids to decode (the others are dropped before decoding); None:
+            decode every frame.
     """
 
     def __init__(
@@ -92,7 +136,16 @@ class MavLink:
         source_system: int = 255,
         source_component: int = 190,
         signing_key_file: str = "",
+        wanted: frozenset[int] | None = None,
     ) -> None:
+        self.wanted = wanted
+        self.tap: Callable[[bytes], None] | None = None
+        """Called with every frame's bytes as received, decoded or not (forwarding)."""
+        self.reading = ReadCounts()
+        self._cutter = FrameCutter()
+        self._gaps = SequenceGaps()
+        self._pending: deque[Received] = deque()
+        self._socket: Any = None  # a TCP link's socket (a new one after a reconnect)
         self.signing_key: bytes | None = None
         if signing_key_file:
             from dronewrapper.security.keystore import read_mavlink_key
@@ -128,6 +181,9 @@ class MavLink:
             kwargs["udp_timeout"] = UDP_CLIENT_TIMEOUT_S
         if not any(self.url.startswith(p) for p in ("udp", "tcp")):
             kwargs["baud"] = self.baud
+        self._cutter.clear()
+        self._pending.clear()
+        self._gaps = SequenceGaps()  # a new connection: each sender's count starts afresh
         conn = mavutil.mavlink_connection(self.url, **kwargs)
         if hasattr(conn, "mav"):
             conn.mav.robust_parsing = True
@@ -189,33 +245,72 @@ class MavLink:
         return self._conn is not None
 
     def recv(self, timeout: float) -> Any:
-        """The next message, or None after ``timeout`` s (raises OSError on a link error).
+        """The next message, or None after ``timeout`` s (raises OSError on a link error);
+        ``last_source`` is then the UDP address it came from. One message at a time from
+        :meth:`recv_batch`."""
+        if not self._pending:
+            self._pending.extend(self.recv_batch(timeout))
+        if not self._pending:
+            return None
+        received = self._pending.popleft()
+        self.last_source = received.source
+        return received.msg
 
-        ``last_source`` is then the UDP address it came from. When ``peer`` is set, replies of
-        a listening UDP link keep going to it even if someone else sent last (pymavlink would
-        send to every recent sender: a second autopilot would receive our commands).
+    def recv_batch(self, timeout: float) -> list[Received]:
+        """Every wanted message that arrived by one wake-up, in order; [] after ``timeout`` s
+        with nothing wanted (raises OSError on a link error).
 
-        A UDP link waits in ``select`` only when nothing is buffered and reads once per
-        wake-up (pymavlink's ``recv_match`` reads again after every message: a failed
-        non-blocking read per datagram); serial and TCP links go through ``recv_match``, which
-        also reconnects a TCP link whose socket was replaced."""
+        Waits in ``select`` once, then drains the link: every datagram waiting on a UDP socket
+        (each one's frames with its source address), or every byte waiting on a serial or TCP
+        link (a frame cut across reads is kept for the next one). When ``peer`` is set, replies
+        of a listening UDP link keep going to it even if someone else sent last (pymavlink
+        would send to every recent sender: a second autopilot would receive our commands)."""
         conn = self._conn
         if conn is None:
             time.sleep(timeout)
-            return None
-        if not isinstance(conn, mavutil.mavudp):
-            return conn.recv_match(blocking=True, timeout=timeout)
-        deadline = time.monotonic() + timeout
-        buffered = conn.mav.buf_len() > 0  # the rest of a datagram or stream read before
-        while True:
-            if not buffered and not conn.select(max(0.0, deadline - time.monotonic())):
-                return None
-            msg = conn.recv_msg()
-            if msg is not None:
-                return msg
-            if time.monotonic() >= deadline:
-                return None
-            buffered = False  # what is left is part of a frame: wait for more bytes
+            return []
+        if isinstance(conn, mavutil.mavtcp) and (port := _tcp_socket(conn)) is not self._socket:
+            self._socket = port  # a new connection: what the old one left of a frame is none
+            self._cutter.clear()
+        if not conn.select(max(0.0, timeout)):
+            return []
+        self.reading.wakeups += 1
+        datagrams = isinstance(conn, mavutil.mavudp)
+        out: list[Received] = []
+        for _ in range(MAX_READS_PER_WAKEUP):
+            data = conn.recv() if datagrams else conn.recv(STREAM_READ_BYTES)
+            if not data:
+                break
+            self.reading.reads += 1
+            conn.mav.total_bytes_received += len(data)
+            skipped = self._cutter.skipped
+            if datagrams:
+                self._decode(conn, cut_datagram(data, self._cutter), self.last_source, out)
+            else:
+                self._decode(conn, self._cutter.feed(data), None, out)
+            if self._cutter.skipped > skipped:  # bytes that were no frame: an error, as
+                conn.mav.total_receive_errors += 1  # pymavlink counts a bad prefix
+        return out
+
+    def _decode(self, conn: Any, frames: list[Frame], source: Any, out: list[Received]) -> None:
+        """Decode the wanted ``frames`` into ``out``; hand every frame to ``tap``."""
+        counts, wanted, tap, gaps = self.reading, self.wanted, self.tap, self._gaps
+        counts.frames += len(frames)
+        for frame in frames:
+            conn.mav_loss += gaps.add(frame.data)
+            if tap is not None:
+                tap(frame.data)
+            if wanted is not None and frame.msg_id not in wanted:
+                counts.dropped += 1
+                continue
+            try:
+                msg = conn.mav.decode(bytearray(frame.data))
+            except mavutil.mavlink.MAVError:
+                counts.bad += 1
+                conn.mav.total_receive_errors += 1
+                continue
+            counts.decoded += 1
+            out.append(Received(msg, source))
 
     def time_boot_ms(self) -> int:
         """Milliseconds since this link was created (our ``time_boot_ms``)."""
@@ -247,6 +342,18 @@ class MavLink:
                 return False
         self.sent += 1
         return True
+
+
+def _tcp_socket(conn: Any) -> Any:
+    """The socket a TCP link has now, which ``select`` then waits on: pymavlink reconnects the
+    link inside ``recv`` (after the peer closed it) with a new socket but keeps the old one's
+    descriptor in ``fd``."""
+    if conn.port is None:  # the last reconnect failed: try again (OSError when it fails)
+        conn.reconnect()
+    if conn.port is None:
+        raise OSError(f"{conn.address}: the TCP link is closed")
+    conn.fd = conn.port.fileno()
+    return conn.port
 
 
 class LinkCounts(NamedTuple):

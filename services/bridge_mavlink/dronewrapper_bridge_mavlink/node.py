@@ -11,11 +11,14 @@ Node's service workers, which start an operation in the core and wait until it i
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
 import threading
 import time
 from typing import Any
+
+from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.link import LinkStatus
@@ -31,7 +34,7 @@ from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs
 from dronewrapper_bridge_mavlink.link import MavLink, network_exposure
 from dronewrapper_bridge_mavlink.link_load import LinkLoad, LoadAlarm, Reconnects
 from dronewrapper_bridge_mavlink.modes import canonical_mode
-from dronewrapper_ros2_gateway.hosted import hosted_gateway
+from dronewrapper_bridge_mavlink.wire import wanted_ids
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -84,6 +87,7 @@ class Bridge(BridgeNode[BridgeCore]):
             source_system=config.source_system,
             source_component=config.source_component,
             signing_key_file=config.signing_key_file,
+            wanted=wanted_ids(BridgeCore.read_messages(), mavlink),
         )
         self.link_status = publishers[registry.LINK_STATUS]
         self.load = LinkLoad(self.core.budget.capacity)
@@ -183,6 +187,7 @@ class Bridge(BridgeNode[BridgeCore]):
             publisher = self.node.publisher(registry.MAVLINK_FROM_AUTOPILOT)
             publish = publisher.put
         forwarder = GcsForwarder(self.link.write_raw, address, publish)
+        self.link.tap = forwarder.from_autopilot  # every frame, read or not
         if self.config.gcs_over_zenoh:
             self.node.subscribe(registry.MAVLINK_TO_AUTOPILOT, forwarder.from_zenoh)
         if address is not None and not is_loopback(address[0]):
@@ -257,21 +262,18 @@ class Bridge(BridgeNode[BridgeCore]):
                     stop.wait(1.0)
                 continue
             try:
-                msg = self.link.recv(0.1)
+                batch = self.link.recv_batch(0.1)
             except (OSError, ValueError) as exc:  # serial unplugged, socket error ...
                 log.warning("link error on %s: %s; reopening", self.config.connection, exc)
                 self.link.close()
                 stop.wait(1.0)
                 continue
-            if msg is None:
-                continue
-            if self.gcs is not None and msg.get_type() != "BAD_DATA":
-                self.gcs.from_autopilot(bytes(msg.get_msgbuf()))
-            try:
-                self.handle_mavlink(msg, self.link.last_source)
-            except Exception:
-                self.node.callback_errors["mavlink"] += 1
-                log.exception("error handling %s", msg.get_type())
+            for received in batch:
+                try:
+                    self.handle_mavlink(received.msg, received.source)
+                except Exception:
+                    self.node.callback_errors["mavlink"] += 1
+                    log.exception("error handling %s", received.msg.get_type())
 
 
 def link_kind(url: str) -> str:
@@ -297,7 +299,7 @@ def run(node: Node, config: Config) -> int:
     exposure = network_exposure(config.connection)
     if exposure is not None:
         log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
-    with hosted_gateway(node, config.ros2):  # ROS 2 from this process, when configured
+    with _ros2_gateway(node, config):  # ROS 2 from this process, when configured
         threads = bridge.start()
         node.announce()
         log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
@@ -308,6 +310,16 @@ def run(node: Node, config: Config) -> int:
     if bridge.gcs is not None:
         bridge.gcs.close()
     return 0
+
+
+def _ros2_gateway(node: Node, config: Config) -> Any:
+    """The hosted ROS 2 gateway when ``config`` has a ``ros2`` section; its codec is imported
+    only then (a bridge without one never loads it)."""
+    if config.ros2 is None:
+        return contextlib.nullcontext()
+    from dronewrapper_ros2_gateway.hosted import hosted_gateway
+
+    return hosted_gateway(node, config.ros2)
 
 
 __all__ = ["Bridge", "canonical_mode", "run"]
