@@ -33,6 +33,10 @@ Operation = Callable[[Any, Any], Steps]
 COMMANDS: dict[Service[Any, Any], str] = {
     registry.FLIGHT_TAKEOFF: "takeoff",
     registry.FLIGHT_LAND: "land",
+    registry.FLIGHT_GOTO: "goto",
+    registry.FLIGHT_RETURN: "return",
+    registry.FLIGHT_MISSION: "mission",
+    registry.MISSION_CONTROL: "mission",
     registry.FLIGHT_CANCEL: "cancel",
     registry.ARMING: "arming",
     registry.TAKEOFF: "takeoff",
@@ -106,6 +110,24 @@ class BridgeNode(Generic[C]):
             return self.driver.call(steps(self.core, request), current_commander(), what)
 
         return handle
+
+    # ---- the commanders' processes
+
+    def watch_loop(self, watching: Callable[[], str], period_s: float = 1.0) -> None:
+        """While ``watching()`` names a liveliness key (the core watches an unattended action's
+        commander, :mod:`~dronewrapper_bridge_base.unattended`), look at the keys present in
+        the namespace every ``period_s`` s and feed them to the core's ``on_alive``."""
+        while self.node.sleep(period_s):
+            key = watching()
+            if not key:
+                continue
+            try:
+                keys = self.node.alive_services(key.split("/", 1)[0], timeout=0.5)
+            except Exception:
+                self.node.callback_errors["watch"] += 1
+                self.log.exception("liveliness query failed")
+                continue
+            self.driver.feed(self.core.on_alive, keys)
 
     # ---- the tick
 

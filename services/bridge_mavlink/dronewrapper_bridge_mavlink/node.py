@@ -21,7 +21,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Node
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_mavlink import flight, missions, parameters
+from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
@@ -49,6 +49,10 @@ PUBLISHED = (
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,
+    registry.FLIGHT_GOTO: actions.goto_point,
+    registry.FLIGHT_RETURN: actions.return_home,
+    registry.FLIGHT_MISSION: actions.mission_action,
+    registry.MISSION_CONTROL: actions.control,
     registry.ARMING: ops.arming,
     registry.TAKEOFF: ops.takeoff,
     registry.LAND: ops.land,
@@ -143,6 +147,12 @@ class Bridge(BridgeNode[BridgeCore]):
                 target=self.tick_loop,
                 args=(self.config.stream_rate_hz, "stream"),
                 name="stream",
+                daemon=True,
+            ),
+            threading.Thread(
+                target=self.watch_loop,
+                args=(lambda: self.core.unattended.watching,),
+                name="watch",
                 daemon=True,
             ),
         ]
