@@ -18,7 +18,7 @@ from sim_pair import EPOCH, SimPair
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper_bridge_mavlink import flight, missions, parameters
+from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
 
 STEP_S = 0.02
@@ -37,6 +37,10 @@ class BusBridge:
         services = [
             (registry.FLIGHT_TAKEOFF, flight.takeoff_to),
             (registry.FLIGHT_LAND, flight.land_here),
+            (registry.FLIGHT_GOTO, actions.goto_point),
+            (registry.FLIGHT_RETURN, actions.return_home),
+            (registry.FLIGHT_MISSION, actions.mission_action),
+            (registry.MISSION_CONTROL, actions.control),
             (registry.ARMING, ops.arming),
             (registry.TAKEOFF, ops.takeoff),
             (registry.LAND, ops.land),
@@ -48,6 +52,7 @@ class BusBridge:
         for service, steps in services:
             self.node.serve(service, lambda request, steps=steps: self._call(steps, request))
         self.node.announce()
+        pair.alive = lambda: self.node.alive_services("*")
 
     def _on_setpoint(self, target: Any) -> None:
         self.pair.setpoint = target

@@ -38,6 +38,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import GotoRequest
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
+    HomePosition,
     WaypointList,
     WaypointPush,
     WaypointReached,
@@ -119,6 +120,19 @@ class MissionsMixin:
             env.check_takeoff(envelope, h)
         except EnvelopeError as exc:
             raise CommandRefused("takeoff", str(exc)) from None
+
+    def home(self: Any) -> HomePosition:
+        """Home as the bridge last published it: ``latitude``, ``longitude`` (degrees; NaN
+        without GPS), ``altitude`` (m AMSL) and ``x``, ``y``, ``z`` in the local frame (the one
+        of get_position). It is the origin of goto_local, goto's altitude and local missions.
+
+        Raises:
+            NoData: no home published yet.
+        """
+        home = self._home.value
+        if home is None:
+            raise NoData(f"no home position yet on {registry.HOME_POSITION.key(self.ns)}")
+        return home
 
     def _watch_key(self: Any) -> str:
         """The liveliness key of this process (declared now if not yet): the bridge ends an

@@ -27,7 +27,7 @@ from dronewrapper.msgs.mission import (
     WaypointPush,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_mavlink import missions
+from dronewrapper_bridge_mavlink import actions, missions
 
 HOME_LAT, HOME_LON = 47.397742, 8.545594
 
@@ -228,7 +228,7 @@ def test_mission_clear_and_progress():
 
 def test_mission_start_without_a_mission_is_refused():
     rig = flying()
-    op = rig.call(missions.control, MissionControl(action="start"))
+    op = rig.call(actions.control, MissionControl(action="start"))
     with pytest.raises(ServiceError, match="no mission"):
         op.result()
 

@@ -206,6 +206,8 @@ def control(core: TelloCore, request: MissionControl) -> Steps:
         raise ServiceError("the Tello is not flying: take off first", "refused")
     flying = state.running is not None and not state.running.done
     if request.action == "pause":
+        if not flying:
+            raise ServiceError("pause refused: no mission is being flown", "refused")
         state.paused = True
         yield from ()
         return MissionResult(success=True, message="pausing after the current move")
