@@ -107,15 +107,22 @@ class MissionsMixin:
         )
         return reply.envelope
 
-    def _check_takeoff(self: Any, h: float) -> None:
-        """CommandRefused when a take-off to ``h`` m climbs above the bridge's envelope (the
-        bridge refuses it too; this names the limit before anything is streamed)."""
+    def _held_envelope(self: Any) -> Envelope | None:
+        """The bridge's envelope as last published, else asked for (None: no envelope service)."""
         envelope = self._envelope.value
         if envelope is None:
             try:
                 envelope = self.envelope(timeout=min(2.0, self.service_timeout))
             except DroneError:
-                return  # a bridge without an envelope service: it judges alone
+                return None
+        return envelope
+
+    def _check_takeoff(self: Any, h: float) -> None:
+        """CommandRefused when a take-off to ``h`` m climbs above the bridge's envelope (the
+        bridge refuses it too; this names the limit before anything is streamed)."""
+        envelope = self._held_envelope()
+        if envelope is None:
+            return  # a bridge without an envelope service: it judges alone
         try:
             env.check_takeoff(envelope, h)
         except EnvelopeError as exc:
@@ -198,7 +205,7 @@ class MissionsMixin:
             Cancelled: ``cancel`` was set (the drone holds where it is).
         """
         x, y, z = (setpoints.finite(name, v) for name, v in (("x", x), ("y", y), ("z", z)))
-        envelope = self._envelope.value
+        envelope = self._held_envelope()
         if envelope is not None:
             try:
                 env.check_position(envelope, x, y, z)

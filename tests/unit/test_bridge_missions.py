@@ -121,7 +121,8 @@ def test_a_breach_starts_the_envelopes_action_once(action, command):
     rig.run(0.2)
     assert not rig.commands(command)
     rig.pose(down=-12.0)  # blown above by the wind
-    rig.run(0.1)
+    rig.run(1.2 if action == "return" else 0.1)  # a return first waits (1 s at most) for
+    # the autopilot's return altitude
     assert len(rig.commands(command)) == 1
     assert any("envelope breach: altitude 12 m above the envelope's 10 m" in t for t in texts(rig))
     rig.ack(command, mavlink.MAV_RESULT_ACCEPTED)

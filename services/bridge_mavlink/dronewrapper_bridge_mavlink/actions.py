@@ -68,6 +68,7 @@ log = logging.getLogger("bridge_mavlink")
 HOME_WAIT_S = 5.0
 """How long a go-to waits for home to be known (s): HOME_POSITION comes at 0.5-1 Hz."""
 MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", "ardupilotmega": "AUTO"}
+SETTLE_WAIT_S = 2.0  # s a return waits for the autopilot's return altitude to be kept
 MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
 
 
@@ -146,7 +147,8 @@ def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
 def start_return(core: BridgeCore) -> Generator[float, None, tuple[int, str]]:
     """Ask for the autopilot's return, its altitude first kept under the ceiling:
     (MAV_RESULT, explanation)."""
-    problem = yield from autopilot_limits.sync(core)
+    kept = yield from autopilot_limits.settled(core, SETTLE_WAIT_S)
+    problem = core.missions.limits.problem if kept else "not confirmed in time"
     autopilot = core.autopilot or AUTOPILOT_PX4
     mode = RETURN_MODE[autopilot]
     core.failsafe.release_hold()

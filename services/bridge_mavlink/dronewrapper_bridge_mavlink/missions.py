@@ -65,6 +65,7 @@ log = logging.getLogger("bridge_mavlink")
 
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
+SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
 FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's breach
 TRANSFER_TIMEOUT_S = 1.5
 TRANSFER_ATTEMPTS = 5
@@ -201,10 +202,10 @@ def breach_state(core: BridgeCore) -> str:
 
 def breach_action(core: BridgeCore, action: str) -> Steps:
     """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
-    requests; a return's altitude first kept under the ceiling), or ``hold`` (the autopilot's
-    hold mode)."""
-    if action == "return":
-        yield from autopilot_limits.sync(core)
+    requests; a return's altitude first kept under the ceiling, waiting up to
+    :data:`SETTLE_WAIT_S` when it was not yet), or ``hold`` (the autopilot's hold mode)."""
+    if action == "return" and not (yield from autopilot_limits.settled(core, SETTLE_WAIT_S)):
+        core.bridge_text("breach return: the autopilot's return altitude is not confirmed")
     if action in ("land", "return"):
         return (yield from ops.failsafe_action(core, action))
     autopilot = core.autopilot or AUTOPILOT_PX4
