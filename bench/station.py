@@ -33,7 +33,7 @@ DRONES = ("drone1", "drone2")
 
 
 def _spawn(argv: list[str], log: Path) -> subprocess.Popen:
-    from dronewrapper_compose.launcher import die_with_parent
+    from dronewrapper.runtime.children import die_with_parent
 
     out = open(log, "wb")  # noqa: SIM115 - lives as long as the process
     return subprocess.Popen(

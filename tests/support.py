@@ -16,8 +16,8 @@ import zenoh
 
 from dronewrapper.router import router_options
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.children import die_with_parent
 from dronewrapper.runtime.options import zenoh_config
-from dronewrapper_compose.launcher import die_with_parent
 from dronewrapper_compose.ports import free_port
 
 T = TypeVar("T")

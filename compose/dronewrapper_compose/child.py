@@ -1,31 +1,18 @@
 """One running process of a graph: started in its own session (the launcher, not the
 terminal, decides the stop order), its output forwarded line by line with its name as prefix,
-stopped with SIGINT then SIGKILL; and :func:`die_with_parent`, so nothing outlives a killed
-launcher."""
+stopped with SIGINT then SIGKILL, and stopped by Linux if the launcher is killed
+(:func:`dronewrapper.runtime.children.die_with_parent`)."""
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
 import os
 import signal
 import subprocess
 import threading
 from typing import TextIO
 
+from dronewrapper.runtime.children import die_with_parent
 from dronewrapper_compose.graph import REPO, ProcessSpec
-
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
-    """Ask Linux to send SIGTERM to the child if its parent dies, so nothing is orphaned.
-
-    For ``subprocess.Popen(preexec_fn=...)``, called from the thread that lives as long as the
-    children (Linux signals them when the forking *thread* ends).
-    """
-    with contextlib.suppress(OSError):
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 class Child:

@@ -36,7 +36,7 @@ from dronewrapper.runtime.service import setup_logging
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.security.keystore import default_keys_dir
 from dronewrapper_compose import fleet
-from dronewrapper_compose.child import Child, die_with_parent  # noqa: F401 (imported from here)
+from dronewrapper_compose.child import Child
 from dronewrapper_compose.graph import (
     REPO,
     Graph,

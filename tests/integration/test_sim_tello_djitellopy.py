@@ -28,7 +28,7 @@ FLIGHT = r"""
 import json, signal, subprocess, sys, time
 from pathlib import Path
 
-from dronewrapper_compose.launcher import die_with_parent
+from dronewrapper.runtime.children import die_with_parent
 
 # an empty network namespace of our own (unshare -n): djitellopy's 8889/8890/11111 on every
 # interface cannot collide with other tests on this machine

@@ -35,8 +35,8 @@ from collections.abc import Iterator
 
 import pytest
 
+from dronewrapper.runtime.children import die_with_parent
 from dronewrapper.security.keystore import KeyStore
-from dronewrapper_compose.launcher import die_with_parent
 from support import REPO, Process, wait_for
 
 pytestmark = [

@@ -11,7 +11,7 @@ import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
-from dronewrapper_compose.launcher import die_with_parent
+from dronewrapper.runtime.children import die_with_parent
 
 ENV = "DRONEWRAPPER_ARDUPILOT_SITL"  # names the arducopter binary; unset: tier deselected
 BASE_TCP_PORT = 5760  # SERIAL0 of instance N listens on 5760 + 10 N

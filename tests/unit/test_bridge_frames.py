@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from dronewrapper_bridge_mavlink import frames
+from dronewrapper_bridge_base import frames
 
 
 def close(a, b, tol=1e-9):
@@ -81,7 +81,3 @@ def test_body_forward_at_yaw_90_goes_north():
     # body "left" at yaw 0 (facing east) is north
     east, north = frames.heading_flu_to_enu(0.0, 1.0, 0.0)
     assert abs(east) < 1e-12 and math.isclose(north, 1.0)
-
-
-def test_mavlink_quaternion_order():
-    assert frames.mavlink_quat(1.0, 0.1, 0.2, 0.3) == (0.1, 0.2, 0.3, 1.0)

@@ -72,7 +72,7 @@ def test_attitude_quaternion_matches_attitude():
     a, b = Telemetry(), Telemetry()
     a.on_attitude(wire("attitude", 0, 0.1, -0.2, 0.7, 0, 0, 0))
     # q for rpy (0.1, -0.2, 0.7) in MAVLink (w, x, y, z) order
-    from dronewrapper_bridge_mavlink.frames import quat_from_rpy
+    from dronewrapper_bridge_base.frames import quat_from_rpy
 
     x, y, z, w = quat_from_rpy(0.1, -0.2, 0.7)
     b.on_attitude_quaternion(wire("attitude_quaternion", 0, w, x, y, z, 0, 0, 0))

@@ -197,6 +197,21 @@ def service_messages(service: str) -> dict[str, Message]:
     return {m.name: m for m in (request, response, event)}
 
 
+def define(messages: dict[str, str]) -> None:
+    """Add message types (full name -> ``.msg`` text) to :data:`MESSAGES`, e.g. a firmware's
+    own package. Defining a name again with the same text is allowed.
+
+    Raises:
+        ValueError: a name is already defined with other text, or a text does not parse.
+    """
+    for name, text in messages.items():
+        known = MESSAGES.get(name)
+        if known is not None and known != text:
+            raise ValueError(f"{name} is already defined with other fields")
+        parse(name, text)
+    MESSAGES.update(messages)
+
+
 @cache
 def message(name: str) -> Message:
     """A message type by full name (``sensor_msgs/msg/Image``), or a service's part

@@ -34,10 +34,10 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions
-from dronewrapper_bridge_mavlink.frames import yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,

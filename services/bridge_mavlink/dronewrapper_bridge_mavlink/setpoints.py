@@ -36,7 +36,7 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
 )
 from dronewrapper.setpoint_limits import Kind, SetpointError
-from dronewrapper_bridge_mavlink.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
+from dronewrapper_bridge_base.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
 

@@ -45,11 +45,10 @@ from dronewrapper.msgs.sensor import (
     NavSatStatus,
 )
 from dronewrapper.msgs.std import Header
-from dronewrapper_bridge_mavlink.frames import (
+from dronewrapper_bridge_base.frames import (
     Quat,
     attitude_ned_frd_to_enu_flu,
     frd_to_flu,
-    mavlink_quat,
     ned_to_enu,
     quat_from_rpy,
     rotate,
@@ -168,7 +167,7 @@ class Telemetry:
 
     def on_attitude_quaternion(self, msg: Any) -> None:
         """ATTITUDE_QUATERNION (q1..q4 = w, x, y, z; NED/FRD)."""
-        q_ned = mavlink_quat(msg.q1, msg.q2, msg.q3, msg.q4)
+        q_ned = (msg.q2, msg.q3, msg.q4, msg.q1)  # MAVLink's (w, x, y, z) as (x, y, z, w)
         self.attitude = attitude_ned_frd_to_enu_flu(q_ned)
         self.rates_flu = frd_to_flu((msg.rollspeed, msg.pitchspeed, msg.yawspeed))
 

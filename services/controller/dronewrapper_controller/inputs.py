@@ -1,9 +1,9 @@
 """Which detections messages the controller may steer on (pure).
 
 A Detections message is a network input: a buggy or hostile publisher can send NaN or infinite
-stamps, sizes or boxes. The PIDs refuse non-finite input by raising, so one such message used to
-kill the controller (and the flight lost its commander). Every message is checked here first; a
-bad one is counted and dropped and the previous good one stays the newest.
+stamps, sizes or boxes. The PIDs refuse non-finite input by raising, so one such message would
+kill the controller (and the flight would lose its commander). Every message is checked here
+first; a bad one is counted and dropped and the previous good one stays the newest.
 """
 
 from __future__ import annotations

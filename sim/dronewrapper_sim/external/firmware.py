@@ -20,6 +20,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from dronewrapper.runtime.children import die_with_parent
+
 PX4_UDP_PORTS = (14540, 14580, 18570, 19410, 19450)  # + N: every UDP port PX4 instance N uses
 AP_TCP_BASE = 5760  # SERIAL0 of ArduCopter instance N: 5760 + 10 N; SERIAL1 + 2, SERIAL2 + 3
 
@@ -96,12 +98,6 @@ def ardupilot_version(root: Path) -> str:
     return found.group(1) if found else "ArduCopter ?"
 
 
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
-    from dronewrapper_compose.launcher import die_with_parent
-
-    die_with_parent()
-
-
 def _stop(proc: subprocess.Popen) -> None:
     proc.send_signal(signal.SIGTERM)
     try:
@@ -136,7 +132,7 @@ def px4_sih(root: Path, workdir: Path) -> Iterator[Firmware]:
             stdin=subprocess.DEVNULL,
             stdout=log,
             stderr=subprocess.STDOUT,
-            preexec_fn=_die_with_parent,
+            preexec_fn=die_with_parent,
         )
         try:
             variables = {"onboard_port": str(14540 + instance), "truth_port": str(19410 + instance)}
@@ -164,7 +160,7 @@ def arducopter(root: Path, workdir: Path) -> Iterator[Firmware]:
             stdin=subprocess.DEVNULL,
             stdout=log,
             stderr=subprocess.STDOUT,
-            preexec_fn=_die_with_parent,
+            preexec_fn=die_with_parent,
         )
         try:
             port = AP_TCP_BASE + 10 * instance

@@ -1,4 +1,5 @@
-"""Frame conversions between MAVLink (NED / FRD) and DroneWrapper (ENU / FLU), as MAVROS does.
+"""Frame conversions between an autopilot's NED / FRD and DroneWrapper's ENU / FLU, as MAVROS does
+(MAVLink and PX4's uORB use the same frames).
 
 Local frames: NED (x north, y east, z down) <-> ENU (x east, y north, z up).
 Body frames: FRD (forward, right, down) <-> FLU (forward, left, up).
@@ -72,11 +73,6 @@ def attitude_ned_frd_to_enu_flu(q_ned_frd: Quat) -> Quat:
     return q if q[3] >= 0.0 else (-q[0], -q[1], -q[2], -q[3])
 
 
-def mavlink_quat(q1: float, q2: float, q3: float, q4: float) -> Quat:
-    """MAVLink's (w, x, y, z) quaternion fields (ATTITUDE_QUATERNION q1..q4) as (x, y, z, w)."""
-    return (q2, q3, q4, q1)
-
-
 def heading_flu_to_enu(vx_forward: float, vy_left: float, yaw_enu: float) -> tuple[float, float]:
     """A horizontal body (FLU, heading frame) velocity as local ENU (east, north) at ``yaw_enu``.
 
@@ -97,7 +93,6 @@ __all__ = [
     "flu_to_frd",
     "frd_to_flu",
     "heading_flu_to_enu",
-    "mavlink_quat",
     "ned_to_enu",
     "quat_from_rpy",
     "quat_multiply",
