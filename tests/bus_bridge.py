@@ -52,7 +52,12 @@ class BusBridge:
         for service, steps in services:
             self.node.serve(service, lambda request, steps=steps: self._call(steps, request))
         self.node.announce()
-        pair.alive = lambda: self.node.alive_services("*")
+        self._beats: dict[str, float] = {}  # key -> bus time of its last beat
+        self.node.subscribe(registry.COMMANDER_BEAT, self._on_beat)
+        pair.alive = lambda: {k for k, t in self._beats.items() if self.pair.t + EPOCH - t < 1.5}
+
+    def _on_beat(self, beat: Any) -> None:
+        self._beats[beat.key] = self.bus.clock()
 
     def _on_setpoint(self, target: Any) -> None:
         self.pair.setpoint = target

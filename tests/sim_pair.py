@@ -82,7 +82,7 @@ class SimPair:
         self.truth: list[tuple[float, tuple[float, float, float], str]] = []  # t, pose, mode
         self.drop_to_autopilot: Callable[[Any], bool] = lambda msg: False
         self.drop_to_bridge: Callable[[Any], bool] = lambda msg: False
-        self.alive: Callable[[], set[str]] = set  # the liveliness keys present (ALIVE_PERIOD_S)
+        self.alive: Callable[[], set[str]] = set  # the commanders beating (each ALIVE_PERIOD_S)
         self._next_alive = 0.0
         self.streaming: Callable[[], bool] = lambda: True  # whether a commander streams
         self._steps = 0

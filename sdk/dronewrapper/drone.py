@@ -266,7 +266,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             return
         self._closed = True
         _open_wrappers.discard(self)
-        for part in ("_streamer", "_matching", "inputs", "_setpoints"):
+        for part in ("_beat", "_beat_publisher", "_streamer", "_matching", "inputs", "_setpoints"):
             entity = getattr(self, part, None)
             if entity is not None:
                 try:

@@ -32,6 +32,7 @@ import msgspec
 
 from dronewrapper import envelope as env
 from dronewrapper import setpoints
+from dronewrapper.beat import Beat
 from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.errors import CommandRefused, DroneError, InvalidArgument, NoData
 from dronewrapper.msgs import registry
@@ -74,6 +75,7 @@ class MissionsMixin:
         self._envelope = self.inputs.latest(registry.ENVELOPE)
         self._waypoints: Latest[WaypointList] = self.inputs.latest(registry.MISSION_WAYPOINTS)
         self._reached: Latest[WaypointReached] = self.inputs.latest(registry.MISSION_REACHED)
+        self._beat: Beat | None = None  # started by the first go-to, return or mission
 
     # ------------------------------------------------------------------ envelope
 
@@ -142,14 +144,18 @@ class MissionsMixin:
         return home
 
     def _watch_key(self: Any) -> str:
-        """The liveliness key of this process (declared now if not yet): the bridge ends an
-        unattended go-to, return or mission as for a lost commander once it disappears."""
-        try:
-            self.node.announce()
-        except Exception as exc:  # a router that refuses tokens: the action is not watched
-            log.warning("no liveliness token (%s): the bridge cannot watch this program", exc)
-            return ""
-        return registry.ALIVE.key(self.node.ns, service=self.node.name)
+        """The name of this process for the bridge (``{ns}/alive/{node}``), its beat started
+        (:mod:`dronewrapper.beat`): once the beats stop, the bridge ends an unattended go-to,
+        return or mission as for a lost commander."""
+        if self._beat is None:
+            key = registry.ALIVE.key(self.node.ns, service=self.node.name)
+            publisher = self.node.publisher(
+                registry.COMMANDER_BEAT, key=registry.COMMANDER_BEAT.key(self.ns)
+            )
+            self._beat = Beat(publisher.put, key, self.clock)
+            self._beat_publisher = publisher
+        self._beat.start()
+        return self._beat.key
 
     # ------------------------------------------------------------------ go-to
 

@@ -67,7 +67,9 @@ def test_ctrl_c_during_a_mission_ends_on_the_ground_at_home(router, spawn):
                 break
             time.sleep(0.1)
         took = time.monotonic() - stopped
+        exited = not app.alive()
         app.stop(10)
+        assert exited, f"the app did not end on Ctrl-C:\n{app.output()[-3000:]}"
         assert not observer.get_state().armed, f"still armed {took:.0f} s after Ctrl-C"
     for point in POINTS:
         approach = min(math.dist(p, point) for p in track)

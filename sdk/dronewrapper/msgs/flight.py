@@ -58,9 +58,10 @@ def _finite(name: str, value: float) -> None:
 class GotoRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """Fly to a point and hold there; done within ``tolerance`` m of it, within ``timeout``
     s. The point: ``x``, ``y`` (ENU m from home), or ``latitude``, ``longitude`` (degrees;
-    then ``x``/``y`` stay NaN); ``z`` is m above home either way. ``watch``: the liveliness
-    key of the commander's process (``{ns}/alive/{name}``, "" none): if it disappears, the
-    bridge ends the action as for a lost commander (docs/design.md)."""
+    then ``x``/``y`` stay NaN); ``z`` is m above home either way. ``watch``: the name of the
+    commander's process (``{ns}/alive/{name}``, "" none), whose :class:`CommanderBeat` the
+    bridge then expects: if the beats stop, the bridge ends the action as for a lost
+    commander (docs/design.md)."""
 
     z: float
     x: float = math.nan
@@ -120,6 +121,14 @@ class MissionRequest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, f
                 f"action must be one of {', '.join(MISSION_ACTIONS)}, got {self.action!r}"
             )
         _watch_key(self.watch)
+
+
+class CommanderBeat(msgspec.Struct, kw_only=True, frozen=True):
+    """A commander's process is alive: sent about once a second while a go-to, return or
+    mission it started may run unattended. ``key`` is the ``watch`` its requests name."""
+
+    key: str
+    stamp: float = 0.0  # Unix s, the sender's clock
 
 
 def _watch_key(key: str) -> None:

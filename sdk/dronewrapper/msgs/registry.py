@@ -21,6 +21,7 @@ from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.flight import (
     CancelRequest,
+    CommanderBeat,
     FlightResult,
     GotoRequest,
     LandRequest,
@@ -496,6 +497,13 @@ HOME_POSITION = Topic(
     rate_hz=0.5,
     publishers=("bridge",),
     doc="home, on change too",
+)
+COMMANDER_BEAT = Topic(
+    "{ns}/dronewrapper/commander/beat",
+    type=CommanderBeat,
+    rate_hz=1.0,
+    publishers=("sdk",),
+    doc="a commander's process is alive (while its go-to, return or mission may run unattended)",
 )
 ENVELOPE = Topic(
     "{ns}/dronewrapper/envelope",

@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping
 from typing import Any, Generic, TypeVar
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import CommanderBeat
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
@@ -98,6 +99,7 @@ class BridgeNode(Generic[C]):
         A command service's request (:data:`COMMANDS`, and ``guarded``: service -> the name a
         refusal gives it) is refused unless from the lease holder."""
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
+        self.node.subscribe(registry.COMMANDER_BEAT, self.on_beat)
         commands = {**COMMANDS, **(guarded or {})}
         services = {registry.FLIGHT_CANCEL: cancel_steps, **services}
         for service, steps in services.items():
@@ -113,21 +115,11 @@ class BridgeNode(Generic[C]):
 
     # ---- the commanders' processes
 
-    def watch_loop(self, watching: Callable[[], str], period_s: float = 1.0) -> None:
-        """While ``watching()`` names a liveliness key (the core watches an unattended action's
-        commander, :mod:`~dronewrapper_bridge_base.unattended`), look at the keys present in
-        the namespace every ``period_s`` s and feed them to the core's ``on_alive``."""
-        while self.node.sleep(period_s):
-            key = watching()
-            if not key:
-                continue
-            try:
-                keys = self.node.alive_services(key.split("/", 1)[0], timeout=0.5)
-            except Exception:
-                self.node.callback_errors["watch"] += 1
-                self.log.exception("liveliness query failed")
-                continue
-            self.driver.feed(self.core.on_alive, keys)
+    def on_beat(self, beat: CommanderBeat) -> None:
+        """A commander's process is alive (:mod:`~dronewrapper_bridge_base.unattended`)."""
+        on_alive = getattr(self.core, "on_alive", None)
+        if on_alive is not None:
+            self.driver.feed(on_alive, {beat.key})
 
     # ---- the tick
 

@@ -2,11 +2,11 @@
 
 A mission, a go-to or a return runs on the aircraft while its commander's program may do
 anything else, or die. Such a program streams no setpoints, so the setpoint watchdog cannot
-see it go; instead the request names the liveliness key of the commander's process
-(``{ns}/alive/{name}``, present while its Zenoh session lives) and the bridge's node looks at
-the keys present about once a second (:meth:`Unattended.on_alive`).
+see it go; instead the request names the commander's process (``{ns}/alive/{name}``) and that
+process beats about once a second (``{ns}/dronewrapper/commander/beat``, the SDK's
+``dronewrapper.beat``); the bridge hands each beat to :meth:`Unattended.on_alive`.
 
-The rule: once the watched key has been seen and then stays absent for ``lost_timeout`` s,
+The rule: once the watched key has been seen and then stays silent for ``lost_timeout`` s,
 the commander is lost; when the action has also ended (the go-to reached its point, the
 mission's last item is done, or the aircraft holds), the bridge takes ``action`` once:
 ``return`` (fly home and land) or ``land`` (here). A return in progress is left to finish.
@@ -73,7 +73,7 @@ class Unattended:
         self.what = self.key = ""
 
     def on_alive(self, keys: set[str], now: float) -> None:
-        """The liveliness keys present now."""
+        """The keys of the commanders that beat now."""
         if self.key and self.key in keys:
             self.seen, self._last_seen = True, now
 

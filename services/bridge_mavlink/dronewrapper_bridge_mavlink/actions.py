@@ -17,8 +17,8 @@ autopilot's modes nor reads its status texts:
   mission is being flown; else the autopilot's mission or hold mode.
 
 A go-to, return or mission started with a ``watch`` key is watched (the core's
-:class:`~dronewrapper_bridge_base.unattended.Unattended`): if that commander's process
-disappears, the bridge ends the action as for a lost commander. Positions ENU m from home
+:class:`~dronewrapper_bridge_base.unattended.Unattended`): if that commander's process stops
+beating, the bridge ends the action as for a lost commander. Positions ENU m from home
 (the home frame, see :mod:`~dronewrapper_bridge_mavlink.missions`), time the core's.
 """
 
@@ -121,7 +121,7 @@ def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
         if not reply.mode_sent:
             return failed(REFUSED, reply.message, f"set_mode {mode}", reply.result)
     core.failsafe.hold_at(hold_target(target, core.telemetry.yaw_enu))
-    core.unattended.start("goto", request.watch, core.now)
+    start_watch(core, "goto", request.watch)
     deadline = core.now + timeout
     log.info("goto: %.1f, %.1f, %.1f m from home (local %s)", east, north, request.z, target)
     while True:
@@ -174,7 +174,7 @@ def return_home(core: BridgeCore, request: ReturnRequest) -> Steps:
     result, message = yield from start_return(core)
     if result != ops.ACCEPTED:
         return failed(REFUSED, message, "return", result)
-    core.unattended.start("return", request.watch, core.now)
+    start_watch(core, "return", request.watch)
     deadline = core.now + timeout
     while not landed(core):
         hb = core.heartbeat_state
@@ -216,9 +216,15 @@ def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:
         retry = core.now + 0.5  # PX4 refuses the mission mode until it has checked the upload
         while core.now < retry:
             yield retry
-    core.unattended.start("mission", request.watch, core.now)
+    start_watch(core, "mission", request.watch)
     seq, total = core.missions.current_seq, len(core.missions.waypoints)
     return FlightResult(success=True, message=f"flying the mission from item {seq} of {total}")
+
+
+def start_watch(core: BridgeCore, what: str, key: str) -> None:
+    """The ``what`` started now is watched for its commander's process (``key``)."""
+    core.unattended.start(what, key, core.now)
+    log.info("%s: its commander's process %s", what, f"is {key}" if key else "is not known")
 
 
 def mission_refusal(core: BridgeCore, action: str) -> str:

@@ -280,7 +280,7 @@ class BridgeCore(PureCore):
         self._act(self.failsafe.tick(self.now, self.pose()), send=False)
 
     def on_alive(self, keys: set[str], now: float, stamp: float) -> None:
-        """The liveliness keys present now (the node looks while :attr:`unattended` watches)."""
+        """A commander's beat (its process's key) arrived now."""
         self._at(now, stamp)
         watch.on_alive(self, keys)
 

@@ -149,12 +149,6 @@ class Bridge(BridgeNode[BridgeCore]):
                 name="stream",
                 daemon=True,
             ),
-            threading.Thread(
-                target=self.watch_loop,
-                args=(lambda: self.core.unattended.watching,),
-                name="watch",
-                daemon=True,
-            ),
         ]
         self.gcs = self._make_gcs_forwarder()
         if self.gcs is not None:

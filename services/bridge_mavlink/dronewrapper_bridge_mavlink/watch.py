@@ -2,12 +2,13 @@
 commander's process disappeared ends as for a lost commander once the action has ended
 (:mod:`~dronewrapper_bridge_base.unattended`).
 
-The core calls :func:`on_alive` with the liveliness keys its node saw, :func:`tick` each
-stream tick and :func:`on_vehicle` after each change of mode or arming.
+The core calls :func:`on_alive` with the key of each commander's beat its node receives,
+:func:`tick` each stream tick and :func:`on_vehicle` after each change of mode or arming.
 """
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING
 
 from dronewrapper_bridge_mavlink import operations as ops
@@ -16,9 +17,15 @@ from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, HOLD_MODE
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core import BridgeCore
 
+log = logging.getLogger("bridge_mavlink")
+
 
 def on_alive(core: BridgeCore, keys: set[str]) -> None:
-    core.unattended.on_alive(keys, core.now)
+    unattended = core.unattended
+    seen = unattended.seen
+    unattended.on_alive(keys, core.now)
+    if unattended.seen and not seen:
+        log.info("watching %s, the commander of the %s", unattended.key, unattended.what)
 
 
 def on_vehicle(core: BridgeCore) -> None:
