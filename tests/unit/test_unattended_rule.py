@@ -1,6 +1,6 @@
 """The unattended-action rule (bridge_base/unattended.py): a go-to or mission whose commander's
-process is gone ends as for a lost commander once the action has ended; a commander never seen
-is not judged; a return is left to finish; the action is taken once."""
+process stopped beating ends as for a lost commander once the action has ended (the request is
+the first beat); a return is left to finish; the action is taken once."""
 
 from __future__ import annotations
 
@@ -25,15 +25,15 @@ def test_a_lost_commander_is_acted_on_once_the_action_has_ended():
     assert rule.watching == ""
 
 
-def test_a_live_commander_a_never_seen_key_and_a_return_are_not_acted_on():
+def test_a_live_commander_and_a_return_are_not_acted_on():
     rule = Unattended(UnattendedConfig(action="land"))
     rule.start("goto", KEY, 0.0)
     for t in range(1, 20):
         rule.on_alive({KEY}, float(t))
     rule.ended(19.0)
     assert rule.tick(20.0, holding=True) == ""
-    rule.start("goto", "drone/alive/other", 0.0)  # a client without a token: not judged
-    assert rule.tick(60.0, holding=True) == ""
+    rule.start("goto", "drone/alive/other", 0.0)  # the request, then never a beat: lost
+    assert rule.tick(6.0, holding=True) == "land"
     rule.start("return", KEY, 0.0)
     rule.on_alive({KEY}, 1.0)
     assert rule.tick(60.0, holding=True) == ""

@@ -6,13 +6,12 @@ see it go; instead the request names the commander's process (``{ns}/alive/{name
 process beats about once a second (``{ns}/dronewrapper/commander/beat``, the SDK's
 ``dronewrapper.beat``); the bridge hands each beat to :meth:`Unattended.on_alive`.
 
-The rule: once the watched key has been seen and then stays silent for ``lost_timeout`` s,
-the commander is lost; when the action has also ended (the go-to reached its point, the
+The rule: the request counts as the first beat; once the watched key stays silent for
+``lost_timeout`` s, the commander is lost; when the action has also ended (the go-to reached its point, the
 mission's last item is done, or the aircraft holds), the bridge takes ``action`` once:
 ``return`` (fly home and land) or ``land`` (here). A return in progress is left to finish.
-A key never seen is not judged (a client that holds no token, e.g. a ground station): the
-action then stays the autopilot's. A new action, a setpoint stream taking over, or a disarm
-ends the watch.
+A request that names no key is not watched: the action then stays the autopilot's. A new
+action, a setpoint stream taking over, or a disarm ends the watch.
 """
 
 from __future__ import annotations
@@ -61,7 +60,8 @@ class Unattended:
     def start(self, what: str, key: str, now: float) -> None:
         """``what`` began for the commander whose process holds ``key`` ("" none)."""
         self.what, self.key = (what, key) if key else ("", "")
-        self.seen = self.finished = self.acted = False
+        self.seen = bool(key)  # the request is its commander's first beat
+        self.finished = self.acted = False
         self._last_seen = now
 
     def ended(self, now: float) -> None:
