@@ -7,8 +7,9 @@ process beats about once a second (``{ns}/dronewrapper/commander/beat``, the SDK
 ``dronewrapper.beat``); the bridge hands each beat to :meth:`Unattended.on_alive`.
 
 The rule: the request counts as the first beat; once the watched key stays silent for
-``lost_timeout`` s, the commander is lost; when the action has also ended (the go-to reached its point, the
-mission's last item is done, or the aircraft holds), the bridge takes ``action`` once:
+``lost_timeout`` s, the commander is lost; when the action has also ended (the go-to reached
+its point, the mission's last item is done, or the aircraft holds), the bridge takes
+``action`` once:
 ``return`` (fly home and land) or ``land`` (here). A return in progress is left to finish.
 A request that names no key is not watched: the action then stays the autopilot's. A new
 action, a setpoint stream taking over, or a disarm ends the watch.

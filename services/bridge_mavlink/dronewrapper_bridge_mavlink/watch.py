@@ -8,7 +8,6 @@ The core calls :func:`on_alive` with the key of each commander's beat its node r
 
 from __future__ import annotations
 
-import logging
 from typing import TYPE_CHECKING
 
 from dronewrapper_bridge_mavlink import operations as ops
@@ -17,15 +16,9 @@ from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, HOLD_MODE
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core import BridgeCore
 
-log = logging.getLogger("bridge_mavlink")
-
 
 def on_alive(core: BridgeCore, keys: set[str]) -> None:
-    unattended = core.unattended
-    seen = unattended.seen
-    unattended.on_alive(keys, core.now)
-    if unattended.seen and not seen:
-        log.info("watching %s, the commander of the %s", unattended.key, unattended.what)
+    core.unattended.on_alive(keys, core.now)
 
 
 def on_vehicle(core: BridgeCore) -> None:
