@@ -1,21 +1,33 @@
 """The latency budget of a follow graph, stage by stage (pure: times in, figures out).
 
-One camera frame's journey, every time in seconds on this machine's wall clock (the frame's
-header stamp is ``time.time()`` when the simulator starts rendering it):
+One camera frame's journey, every instant in seconds on this machine's wall clock
+(``time.time()``, one clock for every process here; the frame's header stamp is taken when the
+simulator starts rendering it):
 
     stamp -> render -> publish (encode + put) -> transport -> perception queue wait -> decode
-    -> compute (detect + track) -> publish + transport (Detections) -> controller + SDK +
-    transport (setpoint) -> bridge + MAVLink out
+    -> compute (detect + track) -> [Detections published] -> transport + controller + SDK
+    -> [setpoint sent] -> transport + bridge -> [MAVLink datagram at the relay]
 
-``FrameTimes`` holds what a probe saw of one frame (arrival times at a subscriber in another
-process, the timing fields perception puts in its Detections, the datagram leaving the bridge);
-``stages`` splits it. Render and publish are not visible from outside the simulator, so they
-come from the same scene rendered and encoded in the benchmark's process (``in_process``).
-The middleware's share is everything but render and compute.
+Each measured stage runs between two instants on the frame's own path, each taken where the
+event happens: perception's ``receive_time`` and its durations (``queue_time``,
+``processing_time``), the setpoint's send time (the ``sent`` attachment the SDK adds to every
+setpoint, on the controller's clock) and the datagram's arrival at the relay between the bridge
+and the simulator. An instant can only follow the one before it, so no measured stage is
+negative; a frame whose instants are out of that order was wrongly joined (or the clock was
+stepped) and :func:`stages` refuses it. A probe's arrival times (another subscriber, in another
+process) are not on the path: they name which frame a setpoint answers and give the reference
+figures, never a stage's end.
+
+Render and publish are not visible from outside the simulator, so they are the same scene
+rendered and encoded in the benchmark's process (in-process p50 estimates); the frame's
+transport is what remains of stamp -> arrival at perception, and may be slightly negative when
+the simulator renders faster than the estimate (the three rows sum right). The middleware's
+share is everything but render and compute.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -37,12 +49,14 @@ STAGES: tuple[Stage, ...] = (
     Stage("queue", "perception queue wait", True),
     Stage("decode", "decode frame", True),
     Stage("compute", "compute (detect + track)", False),
-    Stage("publish_detections", "publish + transport Detections", True),
-    Stage("controller", "controller + SDK + transport setpoint", True),
-    Stage("bridge", "bridge + MAVLink out", True),
+    Stage("controller", "publish Detections + transport + controller + SDK", True),
+    Stage("bridge", "transport setpoint + bridge + MAVLink out", True),
 )
 STAGE_KEYS = tuple(s.key for s in STAGES)
 MIDDLEWARE_KEYS = tuple(s.key for s in STAGES if s.middleware)
+MEASURED_KEYS = ("queue", "decode", "compute", "controller", "bridge")  # between path instants
+REFERENCE_KEYS = ("detections_to_subscriber",)  # figures beside the stages, not summed
+MATCH_WINDOW_S = 0.100  # a setpoint's datagram leaves the bridge at most this long after sending
 
 
 @dataclass(frozen=True)
@@ -50,16 +64,18 @@ class FrameTimes:
     """What was seen of one frame (s; absolute times are ``time.time()``).
 
     Attributes:
-        stamp: the frame's capture stamp (render start).
+        stamp: the frame's capture stamp (render start, the simulator's clock).
         image_arrival: the frame reached perception (Detections.receive_time).
-        detections_arrival: its Detections reached the probe.
+        detections_arrival: its Detections reached the probe (reference only).
         processing: Detections.processing_time (decode + detect + track).
         queue: Detections.queue_time (arrival at perception -> processing starts); NaN if
             perception does not report it.
         decode: Detections.decode_time; NaN if not reported.
         setpoint_arrival: the first velocity setpoint carrying the frame's stamp reached the
-            probe.
-        mavlink_out: its SET_POSITION_TARGET_LOCAL_NED datagram left the bridge; NaN if not
+            probe (reference only: it names the frame).
+        setpoint_sent: that setpoint's send time (its ``sent`` attachment, the controller's
+            clock); NaN if it carried none.
+        mavlink_out: its SET_POSITION_TARGET_LOCAL_NED datagram reached the relay; NaN if not
             seen.
     """
 
@@ -70,21 +86,52 @@ class FrameTimes:
     queue: float
     decode: float
     setpoint_arrival: float
+    setpoint_sent: float = math.nan
     mavlink_out: float = math.nan
+
+    @property
+    def detections_published(self) -> float:
+        """When perception had its Detections ready to publish: arrival + queue + processing
+        (a lower bound of the publication; its own durations, perception's clock)."""
+        queue = self.queue if math.isfinite(self.queue) else 0.0
+        return self.image_arrival + queue + self.processing
+
+
+class OutOfOrder(ValueError):
+    """A frame's path instants are not in the order its journey makes them."""
+
+
+def path_instants(frame: FrameTimes) -> list[tuple[str, float]]:
+    """The frame's instants on its own path, in journey order (missing ones left out)."""
+    named = [
+        ("stamp", frame.stamp),
+        ("arrival at perception", frame.image_arrival),
+        ("Detections published", frame.detections_published),
+        ("setpoint sent", frame.setpoint_sent),
+        ("MAVLink out", frame.mavlink_out),
+    ]
+    return [(name, t) for name, t in named if math.isfinite(t)]
 
 
 def stages(frame: FrameTimes, render_s: float, publish_s: float) -> dict[str, float]:
     """Split one frame into the stages of :data:`STAGES` (s), plus ``total`` (stamp -> the
-    last time seen: MAVLink out, else the setpoint) and ``middleware`` (total - render -
-    compute).
+    last path instant seen: MAVLink out, else the setpoint's send) and ``middleware``
+    (total - render - compute), and the reference figures of :data:`REFERENCE_KEYS`.
 
     ``render_s`` and ``publish_s`` are the in-process figures for this scene (not visible from
     outside the simulator); the frame's transport is what remains of stamp -> arrival.
     A stage whose times are missing (NaN) is NaN and is left out of the middleware sum.
+
+    Raises:
+        OutOfOrder: an instant of the frame's path precedes the one before it.
     """
-    queue = frame.queue if math.isfinite(frame.queue) else 0.0
+    path = path_instants(frame)
+    for (before, t0), (after, t1) in itertools.pairwise(path):
+        if t1 < t0:
+            raise OutOfOrder(f"{after} ({t1:.6f}) precedes {before} ({t0:.6f})")
     decode = frame.decode if math.isfinite(frame.decode) else 0.0
     compute = frame.processing - decode
+    published = frame.detections_published
     out = {
         "render": render_s,
         "publish_image": publish_s,
@@ -92,23 +139,60 @@ def stages(frame: FrameTimes, render_s: float, publish_s: float) -> dict[str, fl
         "queue": frame.queue,
         "decode": frame.decode,
         "compute": compute,
-        "publish_detections": frame.detections_arrival
-        - frame.image_arrival
-        - queue
-        - frame.processing,
-        "controller": frame.setpoint_arrival - frame.detections_arrival,
-        "bridge": frame.mavlink_out - frame.setpoint_arrival,
+        "controller": frame.setpoint_sent - published,
+        "bridge": frame.mavlink_out - frame.setpoint_sent,
+        "detections_to_subscriber": frame.detections_arrival - published,
     }
-    end = frame.mavlink_out if math.isfinite(frame.mavlink_out) else frame.setpoint_arrival
+    end = path[-1][1]
     out["total"] = end - frame.stamp
     out["middleware"] = out["total"] - render_s - compute
     return out
 
 
+def split_all(
+    frames: Iterable[FrameTimes], render_s: float, publish_s: float
+) -> tuple[list[dict[str, float]], list[FrameTimes], list[str]]:
+    """:func:`stages` of every frame: (the stages of each frame kept, those frames, why each
+    other one was left out: its path instants out of order)."""
+    per_frame, kept, left_out = [], [], []
+    for frame in frames:
+        try:
+            per_frame.append(stages(frame, render_s, publish_s))
+        except OutOfOrder as exc:  # a wrong join, or a stepped clock: not a figure
+            left_out.append(str(exc))
+        else:
+            kept.append(frame)
+    return per_frame, kept, left_out
+
+
+def first_datagram(
+    sent: float,
+    key: Sequence[float],
+    datagrams: Sequence[tuple[float, Sequence[float]]],
+    used: set[int],
+    window_s: float = MATCH_WINDOW_S,
+) -> float:
+    """When the datagram a setpoint sent at ``sent`` became reached the relay: the first of
+    ``datagrams`` ((arrival, key), sorted by arrival) not in ``used`` whose key matches
+    ``key`` (float32 on the wire), arriving in [sent, sent + window_s]; its index is added to
+    ``used``. NaN if none (or ``sent`` is unknown): a datagram can never precede its send."""
+    if not math.isfinite(sent):
+        return math.nan
+    for i, (t, datagram_key) in enumerate(datagrams):
+        if t < sent or i in used:
+            continue
+        if t > sent + window_s:
+            break
+        if np.allclose(datagram_key, key, rtol=1e-5, atol=1e-5):
+            used.add(i)
+            return t
+    return math.nan
+
+
 def summarise(per_frame: Iterable[Mapping[str, float]]) -> dict[str, dict[str, float]]:
     """p50/p99 (ms) and count of each stage over frames (NaNs skipped)."""
     frames = list(per_frame)
-    keys = [*STAGE_KEYS, "total", "middleware"]
+    keys = [*STAGE_KEYS, "total", "middleware", *REFERENCE_KEYS]
     out: dict[str, dict[str, float]] = {}
     for key in keys:
         values = np.array([f[key] for f in frames if key in f], dtype=float)

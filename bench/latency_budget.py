@@ -6,10 +6,11 @@ it and times each camera frame on its way (see :mod:`bench.budget` for the stage
 
 * perception's Detections carry the frame's stamp, its processing time and
   when the frame reached perception, its queue wait and its decode time;
-* a subscriber takes the arrival of the first velocity setpoint carrying the frame's stamp
-  (where the bridge receives it);
+* a subscriber takes the first velocity setpoint carrying the frame's stamp, with its send
+  time (the ``sent`` attachment, on the controller's clock);
 * a UDP relay between the simulator (the autopilot) and the bridge times the
-  SET_POSITION_TARGET_LOCAL_NED datagram that setpoint became (MAVLink out).
+  SET_POSITION_TARGET_LOCAL_NED datagram that setpoint became (MAVLink out), never before the
+  setpoint was sent.
 
 Render and publish are inside the simulator: they are the same scene rendered and encoded here
 (in-process p50). The middleware's share is the total minus render and compute.
@@ -35,13 +36,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.budget import FrameTimes, budget_rows, growth, stages, summarise
+from bench.budget import FrameTimes, budget_rows, first_datagram, growth, split_all, summarise
 from bench.common import percentiles, print_table, write_results
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
+from dronewrapper.runtime.caller import origin_of
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper.runtime.shm_put import ShmWriter
@@ -176,11 +178,12 @@ class MavlinkTap(threading.Thread):
 
 
 class Probe:
-    """Arrival times of frames, Detections and setpoints, by frame stamp (``time.time()``)."""
+    """Arrival times of Detections and setpoints, by frame stamp (``time.time()``), with each
+    setpoint's send time (NaN when it carries none)."""
 
     def __init__(self, session, ns: str) -> None:
         self.detections: dict[float, tuple[float, float, float, float, float]] = {}
-        self.setpoints: dict[float, tuple[float, tuple[float, float, float]]] = {}
+        self.setpoints: dict[float, tuple[float, float, tuple[float, float, float]]] = {}
         self.lock = threading.Lock()
         det_dec, sp_dec = codec.decoder(Detections), codec.decoder(PositionTarget)
 
@@ -200,8 +203,11 @@ class Probe:
             if sp.type_mask != MASK_VELOCITY:
                 return
             key = setpoint_key(sp.velocity.x, sp.velocity.y, sp.velocity.z, sp.yaw_rate)
+            sent = origin_of(sample.attachment)[1]
             with self.lock:
-                self.setpoints.setdefault(sp.header.stamp, (now, key))
+                self.setpoints.setdefault(
+                    sp.header.stamp, (now, math.nan if sent is None else sent, key)
+                )
 
         self._subs = [
             session.declare_subscriber(registry.DETECTIONS.key(ns), on_detections),
@@ -220,31 +226,23 @@ class Probe:
 
 def match_frames(probe: Probe, tap_setpoints) -> list[FrameTimes]:
     """Join what was seen of each frame that produced a command; MAVLink out is the first
-    setpoint datagram with the same values from 20 ms before the probe saw the setpoint
-    (the bridge may be quicker than the probe) to 100 ms after."""
+    setpoint datagram with the same values after the setpoint was sent (bench.budget's
+    ``first_datagram``)."""
     mav = sorted(tap_setpoints)
     used: set[int] = set()
     frames = []
     with probe.lock:
         items = sorted(probe.setpoints.items())
-        for stamp, (sp_arrival, key) in items:
+        for stamp, (sp_arrival, sent, key) in items:
             if stamp not in probe.detections:
                 continue
             det_arrival, received, processing, queue, decode = probe.detections[stamp]
-            out = math.nan
-            for i, (t, mav_key) in enumerate(mav):
-                if t < sp_arrival - 0.020 or i in used:
-                    continue
-                if t > sp_arrival + 0.100:
-                    break
-                if np.allclose(mav_key, key, rtol=1e-5, atol=1e-5):  # float32 on the wire
-                    out = t
-                    used.add(i)
-                    break
+            out = first_datagram(sent, key, mav, used)
             frames.append(
                 FrameTimes(stamp=stamp, image_arrival=received,
                            detections_arrival=det_arrival, processing=processing, queue=queue,
-                           decode=decode, setpoint_arrival=sp_arrival, mavlink_out=out)
+                           decode=decode, setpoint_arrival=sp_arrival, setpoint_sent=sent,
+                           mavlink_out=out)
             )  # fmt: skip
     return frames
 
@@ -324,18 +322,20 @@ def measure(app: str, seconds: float, frames: int = 120) -> dict[str, object]:
     seen, facts = run_graph(app, seconds)
     render_s = local["render"]["p50_ms"] / 1e3
     publish_s = local["publish"]["p50_ms"] / 1e3
-    per_frame = [stages(f, render_s, publish_s) for f in seen]
+    per_frame, kept, out_of_order = split_all(seen, render_s, publish_s)
     summary = summarise(per_frame)
-    to_setpoint = [f.setpoint_arrival - f.stamp for f in seen]
+    to_setpoint = [f.setpoint_arrival - f.stamp for f in kept]
     result: dict[str, object] = {
         **facts,
         "in_process": local,
-        "frames": len(seen),
+        "frames": len(kept),
+        "frames_out_of_order": len(out_of_order),
+        "out_of_order_examples": out_of_order[:3],
         "stages": summary,
         "glass_to_setpoint": percentiles(to_setpoint),
         "previous_glass_to_setpoint_ms": dict(zip(("p50", "p99"), PREVIOUS[app], strict=True)),
     }
-    times = [f.stamp for f in seen]
+    times = [f.stamp for f in kept]
     for key in ("total", "middleware"):
         result[f"growth_{key}"] = asdict(growth(times, [p[key] for p in per_frame]))
     return result
@@ -352,8 +352,14 @@ def print_budget(app: str, result: dict) -> None:
     sp = result["glass_to_setpoint"]
     prev = PREVIOUS[app]
     p50, p99 = sp.get("p50_ms", math.nan), sp.get("p99_ms", math.nan)
-    print(f"  glass -> setpoint at the bridge: p50 {p50:.1f} / p99 {p99:.1f} ms "
+    print(f"  glass -> setpoint at a subscriber: p50 {p50:.1f} / p99 {p99:.1f} ms "
           f"(reference: {prev[0]} / {prev[1]} ms)")  # fmt: skip
+    det = summary["detections_to_subscriber"]
+    print(f"  reference: Detections published -> at a subscriber beside the controller: "
+          f"p50 {det['p50_ms']:.2f} / p99 {det['p99_ms']:.2f} ms")  # fmt: skip
+    if result.get("frames_out_of_order"):
+        print(f"  left out: {result['frames_out_of_order']} frames whose instants are out of "
+              f"order, e.g. {result['out_of_order_examples'][0]}")  # fmt: skip
     mw = summary["middleware"]
     print(f"  middleware share: p50 {mw['p50_ms']:.2f} ms (target <= 3), p99 {mw['p99_ms']:.2f} ms"
           f" (target <= 10)")  # fmt: skip

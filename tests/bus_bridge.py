@@ -17,6 +17,7 @@ from sim_pair import EPOCH, SimPair
 
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
+from dronewrapper.runtime.caller import current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
@@ -76,7 +77,9 @@ class BusBridge:
         self._publish()
 
     def _call(self, steps: Any, request: Any, limit: float = 60.0) -> Any:
-        op = self.pair.core.start(steps(self.pair.core, request), self.pair.t, EPOCH + self.pair.t)
+        core = self.pair.core  # the request's commander as the real wiring hands it on
+        steps = steps(core, request)
+        op = core.request(steps, current_commander(), "", self.pair.t, EPOCH + self.pair.t)
         end = self.pair.t + limit
         steps = 0
         while not op.done and self.pair.t < end:

@@ -21,6 +21,8 @@ return at once, as in the sync API. Cancelling an awaited take-off or landing st
 further step is taken and the setpoint stream stops (the bridge holds position); the awaiting
 task sees CancelledError once the worker has stopped. Telemetry and frames are async iterators
 of the newest values: a slow consumer skips values instead of queueing them (never a backlog).
+The bridge's refusals of our setpoints are an async iterator too (:meth:`Drone.refusal_stream`),
+each one kept: a refusal is an event, not a value to skip.
 
 Many drones at once: :class:`Fleet` (:mod:`dronewrapper.fleet_aio`).
 """
@@ -41,6 +43,7 @@ from dronewrapper.fleet_aio import Fleet
 from dronewrapper.inputs import camera_key_name
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.runtime.latest import Latest
@@ -49,6 +52,9 @@ __all__ = ["Drone", "Fleet"]
 
 T = TypeVar("T")
 V = TypeVar("V")
+
+REFUSAL_BACKLOG = 100
+"""Most refusals :meth:`Drone.refusal_stream` keeps for a consumer that has not taken them."""
 
 
 class Drone:
@@ -165,6 +171,9 @@ class Drone:
     async def envelope(self, **kwargs: Any) -> Any:
         return await self._run(self.sync.envelope, **kwargs)
 
+    async def reset_envelope(self, **kwargs: Any) -> Any:
+        return await self._run(self.sync.reset_envelope, **kwargs)
+
     async def wait_for_connection(self, timeout: float = 10.0) -> State:
         return await self._run(self.sync.wait_for_connection, timeout)
 
@@ -232,6 +241,29 @@ class Drone:
     def battery(self) -> AsyncIterator[float]:
         """Battery charge fractions 0..1 as they arrive."""
         return self._stream(registry.BATTERY, _percentage_of)
+
+    async def refusal_stream(self) -> AsyncIterator[Refusal]:
+        """The bridge's refusals of our setpoints (and overrides of our commands), each as it
+        arrives from now on (see :attr:`DroneWrapper.refusals`); at most
+        :data:`REFUSAL_BACKLOG` wait for a slow consumer, the oldest dropped first."""
+        loop = asyncio.get_running_loop()
+        queue: asyncio.Queue[Refusal] = asyncio.Queue()
+
+        def put(refusal: Refusal) -> None:
+            if queue.qsize() >= REFUSAL_BACKLOG:
+                queue.get_nowait()
+            queue.put_nowait(refusal)
+
+        def arrived(refusal: Refusal) -> None:
+            with contextlib.suppress(RuntimeError):  # the loop closed meanwhile
+                loop.call_soon_threadsafe(put, refusal)
+
+        stop = self.sync.on_refusal(arrived)
+        try:
+            while True:
+                yield await queue.get()
+        finally:
+            stop()
 
     async def frames(self, camera: str = "frontal") -> AsyncIterator[np.ndarray]:
         """Camera frames (BGR ``uint8``), the newest each time; slow consumers skip frames."""

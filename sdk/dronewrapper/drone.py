@@ -53,7 +53,9 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.refusals import RefusalInbox
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.flight import FlightSequence, Landing, Takeoff
@@ -170,6 +172,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
                 node, self.ns, compressed_images=self.compressed_images, cameras=cameras
             )
             self._declare_mission_inputs()  # home, envelope, mission (missions.py)
+            self._refusals = RefusalInbox(self.ns, self.commander, self.clock)
+            self.inputs.subscribe(registry.REFUSAL, self._refusals.on_refusal)
             self._setpoints = node.publisher(
                 registry.SETPOINT_RAW_LOCAL, key=registry.SETPOINT_RAW_LOCAL.key(self.ns)
             )
@@ -211,6 +215,15 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     def status_texts(self) -> collections.deque[StatusText]:
         """The autopilot's last 20 text messages (newest last)."""
         return self.inputs.status_texts
+
+    @property
+    def refusals(self) -> list[Refusal]:
+        """The bridge's last 20 refusals of our setpoints, newest last (``msgs.refusal``)."""
+        return list(self._refusals.recent)
+
+    def on_refusal(self, callback: Callable[[Refusal], None]) -> Callable[[], None]:
+        """``callback(refusal)`` as each of ours arrives (a Zenoh thread); returns a stop."""
+        return self._refusals.listen(callback)
 
     @property
     def decode_errors(self) -> collections.Counter[str]:
@@ -296,7 +309,9 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
                 after ``timeout`` s (the message names the missing keys).
         """
-        return connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
+        state = connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
+        self._warn_of_envelope()  # held for set_cmd_*; warns if a commander's is in force
+        return state
 
     def _require_connected(self, what: str) -> State:
         """The connected State, or NotConnected saying why ``what`` cannot be done."""

@@ -10,6 +10,11 @@ by the SDK, which checks a go-to before it asks. Positions are ENU metres in the
 * :func:`check_velocity`: a velocity above the maximum speeds is refused.
 * :func:`breach`: the aircraft's own position is outside the envelope by more than ``margin``
   (wind, a mission, a pilot): the bridge then takes ``breach_action`` (hold, return or land).
+* :func:`check_replacement`: a new envelope whose fence contains neither home nor the aircraft
+  is refused (it would breach at once, or leave home outside: a return could never end).
+
+``max_altitude`` is at least :data:`MIN_ALTITUDE_M`: a ceiling lower than that leaves no room to
+take off and hover above the ground effect, so it is a typo (centimetres, or 0.1 for 10).
 
 The fence is an inclusion polygon (at least 3 vertices, ENU m); exclusion zones are polygons
 the aircraft must stay out of. An empty fence means no polygon, only the distance limit.
@@ -22,6 +27,8 @@ import math
 import msgspec
 
 BREACH_ACTIONS = ("hold", "return", "land")
+MIN_ALTITUDE_M = 1.0
+"""The lowest ``max_altitude`` an envelope may have (m above home)."""
 UPPER_BOUNDS = {  # beyond these a value is a typo, not an envelope
     "max_altitude": 10_000.0,  # m
     "max_distance": 100_000.0,  # m
@@ -33,7 +40,12 @@ Polygon = list[tuple[float, float]]
 
 
 class EnvelopeError(ValueError):
-    """A target outside the envelope; the message names the limit."""
+    """A target outside the envelope; the message names the limit, and ``limit`` is the
+    envelope's field it is beyond (``max_altitude``, ``fence`` ...)."""
+
+    def __init__(self, message: str, limit: str = "") -> None:
+        super().__init__(message)
+        self.limit = limit
 
 
 class Envelope(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
@@ -64,6 +76,11 @@ class Envelope(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=
             value = getattr(self, name)
             if isinstance(value, bool) or not (math.isfinite(value) and 0 < value <= upper):
                 raise ValueError(f"envelope {name} must be in (0, {upper:g}], got {value!r}")
+        if self.max_altitude < MIN_ALTITUDE_M:
+            raise ValueError(
+                f"envelope max_altitude must be at least {MIN_ALTITUDE_M:g} m above home, "
+                f"got {self.max_altitude!r}"
+            )
         if not (math.isfinite(self.margin) and 0 <= self.margin <= 50):
             raise ValueError(f"envelope margin must be in [0, 50] m, got {self.margin!r}")
         if self.breach_action not in BREACH_ACTIONS:
@@ -112,35 +129,45 @@ def distance_outside(polygon: Polygon, x: float, y: float) -> float:
     return best
 
 
-def violation(envelope: Envelope, x: float, y: float, z: float, margin: float = 0.0) -> str:
-    """The limit (x, y, z) (ENU m from home) is beyond by more than ``margin`` m, or ""."""
+def violated(
+    envelope: Envelope, x: float, y: float, z: float, margin: float = 0.0
+) -> tuple[str, str]:
+    """(the envelope's field, the reason) when (x, y, z) (ENU m from home) is beyond a limit
+    by more than ``margin`` m, else ("", "")."""
     if z > envelope.max_altitude + margin:
-        return f"altitude {z:g} m above the envelope's {envelope.max_altitude:g} m"
+        return "max_altitude", f"altitude {z:g} m above the envelope's {envelope.max_altitude:g} m"
     distance = math.hypot(x, y)
     if distance > envelope.max_distance + margin:
-        return (
+        return "max_distance", (
             f"distance {distance:g} m from home beyond the envelope's {envelope.max_distance:g} m"
         )
     if envelope.fence and distance_outside(envelope.fence, x, y) > margin:
-        return f"position ({x:g}, {y:g}) m outside the envelope's fence"
+        return "fence", f"position ({x:g}, {y:g}) m outside the envelope's fence"
     for number, zone in enumerate(envelope.exclusions, start=1):
         if inside(zone, x, y):
-            return f"position ({x:g}, {y:g}) m inside the envelope's exclusion zone {number}"
-    return ""
+            reason = f"position ({x:g}, {y:g}) m inside the envelope's exclusion zone {number}"
+            return "exclusions", reason
+    return "", ""
+
+
+def violation(envelope: Envelope, x: float, y: float, z: float, margin: float = 0.0) -> str:
+    """The limit (x, y, z) (ENU m from home) is beyond by more than ``margin`` m, or ""."""
+    return violated(envelope, x, y, z, margin)[1]
 
 
 def check_position(envelope: Envelope, x: float, y: float, z: float) -> None:
     """EnvelopeError naming the limit when the target (x, y, z) (ENU m from home) is outside."""
-    reason = violation(envelope, x, y, z)
+    limit, reason = violated(envelope, x, y, z)
     if reason:
-        raise EnvelopeError(reason)
+        raise EnvelopeError(reason, limit)
 
 
 def check_takeoff(envelope: Envelope, height: float) -> None:
     """EnvelopeError when a take-off to ``height`` m above home climbs above the envelope."""
     if math.isfinite(height) and height > envelope.max_altitude:
         raise EnvelopeError(
-            f"take-off altitude {height:g} m above the envelope's {envelope.max_altitude:g} m"
+            f"take-off altitude {height:g} m above the envelope's {envelope.max_altitude:g} m",
+            "max_altitude",
         )
 
 
@@ -150,13 +177,26 @@ def check_velocity(envelope: Envelope, vx: float, vy: float, vz: float) -> None:
     if horizontal > envelope.max_horizontal_speed:
         raise EnvelopeError(
             f"horizontal speed {horizontal:g} m/s above the envelope's "
-            f"{envelope.max_horizontal_speed:g} m/s"
+            f"{envelope.max_horizontal_speed:g} m/s",
+            "max_horizontal_speed",
         )
     if abs(vz) > envelope.max_vertical_speed:
         raise EnvelopeError(
             f"vertical speed {abs(vz):g} m/s above the envelope's "
-            f"{envelope.max_vertical_speed:g} m/s"
+            f"{envelope.max_vertical_speed:g} m/s",
+            "max_vertical_speed",
         )
+
+
+def check_replacement(envelope: Envelope, aircraft: tuple[float, float] | None) -> None:
+    """EnvelopeError (limit ``fence``) when ``envelope``'s fence contains neither home (the
+    origin) nor the aircraft at ``aircraft`` (x, y ENU m from home; None: not known)."""
+    if not envelope.fence or inside(envelope.fence, 0.0, 0.0):
+        return
+    if aircraft is not None and inside(envelope.fence, *aircraft):
+        return
+    where = "" if aircraft is None else f" nor the aircraft at ({aircraft[0]:g}, {aircraft[1]:g}) m"
+    raise EnvelopeError(f"the fence contains neither home{where}", "fence")
 
 
 def breach(envelope: Envelope, x: float, y: float, z: float) -> str:
@@ -172,10 +212,11 @@ class BreachMonitor:
     def __init__(self) -> None:
         self.outside = False
         self.breaches = 0
+        self.limit = ""  # the envelope's field the last breach crossed
 
     def update(self, envelope: Envelope, position: tuple[float, float, float]) -> str:
         """The breach to act on now ("" when none or already acted on)."""
-        reason = breach(envelope, *position)
+        limit, reason = violated(envelope, *position, envelope.margin)
         if not reason:
             if self.outside and not violation(envelope, *position):
                 self.outside = False
@@ -184,6 +225,7 @@ class BreachMonitor:
             return ""
         self.outside = True
         self.breaches += 1
+        self.limit = limit
         return reason
 
 
@@ -194,9 +236,11 @@ __all__ = [
     "EnvelopeError",
     "breach",
     "check_position",
+    "check_replacement",
     "check_takeoff",
     "check_velocity",
     "distance_outside",
     "inside",
+    "violated",
     "violation",
 ]

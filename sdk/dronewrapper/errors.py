@@ -27,14 +27,19 @@ class CommandRefused(DroneError):
         result: the MAV_RESULT code of the reply (``-1``: no acknowledgement; ``None``: the
             bridge rejected the request itself, e.g. a malformed or unsupported request).
         reason: the autopilot's or the bridge's reason, for a person to read.
+        limit: the envelope's field the command is beyond (``max_altitude``, ``fence`` ...),
+            ``""`` when no envelope limit is the cause.
     """
 
-    def __init__(self, command: str, reason: str, result: int | None = None) -> None:
+    def __init__(
+        self, command: str, reason: str, result: int | None = None, *, limit: str = ""
+    ) -> None:
         code = "" if result is None else f" (result {result})"
         super().__init__(f"{command} refused{code}: {reason or 'no reason given'}")
         self.command = command
         self.reason = reason
         self.result = result
+        self.limit = limit
 
 
 class Timeout(DroneError, TimeoutError):

@@ -40,6 +40,7 @@ from dronewrapper.fleet_online import (
     wait_for_bridges,
 )
 from dronewrapper.fleet_results import FleetError, FleetResult, Outcome, timed
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
 from dronewrapper.runtime.contract import NodeApi
 
@@ -186,6 +187,26 @@ class Fleet:
         else:
             bridges = {name: self._bridges.get(name, BRIDGE_PREFIX) for name in self.drones}
         return [describe(name, bridge, self.drones.get(name)) for name, bridge in bridges.items()]
+
+    # ---- what the bridges refused
+
+    def refusals(self) -> dict[str, list[Refusal]]:
+        """Each drone's recent refusals of our setpoints (see ``DroneWrapper.refusals``)."""
+        return {name: drone.refusals for name, drone in self.drones.items()}
+
+    def on_refusal(self, callback: Callable[[str, Refusal], None]) -> Callable[[], None]:
+        """Call ``callback(name, refusal)`` as each drone's refusals arrive (on a Zenoh
+        thread: keep it short). Returns a function that stops the calls."""
+        stops = [
+            drone.on_refusal(lambda refusal, name=name: callback(name, refusal))
+            for name, drone in self.drones.items()
+        ]
+
+        def stop() -> None:
+            for one in stops:
+                one()
+
+        return stop
 
     # ---- running a call on every drone
 

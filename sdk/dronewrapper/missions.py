@@ -37,6 +37,7 @@ from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.errors import CommandRefused, DroneError, InvalidArgument, NoData
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import GotoRequest
+from dronewrapper.msgs.mavros import MASK_MIXED, MASK_POSITION, PositionTarget
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
     HomePosition,
@@ -81,33 +82,88 @@ class MissionsMixin:
 
     def envelope(self: Any, *, timeout: float | None = None) -> Envelope:
         """The envelope the bridge enforces now."""
-        reply = self._command(registry.ENVELOPE_SET, EnvelopeSet(), "envelope", timeout)
-        return reply.envelope
+        return self._envelope_call(EnvelopeSet(), "envelope", timeout).envelope
 
     def set_envelope(self: Any, *, timeout: float | None = None, **limits: Any) -> Envelope:
-        """Change the bridge's envelope: any of ``max_altitude`` (m above home),
-        ``max_distance`` (m from home), ``fence`` (``[(x, y), ...]`` ENU m from home; ``[]``
-        none), ``exclusions``, ``max_horizontal_speed``, ``max_vertical_speed`` (m/s),
+        """Change the bridge's envelope: any of ``max_altitude`` (m above home, at least
+        :data:`~dronewrapper.envelope.MIN_ALTITUDE_M`), ``max_distance`` (m from home),
+        ``fence`` (``[(x, y), ...]`` ENU m from home; ``[]`` none; it must contain home or
+        the drone), ``exclusions``, ``max_horizontal_speed``, ``max_vertical_speed`` (m/s),
         ``breach_action`` (``hold``, ``return``, ``land``), ``margin`` (m). The others stay.
-        Returns the envelope in force.
+        Returns the envelope in force. The new envelope outlives this program: the next one
+        is warned on connect, and :meth:`reset_envelope` puts the bridge's configured one back.
 
         Raises:
-            InvalidArgument: an unknown field or a bad value (nothing is changed).
+            InvalidArgument: an unknown field, or a value of the wrong type or out of range (the
+                message names the field; nothing is changed).
+            CommandRefused: the bridge refused it (a fence containing neither home nor the
+                drone).
         """
         current = self.envelope(timeout=timeout)
         unknown = set(limits) - set(Envelope.__struct_fields__)
         if unknown:
             raise InvalidArgument(f"set_envelope: unknown field(s) {sorted(unknown)}")
-        if "fence" in limits:
-            limits["fence"] = [tuple(float(v) for v in vertex) for vertex in limits["fence"]]
+        fields = {**msgspec.structs.asdict(current), **limits}
         try:
-            wanted = msgspec.structs.replace(current, **limits)
-        except (TypeError, ValueError) as exc:
-            raise InvalidArgument(f"set_envelope: {exc}") from None
-        reply = self._command(
-            registry.ENVELOPE_SET, EnvelopeSet(envelope=wanted), "set_envelope", timeout
-        )
-        return reply.envelope
+            wanted = msgspec.convert(fields, Envelope)
+        except msgspec.ValidationError as exc:
+            raise InvalidArgument(f"set_envelope: {_named(exc)}") from None
+        return self._envelope_call(EnvelopeSet(envelope=wanted), "set_envelope", timeout).envelope
+
+    def reset_envelope(self: Any, *, timeout: float | None = None) -> Envelope:
+        """Put the bridge's configured envelope back (undo every :meth:`set_envelope`);
+        returns it."""
+        return self._envelope_call(EnvelopeSet(reset=True), "reset_envelope", timeout).envelope
+
+    def _envelope_call(self: Any, request: EnvelopeSet, what: str, timeout: float | None):
+        """One envelope/set call; the envelope in force is then held for the setpoint checks."""
+        reply = self._command(registry.ENVELOPE_SET, request, what, timeout)
+        self._envelope.update(reply.envelope)
+        return reply
+
+    def _warn_of_envelope(self: Any) -> None:
+        """On connect: fetch the envelope in force (held for the setpoint checks) and warn when
+        a commander set it rather than the bridge's configuration (it outlived its program)."""
+        try:
+            reply = self._envelope_call(EnvelopeSet(), "envelope", min(2.0, self.service_timeout))
+        except DroneError:
+            return  # a bridge without an envelope service: it judges alone
+        if reply.set_by:
+            e = reply.envelope
+            fence = f"a fence of {len(e.fence)} vertices" if e.fence else "no fence"
+            log.warning(
+                "%s: the envelope in force was set by %r, not the bridge's configuration: "
+                "max_altitude %g m, max_distance %g m, %s, breach_action %s; "
+                "reset_envelope() puts the configured one back",
+                self.ns,
+                reply.set_by,
+                e.max_altitude,
+                e.max_distance,
+                fence,
+                e.breach_action,
+            )
+
+    def _check_setpoint(self: Any, target: PositionTarget, what: str) -> None:
+        """CommandRefused, the limit named, when ``target`` is outside the envelope held (the
+        bridge would refuse it); a position needs home too. Nothing held: the bridge judges,
+        and its refusal arrives on :attr:`refusals`."""
+        envelope, home = self._envelope.value, self._home.value
+        if envelope is None:
+            return
+        try:
+            if target.type_mask != MASK_POSITION:
+                v = target.velocity
+                env.check_velocity(envelope, v.x, v.y, v.z)
+            p = target.position
+            if target.type_mask == MASK_POSITION and home is not None:
+                env.check_position(envelope, p.x - home.x, p.y - home.y, p.z - home.z)
+            elif target.type_mask == MASK_MIXED and home is not None:
+                z, ceiling = p.z - home.z, envelope.max_altitude  # its altitude only
+                if z > ceiling:
+                    reason = f"altitude {z:g} m above the envelope's {ceiling:g} m"
+                    raise EnvelopeError(reason, "max_altitude")
+        except EnvelopeError as exc:
+            raise CommandRefused(what, f"outside the envelope: {exc}", limit=exc.limit) from None
 
     def _held_envelope(self: Any) -> Envelope | None:
         """The bridge's envelope as last published, else asked for (None: no envelope service)."""
@@ -128,7 +184,7 @@ class MissionsMixin:
         try:
             env.check_takeoff(envelope, h)
         except EnvelopeError as exc:
-            raise CommandRefused("takeoff", str(exc)) from None
+            raise CommandRefused("takeoff", str(exc), limit=exc.limit) from None
 
     def home(self: Any) -> HomePosition:
         """Home as the bridge last published it: ``latitude``, ``longitude`` (degrees; NaN
@@ -196,9 +252,9 @@ class MissionsMixin:
         tolerance: float = 1.0,
         cancel: threading.Event | None = None,
     ) -> None:
-        """Fly to (``x``, ``y``, ``z``) ENU metres from home (the point the bridge publishes on
-        ``home_position/home``: where the autopilot set home, normally where it first armed;
-        a second take-off elsewhere does not move it) and hold there, keeping the heading;
+        """Fly to (``x``, ``y``, ``z``) ENU metres from home (:meth:`home`: where the autopilot
+        set it, PX4 and ArduPilot where they armed, so a take-off elsewhere moves it; local
+        positions keep their origin) and hold there, keeping the heading;
         return once within ``tolerance`` m. One request to the bridge, which flies it and
         answers at the end; the drone then holds the point by itself until commanded.
 
@@ -216,7 +272,7 @@ class MissionsMixin:
             try:
                 env.check_position(envelope, x, y, z)
             except EnvelopeError as exc:
-                raise CommandRefused("goto", str(exc)) from None
+                raise CommandRefused("goto", str(exc), limit=exc.limit) from None
         request = GotoRequest(
             x=x, y=y, z=z, timeout=timeout, tolerance=tolerance, watch=self._watch_key()
         )
@@ -317,6 +373,12 @@ class MissionsMixin:
             total=len(listing.waypoints),
             reached=-1 if reached is None else reached.wp_seq,
         )
+
+
+def _named(exc: msgspec.ValidationError) -> str:
+    """msgspec's message with the field first: ``max_altitude: Expected `float`, got `str```."""
+    message, _, path = str(exc).partition(" - at `$.")
+    return f"{path.rstrip('`')}: {message}" if path else message
 
 
 __all__ = ["MissionProgress", "MissionsMixin"]

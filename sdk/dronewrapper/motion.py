@@ -2,13 +2,17 @@
 
 Each ``set_cmd_*`` checks its arguments (finite numbers, yaw within a turn), builds the
 PositionTarget (local ENU positions in metres, body FLU velocities in m/s, yaw in rad, yaw
-rate in rad/s CCW positive) and hands it to the wrapper's setpoint stream, which publishes it
-at once and repeats it at the stream rate (:mod:`dronewrapper.streamer`).
+rate in rad/s CCW positive), checks it against the bridge's envelope the wrapper holds (a
+target outside it raises CommandRefused naming the limit, and nothing is sent) and hands it to
+the wrapper's setpoint stream, which publishes it at once and repeats it at the stream rate
+(:mod:`dronewrapper.streamer`). What the bridge refuses later (the command lease, a late
+setpoint, an envelope the wrapper did not hold yet) arrives on the wrapper's ``refusals``.
 """
 
 from __future__ import annotations
 
 import logging
+from typing import TYPE_CHECKING
 
 from dronewrapper import setpoints, telemetry
 from dronewrapper.errors import NoData, NotConnected
@@ -35,6 +39,10 @@ class Motion:
     _closed: bool
     _warned_grounded: bool
 
+    if TYPE_CHECKING:
+
+        def _check_setpoint(self, target: PositionTarget, what: str) -> None: ...
+
     def set_cmd_pos(
         self,
         x: float = 0.0,
@@ -56,11 +64,14 @@ class Motion:
             InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
                 (degrees by mistake); nothing is sent.
             NoData: ``z`` or ``az`` left out before any position arrived.
+            CommandRefused: the point is outside the bridge's envelope (``limit`` names the
+                envelope's field); nothing is sent.
         """
         stamp = setpoints.check_stamp(stamp, self.clock.time())
         z = self._kept_altitude("set_cmd_pos") if z is None else z
         az = self._kept_yaw("set_cmd_pos") if az is None else az
         target = setpoints.position_target(x, y, z, az, stamp=stamp)
+        self._check_setpoint(target, "set_cmd_pos")
         self._warn_if_grounded("set_cmd_pos")
         self._command_setpoint(target)
 
@@ -81,9 +92,11 @@ class Motion:
         Raises:
             InvalidArgument: an argument is not a finite number, or ``az`` is beyond a full turn
                 per second (degrees by mistake); nothing is sent.
+            CommandRefused: faster than the bridge's envelope allows (``limit`` names it).
         """
         stamp = setpoints.check_stamp(stamp, self.clock.time())
         target = setpoints.velocity_target(vx, vy, vz, az, stamp=stamp)
+        self._check_setpoint(target, "set_cmd_vel")
         self._warn_if_grounded("set_cmd_vel")
         self._command_setpoint(target)
 
@@ -103,10 +116,12 @@ class Motion:
         Raises:
             InvalidArgument: an argument is not a finite number (nothing is sent).
             NoData: ``z`` left out before any position arrived.
+            CommandRefused: above or faster than the bridge's envelope allows (``limit``).
         """
         stamp = setpoints.check_stamp(stamp, self.clock.time())
         z = self._kept_altitude("set_cmd_mix") if z is None else z
         target = setpoints.mixed_target(vx, vy, z, az, stamp=stamp)
+        self._check_setpoint(target, "set_cmd_mix")
         self._warn_if_grounded("set_cmd_mix")
         self._command_setpoint(target)
 

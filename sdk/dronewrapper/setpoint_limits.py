@@ -34,7 +34,12 @@ from dronewrapper.msgs.mavros import (
 
 
 class SetpointError(ValueError):
-    """A PositionTarget a bridge refuses; the message says why."""
+    """A PositionTarget a bridge refuses; the message says why, and ``limit`` names the field
+    or bound it breaks (``type_mask``, ``position.x``, ``max_horizontal_speed`` ...)."""
+
+    def __init__(self, message: str, limit: str = "") -> None:
+        super().__init__(message)
+        self.limit = limit
 
 
 class Kind(Enum):
@@ -73,7 +78,7 @@ FRAMES_OF_MASK = {
 def finite_field(name: str, value: object) -> float:
     """``value`` as a float if it is a finite number (not a bool), else SetpointError."""
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SetpointError(f"{name} must be a finite number, got {value!r}")
+        raise SetpointError(f"{name} must be a finite number, got {value!r}", name)
     return float(value)
 
 
@@ -83,24 +88,28 @@ def validate(target: PositionTarget, bounds: Bounds) -> Kind:
     if mask not in KIND_OF_MASK:
         raise SetpointError(
             f"type_mask {mask} is not supported; use {MASK_POSITION} (position + yaw), "
-            f"{MASK_VELOCITY} (velocity + yaw rate) or {MASK_MIXED} (vx, vy, altitude z, yaw rate)"
+            f"{MASK_VELOCITY} (velocity + yaw rate) or {MASK_MIXED} (vx, vy, altitude z, yaw rate)",
+            "type_mask",
         )
     if frame not in FRAMES_OF_MASK[mask]:
         allowed = " or ".join(str(f) for f in FRAMES_OF_MASK[mask])
         raise SetpointError(
-            f"coordinate_frame {frame} is not valid with type_mask {mask}: use {allowed}"
+            f"coordinate_frame {frame} is not valid with type_mask {mask}: use {allowed}",
+            "coordinate_frame",
         )
     kind = KIND_OF_MASK[mask]
     p, v = target.position, target.velocity
     if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
-        raise SetpointError(f"position is required with type_mask {mask}")
+        raise SetpointError(f"position is required with type_mask {mask}", "position")
     if kind is Kind.POSITION:
         x, y = finite_field("position.x", p.x), finite_field("position.y", p.y)
         z = finite_field("position.z", p.z)
         finite_field("yaw", target.yaw)
         if abs(x) > bounds.max_distance or abs(y) > bounds.max_distance:
             raise SetpointError(
-                f"position ({x:g}, {y:g}) is farther than {bounds.max_distance:g} m from the origin"
+                f"position ({x:g}, {y:g}) is farther than {bounds.max_distance:g} m "
+                "from the origin",
+                "max_distance",
             )
         _check_altitude(z, bounds)
         return kind
@@ -109,12 +118,17 @@ def validate(target: PositionTarget, bounds: Bounds) -> Kind:
     yaw_rate = finite_field("yaw_rate", target.yaw_rate)
     if math.hypot(vx, vy) > bounds.max_horizontal_speed:
         raise SetpointError(
-            f"horizontal speed {math.hypot(vx, vy):g} m/s exceeds {bounds.max_horizontal_speed:g}"
+            f"horizontal speed {math.hypot(vx, vy):g} m/s exceeds {bounds.max_horizontal_speed:g}",
+            "max_horizontal_speed",
         )
     if abs(vz) > bounds.max_vertical_speed:
-        raise SetpointError(f"vertical speed {vz:g} m/s exceeds {bounds.max_vertical_speed:g}")
+        raise SetpointError(
+            f"vertical speed {vz:g} m/s exceeds {bounds.max_vertical_speed:g}", "max_vertical_speed"
+        )
     if abs(yaw_rate) > bounds.max_yaw_rate:
-        raise SetpointError(f"yaw_rate {yaw_rate:g} rad/s exceeds {bounds.max_yaw_rate:g}")
+        raise SetpointError(
+            f"yaw_rate {yaw_rate:g} rad/s exceeds {bounds.max_yaw_rate:g}", "max_yaw_rate"
+        )
     if kind is Kind.MIXED:
         _check_altitude(finite_field("position.z", p.z), bounds)
     return kind
@@ -123,5 +137,6 @@ def validate(target: PositionTarget, bounds: Bounds) -> Kind:
 def _check_altitude(z: float, bounds: Bounds) -> None:
     if not bounds.min_altitude <= z <= bounds.max_altitude:
         raise SetpointError(
-            f"altitude z={z:g} m is outside [{bounds.min_altitude:g}, {bounds.max_altitude:g}]"
+            f"altitude z={z:g} m is outside [{bounds.min_altitude:g}, {bounds.max_altitude:g}]",
+            "min_altitude" if z < bounds.min_altitude else "max_altitude",
         )

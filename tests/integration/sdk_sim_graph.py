@@ -20,7 +20,9 @@ from support import Process, free_endpoint, free_port, python_module
 START_TIMEOUT_S = 60.0
 
 
-def _start(log_dir: Path, ns: str, router: str, use_router: bool) -> Process:
+def _start(
+    log_dir: Path, ns: str, router: str, use_router: bool, variables: Sequence[str] = ()
+) -> Process:
     argv = python_module(
         "dronewrapper",
         "up",
@@ -33,6 +35,7 @@ def _start(log_dir: Path, ns: str, router: str, use_router: bool) -> Process:
         f"onboard_port={free_port(socket.SOCK_DGRAM)}",
         "--var",
         f"gcs_port={free_port(socket.SOCK_DGRAM)}",
+        *(arg for variable in variables for arg in ("--var", variable)),
         *(["--use-router"] if use_router else []),
     )
     return Process(argv, log_dir / f"sim_iris-{ns}.log")
@@ -56,10 +59,13 @@ def _wait_for_bridges(router: str, procs: dict[str, Process]) -> None:
 
 
 @contextlib.contextmanager
-def sim_graph(log_dir: Path, ns: str = "drone") -> Iterator[tuple[str, Process]]:
-    """Run the simulated Iris + bridge + a router; yields (router endpoint, graph process)."""
+def sim_graph(
+    log_dir: Path, ns: str = "drone", variables: Sequence[str] = ()
+) -> Iterator[tuple[str, Process]]:
+    """Run the simulated Iris + bridge + a router (``variables``: the graph's ``KEY=VALUE``
+    variables, e.g. ``command_lease=true``); yields (router endpoint, graph process)."""
     router = free_endpoint()
-    proc = _start(log_dir, ns, router, use_router=False)
+    proc = _start(log_dir, ns, router, use_router=False, variables=variables)
     try:
         _wait_for_bridges(router, {ns: proc})
         yield router, proc

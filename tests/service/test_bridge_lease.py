@@ -7,6 +7,7 @@ import logging
 
 import pytest
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CancelRequest
 from dronewrapper.msgs.geometry import Vector3
@@ -17,6 +18,14 @@ from dronewrapper.msgs.mavros import (
     CommandBool,
     CommandTOL,
     PositionTarget,
+)
+from dronewrapper.msgs.mission import (
+    EnvelopeSet,
+    MissionControl,
+    Waypoint,
+    WaypointClear,
+    WaypointPush,
+    WaypointSetCurrent,
 )
 from dronewrapper.runtime import ServiceError
 from dronewrapper.runtime.caller import commander_attachment, handling
@@ -52,7 +61,7 @@ def wired(kind: str) -> tuple[FakeBus, Wired]:
     node = FakeNode("bridge", bus)
     publishers = {topic: node.publisher(topic) for topic in module.PUBLISHED}
     bridge = Wired(node, core, publishers, logging.getLogger(kind))
-    bridge.serve(module.SERVICES)
+    module.serve_services(bridge)  # as the bridge's start() does
     return bus, bridge
 
 
@@ -101,3 +110,55 @@ def test_a_non_holders_cancel_is_refused_and_the_holders_is_answered(kind):
     assert error.value.code == "lease"
     reply = ask(user, registry.FLIGHT_CANCEL, CancelRequest(), "alice")
     assert not reply.success and "nothing to cancel" in reply.message
+
+
+HERE = Waypoint(x_lat=0.0, y_long=0.0, z_alt=1.0)
+MISSION_REQUESTS = {
+    "mavlink": [
+        (registry.MISSION_PUSH, WaypointPush(waypoints=[HERE])),
+        (registry.MISSION_CLEAR, WaypointClear()),
+        (registry.MISSION_SET_CURRENT, WaypointSetCurrent(wp_seq=0)),
+        (registry.MISSION_CONTROL, MissionControl(action="start")),
+        (registry.GEOFENCE_PUSH, WaypointClear()),
+    ],
+    "tello": [
+        (
+            registry.MISSION_PUSH,
+            WaypointPush(waypoints=[Waypoint(frame=4, x_lat=0, y_long=0, z_alt=1)]),
+        ),
+        (registry.MISSION_CLEAR, WaypointClear()),
+        (registry.MISSION_CONTROL, MissionControl(action="start")),
+    ],
+}
+
+
+@pytest.mark.parametrize("kind", ["mavlink", "tello"])
+def test_only_the_lease_holder_may_change_the_envelope(kind):
+    bus, bridge = wired(kind)
+    user = FakeNode("apps", bus)
+    before = bridge.core.missions.envelope
+    assert ask(user, registry.COMMAND_LEASE, LeaseRequest(action="take"), "alice").granted
+    wide = EnvelopeSet(envelope=Envelope(max_altitude=500.0, max_distance=5000.0))
+    with pytest.raises(ServiceError, match="'alice' holds the command lease") as error:
+        ask(user, registry.ENVELOPE_SET, wide, "bob")
+    assert error.value.code == "lease"
+    assert bridge.core.missions.envelope == before
+    reply = ask(user, registry.ENVELOPE_SET, wide, "alice")
+    assert reply.success and bridge.core.missions.envelope.max_altitude == 500.0
+
+
+@pytest.mark.parametrize("kind", ["mavlink", "tello"])
+def test_only_the_lease_holder_may_push_clear_or_fly_a_mission(kind):
+    bus, bridge = wired(kind)
+    user = FakeNode("apps", bus)
+    assert ask(user, registry.COMMAND_LEASE, LeaseRequest(action="take"), "alice").granted
+    for service, request in MISSION_REQUESTS[kind]:
+        with pytest.raises(ServiceError, match="'alice' holds the command lease") as error:
+            ask(user, service, request, "bob")
+        assert error.value.code == "lease", service.key("drone")
+    assert bridge.core.missions.waypoints == []  # bob's push kept nothing
+    for service, request in MISSION_REQUESTS[kind]:
+        try:  # alice's reach the bridge's side (no aircraft: refused there, if at all)
+            ask(user, service, request, "alice")
+        except ServiceError as exc:
+            assert exc.code != "lease", (service.key("drone"), exc)

@@ -183,6 +183,34 @@ def test_mission_push_refuses_an_item_outside_the_envelope():
     assert not rig.sent_since(-math.inf, "MISSION_COUNT")
 
 
+def test_mission_push_refuses_an_item_above_the_ceiling():
+    rig = flying()
+    home(rig)
+    high = [*square(2), Waypoint(x_lat=HOME_LAT, y_long=HOME_LON, z_alt=130.0)]
+    op = rig.call(missions.push, WaypointPush(waypoints=high))
+    with pytest.raises(ServiceError, match=r"mission item 2: altitude 130 m above the envelope's"):
+        op.result()
+    takeoff = [Waypoint(command=mavlink.MAV_CMD_NAV_TAKEOFF, x_lat=0, y_long=0, z_alt=150.0)]
+    op = rig.call(missions.push, WaypointPush(waypoints=takeoff))
+    with pytest.raises(ServiceError, match=r"mission item 0: altitude 150 m above the envelope's"):
+        op.result()
+    assert not rig.sent_since(-math.inf, "MISSION_COUNT")
+
+
+def test_a_transfer_waits_for_the_running_one_to_end():
+    rig = flying()
+    home(rig)
+    push = rig.call(missions.push, WaypointPush(waypoints=square(2)))
+    pull = rig.call(missions.pull, WaypointPull())
+    rig.run(0.2)
+    assert rig.sent_since(-math.inf, "MISSION_REQUEST_LIST") == []  # the upload runs
+    answer_upload(rig)
+    assert push.result().success
+    rig.run(0.2)
+    assert len(rig.sent_since(-math.inf, "MISSION_REQUEST_LIST")) == 1  # now the download
+    assert not pull.done
+
+
 def test_mission_push_without_home_is_refused():
     rig = flying()
     op = rig.call(missions.push, WaypointPush(waypoints=square(1)))

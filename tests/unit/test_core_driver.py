@@ -15,12 +15,20 @@ from dronewrapper_bridge_base.core_driver import CoreDriver, PureCore
 from dronewrapper_bridge_base.operation import Steps
 
 
+class Outbox(list):
+    """EchoCore's outbox: the inputs in order, and the samples published (``samples``)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.samples: list = []
+
+
 class EchoCore(PureCore):
     """Answers an operation when told; queues every input in its outbox (a list), and the
     commander shown on each State it publishes."""
 
     def __init__(self, lease_ttl_s: float | None = None) -> None:
-        super().__init__(0.0, list, logging.getLogger("test"), lease_ttl_s=lease_ttl_s)
+        super().__init__(0.0, Outbox, logging.getLogger("test"), lease_ttl_s=lease_ttl_s)
         self.answer: str | None = None
         self.states: list[str] = []
 

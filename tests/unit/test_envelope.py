@@ -89,6 +89,18 @@ def test_breach_monitor_acts_once_per_excursion():
     assert monitor.breaches == 2
 
 
+def test_breach_monitor_rearms_only_back_inside_the_envelope_not_within_its_margin():
+    env = Envelope(max_altitude=10, margin=1.0)
+    monitor = BreachMonitor()
+    assert "altitude" in monitor.update(env, (0, 0, 11.5))  # beyond the margin: a breach
+    assert monitor.update(env, (0, 0, 10.5)) == ""  # back within the margin, still outside
+    assert monitor.update(env, (0, 0, 11.5)) == ""  # out again: the same excursion
+    assert monitor.breaches == 1
+    assert monitor.update(env, (0, 0, 9.5)) == ""  # inside the envelope: re-armed
+    assert "altitude" in monitor.update(env, (0, 0, 11.5))
+    assert monitor.breaches == 2
+
+
 def test_polygon_geometry():
     assert inside(SQUARE, 0, 0) and not inside(SQUARE, 11, 0)
     assert distance_outside(SQUARE, 13, 0) == pytest.approx(3.0)

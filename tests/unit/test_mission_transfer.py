@@ -39,6 +39,10 @@ def item_seqs(sends: list[tuple[str, tuple]]) -> list[int]:
     return [fields[2] for name, fields in sends if name == "mission_item_int"]
 
 
+def item_seqs_asked(sends: list[tuple[str, tuple]]) -> list[int]:
+    return [fields[2] for name, fields in sends if name == "mission_request_int"]
+
+
 def test_upload_in_order_sends_count_then_each_item_asked_and_ends_on_accept():
     up = Upload(items(3), TARGET, 0.0)
     first = up.due(0.0)
@@ -172,6 +176,34 @@ def test_download_lost_item_is_asked_again_and_a_duplicate_kept_once():
     down.on_message(mavlink.MAVLink_mission_item_int_message(*fields), 1.3)
     down.on_message(mavlink.MAVLink_mission_item_int_message(*fields), 1.3)
     assert len(down.items) == 1 and down.done
+
+
+def test_download_takes_the_first_count_only():
+    down = Download(TARGET, 0.0, timeout=1.0)
+    down.due(0.0)
+    down.on_message(mavlink.MAVLink_mission_count_message(255, 191, 2, MISSION), 0.1)
+    assert item_seqs_asked(down.due(0.1)) == [0]
+    fields = (255, 191, 0, 3, 16, 0, 1, 0, 0, 0, math.nan, 10, 20, 5.0, MISSION)
+    down.on_message(mavlink.MAVLink_mission_item_int_message(*fields), 0.2)
+    assert item_seqs_asked(down.due(0.2)) == [1]
+    # our re-sent MISSION_REQUEST_LIST answered late: neither a new count nor a new request
+    down.on_message(mavlink.MAVLink_mission_count_message(255, 191, 1, MISSION), 0.3)
+    assert down.count == 2 and down.due(0.3) == [] and not down.done
+    fields = (255, 191, 1, 3, 16, 0, 1, 0, 0, 0, math.nan, 11, 20, 5.0, MISSION)
+    down.on_message(mavlink.MAVLink_mission_item_int_message(*fields), 0.4)
+    assert down.done and not down.error and [item.x for item in down.items] == [10, 11]
+
+
+def test_download_refused_ends_with_the_autopilots_reason():
+    down = Download(TARGET, 0.0)
+    down.due(0.0)
+    down.on_message(ack(mavlink.MAV_MISSION_ACCEPTED), 0.1)  # not an answer to a download
+    assert not down.done
+    down.on_message(ack(mavlink.MAV_MISSION_DENIED, FENCE), 0.1)  # another mission type's
+    assert not down.done
+    down.on_message(ack(mavlink.MAV_MISSION_DENIED), 0.2)
+    assert down.done and "refused by the autopilot: MAV_MISSION_DENIED" in down.error
+    assert down.due(5.0) == []  # nothing re-sent after the refusal
 
 
 def test_download_without_an_answer_times_out():

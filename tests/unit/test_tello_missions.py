@@ -10,10 +10,12 @@ from tello_core_rig import TelloRig
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point
+from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
+    FRAME_BODY_NED,
     FRAME_LOCAL_NED,
     LANDED_STATE_IN_AIR,
+    MASK_MIXED,
     MASK_POSITION,
     CommandTOL,
     PositionTarget,
@@ -73,6 +75,27 @@ def test_a_position_beyond_the_envelope_is_refused():
     assert rig.core.rejected_setpoints == 1
     texts = [m.text for m in rig.published(registry.STATUSTEXT)]
     assert any("distance 40 m from home beyond the envelope's 30 m" in t for t in texts)
+
+
+def test_a_target_above_the_envelope_is_refused_and_flies_nothing():
+    rig = flying_rig()
+    above = PositionTarget(
+        coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION, position=Point(x=1.0, z=12.0)
+    )
+    climb = PositionTarget(
+        coordinate_frame=FRAME_BODY_NED,
+        type_mask=MASK_MIXED,
+        velocity=Vector3(x=0.5),
+        position=Point(z=12.0),
+    )
+    for target in (above, climb):
+        start = rig.now
+        rig.setpoint(target)
+        rig.run(0.3)
+        assert all(sticks == (0, 0, 0, 0) for _, sticks in rig.rcs(start))  # no climb
+    assert rig.core.rejected_setpoints == 2
+    texts = [m.text for m in rig.published(registry.STATUSTEXT)]
+    assert any("altitude 12 m above the envelope's 10 m" in t for t in texts)
 
 
 def test_a_breach_lands_the_tello():

@@ -7,12 +7,15 @@ from __future__ import annotations
 import itertools
 
 import pytest
-from tello_core_rig import TelloRig
+from tello_core_rig import EPOCH, TelloRig
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import CancelRequest, TakeoffRequest
 from dronewrapper.msgs.mavros import CommandTOL
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
+from dronewrapper_bridge_base.core_driver import cancel_steps
+from dronewrapper_bridge_tello import flight
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
 from dronewrapper_bridge_tello.config import Config
@@ -183,6 +186,30 @@ def test_the_video_never_goes_ahead_of_a_flight_command_nor_between_one_and_its_
     sent = [(at, t) for at, t in rig.sent if t in ("streamon", "takeoff")]
     assert [t for _, t in sent[-2:]] == ["streamon", "takeoff"]
     assert sent[-1][0] - sent[-2][0] >= 0.5  # the take-off only once streamon was answered
+
+
+def test_a_slot_freed_between_ticks_goes_to_the_waiting_flight_command_not_the_video():
+    rig, viewers = video_rig()
+    rig.connect()
+    rig.run(1.0)
+    rig.delays["up 200"] = 10.0  # the climb to 3 m holds the slot
+    takeoff = rig.start(flight.takeoff_to, TakeoffRequest(height=3.0))
+    rig.run(10.0, until=lambda: "up 200" in rig.commands())
+    land = rig.start(ops.land, CommandTOL.land())  # waits for the slot
+    viewers.subscribe()  # the video waits for it too
+    rig.run(0.2)
+    since = rig.now
+    rig.script["stop"] = None  # the cancel's stop is answered by hand, between two ticks
+    assert rig.start(cancel_steps, CancelRequest()).result().success
+    assert takeoff.done and rig.commands(since) == ["stop"]
+    rig.reply_now("ok")  # the stop answered: the slot is free, the land not resumed yet
+    assert not rig.core.command_busy and not land.done
+    rig.core.tick(rig.now, rig.now + EPOCH, camera_watched=rig.watched())  # the next tick
+    rig.collect()
+    assert rig.commands(since) == ["stop", "land"]  # the flight command first
+    rig.run(5.0, until=lambda: land.done)
+    rig.run(0.5)
+    assert land.result().success and rig.commands(since) == ["stop", "land", "streamon"]
 
 
 def test_mode_on_streams_at_connection_and_mode_off_never_touches_the_stream():

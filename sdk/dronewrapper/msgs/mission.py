@@ -145,17 +145,21 @@ class MissionResult(msgspec.Struct, kw_only=True, frozen=True):
 
 
 class EnvelopeSet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
-    """Replace the bridge's envelope with ``envelope`` (None: only read it)."""
+    """Replace the bridge's envelope with ``envelope`` (None: only read it); ``reset``: put
+    the bridge's configured envelope back instead."""
 
     envelope: Envelope | None = None
+    reset: bool = False
 
 
 class EnvelopeResult(msgspec.Struct, kw_only=True, frozen=True):
-    """The envelope in force after the call."""
+    """The envelope in force after the call; ``set_by``: the commander that set it (``""``:
+    it is the bridge's configured one)."""
 
     success: bool = False
     message: str = ""
     envelope: Envelope = msgspec.field(default_factory=Envelope)
+    set_by: str = ""
 
 
 class HomePosition(msgspec.Struct, kw_only=True, frozen=True):

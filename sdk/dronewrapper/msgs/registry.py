@@ -63,6 +63,7 @@ from dronewrapper.msgs.mission import (
     WaypointReached,
     WaypointSetCurrent,
 )
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.sensor import (
     BatteryState,
     CameraInfo,
@@ -511,6 +512,12 @@ ENVELOPE = Topic(
     rate_hz=0.5,
     publishers=("bridge",),
     doc="the safety envelope in force",
+)
+REFUSAL = Topic(
+    "{ns}/dronewrapper/refusal",
+    type=Refusal,
+    publishers=("bridge",),
+    doc="a setpoint refused or a command overridden, named to its commander (msgs.refusal)",
 )
 MISSION_PUSH = Service(
     "{ns}/mavros/mission/push",

@@ -20,7 +20,8 @@ gives that loop three things, each taking the time as an argument:
 - **the bridge's state** as newest-value holders on the loop's clock: ``state``,
   ``extended``, ``pose``, ``status_text`` (the autopilot's newest text), and
   :meth:`Commander.ready` (autopilot connected, State fresh, landed state and position
-  present).
+  present); and ``refusals``, the bridge's refusals of our setpoints as they arrive
+  (:class:`~dronewrapper.refusals.RefusalInbox`: the recent ones, a warning line, listeners).
 
 Every setpoint and request carries the ``commander=NAME`` attachment, as the SDK's do, so a
 bridge with the command lease on knows who sends it. Units: seconds (``now``: the node's
@@ -40,6 +41,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import PoseStamped
 from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State, StatusText
 from dronewrapper.msgs.registry import Service
+from dronewrapper.refusals import RefusalInbox
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.latest import Latest
@@ -139,6 +141,8 @@ class Commander:
         self.extended: Latest[ExtendedState] = node.latest(registry.EXTENDED_STATE)
         self.pose: Latest[PoseStamped] = node.latest(registry.LOCAL_POSE)
         self.status_text: Latest[StatusText] = node.latest(registry.STATUSTEXT)
+        self.refusals = RefusalInbox(self.ns, name, self.clock)
+        node.subscribe(registry.REFUSAL, self.refusals.on_refusal)
 
     def wall(self) -> float:
         """Unix time now on the node's clock (s)."""

@@ -12,7 +12,7 @@ bridge subclasses it with its link: it executes the aircraft's part of the core'
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Generic, TypeVar
 
 from dronewrapper.msgs import registry
@@ -93,15 +93,20 @@ class BridgeNode(Generic[C]):
     def serve(
         self,
         services: Mapping[Service[Any, Any], Operation],
-        guarded: Mapping[Service[Any, Any], str] | None = None,
+        guarded: Iterable[tuple[Service[Any, Any], Operation, str]] = (),
     ) -> None:
         """Subscribe to setpoints, serve each service with its operation and the lease service.
-        A command service's request (:data:`COMMANDS`, and ``guarded``: service -> the name a
-        refusal gives it) is refused unless from the lease holder."""
+        A command service's request (:data:`COMMANDS`) is refused unless from the lease holder,
+        as is one of a ``guarded`` service: (service, operation, the lease action a refusal
+        names; "" for a service anyone may call), the bridge's mission services and envelope."""
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
         self.node.subscribe(registry.COMMANDER_BEAT, self.on_beat)
-        commands = {**COMMANDS, **(guarded or {})}
+        commands = dict(COMMANDS)
         services = {registry.FLIGHT_CANCEL: cancel_steps, **services}
+        for service, steps, what in guarded:
+            services[service] = steps
+            if what:
+                commands[service] = what
         for service, steps in services.items():
             self.node.serve(service, self._handler(steps, commands.get(service, "")))
         self.node.serve(registry.COMMAND_LEASE, self.on_lease)

@@ -5,7 +5,11 @@ A bridge's core (bridge_mavlink's ``BridgeCore``, bridge_tello's ``TelloCore``) 
 with the time as arguments and queues what to send and publish in an outbox. It applies the
 commander lease itself (:class:`~.commander_lease.LeaseGate`): a setpoint or command
 from anyone but the lease holder is refused in the core, so the rule is held by the core's
-tests. :class:`CoreDriver` is the only place a node touches a core: every input goes through
+tests. Every setpoint the core refuses (lease, late, validation, envelope) and every breach
+that overrides a commander is published to that commander on ``{ns}/dronewrapper/refusal``
+(:meth:`PureCore.refuse`, repeats throttled by :class:`~.refusals.RefusalThrottle`).
+
+:class:`CoreDriver` is the only place a node touches a core: every input goes through
 :meth:`CoreDriver.feed` (the core called under the lock with the monotonic and wall-clock time,
 its outbox executed after the lock is released), and a service call runs its operation to the
 end with :meth:`CoreDriver.call`, waiting on the lock's condition until the operation ends,
@@ -21,13 +25,17 @@ import time
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
+from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CANCELLED, CancelRequest, FlightResult
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
+from dronewrapper.msgs.refusal import BREACH, ENVELOPE, LATE, LEASE, VALIDATION, Refusal
 from dronewrapper.msgs.registry import Topic
+from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.setpoint_limits import SetpointError
-from dronewrapper_bridge_base.commander_lease import LeaseGate
+from dronewrapper_bridge_base.commander_lease import LeaseDecision, LeaseGate
 from dronewrapper_bridge_base.operation import Operation, Operations, Steps
+from dronewrapper_bridge_base.refusals import RefusalThrottle
 from dronewrapper_bridge_base.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
 
 MAX_WAIT_S = 0.05
@@ -70,6 +78,9 @@ class PureCore:
         self._late_log_at = -math.inf
         self.rejected_setpoints = 0  # setpoints refused by validation or the envelope
         self._last_reject_log = -math.inf
+        self.refusals = RefusalThrottle()  # what is published to the refused commanders
+        self.setpoint_commander = ""  # who sent the last setpoint flown (told of a breach)
+        self.caller = ""  # the commander of the request whose operation is starting
 
     def _at(self, now: float, stamp: float) -> None:
         self.now, self.stamp = now, stamp
@@ -115,20 +126,27 @@ class PureCore:
         lease refuses it (:meth:`admit_setpoint`), when ``check(target)`` (the bridge's own
         validation) raises SetpointError, or when ``refuse(core, target, kind)`` (the
         envelope) says so. Every refusal but the lease's is counted in
-        ``rejected_setpoints``; a validation refusal is logged at most every 2 s."""
+        ``rejected_setpoints``; a validation refusal is logged at most every 2 s. Each
+        refusal is published to ``commander`` (:meth:`refuse`); ``refuse`` returns the
+        EnvelopeError (its ``limit`` named) or a reason, falsy when the envelope admits it."""
         if not self.admit_setpoint(commander, sent):
             return None
         try:
             kind = check(target)
         except SetpointError as exc:
             self.rejected_setpoints += 1
+            self.refuse(VALIDATION, commander, exc.limit, str(exc))
             if self.now - self._last_reject_log >= 2.0:
                 self._last_reject_log = self.now
                 self._log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
             return None
-        if refuse(self, target, kind):
+        refused = refuse(self, target, kind)
+        if refused:
             self.rejected_setpoints += 1
+            limit = getattr(refused, "limit", "")
+            self.refuse(ENVELOPE, commander, limit, str(refused))
             return None
+        self.setpoint_commander = commander
         return kind
 
     def admit_setpoint(self, commander: str, sent: float | None = None) -> bool:
@@ -137,6 +155,14 @@ class PureCore:
         ``setpoint_delay.refused`` and logged) and the lease admits it."""
         verdict = self.setpoint_delay.judge(commander, sent, self.now)
         if verdict.late:
+            threshold = self.setpoint_delay.threshold_s
+            message = (
+                f"arrived {verdict.excess:.2f} s later than its usual lag, beyond the bridge's "
+                f"{threshold:g} s (held on the way: a stalled link)"
+                if verdict.excess > threshold
+                else f"sent within {threshold:g} s of a late one (queued behind it)"
+            )
+            self.refuse(LATE, commander, "late_setpoint_s", message)
             if self.now - self._late_log_at >= 2.0:
                 self._late_log_at = self.now
                 self._log.warning(
@@ -148,7 +174,51 @@ class PureCore:
             return False
         admitted = self.lease.admit_setpoint(commander, self.now)
         self.show_commander()
+        if not admitted:
+            reason = LeaseDecision(False, self.lease.holder(self.now)).reason(commander)
+            self.refuse(LEASE, commander, "command_lease", reason)
         return admitted
+
+    def refuse(
+        self,
+        kind: str,
+        commander: str,
+        limit: str,
+        message: str,
+        *,
+        what: str = "setpoint",
+        action: str = "",
+    ) -> None:
+        """Tell ``commander`` that its ``what`` was refused (or overridden: a breach) by rule
+        ``kind`` (:data:`dronewrapper.msgs.refusal.KINDS`), ``limit`` named: published now
+        unless an identical refusal was published less than a second ago (then counted into
+        the next one, :class:`~.refusals.RefusalThrottle`)."""
+        count = self.refusals.admit(self.now, commander, kind, what, limit, message)
+        if count:
+            refusal = Refusal(
+                header=Header(stamp=self.stamp),
+                commander=commander,
+                kind=kind,
+                what=what,
+                limit=limit,
+                message=message,
+                action=action,
+                count=count,
+            )
+            self.publish(registry.REFUSAL, refusal)
+
+    def report_breach(self, limit: str, reason: str, action: str) -> None:
+        """Tell whoever commands (the lease's holder, else the sender of the last setpoint
+        flown) that a breach of ``limit`` overrides it with the envelope's ``action``."""
+        commander = self.lease.holder(self.now) or self.setpoint_commander
+        self.refuse(
+            BREACH,
+            commander,
+            limit,
+            f"envelope breach: {reason}",
+            what="command",
+            action=action,
+        )
 
     def request(self, steps: Steps, commander: str, what: str, now: float, stamp: float):
         """A service call from ``commander``: ``what`` names the command the lease guards
@@ -160,6 +230,7 @@ class PureCore:
         if refusal is not None:
             steps.close()
             steps = _refused(refusal)
+        self.caller = commander  # read by the operation's first step
         return self.operations.start(steps)
 
     def on_lease_request(

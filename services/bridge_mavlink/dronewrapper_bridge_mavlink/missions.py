@@ -31,7 +31,6 @@ from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
 from dronewrapper.msgs.mission import (
-    EnvelopeResult,
     EnvelopeSet,
     HomePosition,
     MissionResult,
@@ -48,6 +47,7 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits, mission_frames
 from dronewrapper_bridge_mavlink import mission_transfer as mt
@@ -79,6 +79,7 @@ class MissionState:
 
     def __init__(self, envelope: Envelope) -> None:
         self.envelope = envelope
+        self.set_by = ""  # who set the envelope in force ("": the configured one)
         self.monitor = BreachMonitor()
         self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)  # ENU m
         self.home_known = False  # HOME_POSITION has arrived (home_local is the origin before)
@@ -104,8 +105,9 @@ def relative(core: BridgeCore, x: float, y: float, z: float) -> tuple[float, flo
 # ---------------------------------------------------------------- hooks the core calls
 
 
-def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> str:
-    """Why the envelope refuses ``target`` (valid, of control ``kind``), or ""."""
+def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
+    """Why the envelope refuses ``target`` (valid, of control ``kind``; the limit named), or
+    None."""
     state = core.missions
     try:
         if kind is Kind.POSITION:
@@ -118,15 +120,16 @@ def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> str
                 z = target.position.z - state.home_local[2]
                 if z > state.envelope.max_altitude:
                     raise EnvelopeError(
-                        f"altitude {z:g} m above the envelope's {state.envelope.max_altitude:g} m"
+                        f"altitude {z:g} m above the envelope's {state.envelope.max_altitude:g} m",
+                        "max_altitude",
                     )
     except EnvelopeError as exc:
         reason = f"setpoint refused: {exc}"
         if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
             state.last_refusal_text = core.now
             core.bridge_text(reason)
-        return reason
-    return ""
+        return exc
+    return None
 
 
 def refuse_takeoff(core: BridgeCore, height: float) -> None:
@@ -158,6 +161,7 @@ def tick(core: BridgeCore) -> None:
         if reason:
             action = state.envelope.breach_action
             core.bridge_text(f"envelope breach: {reason}; {action}")
+            core.report_breach(state.monitor.limit, reason, action)
             core.start(breach_action(core, action), core.now, core.stamp, background=True)
     if core.now >= state._next_publish:
         state._next_publish = core.now + PUBLISH_PERIOD_S
@@ -395,18 +399,22 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
 
 
 def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
-    """envelope/set: replace the envelope (None: read it); the fence follows to the autopilot
-    when one is connected and home is known."""
+    """envelope/set: replace or reset the envelope (neither: read it; see
+    :mod:`dronewrapper_bridge_base.envelope_set`); the fence follows to the autopilot when one
+    is connected and home is known."""
     state = core.missions
-    if request.envelope is not None:
-        state.envelope = request.envelope
-        state.monitor = BreachMonitor()
+    pose = core.pose()
+    aircraft = None if pose is None else relative(core, *pose[0])[:2]
+    changed = envelope_set.apply(
+        state, request, configured=core.config.envelope, caller=core.caller, aircraft=aircraft
+    )
+    if changed:
         core.publish(registry.ENVELOPE, state.envelope)
-        log.info("envelope set: %s", state.envelope)
+        log.info("envelope set by %r: %s", state.set_by or "the configuration", state.envelope)
         if core.connected and state.home_geo is not None and core.config.upload_fence:
             follow_envelope(core)
     yield from ()
-    return EnvelopeResult(success=True, message="envelope in force", envelope=state.envelope)
+    return envelope_set.result(state)
 
 
 def fence_items(state: MissionState) -> list[mt.Item]:

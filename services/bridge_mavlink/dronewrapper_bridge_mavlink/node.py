@@ -45,6 +45,7 @@ PUBLISHED = (
     registry.HOME_POSITION,
     registry.MISSION_WAYPOINTS,
     registry.MISSION_REACHED,
+    registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
@@ -60,6 +61,13 @@ SERVICES = {
     registry.PARAM_GET: parameters.param_get,
     registry.PARAM_SET: parameters.param_set,
 }
+
+
+def serve_services(bridge: BridgeNode[Any]) -> None:
+    """Serve this bridge's services on ``bridge``: :data:`SERVICES`, and
+    ``missions.SERVICES`` (the mission services, the fence upload and the envelope), which
+    only the command lease's holder may call."""
+    bridge.serve(SERVICES, missions.SERVICES)
 
 
 class Bridge(BridgeNode[BridgeCore]):
@@ -137,10 +145,7 @@ class Bridge(BridgeNode[BridgeCore]):
     def start(self) -> list[threading.Thread]:
         """Open the link, subscribe, serve, and start the loops (returns the threads)."""
         self._open_link()
-        self.serve(
-            {**SERVICES, **{service: steps for service, steps, _ in missions.SERVICES}},
-            guarded={service: what for service, _, what in missions.SERVICES if what},
-        )
+        serve_services(self)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(

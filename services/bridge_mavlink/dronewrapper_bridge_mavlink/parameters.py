@@ -3,10 +3,19 @@
 PX4 sends integer parameters as their bytes in PARAM_VALUE's float field, ArduPilot as float
 values (param_values.py); a write is checked against the parameter's type before anything is
 sent, and its reply is the value the autopilot echoes.
+
+A write's echo is matched to the write. PARAM_VALUE answers a read (PARAM_REQUEST_READ) and
+acknowledges a write (PARAM_SET) alike, with the same param_id and, on PX4, the same
+param_index, so only the value tells them apart: a PARAM_VALUE heard after the write that holds
+the value written (within float32 tolerance) is its echo. One holding another value may answer
+a read that overlaps the write (this bridge's own or another ground station's), so it is not
+taken as the echo: the write re-sends until its attempts are spent, and only then is it
+reported as kept at the last value heard.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable, Generator
 from typing import TYPE_CHECKING, Any
 
@@ -19,12 +28,16 @@ if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core import BridgeCore
 
 
+HISTORY = 16  # PARAM_VALUEs kept per parameter, so overlapping exchanges each find theirs
+
+
 class ParamCache:
-    """The autopilot's parameters as last heard (PARAM_VALUE), each with its arrival number, so
-    a read knows which answers came after its request."""
+    """The autopilot's parameters as heard (PARAM_VALUE), each with its arrival number, so an
+    exchange knows which answers came after its request; the last :data:`HISTORY` values of
+    each parameter are kept, as several may arrive between two resumptions of an exchange."""
 
     def __init__(self) -> None:
-        self._values: dict[str, tuple[float, int, int]] = {}  # id -> (raw, type, arrival no.)
+        self._values: dict[str, deque[tuple[float, int, int]]] = {}  # id -> (raw, type, no.)
         self.received = 0  # PARAM_VALUEs so far
 
     def on_value(self, msg: Any) -> None:
@@ -33,15 +46,18 @@ class ParamCache:
         if isinstance(param_id, bytes | bytearray):
             param_id = bytes(param_id).decode("ascii", "replace")
         self.received += 1
-        self._values[param_id.split("\x00", 1)[0]] = (
-            float(msg.param_value),
-            int(msg.param_type),
-            self.received,
-        )
+        heard = self._values.setdefault(param_id.split("\x00", 1)[0], deque(maxlen=HISTORY))
+        heard.append((float(msg.param_value), int(msg.param_type), self.received))
 
     def get(self, param_id: str) -> tuple[float, int, int] | None:
-        """(raw float, MAV_PARAM_TYPE, arrival number) of ``param_id``, None if never heard."""
-        return self._values.get(param_id)
+        """(raw float, MAV_PARAM_TYPE, arrival number) of ``param_id`` as last heard, None if
+        never heard."""
+        heard = self._values.get(param_id)
+        return heard[-1] if heard else None
+
+    def since(self, param_id: str, after: int) -> list[tuple[float, int, int]]:
+        """The values of ``param_id`` heard after arrival number ``after``, oldest first."""
+        return [entry for entry in self._values.get(param_id, ()) if entry[2] > after]
 
 
 def check_param_id(param_id: str) -> str:
@@ -62,22 +78,42 @@ def decode(core: BridgeCore, raw: float, param_type: int) -> ParamValue:
     return param_values.decode_param(raw, param_type, bytewise=bytewise)
 
 
+def same_value(echoed: ParamValue, requested: ParamValue) -> bool:
+    """Whether an echoed value is the one requested: integers exactly, reals within float32
+    rounding (relative 1e-6, absolute below 1)."""
+    return echoed.integer == requested.integer and (
+        echoed.real == requested.real
+        or abs(echoed.real - requested.real) <= 1e-6 * max(1.0, abs(requested.real))
+    )
+
+
 def param_exchange(
-    core: BridgeCore, param_id: str, send: Callable[[], None]
+    core: BridgeCore,
+    param_id: str,
+    send: Callable[[], None],
+    echoes: Callable[[float, int], bool] | None = None,
 ) -> Generator[float, None, tuple[float, int] | None]:
-    """Send (with retries) until a PARAM_VALUE for ``param_id`` newer than the send."""
+    """Send (with retries) until a PARAM_VALUE for ``param_id`` heard after the first send
+    answers: (raw float, MAV_PARAM_TYPE), or None if none was heard.
+
+    A read (``echoes`` None) takes the first one. A write takes the first for which
+    ``echoes(raw, type)`` holds (its value written); other values heard may answer an
+    overlapping read, so the write re-sends until its attempts are spent and then answers with
+    the last of them (the value the autopilot kept)."""
+    sent_after = core.params.received  # only a PARAM_VALUE arriving later answers
     for _ in range(core.config.param_attempts):
-        sent_after = core.params.received  # only a PARAM_VALUE arriving later answers
         send()
         deadline = core.now + core.config.param_timeout
         while True:
-            entry = core.params.get(param_id)
-            if entry is not None and entry[2] > sent_after:
-                return entry[0], entry[1]
+            heard = core.params.since(param_id, sent_after)
+            for raw, param_type, _no in heard:
+                if echoes is None or echoes(raw, param_type):
+                    return raw, param_type
             if core.now >= deadline:
                 break
             yield deadline
-    return None
+    heard = core.params.since(param_id, sent_after)
+    return (heard[-1][0], heard[-1][1]) if heard else None
 
 
 def param_read(core: BridgeCore, param_id: str) -> Generator[float, None, tuple | None]:
@@ -120,18 +156,16 @@ def param_set(core: BridgeCore, request: ParamSet) -> Steps:
     bytewise = core.autopilot != AUTOPILOT_ARDUPILOT
     raw = param_values.encode_param(param_id, request.value, param_type, bytewise=bytewise)
     encoded = param_id.encode("ascii")
+    requested = decode(core, raw, param_type)
     got = yield from param_exchange(
         core,
         param_id,
         lambda: core.send("param_set", *core.target(), encoded, raw, param_type),
+        lambda echo_raw, echo_type: same_value(decode(core, echo_raw, echo_type), requested),
     )
     if got is None:
         return ParamSetResult(success=False, message=f"{param_id}: no PARAM_VALUE echo")
     echoed = decode(core, *got)
-    requested = decode(core, raw, param_type)
-    same = echoed.integer == requested.integer and (
-        echoed.real == requested.real
-        or abs(echoed.real - requested.real) <= 1e-6 * max(1.0, abs(requested.real))
-    )
+    same = same_value(echoed, requested)
     message = "ok" if same else "the autopilot kept a different value"
     return ParamSetResult(success=same, value=echoed, message=message)

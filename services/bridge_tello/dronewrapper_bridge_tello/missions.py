@@ -29,7 +29,6 @@ from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, PositionTarget
 from dronewrapper.msgs.mission import (
-    EnvelopeResult,
     EnvelopeSet,
     HomePosition,
     MissionControl,
@@ -44,6 +43,7 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.operation import Operation, Steps
 from dronewrapper_bridge_tello import operations as ops
 
@@ -66,6 +66,7 @@ class TelloMissions:
 
     def __init__(self, envelope: Envelope) -> None:
         self.envelope = envelope
+        self.set_by = ""  # who set the envelope in force ("": the configured one)
         self.monitor = BreachMonitor()
         self.waypoints: list[Waypoint] = []
         self.current_seq = 0
@@ -96,8 +97,8 @@ def go_moves(east: float, north: float, up: float, yaw_enu: float) -> list[tuple
 # ---------------------------------------------------------------- hooks the core calls
 
 
-def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> str:
-    """Why the envelope refuses ``target``, or ""."""
+def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
+    """Why the envelope refuses ``target`` (the limit named), or None."""
     state = core.missions
     try:
         if kind is Kind.POSITION:
@@ -114,8 +115,8 @@ def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> str:
             state.last_refusal_text = core.now
             log.warning("%s", reason)
             core.text(4, f"bridge: {reason}")
-        return reason
-    return ""
+        return exc
+    return None
 
 
 def refuse_takeoff(core: TelloCore, height: float) -> None:
@@ -136,6 +137,7 @@ def tick(core: TelloCore) -> None:
             done = "stop (hover)" if action == "hold" else "land"
             core.text(4, f"bridge: envelope breach: {reason}; {done}")
             log.warning("envelope breach: %s; %s", reason, done)
+            core.report_breach(state.monitor.limit, reason, "hold" if action == "hold" else "land")
             state.paused = True
             core.start(breach_action(core, action), core.now, core.stamp, background=True)
     if core.now >= state._next_publish:
@@ -265,13 +267,19 @@ def fly_home(core: TelloCore) -> Steps:
 
 
 def set_envelope(core: TelloCore, request: EnvelopeSet) -> Steps:
+    """envelope/set: replace or reset the envelope, or read it
+    (:mod:`dronewrapper_bridge_base.envelope_set`; home is the take-off point)."""
     state = core.missions
-    if request.envelope is not None:
-        state.envelope = request.envelope
-        state.monitor = BreachMonitor()
+    position = core.telemetry.position_enu
+    aircraft = None if position is None else (position[0], position[1])
+    changed = envelope_set.apply(
+        state, request, configured=core.config.envelope, caller=core.caller, aircraft=aircraft
+    )
+    if changed:
         core.publish(registry.ENVELOPE, state.envelope)
+        log.info("envelope set by %r: %s", state.set_by or "the configuration", state.envelope)
     yield from ()
-    return EnvelopeResult(success=True, message="envelope in force", envelope=state.envelope)
+    return envelope_set.result(state)
 
 
 SERVICES: tuple[tuple[Any, Callable[..., Steps], str], ...] = (

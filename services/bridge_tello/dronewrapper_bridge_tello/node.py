@@ -51,6 +51,7 @@ PUBLISHED = (
     registry.HOME_POSITION,
     registry.MISSION_WAYPOINTS,
     registry.MISSION_REACHED,
+    registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
@@ -65,6 +66,13 @@ SERVICES = {
     registry.PARAM_GET: ops.param_get,
     registry.PARAM_SET: ops.param_set,
 }
+
+
+def serve_services(bridge: BridgeNode[Any]) -> None:
+    """Serve this bridge's services on ``bridge``: :data:`SERVICES`, and
+    ``missions.SERVICES`` (the mission services and the envelope), which only the command
+    lease's holder may call."""
+    bridge.serve(SERVICES, missions.SERVICES)
 
 
 class Bridge(BridgeNode[TelloCore]):
@@ -137,10 +145,7 @@ class Bridge(BridgeNode[TelloCore]):
 
     def start(self) -> list[threading.Thread]:
         """Subscribe, serve, and start the loops (returns the threads)."""
-        self.serve(
-            {**SERVICES, **{service: steps for service, steps, _ in missions.SERVICES}},
-            guarded={service: what for service, _, what in missions.SERVICES if what},
-        )
+        serve_services(self)
         loops = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),
             (self._receive_loop, (self.link.state, self._on_state, "state"), "tello-state"),

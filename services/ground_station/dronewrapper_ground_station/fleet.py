@@ -117,6 +117,7 @@ class DroneLink:
             )
         out["log"] = list(self.status_texts)[-20:]
         out["command"] = self.last_command
+        out["refusals"] = [snapshot.refusal_entry(r) for r in self.drone.refusals[-5:]]
         out["teleop"] = self.deadman.active
         for camera, slot in self.slots.items():
             out[f"video_{camera}_age"] = None if slot.value is None else slot.age()
@@ -180,8 +181,8 @@ class DroneLink:
             self.hold()
 
     def hold(self) -> None:
-        """Hold position where the drone is now (a position setpoint); on the ground, stop
-        commanding."""
+        """Hold position where the drone is now (a position setpoint); on the ground, or
+        outside the envelope (the bridge's breach action flies it), stop commanding."""
         with self._command_lock:
             self.deadman.release()
             pose = self.value("pose")
@@ -192,7 +193,12 @@ class DroneLink:
                 self._note("stop")
                 return
             f = snapshot.pose_fields(pose)
-            self.drone.set_cmd_pos(f["x"], f["y"], f["z"], f["yaw"])
+            try:
+                self.drone.set_cmd_pos(f["x"], f["y"], f["z"], f["yaw"])
+            except CommandRefused as exc:
+                self.drone.stop_commanding()
+                self._note("stop", refused=exc.reason)
+                return
             self._note("hold", x=f["x"], y=f["y"], z=f["z"])
 
     def goto(self, x: float, y: float) -> None:

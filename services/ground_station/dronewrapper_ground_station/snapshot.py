@@ -17,6 +17,7 @@ from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped, TwistStamped
 from dronewrapper.msgs.mavros import ExtendedState, State, StatusText
 from dronewrapper.msgs.mission import HomePosition, WaypointList
+from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.sensor import BatteryState, NavSatFix
 from dronewrapper.msgs.vision import Detections
 
@@ -166,6 +167,21 @@ def status_text_entry(msg: StatusText) -> dict[str, Any]:
     stamp = msg.header.stamp
     shown = time.strftime("%H:%M:%S", time.localtime(stamp)) if math.isfinite(stamp) else "--:--:--"
     return {"stamp": stamp, "time": shown, "severity": severity, "text": msg.text}
+
+
+def refusal_entry(refusal: Refusal) -> dict[str, Any]:
+    """A refusal of the station's commands, as the page shows it beside its buttons: its rule
+    (``kind``), ``limit``, ``count``, the bridge's stamp and local ``time``, and ``text``."""
+    stamp = refusal.header.stamp
+    shown = time.strftime("%H:%M:%S", time.localtime(stamp)) if math.isfinite(stamp) else "--:--:--"
+    return {
+        "stamp": stamp,
+        "time": shown,
+        "kind": refusal.kind,
+        "limit": refusal.limit,
+        "count": refusal.count,
+        "text": refusal.text(),
+    }
 
 
 def _stamp(msg: Any) -> float:

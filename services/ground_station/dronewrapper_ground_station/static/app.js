@@ -145,7 +145,21 @@ function onTelemetry(msg) {
     plots.cmd.push(3, now, d.velocity_body && d.velocity_body.vx);
   }
   renderTelemetry(d);
+  renderRefusals(d);
   renderObjects(msg.objects);
+}
+
+// ---- what the bridge refused of this station's commands (beside the buttons, and logged)
+const seenRefusals = new Set();
+function renderRefusals(d) {
+  const list = $("refusals"), refusals = (d && d.refusals) || [];
+  list.replaceChildren(...refusals.slice().reverse().map((r) => {
+    const li = document.createElement("li"); li.textContent = `${r.time}  ${r.text}`; return li;
+  }));
+  for (const r of refusals) {
+    const key = `${r.stamp}|${r.text}`;
+    if (!seenRefusals.has(key)) { seenRefusals.add(key); logLine(`${station.ns}: ${r.text}`, "error", r.time); }
+  }
 }
 
 function setRole(role) {
