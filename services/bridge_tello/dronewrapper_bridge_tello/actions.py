@@ -6,7 +6,8 @@ longitude is ``no_home``) and is flown as ``go`` moves
 (:func:`~dronewrapper_bridge_tello.missions.fly_to`); a return flies home at the current
 height and lands (:func:`~dronewrapper_bridge_tello.missions.fly_home`); a mission's start and
 resume start its moves in the background, a pause takes effect after the current move. All
-are refused on the ground. Positions ENU m from home, time the core's.
+are refused on the ground; while the bridge flies them no commander steers, so none is lost
+(the setpoint watchdog forgets the last setpoint). Positions ENU m from home, time the core's.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ def _ready(core: TelloCore, what: str) -> FlightResult | None:
         return failed(NOT_READY, "the Tello is not connected (no state string)")
     if core.telemetry.landed.state != LANDED_STATE_IN_AIR:
         return failed(REFUSED, f"{what} refused: not flying (take off first)", what)
+    core.failsafe.on_takeoff_or_land()  # the bridge flies it: no commander steers, none lost
     return None
 
 
