@@ -149,3 +149,14 @@ def test_the_tello_goto_and_return_are_one_operation_each_and_refused_on_the_gro
     reply = rig.call(actions.return_home, ReturnRequest())
     assert reply.success, reply.message
     assert rig.commands(start)[-1] == "land"  # (the rig's Tello does not move: home is here)
+
+
+def test_a_pause_then_resume_before_the_move_ends_goes_on():
+    rig = flying_rig()
+    assert rig.call(missions.push, WaypointPush(waypoints=[local(3, 0, 1), local(3, 3, 1)])).success
+    assert rig.call(missions.control, MissionControl(action="start")).success
+    assert rig.call(missions.control, MissionControl(action="pause")).success
+    reply = rig.call(missions.control, MissionControl(action="start"))
+    assert reply.success and "resumed" in reply.message
+    rig.run(2.0)
+    assert [m.wp_seq for m in rig.published(registry.MISSION_REACHED)] == [0, 1]

@@ -213,6 +213,10 @@ def control(core: TelloCore, request: MissionControl) -> Steps:
         state.paused = True
         yield from ()
         return MissionResult(success=True, message="pausing after the current move")
+    if flying and state.paused and request.action == "start":
+        state.paused = False  # paused, its current move not yet done: it goes on
+        yield from ()
+        return MissionResult(success=True, message="resumed: the mission goes on")
     if flying:
         raise ServiceError("a mission or a return is being flown already", "refused")
     state.paused = False
