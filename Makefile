@@ -6,16 +6,21 @@ STAMP  := $(VENV)/.installed
 # every distribution of the repository: the SDK, one per service, the simulator and the graphs
 DISTS  := sdk $(patsubst %/pyproject.toml,%,$(wildcard services/*/pyproject.toml)) sim compose
 
-.PHONY: setup demo test test-unit test-fast bench lint format clean
+.PHONY: setup onboard demo test test-unit test-fast bench lint format clean
 
 setup: $(STAMP)
 
 $(STAMP): pyproject.toml $(DISTS:%=%/pyproject.toml)
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) -e '.[dev]'
+	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) '.[dev]'  # the root holds no code: not editable
 	$(BIN)/python -m pip install -q --no-deps 'djitellopy==2.5.0'  # test client; its opencv-python would shadow our headless cv2
 	@touch $(STAMP)
+
+onboard:  # a companion computer (a Jetson): the stack without the test tools (docs/jetson.md)
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) -e .
 
 demo: setup
 	$(BIN)/python -m dronewrapper_compose.demo $(ARGS)
@@ -41,4 +46,4 @@ format: setup
 	$(BIN)/ruff format .
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache bench/results/*.json
+	rm -rf $(VENV) build .pytest_cache .ruff_cache bench/results/*.json

@@ -16,7 +16,6 @@ Run: ``.venv/bin/python -m bench.bridge_latency [--seconds S]``; writes bench/re
 
 from __future__ import annotations
 
-import argparse
 import os
 import socket
 import subprocess
@@ -41,6 +40,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
@@ -173,7 +173,7 @@ class PX4StandIn:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=15.0, help="length of each phase")
     args = parser.parse_args(argv)
 

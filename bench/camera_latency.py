@@ -14,7 +14,6 @@ Run: ``python -m bench.camera_latency [--duration 10]``. Writes bench/results/ca
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import subprocess
 import sys
@@ -32,6 +31,7 @@ from bench.common import (
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_camera_victure.pattern import render_pattern
 
 REPO = Path(__file__).resolve().parents[1]
@@ -90,7 +90,7 @@ def one_run(endpoint: str, width: int, height: int, jpeg: bool, duration: float)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--duration", type=float, default=10.0, help="seconds per run")
     args = parser.parse_args(argv)
     router = LoopbackRouter()

@@ -18,7 +18,6 @@ backend) and writes the matrix; the file is never edited by hand.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import datetime
 import json
@@ -31,6 +30,7 @@ from pathlib import Path
 
 from bench.common import RESULTS
 from bench.fidelity import backend as iris_backend
+from dronewrapper.runtime.arguments import CommandParser
 
 REPO = Path(__file__).resolve().parents[1]
 RECORDS = RESULTS / "capabilities.jsonl"
@@ -235,7 +235,9 @@ def probe_actions(p: Probe, drone, position) -> None:
     p.check("start_mission", drone.start_mission)
 
     def progress():
-        drone.wait_for(lambda: drone.mission_progress().reached >= 0, 40.0, "an item reached")
+        drone.wait_for(
+            lambda: drone.mission_progress().reached is not None, 40.0, "an item reached"
+        )
         return drone.mission_progress()
 
     p.check("mission_progress", progress, lambda v: "" if v.total == 3 else f"total {v.total}")
@@ -344,7 +346,7 @@ def render(path: Path = RECORDS, out: Path = MATRIX) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = CommandParser(description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("probe", help="call every SDK call on one backend and record the results")
     p.add_argument("--backend", choices=list(BACKENDS), required=True)

@@ -15,7 +15,6 @@ Run: ``python -m bench.controller_latency [--seconds 30]``; writes results/contr
 
 from __future__ import annotations
 
-import argparse
 import math
 import socket
 import sys
@@ -29,6 +28,7 @@ from bench.common import percentiles, print_table, write_results
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.vision import Detections
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
@@ -178,7 +178,7 @@ def through_graph(graph: str, scenario: str, detector: str, seconds: float) -> d
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=30.0, help="graph run per case")
     parser.add_argument("--frames", type=int, default=150, help="in-process frames per case")
     args = parser.parse_args(argv)

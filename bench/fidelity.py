@@ -24,7 +24,6 @@ FILE`` flies our sim alone and compares it with the firmware figures of an earli
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import itertools
 import json
@@ -39,6 +38,7 @@ from pathlib import Path
 
 from bench.common import RESULTS, print_table, write_results
 from bench.fidelity_metrics import ratio, step_figures, within
+from dronewrapper.runtime.arguments import CommandParser
 
 REPO = Path(__file__).resolve().parents[1]
 TAKEOFF_M = 2.5
@@ -329,7 +329,7 @@ def plot(results: dict[str, dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = CommandParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--px4", type=Path, default=os.environ.get("PX4_SITL_DIR") or None)
     parser.add_argument("--ardupilot", type=Path, default=os.environ.get("AP_SITL_DIR") or None)
     parser.add_argument("--only", default="sim,px4,ardupilot", help="backends, comma-separated")

@@ -40,6 +40,7 @@ from bench.common import RESULTS, percentiles, print_table, write_results
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.geometry import PoseStamped, Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, CommandBool, PositionTarget
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper_compose.ports import free_port
 
@@ -353,7 +354,7 @@ def report(results: list[dict[str, object]]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--counts", type=int, nargs="+", default=[1, 5, 10, 20])
     parser.add_argument("--max", type=int, default=60, help="most drones to try for the knee")
     parser.add_argument("--step", type=int, default=10, help="drones added past the counts")

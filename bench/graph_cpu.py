@@ -8,7 +8,6 @@ Run: ``python -m bench.graph_cpu [--seconds 20]``; writes bench/results/graph_cp
 
 from __future__ import annotations
 
-import argparse
 import os
 import socket
 import sys
@@ -17,6 +16,7 @@ from pathlib import Path
 
 from bench import common
 from bench.common import print_table, write_results
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
@@ -81,7 +81,7 @@ def measure(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=20.0, help="measuring window (s)")
     parser.add_argument("--settle", type=float, default=15.0, help="wait after start (s)")
     args = parser.parse_args(argv)

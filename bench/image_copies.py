@@ -36,6 +36,7 @@ import zenoh
 from bench.common import percentiles, print_table, write_results
 from dronewrapper.msgs import Header, Image, codec, registry
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import Publisher
 from dronewrapper_compose.ports import free_port
 
@@ -137,7 +138,7 @@ def run(samples: int, interleave: int = 8, ways: tuple[str, ...] = ()) -> dict[s
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--samples", type=int, default=400)
     parser.add_argument("--echo", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)

@@ -22,7 +22,6 @@ writes results/latency_budget.json.
 
 from __future__ import annotations
 
-import argparse
 import math
 import select
 import socket
@@ -43,6 +42,7 @@ from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.caller import origin_of
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
@@ -372,7 +372,7 @@ def print_budget(app: str, result: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--app", choices=("color", "person", "both"), default="both")
     parser.add_argument("--seconds", type=float, default=30.0, help="measured time per app")
     parser.add_argument("--minutes", type=float, help="measured time per app in minutes "

@@ -38,6 +38,7 @@ from bench.common import (
     stop_process,
     write_results,
 )
+from dronewrapper.runtime.arguments import CommandParser
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
@@ -316,7 +317,7 @@ def previous_results() -> dict[str, object]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="bench.perception_speed", description=__doc__)
+    parser = CommandParser(prog="bench.perception_speed", description=__doc__)
     parser.add_argument("--duration", type=float, default=60.0, help="latency run, s")
     parser.add_argument("--fps", type=float, default=30.0)
     parser.add_argument("--latency-detector", default="color", choices=("color", "yolox", "hog"))

@@ -29,6 +29,7 @@ import numpy as np
 
 from bench.common import percentiles, print_table, write_results
 from bench.suggest import DetectorSpeed, suggest
+from dronewrapper.runtime.arguments import CommandParser
 
 DETECTOR_RUNS = 30
 SIZES = (416, 320, 256)
@@ -75,7 +76,7 @@ def transport_floor(samples: int) -> dict[str, dict[str, float]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper bench --quick",
         description="This computer's detector speed, image transport floor and latency budget, "
         "and detector settings that meet a latency target.",

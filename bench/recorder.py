@@ -14,7 +14,6 @@ JPEG-compressed; replay timing accuracy.
 
 from __future__ import annotations
 
-import argparse
 import resource
 import subprocess
 import sys
@@ -32,6 +31,7 @@ from dronewrapper.record.reader import read_bus, summarize
 from dronewrapper.record.recorder import Recorder
 from dronewrapper.record.replayer import replay
 from dronewrapper.runtime import Node, ZenohOptions, open_session
+from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
 PHOTO = REPO / "assets" / "images" / "basketball1.png"
@@ -126,7 +126,7 @@ def bench_replay(endpoint: str, seconds: float) -> dict[str, object]:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=10.0)
     args = parser.parse_args()
     router = LoopbackRouter()

@@ -58,6 +58,7 @@ from dronewrapper.ros2.convert import ROS_TYPES
 from dronewrapper.ros2.names import topic_key
 from dronewrapper.ros2.typehash import type_hash
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
 NS = "drone"  # the standalone gateway's drone
@@ -320,7 +321,7 @@ def cpu_phase(receiver: Node, publisher: Publisher, ns: str, seconds: float, *pi
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=10.0, help="length of each phase")
     parser.add_argument(
         "--gateway-arg", action="append", default=[], help="an extra flag for the gateway"

@@ -29,6 +29,8 @@ import sys
 import threading
 import time
 
+from dronewrapper.runtime.arguments import CommandParser, first_line
+
 
 def percentiles_ms(values: list[float]) -> dict[str, float]:
     ordered = sorted(v * 1e3 for v in values)
@@ -169,7 +171,7 @@ def flood(rospy, child, kind: str, msg_type, msg, seconds: float) -> float:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--small", type=int, default=2000)
     parser.add_argument("--image", type=int, default=400)
     parser.add_argument("--seconds", type=float, default=4.0)

@@ -17,7 +17,6 @@ LOCAL_POSITION_NED, ATTITUDE), then a DroneWrapper in client mode, as a laptop a
 
 from __future__ import annotations
 
-import argparse
 import os
 import random
 import socket
@@ -34,6 +33,7 @@ from dronewrapper import DroneWrapper
 from dronewrapper.errors import Timeout
 from dronewrapper.msgs import Image, registry
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_compose.ports import free_port
 
 os.environ.setdefault("MAVLINK20", "1")
@@ -144,7 +144,7 @@ def time_commands(drone: DroneWrapper, autopilot: FakeAutopilot, samples: int):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--samples", type=int, default=300)
     parser.add_argument("--calls", type=int, default=20000)
     args = parser.parse_args(argv)

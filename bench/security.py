@@ -17,7 +17,6 @@ Targets: <= 0.3 ms added per message p50, <= 5 % CPU.
 
 from __future__ import annotations
 
-import argparse
 import tempfile
 import threading
 import time
@@ -28,6 +27,7 @@ from bench.common import percentiles, print_table, write_results
 from dronewrapper import setpoints
 from dronewrapper.msgs import Header, PoseStamped, PositionTarget, codec, registry
 from dronewrapper.router import router_options, run_router
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import encoding_for, open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper.security.keystore import KeyStore
@@ -128,7 +128,7 @@ def mavlink_costs(n: int) -> dict:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--round-trips", type=int, default=1000)
     parser.add_argument("--mavlink-messages", type=int, default=20000)
     args = parser.parse_args()

@@ -12,7 +12,6 @@ Run: ``python -m bench.sim_physics [--seconds 10]``; writes bench/results/sim_ph
 
 from __future__ import annotations
 
-import argparse
 import socket
 import subprocess
 import sys
@@ -21,6 +20,7 @@ import time
 from pathlib import Path
 
 from bench.common import LoopbackRouter, cpu_seconds, print_table, write_results
+from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
 DT = 1.0 / 250.0
@@ -149,7 +149,7 @@ def process_cpu(seconds: float, cameras: bool) -> dict[str, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=10.0, help="each CPU window, s")
     args = parser.parse_args(argv)
     rates = physics_rates()

@@ -14,7 +14,6 @@ Run: ``.venv/bin/python -m bench.sim_render [--frames 150]``; writes bench/resul
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 from pathlib import Path
@@ -23,6 +22,7 @@ import cv2
 import numpy as np
 
 from bench.common import percentiles, print_table, write_results
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_sim.render.camera import FRONTAL, VENTRAL, PinholeCamera
 from dronewrapper_sim.render.renderer import Renderer
 from dronewrapper_sim.world.scenario import load_scenario
@@ -82,7 +82,7 @@ def run_scene(
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--frames", type=int, default=150, help="frames per scene and camera")
     args = parser.parse_args()
     cv2.setNumThreads(1)

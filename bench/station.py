@@ -16,7 +16,6 @@ Run: ``python -m bench.station [--seconds 15]``; writes bench/results/station.js
 
 from __future__ import annotations
 
-import argparse
 import os
 import socket
 import subprocess
@@ -27,6 +26,7 @@ from pathlib import Path
 
 from bench.common import percentiles, print_table, write_results
 from bench.graph_cpu import cpu_seconds, free_port
+from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
 DRONES = ("drone1", "drone2")
@@ -61,7 +61,7 @@ def _cpu_percent(pid: int, seconds: float, during=None) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=15.0, help="each measuring window (s)")
     args = parser.parse_args(argv)
     from dronewrapper import list_drones

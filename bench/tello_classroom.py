@@ -43,6 +43,7 @@ import numpy as np
 
 from bench.common import LoopbackRouter, cpu_seconds, print_table, stop_process, write_results
 from bench.tello_standin import TelloStandIn
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_sim.tello.video import H264Encoder, packetise
 
 REPO = Path(__file__).resolve().parents[1]
@@ -207,7 +208,7 @@ def watch_once(endpoint: str, tello: TelloStandIn) -> dict[str, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--tellos", type=int, default=3, help="how many Tellos (N)")
     parser.add_argument("--seconds", type=float, default=20.0, help="CPU measuring window, s")
     parser.add_argument("--host", help=argparse.SUPPRESS)  # one process: the Tellos' addresses

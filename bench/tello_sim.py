@@ -17,7 +17,6 @@ Run: ``python -m bench.tello_sim [--seconds 10]``; writes bench/results/tello_si
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import math
 import socket
@@ -29,6 +28,7 @@ from pathlib import Path
 
 from bench.common import LoopbackRouter, percentiles, print_table, write_results
 from bench.sim_physics import cpu_percent
+from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -181,7 +181,7 @@ def encode_latency(frames: int = 300) -> dict[str, dict[str, float]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=10.0, help="each CPU window, s")
     args = parser.parse_args(argv)
     cpu = {}

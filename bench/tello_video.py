@@ -20,7 +20,6 @@ Both clocks are this machine's CLOCK_MONOTONIC. Run:
 
 from __future__ import annotations
 
-import argparse
 import random
 import signal
 import subprocess
@@ -42,6 +41,7 @@ from bench.tello_standin import TelloStandIn
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_sim.tello.video import H264Encoder, packetise
 
 REPO = Path(__file__).resolve().parents[1]
@@ -85,7 +85,7 @@ class StampedVideo:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=60.0, help="length of the video run")
     args = parser.parse_args(argv)
 

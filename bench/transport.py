@@ -38,6 +38,7 @@ from bench.transport_breakdown import SUMMARY
 from dronewrapper.msgs import CompressedImage, Header, Image, PoseStamped, codec, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions
+from dronewrapper.runtime.arguments import CommandParser, first_line
 
 PING_NS, PONG_NS = "bench_ping", "bench_pong"
 BLOCK = {"congestion_control": zenoh.CongestionControl.BLOCK}
@@ -380,7 +381,7 @@ def rospy_side_by_side(results: dict, args: argparse.Namespace) -> dict | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--samples-small", type=int, default=2000)
     parser.add_argument("--samples-image", type=int, default=400)
     parser.add_argument("--seconds", type=float, default=4.0)

@@ -52,6 +52,7 @@ import zenoh
 from bench.common import cpu_seconds, free_endpoint, print_table, write_results
 from dronewrapper.msgs import CompressedImage, Header, codec, registry
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.options import ZenohOptions, zenoh_config
 from dronewrapper.runtime.session import encoding_for
 from dronewrapper.runtime.thread_state import KEPT
@@ -502,7 +503,7 @@ def run_socket(samples: int, placement: str = "any"):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--samples", type=int, default=1000, help="round trips per round")
     parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds")
     parser.add_argument("--only", action="append", help="variants whose name contains this")

@@ -17,7 +17,7 @@ from dronewrapper.geodesy import to_geodetic
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--side", type=float, default=8.0, help="side length, m")
     parser.add_argument("--height", type=float, default=4.0, help="altitude above home, m")
     parser.add_argument("--name", default=None, help="drone namespace (default: drone)")
@@ -36,7 +36,7 @@ def main() -> None:
         while not drone.mission_progress().finished and time.monotonic() < deadline:
             time.sleep(0.2)
         progress = drone.mission_progress()
-        print(f"mission: reached {progress.reached + 1} of {progress.total}")
+        print(f"mission: finished={progress.finished}, last item reached: {progress.reached}")
         drone.return_to_launch()
         x, y, _ = drone.get_position()
         print(f"home: landed at x={x:.2f} y={y:.2f}")

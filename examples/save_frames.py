@@ -17,7 +17,7 @@ from dronewrapper import DroneWrapper
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--count", type=int, default=10, help="frames per camera")
     parser.add_argument("--rate", type=float, default=5.0, help="frames per second")
     parser.add_argument("--out", type=Path, default=Path("frames"), help="output folder")

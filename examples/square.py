@@ -16,7 +16,7 @@ from dronewrapper import DroneWrapper
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--side", type=float, default=2.0, help="side length, m")
     parser.add_argument("--height", type=float, default=2.0, help="flight altitude, m")
     parser.add_argument("--tolerance", type=float, default=0.3, help="corner reached within, m")

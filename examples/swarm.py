@@ -40,7 +40,7 @@ def fly(fleet: Fleet, heights: dict[str, float], side: float) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--names", nargs="+", help="namespaces (default: every drone online)")
     parser.add_argument("--count", type=int, help="wait until this many drones are online")
     parser.add_argument("--connect", default=None, help="router endpoint")

@@ -65,12 +65,14 @@ class Run:
             Ctrl-C).
         preamble: Python run before the snippet (a snippet that continues the one above it).
         same_as: the code (comments aside) is that of another snippet, which runs instead.
+        unsudo: a leading ``sudo`` is dropped (what it runs needs no root once bounded).
     """
 
     skip: dict[str, str] = field(default_factory=dict)
     bound: dict[str, str] = field(default_factory=dict)
     preamble: str = ""
     same_as: str = ""
+    unsudo: bool = False
 
 
 HARDWARE = "needs the drone's hardware (serial autopilot, USB camera, Jetson GPU)"
@@ -191,6 +193,31 @@ PLAN: dict[str, Run | Excluded] = {
         "three computers joined by a radio link (tests/network/test_fleet_routers.py builds "
         "them with network namespaces, as root)"
     ),
+    "docs/jetson.md: sudo apt-get install -y python3-venv python3-dev g": Excluded(
+        "sets up a Jetson: apt packages, a clone, its .venv (make onboard: make setup without "
+        "the test tools) and the user's groups"
+    ),
+    "docs/jetson.md: .venv/bin/pip uninstall -y onnxruntime": Excluded(
+        "replaces onnxruntime by NVIDIA's aarch64 build for JetPack 6 (a Jetson only)"
+    ),
+    'docs/jetson.md: .venv/bin/python -c "import onnxruntime; print(onn': Run(),
+    "docs/jetson.md: .venv/bin/dronewrapper doctor --hardware --serial": Excluded(
+        "needs the autopilot on /dev/ttyTHS1; tests/integration/test_doctor_hardware.py runs "
+        "the same check on a pseudo-terminal with an autopilot's heartbeats"
+    ),
+    "docs/jetson.md: .venv/bin/dronewrapper keys init": Run(
+        skip={"provision --connection /dev/ttyACM0": "an autopilot on USB (hardware)"}
+    ),
+    "docs/jetson.md: .venv/bin/dronewrapper up compose/px4_real_follow_": Run(
+        bound={"dronewrapper install": "--print"}, unsudo=True
+    ),
+    "docs/jetson.md: systemctl status dronewrapper-px4_real_follow_pers": Excluded(
+        "the installed unit on a Jetson booted with systemd (test_install_unit.py installs it "
+        "into a temporary root and verifies it; test_doctor.py runs doctor against a graph)"
+    ),
+    "docs/jetson.md: sudo .venv/bin/dronewrapper uninstall compose/px4_": Excluded(
+        "removes the unit from a Jetson (test_install_unit.py uninstalls from a temporary root)"
+    ),
 }
 
 DRONE_ADDRESSES = ("tls/192.168.1.50:7448",)
@@ -230,6 +257,8 @@ def adapt(
         for key, extra in plan.bound.items():
             if key in line:
                 line = _insert_before_comment(line, extra)
+        if plan.unsudo:
+            line = re.sub(r"^(\s*)sudo\s+", r"\1", line)
         kept.append(_without_placeholders(line))
     return "\n".join(kept), left_out
 

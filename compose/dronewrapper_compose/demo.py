@@ -16,7 +16,6 @@ The processes' own logs go to ``out/demo/graph.log``.
 
 from __future__ import annotations
 
-import argparse
 import math
 import socket
 import sys
@@ -27,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
@@ -311,7 +311,7 @@ def run_demo(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="make demo", description=__doc__.splitlines()[0])
+    parser = CommandParser(prog="make demo", description=first_line(__doc__))
     parser.add_argument("--duration", type=float, default=60.0, help="seconds of flight")
     parser.add_argument("--scenario", default="beacon_smooth", help="a beacon_* scenario")
     parser.add_argument("--out", type=Path, default=REPO / "out" / "demo", help="output folder")

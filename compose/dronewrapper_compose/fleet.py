@@ -37,6 +37,14 @@ ANY_ADDRESS = "0.0.0.0"
 """A bridge's local address when none is listed: every address of this machine."""
 MAX_DRONES = 200
 """More drones than this is a typo, not a fleet (each is a few processes)."""
+SIM_MODULE = "dronewrapper_sim"
+"""The module of a simulated aircraft's process (one per drone)."""
+CORE_SHARE_PER_DRONE = 0.065
+"""The share of one core a simulated drone takes while flying: its sim (3.3 %), its bridge
+(2.7 %) and its part of the router (0.5 %), measured by ``bench.fleet`` (docs/fleet.md)."""
+BUSY_LIMIT = 0.9
+"""The share of the machine's cores a fleet may take before poses arrive late (``bench.fleet``
+calls 90 % busy the knee)."""
 
 
 class FleetError(ValueError):
@@ -104,6 +112,20 @@ def plan_fleet(values: Mapping[str, str], free_udp_port: Callable[[], int]) -> l
         }
         drones.append(FleetDrone(i, ns, kind, own))
     return drones
+
+
+def load_warning(drones: int, cores: int) -> str | None:
+    """What to tell a user who asks for ``drones`` simulated drones on ``cores`` cores, or
+    None when the cores carry them (:data:`CORE_SHARE_PER_DRONE`, :data:`BUSY_LIMIT`)."""
+    carried = int(cores * BUSY_LIMIT / CORE_SHARE_PER_DRONE)
+    if drones <= carried:
+        return None
+    return (
+        f"{drones} simulated drones take about {drones * CORE_SHARE_PER_DRONE:.1f} cores "
+        f"({CORE_SHARE_PER_DRONE:.1%} of one core each, docs/fleet.md); the {cores} cores of "
+        f"this machine carry about {carried} before they are {BUSY_LIMIT:.0%} busy: expect "
+        "late poses and slow or failed starts"
+    )
 
 
 def drones_of(drones: list[FleetDrone], kind: str) -> list[FleetDrone]:

@@ -195,7 +195,21 @@ def resolve_graph_path(name_or_path: str) -> Path:
     candidate = GRAPH_DIR / f"{name_or_path.removesuffix('.yaml')}.yaml"
     if candidate.exists():
         return candidate
-    raise GraphError(f"{name_or_path}: no such graph file (looked in . and {GRAPH_DIR})")
+    names = sorted(p.stem for p in GRAPH_DIR.glob("*.yaml"))
+    close = difflib.get_close_matches(Path(name_or_path).stem, names, n=1)
+    hint = f"did you mean {close[0]}?" if close else f"graphs there: {', '.join(names)}"
+    raise GraphError(f"{name_or_path}: no such graph file (looked in . and {GRAPH_DIR}); {hint}")
+
+
+NOT_A_GRAPH = " (a graph is a YAML file such as compose/sim_iris.yaml)"
+
+
+def yaml_problem(exc: Exception) -> str:
+    """A YAML error in one line: what and where (line and column, 1-based)."""
+    mark = getattr(exc, "problem_mark", None)
+    what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+    return f"not valid YAML at {where}{what}" if where else f"not valid YAML: {what}"
 
 
 def load_graph(path: str | Path) -> Graph:
@@ -213,9 +227,9 @@ def load_graph(path: str | Path) -> Graph:
     except OSError as exc:
         raise GraphError(f"{path}: cannot read graph: {exc.strerror}") from exc
     except yaml.YAMLError as exc:
-        raise GraphError(f"{path}: not valid YAML: {exc}") from exc
+        raise GraphError(f"{path}: not a graph: {yaml_problem(exc)}{NOT_A_GRAPH}") from exc
     if not isinstance(raw, dict):
-        raise GraphError(f"{path}: top level must be a mapping")
+        raise GraphError(f"{path}: not a graph: its top level is not a mapping{NOT_A_GRAPH}")
     raw["vars"] = {k: _text(v) for k, v in (raw.get("vars") or {}).items()}
     raw["types"] = {
         k: [_text(item) for item in v] if isinstance(v, list) else v

@@ -16,7 +16,8 @@ here; one running process and its prefixed output is ``child.py``, the graph fil
 
 from __future__ import annotations
 
-import argparse
+import logging
+import os
 import signal
 import sys
 import threading
@@ -30,6 +31,7 @@ import zenoh
 from dronewrapper.msgs.registry import ALIVE
 from dronewrapper.router import InsecureEndpoint, router_options
 from dronewrapper.router_reach import open_client_session
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
@@ -365,6 +367,16 @@ class Launcher:
         return self.exit_code
 
 
+def simulated_drones(launcher: Launcher) -> int:
+    """How many simulated aircraft the graph runs (its ``dronewrapper_sim`` processes)."""
+    return sum(inst.spec.module == fleet.SIM_MODULE for group in launcher.groups for inst in group)
+
+
+def usable_cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
 def _parse_vars(pairs: Sequence[str]) -> dict[str, str]:
     out = {}
     for pair in pairs:
@@ -377,7 +389,7 @@ def _parse_vars(pairs: Sequence[str]) -> dict[str, str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``dronewrapper up GRAPH [--router EP] [--scenario NAME] [--duration S] [--var K=V]``."""
-    parser = argparse.ArgumentParser(prog="dronewrapper up", description="run a process graph")
+    parser = CommandParser(prog="dronewrapper up", description="run a process graph")
     parser.add_argument("graph", help="compose/NAME.yaml, or a bare graph name")
     parser.add_argument("--router", default=DEFAULT_ROUTER, help="router endpoint to start")
     parser.add_argument(
@@ -426,6 +438,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             keys_dir=args.keys,
             insecure=args.insecure,
         )
+        if warning := fleet.load_warning(simulated_drones(launcher), usable_cores()):
+            print(f"dronewrapper up: warning: {warning}", file=sys.stderr)
         if args.check:
             for group in launcher.groups:
                 for inst in group:
@@ -436,6 +450,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
 
     setup_logging()  # the graph runs: log lines from here on (a bad graph only printed above)
+    if args.identity and not args.use_router:  # what a rejected TLS handshake means
+        from dronewrapper.zenoh_log import relay_zenoh_log
+
+        relay_zenoh_log(logging.getLogger("router"))
+        launcher.out = sys.stdout  # where fd 1 went before Zenoh's log took it
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

@@ -5,7 +5,10 @@
     dronewrapper echo KEYEXPR [--count N]            print decoded messages
     dronewrapper alive [--connect ENDPOINT]          drones and processes online, with health
     dronewrapper doctor [--connect ENDPOINT]         diagnose a setup and say what to fix
+    dronewrapper doctor --hardware [--serial DEV]    this computer's serial port, camera, clock
     dronewrapper up compose/GRAPH.yaml [...]         run a process graph (needs the stack)
+    dronewrapper install GRAPH [--user USER] [...]   start the graph at boot (systemd unit)
+    dronewrapper uninstall GRAPH                     remove that unit
     dronewrapper sim [--scenario NAME] [...]         the simulated aircraft and world
     dronewrapper detect FILE [--detector NAME] [...] run perception offline on a file
     dronewrapper station [--host H] [--port P]       the web ground station (loopback)
@@ -17,28 +20,31 @@
     dronewrapper bench --quick [--target-ms MS]      this computer's speed, settings to use (stack)
     dronewrapper --version                           the installed version
 
-``up``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the on-board stack (``make
-setup``); the SDK alone (``pip install ./sdk``) has ``router``, ``echo``, ``alive`` and
-``doctor``; ``record``, ``replay`` and ``foxglove`` come with its ``record`` extra (``pip
-install './sdk[record]'``).
+``up``, ``install``, ``uninstall``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the
+on-board stack (``make setup``); the SDK alone (``pip install ./sdk``) has ``router``,
+``echo``, ``alive`` and ``doctor``; ``record``, ``replay`` and ``foxglove`` come with its
+``record`` extra (``pip install './sdk[record]'``).
 """
 
 from __future__ import annotations
 
-import argparse
 import importlib
+import logging
 import os
 import signal
 import sys
 import threading
 from collections.abc import Sequence
 
+from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
-from dronewrapper.runtime.service import plain_text, setup_logging
+from dronewrapper.runtime.service import setup_logging
 
 # subcommand -> (module, function) in the on-board stack, imported only when used
 _STACK_COMMANDS = {
     "up": ("dronewrapper_compose.launcher", "main"),
+    "install": ("dronewrapper_compose.install_cli", "install_main"),
+    "uninstall": ("dronewrapper_compose.install_cli", "uninstall_main"),
     "sim": ("dronewrapper_sim.cli", "main"),
     "detect": ("dronewrapper_perception.detect_cli", "main"),
     "station": ("dronewrapper_ground_station.cli", "main"),
@@ -63,7 +69,7 @@ def _stop_on_signals() -> threading.Event:
 def _router(argv: Sequence[str]) -> int:
     from dronewrapper.router import router_options, run_router
 
-    parser = argparse.ArgumentParser(prog="dronewrapper router", description="a Zenoh router")
+    parser = CommandParser(prog="dronewrapper router", description="a Zenoh router")
     parser.add_argument(
         "--listen", action="append", metavar="ENDPOINT", help=f"default {DEFAULT_ROUTER}"
     )
@@ -91,6 +97,10 @@ def _router(argv: Sequence[str]) -> int:
             insecure=args.insecure,
             acl_namespaces=args.namespace,
         )
+        if options.identity:  # say what a rejected TLS handshake means, not Zenoh's hint
+            from dronewrapper.zenoh_log import relay_zenoh_log
+
+            relay_zenoh_log(logging.getLogger("router"))
         run_router(options, _stop_on_signals())
     except (ValueError, ConnectionError, FileNotFoundError) as exc:
         print(f"dronewrapper router: {exc}", file=sys.stderr)
@@ -120,7 +130,7 @@ def _echo(argv: Sequence[str]) -> int:
     from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
 
-    parser = argparse.ArgumentParser(prog="dronewrapper echo", description="print messages")
+    parser = CommandParser(prog="dronewrapper echo", description="print messages")
     parser.add_argument("keyexpr", help="key expression, e.g. drone/mavros/state or drone/**")
     parser.add_argument("--count", "-n", type=int, default=0, help="stop after N messages")
     parser.add_argument("--duration", type=float, default=0.0, help="stop after S seconds")
@@ -165,7 +175,7 @@ def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.doctor import describe_drone, listen, topic_families
     from dronewrapper.router_reach import open_client_session
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
     )
     parser.add_argument(
@@ -196,7 +206,7 @@ def _alive(argv: Sequence[str]) -> int:
 def _doctor(argv: Sequence[str]) -> int:
     from dronewrapper.doctor import run_doctor
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper doctor", description="diagnose a setup and say what to fix"
     )
     parser.add_argument(
@@ -204,12 +214,32 @@ def _doctor(argv: Sequence[str]) -> int:
     )
     parser.add_argument("--images", action="store_true", help="also measure camera streams")
     parser.add_argument("--no-bandwidth", action="store_true", help="skip the bandwidth probe")
+    hardware = parser.add_argument_group("this computer's hardware (--hardware)")
+    hardware.add_argument(
+        "--hardware", action="store_true", help="check the serial port, camera, clock, disk, boot"
+    )
+    hardware.add_argument("--serial", metavar="DEV", help="the autopilot's serial device")
+    hardware.add_argument("--baud", type=int, default=57600, help="its baud rate (57600)")
+    hardware.add_argument(
+        "--recordings", default=".", metavar="DIR", help="where recordings go (.)"
+    )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
     labels = {"ok": "ok  ", "warn": "warn", "fail": "FAIL"}
 
     def report(verdict: str, text: str) -> None:
         print(f"{labels[verdict]} {text}", flush=True)
+
+    if args.hardware:
+        from dronewrapper.hardware_probe import run_hardware
+
+        return run_hardware(
+            report,
+            serial=args.serial,
+            baud=args.baud,
+            listen_s=max(args.seconds, 2.0),  # a heartbeat is 1 Hz: two of them at least
+            recordings=args.recordings,
+        )
 
     return run_doctor(
         options_from_args(args),
@@ -224,7 +254,7 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
     from dronewrapper.mavlink_forward import forward, parse_udp
     from dronewrapper.runtime.node import Node
 
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper mavlink-forward",
         description="a drone's MAVLink (bridge gcs_over_zenoh) as UDP for QGroundControl",
     )

@@ -40,6 +40,7 @@ class Commands:
     inputs: Inputs
     service_timeout: float
     _attachment: bytes
+    _forbidden: str  # why our certificate's role may not command ("" when it may)
 
     if TYPE_CHECKING:
         commanding: PositionTarget | None
@@ -47,7 +48,11 @@ class Commands:
         def _no_reply(self, what: str, key: str, timeout: float) -> DroneError: ...
 
     def _ask(self, service: Service[Any, T], request: Any, timeout: float) -> T:
-        """One request/reply; raises the runtime's ServiceError / ServiceUnavailable."""
+        """One request/reply; raises the runtime's ServiceError / ServiceUnavailable, and
+        ServiceError (code ``forbidden``) at once, unsent, when our certificate's role may not
+        command (the router would drop the request)."""
+        if self._forbidden:
+            raise ServiceError(self._forbidden, "forbidden")
         return self.node.call(
             service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
         )
@@ -56,8 +61,9 @@ class Commands:
         timeout = self.service_timeout if timeout is None else timeout
         try:
             return self._ask(service, request, timeout)
-        except ServiceUnavailable:
-            raise self._no_reply(what, service.key(self.ns), timeout) from None
+        except ServiceUnavailable as exc:
+            waited = timeout if exc.waited is None else exc.waited
+            raise self._no_reply(what, service.key(self.ns), waited) from None
         except ServiceError as exc:
             raise CommandRefused(what, exc.message) from None
 

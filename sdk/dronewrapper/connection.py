@@ -21,6 +21,7 @@ from dronewrapper.discovery import connection_problem
 from dronewrapper.errors import DroneError, NotConnected
 from dronewrapper.inputs import TELEMETRY_READ_BY_GETTERS, Inputs
 from dronewrapper.msgs.mavros import State
+from dronewrapper.router_reach import why_no_session
 from dronewrapper.runtime.commander import STATE_FRESH_S
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import ZenohOptions
@@ -35,7 +36,8 @@ def open_node(ns: str, connect: str, timeout: float, *, mode: str, identity: str
     """The wrapper's own node on the router at ``connect`` (see the module doc).
 
     Raises:
-        NotConnected: the router cannot be reached within ``timeout`` seconds.
+        NotConnected: no session within ``timeout`` seconds (the message names the cause: no
+            router, a refused TLS handshake and by which side, ...).
         ValueError: a malformed endpoint or an unknown mode.
     """
     options = ZenohOptions(mode=mode, connect=[connect], identity=identity, namespace=ns)
@@ -48,11 +50,7 @@ def open_node(ns: str, connect: str, timeout: float, *, mode: str, identity: str
             direct_callbacks=True,
         )
     except ConnectionError as exc:
-        raise NotConnected(
-            f"cannot reach the Zenoh router at {connect} within {timeout:g} s: is it running? "
-            f"(start one with `dronewrapper router --listen {connect}` or "
-            "`dronewrapper up compose/sim_iris.yaml`)"
-        ) from exc
+        raise NotConnected(why_no_session(connect, timeout, exc)) from exc
 
 
 def connected_state(inputs: Inputs) -> State | None:

@@ -11,9 +11,11 @@ A call nobody answered has four causes, each with its own exception and sentence
 - no bridge runs for the drone: NotConnected;
 - a bridge runs but did not answer in time (busy or stuck): Timeout.
 
-The role and revocation come from the local key store's ``index.json`` when the identity was
-issued there; elsewhere (a laptop holding only its own certificate) they are inferred from what
-the router shows the identity.
+The role comes from the identity's own certificate (``dronewrapper keys issue`` writes it in
+the subject), so a laptop holding only its three files knows it; an observer's command is then
+refused at once (:func:`role_refusal`), before it is sent. Revocation comes from the local key
+store's ``index.json`` when the identity was issued there; elsewhere it is inferred from what
+the router shows the identity. Every duration in a sentence is the one actually waited.
 """
 
 from __future__ import annotations
@@ -42,20 +44,52 @@ def identity_name(identity: str) -> str:
     return Path(identity).stem if identity.endswith(".crt") else identity
 
 
+def certificate_role(identity: str, keys_dir: str | Path | None = None) -> str:
+    """The role ``identity``'s own certificate names (``""`` when it names none or cannot be
+    read)."""
+    if not identity:
+        return ""
+    from dronewrapper.security.identity import Identity
+
+    with contextlib.suppress(OSError, ValueError, TypeError):
+        return Identity.load(identity, keys_dir).subject().role
+    return ""
+
+
 def local_standing(identity: str, keys_dir: str | Path | None = None) -> tuple[str, bool] | None:
-    """``(role, refused)`` of ``identity`` from the local key store, ``refused`` meaning revoked
-    or expired; None when the store does not know it."""
+    """``(role, refused)`` of ``identity``: the role its certificate names (else the local key
+    store's), ``refused`` meaning revoked or expired in the local key store; None when neither
+    knows it."""
     if not identity:
         return None
     from dronewrapper.security.keystore import KeyStore
 
     name = identity_name(identity)
+    role = certificate_role(identity, keys_dir)
     with contextlib.suppress(OSError, ValueError, TypeError):
         for entry in KeyStore(keys_dir).entries():
             if entry.name == name:
-                refused = entry.revoked or entry.expired(dt.datetime.now(dt.UTC))
-                return entry.role, refused
-    return None
+                refused = entry.revoked or entry.expired(dt.datetime.now(dt.timezone.utc))
+                return role or entry.role, refused
+    return (role, False) if role else None
+
+
+def role_refusal(role: str, identity: str) -> str:
+    """Why a command of ``identity``, whose certificate's role is ``role``, is not sent."""
+    return (
+        f"not permitted for role {role} (identity {identity_name(identity)!r}, as its "
+        "certificate says): the router's access control lets it watch, not command; connect "
+        "with an operator's certificate"
+    )
+
+
+def forbidden(identity: str, connect: str, keys_dir: str | Path | None = None) -> str:
+    """The reason every command of ``identity`` on router ``connect`` would be dropped by the
+    router, known before sending (a watch-only role in its certificate), else ``""``."""
+    if not identity or not connect.startswith("tls/"):
+        return ""
+    role = certificate_role(identity, keys_dir)
+    return f"{role_refusal(role, identity)} (not sent)" if role in WATCH_ONLY_ROLES else ""
 
 
 def identity_facts(identity: str, connect: str) -> dict[str, object]:
@@ -86,7 +120,8 @@ def no_reply(
     identity: str = "",
     standing: tuple[str, bool] | None = None,
 ) -> DroneError:
-    """The exception for call ``what`` on ``key`` unanswered after ``timeout`` s.
+    """The exception for call ``what`` on ``key`` unanswered after ``timeout`` s (the time
+    actually waited).
 
     Args:
         alive_names: the liveliness keys the router showed in namespace ``ns``.
@@ -104,17 +139,13 @@ def no_reply(
     if identity and (refused or (standing is None and shown_nothing)):
         return NotConnected(f"{what}: {refused_identity(identity, connect)}")
     if identity and role in WATCH_ONLY_ROLES:
-        return CommandRefused(
-            what,
-            f"not permitted for role {role} (identity {identity_name(identity)!r}): the "
-            "router's access control lets it watch, not command; connect with an operator's "
-            "certificate",
-        )
+        return CommandRefused(what, role_refusal(role, identity))
     if bridge:
         if identity and not role:
             return Timeout(
-                f"{what}: {waited}: the bridge is alive; if {identity_name(identity)!r} is an "
-                "observer, the router drops its commands (not permitted for role observer)"
+                f"{what}: {waited}: the bridge is alive; the certificate of "
+                f"{identity_name(identity)!r} names no role: if it is an observer's, the "
+                "router drops its commands"
             )
         return Timeout(f"{what}: {waited}")
     return NotConnected(f"{what}: {waited}: no bridge is running for drone {ns!r} on {connect}")

@@ -122,11 +122,9 @@ def open_client(
     try:
         return open_session(options, timeout=timeout)
     except ConnectionError as exc:
-        raise NotConnected(
-            f"cannot reach the Zenoh router at {connect} within {seconds(timeout)} s: is it "
-            f"running? (start one with `dronewrapper router --listen {connect}` or "
-            "`dronewrapper up compose/sim_iris.yaml`)"
-        ) from exc
+        from dronewrapper.router_reach import why_no_session
+
+        raise NotConnected(why_no_session(connect, timeout, exc)) from exc
 
 
 def list_drones(

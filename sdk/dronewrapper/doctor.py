@@ -1,7 +1,8 @@
 """``dronewrapper doctor``: diagnose a setup and say what to fix.
 
 Checks, in order: the router is reachable; which processes are alive in which namespace; each
-drone's autopilot link (kind, connected, mode, battery); ROS 2 (rmw_zenoh) endpoints that
+drone's autopilot link (kind, connected, mode, battery) and how full it is (``link 94 %
+full``, from the bridge's link status); ROS 2 (rmw_zenoh) endpoints that
 disagree on a type or its hash; every telemetry stream's rate and age
 against the registry; the senders' clocks against this computer's; the link bandwidth through
 the router. Each line starts with ``ok``, ``warn`` or ``FAIL``; the exit status is 1 if any check
@@ -34,8 +35,9 @@ from dronewrapper.health import (
     judge_stream,
 )
 from dronewrapper.msgs import codec
+from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import State
-from dronewrapper.msgs.registry import STATE, TOPICS, Topic, topic_for_key
+from dronewrapper.msgs.registry import LINK_STATUS, STATE, TOPICS, Topic, topic_for_key
 from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image
 from dronewrapper.router_reach import NO_ROUTER_HINT, open_client_session
 from dronewrapper.runtime.node import open_session
@@ -163,6 +165,24 @@ def describe_drone(ns: str, processes: list[str], latest: dict[str, object]) -> 
     return (OK if state.connected else FAIL), sentence
 
 
+LINK_WARN_LOAD = 0.8
+"""A serial autopilot link this full is reported (the bridge's own warning threshold)."""
+
+
+def describe_link(ns: str, latest: dict[str, object]) -> tuple[str, str] | None:
+    """(verdict, sentence) about drone ``ns``'s autopilot link, or None when its bridge does
+    not report one (pure): ``warn`` from :data:`LINK_WARN_LOAD` full, ``FAIL`` when full."""
+    status = latest.get(LINK_STATUS.key(ns))
+    if not isinstance(status, LinkStatus):
+        return None
+    sentence = f"drone {ns!r}: {status.describe()}"
+    if status.load >= 1.0:
+        return FAIL, f"{sentence}; telemetry is being lost: lower message_rates or raise the baud"
+    if status.load >= LINK_WARN_LOAD:
+        return WARN, f"{sentence}; near its limit: lower message_rates or raise the baud"
+    return OK, sentence
+
+
 def bridge_streams(ns: str) -> list[str]:
     """The keys of every periodic stream a bridge publishes for drone ``ns`` (registry)."""
     return [
@@ -180,6 +200,8 @@ def stream_findings(heard: Heard) -> list[StreamHealth]:
     for key in sorted(keys):
         if key.endswith("global_position/global") and key not in heard.logs:
             continue  # no GPS is a fact, not a fault (a Tello, an indoor flight)
+        if LINK_STATUS.match(key) and key not in heard.logs:
+            continue  # only bridge_mavlink reports its link
         topic = heard.topics.get(key) or topic_for_key(key)
         expected = topic.rate_hz if topic is not None else 0.0
         findings.append(judge_stream(key, expected, heard.logs.get(key, StreamLog()), heard.end))
@@ -239,6 +261,8 @@ def run_doctor(
         heard = listen(session, topic_families(images), listen_s)
         for ns, processes in grouped.items():
             say(*describe_drone(ns, processes, heard.latest))
+            if (link := describe_link(ns, heard.latest)) is not None:
+                say(*link)
         for finding in ros2_findings(session, min(timeout, 1.0)):
             say(*finding)
         for health in stream_findings(heard):

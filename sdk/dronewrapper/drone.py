@@ -39,7 +39,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
-from dronewrapper import connection, flying, images, setpoints
+from dronewrapper import connection, diagnosis, flying, images, setpoints
 from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
 from dronewrapper.errors import Cancelled, DroneError, InvalidArgument
@@ -119,6 +119,8 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             NAME.crt, see ``dronewrapper keys``; env ``DRONEWRAPPER_IDENTITY``).
         commander: our name on the command lease (default: the identity's name, or
             ``user@host``); the bridge obeys one commander at a time, see take_command().
+            With an identity the certificate's name is the commander, whatever this says
+            (the router binds every command to it, see docs/security.md).
         node: the node to stand on (a service's ``Node``, or a ``FakeNode`` on the fake bus);
             not closed by :meth:`close`. None: the wrapper opens its own (``connect``, ``mode``
             and ``identity`` are for that one).
@@ -157,6 +159,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         identity = self._identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
         self.commander = commander or default_commander(identity)
         self._attachment = commander_attachment(self.commander)
+        self._forbidden = diagnosis.forbidden(identity, self.connect) if node is None else ""
         self.compressed_images = self._choose_compression(compressed_images, node, cameras)
         self._own_node = node is None
         if node is None:
@@ -165,6 +168,11 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             )
         self.node: NodeApi = node
         self.clock = node.clock
+        bound = getattr(node, "bound_name", "")
+        if bound and bound != self.commander:  # the router binds our commands to it
+            log.warning("commander %r: the certificate's name %r commands", self.commander, bound)
+        self.commander = bound or self.commander
+        self._attachment = commander_attachment(self.commander)
         deadline = self.clock.monotonic() + timeout
         _open_wrappers.add(self)
         try:

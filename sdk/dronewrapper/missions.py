@@ -57,15 +57,17 @@ log = logging.getLogger("dronewrapper")
 @dataclass(frozen=True)
 class MissionProgress:
     """Where the mission stands: ``current`` (the item being flown, 0-based), ``total``
-    items, and ``reached`` (the last item reached, -1 before any)."""
+    items, and ``reached`` (the last item reached, 0-based; None until this object has heard
+    an item reached, so while the mission has not started)."""
 
     current: int
     total: int
-    reached: int
+    reached: int | None = None
 
     @property
     def finished(self) -> bool:
-        return self.total > 0 and self.reached >= self.total - 1
+        """The last item was reached."""
+        return self.total > 0 and self.reached is not None and self.reached >= self.total - 1
 
 
 class MissionsMixin:
@@ -371,7 +373,7 @@ class MissionsMixin:
         return MissionProgress(
             current=listing.current_seq,
             total=len(listing.waypoints),
-            reached=-1 if reached is None else reached.wp_seq,
+            reached=None if reached is None else reached.wp_seq,
         )
 
 

@@ -75,3 +75,25 @@ def open_client_session(options: ZenohOptions, *, timeout: float = 10.0) -> zeno
     if options.mode == "client" and (sentence := no_router(options.connect)):
         raise ConnectionError(sentence)
     return open_session(options, timeout=timeout)
+
+
+def why_no_session(connect: str, timeout: float, exc: BaseException) -> str:
+    """The sentence for a client session that did not open on ``connect`` within ``timeout``
+    s, failing with ``exc``: a refused TLS handshake says why, a refused connection says no
+    router listens, and otherwise what was seen."""
+    from dronewrapper.runtime.session import HandshakeRefused
+
+    if isinstance(exc, HandshakeRefused):
+        return str(exc)
+    address = tcp_address(connect)
+    if address is not None and refuses(address):
+        return (
+            f"cannot reach the Zenoh router at {connect}: nothing listens there (connection "
+            f"refused); {NO_ROUTER_HINT}"
+        )
+    if address is not None:
+        return (
+            f"the router at {connect} took the connection but no Zenoh session opened within "
+            f"{timeout:g} s ({exc})"
+        )
+    return f"cannot reach the Zenoh router at {connect} within {timeout:g} s: {NO_ROUTER_HINT}"

@@ -4,6 +4,8 @@
                                                             write and telemetry forgery
     security_client.py fly ENDPOINT KEYS_DIR                alice flies; carol is refused
                                                             until she takes the lease
+    security_client.py spoof ENDPOINT KEYS_DIR              carol holds the lease; alice
+                                                            claims to be carol
 
 Prints one JSON line with what happened (the test judges it with the drone's ground truth).
 """
@@ -189,10 +191,58 @@ def fly(endpoint: str, keys: str) -> dict:
     return out
 
 
+def spoof(endpoint: str, keys: str) -> dict:
+    """Carol takes the lease; alice sends a parameter write in carol's name: through the SDK
+    (``commander="carol"``), and on a raw session with her certificate whose attachment names
+    carol, on the plain key, on carol's bound key and on her own."""
+    os.environ["DRONEWRAPPER_KEYS"] = keys
+    out: dict = {}
+    carol = DroneWrapper(connect=endpoint, identity="carol", cameras=(), timeout=30)
+    alice = DroneWrapper(
+        connect=endpoint, identity="alice", commander="carol", cameras=(), timeout=30
+    )
+    try:
+        out["carol_took_from"] = carol.take_command()
+        out["param_before"] = carol.param_get(PARAM)
+        out["alice_commander"] = alice.commander
+        try:
+            alice.param_set(PARAM, 0.5)
+            out["sdk"] = "obeyed"
+        except CommandRefused as exc:
+            out["sdk"] = f"refused: {exc}"
+        options = ZenohOptions(mode="client", connect=[endpoint], identity="alice", keys_dir=keys)
+        session = open_session(options, timeout=10.0)
+        claim = commander_attachment("carol")
+        try:
+            for bound in ("", "carol", "alice"):
+                request = ParamSet(param_id=PARAM, value=ParamValue(real=0.5))
+                try:
+                    reply = call_service(
+                        session, registry.PARAM_SET, request, ns=NS, timeout=1.0,
+                        attachment=claim, bound_to=bound,
+                    )  # fmt: skip
+                    outcome = "obeyed" if reply.success else f"refused: {reply.message}"
+                except ServiceUnavailable:
+                    outcome = "no_reply"
+                except ServiceError as exc:
+                    outcome = "no_reply" if exc.message == "Timeout" else f"refused: {exc.message}"
+                out[f"raw_{bound or 'plain'}"] = outcome
+        finally:
+            session.close()
+        out["holder"] = carol.get_state().commander
+        out["param_after"] = carol.param_get(PARAM)
+    finally:
+        alice.close()
+        carol.close()
+    return out
+
+
 def main() -> int:
     mode, endpoint = sys.argv[1], sys.argv[2]
     if mode == "attack":
         result = attack(endpoint, sys.argv[3], sys.argv[4])
+    elif mode == "spoof":
+        result = spoof(endpoint, sys.argv[3])
     else:
         result = fly(endpoint, sys.argv[3])
     print(json.dumps(result), flush=True)

@@ -10,6 +10,7 @@ import socket
 import pytest
 
 from dronewrapper import DroneWrapper
+from dronewrapper.errors import CommandRefused, NotConnected
 from dronewrapper.security.keystore import KeyStore
 from support import free_endpoint, free_port, python_module, wait_for
 
@@ -21,7 +22,11 @@ def test_secure_graph_flies_with_an_operator_certificate(spawn, tmp_path, monkey
     store.init()
     store.issue("drone1", "drone")
     store.issue("alice", "operator")
+    store.issue("olga", "observer")
     store.new_mavlink_key()
+    other = KeyStore(tmp_path / "other")
+    other.init()
+    other.issue("mallory", "operator")
     monkeypatch.setenv("DRONEWRAPPER_KEYS", str(store.root))
     tls = f"tls/127.0.0.1:{free_port()}"
     argv = python_module(
@@ -39,9 +44,22 @@ def test_secure_graph_flies_with_an_operator_certificate(spawn, tmp_path, monkey
         assert drone.get_state().commander == "alice"
         drone.land(timeout=60)
         assert not drone.is_flying()
+    # an observer's certificate says so: its command is refused at once, never sent
+    with DroneWrapper(connect=tls, identity="olga", cameras=(), timeout=30) as watcher:
+        assert watcher.get_state().connected  # it may watch
+        with pytest.raises(
+            CommandRefused, match=r"role observer .*as its certificate says.*not sent"
+        ):
+            watcher.arm()
+    # another CA's certificate: the client says which side refused, the router what it means
+    with pytest.raises(NotConnected, match=r"TLS handshake with .* refused by this client"):
+        DroneWrapper(connect=tls, identity=str(other.cert("mallory")), cameras=(), timeout=10)
     graph.stop()
     assert "command lease acquired: alice" in graph.output()
-    assert "rejected" not in graph.output()  # every signed frame verified on both sides
+    assert "rejected TLS handshake: a client refused this router's certificate" in graph.output()
+    assert "open file limit" not in graph.output()
+    signing = [line for line in graph.output().splitlines() if "rejected TLS" not in line]
+    assert not any("rejected" in line for line in signing)  # every signed frame verified
 
 
 def test_plain_tcp_off_loopback_is_refused(spawn):

@@ -6,6 +6,11 @@ on loopback. From the laptop's namespace, clients with no certificate, a certifi
 CA, an observer's, an expired one and a revoked one try every command path, a parameter write,
 a setpoint stream and telemetry forgery: none is obeyed and no forged message is delivered.
 Then an operator flies; a second operator is refused until she takes the lease over.
+
+The same attack on a TLS listener on the drone's loopback and through a forwarded port (as
+``ssh -L`` or a reverse proxy ending on the drone) gets no more than the certificates allow:
+only plain local links are trusted without one. Alice claiming to be carol is refused while
+carol holds the lease. Each attacker's error is the one docs/security.md quotes.
 """
 
 from __future__ import annotations
@@ -25,8 +30,20 @@ pytestmark = pytest.mark.integration
 
 ROUTER_LOCAL = "tcp/127.0.0.1:7447"
 TLS_PORT = 7448
+FORWARDED_PORT = 7449
 CLIENT = str(REPO / "tests" / "data" / "security_client.py")
 MONITOR = str(REPO / "tests" / "data" / "security_monitor.py")
+FORWARD = str(REPO / "tests" / "data" / "tcp_forward.py")
+SECURITY_DOC = REPO / "docs" / "security.md"
+
+# What each attacker is told (docs/security.md quotes each; the tests hold both)
+SAYS_NO_IDENTITY = "refused by this client: the router's certificate is not trusted"
+SAYS_OTHER_CA = "refused by this client: the router's certificate does not verify with the CA in"
+SAYS_EXPIRED = "refused by the router: this client's certificate has expired (identity='old')"
+SAYS_PLAIN = "speaks TLS on that port: connect with tls/"
+SAYS_OBSERVER = "not permitted for role observer (identity 'olga', as its certificate says)"
+SAYS_REVOKED = "this identity was refused (revoked or unknown)"
+SAYS_LEASE = "'carol' holds the command lease; 'alice' must take it over explicitly"
 
 
 def _keys(tmp_path, drone_address: str) -> tuple[KeyStore, KeyStore]:
@@ -46,18 +63,18 @@ def _keys(tmp_path, drone_address: str) -> tuple[KeyStore, KeyStore]:
     return store, other
 
 
-def _client(laptop, *args: str, timeout: float) -> dict:
-    return _clients(laptop, [args], timeout=timeout)[0]
+def _client(host, *args: str, timeout: float) -> dict:
+    return _clients(host, [args], timeout=timeout)[0]
 
 
-def _clients(laptop, runs: list[tuple[str, ...]], timeout: float) -> list[dict]:
+def _clients(host, runs: list[tuple[str, ...]], timeout: float) -> list[dict]:
     """Run the laptop's client once per argument tuple, all at the same time, and return each
     one's JSON line in the order of ``runs``. An attacker spends its time waiting for replies
     that never come (1 s per call) and for sessions that are never opened, so running them side
     by side changes no verdict: every call still gets its full timeout."""
     procs = [
         subprocess.Popen(
-            laptop.argv(sys.executable, CLIENT, *args),
+            host.argv(sys.executable, CLIENT, *args),
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
@@ -206,3 +223,93 @@ def test_without_security_an_intruder_flies_the_drone(tmp_path, spawn):
     assert seen["armed"] and seen["setpoints"] > 0, seen
     assert seen["forged_states"] > 0 and seen["forged_poses"] > 0, seen
     assert seen["forged_replies"] > 0 and seen["forged_tokens"] > 0, seen
+
+
+def _judge(results: list[dict], seen: dict) -> None:
+    """Nothing obeyed, nothing forged delivered, every call of a session denied by the router."""
+    report = {f"{r['identity']}@{i}": r for i, r in enumerate(results)}
+    assert sum(r["obeyed"] for r in results) == 0, report
+    for r in results:
+        if r["connected"]:
+            assert r["attempts"] == r["planned"], r
+            assert r["no_reply"] == r["calls"] and r["refused"] == 0, json.dumps(r)
+        else:
+            assert r["attempts"] == 0, r
+    assert seen["states"] > 0 and seen["truths"] > 0, seen
+    assert seen["forged_states"] == 0 and seen["forged_poses"] == 0, seen
+    assert seen["setpoints"] == 0 and seen["forged_replies"] == 0, seen
+    assert seen["forged_tokens"] == 0 and seen["param_replies"] > 0, seen
+    assert not seen["armed"] and seen["max_z"] < 0.3, seen
+    assert seen["param_after"] == seen["param_before"], seen
+
+
+def test_roles_hold_on_a_tls_listener_on_loopback_and_a_forwarded_port(tmp_path, spawn):
+    """The router listens with TLS on the drone's loopback only; attackers connect there from
+    the drone itself and from the laptop through a port forwarded to it: every link arrives on
+    ``lo``, and each gets exactly its certificate's role."""
+    if not is_root():
+        pytest.fail("needs root: it creates network namespaces (CI runs as root)")
+    with two_hosts("f") as (drone, laptop):
+        store, other = _keys(tmp_path, drone.address)
+        keys, mavkey = str(store.root), str(store.mavlink_key)
+        local_tls = f"tls/127.0.0.1:{TLS_PORT}"
+        procs = start_drone(spawn, drone, tmp_path, router_listen=["--listen", local_tls,
+                            "--identity", "drone1", "--keys", keys],
+                            bridge_set=["command_lease=true", f"signing_key_file={mavkey}"],
+                            sim_args=["--signing-key", mavkey])  # fmt: skip
+        forward = spawn(drone.argv(sys.executable, FORWARD, f"{drone.address}:{FORWARDED_PORT}",
+                                   f"127.0.0.1:{TLS_PORT}"), "forward")  # fmt: skip
+        wait_for(lambda: "forwarding" in forward.output() or not forward.alive(), 30,
+                 what="forwarder")  # fmt: skip
+        tunnel = f"tls/{drone.address}:{FORWARDED_PORT}"
+        on_drone = [("attack", local_tls, who, keys) for who in ("olga", "rex", "old")]
+        on_drone += [
+            ("attack", local_tls, "", keys),
+            ("attack", local_tls, "mallory", str(other.root)),
+        ]
+        on_drone.append(("attack", f"tcp/127.0.0.1:{TLS_PORT}", "", keys))  # plain on the TLS port
+        through = [("attack", tunnel, who, keys) for who in ("olga", "rex")]
+        local_results = _clients(drone, on_drone, timeout=120)
+        tunnel_results = _clients(laptop, through, timeout=120)
+        procs[-1].stop()  # the monitor writes what it saw
+        seen = json.loads((tmp_path / "truth.json").read_text())
+        results = local_results + tunnel_results
+        print_summary(results, seen)
+        _judge(results, seen)
+        olga, rex, old, nobody, mallory, plain = local_results
+        assert olga["connected"] and rex["connected"], results  # TLS passes; roles decide
+        assert olga["states_received"] > 0 and rex["states_received"] == 0, results
+        assert not (old["connected"] or nobody["connected"] or mallory["connected"]), results
+        assert SAYS_EXPIRED in old["why"], old
+        assert SAYS_NO_IDENTITY in nobody["why"], nobody
+        assert SAYS_OTHER_CA in mallory["why"], mallory
+        assert not plain["connected"] and SAYS_PLAIN in plain["why"], plain
+        for r in (olga, tunnel_results[0]):
+            assert r["sdk_error"].startswith("CommandRefused") and SAYS_OBSERVER in r["sdk_error"]
+        for r in (rex, tunnel_results[1]):
+            assert SAYS_REVOKED in r["sdk_error"], r
+        assert all(r["connected"] for r in tunnel_results), tunnel_results
+
+        spoofed = _client(drone, "spoof", local_tls, keys, timeout=120)
+        assert spoofed["alice_commander"] == "alice", spoofed  # the certificate's name
+        assert spoofed["sdk"].startswith("refused") and SAYS_LEASE in spoofed["sdk"], spoofed
+        said = spoofed["sdk"].removeprefix("refused: ")  # the CommandRefused's own text
+        assert said.startswith(f"param_set MPC_XY_VEL_MAX refused: {SAYS_LEASE}"), spoofed
+        assert spoofed["raw_plain"] == "no_reply", spoofed  # plain keys: local processes only
+        assert spoofed["raw_carol"] == "no_reply", spoofed  # carol's key: carol's certificate
+        assert SAYS_LEASE in spoofed["raw_alice"], spoofed  # her own: she is alice
+        assert spoofed["holder"] == "carol", spoofed
+        assert spoofed["param_after"] == spoofed["param_before"], spoofed
+        for proc in reversed([*procs, forward]):
+            proc.stop()
+        router_log = procs[0].output()
+        assert "rejected TLS handshake" in router_log, router_log[-3000:]
+        assert "open file limit" not in router_log, router_log[-3000:]
+
+
+def test_docs_quote_what_each_attacker_is_told():
+    """docs/security.md quotes the errors the attack above holds."""
+    text = " ".join(SECURITY_DOC.read_text().split())
+    for said in (SAYS_NO_IDENTITY, SAYS_OTHER_CA, SAYS_EXPIRED, SAYS_PLAIN, SAYS_OBSERVER,
+                 SAYS_REVOKED, SAYS_LEASE):  # fmt: skip
+        assert said in text, said

@@ -13,7 +13,7 @@ from station_env import POSE, TOKEN, StationEnv, station_env
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import MASK_POSITION, CommandBool
 from dronewrapper_ground_station.browser import chromium, console_errors
-from support import client_node, wait_for
+from support import REPO, client_node, wait_for
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -135,3 +135,46 @@ def test_gamepad_drives_only_while_its_dead_man_is_held(env: StationEnv, driver,
         )
         assert (sp.position.x, sp.position.y, sp.position.z) == POSE
     assert console_errors(driver) == []
+
+
+LAYOUT_SHOT = REPO / "out" / "station_1280.png"
+
+
+def test_at_1280_px_the_log_sits_by_the_buttons_and_plots_are_sharp(env: StationEnv, driver):
+    """On a 1280 px wide window the log (where refusal reasons go) is right below the command
+    buttons, on the first screen, and each plot's canvas has one pixel per device pixel (not
+    a small bitmap stretched), with labels in the page's small font. Screenshots are saved to
+    ``out/station_1280.png`` and ``out/station_1280_plots.png``."""
+    size = driver.get_window_size()
+    driver.set_window_size(1280, 800)
+    try:
+        _open(driver, env)
+        driver.find_element(By.ID, "btn-disarm").click()  # a refusal, logged with its reason
+        wait_for(lambda: driver.find_elements(By.CSS_SELECTOR, "#log li"), 10, what="a log line")
+        box = driver.execute_script(
+            "const r = (id) => document.getElementById(id).getBoundingClientRect();"
+            "const buttons = document.getElementById('btn-arm').closest('.panel');"
+            "return {buttons: buttons.getBoundingClientRect(), log: r('log'),"
+            " viewport: window.innerHeight};"
+        )
+        gap = box["log"]["top"] - box["buttons"]["bottom"]
+        assert 0 <= gap <= 80, f"the log starts {gap:.0f} px below the buttons"
+        assert box["log"]["top"] < box["viewport"], "the log is off the first screen"
+        plots = driver.execute_script(
+            "const dpr = window.devicePixelRatio || 1;"
+            "return [...document.querySelectorAll('canvas.plot')].map((c) => ({"
+            "  id: c.id, width: c.width, height: c.height, dpr: dpr,"
+            "  cssWidth: c.clientWidth, cssHeight: c.clientHeight,"
+            "  font: c.getContext('2d').font}));"
+        )
+        assert len(plots) == 3
+        for plot in plots:
+            assert plot["width"] == round(plot["cssWidth"] * plot["dpr"]), plot
+            assert plot["height"] == round(plot["cssHeight"] * plot["dpr"]), plot
+            assert plot["font"].startswith("12px"), plot  # the .muted text's size, in CSS px
+        LAYOUT_SHOT.parent.mkdir(exist_ok=True)
+        driver.save_screenshot(str(LAYOUT_SHOT))
+        driver.execute_script("document.getElementById('plot-alt').scrollIntoView()")
+        driver.save_screenshot(str(LAYOUT_SHOT.with_name("station_1280_plots.png")))
+    finally:
+        driver.set_window_size(size["width"], size["height"])

@@ -10,7 +10,8 @@ pairs on private subnets that exist only inside them:
   side, a relay that delays every byte 50 ms each way (``delay_relay.py``: this kernel has no
   ``netem``, so the delay is added in user space), and both its interfaces shaped to 20 Mbit/s
   with ``tbf`` (each direction of the path leaves through one of them);
-- ground: a router (identity ``ground``, role ``operator``) which joins the link router, and
+- ground: a router (identity ``ground``, role ``relay``: it forwards its apps' commands, each
+  in the app's name) which joins the link router, and
   an SDK app with the fleet (``fleet_ground_probe.py``).
 
 Every router speaks Zenoh over mTLS with the project's CA and enforces the access control
@@ -136,7 +137,7 @@ def key_folders(root, net: FieldLinkGround) -> dict[str, str]:
     store.init()
     store.issue("field", "drone")
     store.issue("link", "relay", hosts=[net.link_field_address, net.link_ground_address])
-    store.issue("ground", "operator")
+    store.issue("ground", "relay")
     store.issue("olga", "observer")
     folders = {}
     for name in ("field", "link", "ground", "olga"):

@@ -6,7 +6,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -15,9 +14,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from replay_harness import RECORDINGS, compare, outputs, reference_path
 
+from dronewrapper.runtime.arguments import CommandParser, first_line
+
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("names", nargs="*", help=f"recordings (default: {', '.join(RECORDINGS)})")
     parser.add_argument("--write", action="store_true", help="store the new references")
     args = parser.parse_args()

@@ -8,6 +8,7 @@ import logging
 import pytest
 
 from dronewrapper.envelope import Envelope
+from dronewrapper.errors import CommandRefused
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CancelRequest
 from dronewrapper.msgs.geometry import Vector3
@@ -162,3 +163,40 @@ def test_only_the_lease_holder_may_push_clear_or_fly_a_mission(kind):
             ask(user, service, request, "alice")
         except ServiceError as exc:
             assert exc.code != "lease", (service.key("drone"), exc)
+
+
+@pytest.mark.parametrize("kind", ["mavlink", "tello"])
+def test_a_spoofed_commander_name_is_refused(kind):
+    """On a secure graph a certificate's commands travel on keys bound to its name (the
+    router's access control lets alice put and query only under ``@by/alice``): alice
+    claiming "carol" in her attachment is still alice, and carol's lease holds."""
+    bus, bridge = wired(kind)
+    carol = FakeNode("carol_app", bus, bound_name="carol")
+    alice = FakeNode("alice_app", bus, bound_name="alice")
+    assert ask(carol, registry.COMMAND_LEASE, LeaseRequest(action="take"), "carol").granted
+    with pytest.raises(ServiceError) as error:
+        ask(alice, registry.ARMING, CommandBool(value=True), "carol")
+    assert error.value.code == "lease"
+    assert error.value.message.startswith("'carol' holds the command lease; 'alice' must")
+    setpoints = alice.publisher(registry.SETPOINT_RAW_LOCAL)
+    assert setpoints.key == "drone/mavros/setpoint_raw/local/@by/alice"
+    setpoints.put(FORWARD, attachment=commander_attachment("carol"))
+    assert bridge.core.lease.refused_setpoints == 1  # the bridge heard it, as alice's
+    reply = ask(alice, registry.COMMAND_LEASE, LeaseRequest(action="release"), "carol")
+    assert not reply.granted and reply.holder == "carol"  # nor may she release carol's lease
+    with pytest.raises(ServiceError) as error:  # carol's own reach the aircraft's side
+        ask(carol, registry.ARMING, CommandBool(value=True), "carol")
+    assert error.value.code == "unavailable"
+
+
+def test_a_lease_refusal_names_the_command_once():
+    """The bridge's refusal is the reason; the SDK names the command: "arming refused: 'alice'
+    holds ...", never "arming refused: arming refused: ..."."""
+    bus, _ = wired("mavlink")
+    user = FakeNode("apps", bus)
+    assert ask(user, registry.COMMAND_LEASE, LeaseRequest(action="take"), "alice").granted
+    with pytest.raises(ServiceError) as error:
+        ask(user, registry.ARMING, CommandBool(value=True), "bob")
+    text = str(CommandRefused("arming", error.value.message))
+    assert text.startswith("arming refused: 'alice' holds the command lease; 'bob' must take")
+    assert text.count("refused") == 1

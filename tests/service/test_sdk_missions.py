@@ -58,6 +58,8 @@ def test_a_waypoint_list_is_flown_and_progress_reported_then_rtl_lands_at_home(s
     points = [(8.0, 0.0, 5.0), (8.0, 8.0, 5.0)]
     plan = [(*to_geodetic(HOME, x, y), z) for x, y, z in points]
     assert sim.drone.upload_mission(plan) == 2
+    before = sim.drone.mission_progress()  # no item reached yet: None, not -1
+    assert (before.total, before.reached, before.finished) == (2, None, False)
     start = sim.pair.t
     sim.drone.start_mission()
     for _ in range(600):

@@ -3,6 +3,7 @@ drone to its start (``{ns}/sim/world/reset``), on the fake bus in bus time (see 
 
 from __future__ import annotations
 
+import logging
 import threading
 
 import pytest
@@ -100,3 +101,19 @@ def test_reset_of_a_real_aircraft_says_no_simulator_answers():
         assert status == 503 and "no simulator answers" in reply["error"]
     finally:
         rig.close()
+
+
+def test_the_terminal_says_when_the_router_is_unreachable_and_when_it_is_back(caplog):
+    rig = StationRig()
+    with caplog.at_level(logging.INFO, logger="station"):
+        rig.bus.link_gap(True)
+        rig.fleet.discover()
+        rig.fleet.discover()  # said once, not at every discovery
+        rig.bus.link_gap(False)
+        rig.fleet.discover()
+    said = [(r.levelno, r.getMessage()) for r in caplog.records if r.name == "station"]
+    unreachable = [text for level, text in said if level == logging.WARNING]
+    assert len(unreachable) == 1 and unreachable[0].startswith(
+        "no router reachable at the router: the page shows no drone until one runs there"
+    )
+    assert (logging.INFO, "router reached at the router") in said

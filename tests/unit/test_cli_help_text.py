@@ -10,7 +10,8 @@ import pytest
 from dronewrapper.cli import main
 
 SUBCOMMANDS = [
-    "router", "keys", "echo", "alive", "doctor", "mavlink-forward", "up", "sim", "detect",
+    "router", "keys", "echo", "alive", "doctor", "mavlink-forward", "up", "install",
+    "uninstall", "sim", "detect",
     "station", "record", "replay", "foxglove",
 ]  # fmt: skip
 SERVICES = [
@@ -42,3 +43,17 @@ def test_service_help_is_plain_text(module, capsys, monkeypatch):
     assert done.value.code == 0
     out = capsys.readouterr().out
     assert out.strip() and "``" not in out, out
+
+
+def test_a_service_help_lists_its_config_keys_with_defaults_and_what_they_are(capsys):
+    import msgspec
+
+    from dronewrapper_ros2_gateway.config import Config
+
+    with pytest.raises(SystemExit):
+        main(["ros2", "--help"])
+    out = capsys.readouterr().out
+    keys = out[out.index("config keys (--set KEY=VALUE") :]
+    for field in msgspec.structs.fields(Config):
+        assert f"\n  {field.name} = " in keys, field.name
+    assert "  domain_id = 0\n      the ROS_DOMAIN_ID of the ROS 2 graph (0-232)" in keys

@@ -6,7 +6,8 @@ import itertools
 
 import pytest
 
-from dronewrapper_compose.fleet import FleetError, drones_of, parse_kinds, plan_fleet
+from dronewrapper_compose import launcher
+from dronewrapper_compose.fleet import FleetError, drones_of, load_warning, parse_kinds, plan_fleet
 from dronewrapper_compose.graph import GRAPH_DIR, GraphError, load_graph
 from dronewrapper_compose.launcher import Launcher
 
@@ -111,3 +112,20 @@ def test_a_classroom_lists_its_tellos_and_this_machines_address_for_each():
     bridge2 = " ".join(launcher.argv_of(launcher.groups[0][1])[0])
     assert "tello_address=127.0.43.2" in bridge2 and "video=on_demand" in bridge2
     assert "config/sim.yaml" in bridge2
+
+
+def test_a_fleet_beyond_what_the_cores_carry_is_said_with_the_measured_figure():
+    assert load_warning(27, cores=2) is None  # 27 x 6.5 % = 1.76 of 2 cores, under 90 %
+    said = load_warning(200, cores=2)
+    assert said is not None
+    assert "200 simulated drones take about 13.0 cores" in said
+    assert "6.5% of one core each, docs/fleet.md" in said and "carry about 27" in said
+    assert load_warning(200, cores=16) is None  # 13 of 16 cores
+
+
+def test_up_warns_when_a_fleet_asks_more_than_the_machine_carries(capsys, monkeypatch):
+    monkeypatch.setattr(launcher, "usable_cores", lambda: 2)
+    assert launcher.main(["sim_fleet", "--var", "drones=200", "--check"]) == 0
+    assert "warning: 200 simulated drones take about 13.0 cores" in capsys.readouterr().err
+    assert launcher.main(["sim_fleet", "--var", "drones=3", "--check"]) == 0
+    assert "warning" not in capsys.readouterr().err

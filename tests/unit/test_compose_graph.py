@@ -170,3 +170,24 @@ def _number(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+@pytest.mark.parametrize(
+    ("graph", "said"),
+    [
+        ("sim_irs", "sim_irs: no such graph file"),
+        ("sim_irs", "did you mean sim_iris?"),
+        ("compose/sim_follow_colour.yaml", "did you mean sim_follow_color?"),
+        ("README.md", "README.md: not a graph: not valid YAML at line "),
+    ],
+)
+def test_up_names_the_file_and_the_closest_graph(capsys, monkeypatch, graph, said):
+    monkeypatch.chdir(GRAPH_DIR.parent)
+    assert launcher_main([graph, "--check"]) == 2
+    err = capsys.readouterr().err
+    assert said in err and err.count("\n") == 1, err  # one line, no YAML traceback text
+
+
+def test_a_file_that_is_yaml_but_not_a_mapping_is_not_a_graph(tmp_path):
+    with pytest.raises(GraphError, match=r"g\.yaml: not a graph: its top level is not a mapping"):
+        load_graph(write(tmp_path, "- a\n- b\n"))

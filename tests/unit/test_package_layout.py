@@ -58,3 +58,22 @@ def test_setup_installs_every_distribution():
     for dist in DISTRIBUTIONS:
         name = tomllib.loads((dist / "pyproject.toml").read_text())["project"]["name"]
         assert name in named or name == "dronewrapper", name
+
+
+@pytest.mark.parametrize("dist", DISTRIBUTIONS, ids=lambda p: p.name)
+def test_an_editable_install_is_a_plain_path_entry(dist: Path):
+    """With its packages declared beside its pyproject.toml (``package-dir = {"" = "."}``),
+    setuptools installs a distribution editable as a ``.pth`` path entry; without it, through
+    an import hook whose install prints a warning block (twelve blocks before the demo)."""
+    config = tomllib.loads((dist / "pyproject.toml").read_text())
+    assert config["tool"]["setuptools"]["package-dir"] == {"": "."}
+
+
+def test_make_setup_installs_the_root_distribution_as_it_is():
+    """The root holds no code (``packages = []``): an editable install of it would be the same
+    import hook and warning block for nothing."""
+    root = tomllib.loads((REPO / "pyproject.toml").read_text())
+    assert root["tool"]["setuptools"]["packages"] == []
+    makefile = (REPO / "Makefile").read_text().splitlines()
+    (install,) = [line for line in makefile if "$(DISTS:%=-e ./%)" in line]
+    assert " '.[dev]'" in install and "-e '.[dev]'" not in install

@@ -5,7 +5,14 @@ from __future__ import annotations
 
 import pytest
 
-from dronewrapper.diagnosis import identity_facts, local_standing, no_reply, seconds
+from dronewrapper.diagnosis import (
+    forbidden,
+    identity_facts,
+    local_standing,
+    no_reply,
+    role_refusal,
+    seconds,
+)
 from dronewrapper.discovery import connection_problem
 from dronewrapper.errors import CommandRefused, NotConnected, Timeout
 from dronewrapper.security.keystore import KeyStore
@@ -32,11 +39,17 @@ def test_an_observers_command_is_not_permitted_for_its_role():
     assert "not permitted for role observer" in str(error) and "'olga'" in str(error)
 
 
-def test_an_observer_unknown_to_the_local_store_is_told_what_the_silence_may_mean():
+def test_an_identity_whose_certificate_names_no_role_is_told_what_the_silence_may_mean():
     error = ask(identity="olga", standing=None)
     assert isinstance(error, Timeout)
     assert "within 10 s" in str(error) and "9.99" not in str(error)
-    assert "not permitted for role observer" in str(error)
+    assert "names no role: if it is an observer's, the router drops its commands" in str(error)
+
+
+def test_the_time_in_a_sentence_is_the_time_waited():
+    """A call whose query no server took ends after 2 s: it says 2 s, not its 10 s timeout."""
+    error = no_reply("arming", KEY, 2.0, ns="drone", connect=TLS, alive_names=ALIVE)
+    assert "within 2 s" in str(error) and "10 s" not in str(error)
 
 
 def test_a_revoked_identity_is_told_it_was_refused_not_that_no_bridge_runs():
@@ -81,3 +94,23 @@ def test_the_local_key_store_knows_role_and_revocation(tmp_path, monkeypatch):
     assert local_standing("nobody") is None and local_standing("") is None
     assert identity_facts("olga", "tcp/127.0.0.1:7447") == {"identity": "", "standing": None}
     assert identity_facts("olga", TLS)["standing"] == ("observer", False)
+
+
+def test_the_role_comes_from_the_certificate_without_the_index(tmp_path, monkeypatch):
+    """A laptop holds ca.crt, NAME.crt and NAME.key only: the certificate says the role, so an
+    observer's command is refused before it is sent, over TLS; on a plain link, nothing."""
+    store = KeyStore(tmp_path / "keys")
+    store.init()
+    store.issue("olga", "observer")
+    store.issue("alice", "operator")
+    laptop = tmp_path / "laptop"
+    store.export("olga", laptop)
+    store.export("alice", laptop)
+    assert not (laptop / "index.json").exists()
+    monkeypatch.setenv("DRONEWRAPPER_KEYS", str(laptop))
+    assert local_standing("olga") == ("observer", False)
+    assert forbidden("olga", TLS) == role_refusal("observer", "olga") + " (not sent)"
+    assert "not permitted for role observer (identity 'olga', as its certificate says)" in (
+        forbidden("olga", TLS)
+    )
+    assert forbidden("alice", TLS) == "" and forbidden("olga", "tcp/127.0.0.1:7447") == ""

@@ -10,7 +10,7 @@ from cryptography import x509
 from cryptography.x509.oid import NameOID
 
 from dronewrapper.cli import main as cli_main
-from dronewrapper.security.identity import Identity
+from dronewrapper.security.identity import Identity, Subject
 from dronewrapper.security.keystore import KeyStore, KeyStoreError, read_mavlink_key
 
 
@@ -48,6 +48,18 @@ def test_certificate_names_the_identity_and_chains_to_the_ca(store):
         "127.0.0.1",
         "10.0.0.5",
     ]
+
+
+def test_the_certificate_says_its_role(store):
+    """The role is in the subject (organizational unit): a laptop reads its own role from its
+    certificate, without the drone's index.json. An old certificate without one reads ""."""
+    for name, role in (("drone1", "drone"), ("alice", "operator"), ("olga", "observer")):
+        store.issue(name, role)
+        assert Identity.load(name, store.root).subject() == Subject(name, role)
+    cert = x509.load_pem_x509_certificate(store.cert("olga").read_bytes())
+    assert cert.subject.get_attributes_for_oid(NameOID.ORGANIZATIONAL_UNIT_NAME)[0].value == (
+        "observer"
+    )
 
 
 def test_roles_exclude_revoked_and_expired(store):

@@ -7,7 +7,7 @@ import pytest
 from dronewrapper.msgs import registry
 from dronewrapper.router import InsecureEndpoint, check_endpoints, is_loopback, router_options
 from dronewrapper.runtime import caller
-from dronewrapper.security.acl import access_control, acl_rules
+from dronewrapper.security.acl import access_control, acl_rules, command_rule
 from dronewrapper_bridge_base.commander_lease import CommanderLease
 
 
@@ -48,36 +48,66 @@ def test_rules_follow_the_registry():
     setpoint = registry.SETPOINT_RAW_LOCAL.key("drone")
     state = registry.STATE.key("drone")
     arming = registry.ARMING.key("drone")
-    assert setpoint in _allowed(rules["operator"], "put", "ingress")
+    # a certificate's commands travel on keys bound to its name only (command_rule)
+    assert setpoint not in _allowed(rules["operator"], "put", "ingress")
+    assert arming not in _allowed(rules["operator"], "query", "ingress")
+    alice = [command_rule(["drone"], "alice")]
+    assert _allowed(alice, "put", "ingress") >= {f"{setpoint}/@by/alice"}
+    assert f"{arming}/@by/alice" in _allowed(alice, "query", "ingress")
+    assert not any("carol" in k or k.endswith("/*") for k in _allowed(alice, "query", "ingress"))
+    assert state not in {k.split("/@by/")[0] for k in _allowed(alice, "put", "ingress")}
     # a client publisher sends only while it sees a subscriber: the operator must see them
     assert setpoint in _allowed(rules["operator"], "declare_subscriber", "egress")
-    assert state not in _allowed(rules["operator"], "put", "ingress")
-    assert arming in _allowed(rules["operator"], "query", "ingress")
+    assert f"{setpoint}/@by/*" in _allowed(rules["operator"], "declare_subscriber", "egress")
     assert state in _allowed(rules["drone"], "put", "ingress")
     assert arming in _allowed(rules["drone"], "declare_queryable", "ingress")
+    assert f"{arming}/@by/*" in _allowed(rules["drone"], "declare_queryable", "ingress")
     assert arming not in _allowed(rules["operator"], "declare_queryable", "ingress")
     # observers only watch: no put, no query, no queryable, no token
     for message in ("put", "delete", "query", "declare_queryable", "liveliness_token"):
         assert not _allowed(rules["observer"], message, "ingress"), message
     assert state in _allowed(rules["observer"], "declare_subscriber", "ingress")
     every_service = {s.key("drone") for s in registry.SERVICES.values()}
-    assert every_service <= _allowed(rules["operator"], "query", "ingress")
+    assert {f"{k}/@by/alice" for k in every_service} <= _allowed(alice, "query", "ingress")
+    # the drone's own local processes command on plain keys (named by their attachment)
+    assert every_service <= _allowed(rules["local"], "query", "ingress")
+    assert setpoint in _allowed(rules["local"], "put", "ingress")
+
+
+def test_only_plain_loopback_links_are_trusted_without_a_certificate():
+    """A TLS link on loopback (a listener on 127.0.0.1, an ssh -L tunnel, a reverse proxy)
+    gets its certificate's role: the local subject is interface lo *and* a plain protocol."""
+    acl = access_control({"operator": ["alice"], "observer": ["olga"]})
+    local = next(s for s in acl["subjects"] if s["id"] == "local")
+    assert local["interfaces"] == ["lo"]
+    assert local["link_protocols"] == ["tcp", "udp"]
+    assert "tls" not in local["link_protocols"] and "quic" not in local["link_protocols"]
+    # every subject that is not the local one names certificates
+    for subject in acl["subjects"]:
+        assert subject["id"] == "local" or set(subject) == {"id", "cert_common_names"}, subject
+
+
+def test_each_operator_commands_in_its_own_name_only():
+    acl = access_control({"operator": ["alice", "carol"], "observer": ["olga"], "relay": []})
+    policies = {p["id"]: p for p in acl["policies"]}
+    rules = {r["id"]: r for r in acl["rules"]}
+    subjects = {s["id"]: s for s in acl["subjects"]}
+    for name in ("alice", "carol"):
+        policy = policies[f"cert_{name}"]
+        assert subjects[policy["subjects"][0]]["cert_common_names"] == [name]
+        (rule,) = (rules[r] for r in policy["rules"])
+        assert all(k.endswith(f"/@by/{name}") for k in rule["key_exprs"]), rule
+    assert "cert_olga" not in policies  # an observer commands in no name
 
 
 def test_a_relay_forwards_what_the_drone_and_the_operator_may_send():
     """A router between the field and the ground carries telemetry one way and setpoints and
-    calls the other: its rules are the drone's and the operator's, and nothing more."""
+    calls the other, bound to any commander's name (each end's router checked them)."""
     rules = acl_rules(["drone"])
     ids = lambda role: {r["id"] for r in rules[role]}  # noqa: E731
-    assert ids("relay") == ids("drone") | ids("operator")
-    for message, flow in (
-        ("put", "ingress"),
-        ("query", "ingress"),
-        ("declare_queryable", "ingress"),
-    ):
-        assert _allowed(rules["relay"], message, flow) == (
-            _allowed(rules["drone"], message, flow) | _allowed(rules["operator"], message, flow)
-        )
+    assert ids("relay") >= ids("drone") | ids("operator")
+    arming = registry.ARMING.key("drone")
+    assert f"{arming}/@by/*" in _allowed(rules["relay"], "query", "ingress")
     acl = access_control({"drone": ["field"], "operator": ["ground"], "relay": ["link"]})
     policies = {p["id"]: p for p in acl["policies"]}
     assert set(policies["role_relay"]["rules"]) == {f"relay_{i}" for i in ids("relay")}
@@ -121,4 +151,20 @@ def test_caller_attachment_round_trip():
     assert caller.commander_of(None) == "" and caller.commander_of(b"other") == ""
     with caller.handling(caller.commander_attachment("carol")):
         assert caller.current_commander() == "carol"
+    assert caller.current_commander() == ""
+
+
+def test_a_bound_key_names_the_commander_whatever_the_attachment_says():
+    key = caller.bound_key("drone/mavros/cmd/arming", "alice")
+    assert key == "drone/mavros/cmd/arming/@by/alice"
+    assert caller.split_bound(key) == ("drone/mavros/cmd/arming", "alice")
+    assert caller.split_bound("drone/mavros/state") == ("drone/mavros/state", "")
+    assert caller.bound_key("drone/x", "") == "drone/x"
+    claim = caller.commander_attachment("carol", sent=5.0)
+    assert caller.origin_of(claim, key) == ("alice", 5.0)
+    assert caller.origin_of(claim, "drone/mavros/cmd/arming") == ("carol", 5.0)
+    with caller.handling(claim, key):
+        assert caller.current_commander() == "alice"
+    with caller.handling(None, key):
+        assert caller.current_commander() == "alice"
     assert caller.current_commander() == ""

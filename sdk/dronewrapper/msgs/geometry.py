@@ -6,11 +6,14 @@ Body frame: FLU (x forward, y left, z up), ``frame_id="base_link"``.
 
 from __future__ import annotations
 
-from typing import Self
+from typing import TYPE_CHECKING
 
 import msgspec
 
 from dronewrapper.msgs.std import Header
+
+if TYPE_CHECKING:
+    from typing import Self  # novermin (Python 3.11; only for type checkers: JetPack 6 has 3.10)
 
 
 class _XYZ(msgspec.Struct, frozen=True, kw_only=True):

@@ -31,6 +31,7 @@ from dronewrapper.msgs.flight import (
 )
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
+from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavlink import MavlinkFrames
 from dronewrapper.msgs.mavros import (
     CommandBool,
@@ -255,6 +256,13 @@ BATTERY = Topic(
     rate_hz=1.0,
     publishers=("bridge",),
     doc="battery, 0..1",
+)
+LINK_STATUS = Topic(
+    "{ns}/bridge/link",
+    type=LinkStatus,
+    rate_hz=1.0,
+    publishers=("bridge",),
+    doc="the autopilot link's load, losses and reconnects (bridge_mavlink)",
 )
 STATUSTEXT = Topic(
     "{ns}/mavros/statustext/recv",

@@ -15,6 +15,7 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper.runtime.options import add_zenoh_args, options_from_args
 from dronewrapper.runtime.service import setup_logging
 
@@ -59,7 +60,7 @@ def _open(args: argparse.Namespace, prog: str):
 
 def record_main(argv: Sequence[str]) -> int:
     """``dronewrapper record``: the bus to MCAP, or ``--info FILE`` to summarise one."""
-    parser = argparse.ArgumentParser(prog="dronewrapper record", description="the bus to MCAP")
+    parser = CommandParser(prog="dronewrapper record", description="the bus to MCAP")
     parser.add_argument("keyexprs", nargs="*", default=["**"], help="what to record (default **)")
     parser.add_argument("-o", "--output", metavar="FILE.mcap", help="the recording to write")
     parser.add_argument("--info", metavar="FILE.mcap", help="summarise a recording and exit")
@@ -143,7 +144,7 @@ def record_main(argv: Sequence[str]) -> int:
 
 def replay_main(argv: Sequence[str]) -> int:
     """``dronewrapper replay``: a recording back on the bus with its original timing."""
-    parser = argparse.ArgumentParser(prog="dronewrapper replay", description="MCAP to the bus")
+    parser = CommandParser(prog="dronewrapper replay", description="MCAP to the bus")
     parser.add_argument("file", help="the recording (.mcap)")
     parser.add_argument("--rate", type=_positive, default=1.0, help="speed factor (default 1)")
     parser.add_argument("--loop", action="store_true", help="start again at the end")
@@ -185,7 +186,7 @@ def foxglove_main(argv: Sequence[str]) -> int:
     """``dronewrapper foxglove``: the live bus on a Foxglove WebSocket (ws://HOST:PORT)."""
     from dronewrapper.record.live import DEFAULT_PORT
 
-    parser = argparse.ArgumentParser(prog="dronewrapper foxglove", description="live Foxglove")
+    parser = CommandParser(prog="dronewrapper foxglove", description="live Foxglove")
     parser.add_argument("keyexprs", nargs="*", default=["**"], help="what to serve (default **)")
     parser.add_argument("--host", default="127.0.0.1", help="listen address (default loopback)")
     parser.add_argument("--port", type=int, default=DEFAULT_PORT, help=f"default {DEFAULT_PORT}")

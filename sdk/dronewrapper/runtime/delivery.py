@@ -74,7 +74,7 @@ def decoding(
             errors.note(errors.decode, "undecodable sample", key, exc)
             return
         try:
-            with caller.handling(attachment):
+            with caller.handling(attachment, key):
                 if keyed:
                     callback(key, msg)
                 else:

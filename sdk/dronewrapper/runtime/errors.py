@@ -20,10 +20,16 @@ class ServiceError(RuntimeError):
 
 
 class ServiceUnavailable(ServiceError):
-    """Nobody answered: the serving process is not running or not reachable."""
+    """Nobody answered: the serving process is not running or not reachable.
 
-    def __init__(self, message: str) -> None:
+    Attributes:
+        waited: seconds the call actually waited (less than its timeout when no server took
+            the query at all), None when unknown.
+    """
+
+    def __init__(self, message: str, waited: float | None = None) -> None:
         super().__init__(message, code="unavailable")
+        self.waited = waited
 
 
 class ServiceTimeout(ServiceUnavailable):
@@ -31,8 +37,8 @@ class ServiceTimeout(ServiceUnavailable):
     busy or stuck (the request may still take effect), or the query reached none at the last
     moment. A kind of :class:`ServiceUnavailable`, never a refusal."""
 
-    def __init__(self, message: str) -> None:
-        super().__init__(message)
+    def __init__(self, message: str, waited: float | None = None) -> None:
+        super().__init__(message, waited)
         self.code = "timeout"
 
 

@@ -46,6 +46,8 @@ from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.session import ROUTE_WAIT_S
+from dronewrapper.security import acl  # a module: acl imports the runtime's caller
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -250,9 +252,11 @@ class FakeNode:
     age and wait on the bus clock; services answer synchronously.
     """
 
-    def __init__(self, name: str, bus: FakeBus, *, ns: str = "drone") -> None:
+    def __init__(self, name: str, bus: FakeBus, *, ns: str = "drone", bound_name: str = "") -> None:
         self.name = name
         self.ns = ns
+        self.bound_name = bound_name
+        """As :attr:`Node.bound_name`: the certificate name this node's commands are bound to."""
         self.bus = bus
         self.clock = bus.clock
         self.log = logging.getLogger(name)
@@ -313,7 +317,8 @@ class FakeNode:
         qos: dict[str, Any] | None = None,
         **parts: str,
     ) -> FakePublisher[T]:
-        return FakePublisher(self.bus, key or topic.key(self.ns, **parts), topic.type)
+        key = acl.commanding_key(topic, key or topic.key(self.ns, **parts), self.bound_name)
+        return FakePublisher(self.bus, key, topic.type)
 
     def subscribe(
         self,
@@ -327,9 +332,13 @@ class FakeNode:
     ) -> _Subscription:
         keyexpr = key or topic.key(self.ns, **parts)
         deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
-        return self.bus.subscribe(
-            keyexpr, lambda where, payload, attachment=None: deliver(where, payload, attachment)
-        )
+
+        def on_payload(where: str, payload: bytes, attachment: bytes | None = None) -> None:
+            deliver(where, payload, attachment)
+
+        if acl.is_commanded(topic):  # as the real node: the bound keys too
+            self.bus.subscribe(caller.any_bound(keyexpr), on_payload)
+        return self.bus.subscribe(keyexpr, on_payload)
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
         holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)
@@ -339,13 +348,13 @@ class FakeNode:
     def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str):
         key = service.key(self.ns, **parts)
 
-        def answer(payload: bytes, attachment: bytes | None = None) -> Rep:
+        def answer(payload: bytes, attachment: bytes | None = None, asked: str = "") -> Rep:
             try:
                 request = codec.decode(service.request, payload)
             except (msgspec.DecodeError, msgspec.ValidationError) as exc:
                 raise ServiceError(f"{key}: bad request: {exc}", "bad_request") from exc
             try:
-                with caller.handling(attachment):  # who asks, as the real node records it
+                with caller.handling(attachment, asked):  # who asks, as the real node records
                     return handler(request)
             except ValueError as exc:
                 raise ServiceError(f"{key}: {exc}", "bad_request") from exc
@@ -368,6 +377,9 @@ class FakeNode:
         key = service.key(ns or self.ns, **parts)
         answer = self.bus._services.get(key)
         if answer is None:
-            raise ServiceUnavailable(f"no reply from {key}: nothing serves it on the fake bus")
-        reply = answer(codec.encode(request), attachment)
+            waited = min(timeout, ROUTE_WAIT_S)  # as long as a real call asks an absent server
+            raise ServiceUnavailable(
+                f"no reply from {key}: nothing serves it on the fake bus", waited
+            )
+        reply = answer(codec.encode(request), attachment, caller.bound_key(key, self.bound_name))
         return codec.decode(service.reply, codec.encode(reply))

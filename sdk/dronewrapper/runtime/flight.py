@@ -177,7 +177,9 @@ class FlightSequence:
         try:
             reply = pending.result(self.now)
         except (ServiceUnavailable, TimeoutError) as exc:  # no answer (before ServiceError,
-            raise NoReply(self.what, service.key(c.ns), timeout, str(exc)) from None  # its kind)
+            waited = getattr(exc, "waited", None)  # its kind); the time actually waited
+            waited = timeout if waited is None else waited
+            raise NoReply(self.what, service.key(c.ns), waited, str(exc)) from None
         except ServiceError as exc:
             raise StepRefused(self.what, exc.message) from None
         self.result = reply

@@ -14,6 +14,11 @@ Zenoh queryables whose handlers run on a worker pool; a bad request gets an erro
 what is wrong, never silence. SIGINT and SIGTERM set ``stop_event``; the session is always
 closed on exit (an unclosed session can hang the interpreter).
 
+A node with a certificate (``options.identity``) sends its calls and the topics an operator
+publishes on keys bound to its certificate's name (``KEY/@by/NAME``, see
+:mod:`dronewrapper.runtime.caller`); every node serves, and subscribes to those topics, on the
+bound keys too, and a handler's commander is the bound name.
+
 A Node satisfies the node contract (:class:`~dronewrapper.runtime.contract.NodeApi`): the bus
 and the clock (``node.clock``, the real clocks unless given another).
 """
@@ -54,6 +59,7 @@ from dronewrapper.runtime.session import (
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.runtime.shm_put import BLOCK_WAIT_S, ShmWriter
 from dronewrapper.runtime.thread_state import KEPT
+from dronewrapper.security import acl  # a module: acl imports the runtime's caller
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -178,6 +184,8 @@ class Node:
         self._parent_pid = os.getppid()
         self.shm_writer = ShmWriter() if self.options.shared_memory else None
         """Writes large messages (images) straight into Zenoh shared memory; None when off."""
+        self.bound_name = bound_name(self.options)
+        """The certificate's name this node's commands are bound to ("" without identity)."""
         if handle_signals and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
                 self._old_handlers[sig] = signal.signal(sig, self._on_signal)
@@ -290,7 +298,7 @@ class Node:
         max_bytes = LOW_LATENCY_MAX_BYTES if self.options.low_latency else None
         pub = Publisher(
             self.session,
-            key or topic.key(self.ns, **parts),
+            acl.commanding_key(topic, key or topic.key(self.ns, **parts), self.bound_name),
             topic.type,
             shm=shm,
             max_bytes=max_bytes,
@@ -332,6 +340,9 @@ class Node:
         handler = zenoh.handlers.Callback(on_sample, indirect=not inline)
         sub = self.session.declare_subscriber(keyexpr, handler)
         self._declared.append(sub)
+        if acl.is_commanded(topic):  # the same commands from certified commanders
+            bound = zenoh.handlers.Callback(on_sample, indirect=not inline)
+            self._declared.append(self.session.declare_subscriber(caller.any_bound(keyexpr), bound))
         return sub
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
@@ -371,9 +382,11 @@ class Node:
                     raise ServiceError(
                         f"{key}: bad {service.request.__name__} request: {exc}", "bad_request"
                     ) from exc
-                with caller.handling(query.attachment):
+                asked = str(query.key_expr)
+                with caller.handling(query.attachment, asked):
                     reply = handler(request)
-                query.reply(key, codec.encode(reply), encoding=reply_encoding)
+                answered = caller.bound_key(key, caller.split_bound(asked)[1])
+                query.reply(answered, codec.encode(reply), encoding=reply_encoding)
             except ServiceError as exc:
                 err = ErrorReply(message=exc.message, code=exc.code)
                 query.reply_err(codec.encode(err), encoding=ERROR_ENCODING)
@@ -395,6 +408,7 @@ class Node:
 
         queryable = self.session.declare_queryable(key, on_query)
         self._declared.append(queryable)
+        self._declared.append(self.session.declare_queryable(caller.any_bound(key), on_query))
         return queryable
 
     def call(
@@ -422,5 +436,16 @@ class Node:
             ns=ns or self.ns,
             timeout=timeout,
             attachment=attachment,
+            bound_to=self.bound_name,
             **parts,
         )
+
+
+def bound_name(options: ZenohOptions) -> str:
+    """The name a node with ``options`` binds its commands to: its certificate's common name
+    (``""`` without an identity)."""
+    if not options.identity:
+        return ""
+    from dronewrapper.security.identity import Identity
+
+    return Identity.load(options.identity, options.keys_dir or None).subject().name

@@ -22,7 +22,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TypeVar
 
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.config import ConfigError, load_config
+from dronewrapper.runtime.config_help import config_help
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import add_zenoh_args, options_from_args
 
@@ -46,16 +48,20 @@ def command_line_name(name: str) -> str:
     return f"python -m {package}" if package else name
 
 
-def plain_text(text: str) -> str:
-    """``text`` from a docstring as a terminal shows it: reST's double backticks dropped."""
-    return text.replace("``", "")
-
-
-def service_parser(name: str, description: str | None, *, default_mode: str = "peer"):
-    """An ArgumentParser with the flags every service takes."""
-    parser = argparse.ArgumentParser(
+def service_parser(
+    name: str,
+    description: str | None,
+    *,
+    default_mode: str = "peer",
+    config_type: type | None = None,
+):
+    """An ArgumentParser with the flags every service takes; its help ends with the keys of
+    ``config_type`` (:func:`~dronewrapper.runtime.config_help.config_help`)."""
+    parser = CommandParser(
         prog=command_line_name(name),
-        description=plain_text(description.strip().splitlines()[0]) if description else None,
+        description=first_line(description),
+        epilog=config_help(config_type) if config_type is not None else None,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--config", metavar="FILE", help="YAML or JSON config file")
     parser.add_argument(
@@ -85,7 +91,7 @@ def run_service(
     ``add_args`` may add service-specific flags; ``configure(args, overrides)`` may turn them
     into config overrides (appended to ``--set``) before the config is loaded.
     """
-    parser = service_parser(name, description)
+    parser = service_parser(name, description, config_type=config_type)
     if add_args:
         add_args(parser)
     args = parser.parse_args(argv)

@@ -18,6 +18,7 @@ import zenoh
 from dronewrapper.msgs import codec
 from dronewrapper.msgs.registry import ALIVE, Service
 from dronewrapper.msgs.std import ErrorReply
+from dronewrapper.runtime import caller
 from dronewrapper.runtime.errors import (
     ServiceError,
     ServiceTimeout,
@@ -67,20 +68,40 @@ def open_session(options: ZenohOptions, *, timeout: float = 10.0) -> zenoh.Sessi
             os.environ.pop(key, None)
 
 
+class HandshakeRefused(ConnectionError):
+    """A TLS handshake with the router was refused; the message says by which side and why."""
+
+
+RETRY_FIRST_S = 0.2
+RETRY_MAX_S = 2.0
+"""A session waiting for its router asks again after 0.2 s; on a ``tls/`` endpoint each wait is
+twice the last, up to 2 s, so a router is not handed a failing handshake five times a second
+(a refused handshake is not retried at all: certificates do not change while it waits)."""
+
+
 def _open(options: ZenohOptions, timeout: float) -> zenoh.Session:
     deadline = time.monotonic() + timeout
+    pause = RETRY_FIRST_S
     while True:
         try:
             return zenoh.open(zenoh_config(options))
         except zenoh.ZError as exc:
             # a router that cannot listen fails at once; a client/peer waits for its router
+            where = ", ".join(options.connect or options.listen)
             if options.mode == "router" or time.monotonic() >= deadline:
-                where = ", ".join(options.connect or options.listen)
                 raise ConnectionError(
                     f"cannot open a zenoh {options.mode} session on {where}: "
                     f"{zenoh_error_text(exc)}"
                 ) from exc
-            time.sleep(0.2)
+            if options.mode == "client":
+                from dronewrapper.security.handshake import explain
+
+                cause = explain(options.connect, options.identity, options.keys_dir)
+                if cause is not None:
+                    raise HandshakeRefused(cause) from exc
+            time.sleep(max(0.0, min(pause, deadline - time.monotonic())))
+            if any(e.startswith(("tls/", "quic/")) for e in options.connect):
+                pause = min(pause * 2, RETRY_MAX_S)
 
 
 def alive_services(session: zenoh.Session, ns: str = "*", timeout: float = 2.0) -> set[str]:
@@ -100,15 +121,17 @@ def call_service(
     ns: str,
     timeout: float = 5.0,
     attachment: bytes | None = None,
+    bound_to: str = "",
     **parts: str,
 ) -> Rep:
     """Request/reply on a plain session (see :meth:`Node.call`); ``attachment`` travels with
-    the request (the SDK names its commander there, see :mod:`dronewrapper.runtime.caller`)."""
+    the request (the SDK names its commander there, see :mod:`dronewrapper.runtime.caller`);
+    ``bound_to``: the certificate name the query's key is bound to (``KEY/@by/NAME``)."""
     if type(request) is not service.request:
         raise TypeError(
             f"{service.template} takes {service.request.__name__}, got {type(request).__name__}"
         )
-    key = service.key(ns, **parts)
+    key = caller.bound_key(service.key(ns, **parts), bound_to)
     payload = codec.encode(request)
     start = time.monotonic()
     deadline = start + timeout
@@ -134,13 +157,17 @@ def call_service(
                 if raw == ZENOH_QUERY_TIMEOUT:
                     raise ServiceTimeout(
                         f"no reply from {key} within {timeout:g} s (Zenoh ended the query: "
-                        f"the {service.server or 'server'} is busy, stuck or not running)"
+                        f"the {service.server or 'server'} is busy, stuck or not running)",
+                        time.monotonic() - start,
                     ) from None
                 err = ErrorReply(message=raw.decode("utf-8", "replace"), code="internal")
             raise ServiceError(err.message, err.code)
         if time.monotonic() + 0.05 >= ask_until:
             break
         time.sleep(0.05)
+    waited = time.monotonic() - start
     raise ServiceUnavailable(
-        f"no reply from {key} within {timeout:g} s: is the {service.server or 'server'} running?"
+        f"no reply from {key}: no server took the query in {waited:.1f} s: is the "
+        f"{service.server or 'server'} running?",
+        waited,
     )

@@ -4,7 +4,10 @@
 (``~/.config/dronewrapper/keys``, ``$DRONEWRAPPER_KEYS``, or ``keys_dir``); a path to a
 ``.crt`` file works too (its ``.key`` and the ``ca.crt`` beside it). ``tls_config`` is the
 ``transport/link/tls`` section of a Zenoh config for it (mutual TLS: each side shows its
-certificate and checks the other's against the project CA).
+certificate and checks the other's against the project CA). ``subject()`` reads what the
+certificate says about its holder: the common name (the router's access control binds roles
+and commands to it) and the role, which ``dronewrapper keys issue`` writes as the subject's
+organizational unit, so a laptop knows its role without the drone's ``index.json``.
 """
 
 from __future__ import annotations
@@ -14,6 +17,32 @@ from pathlib import Path
 from typing import Any
 
 from dronewrapper.security.keystore import KeyStore, check_name
+
+
+@dataclass(frozen=True)
+class Subject:
+    """What a certificate says about its holder: ``name`` (common name) and ``role`` (the
+    organizational unit; ``""`` in certificates issued before roles were written there)."""
+
+    name: str
+    role: str
+
+
+def read_subject(cert: Path) -> Subject:
+    """The subject of the PEM certificate ``cert``; without ``cryptography`` installed (the SDK
+    without the ``security`` extra), the file's stem and no role."""
+    try:
+        from cryptography import x509
+        from cryptography.x509.oid import NameOID
+    except ImportError:
+        return Subject(cert.stem, "")
+    subject = x509.load_pem_x509_certificate(cert.read_bytes()).subject
+
+    def first(oid: object) -> str:
+        values = subject.get_attributes_for_oid(oid)  # type: ignore[arg-type]
+        return str(values[0].value) if values else ""
+
+    return Subject(first(NameOID.COMMON_NAME) or cert.stem, first(NameOID.ORGANIZATIONAL_UNIT_NAME))
 
 
 @dataclass(frozen=True)
@@ -47,6 +76,10 @@ class Identity:
                     "(issue one with `dronewrapper keys issue NAME --role ROLE`)"
                 )
         return found
+
+    def subject(self) -> Subject:
+        """The certificate's name and role (see :func:`read_subject`)."""
+        return read_subject(self.cert)
 
     def tls_config(self) -> dict[str, Any]:
         """The Zenoh ``transport/link/tls`` settings for this identity (mTLS both ways)."""

@@ -26,11 +26,12 @@ import datetime as dt
 import sys
 from collections.abc import Sequence
 
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper.security.keystore import ROLES, KeyStore, KeyStoreError
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper keys", description="project CA, certificates, MAVLink signing key"
     )
     parser.add_argument("--keys", default=None, metavar="DIR", help="key store folder")

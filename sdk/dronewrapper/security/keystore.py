@@ -9,7 +9,8 @@ holds everything; no online service is involved:
     mavlink.key             the 32-byte MAVLink 2 signing key, as 64 hex digits
 
 Every file is written with mode 0600 (the folder 0700). A certificate's common name is the
-identity's name; the router's access control maps names to roles through ``index.json``, so a
+identity's name and its organizational unit the role (what its holder's SDK reads to know its
+role). The router's access control grants roles from ``index.json`` only, so a
 revoked name loses every permission (Zenoh's TLS has no revocation list; the name is simply no
 longer in any role, and the default is deny). A revoked name cannot be issued again.
 """
@@ -205,7 +206,14 @@ class KeyStore:
         not_after = now + dt.timedelta(days=days)
         cert = (
             x509.CertificateBuilder()
-            .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, name)]))
+            .subject_name(
+                x509.Name(
+                    [
+                        x509.NameAttribute(NameOID.COMMON_NAME, name),
+                        x509.NameAttribute(NameOID.ORGANIZATIONAL_UNIT_NAME, role),
+                    ]
+                )
+            )
             .issuer_name(ca_cert.subject)
             .public_key(key.public_key())
             .serial_number(serial)

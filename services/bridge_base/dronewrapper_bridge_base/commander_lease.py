@@ -12,7 +12,9 @@ Every setpoint and command names its commander (the ``commander`` attachment the
 ``{ns}/dronewrapper/lease`` service; off (``ttl_s`` None), it admits everything.
 
 The lease coordinates authorised operators (the router's access control keeps everyone else
-out); it is not an authentication mechanism by itself: a commander's name is what its SDK says.
+out). A commander's name is the one its key is bound to when the key carries one (a
+certificate's name, which the router's access control enforces on a secure graph), else what
+its attachment says (on a secure router, only the drone's own local processes send those).
 """
 
 from __future__ import annotations
@@ -136,7 +138,7 @@ class LeaseGate:
         if decision.accepted:
             return None
         self.refused_commands += 1
-        return ServiceError(f"{what} refused: {decision.reason(commander)}", "lease")
+        return ServiceError(decision.reason(commander), "lease")  # the SDK names ``what``
 
     def handle(self, request: LeaseRequest, commander: str, now: float) -> LeaseReply:
         """The lease service: take, take over or release (ValueError for another action)."""

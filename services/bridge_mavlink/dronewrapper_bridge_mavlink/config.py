@@ -32,6 +32,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
 
     connection: str = "udpin:127.0.0.1:14540"  # pymavlink URL; loopback unless set otherwise
     baud: int = 57600  # serial only
+    link_share: float = 0.6  # serial: share of the line the asked streams may use (link_budget)
+    link_warn_load: float = 0.8  # serial: warn when the line is this full (0..1)
     source_system: int = 255  # our MAVLink system id
     source_component: int = 191  # our MAVLink component id (onboard computer; QGC is 190)
     heartbeat_type: int = mavlink.MAV_TYPE_GCS  # our HEARTBEAT's type (GCS: PX4 sends STATUSTEXT)
@@ -76,6 +78,11 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     ros2: Ros2Config | None = None  # present this drone to ROS 2 from this process (docs/ros2.md)
 
     def __post_init__(self) -> None:
+        if self.baud <= 0:
+            raise ValueError(f"baud must be > 0, got {self.baud!r}")
+        for name in ("link_share", "link_warn_load"):
+            if not 0 < getattr(self, name) <= 1:
+                raise ValueError(f"{name} must be in (0, 1], got {getattr(self, name)!r}")
         if not 0 < self.late_setpoint_s <= 5:
             raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action

@@ -44,6 +44,7 @@ from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
+from dronewrapper_bridge_mavlink.link_budget import fit_rates, is_serial_url
 from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, GUIDED_MODE, is_guided
 from dronewrapper_bridge_mavlink.operations import failsafe_action
@@ -107,8 +108,14 @@ class BridgeCore(PureCore):
         self.missions = missions.MissionState(config.envelope)
         self.unattended = Unattended(config.unattended_config())
         self.params = ParamCache()
-        self.streams = StreamRequests(
+        self.budget = fit_rates(
             config.message_rates,
+            config.baud if is_serial_url(config.connection) else None,
+            signed=bool(config.signing_key_file),
+            share=config.link_share,
+        )
+        self.streams = StreamRequests(
+            self.budget.rates,
             config.unused_streams,
             forwarding=bool(config.gcs_url) or config.gcs_over_zenoh,
         )

@@ -20,7 +20,7 @@ import logging
 import os
 import threading
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 os.environ.setdefault("MAVLINK20", "1")
 
@@ -29,12 +29,12 @@ import contextlib
 from pymavlink import mavutil
 
 from dronewrapper.security.mavlink_signing import verify_signed_frame
+from dronewrapper_bridge_mavlink.link_budget import NETWORK_SCHEMES
 
 log = logging.getLogger("bridge_mavlink.link")
 
 UNSIGNED_ALLOWED = frozenset({mavutil.mavlink.MAVLINK_MSG_ID_RADIO_STATUS})  # radios add it
 UDP_CLIENT_TIMEOUT_S = 5.0  # udpin: stop sending to a peer silent for this long (restarted sim)
-NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
 
 
 def network_exposure(url: str) -> str | None:
@@ -109,6 +109,7 @@ class MavLink:
         self.peer: Any = None  # UDP listen: the address replies go to (None: the last sender)
         self.sent = 0
         self.send_errors = 0
+        self._closed_counts = LinkCounts(0, 0, 0)  # what connections closed before counted
 
     @property
     def mav(self) -> Any:
@@ -168,10 +169,18 @@ class MavLink:
         signing = conn.mav.signing
         return int(signing.reject_count)
 
+    def counts(self) -> LinkCounts:
+        """Bytes received and sent, and frames lost, since this link was made (over reopens).
+
+        Frames lost are gaps in the autopilot's MAVLink sequence numbers plus bytes that did
+        not parse (pymavlink's counts)."""
+        return self._closed_counts + _counts_of(self._conn)
+
     def close(self) -> None:
         """Close the connection (idempotent)."""
         conn, self._conn = self._conn, None
         if conn is not None:
+            self._closed_counts = self._closed_counts + _counts_of(conn)
             with contextlib.suppress(OSError):
                 conn.close()
 
@@ -222,6 +231,7 @@ class MavLink:
             raise OSError("the autopilot link is not open")
         with self._send_lock:
             conn.write(frame)
+            conn.mav.total_bytes_sent += len(frame)
 
     def send(self, name: str, *args: Any, **kwargs: Any) -> bool:
         """Send message ``name`` (e.g. ``heartbeat``) with its fields; False if not sent."""
@@ -237,6 +247,26 @@ class MavLink:
                 return False
         self.sent += 1
         return True
+
+
+class LinkCounts(NamedTuple):
+    """Bytes received, bytes sent, frames lost (sequence gaps and unparsable bytes)."""
+
+    received: int
+    sent: int
+    lost: int
+
+    def __add__(self, other: tuple) -> LinkCounts:  # type: ignore[override]
+        return LinkCounts(*(a + b for a, b in zip(self, other, strict=True)))
+
+
+def _counts_of(conn: Any) -> LinkCounts:
+    """pymavlink's counts of one connection (zeros for None)."""
+    mav = getattr(conn, "mav", None)
+    if mav is None:
+        return LinkCounts(0, 0, 0)
+    lost = int(getattr(conn, "mav_loss", 0)) + int(getattr(mav, "total_receive_errors", 0))
+    return LinkCounts(int(mav.total_bytes_received), int(mav.total_bytes_sent), lost)
 
 
 def _allow_unsigned(_mav: Any, msg_id: int) -> bool:

@@ -18,7 +18,9 @@ import time
 from typing import Any
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import State
+from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
@@ -27,6 +29,7 @@ from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
 from dronewrapper_bridge_mavlink.gcs import GcsForwarder, is_loopback, parse_gcs_url
 from dronewrapper_bridge_mavlink.link import MavLink, network_exposure
+from dronewrapper_bridge_mavlink.link_load import LinkLoad, LoadAlarm, Reconnects
 from dronewrapper_bridge_mavlink.modes import canonical_mode
 from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
@@ -41,6 +44,7 @@ PUBLISHED = (
     registry.GLOBAL_POSITION,
     registry.BATTERY,
     registry.STATUSTEXT,
+    registry.LINK_STATUS,
     registry.ENVELOPE,  # missions.py: the envelope, home and the mission
     registry.HOME_POSITION,
     registry.MISSION_WAYPOINTS,
@@ -85,6 +89,11 @@ class Bridge(BridgeNode[BridgeCore]):
             source_component=config.source_component,
             signing_key_file=config.signing_key_file,
         )
+        self.link_status = publishers[registry.LINK_STATUS]
+        self.load = LinkLoad(self.core.budget.capacity)
+        self.load_alarm = LoadAlarm(config.link_warn_load)
+        self.reconnects = Reconnects()  # under _reconnects_lock (receive and status threads)
+        self._reconnects_lock = threading.Lock()
 
     # ---- what the core knows, for tests and tools
 
@@ -148,6 +157,7 @@ class Bridge(BridgeNode[BridgeCore]):
         serve_services(self)
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
+            threading.Thread(target=self._link_status_loop, name="link-status", daemon=True),
             threading.Thread(
                 target=self.tick_loop,
                 args=(self.config.stream_rate_hz, "stream"),
@@ -200,7 +210,48 @@ class Bridge(BridgeNode[BridgeCore]):
             self.link.close()
             return False
         log.info("MAVLink link open on %s", self.config.connection)
+        with self._reconnects_lock:
+            self.reconnects.opened()
         return True
+
+    def _link_status_loop(self) -> None:
+        """Once a second: the link's load, losses and reconnects on ``LINK_STATUS``, and a
+        warning in the log when a serial line is nearly full."""
+        log.info("%s", self.core.budget.describe())
+        stop = self.node.stop_event
+        while not stop.wait(1.0):
+            try:
+                self.link_status.put(self.measure_link(time.monotonic()))
+            except Exception:
+                self.node.callback_errors["link status"] += 1
+                log.exception("link status")
+
+    def measure_link(self, now: float) -> LinkStatus:
+        """The link as it is now (counts heartbeats regained as a reconnect)."""
+        with self._reconnects_lock:
+            self.reconnects.heartbeat(self.core.connected)
+        counts = self.link.counts()
+        self.load.add(now, counts.received, counts.sent)
+        received, sent = self.load.rates()
+        budget = self.core.budget
+        status = LinkStatus(
+            header=Header.now(),
+            kind=link_kind(self.config.connection),
+            baud=self.config.baud if budget.capacity > 0 else 0,
+            capacity=budget.capacity,
+            received_rate=received,
+            sent_rate=sent,
+            load=self.load.load(),
+            lost=counts.lost,
+            reconnects=self.reconnects.count,
+            rejected=self.link.rejected,
+            stream_scale=budget.scale,
+        )
+        if budget.capacity > 0:
+            warning = self.load_alarm.update(status.load, f"serial {self.config.baud} baud")
+            if warning is not None:
+                (log.warning if self.load_alarm.raised else log.info)("%s", warning)
+        return status
 
     def _receive_loop(self) -> None:
         stop = self.node.stop_event
@@ -225,6 +276,16 @@ class Bridge(BridgeNode[BridgeCore]):
             except Exception:
                 self.node.callback_errors["mavlink"] += 1
                 log.exception("error handling %s", msg.get_type())
+
+
+def link_kind(url: str) -> str:
+    """``serial``, ``udp`` or ``tcp`` for a pymavlink URL."""
+    scheme = url.partition(":")[0]
+    if scheme.startswith("udp"):
+        return "udp"
+    if scheme.startswith("tcp"):
+        return "tcp"
+    return "serial"
 
 
 def run(node: Node, config: Config) -> int:

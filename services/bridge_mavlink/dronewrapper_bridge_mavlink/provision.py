@@ -9,7 +9,6 @@ with that key. The vehicle must be disarmed. Exit 0 when the autopilot signs wit
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
@@ -18,6 +17,7 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink import mavutil
 
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper.security.keystore import KeyStore, read_mavlink_key
 from dronewrapper.security.mavlink_signing import verify_signed_frame
 
@@ -71,7 +71,7 @@ def provision(url: str, key: bytes, *, baud: int = 57600, timeout: float = 10.0)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m dronewrapper_bridge_mavlink.provision")
+    parser = CommandParser(prog="python -m dronewrapper_bridge_mavlink.provision")
     parser.add_argument("--connection", required=True, help="pymavlink URL (USB: /dev/ttyACM0)")
     parser.add_argument("--baud", type=int, default=57600)
     parser.add_argument("--key", default=None, help="key file (default: the key store's)")

@@ -361,7 +361,18 @@ class Fleet:
     def discover(self) -> None:
         """Whether the router is linked; list the processes alive now; add new drones, mark
         vanished ones offline."""
-        self.router_linked = self.node.linked()
+        linked = self.node.linked()
+        if linked != self.router_linked:
+            endpoint = self.router()["endpoint"]
+            if linked:
+                log.info("router reached at %s", endpoint)
+            else:
+                log.warning(
+                    "no router reachable at %s: the page shows no drone until one runs there "
+                    "(dronewrapper router, or dronewrapper up GRAPH), or give --connect",
+                    endpoint,
+                )
+        self.router_linked = linked
         by_ns = services_by_namespace(self.node.alive_services("*"))
         for ns, names in by_ns.items():
             has_bridge = any(name.startswith(BRIDGE_PREFIX) for name in names)

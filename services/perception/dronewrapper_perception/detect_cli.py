@@ -26,6 +26,7 @@ import cv2
 import numpy as np
 
 from dronewrapper.msgs import to_builtins
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_perception.config import DETECTORS, Config
 from dronewrapper_perception.model_file import ModelFileError
@@ -47,7 +48,7 @@ IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".p
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="dronewrapper detect", description="run perception on an image or video file"
     )
     parser.add_argument("file", help="image (png, jpg...) or video (avi, mp4...)")

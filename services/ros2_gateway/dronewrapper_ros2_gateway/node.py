@@ -16,7 +16,8 @@ and one Zenoh declaration on the ROS 2 key:
 It also reads every ROS 2 endpoint's token on its domain and logs each type disagreement with
 one of its own entities (:mod:`dronewrapper.ros2.mismatch`). :func:`run` is the gateway as a
 process of its own; :mod:`dronewrapper_ros2_gateway.hosted` runs the same :class:`Gateway`
-inside a bridge.
+inside a bridge. (Over 400 lines: one class holds every declaration of both directions, which
+share its ids, tokens and close; the formats, rules and checks are in the modules named.)
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import logging
 import math
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -65,6 +67,7 @@ from dronewrapper.runtime.qos import qos_for
 from dronewrapper.setpoint_limits import SetpointError, validate
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import IN, OUT, SERVE, Entity, selected
+from dronewrapper_ros2_gateway.presence import PresenceWatch
 
 log = logging.getLogger("ros2_gateway")
 
@@ -151,6 +154,7 @@ class Gateway:
         self.commander = commander
         self.inline = inline
         self.refused: dict[str, int] = {}
+        self.declared: dict[str, int] = {}  # ROS 2 endpoint kind (MP, MS, SS) -> how many
         self.mismatches: list[str] = []
         self.outgoing: list[tuple[str, Entity, Outgoing]] = []
         self._declared: list[Any] = []
@@ -208,7 +212,8 @@ class Gateway:
             else:
                 self._declare_service(ns, entity, key)
             self._token(token)
-            log.info("%s %s", kind, key)
+            self.declared[kind] = self.declared.get(kind, 0) + 1
+            log.debug("%s %s", kind, key)
 
     def _declare_out(self, ns: str, entity: Entity, key: str, gid: bytes) -> None:
         # the registry's transport class (priority, drop under congestion); telemetry leaves
@@ -374,24 +379,36 @@ def ros_session_for(node: Node, config: Config) -> tuple[zenoh.Session, bool]:
     return open_session(options), True
 
 
-def follow_demand_until_stopped(gateway: Gateway, done: threading.Event | None = None) -> None:
-    """:meth:`Gateway.follow_demand` every ``image_check_s`` until the node stops (or
-    ``done`` is set)."""
+def follow_demand_until_stopped(
+    gateway: Gateway,
+    done: threading.Event | None = None,
+    tick: Callable[[], None] | None = None,
+) -> None:
+    """:meth:`Gateway.follow_demand` (and ``tick``) every ``image_check_s`` until the node
+    stops (or ``done`` is set)."""
     node, period = gateway.node, gateway.config.image_check_s
     while not node.clock.wait(done or node.stop_event, period) and not node.stopping:
         gateway.follow_demand()
+        if tick is not None:
+            tick()
 
 
 def log_started(gateway: Gateway, how: str) -> None:
-    """Log what the gateway presents, to which domain, under which commander name."""
+    """Log, in one line, what the gateway presents, to which domain, under which commander
+    name (each ROS 2 key at DEBUG)."""
     config = gateway.config
+    counts = gateway.declared
     log.info(
-        "ROS 2 domain %d: %s as %s (commander %r, %s)",
+        "ROS 2 domain %d: %s as %s (commander %r, %s): %d topics out, %d in, %d services "
+        "(--log-level DEBUG lists their keys)",
         config.domain_id,
         ", ".join(config.drones or [gateway.node.ns]),
         config.node_name,
         gateway.commander,
         how,
+        counts.get(PUBLISHER, 0),
+        counts.get(SUBSCRIBER, 0),
+        counts.get(SERVICE, 0),
     )
 
 
@@ -404,7 +421,8 @@ def run(node: Node, config: Config) -> int:
         gateway.start()
         node.announce()
         log_started(gateway, "its own process")
-        follow_demand_until_stopped(gateway)
+        watch = PresenceWatch(node, config.drones or [node.ns], log.log)
+        follow_demand_until_stopped(gateway, tick=watch.tick)
     finally:
         gateway.close()
         if own:

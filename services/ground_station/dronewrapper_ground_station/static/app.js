@@ -24,7 +24,7 @@ function wsUrl(path) {
   return `${proto}//${location.host}${path}${station.token ? "?token=" + encodeURIComponent(station.token) : ""}`;
 }
 
-function logLine(text, cls = "station", time = new Date().toLocaleTimeString()) {
+function logLine(text, cls = "station", time = new Date().toTimeString().slice(0, 8)) {  // HH:MM:SS, as the autopilot's lines
   const li = document.createElement("li");
   li.className = cls; li.textContent = `${time}  ${text}`;
   const log = $("log"); log.prepend(li);
