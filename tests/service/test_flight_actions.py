@@ -265,3 +265,13 @@ def test_a_cancel_ends_a_go_to_and_holds_where_it_is():
     x = pair.position[0]
     pair.run(8.0)
     assert abs(pair.position[0] - x) < 3.0 and pair.position[0] < 20.0
+
+
+def test_a_go_to_that_timed_out_and_lost_its_commander_ends_on_the_ground():
+    pair = SimPair(params=dict(FAST_RTL, RTL_RETURN_ALT=6.0), unattended_action="land")
+    pair.alive = set  # the commander's beats stop after its request
+    pair.take_off(3.0)
+    request = GotoRequest(x=40.0, y=0.0, z=3.0, timeout=2.0, watch=APP)
+    assert pair.call(actions.goto_point, request).failure == TOO_LATE
+    assert pair.run(60.0, until=lambda: not pair.autopilot.armed), pair.autopilot.mode.name
+    assert pair.position[0] < 25.0  # it held, then landed: it did not fly on to the point

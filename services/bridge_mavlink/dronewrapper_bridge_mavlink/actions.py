@@ -122,13 +122,25 @@ def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
             return failed(REFUSED, reply.message, f"set_mode {mode}", reply.result)
     core.failsafe.hold_at(hold_target(target, core.telemetry.yaw_enu))
     start_watch(core, "goto", request.watch)
+    try:
+        return (yield from fly_to(core, target, mode, tolerance, timeout))
+    finally:
+        core.unattended.ended(core.now)  # reached, given up or cancelled: the go-to is over
+
+
+def fly_to(
+    core: BridgeCore,
+    target: tuple[float, float, float],
+    mode: str,
+    tolerance: float,
+    timeout: float,
+) -> Steps:
+    """Wait until within ``tolerance`` m of ``target`` (local ENU m), the bridge holding it."""
     deadline = core.now + timeout
-    log.info("goto: %.1f, %.1f, %.1f m from home (local %s)", east, north, request.z, target)
     while True:
         position = core.telemetry.position_enu
         distance = math.dist(position, target) if position is not None else math.inf
         if distance <= tolerance:
-            core.unattended.ended(core.now)
             return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
         hb = core.heartbeat_state
         if hb is not None and not hb.armed:
