@@ -20,7 +20,7 @@ $(STAMP): pyproject.toml $(DISTS:%=%/pyproject.toml)
 onboard:  # a companion computer (a Jetson): the stack without the test tools (docs/jetson.md)
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) -e .
+	$(BIN)/python -m pip install -q $(DISTS:%=-e ./%) .  # the root holds no code: not editable
 
 demo: setup
 	$(BIN)/python -m dronewrapper_compose.demo $(ARGS)

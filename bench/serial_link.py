@@ -14,7 +14,6 @@ the bridge (waiting behind the frames before it, then its own bytes). Cases: 576
 
 from __future__ import annotations
 
-import argparse
 import subprocess
 import sys
 import tempfile
@@ -22,6 +21,7 @@ import time
 
 from bench.common import LoopbackRouter, percentiles, print_table, stop_process, write_results
 from dronewrapper.msgs import registry
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper.security.keystore import KeyStore
@@ -89,7 +89,7 @@ def measure(router: str, baud: int, share: float, key: str, settle: float, secon
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--settle", type=float, default=10.0)
     args = parser.parse_args()

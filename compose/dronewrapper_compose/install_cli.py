@@ -23,6 +23,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper_compose.graph import REPO, GraphError, check_variables, load_graph
 from dronewrapper_compose.graph import resolve_graph_path as resolve
 from dronewrapper_compose.launcher import Launcher, _parse_vars
@@ -73,8 +74,8 @@ def build_spec(args: argparse.Namespace) -> UnitSpec:
     )
 
 
-def _parser(prog: str, what: str) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog=prog, description=what)
+def _parser(prog: str, what: str) -> CommandParser:
+    parser = CommandParser(prog=prog, description=what)
     parser.add_argument("graph", help="compose/NAME.yaml, or a bare graph name")
     parser.add_argument("--root", metavar="DIR", help="install under DIR (no start)")
     parser.add_argument("--unit-dir", metavar="DIR", help="write the unit here (no enable)")

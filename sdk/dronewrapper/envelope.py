@@ -129,24 +129,38 @@ def distance_outside(polygon: Polygon, x: float, y: float) -> float:
     return best
 
 
+def metres(value: float) -> str:
+    """A length as people read it: ``4.5 m``, ``1113.19 m``, ``8843.4 km`` (never
+    ``8.84341e+06 m``)."""
+    if abs(value) >= 10_000:
+        return f"{value / 1000:.1f} km"
+    return f"{value:g} m"
+
+
+def _plain(value: float) -> str:
+    return f"{value:.0f}" if abs(value) >= 100_000 else f"{value:g}"
+
+
 def violated(
     envelope: Envelope, x: float, y: float, z: float, margin: float = 0.0
 ) -> tuple[str, str]:
     """(the envelope's field, the reason) when (x, y, z) (ENU m from home) is beyond a limit
     by more than ``margin`` m, else ("", "")."""
     if z > envelope.max_altitude + margin:
-        return "max_altitude", f"altitude {z:g} m above the envelope's {envelope.max_altitude:g} m"
+        reason = f"altitude {metres(z)} above the envelope's {envelope.max_altitude:g} m"
+        return "max_altitude", reason
     distance = math.hypot(x, y)
     if distance > envelope.max_distance + margin:
         return "max_distance", (
-            f"distance {distance:g} m from home beyond the envelope's {envelope.max_distance:g} m"
+            f"distance {metres(distance)} from home beyond the envelope's "
+            f"{envelope.max_distance:g} m"
         )
+    where = f"({_plain(x)}, {_plain(y)}) m"
     if envelope.fence and distance_outside(envelope.fence, x, y) > margin:
-        return "fence", f"position ({x:g}, {y:g}) m outside the envelope's fence"
+        return "fence", f"position {where} outside the envelope's fence"
     for number, zone in enumerate(envelope.exclusions, start=1):
         if inside(zone, x, y):
-            reason = f"position ({x:g}, {y:g}) m inside the envelope's exclusion zone {number}"
-            return "exclusions", reason
+            return "exclusions", f"position {where} inside the envelope's exclusion zone {number}"
     return "", ""
 
 
@@ -241,6 +255,7 @@ __all__ = [
     "check_velocity",
     "distance_outside",
     "inside",
+    "metres",
     "violated",
     "violation",
 ]

@@ -22,6 +22,7 @@ and no status text is read: the bridge answers each action with its typed result
 from __future__ import annotations
 
 import logging
+import math
 import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -31,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import msgspec
 
 from dronewrapper import envelope as env
-from dronewrapper import setpoints
+from dronewrapper import plan_fence, setpoints
 from dronewrapper.beat import Beat
 from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.errors import CommandRefused, DroneError, InvalidArgument, NoData
@@ -45,7 +46,8 @@ from dronewrapper.msgs.mission import (
     WaypointPush,
     WaypointReached,
 )
-from dronewrapper.plan import PlanError, waypoints_of
+from dronewrapper.plan import PlanError, load_plan
+from dronewrapper.plan_fence import PlanFence
 from dronewrapper.runtime.flight import Goto, MissionStep, Return
 
 if TYPE_CHECKING:
@@ -57,12 +59,19 @@ log = logging.getLogger("dronewrapper")
 @dataclass(frozen=True)
 class MissionProgress:
     """Where the mission stands: ``current`` (the item being flown, 0-based), ``total``
-    items, and ``reached`` (the last item reached, 0-based; None until this object has heard
-    an item reached, so while the mission has not started)."""
+    items, ``reached`` (the last item reached, 0-based; None until one is heard reached) and
+    ``reached_items`` (every item reported reached since the upload, in order, each once:
+    PX4 and our simulator report the items that fly somewhere, not speed or camera items)."""
 
     current: int
     total: int
     reached: int | None = None
+    reached_items: tuple[int, ...] = ()
+
+    @property
+    def reached_count(self) -> int:
+        """How many distinct items have been reached."""
+        return len(self.reached_items)
 
     @property
     def finished(self) -> bool:
@@ -79,6 +88,13 @@ class MissionsMixin:
         self._waypoints: Latest[WaypointList] = self.inputs.latest(registry.MISSION_WAYPOINTS)
         self._reached: Latest[WaypointReached] = self.inputs.latest(registry.MISSION_REACHED)
         self._beat: Beat | None = None  # started by the first go-to, return or mission
+        self._reached_items: list[int] = []  # every item reached since the last upload
+        self._reached.listen(self._on_reached)
+
+    def _on_reached(self: Any) -> None:
+        reached = self._reached.value
+        if reached is not None and reached.wp_seq not in self._reached_items:
+            self._reached_items.append(reached.wp_seq)
 
     # ------------------------------------------------------------------ envelope
 
@@ -314,25 +330,57 @@ class MissionsMixin:
         plan: str | PathLike[str] | Mapping[str, Any] | Sequence[Any],
         *,
         frame: str = "global",
+        returns_home: bool = False,
         timeout: float = 30.0,
     ) -> int:
         """Upload a mission: a QGroundControl ``.plan`` path (or its parsed JSON), or a list
         of ``(lat, lon, alt)`` (degrees, m above home); ``frame="local"``: ``(x, y, z)`` ENU
         m from home (the Tello's only kind). Returns the number of items.
 
+        A plan's ``geoFence`` is folded into the envelope first (:mod:`dronewrapper.plan_fence`;
+        it stays after the mission, put back if the upload fails); rally points and a
+        breach-return point are refused unless ``returns_home`` accepts returns to home.
+
         Raises:
-            InvalidArgument: the plan cannot be read or flown (the message says where).
+            InvalidArgument: the plan cannot be read or flown, or its fence cannot be held.
+            NoData: the plan has a fence and home's position is not known yet.
             CommandRefused: an item is outside the envelope, or the autopilot refused the
-                upload (with how many items it took).
+                upload (naming the item it refused and its command).
         """
         try:
-            waypoints = waypoints_of(plan, frame=frame)
+            loaded = load_plan(plan, frame=frame)
         except PlanError as exc:
             raise InvalidArgument(f"upload_mission: {exc}") from None
-        reply = self._command(
-            registry.MISSION_PUSH, WaypointPush(waypoints=waypoints), "upload_mission", timeout
-        )
+        before = None if loaded.fence.empty else self._fold(loaded.fence, returns_home, timeout)
+        push = WaypointPush(waypoints=loaded.waypoints)
+        try:
+            reply = self._command(registry.MISSION_PUSH, push, "upload_mission", timeout)
+        except DroneError:
+            if before is not None:
+                self._command(
+                    registry.ENVELOPE_SET, EnvelopeSet(envelope=before), "upload_mission", timeout
+                )
+            raise
+        self._reached_items.clear()
         return reply.wp_transfered
+
+    def _fold(self: Any, fence: PlanFence, returns_home: bool, timeout: float) -> Envelope:
+        """Carry a plan's fence into the bridge's envelope; returns the envelope before."""
+        home = self._home.value
+        if home is None or math.isnan(home.latitude):
+            raise NoData("upload_mission: the plan has a fence, and home is not known yet")
+        current = self.envelope(timeout=timeout)
+        try:
+            wanted = plan_fence.fold(
+                fence, current, (home.latitude, home.longitude), returns_home=returns_home
+            )
+        except ValueError as exc:
+            raise InvalidArgument(f"upload_mission: {exc}") from None
+        if wanted != current:
+            self._command(
+                registry.ENVELOPE_SET, EnvelopeSet(envelope=wanted), "upload_mission", timeout
+            )
+        return current
 
     def start_mission(self: Any, *, timeout: float = 10.0) -> None:
         """Fly the uploaded mission from its current item; returns once the drone flies it
@@ -374,6 +422,7 @@ class MissionsMixin:
             current=listing.current_seq,
             total=len(listing.waypoints),
             reached=None if reached is None else reached.wp_seq,
+            reached_items=tuple(self._reached_items),
         )
 
 

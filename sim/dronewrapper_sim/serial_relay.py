@@ -17,7 +17,6 @@ MAVLink frame; ``--tcp`` connects to an ArduPilot SITL serial port. The device p
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import os
 import select
@@ -28,6 +27,7 @@ import time
 import tty
 from pathlib import Path
 
+from dronewrapper.runtime.arguments import CommandParser
 from dronewrapper_sim.serial_line import FrameCutter, SerialLine
 
 UPLINK_BUFFER_BYTES = 4096  # the pty's own buffer is about this deep
@@ -177,7 +177,7 @@ class SerialRelay:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="python -m dronewrapper_sim.serial_relay",
         description="a pseudo-terminal joined to an autopilot's port at a real baud rate",
     )

@@ -86,7 +86,7 @@ def test_a_qgroundcontrol_plan_is_uploaded(sim, tmp_path):
     assert sim.pair.autopilot.missions.mission[0].x == round(lat * 1e7)
     survey = {**plan, "mission": {"items": [{"type": "ComplexItem"}]}}
     path.write_text(json.dumps(survey))
-    with pytest.raises(InvalidArgument, match="ComplexItem is not supported"):
+    with pytest.raises(InvalidArgument, match="ComplexItem without its expanded items"):
         sim.drone.upload_mission(path)
 
 

@@ -98,6 +98,6 @@ def test_bad_plans_are_refused_with_the_reason(station):
     assert status == 400 and "plan must be" in reply["error"]
     survey = {"fileType": "Plan", "mission": {"items": [{"type": "ComplexItem"}]}}
     status, reply, _ = station.post("upload_plan", {"plan": survey})
-    assert status == 409 and "ComplexItem is not supported" in reply["error"]
+    assert status == 409 and "ComplexItem without its expanded items" in reply["error"]
     status, reply, _ = station.post("upload_plan", {"plan": plan_of([(50, 0, 4)])})
     assert status == 409 and "outside the envelope's fence" in reply["error"]

@@ -25,7 +25,7 @@ CODE_DIRS = ("sdk", "services", "sim", "compose", "bench", "examples", "tests/re
 
 DRONEWRAPPER = [
     "router", "echo", "alive", "doctor", "keys", "mavlink-forward", "up", "sim", "detect",
-    "station", "ros2", "record", "replay", "foxglove",
+    "station", "ros2", "record", "replay", "foxglove", "install", "uninstall",
 ]  # fmt: skip
 SERVICES = [
     "dronewrapper_bridge_mavlink", "dronewrapper_bridge_tello", "dronewrapper_camera_victure",
@@ -34,6 +34,7 @@ SERVICES = [
 ]  # fmt: skip
 MODULE_MAINS = [
     "dronewrapper_compose.demo", "dronewrapper_bridge_mavlink.provision",
+    "dronewrapper_sim.serial_relay",
     *(f"bench.{p.stem}" for p in sorted((REPO / "bench").glob("*.py"))
       if "ArgumentParser(" in p.read_text() or "CommandParser(" in p.read_text()),
 ]  # fmt: skip
@@ -170,6 +171,8 @@ def test_every_command_of_the_project_is_checked():
         "compose/dronewrapper_compose/demo.py",
         "services/perception/dronewrapper_perception/detect_cli.py",
         "services/bridge_mavlink/dronewrapper_bridge_mavlink/provision.py",
+        "compose/dronewrapper_compose/install_cli.py",  # dronewrapper install / uninstall
+        "sim/dronewrapper_sim/serial_relay.py",
         *(f"bench/{m.removeprefix('bench.')}.py" for m in MODULE_MAINS if m.startswith("bench.")),
     }
     assert built <= covered, f"add to STARTS: {sorted(built - covered)}"

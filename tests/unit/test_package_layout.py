@@ -75,5 +75,8 @@ def test_make_setup_installs_the_root_distribution_as_it_is():
     root = tomllib.loads((REPO / "pyproject.toml").read_text())
     assert root["tool"]["setuptools"]["packages"] == []
     makefile = (REPO / "Makefile").read_text().splitlines()
-    (install,) = [line for line in makefile if "$(DISTS:%=-e ./%)" in line]
-    assert " '.[dev]'" in install and "-e '.[dev]'" not in install
+    installs = [line for line in makefile if "$(DISTS:%=-e ./%)" in line]
+    assert installs, "make setup installs the distributions"
+    for install in installs:  # setup (with the test tools) and onboard (without)
+        assert "-e '.[dev]'" not in install and "-e ." not in install.replace("-e ./", "")
+    assert any(" '.[dev]'" in install for install in installs)

@@ -29,6 +29,51 @@ NAV_RETURN_TO_LAUNCH = 20
 NAV_LAND = 21
 NAV_TAKEOFF = 22
 
+COMMAND_NAMES = {  # MAV_CMD names (without MAV_CMD_) of the items mission plans hold
+    16: "NAV_WAYPOINT",
+    17: "NAV_LOITER_UNLIM",
+    18: "NAV_LOITER_TURNS",
+    19: "NAV_LOITER_TIME",
+    20: "NAV_RETURN_TO_LAUNCH",
+    21: "NAV_LAND",
+    22: "NAV_TAKEOFF",
+    31: "NAV_LOITER_TO_ALT",
+    82: "NAV_SPLINE_WAYPOINT",
+    84: "NAV_VTOL_TAKEOFF",
+    85: "NAV_VTOL_LAND",
+    93: "NAV_DELAY",
+    112: "CONDITION_DELAY",
+    177: "DO_JUMP",
+    178: "DO_CHANGE_SPEED",
+    179: "DO_SET_HOME",
+    183: "DO_SET_SERVO",
+    189: "DO_LAND_START",
+    195: "DO_SET_ROI_LOCATION",
+    196: "DO_SET_ROI_WPNEXT_OFFSET",
+    197: "DO_SET_ROI_NONE",
+    201: "DO_SET_ROI",
+    202: "DO_DIGICAM_CONFIGURE",
+    203: "DO_DIGICAM_CONTROL",
+    204: "DO_MOUNT_CONFIGURE",
+    205: "DO_MOUNT_CONTROL",
+    206: "DO_SET_CAM_TRIGG_DIST",
+    211: "DO_GRIPPER",
+    214: "DO_SET_CAM_TRIGG_INTERVAL",
+    530: "SET_CAMERA_MODE",
+    531: "SET_CAMERA_ZOOM",
+    532: "SET_CAMERA_FOCUS",
+    1000: "DO_GIMBAL_MANAGER_PITCHYAW",
+    2000: "IMAGE_START_CAPTURE",
+    2001: "IMAGE_STOP_CAPTURE",
+    2500: "VIDEO_START_CAPTURE",
+    2501: "VIDEO_STOP_CAPTURE",
+}
+
+
+def command_name(command: int) -> str:
+    """The MAV_CMD name of ``command`` (``NAV_WAYPOINT``), or ``MAV_CMD 1234``."""
+    return COMMAND_NAMES.get(command, f"MAV_CMD {command}")
+
 
 class Waypoint(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
     """One mission item (mavros_msgs/Waypoint): degrees, metres above home, MAV_CMD params.
@@ -175,6 +220,7 @@ class HomePosition(msgspec.Struct, kw_only=True, frozen=True):
 
 
 __all__ = [
+    "COMMAND_NAMES",
     "FRAME_GLOBAL_REL_ALT",
     "NAV_LAND",
     "NAV_RETURN_TO_LAUNCH",
@@ -194,4 +240,5 @@ __all__ = [
     "WaypointPushResult",
     "WaypointReached",
     "WaypointSetCurrent",
+    "command_name",
 ]

@@ -176,9 +176,19 @@ class Upload(Transfer):
                 )
             else:
                 self._finish(
-                    f"refused by the autopilot: {result_name(msg.type)} "
+                    f"refused by the autopilot: {result_name(msg.type)}{self._refused_item()} "
                     f"({self.transferred} of {len(self.items)} item(s) taken)"
                 )
+
+    def _refused_item(self) -> str:
+        """`` at item N (COMMAND, frame F)``: the item sent last, which the autopilot's
+        refusal answers; "" before any item was asked."""
+        if not 0 <= self._asked < len(self.items):
+            return ""
+        item = self.items[self._asked]
+        entry = mavlink.enums["MAV_CMD"].get(item.command)
+        name = entry.name.removeprefix("MAV_CMD_") if entry is not None else str(item.command)
+        return f" at item {self._asked} ({name}, frame {item.frame})"
 
     def _item_fields(self, seq: int) -> tuple:
         item = self.items[seq]

@@ -137,7 +137,12 @@ class Autopilot:
         self.commander = Commander(self.params, self.state)
         self.missions = MissionStore(cfg.sysid)  # mission.py: missions, fence, AUTO.MISSION
         self.commander.mission = MissionRunner(
-            self.missions, self.local_of, lambda: self.commander.home, self._acceptance_radius
+            self.missions,
+            self.local_of,
+            lambda: self.commander.home,
+            self._acceptance_radius,
+            origin_amsl=cfg.home_alt_m,
+            max_speed=lambda: self.params["MPC_XY_VEL_MAX"],
         )
         self.commander.geofence = Geofence(self.missions, self.local_of)
         self.controller = PositionController()

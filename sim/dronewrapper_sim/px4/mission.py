@@ -12,13 +12,20 @@ asked again is answered again.
 flies to the item (acceptance radius param2, else NAV_ACC_RAD; hold param1 s), NAV_LAND
 lands there, NAV_RETURN_TO_LAUNCH returns; each item reached is MISSION_ITEM_REACHED, and the
 item being flown is MISSION_CURRENT. After the last item the vehicle holds (AUTO.LOITER).
+Altitudes: GLOBAL_RELATIVE_ALT items are m above home, GLOBAL items m AMSL (the local origin
+lies at ``origin_amsl``). DO_CHANGE_SPEED (param1 0 or 1: horizontal; param2 m/s, capped at
+MPC_XY_VEL_MAX; -2 or 0: back to MPC_XY_CRUISE; -1: unchanged) sets the speed of the legs
+after it. The camera, gimbal, region-of-interest and gripper items PX4 takes
+(:data:`NO_OP_COMMANDS`) are taken and skipped, each with an informational STATUSTEXT: this
+vehicle carries no camera, gimbal or gripper. SPLINE_WAYPOINT is refused, as PX4 refuses it.
 
 :class:`Geofence` checks the uploaded fence (circle and polygon inclusion, polygon exclusion)
 against the vehicle's position; a breach in the air starts GF_ACTION (2 hold, 3 return,
 5 land) once per excursion, as PX4's geofence does.
 
 Pure: time is the caller's (s), positions local ENU m; ``to_local(lat, lon)`` gives the local
-(east, north) of a geodetic point.
+(east, north) of a geodetic point. One file over 400 lines: the protocol, the runner and the
+fence share the store's three lists and PX4's tables of what a mission may hold.
 """
 
 from __future__ import annotations
@@ -42,6 +49,28 @@ FENCE = mavlink.MAV_MISSION_TYPE_FENCE
 RALLY = mavlink.MAV_MISSION_TYPE_RALLY
 UPLOAD_TIMEOUT_S = 5.0
 MAX_ITEMS = 500
+NO_OP_COMMANDS = {  # taken as PX4 takes them, and skipped: no camera, gimbal or gripper
+    mavlink.MAV_CMD_DO_SET_ROI,
+    mavlink.MAV_CMD_DO_SET_ROI_LOCATION,
+    mavlink.MAV_CMD_DO_SET_ROI_WPNEXT_OFFSET,
+    mavlink.MAV_CMD_DO_SET_ROI_NONE,
+    mavlink.MAV_CMD_DO_DIGICAM_CONTROL,
+    mavlink.MAV_CMD_DO_MOUNT_CONFIGURE,
+    mavlink.MAV_CMD_DO_MOUNT_CONTROL,
+    mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST,
+    mavlink.MAV_CMD_DO_SET_CAM_TRIGG_INTERVAL,
+    mavlink.MAV_CMD_DO_TRIGGER_CONTROL,
+    mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
+    mavlink.MAV_CMD_DO_GIMBAL_MANAGER_CONFIGURE,
+    mavlink.MAV_CMD_DO_GRIPPER,
+    mavlink.MAV_CMD_IMAGE_START_CAPTURE,
+    mavlink.MAV_CMD_IMAGE_STOP_CAPTURE,
+    mavlink.MAV_CMD_VIDEO_START_CAPTURE,
+    mavlink.MAV_CMD_VIDEO_STOP_CAPTURE,
+    mavlink.MAV_CMD_SET_CAMERA_MODE,
+    mavlink.MAV_CMD_SET_CAMERA_ZOOM,
+    mavlink.MAV_CMD_SET_CAMERA_FOCUS,
+}
 NAV_COMMANDS = {
     MISSION: {
         mavlink.MAV_CMD_NAV_WAYPOINT,
@@ -50,6 +79,7 @@ NAV_COMMANDS = {
         mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH,
         mavlink.MAV_CMD_NAV_LOITER_TIME,
         mavlink.MAV_CMD_DO_CHANGE_SPEED,
+        *NO_OP_COMMANDS,
     },
     FENCE: {
         mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION,
@@ -216,6 +246,7 @@ class Leg:
     position: tuple[float, float, float] | None = None
     mode: str = ""  # "loiter", "land", "rtl"
     land_at: tuple[float, float] | None = None
+    speed: float | None = None  # m/s horizontal set by DO_CHANGE_SPEED; None: MPC_XY_CRUISE
 
 
 class MissionRunner:
@@ -227,12 +258,19 @@ class MissionRunner:
         to_local: Callable[[float, float], tuple[float, float]],
         home: Callable[[], tuple[float, float, float]],
         acceptance_radius: Callable[[], float],
+        *,
+        origin_amsl: float = 0.0,
+        max_speed: Callable[[], float] = lambda: math.inf,
     ) -> None:
         self.store = store
         self.to_local = to_local
         self.home = home
         self.acceptance_radius = acceptance_radius
+        self.origin_amsl = origin_amsl  # m AMSL of local z = 0
+        self.max_speed = max_speed  # m/s: the cap on a DO_CHANGE_SPEED (MPC_XY_VEL_MAX)
+        self.speed: float | None = None  # m/s from the last DO_CHANGE_SPEED; None: default
         self.events: list[Message] = []  # MISSION_ITEM_REACHED / MISSION_CURRENT to send
+        self.notes: list[str] = []  # informational texts for the commander to say
         self._arrived_at: float | None = None
         self._announced = -1
         self._version = store.version
@@ -250,7 +288,7 @@ class MissionRunner:
             mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT,
             mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
         )
-        z = hz + item.z if relative else item.z
+        z = hz + item.z if relative else item.z - self.origin_amsl
         return (east, north, z if math.isfinite(z) else z_now)
 
     def step(self, now: float, position: tuple[float, float, float]) -> Leg:
@@ -258,6 +296,7 @@ class MissionRunner:
         store = self.store
         if store.version != self._version:  # a new mission: start afresh
             self._version, self._announced, self._arrived_at = store.version, -1, None
+            self.speed = None
         while store.current < len(store.mission):
             if self._announced != store.current:
                 self._announced = store.current
@@ -265,8 +304,13 @@ class MissionRunner:
             item = store.mission[store.current]
             if item.command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH:
                 self._reached(store.current)
-                return Leg(mode="rtl")
+                return Leg(mode="rtl", speed=self.speed)
             if item.command == mavlink.MAV_CMD_DO_CHANGE_SPEED:
+                self._change_speed(item)
+                self._advance()
+                continue
+            if item.command in NO_OP_COMMANDS:
+                self._note(store.current, item.command)
                 self._advance()
                 continue
             target = self._target_of(item, position[2])
@@ -279,15 +323,30 @@ class MissionRunner:
             distance = math.dist(position, target)
             if distance > radius:
                 self._arrived_at = None
-                return Leg(position=target)
+                return Leg(position=target, speed=self.speed)
             if self._arrived_at is None:
                 self._arrived_at = now
             hold = item.param1 if item.command != mavlink.MAV_CMD_NAV_TAKEOFF else 0.0
             if now - self._arrived_at < hold:
-                return Leg(position=target)
+                return Leg(position=target, speed=self.speed)
             self._reached(store.current)
             self._advance()
         return Leg(mode="loiter")
+
+    def _change_speed(self, item: Message) -> None:
+        """DO_CHANGE_SPEED: param1 speed type (0 air, 1 ground: horizontal; 2, 3: vertical,
+        not flown differently here), param2 m/s (-1 unchanged; -2 or 0: the default)."""
+        if int(item.param1) not in (0, 1):
+            return
+        speed = item.param2
+        if speed == -1:
+            return
+        self.speed = min(speed, self.max_speed()) if speed > 0 else None
+
+    def _note(self, seq: int, command: int) -> None:
+        entry = mavlink.enums["MAV_CMD"].get(command)
+        name = entry.name.removeprefix("MAV_CMD_") if entry is not None else str(command)
+        self.notes.append(f"Mission item {seq}: {name} skipped (no camera, gimbal or gripper)")
 
     def _reached(self, seq: int) -> None:
         self.events.append(mavlink.MAVLink_mission_item_reached_message(seq))
@@ -378,8 +437,11 @@ def mission_target(cmd: Commander, now: float, state: QuadState) -> Target:
     p = cmd.params
     position = (state.x, state.y, state.z)
     leg = cmd.mission.step(now, position)
+    for text in cmd.mission.notes:
+        cmd._say(mavlink.MAV_SEVERITY_INFO, text)
+    cmd.mission.notes.clear()
     limits = {
-        "max_xy": p["MPC_XY_CRUISE"],
+        "max_xy": p["MPC_XY_CRUISE"] if leg.speed is None else leg.speed,
         "max_up": p["MPC_Z_V_AUTO_UP"],
         "max_down": p["MPC_Z_V_AUTO_DN"],
         "max_yaw_rate": math.radians(p["MPC_YAWRAUTO_MAX"]),

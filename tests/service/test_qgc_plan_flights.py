@@ -1,0 +1,110 @@
+"""QGroundControl plans uploaded and flown through the SDK and bridge_mavlink's core on the
+simulator (tests/bus_bridge.py), in bus time, judged from the simulator's ground truth: the
+plan's fence reaches the envelope, payload items are taken and skipped, a speed change is
+flown, an item the autopilot refuses is named, every item reached is counted."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from pathlib import Path
+
+import pytest
+from bus_bridge import SimSdk
+
+from dronewrapper.errors import CommandRefused, InvalidArgument
+from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.plan import read_plan
+
+PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans"
+HOME = (47.397742, 8.545594)
+
+
+@pytest.fixture
+def sim():
+    rig = SimSdk(params={"RTL_RETURN_ALT": 10.0, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0})
+    yield rig
+    rig.close()
+
+
+def fly_mission(sim: SimSdk, seconds: float) -> None:
+    sim.drone.start_mission()
+    for _ in range(round(seconds / 0.5)):
+        sim.run(0.5)
+        if sim.drone.mission_progress().finished:
+            break
+
+
+def test_every_item_reached_is_counted(sim):
+    sim.drone.takeoff(5.0)
+    points = [(6.0, 0.0, 5.0), (6.0, 6.0, 5.0), (0.0, 6.0, 5.0)]
+    assert sim.drone.upload_mission([(*to_geodetic(HOME, x, y), z) for x, y, z in points]) == 3
+    fly_mission(sim, 60.0)
+    progress = sim.drone.mission_progress()
+    assert progress.reached_items == (0, 1, 2) and progress.reached_count == 3
+    assert progress.reached == 2
+
+
+def test_a_plan_fence_reaches_the_envelope_and_binds_the_items(sim):
+    path = PLANS / "fence_polygon_circle.plan"
+    assert sim.drone.upload_mission(path) == 5
+    envelope = sim.drone.envelope()
+    assert len(envelope.fence) == 4 and len(envelope.exclusions) == 1
+    document = json.loads(path.read_text())
+    into_circle = document["mission"]["items"][2]
+    into_circle["params"][4:6] = document["geoFence"]["circles"][0]["circle"]["center"]
+    with pytest.raises(CommandRefused, match=r"mission item 2: .*exclusion zone 1"):
+        sim.drone.upload_mission(document)
+    assert len(sim.drone.envelope().exclusions) == 1  # the same zone, not twice
+
+
+def test_rally_points_are_refused_unless_returns_home_is_accepted(sim):
+    path = PLANS / "rally_breach_return.plan"
+    with pytest.raises(InvalidArgument, match="2 rally point"):
+        sim.drone.upload_mission(path)
+    assert sim.drone.envelope().fence == []  # nothing was changed
+    assert sim.drone.upload_mission(path, returns_home=True) == 4
+    assert len(sim.drone.envelope().fence) == 24
+
+
+def test_an_item_the_autopilot_refuses_is_named_with_its_command(sim):
+    with pytest.raises(CommandRefused, match=r"at item 2 \(NAV_SPLINE_WAYPOINT, frame 3\)"):
+        sim.drone.upload_mission(PLANS / "spline_waypoints.plan")
+
+
+def test_payload_items_are_skipped_and_the_speed_change_is_flown(sim):
+    assert sim.drone.upload_mission(PLANS / "camera_gimbal_items.plan") == 11
+    sim.drone.takeoff(10.0)
+    start = sim.pair.t
+    fly_mission(sim, 90.0)
+    progress = sim.drone.mission_progress()
+    assert 5 in progress.reached_items and 9 in progress.reached_items
+    truth = [(t, p) for t, p, _ in sim.pair.truth if t >= start]
+    speeds = [
+        math.hypot(b[0] - a[0], b[1] - a[1]) / (tb - ta)
+        for (ta, a), (tb, b) in itertools.pairwise(truth)
+        if tb > ta
+    ]
+    assert 8.0 < max(speeds) < 10.8  # the 10 m/s asked, where the default is 5 m/s
+    texts = [t.text for t in sim.drone.status_texts]
+    assert any("DO_MOUNT_CONTROL skipped" in t for t in texts)
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["square_relative.plan", "survey.plan", "corridor_scan.plan", "fence_polygon_circle.plan"],
+)
+def test_a_plan_is_flown_through_each_of_its_waypoints(sim, name):
+    plan = read_plan(PLANS / name)
+    assert sim.drone.upload_mission(PLANS / name) == len(plan.waypoints)
+    sim.drone.takeoff(5.0)
+    start = sim.pair.t
+    fly_mission(sim, 240.0)
+    progress = sim.drone.mission_progress()
+    assert progress.finished and progress.reached_count >= 2
+    for wp in plan.waypoints:
+        if wp.command == 16:  # NAV_WAYPOINT, frame 3: m above home
+            east, north = to_enu(HOME, wp.x_lat, wp.y_long)
+            # within the autopilot's acceptance radius (NAV_ACC_RAD, 2 m)
+            assert sim.pair.closest_approach((east, north, wp.z_alt), start) <= 2.0, wp
