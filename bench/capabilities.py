@@ -48,7 +48,9 @@ CALLS = (
     "get_frontal_image", "get_ventral_image", "wait_for_image", "param_get", "param_set",
     "take_command", "release_command", "arm", "disarm", "set_mode", "takeoff",
     "wait_for_altitude", "wait_for", "set_cmd_vel", "set_cmd_pos", "set_cmd_mix",
-    "stop_commanding", "land", "wait_for_landed_state",
+    "stop_commanding", "home", "envelope", "set_envelope", "goto_local", "goto", "upload_mission",
+    "start_mission", "mission_progress", "pause_mission", "resume_mission", "return_to_launch",
+    "land", "wait_for_landed_state",
 )  # fmt: skip
 PARAM = {"sim": "MPC_XY_VEL_MAX", "px4": "MPC_XY_VEL_MAX", "ardupilot": "WP_SPD", "tello": ""}
 HOLD_MODE = {"sim": "AUTO.LOITER", "px4": "AUTO.LOITER", "ardupilot": "GUIDED", "tello": ""}
@@ -198,9 +200,52 @@ def probe(drone, backend: str, version: str) -> Probe:
         lambda _v: "" if abs(position()[2] - z) < 0.3 else "altitude not held within 0.3 m",
     )
     p.check("stop_commanding", drone.stop_commanding)
+    probe_actions(p, drone, position)
     p.check("land", lambda: drone.land(timeout=90.0))
     p.check("wait_for_landed_state", lambda: drone.wait_for_landed_state(1, timeout=30.0))
     return p
+
+
+def probe_actions(p: Probe, drone, position) -> None:
+    """The envelope, go-to, mission and return calls (each one bridge operation), judged from
+    the position the drone reports (ENU m from its local origin; home is where it armed)."""
+    p.check("home", drone.home, lambda v: "" if math.isfinite(v.x) else "no local home")
+    p.check("envelope", drone.envelope, lambda v: "" if v.max_altitude > 0 else "no ceiling")
+    p.check(
+        "set_envelope",
+        lambda: drone.set_envelope(max_altitude=20.0, breach_action="return"),
+        lambda v: "" if v.max_altitude == 20.0 else f"max_altitude {v.max_altitude}",
+    )
+    p.check(
+        "goto_local",
+        lambda: drone.goto_local(2.0, 0.0, 3.0, timeout=40.0, tolerance=0.5),
+        lambda _v: "" if position()[2] > 2.0 else "not at 3 m",
+    )
+
+    def goto_north():
+        from dronewrapper.geodesy import to_geodetic
+
+        home = drone.home()
+        lat, lon = to_geodetic((home.latitude, home.longitude), 2.0, 2.0)
+        drone.goto(lat, lon, 3.0, timeout=40.0, tolerance=0.5)
+
+    p.check("goto", goto_north)
+    square = [(2.0, 0.0, 3.0), (2.0, 2.0, 3.0), (0.0, 0.0, 3.0)]
+    p.check("upload_mission", lambda: drone.upload_mission(square, frame="local"))
+    p.check("start_mission", drone.start_mission)
+
+    def progress():
+        drone.wait_for(
+            lambda: drone.mission_progress().reached is not None, 40.0, "an item reached"
+        )
+        return drone.mission_progress()
+
+    p.check("mission_progress", progress, lambda v: "" if v.total == 3 else f"total {v.total}")
+    p.check("pause_mission", drone.pause_mission)
+    p.check("resume_mission", drone.resume_mission)
+    with contextlib.suppress(Exception):
+        drone.wait_for(lambda: drone.mission_progress().finished, 60.0, "the mission's end")
+    p.check("return_to_launch", lambda: drone.return_to_launch(timeout=120.0))
 
 
 def _retry(action, seconds: float):

@@ -19,7 +19,7 @@ from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
 from dronewrapper.runtime.caller import current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper_bridge_mavlink import flight, missions, parameters
+from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
 
 STEP_S = 0.02
@@ -38,6 +38,10 @@ class BusBridge:
         services = [
             (registry.FLIGHT_TAKEOFF, flight.takeoff_to),
             (registry.FLIGHT_LAND, flight.land_here),
+            (registry.FLIGHT_GOTO, actions.goto_point),
+            (registry.FLIGHT_RETURN, actions.return_home),
+            (registry.FLIGHT_MISSION, actions.mission_action),
+            (registry.MISSION_CONTROL, actions.control),
             (registry.ARMING, ops.arming),
             (registry.TAKEOFF, ops.takeoff),
             (registry.LAND, ops.land),
@@ -49,6 +53,12 @@ class BusBridge:
         for service, steps in services:
             self.node.serve(service, lambda request, steps=steps: self._call(steps, request))
         self.node.announce()
+        self._beats: dict[str, float] = {}  # key -> bus time of its last beat
+        self.node.subscribe(registry.COMMANDER_BEAT, self._on_beat)
+        pair.alive = lambda: {k for k, t in self._beats.items() if self.pair.t + EPOCH - t < 1.5}
+
+    def _on_beat(self, beat: Any) -> None:
+        self._beats[beat.key] = self.bus.clock()
 
     def _on_setpoint(self, target: Any) -> None:
         self.pair.setpoint = target

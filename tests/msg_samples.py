@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import random
 import typing
 
@@ -42,6 +43,8 @@ def _polygon(rng: random.Random) -> list[tuple[float, float]]:
     return [(rng.uniform(-50, 50), rng.uniform(-50, 50)) for _ in range(rng.randint(3, 5))]
 
 
+_WATCHING = ("GotoRequest", "ReturnRequest", "MissionRequest")
+
 # Fields whose messages check their range (requests): a random value within it.
 _RANGED = {
     ("CommandTOL", "min_pitch"): lambda rng: rng.uniform(-90.0, 90.0),
@@ -63,6 +66,10 @@ _RANGED = {
     ("WaypointPush", "start_index"): lambda rng: 0,
     ("WaypointSetCurrent", "wp_seq"): lambda rng: rng.randint(0, 100),
     ("MissionControl", "action"): lambda rng: rng.choice(("start", "pause", "return")),
+    ("GotoRequest", "latitude"): lambda rng: math.nan,  # x and y give the point
+    ("GotoRequest", "longitude"): lambda rng: math.nan,
+    **{(kind, "watch"): lambda rng: "drone/alive/app" for kind in _WATCHING},
+    ("MissionRequest", "action"): lambda rng: rng.choice(("start", "pause", "resume")),
 }
 
 

@@ -35,6 +35,7 @@ PHYSICS_HZ = 250.0
 POLL_EVERY = 4  # physics steps between the autopilot's sends (62.5 Hz)
 SETPOINT_HZ = 20.0
 EPOCH = 1.7e9
+ALIVE_PERIOD_S = 1.0
 
 
 def position_target(x: float, y: float, z: float, yaw: float = 0.0) -> PositionTarget:
@@ -55,11 +56,18 @@ class SimPair:
         *,
         wind: tuple[float, float] = (0.0, 0.0),
         params: dict[str, float] | None = None,
+        start: tuple[float, float] = (0.0, 0.0),
         **bridge_config: Any,
     ) -> None:
         self.t = 0.0
         self.autopilot = Autopilot(
-            AutopilotConfig(wind_east=wind[0], wind_north=wind[1], params=params or {}),
+            AutopilotConfig(
+                wind_east=wind[0],
+                wind_north=wind[1],
+                params=params or {},
+                start_x=start[0],
+                start_y=start[1],
+            ),
             link_rates={"onboard": dict(_ONBOARD)},
         )
         bridge_config.setdefault("heartbeat_type", mavlink.MAV_TYPE_GCS)
@@ -73,6 +81,9 @@ class SimPair:
         self.setpoint: PositionTarget | None = None
         self.truth: list[tuple[float, tuple[float, float, float], str]] = []  # t, pose, mode
         self.drop_to_autopilot: Callable[[Any], bool] = lambda msg: False
+        self.drop_to_bridge: Callable[[Any], bool] = lambda msg: False
+        self.alive: Callable[[], set[str]] = set  # the commanders beating (each ALIVE_PERIOD_S)
+        self._next_alive = 0.0
         self.streaming: Callable[[], bool] = lambda: True  # whether a commander streams
         self._steps = 0
         self._next_tick = 0.0
@@ -82,6 +93,8 @@ class SimPair:
 
     def _to_bridge(self, msgs: list[Any]) -> None:
         for msg in msgs:
+            if self.drop_to_bridge(msg):
+                continue
             buf = msg.pack(self._ap_out)
             self._ap_out.seq = (self._ap_out.seq + 1) % 256
             for decoded in self._decode_at_bridge.parse_buffer(buf) or []:
@@ -114,6 +127,10 @@ class SimPair:
         if self.setpoint is not None and self.streaming() and self.t >= self._next_setpoint:
             self._next_setpoint = self.t + 1.0 / SETPOINT_HZ
             self.core.on_setpoint(self.setpoint, "", self.t, EPOCH + self.t)
+            self._collect()
+        if self.t >= self._next_alive and self.core.unattended.watching:
+            self._next_alive = self.t + ALIVE_PERIOD_S  # as the bridge node's watch loop
+            self.core.on_alive(self.alive(), self.t, EPOCH + self.t)
             self._collect()
         if self.t >= self._next_tick:
             self._next_tick = self.t + 1.0 / self.core.config.stream_rate_hz

@@ -162,6 +162,9 @@ class Drone:
     async def pause_mission(self, **kwargs: Any) -> None:
         await self._run(self.sync.pause_mission, **kwargs)
 
+    async def resume_mission(self, **kwargs: Any) -> None:
+        await self._run(self.sync.resume_mission, **kwargs)
+
     async def set_envelope(self, **kwargs: Any) -> Any:
         return await self._run(self.sync.set_envelope, **kwargs)
 

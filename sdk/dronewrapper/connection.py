@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 
 from dronewrapper import diagnosis
 from dronewrapper.diagnosis import identity_facts, seconds
@@ -42,7 +43,7 @@ def open_node(ns: str, connect: str, timeout: float, *, mode: str, identity: str
     options = ZenohOptions(mode=mode, connect=[connect], identity=identity, namespace=ns)
     try:
         return Node(
-            SDK_NODE_NAME,
+            f"{SDK_NODE_NAME}_{os.getpid()}",  # its liveliness key names this process
             options,
             handle_signals=False,
             open_timeout=timeout,

@@ -58,7 +58,7 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper.refusals import RefusalInbox
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.flight import Landing, Takeoff
+from dronewrapper.runtime.flight import FlightSequence, Landing, Takeoff
 from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.script_log import show_progress
 from dronewrapper.streamer import SetpointStreamer
@@ -287,7 +287,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             return
         self._closed = True
         _open_wrappers.discard(self)
-        for part in ("_streamer", "_matching", "inputs", "_setpoints"):
+        for part in ("_beat", "_beat_publisher", "_streamer", "_matching", "inputs", "_setpoints"):
             entity = getattr(self, part, None)
             if entity is not None:
                 try:
@@ -377,7 +377,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         self._require_connected("land")
         self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout), cancel)
 
-    def _fly(self, sequence: Takeoff | Landing, cancel: threading.Event | None) -> None:
+    def _fly(self, sequence: FlightSequence, cancel: threading.Event | None) -> None:
         """Step ``sequence`` to its end, waiting on the node's clock (or until ``cancel``)."""
         clock, cancel = self.clock, cancel or threading.Event()
         ended = threading.Event()
@@ -404,5 +404,6 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             watcher.join(timeout=self.service_timeout + 1.0)
 
     def _ask_cancel(self) -> None:
-        """Ask the bridge to end its running take-off or landing (it holds where it is)."""
+        """Ask the bridge to end its running take-off, landing, go-to or return (it holds where
+        it is)."""
         self._ask(registry.FLIGHT_CANCEL, CancelRequest(reason="the caller cancelled"), 2.0)

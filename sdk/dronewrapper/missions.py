@@ -1,26 +1,29 @@
 """Go-to, return-to-launch, missions and the safety envelope: :class:`MissionsMixin`, the part
 of :class:`~dronewrapper.drone.DroneWrapper` that MAVSDK and DroneKit users look for first.
 
-* ``goto(lat, lon, alt)`` (alt m above home) and ``goto_local(x, y, z)`` (ENU m from home)
-  stream a position setpoint in the guided mode and return once the drone is within
-  ``tolerance`` (1 m) of the point. The bridge's envelope is checked first, so a point outside
-  it raises CommandRefused naming the limit and nothing is sent.
-* ``return_to_launch()``: the autopilot's return (the Tello: fly home, land); returns landed.
+* ``goto(lat, lon, alt)`` (alt m above home) and ``goto_local(x, y, z)`` (ENU m from home):
+  one request to the bridge (``{ns}/dronewrapper/goto``), which flies there its aircraft's way
+  and answers once within ``tolerance`` (1 m); a point outside the envelope the wrapper holds
+  raises CommandRefused naming the limit before anything is sent.
+* ``return_to_launch()``: one request (``{ns}/dronewrapper/return``), answered on the ground.
 * ``upload_mission(plan)`` (a QGroundControl ``.plan`` path, or a list of ``(lat, lon,
   alt)``; ``frame="local"``: ``(x, y, z)`` ENU m from home), ``start_mission()``,
-  ``pause_mission()``, ``mission_progress()``.
+  ``pause_mission()``, ``resume_mission()`` (one request each, ``{ns}/dronewrapper/mission``),
+  ``mission_progress()``.
 * ``set_envelope(max_altitude=..., max_distance=..., fence=...)``: the bridge's envelope
   (fence: ``[(x, y), ...]`` ENU m from home), which it enforces on every setpoint, take-off
   and mission item, and uploads to the autopilot as its fence.
 
-Home is what the bridge publishes on ``home_position/home``; before it arrives, the local
-origin (the Tello's take-off point).
+Home is what the bridge publishes on ``home_position/home``; before it arrives, a go-to waits
+for it (a few seconds), then raises NoData: never a guess. No autopilot's mode is named here
+and no status text is read: the bridge answers each action with its typed result.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
@@ -30,33 +33,27 @@ import msgspec
 
 from dronewrapper import envelope as env
 from dronewrapper import plan_fence, setpoints
+from dronewrapper.beat import Beat
 from dronewrapper.envelope import Envelope, EnvelopeError
-from dronewrapper.errors import CommandRefused, DroneError, InvalidArgument, NoData, Timeout
-from dronewrapper.geodesy import to_enu
+from dronewrapper.errors import CommandRefused, DroneError, InvalidArgument, NoData
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_ON_GROUND,
-    MASK_MIXED,
-    MASK_POSITION,
-    PositionTarget,
-)
+from dronewrapper.msgs.flight import GotoRequest
+from dronewrapper.msgs.mavros import MASK_MIXED, MASK_POSITION, PositionTarget
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
-    MissionControl,
+    HomePosition,
     WaypointList,
     WaypointPush,
     WaypointReached,
 )
 from dronewrapper.plan import PlanError, load_plan
 from dronewrapper.plan_fence import PlanFence
+from dronewrapper.runtime.flight import Goto, MissionStep, Return
 
 if TYPE_CHECKING:
     from dronewrapper.runtime.latest import Latest
 
 log = logging.getLogger("dronewrapper")
-
-GUIDED = {"px4": "OFFBOARD", "ardupilotmega": "GUIDED"}
-POLL_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -90,6 +87,7 @@ class MissionsMixin:
         self._envelope = self.inputs.latest(registry.ENVELOPE)
         self._waypoints: Latest[WaypointList] = self.inputs.latest(registry.MISSION_WAYPOINTS)
         self._reached: Latest[WaypointReached] = self.inputs.latest(registry.MISSION_REACHED)
+        self._beat: Beat | None = None  # started by the first go-to, return or mission
         self._reached_items: list[int] = []  # every item reached since the last upload
         self._reached.listen(self._on_reached)
 
@@ -185,23 +183,53 @@ class MissionsMixin:
         except EnvelopeError as exc:
             raise CommandRefused(what, f"outside the envelope: {exc}", limit=exc.limit) from None
 
-    def _check_takeoff(self: Any, h: float) -> None:
-        """CommandRefused when a take-off to ``h`` m climbs above the bridge's envelope (the
-        bridge refuses it too; this names the limit before anything is streamed)."""
+    def _held_envelope(self: Any) -> Envelope | None:
+        """The bridge's envelope as last published, else asked for (None: no envelope service)."""
         envelope = self._envelope.value
         if envelope is None:
             try:
                 envelope = self.envelope(timeout=min(2.0, self.service_timeout))
             except DroneError:
-                return  # a bridge without an envelope service: it judges alone
+                return None
+        return envelope
+
+    def _check_takeoff(self: Any, h: float) -> None:
+        """CommandRefused when a take-off to ``h`` m climbs above the bridge's envelope (the
+        bridge refuses it too; this names the limit before anything is streamed)."""
+        envelope = self._held_envelope()
+        if envelope is None:
+            return  # a bridge without an envelope service: it judges alone
         try:
             env.check_takeoff(envelope, h)
         except EnvelopeError as exc:
             raise CommandRefused("takeoff", str(exc), limit=exc.limit) from None
 
-    def _home_local(self: Any) -> tuple[float, float, float]:
+    def home(self: Any) -> HomePosition:
+        """Home as the bridge last published it: ``latitude``, ``longitude`` (degrees; NaN
+        without GPS), ``altitude`` (m AMSL) and ``x``, ``y``, ``z`` in the local frame (the one
+        of get_position). It is the origin of goto_local, goto's altitude and local missions.
+
+        Raises:
+            NoData: no home published yet.
+        """
         home = self._home.value
-        return (0.0, 0.0, 0.0) if home is None else (home.x, home.y, home.z)
+        if home is None:
+            raise NoData(f"no home position yet on {registry.HOME_POSITION.key(self.ns)}")
+        return home
+
+    def _watch_key(self: Any) -> str:
+        """The name of this process for the bridge (``{ns}/alive/{node}``), its beat started
+        (:mod:`dronewrapper.beat`): once the beats stop, the bridge ends an unattended go-to,
+        return or mission as for a lost commander."""
+        if self._beat is None:
+            key = registry.ALIVE.key(self.node.ns, service=self.node.name)
+            publisher = self.node.publisher(
+                registry.COMMANDER_BEAT, key=registry.COMMANDER_BEAT.key(self.ns)
+            )
+            self._beat = Beat(publisher.put, key, self.clock)
+            self._beat_publisher = publisher
+        self._beat.start()
+        return self._beat.key
 
     # ------------------------------------------------------------------ go-to
 
@@ -213,20 +241,24 @@ class MissionsMixin:
         *,
         timeout: float = 60.0,
         tolerance: float = 1.0,
+        cancel: threading.Event | None = None,
     ) -> None:
-        """Fly to (``lat``, ``lon``) degrees at ``alt`` m above home; return within
-        ``tolerance`` m of it. See :meth:`goto_local` for the errors."""
+        """Fly to (``lat``, ``lon``) degrees at ``alt`` m above home and hold there; return
+        within ``tolerance`` m of it. See :meth:`goto_local` for the errors (NoData: home has
+        no latitude and longitude)."""
         lat, lon = setpoints.finite("lat", lat), setpoints.finite("lon", lon)
+        alt = setpoints.finite("alt", alt)
         if abs(lat) > 90 or abs(lon) > 180:
             raise InvalidArgument(f"goto: ({lat}, {lon}) is not a latitude and longitude")
-        home = self._home.value
-        if home is None or math.isnan(home.latitude):
-            raise NoData(
-                f"goto: no home position with latitude and longitude on "
-                f"{registry.HOME_POSITION.key(self.ns)} (no GPS, or no bridge): use goto_local"
-            )
-        east, north = to_enu((home.latitude, home.longitude), lat, lon)
-        self.goto_local(east, north, alt, timeout=timeout, tolerance=tolerance)
+        request = GotoRequest(
+            latitude=lat,
+            longitude=lon,
+            z=alt,
+            timeout=timeout,
+            tolerance=tolerance,
+            watch=self._watch_key(),
+        )
+        self._goto(request, cancel)
 
     def goto_local(
         self: Any,
@@ -236,73 +268,60 @@ class MissionsMixin:
         *,
         timeout: float = 60.0,
         tolerance: float = 1.0,
+        cancel: threading.Event | None = None,
     ) -> None:
-        """Fly to (``x``, ``y``, ``z``) ENU metres from home, keeping the heading; return once
-        within ``tolerance`` m. The position setpoint keeps being streamed afterwards.
+        """Fly to (``x``, ``y``, ``z``) ENU metres from home (:meth:`home`: where the autopilot
+        set it, PX4 and ArduPilot where they armed, so a take-off elsewhere moves it; local
+        positions keep their origin) and hold there, keeping the heading;
+        return once within ``tolerance`` m. One request to the bridge, which flies it and
+        answers at the end; the drone then holds the point by itself until commanded.
 
         Raises:
-            CommandRefused: the point is outside the envelope (the limit is named), the bridge
-                refused the setpoint, or the autopilot left the guided mode on the way (a
-                breach action, a pilot).
-            Timeout: not there within ``timeout`` s.
+            CommandRefused: not flying (take off first), the point is outside the envelope
+                (the limit is named), or the autopilot refused or left the guided mode on the
+                way (a breach action, a pilot).
+            NoData: home is not known (the bridge waits a few seconds for it).
+            Timeout: not there within ``timeout`` s (the drone then holds where it is).
+            Cancelled: ``cancel`` was set (the drone holds where it is).
         """
         x, y, z = (setpoints.finite(name, v) for name, v in (("x", x), ("y", y), ("z", z)))
-        try:
-            env.check_position(self.envelope(), x, y, z)
-        except EnvelopeError as exc:
-            raise CommandRefused("goto", str(exc)) from None
-        hx, hy, hz = self._home_local()
-        target = (hx + x, hy + y, hz + z)
-        seen = list(self.status_texts)  # the texts before: a refusal is a new one
-        self.set_cmd_pos(*target)
-        state = self._require_connected("goto")
-        guided = GUIDED.get(state.autopilot)
-        if guided is not None and state.mode != guided:
-            self.set_mode(guided)
-        deadline = self.clock.monotonic() + timeout
-        while True:
-            position = self.get_position()
-            if math.dist(position, target) <= tolerance:
-                return
-            refused = [
-                t.text for t in list(self.status_texts) if "refused" in t.text and t not in seen
-            ]
-            if refused:
-                raise CommandRefused("goto", refused[-1])
-            state = self.inputs.state.value
-            if guided is not None and state is not None and state.mode != guided:
-                raise CommandRefused("goto", f"the autopilot left {guided} for {state.mode}")
-            if self.clock.monotonic() >= deadline:
-                raise Timeout(
-                    f"goto: not within {tolerance:g} m of ({x:g}, {y:g}, {z:g}) after "
-                    f"{timeout:g} s; {math.dist(position, target):.1f} m away"
-                )
-            self.clock.sleep(POLL_S)
+        envelope = self._held_envelope()
+        if envelope is not None:
+            try:
+                env.check_position(envelope, x, y, z)
+            except EnvelopeError as exc:
+                raise CommandRefused("goto", str(exc), limit=exc.limit) from None
+        request = GotoRequest(
+            x=x, y=y, z=z, timeout=timeout, tolerance=tolerance, watch=self._watch_key()
+        )
+        self._goto(request, cancel)
+
+    def _goto(self: Any, request: GotoRequest, cancel: threading.Event | None) -> None:
+        now = self.clock.monotonic()
+        self._require_connected("goto")
+        sequence = Goto(self._aircraft, request, now, call_timeout=self.service_timeout)
+        self._fly(sequence, cancel)
 
     # ------------------------------------------------------------------ return
 
-    def return_to_launch(self: Any, *, timeout: float = 180.0) -> None:
-        """Fly home and land (the autopilot's return mode; the Tello flies home at its height
-        and lands); return once on the ground and disarmed.
+    def return_to_launch(
+        self: Any, *, timeout: float = 180.0, cancel: threading.Event | None = None
+    ) -> None:
+        """Fly home and land (the autopilot's return, its altitude kept under the envelope's
+        ceiling by the bridge; the Tello flies home at its height and lands); return once on
+        the ground and disarmed.
 
         Raises:
-            CommandRefused: the autopilot refused the return.
+            CommandRefused: not flying, or the autopilot refused or left the return.
             Timeout: not landed and disarmed within ``timeout`` s.
+            Cancelled: ``cancel`` was set (the drone holds where it is).
         """
+        now = self.clock.monotonic()
         self._require_connected("return_to_launch")
-        self.stop_commanding()
-        self._command(
-            registry.MISSION_CONTROL, MissionControl(action="return"), "return_to_launch", None
+        sequence = Return(
+            self._aircraft, timeout, now, watch=self._watch_key(), call_timeout=self.service_timeout
         )
-        deadline = self.clock.monotonic() + timeout
-        while True:
-            state, extended = self.inputs.state.value, self.inputs.extended.value
-            landed = extended is not None and extended.landed_state == LANDED_STATE_ON_GROUND
-            if state is not None and not state.armed and landed:
-                return
-            if self.clock.monotonic() >= deadline:
-                raise Timeout(f"return_to_launch: not landed and disarmed after {timeout:g} s")
-            self.clock.sleep(POLL_S)
+        self._fly(sequence, cancel)
 
     # ------------------------------------------------------------------ missions
 
@@ -363,19 +382,35 @@ class MissionsMixin:
             )
         return current
 
-    def start_mission(self: Any, *, timeout: float | None = None) -> None:
-        """Fly the uploaded mission from its current item (after a pause: where it paused).
-        Take off first. Raises CommandRefused (no mission, the autopilot's refusal)."""
-        self.stop_commanding()
-        self._command(
-            registry.MISSION_CONTROL, MissionControl(action="start"), "start_mission", timeout
-        )
+    def start_mission(self: Any, *, timeout: float = 10.0) -> None:
+        """Fly the uploaded mission from its current item; returns once the drone flies it
+        (follow it with :meth:`mission_progress`). Take off first. If this program ends
+        before the mission, the bridge lets the mission finish, then returns home (its
+        ``unattended_action``, docs/design.md).
 
-    def pause_mission(self: Any, *, timeout: float | None = None) -> None:
-        """Hold where the drone is; :meth:`start_mission` resumes."""
-        self._command(
-            registry.MISSION_CONTROL, MissionControl(action="pause"), "pause_mission", timeout
+        Raises:
+            CommandRefused: no mission uploaded, not flying, or the autopilot's refusal.
+        """
+        self._mission("start", timeout)
+
+    def pause_mission(self: Any, *, timeout: float = 10.0) -> None:
+        """Hold where the drone is; :meth:`resume_mission` goes on. CommandRefused when no
+        mission is being flown."""
+        self._mission("pause", timeout)
+
+    def resume_mission(self: Any, *, timeout: float = 10.0) -> None:
+        """Go on with the mission from where it paused (CommandRefused as
+        :meth:`start_mission`)."""
+        self._mission("resume", timeout)
+
+    def _mission(self: Any, action: str, timeout: float) -> None:
+        now = self.clock.monotonic()
+        self._require_connected(f"{action}_mission")
+        watch = "" if action == "pause" else self._watch_key()
+        sequence = MissionStep(
+            self._aircraft, action, timeout, now, watch=watch, call_timeout=self.service_timeout
         )
+        self._fly(sequence, None)
 
     def mission_progress(self: Any) -> MissionProgress:
         """The mission's progress as the bridge last published it."""

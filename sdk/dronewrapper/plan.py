@@ -17,7 +17,8 @@
   reached within :data:`ACCEPTANCE_RADIUS_M` (the autopilot's default, PX4's NAV_ACC_RAD, is
   2 m).
 * with ``frame="local"``, a list of ``(x, y, z)``: ENU metres from home, MAV_FRAME_LOCAL_ENU
-  items (what a drone without GPS, the Tello, flies).
+  items (what a drone without GPS, the Tello, flies; the bridge uploads them to a GPS
+  autopilot as global items), with the same acceptance radius.
 """
 
 from __future__ import annotations
@@ -198,7 +199,14 @@ def waypoints_of(
         return load_plan(plan).waypoints
     if frame == "local":
         return [
-            Waypoint(frame=FRAME_LOCAL_ENU, command=NAV_WAYPOINT, x_lat=x, y_long=y, z_alt=z)
+            Waypoint(
+                frame=FRAME_LOCAL_ENU,
+                command=NAV_WAYPOINT,
+                x_lat=x,
+                y_long=y,
+                z_alt=z,
+                param2=ACCEPTANCE_RADIUS_M,
+            )
             for x, y, z in _triples(plan, "x, y, z")
         ]
     try:

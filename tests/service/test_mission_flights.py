@@ -25,7 +25,7 @@ from dronewrapper.msgs.mission import (
     WaypointPush,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_mavlink import missions
+from dronewrapper_bridge_mavlink import actions, missions
 from dronewrapper_bridge_mavlink import operations as ops
 
 SQUARE = [(10.0, 0.0, 5.0), (10.0, 10.0, 5.0), (0.0, 10.0, 5.0), (0.0, 0.0, 5.0)]
@@ -48,7 +48,7 @@ def fly_square(pair: SimPair) -> float:
     reply = pair.call(missions.push, WaypointPush(waypoints=waypoints(pair, SQUARE)))
     assert reply.success and reply.wp_transfered == 4, reply.message
     start = pair.t
-    assert pair.call(missions.control, MissionControl(action="start")).success
+    assert pair.call(actions.control, MissionControl(action="start")).success
     finished = pair.run(90.0, until=lambda: pair.autopilot.mode.name == "LOITER")
     assert finished, f"mission not finished: {pair.autopilot.mode.name} at {pair.position}"
     pair.run(0.5)
@@ -98,10 +98,10 @@ def test_return_to_launch_lands_within_1_m_of_home():
     pair = SimPair(params=FAST_RTL)
     pair.take_off(5.0)
     pair.call(missions.push, WaypointPush(waypoints=waypoints(pair, [(15.0, 8.0, 5.0)])))
-    pair.call(missions.control, MissionControl(action="start"))
+    pair.call(actions.control, MissionControl(action="start"))
     assert pair.run(30.0, until=lambda: pair.autopilot.mode.name == "LOITER")
     assert math.hypot(pair.position[0] - 15.0, pair.position[1] - 8.0) < 1.0
-    assert pair.call(missions.control, MissionControl(action="return")).success
+    assert pair.call(actions.control, MissionControl(action="return")).success
     assert pair.run(90.0, until=lambda: not pair.autopilot.armed), "not landed and disarmed"
     error = math.hypot(pair.position[0], pair.position[1])
     print(f"\nRTL: landed {error:.3f} m from home")

@@ -106,7 +106,8 @@ def test_no_ros2_section_hosts_nothing():
     bridge = HostingBridge()
     with hosted_gateway(bridge.node, None) as gateway:
         assert gateway is None
-    assert bridge.session.tokens == [] and bridge.subscribed[1:] == []
+    own = 2  # the bridge's own subscriptions: setpoints and commanders' beats
+    assert bridge.session.tokens == [] and bridge.subscribed[own:] == []
 
 
 def test_a_bridge_presents_its_own_drone_only():
@@ -135,7 +136,7 @@ def test_telemetry_is_taken_on_the_putting_thread_and_cameras_on_zenoh_s():
         image = Image(header=Header(stamp=5.0), height=1, width=2, step=6, data=bytes(6))
         bridge.node.publisher(registry.IMAGE_RAW, camera="cam_frontal").put(image)
         assert len(bridge.session.publishers[image_key].sent) == 1
-    direct = dict(bridge.subscribed[1:])  # after the bridge's own setpoint subscription
+    direct = dict(bridge.subscribed[2:])  # after the bridge's own: setpoints, beats
     assert direct[registry.STATE.key("drone")] is True
     assert direct[registry.LOCAL_POSE.key("drone")] is True
     assert direct[registry.IMAGE_RAW.key("drone", camera="cam_frontal")] is False

@@ -109,3 +109,32 @@ def test_the_aio_front_awaits_the_envelope_and_goto(sim):
             await drone.close()
 
     asyncio.run(ask())
+
+
+def test_calls_with_nothing_to_do_are_refused_at_once_naming_the_call(sim):
+    start = sim.bus.clock()
+    with pytest.raises(CommandRefused, match="goto refused: not flying"):
+        sim.drone.goto_local(2.0, 0.0, 3.0)
+    with pytest.raises(CommandRefused, match="no mission uploaded"):
+        sim.drone.start_mission()
+    with pytest.raises(CommandRefused, match="no mission is being flown"):
+        sim.drone.pause_mission()
+    with pytest.raises(CommandRefused, match="return refused: not flying"):
+        sim.drone.return_to_launch()
+    assert sim.bus.clock() - start < 5.0  # no call waited out a timeout
+    assert not sim.pair.autopilot.armed and sim.pair.autopilot.mode.name == "LOITER"
+
+
+def test_a_mission_left_by_its_program_ends_on_the_ground_at_home(sim):
+    sim.drone.takeoff(3.0)
+    sim.drone.upload_mission([(8.0, 0.0, 3.0), (8.0, 8.0, 3.0)], frame="local")
+    sim.drone.start_mission()
+    sim.run(2.0)
+    sim.drone.close()  # the program ends: its beats stop
+    for _ in range(90):
+        sim.run(1.0)
+        if not sim.pair.autopilot.armed:
+            break
+    assert not sim.pair.autopilot.armed, sim.pair.autopilot.mode.name
+    assert sim.pair.core.missions.last_reached == 1  # finished first
+    assert math.hypot(*sim.pair.position[:2]) < 1.0

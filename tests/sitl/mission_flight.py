@@ -35,7 +35,7 @@ from dronewrapper.msgs.mission import (
     WaypointPull,
     WaypointPush,
 )
-from dronewrapper_bridge_mavlink import missions
+from dronewrapper_bridge_mavlink import actions, missions
 from dronewrapper_bridge_mavlink import operations as ops
 
 SQUARE = [(10.0, 0.0, 6.0), (10.0, 10.0, 6.0), (0.0, 10.0, 6.0), (0.0, 0.0, 6.0)]
@@ -87,12 +87,12 @@ def main(kind: str, connection: str) -> int:
         pulled = pair.call(missions.pull, WaypointPull())
         report["pull"] = f"{pulled.wp_received} item(s): {pulled.message}"
         start = time.monotonic()
-        report["start"] = pair.call(missions.control, MissionControl(action="start")).message
+        report["start"] = pair.call(actions.control, MissionControl(action="start")).message
         done = pair.run(120.0, until=lambda: len(items) - 1 in pair.reached)
         pair.run(1.0)
         report["mission_finished"] = done
         report["waypoint_errors_m"] = [round(pair.closest_approach(p, start), 3) for p in SQUARE]
-        report["rtl"] = pair.call(missions.control, MissionControl(action="return")).message
+        report["rtl"] = pair.call(actions.control, MissionControl(action="return")).message
         landed = pair.run(120.0, until=lambda: not pair.armed)
         report["rtl_landed"] = landed
         report["rtl_landing_error_m"] = round(math.hypot(*pair.position[:2]), 3)

@@ -27,7 +27,7 @@ from dronewrapper.msgs.mission import (
     WaypointPush,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_mavlink import missions
+from dronewrapper_bridge_mavlink import actions, missions
 
 HOME_LAT, HOME_LON = 47.397742, 8.545594
 
@@ -121,7 +121,8 @@ def test_a_breach_starts_the_envelopes_action_once(action, command):
     rig.run(0.2)
     assert not rig.commands(command)
     rig.pose(down=-12.0)  # blown above by the wind
-    rig.run(0.1)
+    rig.run(1.2 if action == "return" else 0.1)  # a return first waits (1 s at most) for
+    # the autopilot's return altitude
     assert len(rig.commands(command)) == 1
     assert any("envelope breach: altitude 12 m above the envelope's 10 m" in t for t in texts(rig))
     rig.ack(command, mavlink.MAV_RESULT_ACCEPTED)
@@ -256,7 +257,7 @@ def test_mission_clear_and_progress():
 
 def test_mission_start_without_a_mission_is_refused():
     rig = flying()
-    op = rig.call(missions.control, MissionControl(action="start"))
+    op = rig.call(actions.control, MissionControl(action="start"))
     with pytest.raises(ServiceError, match="no mission"):
         op.result()
 

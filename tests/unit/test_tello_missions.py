@@ -10,6 +10,7 @@ from tello_core_rig import TelloRig
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import NO_HOME, REFUSED, GotoRequest, ReturnRequest
 from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -22,7 +23,7 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.mission import MissionControl, Waypoint, WaypointPush
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_tello import missions
+from dronewrapper_bridge_tello import actions, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
 
@@ -131,3 +132,31 @@ def test_a_mission_item_outside_the_envelope_is_refused():
     rig = flying_rig()
     with pytest.raises(ServiceError, match="mission item 1: altitude 12 m above"):
         rig.call(missions.push, WaypointPush(waypoints=[local(1, 0, 1), local(1, 0, 12)]))
+
+
+def test_the_tello_goto_and_return_are_one_operation_each_and_refused_on_the_ground():
+    grounded = TelloRig()
+    grounded.connect()
+    reply = grounded.call(actions.goto_point, GotoRequest(x=3.0, y=0.0, z=1.0))
+    assert reply.failure == REFUSED and "not flying" in reply.message
+    rig = flying_rig()
+    geodetic = GotoRequest(latitude=47.0, longitude=8.0, z=1.0)
+    assert rig.call(actions.goto_point, geodetic).failure == NO_HOME
+    start = rig.now
+    reply = rig.call(actions.goto_point, GotoRequest(x=3.0, y=0.0, z=1.0))
+    assert reply.success, reply.message
+    assert rig.commands(start) == ["go 300 0 0 50"]
+    reply = rig.call(actions.return_home, ReturnRequest())
+    assert reply.success, reply.message
+    assert rig.commands(start)[-1] == "land"  # (the rig's Tello does not move: home is here)
+
+
+def test_a_pause_then_resume_before_the_move_ends_goes_on():
+    rig = flying_rig()
+    assert rig.call(missions.push, WaypointPush(waypoints=[local(3, 0, 1), local(3, 3, 1)])).success
+    assert rig.call(missions.control, MissionControl(action="start")).success
+    assert rig.call(missions.control, MissionControl(action="pause")).success
+    reply = rig.call(missions.control, MissionControl(action="start"))
+    assert reply.success and "resumed" in reply.message
+    rig.run(2.0)
+    assert [m.wp_seq for m in rig.published(registry.MISSION_REACHED)] == [0, 1]

@@ -19,7 +19,16 @@ from typing import Any, Generic, TypeVar
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
-from dronewrapper.msgs.flight import CancelRequest, FlightResult, LandRequest, TakeoffRequest
+from dronewrapper.msgs.flight import (
+    CancelRequest,
+    CommanderBeat,
+    FlightResult,
+    GotoRequest,
+    LandRequest,
+    MissionRequest,
+    ReturnRequest,
+    TakeoffRequest,
+)
 from dronewrapper.msgs.geometry import PoseStamped, Twist, TwistStamped
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.link import LinkStatus
@@ -444,13 +453,36 @@ FLIGHT_LAND = Service(
     server="bridge",
     doc="land here; the reply comes once on the ground and disarmed (or failed)",
 )
+FLIGHT_GOTO = Service(
+    "{ns}/dronewrapper/goto",
+    request=GotoRequest,
+    reply=FlightResult,
+    server="bridge",
+    doc="fly to a point (ENU m from home, or latitude/longitude) and hold; the reply comes "
+    "once there (or failed)",
+)
+FLIGHT_RETURN = Service(
+    "{ns}/dronewrapper/return",
+    request=ReturnRequest,
+    reply=FlightResult,
+    server="bridge",
+    doc="fly home and land; the reply comes once on the ground and disarmed (or failed)",
+)
+FLIGHT_MISSION = Service(
+    "{ns}/dronewrapper/mission",
+    request=MissionRequest,
+    reply=FlightResult,
+    server="bridge",
+    doc="start, pause or resume the uploaded mission; the reply comes once the aircraft "
+    "flies it (or holds)",
+)
 FLIGHT_CANCEL = Service(
     "{ns}/dronewrapper/cancel",
     request=CancelRequest,
     reply=FlightResult,
     server="bridge",
-    doc="end the running take-off or landing at once (its reply: cancelled); the "
-    "aircraft holds where it is",
+    doc="end the running take-off, landing, go-to or return at once (its reply: "
+    "cancelled); the aircraft holds where it is",
 )
 
 # ---- missions, home and the safety envelope (MAVROS's mission/geofence/home keys) ----
@@ -474,6 +506,13 @@ HOME_POSITION = Topic(
     rate_hz=0.5,
     publishers=("bridge",),
     doc="home, on change too",
+)
+COMMANDER_BEAT = Topic(
+    "{ns}/dronewrapper/commander/beat",
+    type=CommanderBeat,
+    rate_hz=1.0,
+    publishers=("sdk",),
+    doc="a commander's process is alive (while its go-to, return or mission may run unattended)",
 )
 ENVELOPE = Topic(
     "{ns}/dronewrapper/envelope",

@@ -1,9 +1,10 @@
-"""Take-off and landing as steps a loop drives (never blocking): one request to the bridge each.
+"""The bridge's long actions as steps a loop drives (never blocking): one request each.
 
-The bridge flies the manoeuvre its aircraft's way and answers once it has ended
-(``{ns}/dronewrapper/takeoff`` and ``{ns}/dronewrapper/land``, :mod:`dronewrapper.msgs.flight`),
-so nothing here depends on the aircraft. Written once, as generators that yield while they
-wait, and driven two ways: a service's loop (the controller, on a
+Take-off, landing, go-to, return and a mission's start, pause and resume. The bridge flies
+each its aircraft's way and answers once it has ended (``{ns}/dronewrapper/takeoff``,
+``land``, ``goto``, ``return``, ``mission``, :mod:`dronewrapper.msgs.flight`), so nothing here
+depends on the aircraft: no mode names, no status texts read. Written once, as generators that
+yield while they wait, and driven two ways: a service's loop (the controller, on a
 :class:`~dronewrapper.runtime.commander.Commander`) calls ``step(now)`` once per wake and keeps
 watching its inputs and its stop request meanwhile; the SDK's blocking ``DroneWrapper.takeoff``
 / ``land`` call ``step`` until done (:mod:`dronewrapper.flying`). A landing stops the caller's
@@ -26,11 +27,15 @@ from typing import Any, Protocol
 from dronewrapper import setpoints
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import (
+    NO_HOME,
     NO_POSITION,
     REFUSED,
     TOO_LATE,
     FlightResult,
+    GotoRequest,
     LandRequest,
+    MissionRequest,
+    ReturnRequest,
     TakeoffRequest,
 )
 from dronewrapper.msgs.mavros import State
@@ -105,7 +110,7 @@ def failure(what: str, reply: FlightResult) -> FlightError:
         return StepRefused(reply.step or what, reply.message, reply.result)
     if reply.failure == TOO_LATE:
         return TooLate(f"{what}: {reply.message}")
-    if reply.failure == NO_POSITION:
+    if reply.failure in (NO_POSITION, NO_HOME):
         return NoPosition(f"{what}: {reply.message}")
     return NotReady(f"{what}: {reply.message or 'the bridge gave no reason'}")
 
@@ -226,3 +231,73 @@ class Landing(FlightSequence):
     def _run(self) -> FlightSteps:
         self.commander.stop()
         yield from self._request(registry.FLIGHT_LAND, LandRequest(timeout=self.timeout))
+
+
+class Goto(FlightSequence):
+    """Fly to a point (``request``: ENU m from home, or latitude/longitude) and hold there; done
+    within the request's tolerance, within its timeout."""
+
+    what = "goto"
+
+    def __init__(
+        self,
+        aircraft: Aircraft,
+        request: GotoRequest,
+        now: float,
+        *,
+        call_timeout: float | None = None,
+    ) -> None:
+        self.request = request
+        super().__init__(aircraft, request.timeout, now, call_timeout=call_timeout)
+
+    def _run(self) -> FlightSteps:
+        self.commander.stop()  # the bridge holds the point: no setpoint of ours may override it
+        yield from self._request(registry.FLIGHT_GOTO, self.request)
+
+
+class Return(FlightSequence):
+    """Fly home and land; done once on the ground and disarmed (``timeout`` s)."""
+
+    what = "return"
+
+    def __init__(
+        self,
+        aircraft: Aircraft,
+        timeout: float,
+        now: float,
+        *,
+        watch: str = "",
+        call_timeout: float | None = None,
+    ) -> None:
+        self.watch = watch
+        super().__init__(aircraft, timeout, now, call_timeout=call_timeout)
+
+    def _run(self) -> FlightSteps:
+        self.commander.stop()
+        yield from self._request(
+            registry.FLIGHT_RETURN, ReturnRequest(timeout=self.timeout, watch=self.watch)
+        )
+
+
+class MissionStep(FlightSequence):
+    """Start, pause or resume the uploaded mission; done once the aircraft flies it (or
+    holds)."""
+
+    def __init__(
+        self,
+        aircraft: Aircraft,
+        action: str,
+        timeout: float,
+        now: float,
+        *,
+        watch: str = "",
+        call_timeout: float | None = None,
+    ) -> None:
+        self.request = MissionRequest(action=action, timeout=timeout, watch=watch)
+        self.what = f"{action}_mission"
+        super().__init__(aircraft, timeout, now, call_timeout=call_timeout)
+
+    def _run(self) -> FlightSteps:
+        if self.request.action != "pause":
+            self.commander.stop()
+        yield from self._request(registry.FLIGHT_MISSION, self.request)

@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Generic, TypeVar
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import CommanderBeat
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
@@ -33,6 +34,10 @@ Operation = Callable[[Any, Any], Steps]
 COMMANDS: dict[Service[Any, Any], str] = {
     registry.FLIGHT_TAKEOFF: "takeoff",
     registry.FLIGHT_LAND: "land",
+    registry.FLIGHT_GOTO: "goto",
+    registry.FLIGHT_RETURN: "return",
+    registry.FLIGHT_MISSION: "mission",
+    registry.MISSION_CONTROL: "mission",
     registry.FLIGHT_CANCEL: "cancel",
     registry.ARMING: "arming",
     registry.TAKEOFF: "takeoff",
@@ -95,6 +100,7 @@ class BridgeNode(Generic[C]):
         as is one of a ``guarded`` service: (service, operation, the lease action a refusal
         names; "" for a service anyone may call), the bridge's mission services and envelope."""
         self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self.on_setpoint)
+        self.node.subscribe(registry.COMMANDER_BEAT, self.on_beat)
         commands = dict(COMMANDS)
         services = {registry.FLIGHT_CANCEL: cancel_steps, **services}
         for service, steps, what in guarded:
@@ -111,6 +117,14 @@ class BridgeNode(Generic[C]):
             return self.driver.call(steps(self.core, request), current_commander(), what)
 
         return handle
+
+    # ---- the commanders' processes
+
+    def on_beat(self, beat: CommanderBeat) -> None:
+        """A commander's process is alive (:mod:`~dronewrapper_bridge_base.unattended`)."""
+        on_alive = getattr(self.core, "on_alive", None)
+        if on_alive is not None:
+            self.driver.feed(on_alive, {beat.key})
 
     # ---- the tick
 

@@ -269,13 +269,15 @@ class PureCore:
     # ---- a commander's cancel
 
     def cancel_flight(self, request: CancelRequest) -> FlightResult:
-        """End the running take-off or landing (:data:`CANCELLABLE`) at once, each
+        """End the running take-off, landing, go-to or return (:data:`CANCELLABLE`) at once, each
         answered ``cancelled``, and hold where the aircraft is (:meth:`hold_here`)."""
         running = [
             op for op in self.operations.pending if not op.background and op.name in CANCELLABLE
         ]
         if not running:
-            return FlightResult(message="nothing to cancel: no take-off or landing runs")
+            return FlightResult(
+                message="nothing to cancel: no take-off, landing, go-to or return runs"
+            )
         names = ", ".join(CANCELLABLE[op.name] for op in running)
         why = f": {request.reason}" if request.reason else ""
         for op in running:
@@ -290,7 +292,12 @@ class PureCore:
         raise NotImplementedError
 
 
-CANCELLABLE = {"takeoff_to": "take-off", "land_here": "landing"}
+CANCELLABLE = {
+    "takeoff_to": "take-off",
+    "land_here": "landing",
+    "goto_point": "go-to",
+    "return_home": "return",
+}
 """The waiting operations a cancel ends (their steps' names: both bridges' ``flight``
 module), and how its reply names them."""
 

@@ -6,6 +6,7 @@ import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.envelope import Envelope
+from dronewrapper_bridge_base.unattended import UnattendedConfig
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
 from dronewrapper_bridge_mavlink.setpoints import Limits
@@ -46,6 +47,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
     commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
     commander_lost_action: str = "land"  # hold | land | return
+    unattended_action: str = "return"  # return | land: a go-to/mission whose commander died
+    unattended_lost_timeout: float = 5.0  # s its commander's process may be gone
     command_attempts: int = 5  # sends of a COMMAND_LONG before giving up
     command_ack_timeout: float = 0.6  # s to wait for each COMMAND_ACK
     param_attempts: int = 5
@@ -83,6 +86,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         if not 0 < self.late_setpoint_s <= 5:
             raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
+        self.unattended_config()
         if self.stream_rate_hz < 20.0:
             raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
         for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
@@ -98,6 +102,12 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         for name in ("final_ack_timeout", "mode_confirm_timeout"):
             if not 0 < getattr(self, name) <= 30:
                 raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")
+
+    def unattended_config(self) -> UnattendedConfig:
+        """The unattended-action rule's settings (validated there)."""
+        return UnattendedConfig(
+            lost_timeout=self.unattended_lost_timeout, action=self.unattended_action
+        )
 
     def failsafe_config(self) -> FailsafeConfig:
         """The failsafe's settings, from this config's flat keys (validated there)."""

@@ -37,8 +37,9 @@ from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.core_driver import PureCore
+from dronewrapper_bridge_base.unattended import Unattended
 from dronewrapper_bridge_mavlink import commands as cmds
-from dronewrapper_bridge_mavlink import missions, receive
+from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
@@ -105,6 +106,7 @@ class BridgeCore(PureCore):
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
         self.missions = missions.MissionState(config.envelope)
+        self.unattended = Unattended(config.unattended_config())
         self.params = ParamCache()
         self.budget = fit_rates(
             config.message_rates,
@@ -286,7 +288,13 @@ class BridgeCore(PureCore):
             return
         airborne = is_airborne(self.ext.landed_state, hb.armed)
         self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+        watch.on_vehicle(self)
         self._act(self.failsafe.tick(self.now, self.pose()), send=False)
+
+    def on_alive(self, keys: set[str], now: float, stamp: float) -> None:
+        """A commander's beat (its process's key) arrived now."""
+        self._at(now, stamp)
+        watch.on_alive(self, keys)
 
     def on_command_ack(self, msg: Any, now: float, stamp: float) -> None:
         """A COMMAND_ACK, bypassing admission (tests of the ack routing)."""
@@ -303,7 +311,7 @@ class BridgeCore(PureCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state,
+            failsafe=self.failsafe.state or missions.breach_state(self),
             commander=self.commander,
         )
 
@@ -375,6 +383,7 @@ class BridgeCore(PureCore):
         self._act(tick, send=self.connected)
         self.show_commander()
         missions.tick(self)
+        watch.tick(self)
         self._periodic()
         self.advance(now, stamp)
 
@@ -437,6 +446,7 @@ class BridgeCore(PureCore):
         )
         if kind is None:
             return
+        self.unattended.clear()  # a commander steers: the unattended action is over
         self.failsafe.on_setpoint(target, kind, now)
         self._act(self.failsafe.tick(now, self.pose()), send=True)
 

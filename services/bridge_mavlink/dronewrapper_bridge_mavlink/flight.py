@@ -4,8 +4,8 @@
   own hold at the ground (:meth:`~dronewrapper_bridge_mavlink.failsafe.Failsafe.hold_at`),
   arm, the own hold moved ``height`` m up; ArduPilot: GUIDED, arm, MAV_CMD_NAV_TAKEOFF. Then
   the climb is watched until within ``tolerance`` of the height: it fails when the autopilot
-  disarms or leaves the mode it was put in, or the ``timeout`` passes. Already flying: done
-  at once, nothing sent.
+  disarms or leaves the mode it was put in, or the ``timeout`` passes (then the aircraft holds
+  where it is: the climb stops). Already flying: done at once, nothing sent.
 - landing: LAND here, then wait until on the ground and disarmed.
 
 Each returns a :class:`~dronewrapper.msgs.flight.FlightResult` (a failure says which step and
@@ -119,6 +119,8 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
     if outcome is not None:
         if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == REFUSED:
             core.failsafe.release_hold()
+        if outcome.failure == TOO_LATE:
+            core.hold_here()  # the take-off ends here: the climb must not go on
         return outcome
     z = core.telemetry.position_enu[2] if core.telemetry.position_enu else math.nan
     return FlightResult(

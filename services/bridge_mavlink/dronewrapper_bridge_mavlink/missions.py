@@ -27,13 +27,12 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper import envelope as env
 from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
-from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
     HomePosition,
-    MissionControl,
     MissionResult,
     Waypoint,
     WaypointClear,
@@ -50,13 +49,12 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper.setpoint_limits import Kind
 from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_mavlink import autopilot_limits, mission_frames
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import (
-    AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
     HOLD_MODE,
-    RETURN_MODE,
     is_guided,
 )
 
@@ -65,10 +63,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("bridge_mavlink")
 
-MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", AUTOPILOT_ARDUPILOT: "AUTO"}
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
-MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
+SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
 FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's breach
 TRANSFER_TIMEOUT_S = 1.5
 TRANSFER_ATTEMPTS = 5
@@ -85,6 +82,8 @@ class MissionState:
         self.set_by = ""  # who set the envelope in force ("": the configured one)
         self.monitor = BreachMonitor()
         self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)  # ENU m
+        self.home_known = False  # HOME_POSITION has arrived (home_local is the origin before)
+        self.limits = autopilot_limits.Limits()  # the autopilot's return and fence parameters
         self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
         self.waypoints: list[Waypoint] = []
         self.current_seq = 0
@@ -199,9 +198,18 @@ def publish_waypoints(core: BridgeCore) -> None:
     core.publish(registry.MISSION_WAYPOINTS, listing)
 
 
+def breach_state(core: BridgeCore) -> str:
+    """``breach:<action>`` while the aircraft is outside the envelope, else ""."""
+    state = core.missions
+    return f"breach:{state.envelope.breach_action}" if state.monitor.outside else ""
+
+
 def breach_action(core: BridgeCore, action: str) -> Steps:
     """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
-    requests), or ``hold`` (the autopilot's hold mode)."""
+    requests; a return's altitude first kept under the ceiling, waiting up to
+    :data:`SETTLE_WAIT_S` when it was not yet), or ``hold`` (the autopilot's hold mode)."""
+    if action == "return" and not (yield from autopilot_limits.settled(core, SETTLE_WAIT_S)):
+        core.bridge_text("breach return: the autopilot's return altitude is not confirmed")
     if action in ("land", "return"):
         return (yield from ops.failsafe_action(core, action))
     autopilot = core.autopilot or AUTOPILOT_PX4
@@ -217,11 +225,18 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
     state = core.missions
     before = (state.home_local, state.home_geo)
     state.home_local = (float(msg.y), float(msg.x), -float(msg.z))  # NED -> ENU
+    state.home_known = True
     state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
     if (state.home_local, state.home_geo) != before:
         publish_home(core)
     if before[1] is None and core.config.upload_fence:  # home known: the autopilot's fence
-        core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+        follow_envelope(core)
+
+
+def follow_envelope(core: BridgeCore) -> None:
+    """Give the autopilot the envelope: its fence, its return altitude and fence action."""
+    core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+    core.start(autopilot_limits.sync_steps(core), core.now, core.stamp, background=True)
 
 
 def on_transfer_message(core: BridgeCore, msg: Any) -> None:
@@ -317,32 +332,22 @@ def waypoint_of(item: mt.Item) -> Waypoint:
     )
 
 
-def check_mission(core: BridgeCore, waypoints: list[Waypoint]) -> None:
-    """ValueError naming the first item outside the envelope (positions need home)."""
-    state = core.missions
-    for seq, wp in enumerate(waypoints):
-        positional = wp.x_lat != 0.0 or wp.y_long != 0.0
-        if positional and state.home_geo is None:
-            raise ServiceError(
-                "home is not known yet: the mission cannot be checked against the envelope",
-                "refused",
-            )
-        east, north = to_enu(state.home_geo, wp.x_lat, wp.y_long) if positional else (0.0, 0.0)
-        try:
-            env.check_position(state.envelope, east, north, wp.z_alt)
-        except EnvelopeError as exc:
-            raise ServiceError(f"mission item {seq}: {exc}", "refused") from None
-
-
 def push(core: BridgeCore, request: WaypointPush) -> Steps:
-    """mission/push: check every item against the envelope, then upload them."""
+    """mission/push: place and check every item against the envelope
+    (:mod:`~dronewrapper_bridge_mavlink.mission_frames`: local items go up as global ones),
+    then upload them."""
     core.require_connected()
-    check_mission(core, request.waypoints)
-    items = [item_of(wp) for wp in request.waypoints]
+    try:
+        waypoints = mission_frames.prepare(
+            request.waypoints, core.missions.envelope, core.missions.home_geo
+        )
+    except mission_frames.MissionFrameError as exc:
+        raise ServiceError(str(exc), "refused") from None
+    items = [item_of(wp) for wp in waypoints]
     upload = mt.Upload(items, core.target(), core.now, **_transfer_args())
     yield from run_transfer(core, upload)
     if not upload.error:
-        core.missions.waypoints = list(request.waypoints)
+        core.missions.waypoints = waypoints
         core.missions.current_seq = 0
         core.missions.last_reached = -1
         publish_waypoints(core)
@@ -393,30 +398,6 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
     return MissionResult(success=result == ops.ACCEPTED, message=message)
 
 
-def control(core: BridgeCore, request: MissionControl) -> Steps:
-    """mission/control: start (the autopilot's mission mode), pause (its hold mode) or return
-    (its return mode)."""
-    autopilot = core.require_connected()
-    if request.action == "start" and not core.missions.waypoints:
-        raise ServiceError("no mission uploaded", "refused")
-    if request.action == "start":
-        core.missions.last_reached = -1
-    mode = {
-        "start": MISSION_MODE,
-        "pause": HOLD_MODE,
-        "return": RETURN_MODE,
-    }[request.action][autopilot]
-    deadline = core.now + MISSION_CHECK_WAIT_S
-    while True:
-        reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
-        busy = reply.result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
-        if reply.mode_sent or request.action != "start" or not busy or core.now >= deadline:
-            return MissionResult(success=reply.mode_sent, message=reply.message)
-        retry = core.now + 0.5  # PX4 refuses the mission mode until it has checked the upload
-        while core.now < retry:
-            yield retry
-
-
 def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
     """envelope/set: replace or reset the envelope (neither: read it; see
     :mod:`dronewrapper_bridge_base.envelope_set`); the fence follows to the autopilot when one
@@ -431,7 +412,7 @@ def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
         core.publish(registry.ENVELOPE, state.envelope)
         log.info("envelope set by %r: %s", state.set_by or "the configuration", state.envelope)
         if core.connected and state.home_geo is not None and core.config.upload_fence:
-            core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+            follow_envelope(core)
     yield from ()
     return envelope_set.result(state)
 
@@ -491,7 +472,6 @@ SERVICES: tuple[tuple[Any, Callable[..., Steps], str], ...] = (
     (registry.MISSION_PULL, pull, ""),
     (registry.MISSION_CLEAR, clear, "mission"),
     (registry.MISSION_SET_CURRENT, set_current, "mission"),
-    (registry.MISSION_CONTROL, control, "mission"),
     (registry.GEOFENCE_PUSH, push_fence, "mission"),
     (registry.ENVELOPE_SET, set_envelope, "envelope"),
 )

@@ -26,7 +26,7 @@ from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_mavlink import flight, missions, parameters
+from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
@@ -57,6 +57,10 @@ PUBLISHED = (
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,
+    registry.FLIGHT_GOTO: actions.goto_point,
+    registry.FLIGHT_RETURN: actions.return_home,
+    registry.FLIGHT_MISSION: actions.mission_action,
+    registry.MISSION_CONTROL: actions.control,
     registry.ARMING: ops.arming,
     registry.TAKEOFF: ops.takeoff,
     registry.LAND: ops.land,

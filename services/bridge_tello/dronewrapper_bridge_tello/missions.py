@@ -208,9 +208,15 @@ def control(core: TelloCore, request: MissionControl) -> Steps:
         raise ServiceError("the Tello is not flying: take off first", "refused")
     flying = state.running is not None and not state.running.done
     if request.action == "pause":
+        if not flying:
+            raise ServiceError("pause refused: no mission is being flown", "refused")
         state.paused = True
         yield from ()
         return MissionResult(success=True, message="pausing after the current move")
+    if flying and state.paused and request.action == "start":
+        state.paused = False  # paused, its current move not yet done: it goes on
+        yield from ()
+        return MissionResult(success=True, message="resumed: the mission goes on")
     if flying:
         raise ServiceError("a mission or a return is being flown already", "refused")
     state.paused = False

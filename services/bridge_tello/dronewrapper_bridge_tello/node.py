@@ -25,7 +25,7 @@ from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_tello import flight, missions
+from dronewrapper_bridge_tello import actions, flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
 from dronewrapper_bridge_tello.config import Config
@@ -56,6 +56,9 @@ PUBLISHED = (
 SERVICES = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,
+    registry.FLIGHT_GOTO: actions.goto_point,
+    registry.FLIGHT_RETURN: actions.return_home,
+    registry.FLIGHT_MISSION: actions.mission_action,
     registry.ARMING: ops.arming,
     registry.TAKEOFF: ops.takeoff,
     registry.LAND: ops.land,

@@ -1,0 +1,266 @@
+"""Go-to, return and a mission's start, pause and resume: each one waiting operation (pure).
+
+Like take-off and landing (:mod:`~dronewrapper_bridge_mavlink.flight`), each answers with a
+:class:`~dronewrapper.msgs.flight.FlightResult` at its end, so a client never names an
+autopilot's modes nor reads its status texts:
+
+- go-to: refused at once on the ground (take off first), outside the envelope (the limit
+  named) or when home stays unknown for :data:`HOME_WAIT_S` (``no_home``: the point cannot
+  be placed, never a guess); else the autopilot's guided mode (PX4 OFFBOARD, primed;
+  ArduPilot GUIDED) and the bridge's own position hold at the point
+  (:meth:`~dronewrapper_bridge_mavlink.failsafe.Failsafe.hold_at`), done within ``tolerance``.
+  A timeout holds where the aircraft is.
+- return: refused on the ground; the autopilot's return (its altitude kept under the
+  envelope's ceiling, :mod:`~dronewrapper_bridge_mavlink.autopilot_limits`), done once on the
+  ground and disarmed.
+- mission: start or resume refused with no mission or on the ground; pause refused when no
+  mission is being flown; else the autopilot's mission or hold mode.
+
+A go-to, return or mission started with a ``watch`` key is watched (the core's
+:class:`~dronewrapper_bridge_base.unattended.Unattended`): if that commander's process stops
+beating, the bridge ends the action as for a lost commander. Positions ENU m from home
+(the home frame, see :mod:`~dronewrapper_bridge_mavlink.missions`), time the core's.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Generator
+from typing import TYPE_CHECKING
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper import envelope as env
+from dronewrapper.envelope import EnvelopeError
+from dronewrapper.geodesy import to_enu
+from dronewrapper.msgs.flight import (
+    NO_HOME,
+    NOT_READY,
+    REFUSED,
+    TOO_LATE,
+    FlightResult,
+    GotoRequest,
+    MissionRequest,
+    ReturnRequest,
+)
+from dronewrapper.msgs.mavros import SetMode
+from dronewrapper.msgs.mission import MissionControl, MissionResult
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_mavlink import autopilot_limits
+from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink.flight import MAX_TIMEOUT_S, checked, failed, landed, last_text
+from dronewrapper_bridge_mavlink.modes import (
+    AUTOPILOT_PX4,
+    GUIDED_MODE,
+    HOLD_MODE,
+    LAND_MODE,
+    RETURN_MODE,
+)
+from dronewrapper_bridge_mavlink.setpoints import hold_target
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core import BridgeCore
+
+log = logging.getLogger("bridge_mavlink")
+
+HOME_WAIT_S = 5.0
+"""How long a go-to waits for home to be known (s): HOME_POSITION comes at 0.5-1 Hz."""
+MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", "ardupilotmega": "AUTO"}
+SETTLE_WAIT_S = 2.0  # s a return waits for the autopilot's return altitude to be kept
+MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
+
+
+def flying(core: BridgeCore) -> bool:
+    """Armed and in the air (per the landed state)."""
+    return core.failsafe.airborne and core.failsafe.armed
+
+
+def not_flying(what: str) -> FlightResult:
+    return failed(REFUSED, f"{what} refused: not flying (take off first)", what)
+
+
+def wait_for_home(core: BridgeCore) -> Generator[float, None, bool]:
+    """Wait up to :data:`HOME_WAIT_S` for home; whether it is known."""
+    deadline = core.now + HOME_WAIT_S
+    while not core.missions.home_known:
+        if core.now >= deadline:
+            return False
+        yield deadline
+    return True
+
+
+def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
+    """Fly to the point and hold there (see module docstring)."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    tolerance = checked("tolerance", request.tolerance, 0.0, 100.0)
+    if not core.connected:
+        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+    if not flying(core):
+        return not_flying("goto")
+    if not (yield from wait_for_home(core)):
+        return failed(NO_HOME, f"home is not known after {HOME_WAIT_S:g} s: no point to fly to")
+    state = core.missions
+    if request.geodetic:
+        if state.home_geo is None or math.isnan(state.home_geo[0]):
+            return failed(NO_HOME, "home has no latitude and longitude (no GPS): go to x, y")
+        east, north = to_enu(state.home_geo, request.latitude, request.longitude)
+    else:
+        east, north = request.x, request.y
+    try:
+        env.check_position(state.envelope, east, north, request.z)
+    except EnvelopeError as exc:
+        return failed(REFUSED, f"goto refused: {exc}", "goto")
+    hx, hy, hz = state.home_local
+    target = (hx + east, hy + north, hz + request.z)
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    mode = GUIDED_MODE[autopilot]
+    if ops.shown_mode(core) != mode:
+        reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
+        if not reply.mode_sent:
+            return failed(REFUSED, reply.message, f"set_mode {mode}", reply.result)
+    core.failsafe.hold_at(hold_target(target, core.telemetry.yaw_enu))
+    start_watch(core, "goto", request.watch)
+    try:
+        return (yield from fly_to(core, target, mode, tolerance, timeout))
+    finally:
+        core.unattended.ended(core.now)  # reached, given up or cancelled: the go-to is over
+
+
+def fly_to(
+    core: BridgeCore,
+    target: tuple[float, float, float],
+    mode: str,
+    tolerance: float,
+    timeout: float,
+) -> Steps:
+    """Wait until within ``tolerance`` m of ``target`` (local ENU m), the bridge holding it."""
+    deadline = core.now + timeout
+    while True:
+        position = core.telemetry.position_enu
+        distance = math.dist(position, target) if position is not None else math.inf
+        if distance <= tolerance:
+            return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
+        hb = core.heartbeat_state
+        if hb is not None and not hb.armed:
+            return failed(REFUSED, f"the autopilot disarmed{last_text(core)}", "goto")
+        if hb is not None and hb.mode != mode:
+            text = f"the autopilot left {mode} for {hb.mode}{last_text(core)}"
+            return failed(REFUSED, text, "goto")
+        if core.now >= deadline:
+            core.hold_here()  # the go-to ends here: no flying on toward the point
+            return failed(
+                TOO_LATE, f"not within {tolerance:g} m after {timeout:g} s: {distance:.1f} m away"
+            )
+        yield deadline
+
+
+def start_return(core: BridgeCore) -> Generator[float, None, tuple[int, str]]:
+    """Ask for the autopilot's return, its altitude first kept under the ceiling:
+    (MAV_RESULT, explanation)."""
+    kept = yield from autopilot_limits.settled(core, SETTLE_WAIT_S)
+    problem = core.missions.limits.problem if kept else "not confirmed in time"
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    mode = RETURN_MODE[autopilot]
+    core.failsafe.release_hold()
+    core.failsafe.on_mode_requested(mode, core.now)
+    core.failsafe.on_mode_requested(LAND_MODE[autopilot], core.now)
+    result, message = yield from ops.command(core, mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH)
+    if result == ops.ACCEPTED:
+        core.mode_entered(mode)
+    if problem:
+        message += f" (the autopilot's own return altitude: {problem})"
+    return result, message
+
+
+def return_home(core: BridgeCore, request: ReturnRequest) -> Steps:
+    """The autopilot's return, its altitude under the ceiling; done on the ground, disarmed."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    if not core.connected:
+        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+    if not flying(core):
+        return not_flying("return")
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    mode = RETURN_MODE[autopilot]
+    result, message = yield from start_return(core)
+    if result != ops.ACCEPTED:
+        return failed(REFUSED, message, "return", result)
+    start_watch(core, "return", request.watch)
+    deadline = core.now + timeout
+    while not landed(core):
+        hb = core.heartbeat_state
+        if hb is not None and hb.armed and hb.mode not in (mode, LAND_MODE[autopilot]):
+            return failed(REFUSED, f"the autopilot left {mode} for {hb.mode}", "return")
+        if core.now >= deadline:
+            return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
+        yield deadline
+    core.unattended.clear()
+    return FlightResult(success=True, message="returned: on the ground and disarmed")
+
+
+def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:
+    """Start, pause or resume the uploaded mission (see module docstring)."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    if not core.connected:
+        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+    refusal = mission_refusal(core, request.action)
+    if refusal:
+        return failed(REFUSED, refusal, request.action)
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    if request.action == "pause":
+        reply = yield from ops.set_mode(core, SetMode(custom_mode=HOLD_MODE[autopilot]))
+        if not reply.mode_sent:
+            return failed(REFUSED, reply.message, "pause", reply.result)
+        return FlightResult(success=True, message="mission paused: holding here")
+    if request.action == "start":
+        core.missions.last_reached = -1
+    mode = MISSION_MODE[autopilot]
+    deadline = core.now + min(timeout, MISSION_CHECK_WAIT_S)
+    core.failsafe.release_hold()
+    while True:
+        reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
+        busy = reply.result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+        if reply.mode_sent:
+            break
+        if not busy or core.now >= deadline:
+            return failed(REFUSED, reply.message, request.action, reply.result)
+        retry = core.now + 0.5  # PX4 refuses the mission mode until it has checked the upload
+        while core.now < retry:
+            yield retry
+    start_watch(core, "mission", request.watch)
+    seq, total = core.missions.current_seq, len(core.missions.waypoints)
+    return FlightResult(success=True, message=f"flying the mission from item {seq} of {total}")
+
+
+def start_watch(core: BridgeCore, what: str, key: str) -> None:
+    """The ``what`` started now is watched for its commander's process (``key``)."""
+    core.unattended.start(what, key, core.now)
+    log.info("%s: its commander's process %s", what, f"is {key}" if key else "is not known")
+
+
+def mission_refusal(core: BridgeCore, action: str) -> str:
+    """Why a mission ``action`` (start, resume, pause, return) cannot be done now, or ""."""
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    if action in ("start", "resume") and not core.missions.waypoints:
+        return f"{action} refused: no mission uploaded"
+    if action in ("start", "resume", "return") and not flying(core):
+        return f"{action} refused: not flying (take off first)"
+    if action == "pause" and ops.shown_mode(core) != MISSION_MODE[autopilot]:
+        return f"pause refused: no mission is being flown (mode {ops.shown_mode(core) or '?'})"
+    return ""
+
+
+def control(core: BridgeCore, request: MissionControl) -> Steps:
+    """mission/control (a ground station's buttons): ``start``, ``pause`` or ``return``,
+    answered once the autopilot has taken it (a return does not wait for the landing); the
+    same refusals as :func:`mission_action` and :func:`return_home`."""
+    core.require_connected()
+    refusal = mission_refusal(core, request.action)
+    if refusal:
+        raise ServiceError(refusal, "refused")
+    if request.action == "return":
+        result, message = yield from start_return(core)
+        return MissionResult(success=result == ops.ACCEPTED, message=message)
+    reply = yield from mission_action(core, MissionRequest(action=request.action))
+    return MissionResult(success=reply.success, message=reply.message)

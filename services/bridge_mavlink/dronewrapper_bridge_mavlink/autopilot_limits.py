@@ -1,0 +1,145 @@
+"""The autopilot's own return and fence behaviour, kept consistent with the envelope (pure).
+
+The autopilot flies some things without the bridge: its return (RTL) climbs to its return
+altitude first, and its fence fires its own action. Left at their defaults a breach "return"
+climbs to PX4's 30 m (``RTL_RETURN_ALT``) above a 15 m ceiling, and a fence breach the
+autopilot sees first holds instead of returning. So the bridge writes the autopilot's
+parameters whenever the envelope or the autopilot changes (:func:`sync`, an operation):
+
+- the return altitude: at most ``max_altitude - RETURN_ALT_BELOW_CEILING_M`` m above home
+  (PX4 ``RTL_RETURN_ALT`` and ``RTL_DESCEND_ALT`` in m; ArduPilot ``RTL_ALT`` in cm), at
+  least :data:`MIN_RETURN_ALT_M`; a lower value the autopilot holds is kept. A return then
+  never climbs above the ceiling (it starts at the current height when that is higher, and a
+  breach is declared before that is far above).
+- the fence action: the envelope's ``breach_action`` (PX4 ``GF_ACTION`` 2 hold, 3 return,
+  5 land; ArduPilot ``FENCE_ACTION`` 4 brake, 1 RTL, 2 land), so whichever fence fires first,
+  the action taken is the one asked for.
+
+:func:`wanted` is the pure table (tested alone); what was written is remembered per
+autopilot and envelope, so :func:`sync` costs nothing when nothing changed. A write the
+autopilot refuses is reported as a bridge text and in :attr:`Limits.problem` (a return is
+then flown anyway: the message says which altitude the autopilot keeps).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Generator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from dronewrapper.envelope import Envelope
+from dronewrapper.msgs.mavros import ParamSet, ParamValue
+from dronewrapper_bridge_mavlink import parameters
+from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core import BridgeCore
+
+log = logging.getLogger("bridge_mavlink")
+
+RETURN_ALT_BELOW_CEILING_M = 1.0
+MIN_RETURN_ALT_M = 2.0
+PX4_FENCE_ACTION = {"hold": 2, "return": 3, "land": 5}
+ARDUPILOT_FENCE_ACTION = {"hold": 4, "return": 1, "land": 2}
+AT_MOST = "at_most"  # lowered to the value when above it, else kept
+EXACTLY = "exactly"
+
+
+@dataclass
+class Limits:
+    """What the bridge last wrote: for which (autopilot, envelope), and a problem ("" none)."""
+
+    written_for: tuple[str, Envelope] | None = None
+    problem: str = ""
+    running: bool = False
+
+
+def return_altitude(envelope: Envelope) -> float:
+    """The highest return altitude (m above home) under ``envelope``'s ceiling."""
+    return max(MIN_RETURN_ALT_M, envelope.max_altitude - RETURN_ALT_BELOW_CEILING_M)
+
+
+def wanted(autopilot: str, envelope: Envelope) -> list[tuple[str, float, str]]:
+    """The parameters to keep: (name, value, :data:`AT_MOST` or :data:`EXACTLY`)."""
+    alt = return_altitude(envelope)
+    if autopilot == AUTOPILOT_ARDUPILOT:
+        return [
+            ("RTL_ALT", float(round(alt * 100.0)), AT_MOST),  # cm
+            ("FENCE_ACTION", float(ARDUPILOT_FENCE_ACTION[envelope.breach_action]), EXACTLY),
+        ]
+    return [
+        ("RTL_RETURN_ALT", alt, AT_MOST),
+        ("RTL_DESCEND_ALT", alt, AT_MOST),
+        ("GF_ACTION", float(PX4_FENCE_ACTION[envelope.breach_action]), EXACTLY),
+    ]
+
+
+def to_write(current: float | None, value: float, how: str) -> float | None:
+    """The value to write over ``current`` (None: unknown), or None to leave it."""
+    if how == EXACTLY:
+        return None if current == value else value
+    return None if current is not None and current <= value else value
+
+
+def sync(core: BridgeCore) -> Generator[float, None, str]:
+    """Keep :func:`wanted` unless already done for this autopilot and envelope (a value the
+    autopilot holds lower than asked is kept); the problem ("" when all were taken)."""
+    limits: Limits = core.missions.limits
+    while limits.running:  # one writer at a time; the other waits for its result
+        yield core.now + 0.05
+    autopilot = core.autopilot or AUTOPILOT_PX4
+    key = (autopilot, core.missions.envelope)
+    if limits.written_for == key or not core.connected:
+        return limits.problem
+    limits.running = True
+    try:
+        problems, written = [], []
+        for name, value, how in wanted(autopilot, key[1]):
+            got = yield from parameters.param_read(core, name)
+            current = None if got is None else parameters.decode(core, *got)
+            number = None if current is None else float(current.as_number())
+            write = to_write(number, value, how)
+            if write is None:
+                continue
+            integer = how == EXACTLY or autopilot == AUTOPILOT_ARDUPILOT
+            param = ParamValue.of(int(write) if integer else write)
+            reply = yield from parameters.param_set(core, ParamSet(param_id=name, value=param))
+            if reply.success:
+                written.append(f"{name}={write:g}")
+            else:
+                problems.append(f"{name}={write:g}: {reply.message}")
+        limits.problem = "; ".join(problems)
+        limits.written_for = key
+    finally:
+        limits.running = False
+    if limits.problem:
+        text = f"the autopilot's return or fence may leave the envelope: {limits.problem}"
+        core.bridge_text(text)
+    elif written:
+        log.info("autopilot return and fence set for the envelope: %s", ", ".join(written))
+    return limits.problem
+
+
+def settled(core: BridgeCore, seconds: float) -> Generator[float, None, bool]:
+    """Wait up to ``seconds`` for the limits to be kept for this autopilot and envelope (a
+    :func:`sync` started in the background when none runs); whether they are."""
+    limits: Limits = core.missions.limits
+    key = (core.autopilot or AUTOPILOT_PX4, core.missions.envelope)
+    if limits.written_for == key:
+        return True
+    if not limits.running:
+        core.start(sync_steps(core), core.now, core.stamp, background=True)
+    deadline = core.now + seconds
+    while limits.written_for != key and core.now < deadline:
+        yield min(deadline, core.now + 0.05)
+    return limits.written_for == key
+
+
+def sync_steps(core: BridgeCore) -> Generator[float, None, str]:
+    """:func:`sync` as a background operation (the core starts it on connect and on a new
+    envelope)."""
+    return (yield from sync(core))
+
+
+__all__ = ["Limits", "return_altitude", "settled", "sync", "to_write", "wanted"]
