@@ -37,6 +37,7 @@ os.environ.setdefault("MAVLINK20", "1")
 from pymavlink.dialects.v20 import common as mavlink
 
 from bench.common import machine, print_table, write_results
+from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_bridge_mavlink.config import DEFAULT_MESSAGE_RATES, UNUSED_STREAMS
 from dronewrapper_bridge_mavlink.core import BridgeCore
 from dronewrapper_bridge_mavlink.link import MavLink
@@ -161,7 +162,7 @@ def measure(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--send", nargs=3, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
