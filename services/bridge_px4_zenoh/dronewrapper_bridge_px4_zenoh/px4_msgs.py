@@ -2,9 +2,10 @@
 comments left out: neither changes the wire format nor the RIHS01 hash).
 
 The fields are those PX4's ``msg/`` directory defines at upstream main of 2026-03-02
-(02e73e3b6f), the firmware the bridge was measured against; each type's hash as that firmware
-announces it is pinned in :data:`MEASURED_HASHES` and a test holds our definitions to it. A
-firmware whose messages differ announces other hashes, and :mod:`.versions` refuses them.
+(02e73e3b6f), the firmware the bridge was measured against: every type's RIHS01 hash equals the
+one that firmware announces (tests/data/px4_zenoh holds its tokens and samples, and a test holds
+our definitions to them). A firmware whose messages differ announces other hashes, and
+:mod:`.versions` refuses them.
 Units and frames are PX4's: metres, m/s, radians, NED local frame, FRD body frame,
 microseconds since the autopilot's boot for ``timestamp``.
 """
@@ -99,11 +100,6 @@ FIELDS: dict[str, str] = {
     ),
 }
 """Each type's fields, by short name (``VehicleStatus`` is ``px4_msgs/msg/VehicleStatus``)."""
-
-MEASURED_HASHES: dict[str, str] = {
-    "VehicleStatus": "RIHS01_b98c704379561e2bfa2a83902bea00bb14357240659617df3a8be1e209747e97",
-}
-"""The RIHS01 hash of each type as the measured firmware announced it in its keys."""
 
 
 def full_name(short: str) -> str:
