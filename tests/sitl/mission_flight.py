@@ -50,9 +50,16 @@ def target(x: float, y: float, z: float) -> PositionTarget:
     )
 
 
+def highest(pair: RealPair, since: float) -> float:
+    """The highest altitude above the local origin (ENU z, m) flown since ``since``."""
+    return round(max(p[2] for t, p, _ in pair.track if t >= since), 2)
+
+
 def main(kind: str, connection: str) -> int:
     report: dict = {"autopilot": kind}
-    envelope = Envelope(max_distance=25.0, margin=1.0, breach_action="return")
+    # a 15 m ceiling under the firmware's own return altitude (PX4 30 m, ArduCopter 15 m): the
+    # bridge must keep the autopilot's returns under it
+    envelope = Envelope(max_distance=25.0, max_altitude=15.0, margin=1.0, breach_action="return")
     pair = RealPair(connection, envelope=envelope)
     try:
         ready = pair.run(
@@ -93,9 +100,14 @@ def main(kind: str, connection: str) -> int:
         report["mission_finished"] = done
         report["waypoint_errors_m"] = [round(pair.closest_approach(p, start), 3) for p in SQUARE]
         report["rtl"] = pair.call(actions.control, MissionControl(action="return")).message
+        rtl_start = time.monotonic()
         landed = pair.run(120.0, until=lambda: not pair.armed)
+        report["rtl_max_altitude_m"] = highest(pair, rtl_start)
         report["rtl_landed"] = landed
-        report["rtl_landing_error_m"] = round(math.hypot(*pair.position[:2]), 3)
+        hx, hy, _ = pair.core.missions.home_local  # the return lands at home, not at the origin
+        report["rtl_landing_error_m"] = round(
+            math.hypot(pair.position[0] - hx, pair.position[1] - hy), 3
+        )
         # the envelope: a setpoint beyond it is refused; then, 20 m out, the envelope shrinks
         # to 10 m around the aircraft's home: a breach, and the return it starts
         if kind == "ardupilot":  # it stays in RTL after landing, where it does not arm
@@ -124,6 +136,7 @@ def main(kind: str, connection: str) -> int:
         report["max_distance_m"] = round(max(math.hypot(*p[:2]) for _, p, _ in pair.track), 2)
         pair.setpoint = None
         pair.run(90.0, until=lambda: not pair.armed)
+        report["breach_max_altitude_m"] = highest(pair, changed)
         report["reached"] = pair.reached
         report["texts"] = pair.texts[-25:]
         print(json.dumps(report))
