@@ -36,7 +36,7 @@ def main() -> None:
         while not drone.mission_progress().finished and time.monotonic() < deadline:
             time.sleep(0.2)
         progress = drone.mission_progress()
-        print(f"mission: finished={progress.finished}, last item reached: {progress.reached}")
+        print(f"mission: reached {progress.reached_count} of {progress.total}")
         drone.return_to_launch()
         x, y, _ = drone.get_position()
         print(f"home: landed at x={x:.2f} y={y:.2f}")
