@@ -92,6 +92,18 @@ def forbidden(identity: str, connect: str, keys_dir: str | Path | None = None) -
     return f"{role_refusal(role, identity)} (not sent)" if role in WATCH_ONLY_ROLES else ""
 
 
+def node_forbidden(node: object) -> str:
+    """:func:`forbidden` for a node opened elsewhere (a ``Fleet``'s, an app's own): its
+    identity and the first ``tls/`` router it connects to; ``""`` for a node without options
+    (the fake bus) or identity."""
+    options = getattr(node, "options", None)
+    identity = getattr(options, "identity", "") if options is not None else ""
+    if not identity:
+        return ""
+    tls = next((ep for ep in options.connect if ep.startswith("tls/")), "")
+    return forbidden(identity, tls, options.keys_dir or None)
+
+
 def identity_facts(identity: str, connect: str) -> dict[str, object]:
     """What the diagnoses take about our identity: ``identity`` (only on a ``tls/`` router,
     the one kind with access control) and its local ``standing``."""

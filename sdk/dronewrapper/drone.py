@@ -159,7 +159,11 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         identity = self._identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
         self.commander = commander or default_commander(identity)
         self._attachment = commander_attachment(self.commander)
-        self._forbidden = diagnosis.forbidden(identity, self.connect) if node is None else ""
+        self._forbidden = (
+            diagnosis.forbidden(identity, self.connect)
+            if node is None
+            else diagnosis.node_forbidden(node)
+        )
         self.compressed_images = self._choose_compression(compressed_images, node, cameras)
         self._own_node = node is None
         if node is None:

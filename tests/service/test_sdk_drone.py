@@ -18,7 +18,15 @@ import numpy as np
 import pytest
 from bus_autopilot import REFUSED, TELEMETRY_PERIOD_S, SdkRig
 
-from dronewrapper import Cancelled, CommandRefused, InvalidArgument, NoData, NotConnected, Timeout
+from dronewrapper import (
+    Cancelled,
+    CommandRefused,
+    DroneWrapper,
+    InvalidArgument,
+    NoData,
+    NotConnected,
+    Timeout,
+)
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_ON_GROUND,
@@ -368,3 +376,22 @@ def test_a_cancelled_takeoff_stops_the_climb_at_once_and_stops_commanding(rig):
     rig.run(1.0)
     assert rig.pilot.z == pytest.approx(z)  # the climb stopped: it holds there
     assert rig.pilot.setpoints(since=stopped + 1e-9) == []
+
+
+def test_an_observer_on_a_shared_node_is_refused_before_sending(tmp_path, monkeypatch):
+    """A node opened elsewhere (a Fleet's) carries the identity in its options: an observer's
+    certificate refuses the command at the call, and nothing reaches the bridge."""
+    from dronewrapper.runtime.options import ZenohOptions
+    from dronewrapper.security.keystore import KeyStore
+
+    store = KeyStore(tmp_path / "keys")
+    store.init()
+    store.issue("olga", "observer")
+    monkeypatch.setenv("DRONEWRAPPER_KEYS", str(store.root))
+    rig = SdkRig({"x": 1.0}, open_drone=False)
+    rig.node.options = ZenohOptions(connect=["tls/192.168.1.10:7448"], identity="olga")
+    rig.drone = DroneWrapper("drone", **rig.options())
+    with pytest.raises(CommandRefused, match=r"not permitted for role observer.*not sent"):
+        rig.drone.arm()
+    assert names(rig) == []
+    rig.close()

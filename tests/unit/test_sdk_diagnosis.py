@@ -3,6 +3,8 @@ silent bridge; and durations printed as a person reads them (pure)."""
 
 from __future__ import annotations
 
+import types
+
 import pytest
 
 from dronewrapper.diagnosis import (
@@ -10,11 +12,13 @@ from dronewrapper.diagnosis import (
     identity_facts,
     local_standing,
     no_reply,
+    node_forbidden,
     role_refusal,
     seconds,
 )
 from dronewrapper.discovery import connection_problem
 from dronewrapper.errors import CommandRefused, NotConnected, Timeout
+from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper.security.keystore import KeyStore
 
 TLS = "tls/192.168.1.10:7448"
@@ -114,3 +118,21 @@ def test_the_role_comes_from_the_certificate_without_the_index(tmp_path, monkeyp
         forbidden("olga", TLS)
     )
     assert forbidden("alice", TLS) == "" and forbidden("olga", "tcp/127.0.0.1:7447") == ""
+
+
+def test_a_shared_nodes_identity_is_judged_the_same(tmp_path, monkeypatch):
+    """A Fleet's or an app's own node: its options name the identity and the router, so an
+    observer's command through it is refused before sending too."""
+    store = KeyStore(tmp_path / "keys")
+    store.init()
+    store.issue("olga", "observer")
+    monkeypatch.setenv("DRONEWRAPPER_KEYS", str(store.root))
+
+    def node(identity, *connect):
+        options = ZenohOptions(connect=list(connect), identity=identity)
+        return types.SimpleNamespace(options=options)
+
+    assert node_forbidden(node("olga", "tcp/127.0.0.1:7447", TLS)) == forbidden("olga", TLS)
+    assert "not permitted for role observer" in node_forbidden(node("olga", TLS))
+    assert node_forbidden(node("olga", "tcp/127.0.0.1:7447")) == ""
+    assert node_forbidden(node("", TLS)) == "" and node_forbidden(object()) == ""
