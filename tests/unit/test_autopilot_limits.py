@@ -6,6 +6,7 @@ action."""
 from __future__ import annotations
 
 import pytest
+from bridge_core_rig import ARDUPILOT, CoreRig
 
 from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_mavlink import autopilot_limits as al
@@ -25,6 +26,7 @@ def test_px4_return_altitude_is_capped_under_the_ceiling_and_the_fence_acts_as_a
 
 def test_ardupilot_return_altitude_is_in_centimetres():
     assert al.wanted("ardupilotmega", Envelope(max_altitude=10.0, breach_action="hold")) == [
+        ("RTL_ALT_M", 9.0, al.AT_MOST),
         ("RTL_ALT", 900.0, al.AT_MOST),
         ("FENCE_ACTION", 4.0, al.EXACTLY),
     ]
@@ -41,3 +43,52 @@ def test_only_a_value_above_the_cap_or_a_different_action_is_written():
 @pytest.mark.parametrize("ceiling, expected", [(2.5, 2.0), (3.5, 2.5), (40.0, 39.0)])
 def test_return_altitude_bounds(ceiling, expected):
     assert al.return_altitude(Envelope(max_altitude=ceiling)) == expected
+
+
+def _sync_on_ardupilot(has: dict[str, tuple[float, int]]) -> tuple[str, dict[str, float]]:
+    """Run :func:`al.sync` on a connected ArduPilot core that answers for the parameters in
+    ``has`` (name -> (value, MAV_PARAM_TYPE)) and stays silent for any other (as ArduPilot does
+    for a name it does not have); its result and the values it was asked to write."""
+    rig = CoreRig(autopilot=ARDUPILOT).connect()
+    rig.run(0.5)
+    since = rig.now
+    op = rig.call(lambda core, _request: al.sync_steps(core), None)
+    written: dict[str, float] = {}
+    answered = 0
+    for _ in range(400):  # 40 s of bus time at most; the exchange ends long before
+        if op.done:
+            break
+        rig.run(0.1)
+        sent = rig.sent_since(since)
+        for msg in sent[answered:]:
+            name = getattr(msg, "param_id", "")
+            if msg.get_type() == "PARAM_SET" and name in has:
+                written[name] = msg.param_value
+                has[name] = (msg.param_value, has[name][1])
+            if name in has and msg.get_type() in ("PARAM_REQUEST_READ", "PARAM_SET"):
+                rig.param(name, *has[name])
+        answered = len(sent)
+    assert op.done
+    return op.reply, written
+
+
+REAL32, INT16, INT8 = 9, 4, 2  # MAV_PARAM_TYPE
+
+
+def test_ardupilot_4_8_gets_its_return_altitude_in_metres_as_rtl_alt_m():
+    problem, written = _sync_on_ardupilot(
+        {"RTL_ALT_M": (150.0, REAL32), "FENCE_ACTION": (1.0, INT8)}  # no RTL_ALT any more
+    )
+    assert problem == "" and written == {"RTL_ALT_M": 119.0}  # under the 120 m default ceiling
+
+
+def test_ardupilot_before_4_8_gets_rtl_alt_in_centimetres():
+    problem, written = _sync_on_ardupilot(
+        {"RTL_ALT": (15000.0, INT16), "FENCE_ACTION": (1.0, INT8)}
+    )
+    assert problem == "" and written == {"RTL_ALT": 11900.0}
+
+
+def test_an_ardupilot_with_neither_return_altitude_says_so():
+    problem, _ = _sync_on_ardupilot({"FENCE_ACTION": (1.0, INT8)})
+    assert problem == "RTL_ALT_M / RTL_ALT: no such parameter answered"

@@ -7,7 +7,8 @@ autopilot sees first holds instead of returning. So the bridge writes the autopi
 parameters whenever the envelope or the autopilot changes (:func:`sync`, an operation):
 
 - the return altitude: at most ``max_altitude - RETURN_ALT_BELOW_CEILING_M`` m above home
-  (PX4 ``RTL_RETURN_ALT`` and ``RTL_DESCEND_ALT`` in m; ArduPilot ``RTL_ALT`` in cm), at
+  (PX4 ``RTL_RETURN_ALT`` and ``RTL_DESCEND_ALT`` in m; ArduCopter 4.8 ``RTL_ALT_M`` in m, and
+  ``RTL_ALT`` in cm before it: whichever the autopilot has, :data:`ONE_OF`), at
   least :data:`MIN_RETURN_ALT_M`; a lower value the autopilot holds is kept. A return then
   never climbs above the ceiling (it starts at the current height when that is higher, and a
   breach is declared before that is far above).
@@ -44,6 +45,11 @@ PX4_FENCE_ACTION = {"hold": 2, "return": 3, "land": 5}
 ARDUPILOT_FENCE_ACTION = {"hold": 4, "return": 1, "land": 2}
 AT_MOST = "at_most"  # lowered to the value when above it, else kept
 EXACTLY = "exactly"
+ONE_OF = (("RTL_ALT_M", "RTL_ALT"),)
+"""Names of one setting across firmware versions (ArduCopter 4.8 renamed ``RTL_ALT``, in cm,
+to ``RTL_ALT_M``, in m): the autopilot has one of them, the others are not asked to change."""
+INTEGER_PARAMS = frozenset({"RTL_ALT"})
+"""The ``AT_MOST`` parameters held as integers (the fence actions, ``EXACTLY``, are too)."""
 
 
 @dataclass
@@ -65,7 +71,8 @@ def wanted(autopilot: str, envelope: Envelope) -> list[tuple[str, float, str]]:
     alt = return_altitude(envelope)
     if autopilot == AUTOPILOT_ARDUPILOT:
         return [
-            ("RTL_ALT", float(round(alt * 100.0)), AT_MOST),  # cm
+            ("RTL_ALT_M", alt, AT_MOST),  # m, ArduCopter 4.8 on
+            ("RTL_ALT", float(round(alt * 100.0)), AT_MOST),  # cm, before 4.8
             ("FENCE_ACTION", float(ARDUPILOT_FENCE_ACTION[envelope.breach_action]), EXACTLY),
         ]
     return [
@@ -94,21 +101,29 @@ def sync(core: BridgeCore) -> Generator[float, None, str]:
         return limits.problem
     limits.running = True
     try:
-        problems, written = [], []
+        problems, written, absent = [], [], set()
+        alternatives = {name for names in ONE_OF for name in names}
         for name, value, how in wanted(autopilot, key[1]):
             got = yield from parameters.param_read(core, name)
+            if got is None and name in alternatives:
+                absent.add(name)  # another firmware version's name: the other one is kept
+                continue
             current = None if got is None else parameters.decode(core, *got)
             number = None if current is None else float(current.as_number())
             write = to_write(number, value, how)
             if write is None:
                 continue
-            integer = how == EXACTLY or autopilot == AUTOPILOT_ARDUPILOT
+            integer = how == EXACTLY or name in INTEGER_PARAMS
             param = ParamValue.of(int(write) if integer else write)
             reply = yield from parameters.param_set(core, ParamSet(param_id=name, value=param))
             if reply.success:
                 written.append(f"{name}={write:g}")
             else:
                 problems.append(f"{name}={write:g}: {reply.message}")
+        asked = {name for name, _, _ in wanted(autopilot, key[1])}
+        for names in ONE_OF:
+            if asked & set(names) and asked & set(names) <= absent:
+                problems.append(f"{' / '.join(names)}: no such parameter answered")
         limits.problem = "; ".join(problems)
         limits.written_for = key
     finally:
@@ -142,4 +157,4 @@ def sync_steps(core: BridgeCore) -> Generator[float, None, str]:
     return (yield from sync(core))
 
 
-__all__ = ["Limits", "return_altitude", "settled", "sync", "to_write", "wanted"]
+__all__ = ["ONE_OF", "Limits", "return_altitude", "settled", "sync", "to_write", "wanted"]
