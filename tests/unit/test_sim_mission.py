@@ -141,3 +141,21 @@ def test_a_fence_breach_in_the_air_starts_gf_action_once():
     cmd.set_mode(Mode.LOITER, 1.2, outside)  # a pilot takes it back: no second action
     mission.check_geofence(cmd, 1.3, outside)
     assert cmd.nav_mode is Mode.LOITER
+
+
+def test_a_lost_request_is_asked_again_on_the_uploads_link_until_the_item_comes():
+    """PX4 re-sends a request after 0.25 s without its item, so a lost request (a full serial
+    line) does not stall the upload; nothing is re-sent after the last item."""
+    store = MissionStore(1)
+    count = gcs(mavlink.MAVLink_mission_count_message(1, 1, 2, MISSION))
+    assert [m.seq for m in store.handle(count, 0.0, "onboard")] == [0]
+    assert store.retry(0.1, "onboard") == []  # not yet
+    assert store.retry(0.3, "gcs") == []  # another link's upload is not this one
+    (again,) = store.retry(0.3, "onboard")
+    assert (again.get_type(), again.seq) == ("MISSION_REQUEST_INT", 0)
+    assert store.retry(0.4, "onboard") == []  # 0.25 s after the last one
+    assert [m.seq for m in store.handle(item(0), 0.5, "onboard")] == [1]
+    assert store.retry(0.6, "onboard") == []
+    assert [m.seq for m in store.retry(0.8, "onboard")] == [1]
+    (ack,) = store.handle(item(1), 0.9, "onboard")
+    assert ack.get_type() == "MISSION_ACK" and store.retry(5.0, "onboard") == []

@@ -234,7 +234,7 @@ class Autopilot:
         """Process one message received on ``link``; returns the replies for that link."""
         kind = msg.get_type()
         if kind.startswith("MISSION_"):
-            return self.missions.handle(msg, self.time_s)
+            return self.missions.handle(msg, self.time_s, link)
         handler = getattr(self, f"_on_{kind.lower()}", None)
         if handler is None:
             return []
@@ -420,6 +420,7 @@ class Autopilot:
                 for text in texts:
                     msgs.extend(self.statustext(text))
             msgs.extend(mission_events)
+            msgs.extend(self.missions.retry(now, name))
             msgs.extend(self._builders[msgid]() for msgid in link.scheduler.due(now))
             for _ in range(min(PARAMS_PER_POLL, len(link.param_queue))):
                 name_at = self.params.name_at(link.param_queue.popleft())

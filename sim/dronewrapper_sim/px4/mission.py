@@ -5,8 +5,10 @@ item by item with MISSION_REQUEST_INT and ended by MISSION_ACK; an item PX4 woul
 (an unsupported command or frame) ends it with the matching MAV_MISSION_RESULT; a download
 (MISSION_REQUEST_LIST) is answered with MISSION_COUNT and each item asked; MISSION_CLEAR_ALL
 empties a list. Missions, fences (MAV_MISSION_TYPE_FENCE) and rally points are separate lists.
-An upload not finished within :data:`UPLOAD_TIMEOUT_S` is dropped (PX4's is 5 s), and an item
-asked again is answered again.
+An upload not finished within :data:`UPLOAD_TIMEOUT_S` is dropped (PX4's is 5 s), an item
+asked again is answered again, and an item not sent within :data:`RETRY_S` of its request is
+asked again (PX4's ``MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT``: a lost request does not stall
+the upload).
 
 :class:`MissionRunner` flies the mission in AUTO.MISSION: NAV_TAKEOFF climbs, NAV_WAYPOINT
 flies to the item (acceptance radius param2, else NAV_ACC_RAD; hold param1 s), NAV_LAND
@@ -48,6 +50,7 @@ MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 FENCE = mavlink.MAV_MISSION_TYPE_FENCE
 RALLY = mavlink.MAV_MISSION_TYPE_RALLY
 UPLOAD_TIMEOUT_S = 5.0
+RETRY_S = 0.25
 MAX_ITEMS = 500
 NO_OP_COMMANDS = {  # taken as PX4 takes them, and skipped: no camera, gimbal or gripper
     mavlink.MAV_CMD_DO_SET_ROI,
@@ -109,6 +112,9 @@ class Upload:
     count: int
     items: list[Message] = field(default_factory=list)
     last_at: float = 0.0
+    link: str = ""  # the link the upload came on (its requests go back there)
+    request: Message | None = None  # the last request sent, and when
+    asked_at: float = 0.0
 
 
 class MissionStore:
@@ -132,8 +138,32 @@ class MissionStore:
             msg.get_srcSystem(), msg.get_srcComponent(), seq, mission_type
         )
 
-    def handle(self, msg: Message, now: float) -> list[Message]:
-        """The replies to one mission-protocol message (addressed to this vehicle)."""
+    def handle(self, msg: Message, now: float, link: str = "") -> list[Message]:
+        """The replies to one mission-protocol message (addressed to this vehicle) that came
+        on ``link``."""
+        replies = self._handle(msg, now)
+        upload = self._upload
+        if upload is not None:
+            for reply in replies:
+                if reply.get_type() == "MISSION_REQUEST_INT":
+                    upload.link, upload.request, upload.asked_at = link, reply, now
+        return replies
+
+    def retry(self, now: float, link: str) -> list[Message]:
+        """The request of a running upload on ``link`` again, once :data:`RETRY_S` has passed
+        since it was sent without its item coming."""
+        upload = self._upload
+        if upload is None or upload.link != link or upload.request is None:
+            return []
+        if now - upload.last_at > UPLOAD_TIMEOUT_S:
+            self._upload = None
+            return []
+        if now - upload.asked_at < RETRY_S:
+            return []
+        upload.asked_at = now
+        return [upload.request]
+
+    def _handle(self, msg: Message, now: float) -> list[Message]:
         if getattr(msg, "target_system", 0) not in (0, self.sysid):
             return []
         kind = msg.get_type()
