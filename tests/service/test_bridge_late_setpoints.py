@@ -3,17 +3,14 @@ commander's stream held by a stalled link and delivered in a burst (virtual time
 
 from __future__ import annotations
 
-import logging
-
 import pytest
+from wired_bridge import Wired, wire
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_base.core_driver import CoreDriver
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
 from dronewrapper_bridge_mavlink.core import BridgeCore
@@ -28,27 +25,12 @@ EAST = PositionTarget(
 PERIOD = 1 / 30
 
 
-class Wired(BridgeNode):
-    """A core on the bridge wiring in the bus's time, its sends dropped (no aircraft)."""
-
-    def send(self, out) -> None:
-        pass
-
-
 def wired(kind: str, bus: FakeBus) -> Wired:
     if kind == "mavlink":
         core, module = BridgeCore(MavlinkConfig()), mavlink_node
     else:
         core, module = TelloCore(TelloConfig(video=False)), tello_node
-    node = FakeNode("bridge", bus)
-    bridge = Wired(
-        node, core, {t: node.publisher(t) for t in module.PUBLISHED}, logging.getLogger()
-    )
-    bridge.driver = CoreDriver(
-        core, bridge.execute, node.stop_event, clock=bus.clock.monotonic, wall=bus.clock.time
-    )
-    bridge.serve(module.SERVICES)
-    return bridge
+    return wire(core, module, bus)
 
 
 def stream(bus: FakeBus, commander: Commander, target: PositionTarget, seconds: float) -> None:

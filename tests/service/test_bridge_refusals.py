@@ -5,9 +5,8 @@ refused setpoint, and a refused stream reported about once a second, not 30 time
 
 from __future__ import annotations
 
-import logging
-
 import pytest
+from wired_bridge import Wired, wire
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import refusal as refusals
@@ -24,8 +23,6 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_base.core_driver import CoreDriver
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
 from dronewrapper_bridge_mavlink.core import BridgeCore
@@ -44,13 +41,6 @@ PERIOD = 1 / 30
 REPORTED_WITHIN_S = 0.1
 
 
-class Wired(BridgeNode):
-    """A core on the bridge wiring in the bus's time, its sends dropped (no aircraft)."""
-
-    def send(self, out) -> None:
-        pass
-
-
 def wired(kind: str, bus: FakeBus, *, lease: bool = False) -> Wired:
     fence = Envelope(fence=[(-10.0, -10.0), (10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)])
     if kind == "mavlink":
@@ -59,15 +49,7 @@ def wired(kind: str, bus: FakeBus, *, lease: bool = False) -> Wired:
     else:
         config = TelloConfig(command_lease=lease, envelope=fence, video=False)
         core, module = TelloCore(config, bus.clock.monotonic()), tello_node
-    node = FakeNode("bridge", bus)
-    bridge = Wired(
-        node, core, {t: node.publisher(t) for t in module.PUBLISHED}, logging.getLogger()
-    )
-    bridge.driver = CoreDriver(
-        core, bridge.execute, node.stop_event, clock=bus.clock.monotonic, wall=bus.clock.time
-    )
-    bridge.serve(module.SERVICES)
-    return bridge
+    return wire(core, module, bus)
 
 
 def stream(bus: FakeBus, commander: Commander, target: PositionTarget, seconds: float) -> None:
