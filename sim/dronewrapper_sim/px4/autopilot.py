@@ -27,7 +27,8 @@ from dronewrapper_sim.dynamics import GRAVITY, QuadParams, QuadState, WindModel,
 from dronewrapper_sim.px4 import modes, offboard, telemetry
 from dronewrapper_sim.px4.commander import FORCE_MAGIC, Commander, StatusText
 from dronewrapper_sim.px4.flight_control import Gains, PositionController
-from dronewrapper_sim.px4.mission import Geofence, MissionRunner, MissionStore
+from dronewrapper_sim.px4.geofence import Geofence
+from dronewrapper_sim.px4.mission import MissionRunner, MissionStore
 from dronewrapper_sim.px4.params import ParamStore
 
 log = logging.getLogger("sim.autopilot")

@@ -32,7 +32,7 @@ from enum import IntEnum
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_sim.dynamics import QuadState
-from dronewrapper_sim.px4 import mission
+from dronewrapper_sim.px4 import geofence, mission
 from dronewrapper_sim.px4.flight_control import NAN, Target
 from dronewrapper_sim.px4.modes import Mode
 from dronewrapper_sim.px4.offboard import OffboardSetpoint
@@ -121,7 +121,7 @@ class Commander:
         self._rtl_z = 0.0
         self._rtl_wait_since = 0.0
         self.mission: mission.MissionRunner | None = None  # set by the autopilot
-        self.geofence: mission.Geofence | None = None
+        self.geofence: geofence.Geofence | None = None
 
     # ---- helpers ----
 
@@ -248,7 +248,7 @@ class Commander:
             if timeout > 0 and now - self.landed_at >= timeout:
                 self.disarm(now, state, force=True, reason=reason)
         self._offboard_failsafe(now, state)
-        mission.check_geofence(self, now, state)
+        geofence.check_geofence(self, now, state)
         self._navigate(now, state)
 
     def _land_detector(self, now: float, state: QuadState) -> None:

@@ -21,13 +21,10 @@ after it. The camera, gimbal, region-of-interest and gripper items PX4 takes
 (:data:`NO_OP_COMMANDS`) are taken and skipped, each with an informational STATUSTEXT: this
 vehicle carries no camera, gimbal or gripper. SPLINE_WAYPOINT is refused, as PX4 refuses it.
 
-:class:`Geofence` checks the uploaded fence (circle and polygon inclusion, polygon exclusion)
-against the vehicle's position; a breach in the air starts GF_ACTION (2 hold, 3 return,
-5 land) once per excursion, as PX4's geofence does.
+The uploaded fence's breach check is :mod:`dronewrapper_sim.px4.geofence`.
 
-Pure: time is the caller's (s), positions local ENU m; ``to_local(lat, lon)`` gives the local
-(east, north) of a geodetic point. One file over 400 lines: the protocol, the runner and the
-fence share the store's three lists and PX4's tables of what a mission may hold.
+Pure: time is the caller's (s), positions local ENU m. One file over 400 lines: the protocol
+and the runner share the store's lists and PX4's tables of what a mission may hold.
 """
 
 from __future__ import annotations
@@ -390,75 +387,7 @@ class MissionRunner:
         return out
 
 
-def _inside(polygon: list[tuple[float, float]], x: float, y: float) -> bool:
-    result = False
-    n = len(polygon)
-    for i in range(n):
-        x1, y1 = polygon[i]
-        x2, y2 = polygon[(i - 1) % n]
-        if (y1 > y) != (y2 > y) and x < (x2 - x1) * (y - y1) / (y2 - y1) + x1:
-            result = not result
-    return result
-
-
-class Geofence:
-    """The uploaded fence as local shapes, and its breach check (see module docstring)."""
-
-    def __init__(self, store: MissionStore, to_local: Callable[[float, float], tuple]) -> None:
-        self.store = store
-        self.to_local = to_local
-        self._version = -1
-        self.circles: list[tuple[bool, float, float, float]] = []  # inclusion, x, y, r
-        self.polygons: list[tuple[bool, list[tuple[float, float]]]] = []
-        self.outside = False
-
-    def _load(self) -> None:
-        self._version = self.store.fence_version
-        self.circles, self.polygons = [], []
-        items = self.store.lists[FENCE]
-        i = 0
-        while i < len(items):
-            item = items[i]
-            x, y = self.to_local(item.x / 1e7, item.y / 1e7)
-            if item.command in (
-                mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION,
-                mavlink.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
-            ):
-                inclusion = item.command == mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
-                self.circles.append((inclusion, x, y, item.param1))
-                i += 1
-            elif item.command in (
-                mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION,
-                mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION,
-            ):
-                count = max(1, int(item.param1))
-                vertices = [self.to_local(v.x / 1e7, v.y / 1e7) for v in items[i : i + count]]
-                inclusion = item.command == mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
-                self.polygons.append((inclusion, vertices))
-                i += count
-            else:
-                i += 1
-
-    def violated(self, x: float, y: float) -> bool:
-        """True when (x, y) (local ENU m) is outside an inclusion or inside an exclusion."""
-        if self._version != self.store.fence_version:
-            self._load()
-        for inclusion, cx, cy, radius in self.circles:
-            if (math.hypot(x - cx, y - cy) <= radius) != inclusion:
-                return True
-        return any(_inside(vertices, x, y) != inclusion for inclusion, vertices in self.polygons)
-
-    def breach(self, x: float, y: float) -> bool:
-        """True once per excursion: the first check outside after being inside."""
-        violated = self.violated(x, y)
-        first = violated and not self.outside
-        self.outside = violated
-        return first
-
-
 # ---------------------------------------------------------------- the commander's side
-
-GF_ACTIONS = {2: "LOITER", 3: "RTL", 5: "LAND"}  # PX4's GF_ACTION values this vehicle flies
 
 
 def mission_target(cmd: Commander, now: float, state: QuadState) -> Target:
@@ -490,18 +419,3 @@ def mission_target(cmd: Commander, now: float, state: QuadState) -> Target:
     if leg.land_at is not None:
         cmd._hold = (leg.land_at[0], leg.land_at[1], state.z, state.yaw)
     return Target(position=(cmd._hold[0], cmd._hold[1], cmd._hold[2]), yaw=cmd._hold[3], **limits)
-
-
-def check_geofence(cmd: Commander, now: float, state: QuadState) -> None:
-    """A fence breach in the air starts GF_ACTION once per excursion (PX4's geofence)."""
-    if cmd.geofence is None or not cmd.armed or cmd.landed:
-        return
-    if not cmd.geofence.breach(state.x, state.y):
-        return
-    action = GF_ACTIONS.get(int(cmd.params["GF_ACTION"]))
-    cmd._say(mavlink.MAV_SEVERITY_CRITICAL, "Geofence exceeded")
-    if action is None:
-        return
-    mode = {"LOITER": Mode.LOITER, "RTL": Mode.RTL, "LAND": Mode.LAND}[action]
-    if cmd.nav_mode is not mode:
-        cmd.set_mode(mode, now, state)
