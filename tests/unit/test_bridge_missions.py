@@ -291,3 +291,25 @@ def test_set_envelope_replaces_it_and_uploads_the_fence():
     assert {i.command for i in items[1:]} == {mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION}
     rig.setpoint(position(0, 0, 40))
     assert rig.core.rejected_setpoints == 1
+
+
+def test_a_home_without_a_fix_or_with_a_non_finite_position_is_dropped():
+    """Bad HOME_POSITIONs (no fix: latitude and longitude 0; NaN or infinite local position)
+    set no home, start no fence upload and are counted; a good one sets home."""
+    rig = CoreRig().connect()
+    nan, inf = math.nan, math.inf
+
+    def home(lat: int, lon: int, x: float, y: float, z: float):
+        q = [1.0, 0.0, 0.0, 0.0]
+        return mavlink.MAVLink_home_position_message(lat, lon, 488000, x, y, z, q, 0, 0, 0)
+
+    for bad in (home(0, 0, 0.0, 0.0, 0.0), home(473977420, 85455940, nan, inf, nan)):
+        since = rig.now
+        rig.deliver(bad)
+        rig.run(0.5)
+        assert not rig.core.missions.home_known
+        assert rig.sent_since(since, "MISSION_COUNT") == []
+    rig.deliver(home(473977420, 85455940, 1.0, 2.0, -0.5))
+    rig.run(0.5)
+    assert rig.core.missions.home_known
+    assert rig.core.missions.home_local == (2.0, 1.0, 0.5)

@@ -221,10 +221,17 @@ def breach_action(core: BridgeCore, action: str) -> Steps:
 
 
 def on_home_position(core: BridgeCore, msg: Any) -> None:
+    """HOME_POSITION: home in both frames. One without a fix (latitude and longitude 0, as
+    GLOBAL_POSITION_INT says "no fix") or with a non-finite local position is dropped and
+    counted: a bad home must never move the fence, the returns or the go-tos."""
+    local = (float(msg.y), float(msg.x), -float(msg.z))  # NED -> ENU
+    if (msg.latitude == 0 and msg.longitude == 0) or not all(map(math.isfinite, local)):
+        core.out.errors.append("home_position")
+        return
     core.telemetry.on_home_position(msg)
     state = core.missions
     before = (state.home_local, state.home_geo)
-    state.home_local = (float(msg.y), float(msg.x), -float(msg.z))  # NED -> ENU
+    state.home_local = local
     state.home_known = True
     state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
     if (state.home_local, state.home_geo) != before:

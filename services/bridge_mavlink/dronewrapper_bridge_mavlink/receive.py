@@ -89,10 +89,6 @@ def on_gps_raw_int(core: BridgeCore, msg: Any) -> None:
     core.telemetry.on_gps_raw(msg)
 
 
-def on_home_position(core: BridgeCore, msg: Any) -> None:
-    core.telemetry.on_home_position(msg)
-
-
 def on_statustext(core: BridgeCore, msg: Any) -> None:
     for text in core.statustexts.add(msg, core.stamp, core.now):
         core.publish_text(text)
@@ -121,7 +117,6 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
     "ATTITUDE_QUATERNION": on_attitude_quaternion,
     "LOCAL_POSITION_NED": on_local_position_ned,
     "GPS_RAW_INT": on_gps_raw_int,
-    "HOME_POSITION": on_home_position,
     "STATUSTEXT": on_statustext,
     "COMMAND_ACK": on_command_ack,
     "PARAM_VALUE": on_param_value,
