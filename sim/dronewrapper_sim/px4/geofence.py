@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.envelope import inside
 from dronewrapper_sim.px4.mission import FENCE, MissionStore
 from dronewrapper_sim.px4.modes import Mode
 
@@ -22,17 +23,6 @@ if TYPE_CHECKING:
     from dronewrapper_sim.px4.commander import Commander
 
 GF_ACTIONS = {2: "LOITER", 3: "RTL", 5: "LAND"}  # PX4's GF_ACTION values this vehicle flies
-
-
-def _inside(polygon: list[tuple[float, float]], x: float, y: float) -> bool:
-    result = False
-    n = len(polygon)
-    for i in range(n):
-        x1, y1 = polygon[i]
-        x2, y2 = polygon[(i - 1) % n]
-        if (y1 > y) != (y2 > y) and x < (x2 - x1) * (y - y1) / (y2 - y1) + x1:
-            result = not result
-    return result
 
 
 class Geofence:
@@ -80,7 +70,7 @@ class Geofence:
         for inclusion, cx, cy, radius in self.circles:
             if (math.hypot(x - cx, y - cy) <= radius) != inclusion:
                 return True
-        return any(_inside(vertices, x, y) != inclusion for inclusion, vertices in self.polygons)
+        return any(inside(vertices, x, y) != inclusion for inclusion, vertices in self.polygons)
 
     def breach(self, x: float, y: float) -> bool:
         """True once per excursion: the first check outside after being inside."""
