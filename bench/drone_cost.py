@@ -1,0 +1,185 @@
+"""What one simulated drone (sim + bridge) costs in CPU, at N drones on one router.
+
+For each N it starts ``compose/sim_fleet`` (N Iris without cameras, ``--per-process``
+drones a process; ``dronewrapper up`` holds the router) and, once every drone is ready and
+``--settle`` s have passed, measures over ``--seconds``: the CPU seconds (user + system, from
+``/proc``) that the fleet's processes spent per drone per second of wall time, in % of one
+core; with ``--per-process 1``, the sims' and the bridges' apart. With ``--subscribe`` this
+process subscribes to every drone's pose meanwhile (as an application does); without, nobody
+reads the bridges' samples. CPU time is counted, not wall time, so the figures depend less on
+what else runs on the machine than a latency does (a loaded machine still costs more per unit
+of work: caches, frequency).
+
+With ``--threads`` it also splits the fleet's CPU by thread: Zenoh's own threads (named by
+Rust: ``rx-0``, ``tx-0``, ``net-0`` ...) against the interpreter's (``python``).
+
+    nice -n 10 python -m bench.drone_cost [--counts 1 10 30] [--per-process 10]
+        [--seconds 10] [--subscribe] [--threads]
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from bench.common import CLK_TCK, free_endpoint, print_table, write_results
+from dronewrapper.runtime.arguments import CommandParser, first_line
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def thread_cpu(pid: int) -> dict[str, float]:
+    """CPU seconds so far of each thread name of process ``pid`` (summed over threads of one
+    name; a trailing number is dropped: ``rx-3`` counts as ``rx``)."""
+    out: dict[str, float] = defaultdict(float)
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            head, tail = (task / "stat").read_text().rsplit(")", 1)
+        except OSError:
+            continue
+        name = head.split("(", 1)[1].rstrip("0123456789").rstrip("-")
+        fields = tail.split()
+        out[name] += (int(fields[11]) + int(fields[12])) / CLK_TCK
+    return out
+
+
+def fleet_processes(launcher: int) -> dict[int, str]:
+    """{pid: role} of the launcher's children: ``sim``, ``bridge`` or ``host``."""
+    found = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+            cmdline = (stat.parent / "cmdline").read_bytes().decode().split("\0")
+        except (OSError, ValueError):
+            continue
+        if ppid != launcher or "-m" not in cmdline:
+            continue
+        module = cmdline[cmdline.index("-m") + 1]
+        found[int(stat.parent.name)] = {
+            "dronewrapper_sim": "sim",
+            "dronewrapper.runtime.host": "host",
+        }.get(module, "bridge")
+    return found
+
+
+def subscribe_poses(endpoint: str) -> tuple[object, list[int]]:
+    """A client session counting every drone's poses (returns it and the count)."""
+    import zenoh
+
+    from dronewrapper.msgs import registry
+    from dronewrapper.runtime.node import open_session
+    from dronewrapper.runtime.options import ZenohOptions
+
+    session = open_session(ZenohOptions(mode="client", connect=[endpoint]))
+    count = [0]
+
+    def on_sample(_sample: object) -> None:
+        count[0] += 1
+
+    session.declare_subscriber(
+        registry.LOCAL_POSE.wildcard("*"), zenoh.handlers.Callback(on_sample)
+    )
+    return session, count
+
+
+def measure(
+    n: int, per_process: int, seconds: float, settle: float, subscribe: bool
+) -> dict[str, object]:
+    """Start N drones, measure their CPU over ``seconds``, stop them."""
+    endpoint = free_endpoint()
+    log_path = REPO / "out" / "bench" / f"drone_cost_{n}.log"
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    argv = [sys.executable, "-m", "dronewrapper", "up", "sim_fleet", "--router", endpoint,
+            "--var", f"drones={n}", "--var", f"per_process={min(per_process, n)}"]  # fmt: skip
+    with open(log_path, "w") as log:
+        up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
+    session = None
+    out: dict[str, object] = {"drones": n, "per_process": min(per_process, n)}
+    try:
+        started = time.monotonic()
+        while "all processes ready" not in log_path.read_text():
+            if up.poll() is not None or time.monotonic() - started > 60 + 5 * n:
+                out["error"] = f"the fleet did not start (see {log_path})"
+                return out
+            time.sleep(0.2)
+        if subscribe:
+            session, poses = subscribe_poses(endpoint)
+        time.sleep(settle)
+        pids = fleet_processes(up.pid)
+        before = {pid: thread_cpu(pid) for pid in pids}
+        got0 = poses[0] if subscribe else 0
+        t0 = time.monotonic()
+        time.sleep(seconds)
+        elapsed = time.monotonic() - t0
+        after = {pid: thread_cpu(pid) for pid in pids}
+        roles: dict[str, float] = defaultdict(float)
+        by_thread: dict[str, float] = defaultdict(float)
+        for pid, role in pids.items():
+            for name, cpu in after[pid].items():
+                spent = cpu - before[pid].get(name, 0.0)
+                roles[role] += spent
+                by_thread[name] += spent
+        per = {role: 100 * cpu / elapsed / n for role, cpu in roles.items()}
+        out.update(
+            cpu_percent_per_drone=per,
+            total_percent_per_drone=sum(per.values()),
+            threads_percent_per_drone={k: 100 * v / elapsed / n for k, v in by_thread.items()},
+            poses_per_s=(poses[0] - got0) / elapsed if subscribe else None,
+            loadavg=os.getloadavg()[0],
+        )
+        return out
+    finally:
+        if session is not None:
+            session.close()
+        up.send_signal(signal.SIGINT)
+        try:
+            up.wait(60 + n)
+        except subprocess.TimeoutExpired:
+            up.kill()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = CommandParser(description=first_line(__doc__))
+    parser.add_argument("--counts", type=int, nargs="+", default=[1, 10, 30])
+    parser.add_argument("--per-process", type=int, default=10, help="drones per process")
+    parser.add_argument("--seconds", type=float, default=10.0, help="measuring window (s)")
+    parser.add_argument("--settle", type=float, default=5.0, help="wait after start (s)")
+    parser.add_argument("--subscribe", action="store_true", help="subscribe to every pose")
+    parser.add_argument("--threads", action="store_true", help="split the CPU by thread")
+    args = parser.parse_args(argv)
+    results = []
+    for n in args.counts:
+        print(f"... {n} drone(s)", flush=True)
+        results.append(measure(n, args.per_process, args.seconds, args.settle, args.subscribe))
+    rows = []
+    for r in results:
+        if "error" in r:
+            rows.append([r["drones"], r["error"], "", "", ""])
+            continue
+        per = r["cpu_percent_per_drone"]
+        split = ", ".join(f"{k} {v:.2f}" for k, v in sorted(per.items()))
+        rows.append([r["drones"], r["total_percent_per_drone"], split,
+                     r["poses_per_s"] if r["poses_per_s"] is not None else "-",
+                     r["loadavg"]])  # fmt: skip
+    print_table(
+        "CPU per drone (% of one core: sim + bridge, the router not counted)",
+        ["N", "per drone", "by process", "poses/s here", "load"],
+        rows,
+    )
+    if args.threads:
+        for r in results:
+            if "error" not in r:
+                top = sorted(r["threads_percent_per_drone"].items(), key=lambda kv: -kv[1])
+                print(f"  N={r['drones']} by thread: "
+                      + ", ".join(f"{k} {v:.2f}" for k, v in top[:8]))  # fmt: skip
+    write_results("drone_cost", {"results": results})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
