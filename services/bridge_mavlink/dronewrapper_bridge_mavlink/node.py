@@ -5,8 +5,10 @@ decides (the commander lease included) is in :class:`~dronewrapper_bridge_mavlin
 (pure, time as an argument); the wiring every bridge shares (driver, publishers, services,
 setpoints, tick loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a
 receive loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
-stream, our heartbeat, periodic samples), Zenoh callbacks (setpoints forwarded at once) and the
-Node's service workers, which start an operation in the core and wait until it is done.
+stream, our heartbeat, periodic samples; in a host, its one thread ticking every hosted
+bridge, :func:`~dronewrapper.runtime.host.shared_ticker`), Zenoh callbacks (setpoints
+forwarded at once) and the Node's service workers, which start an operation in the core and
+wait until it is done.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.host import shared_ticker
 from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
@@ -162,13 +165,19 @@ class Bridge(BridgeNode[BridgeCore]):
         threads = [
             threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
             threading.Thread(target=self._link_status_loop, name="link-status", daemon=True),
-            threading.Thread(
-                target=self.tick_loop,
-                args=(self.config.stream_rate_hz, "stream"),
-                name="stream",
-                daemon=True,
-            ),
         ]
+        ticker = shared_ticker(self.config.stream_rate_hz)  # a host's, for all its bridges
+        if ticker is not None:
+            ticker.join(lambda: self.tick_once("stream"), self.node.stop_event)
+        else:
+            threads.append(
+                threading.Thread(
+                    target=self.tick_loop,
+                    args=(self.config.stream_rate_hz, "stream"),
+                    name="stream",
+                    daemon=True,
+                )
+            )
         self.gcs = self._make_gcs_forwarder()
         if self.gcs is not None:
             threads.append(
