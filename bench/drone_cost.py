@@ -10,11 +10,15 @@ reads the bridges' samples. CPU time is counted, not wall time, so the figures d
 what else runs on the machine than a latency does (a loaded machine still costs more per unit
 of work: caches, frequency).
 
+With ``--split`` it runs no graph but two host processes on a router of its own (N > 1):
+the N sims in one, the N bridges in the other, each drone's sim and bridge as the graph makes
+them, so a bridge's CPU in a shared process is measured apart from its sim's.
+
 With ``--threads`` it also splits the fleet's CPU by thread: Zenoh's own threads (named by
 Rust: ``rx-0``, ``tx-0``, ``net-0`` ...) against the interpreter's (``python``).
 
     nice -n 10 python -m bench.drone_cost [--counts 1 10 30] [--per-process 10]
-        [--seconds 10] [--subscribe] [--threads]
+        [--seconds 10] [--subscribe] [--threads] [--split]
 """
 
 from __future__ import annotations
@@ -87,6 +91,65 @@ def subscribe_poses(endpoint: str) -> tuple[object, list[int]]:
     return session, count
 
 
+def split_hosts(n: int, endpoint: str, loop_hz: str = "50") -> list[subprocess.Popen]:
+    """Two host processes on ``endpoint``: N sims in the first, their N bridges in the other."""
+    from dronewrapper_compose.ports import free_port
+
+    sims: list[str] = []
+    bridges: list[str] = []
+    for i in range(1, n + 1):
+        port = free_port("udp")
+        bus = ["--connect", endpoint, "--namespace", f"drone{i}", "--mode", "peer",
+               "--log-level", "WARNING"]  # fmt: skip
+        sims += ["-m", "dronewrapper_sim", "--scenario", "empty", "--udp-onboard", f"{port}:0",
+                 "--udp-gcs", "off", "--set", "cameras=false", "--set",
+                 f"loop_rate_hz={loop_hz}", "--name", "sim", *bus, "--"]  # fmt: skip
+        bridges += ["-m", "dronewrapper_bridge_mavlink", "--set",
+                    f"connection=udpin:127.0.0.1:{port}", "--name", "bridge_mavlink", *bus,
+                    "--"]  # fmt: skip
+    host = [sys.executable, "-m", "dronewrapper.runtime.host"]
+    return [subprocess.Popen([*host, *members[:-1]], cwd=REPO) for members in (sims, bridges)]
+
+
+def measure_split(n: int, seconds: float, settle: float, subscribe: bool) -> dict[str, object]:
+    """N sims in one host, N bridges in another: each one's CPU per drone."""
+    from bench.common import LoopbackRouter, stop_process
+
+    router = LoopbackRouter()
+    router.start()
+    sims, bridges = split_hosts(n, router.endpoint)
+    session = None
+    try:
+        if subscribe:
+            session, poses = subscribe_poses(router.endpoint)
+        time.sleep(settle + 0.3 * n)  # the members start one after another
+        before = {p.pid: thread_cpu(p.pid) for p in (sims, bridges)}
+        got0 = poses[0] if subscribe else 0
+        t0 = time.monotonic()
+        time.sleep(seconds)
+        elapsed = time.monotonic() - t0
+        per = {}
+        for role, proc in (("sims' host", sims), ("bridges' host", bridges)):
+            spent = sum(thread_cpu(proc.pid).values()) - sum(before[proc.pid].values())
+            per[role] = 100 * spent / elapsed / n
+        return {
+            "drones": n,
+            "per_process": n,
+            "split": True,
+            "cpu_percent_per_drone": per,
+            "total_percent_per_drone": sum(per.values()),
+            "threads_percent_per_drone": {},
+            "poses_per_s": (poses[0] - got0) / elapsed if subscribe else None,
+            "loadavg": os.getloadavg()[0],
+        }
+    finally:
+        if session is not None:
+            session.close()
+        for proc in (bridges, sims):
+            stop_process(proc, timeout_s=30)
+        router.stop()
+
+
 def measure(
     n: int, per_process: int, seconds: float, settle: float, subscribe: bool
 ) -> dict[str, object]:
@@ -151,11 +214,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--settle", type=float, default=5.0, help="wait after start (s)")
     parser.add_argument("--subscribe", action="store_true", help="subscribe to every pose")
     parser.add_argument("--threads", action="store_true", help="split the CPU by thread")
+    parser.add_argument("--split", action="store_true", help="sims and bridges apart")
     args = parser.parse_args(argv)
     results = []
     for n in args.counts:
         print(f"... {n} drone(s)", flush=True)
-        results.append(measure(n, args.per_process, args.seconds, args.settle, args.subscribe))
+        if args.split:
+            results.append(measure_split(n, args.seconds, args.settle, args.subscribe))
+        else:
+            results.append(measure(n, args.per_process, args.seconds, args.settle, args.subscribe))
     rows = []
     for r in results:
         if "error" in r:
@@ -177,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
                 top = sorted(r["threads_percent_per_drone"].items(), key=lambda kv: -kv[1])
                 print(f"  N={r['drones']} by thread: "
                       + ", ".join(f"{k} {v:.2f}" for k, v in top[:8]))  # fmt: skip
-    write_results("drone_cost", {"results": results})
+    write_results("drone_cost_split" if args.split else "drone_cost", {"results": results})
     return 0
 
 
