@@ -29,7 +29,7 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.host import shared_ticker
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
+from dronewrapper_bridge_mavlink import actions, flight, missions, parameters, receive
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
@@ -281,12 +281,13 @@ class Bridge(BridgeNode[BridgeCore]):
                 self.link.close()
                 stop.wait(1.0)
                 continue
-            for received in batch:
-                try:
-                    self.handle_mavlink(received.msg, received.source)
-                except Exception:
-                    self.node.callback_errors["mavlink"] += 1
-                    log.exception("error handling %s", received.msg.get_type())
+            if not batch:
+                continue
+            try:  # the wake-up's messages in one call of the core (receive.on_batch)
+                self.driver.feed(receive.on_batch, self.core, batch)
+            except Exception:
+                self.node.callback_errors["mavlink"] += 1
+                log.exception("error executing the effects of %d message(s)", len(batch))
 
 
 def link_kind(url: str) -> str:
