@@ -447,13 +447,16 @@ def main(argv: list[str] | None = None) -> int:
              f"load {os.getloadavg()[0]:.1f}): CPU % of one core, memory, latency ms")  # fmt: skip
     report(results, title)
     ok = [r for r in results if "error" not in r]
-    bridge_share = max((per_drone(r, "cpu_percent") for r in ok), default=0)
+    biggest = max(ok, key=lambda r: r["drones"], default=None)
+    targets: dict[str, object] = {}
     if args.per_process == 1:
         bridge_share = max((r["cpu_percent_per_process"]["bridge"] for r in ok), default=0)
-    biggest = max(ok, key=lambda r: r["drones"], default=None)
-    targets = {
-        f"bridge <= {BRIDGE_SHARE_PER_DRONE:g} % of a core per drone": bridge_share
-        <= BRIDGE_SHARE_PER_DRONE,
+        targets[f"bridge <= {BRIDGE_SHARE_PER_DRONE:g} % of a core per drone"] = (
+            bridge_share <= BRIDGE_SHARE_PER_DRONE
+        )
+    else:  # a host holds sims and bridges: bench.drone_cost --split measures them apart
+        targets["bridge <= 2 % a drone (bench.drone_cost --split)"] = "not measured here"
+    targets |= {
         f"{biggest['drones'] if biggest else 0} drones: pose age p99 <= 50 ms": bool(
             biggest and biggest["pose_age_worst_p99_ms"] <= POSE_AGE_P99_MS
         ),
