@@ -4,9 +4,10 @@ For each N it starts ``compose/sim_fleet`` (N Iris without cameras, ``--per-proc
 drones a process; ``dronewrapper up`` holds the router) and, once every drone is ready and
 ``--settle`` s have passed, measures over ``--seconds``: the CPU seconds (user + system, from
 ``/proc``) that the fleet's processes spent per drone per second of wall time, in % of one
-core; with ``--per-process 1``, the sims' and the bridges' apart. With ``--subscribe`` this
-process subscribes to every drone's pose meanwhile (as an application does); without, nobody
-reads the bridges' samples. CPU time is counted, not wall time, so the figures depend less on
+core; with ``--per-process 1``, the sims' and the bridges' apart. With ``--subscribe`` one
+subscriber (``bench.pose_ages``, a process of its own) takes every drone's pose meanwhile, as
+an application does, and gives their ages and rates; without, nobody reads the bridges'
+samples. CPU time is counted, not wall time, so the figures depend less on
 what else runs on the machine than a latency does (a loaded machine still costs more per unit
 of work: caches, frequency).
 
@@ -23,6 +24,7 @@ Rust: ``rx-0``, ``tx-0``, ``net-0`` ...) against the interpreter's (``python``).
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -71,24 +73,40 @@ def fleet_processes(launcher: int) -> dict[int, str]:
     return found
 
 
-def subscribe_poses(endpoint: str) -> tuple[object, list[int]]:
-    """A client session counting every drone's poses (returns it and the count)."""
-    import zenoh
+class Poses:
+    """The pose subscriber ``bench.pose_ages`` (a process of its own) on ``endpoint``."""
 
-    from dronewrapper.msgs import registry
-    from dronewrapper.runtime.node import open_session
-    from dronewrapper.runtime.options import ZenohOptions
+    def __init__(self, endpoint: str) -> None:
+        self.child = subprocess.Popen(
+            [sys.executable, "-m", "bench.pose_ages", endpoint],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=REPO,
+        )
+        self.child.stdout.readline()  # "ready"
 
-    session = open_session(ZenohOptions(mode="client", connect=[endpoint]))
-    count = [0]
+    def command(self, line: str) -> dict[str, object]:
+        self.child.stdin.write(line + "\n")
+        self.child.stdin.flush()
+        return json.loads(self.child.stdout.readline()) if line == "stop" else {}
 
-    def on_sample(_sample: object) -> None:
-        count[0] += 1
+    def close(self) -> None:
+        self.child.stdin.close()
+        self.child.wait(10)
 
-    session.declare_subscriber(
-        registry.LOCAL_POSE.wildcard("*"), zenoh.handlers.Callback(on_sample)
-    )
-    return session, count
+
+def pose_figures(report: dict[str, object] | None) -> dict[str, object]:
+    """Poses a second in all, worst drone's age p99 (ms), slowest drone's rate (Hz)."""
+    if report is None:
+        return {"poses_per_s": None}
+    per_drone, rates = report["per_drone"], report["rate_hz"]
+    return {
+        "poses_per_s": sum(rates.values()),
+        "pose_age_p50_ms": report["all"].get("p50_ms"),
+        "pose_age_worst_p99_ms": max((p.get("p99_ms", 0.0) for p in per_drone.values()), default=0),
+        "pose_rate_min_hz": min(rates.values(), default=0.0),
+    }
 
 
 def split_hosts(n: int, endpoint: str, loop_hz: str = "50") -> list[subprocess.Popen]:
@@ -118,16 +136,18 @@ def measure_split(n: int, seconds: float, settle: float, subscribe: bool) -> dic
     router = LoopbackRouter()
     router.start()
     sims, bridges = split_hosts(n, router.endpoint)
-    session = None
+    poses = None
     try:
         if subscribe:
-            session, poses = subscribe_poses(router.endpoint)
+            poses = Poses(router.endpoint)
         time.sleep(settle + 0.3 * n)  # the members start one after another
         before = {p.pid: thread_cpu(p.pid) for p in (sims, bridges)}
-        got0 = poses[0] if subscribe else 0
+        if poses is not None:
+            poses.command("start")
         t0 = time.monotonic()
         time.sleep(seconds)
         elapsed = time.monotonic() - t0
+        report = poses.command("stop") if poses is not None else None
         per = {}
         for role, proc in (("sims' host", sims), ("bridges' host", bridges)):
             spent = sum(thread_cpu(proc.pid).values()) - sum(before[proc.pid].values())
@@ -139,12 +159,12 @@ def measure_split(n: int, seconds: float, settle: float, subscribe: bool) -> dic
             "cpu_percent_per_drone": per,
             "total_percent_per_drone": sum(per.values()),
             "threads_percent_per_drone": {},
-            "poses_per_s": (poses[0] - got0) / elapsed if subscribe else None,
+            **pose_figures(report),
             "loadavg": os.getloadavg()[0],
         }
     finally:
-        if session is not None:
-            session.close()
+        if poses is not None:
+            poses.close()
         for proc in (bridges, sims):
             stop_process(proc, timeout_s=30)
         router.stop()
@@ -161,7 +181,7 @@ def measure(
             "--var", f"drones={n}", "--var", f"per_process={min(per_process, n)}"]  # fmt: skip
     with open(log_path, "w") as log:
         up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
-    session = None
+    poses = None
     out: dict[str, object] = {"drones": n, "per_process": min(per_process, n)}
     try:
         started = time.monotonic()
@@ -171,14 +191,16 @@ def measure(
                 return out
             time.sleep(0.2)
         if subscribe:
-            session, poses = subscribe_poses(endpoint)
+            poses = Poses(endpoint)
         time.sleep(settle)
         pids = fleet_processes(up.pid)
         before = {pid: thread_cpu(pid) for pid in pids}
-        got0 = poses[0] if subscribe else 0
+        if poses is not None:
+            poses.command("start")
         t0 = time.monotonic()
         time.sleep(seconds)
         elapsed = time.monotonic() - t0
+        report = poses.command("stop") if poses is not None else None
         after = {pid: thread_cpu(pid) for pid in pids}
         roles: dict[str, float] = defaultdict(float)
         by_thread: dict[str, float] = defaultdict(float)
@@ -192,13 +214,13 @@ def measure(
             cpu_percent_per_drone=per,
             total_percent_per_drone=sum(per.values()),
             threads_percent_per_drone={k: 100 * v / elapsed / n for k, v in by_thread.items()},
-            poses_per_s=(poses[0] - got0) / elapsed if subscribe else None,
+            **pose_figures(report),
             loadavg=os.getloadavg()[0],
         )
         return out
     finally:
-        if session is not None:
-            session.close()
+        if poses is not None:
+            poses.close()
         up.send_signal(signal.SIGINT)
         try:
             up.wait(60 + n)
@@ -226,18 +248,22 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for r in results:
         if "error" in r:
-            rows.append([r["drones"], r["error"], "", "", ""])
+            rows.append([r["drones"], r["error"], "", "", "", "", ""])
             continue
         per = r["cpu_percent_per_drone"]
         split = ", ".join(f"{k} {v:.2f}" for k, v in sorted(per.items()))
+        ages = "-"
+        if r["poses_per_s"] is not None:
+            ages = f"{r['pose_age_p50_ms']:.1f} / {r['pose_age_worst_p99_ms']:.0f}"
         rows.append([r["drones"], r["total_percent_per_drone"], split,
                      r["poses_per_s"] if r["poses_per_s"] is not None else "-",
-                     r["loadavg"]])  # fmt: skip
+                     r.get("pose_rate_min_hz", "-"), ages, r["loadavg"]])  # fmt: skip
     print_table(
         "CPU per drone (% of one core: sim + bridge, the router not counted)",
-        ["N", "per drone", "by process", "poses/s here", "load"],
+        ["N", "per drone", "by process", "poses/s", "slowest Hz", "age p50 / worst p99 ms",
+         "load"],
         rows,
-    )
+    )  # fmt: skip
     if args.threads:
         for r in results:
             if "error" not in r:
