@@ -15,11 +15,13 @@ With ``--split`` it runs no graph but two host processes on a router of its own 
 the N sims in one, the N bridges in the other, each drone's sim and bridge as the graph makes
 them, so a bridge's CPU in a shared process is measured apart from its sim's.
 
+``--busy`` keeps one core busy with an unrelated program meanwhile (as ``bench.fleet``).
+
 With ``--threads`` it also splits the fleet's CPU by thread: Zenoh's own threads (named by
 Rust: ``rx-0``, ``tx-0``, ``net-0`` ...) against the interpreter's (``python``).
 
     nice -n 10 python -m bench.drone_cost [--counts 1 10 30] [--per-process 10]
-        [--seconds 10] [--subscribe] [--threads] [--split]
+        [--seconds 10] [--subscribe] [--threads] [--split] [--busy]
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from collections import defaultdict
 from pathlib import Path
 
 from bench.common import CLK_TCK, free_endpoint, print_table, write_results
+from bench.fleet import busy_core
 from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
@@ -237,14 +240,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--subscribe", action="store_true", help="subscribe to every pose")
     parser.add_argument("--threads", action="store_true", help="split the CPU by thread")
     parser.add_argument("--split", action="store_true", help="sims and bridges apart")
+    parser.add_argument("--busy", action="store_true", help="keep one core busy meanwhile")
     args = parser.parse_args(argv)
     results = []
-    for n in args.counts:
-        print(f"... {n} drone(s)", flush=True)
-        if args.split:
-            results.append(measure_split(n, args.seconds, args.settle, args.subscribe))
-        else:
-            results.append(measure(n, args.per_process, args.seconds, args.settle, args.subscribe))
+    with busy_core(args.busy):
+        for n in args.counts:
+            print(f"... {n} drone(s)", flush=True)
+            if args.split:
+                result = measure_split(n, args.seconds, args.settle, args.subscribe)
+            else:
+                result = measure(n, args.per_process, args.seconds, args.settle, args.subscribe)
+            results.append({**result, "busy_core": args.busy})
+    report(results, args.threads)
+    name = "drone_cost" + ("_split" if args.split else "") + ("_busy" if args.busy else "")
+    write_results(name, {"results": results})
+    return 0
+
+
+def report(results: list[dict[str, object]], threads: bool) -> None:
     rows = []
     for r in results:
         if "error" in r:
@@ -264,14 +277,12 @@ def main(argv: list[str] | None = None) -> int:
          "load"],
         rows,
     )  # fmt: skip
-    if args.threads:
+    if threads:
         for r in results:
-            if "error" not in r:
+            if "error" not in r and r["threads_percent_per_drone"]:
                 top = sorted(r["threads_percent_per_drone"].items(), key=lambda kv: -kv[1])
                 print(f"  N={r['drones']} by thread: "
                       + ", ".join(f"{k} {v:.2f}" for k, v in top[:8]))  # fmt: skip
-    write_results("drone_cost_split" if args.split else "drone_cost", {"results": results})
-    return 0
 
 
 if __name__ == "__main__":
