@@ -119,7 +119,7 @@ def test_a_bridge_presents_its_own_drone_only():
 def test_telemetry_is_taken_on_the_putting_thread_and_cameras_on_zenoh_s():
     bridge = HostingBridge()
     with hosted_gateway(bridge.node, Config()) as gateway:
-        bridge.bridge.driver.feed(lambda now, stamp: bridge.bridge.core.publish_state(force=True))
+        bridge.bridge.driver.feed(bridge.bridge.core.on_started)
         state_key = ros_key("/drone/mavros/state", "mavros_msgs/msg/State")
         ((payload, _meta),) = bridge.session.publishers[state_key].sent
         assert cdr.decode("mavros_msgs/msg/State", payload)["mode"] == ""

@@ -114,6 +114,11 @@ class PureCore:
         """Publish State (the core's own; called when the lease's holder changed)."""
         raise NotImplementedError
 
+    def on_started(self, now: float, stamp: float) -> None:
+        """The bridge has started: State published at once, stamped ``stamp``."""
+        self._at(now, stamp)
+        self.publish_state(force=True)
+
     # ---- the commander lease
 
     def screen_setpoint(

@@ -173,7 +173,7 @@ class Bridge(BridgeNode[BridgeCore]):
             threads.append(clock.thread(lambda: gcs.run(stop), "gcs"))
         for thread in threads:
             thread.start()
-        self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
+        self.driver.feed(self.core.on_started)
         return threads
 
     def _make_gcs_forwarder(self) -> GcsForwarder | None:

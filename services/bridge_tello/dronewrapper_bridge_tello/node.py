@@ -158,7 +158,7 @@ class Bridge(BridgeNode[TelloCore]):
         threads = [clock.thread(lambda f=f, a=a: f(*a), n) for f, a, n in loops]
         for thread in threads:
             thread.start()
-        self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
+        self.driver.feed(self.core.on_started)
         return threads
 
     def _control_loop(self) -> None:
