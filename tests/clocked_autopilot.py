@@ -52,7 +52,7 @@ class ClockedAutopilot:
         self.peer: Any = None
         self.rejected = 0
         self.sent = 0
-        self.received: list[Any] = []  # what the autopilot was sent (parsed), in order
+        self.received: list[tuple[float, Any]] = []  # (clock's monotonic s, message) sent to it
         self._clock, self._stop = clock, stop
         self._t0 = clock.monotonic()
         self._polled = 0.0  # autopilot time of the last poll
@@ -90,7 +90,7 @@ class ClockedAutopilot:
             self._bridge_out.seq = (self._bridge_out.seq + 1) % 256
             self._bytes_out += len(data)
             for parsed in self._at_autopilot.parse_buffer(data) or []:
-                self.received.append(parsed)
+                self.received.append((self._clock.monotonic(), parsed))
                 self._to_bridge(self.autopilot.handle("onboard", parsed))
             self.sent += 1
         return True

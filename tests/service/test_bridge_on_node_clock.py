@@ -18,12 +18,15 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import TakeoffRequest
+from dronewrapper.msgs.geometry import Vector3
+from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.node import Bridge
 
 T0 = 1_700_000_000.0
 """The bus's start (monotonic and Unix s alike)."""
+HOVER = PositionTarget(coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3())
 
 
 class Rig:
@@ -84,11 +87,34 @@ def test_a_take_off_flies_in_virtual_time_through_the_stream_loop(rig: Rig):
     assert 1.2 < flew < 30.0  # primed for offboard_prime_s, then the climb
     assert abs(rig.link.autopilot.state.z - 2.0) < 0.15  # ground truth: at the height
     assert rig.link.autopilot.armed and rig.link.autopilot.mode.name == "OFFBOARD"
-    sent = [msg.get_type() for msg in rig.link.received]
-    set_mode = next(
-        i
-        for i, msg in enumerate(rig.link.received)
-        if sent[i] == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE
-    )
+    sent = [msg.get_type() for _, msg in rig.link.received]
+    set_mode = sent.index("COMMAND_LONG", commands(rig, mavlink.MAV_CMD_DO_SET_MODE)[0][0])
     primed = sent[:set_mode].count("SET_POSITION_TARGET_LOCAL_NED")
     assert primed >= 1.2 * 30  # offboard_prime_s of the stream thread's ticks at 30 Hz
+
+
+def test_a_lost_commander_is_landed_after_its_timeout_of_the_node_clock(rig: Rig):
+    """The commander-lost rule runs in the stream thread's ticks: the landing is sent
+    ``commander_lost_timeout`` (5 s) after the last setpoint, to the tick (1/30 s)."""
+    clock = rig.bus.clock
+    clock.run_for(3.0)
+    assert rig.user.call(registry.FLIGHT_TAKEOFF, TakeoffRequest(height=2.0)).success
+    setpoints = rig.user.publisher(registry.SETPOINT_RAW_LOCAL)
+    for _ in range(20):  # a commander streams a hover for a second, then dies
+        setpoints.put(HOVER)
+        last = clock.monotonic()
+        clock.run_for(0.05)
+    clock.run_for(6.0)
+    landings = commands(rig, mavlink.MAV_CMD_NAV_LAND)
+    assert len(landings) == 1
+    assert 5.0 <= landings[0][1] - last <= 5.0 + 1 / 30 + 1e-6
+    assert rig.link.autopilot.mode.name == "LAND"
+
+
+def commands(rig: Rig, command: int) -> list[tuple[int, float]]:
+    """(index in what the autopilot was sent, clock's time) of each COMMAND_LONG ``command``."""
+    return [
+        (i, t)
+        for i, (t, msg) in enumerate(rig.link.received)
+        if msg.get_type() == "COMMAND_LONG" and msg.command == command
+    ]
