@@ -1,11 +1,12 @@
-"""bridge_mavlink's real ``Bridge`` on the fake bus, time injected through the node alone.
+"""Both bridges' real ``Bridge`` on the fake bus, time injected through the node alone.
 
-The bridge is made and started as its process does (``Bridge(node, config, link)``,
-``start()``): its receive, stream and link-status threads are the node clock's, its core starts
-at that clock and its driver reads it, so on a :class:`~dronewrapper.runtime.fake.FakeNode`
-everything runs in the bus's virtual time, nothing swapped. The link is the simulator's
-autopilot in process (tests/clocked_autopilot.py: real MAVLink bytes, physics on the same
-clock). What is checked is exact in that time, however loaded the machine.
+Each bridge is made and started as its process does (``Bridge(node, config, link)``,
+``start()``): its threads (MAVLink: receive, stream, link status; Tello: replies, state,
+control) are the node clock's, its core starts at that clock and its driver reads it, so on a
+:class:`~dronewrapper.runtime.fake.FakeNode` everything runs in the bus's virtual time, nothing
+swapped. The link is the simulator's aircraft in process, on the same clock
+(tests/clocked_autopilot.py: real MAVLink bytes; tests/clocked_tello.py: the SDK's text). What
+is checked is exact in that time, however loaded the machine.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from collections.abc import Iterator
 
 import pytest
 from clocked_autopilot import ClockedAutopilot
+from clocked_tello import ClockedTello
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
@@ -23,6 +25,8 @@ from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarg
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.node import Bridge
+from dronewrapper_bridge_tello import node as tello_node
+from dronewrapper_bridge_tello.config import Config as TelloConfig
 
 T0 = 1_700_000_000.0
 """The bus's start (monotonic and Unix s alike)."""
@@ -30,15 +34,20 @@ HOVER = PositionTarget(coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY,
 
 
 class Rig:
-    """The bridge (``bridge``) on ``bus`` facing ``link``; ``user``: an app's node."""
+    """A bridge (``bridge``, MAVLink unless ``tello``) on ``bus`` facing ``link``, started;
+    ``user``: an app's node."""
 
-    def __init__(self) -> None:
+    def __init__(self, *, tello: bool = False) -> None:
         self.bus = FakeBus(start=T0)
-        self.node = FakeNode("bridge_mavlink", self.bus)
-        self.link = ClockedAutopilot(self.node.clock, self.node.stop_event)
-        config = Config(message_rates={}, upload_fence=False)
-        self.bridge = Bridge(self.node, config, link=self.link)
+        self.node = FakeNode("bridge", self.bus)
         self.user = FakeNode("apps", self.bus)
+        if tello:
+            self.tello = ClockedTello(self.node.clock, self.node.stop_event)
+            self.bridge = tello_node.Bridge(self.node, TelloConfig(video=False), link=self.tello)
+        else:
+            self.link = ClockedAutopilot(self.node.clock, self.node.stop_event)
+            config = Config(message_rates={}, upload_fence=False)
+            self.bridge = Bridge(self.node, config, link=self.link)
         self.threads = self.bridge.start()
 
     def close(self) -> None:
@@ -51,6 +60,13 @@ class Rig:
 @pytest.fixture
 def rig() -> Iterator[Rig]:
     made = Rig()
+    yield made
+    made.close()
+
+
+@pytest.fixture
+def tello() -> Iterator[Rig]:
+    made = Rig(tello=True)
     yield made
     made.close()
 
@@ -118,3 +134,21 @@ def commands(rig: Rig, command: int) -> list[tuple[int, float]]:
         for i, (t, msg) in enumerate(rig.link.received)
         if msg.get_type() == "COMMAND_LONG" and msg.command == command
     ]
+
+
+def test_the_tello_bridge_runs_on_the_node_clock_and_takes_off_in_it(tello: Rig):
+    clock = tello.bus.clock
+    assert tello.bridge.core.now == T0
+    clock.run_for(3.0)
+    assert tello.bridge.connected and tello.bridge.sdk_mode
+    assert tello.tello.sent[0] == (T0 + 1 / 20, "command")  # the control thread's first tick
+    for key in (registry.STATE.key("drone"), registry.LOCAL_POSE.key("drone")):
+        published = tello.bus.published[key]
+        assert published and all(T0 <= d.msg.header.stamp <= d.time for d in published), key
+    asked_at = clock.monotonic()
+    result = tello.user.call(registry.FLIGHT_TAKEOFF, TakeoffRequest(height=1.5), timeout=60.0)
+    assert result.success, result.message
+    assert abs(tello.tello.protocol.flight.state.z - 1.5) < 0.1  # ground truth
+    commands = [(t - asked_at, text) for t, text in tello.tello.sent if not text.startswith("rc")]
+    assert commands[-2][1] == "takeoff" and commands[-1][1].startswith("up ")  # to 1.5 m
+    assert 0.0 <= commands[-2][0] < commands[-1][0] < clock.monotonic() - asked_at < 30.0

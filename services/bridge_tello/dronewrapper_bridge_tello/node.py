@@ -78,13 +78,13 @@ def serve_services(bridge: BridgeNode[Any]) -> None:
 
 class Bridge(BridgeNode[TelloCore]):
     """The core wired to one Node and one Tello (its three sockets open at construction:
-    ``OSError`` when an address is taken)."""
+    ``OSError`` when an address is taken; ``link``: one already made instead)."""
 
-    def __init__(self, node: NodeApi, config: Config) -> None:
+    def __init__(self, node: NodeApi, config: Config, link: TelloLink | None = None) -> None:
         publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
         super().__init__(node, TelloCore(config, node.clock.monotonic()), publishers, log)
         self.config = config
-        self.link = TelloLink(
+        self.link = link or TelloLink(
             TelloAddress(
                 tello_address=config.tello_address,
                 command_port=config.command_port,
