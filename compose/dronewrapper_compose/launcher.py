@@ -174,10 +174,9 @@ class Launcher:
         self._width = max(len(inst.label) for group in self.groups for inst in group)
 
     def plan(self) -> list[list[Instance]]:
-        """The processes to start, in groups started together: one group per spec, holding
-        one instance, or one per drone for an ``each_drone`` spec; with ``per_process`` > 1,
-        one group of host processes in place of the ``each_drone`` specs; a ``beside``
-        process joins the one it names in a host process (:mod:`~dronewrapper_compose.hosting`)."""
+        """The processes to start, in groups started together: a group per spec, of one
+        instance, or one per drone (``each_drone``); ``per_process`` > 1 and ``beside`` make
+        host processes in their place (:mod:`~dronewrapper_compose.hosting`)."""
         size = per_process(self.values, self.graph_path)
         groups: list[list[Instance]] = []
         hosted: list[Instance] = []
