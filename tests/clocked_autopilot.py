@@ -45,9 +45,14 @@ class ClockedAutopilot:
     the bridge's MAVLink system and component ids (its config's)."""
 
     def __init__(
-        self, clock: Clock, stop: threading.Event, source: tuple[int, int] = (255, 191)
+        self,
+        clock: Clock,
+        stop: threading.Event,
+        source: tuple[int, int] = (255, 191),
+        config: AutopilotConfig | None = None,
     ) -> None:
-        self.autopilot = Autopilot(AutopilotConfig(), link_rates={"onboard": dict(RATES)})
+        self.autopilot = Autopilot(config or AutopilotConfig(), link_rates={"onboard": dict(RATES)})
+        self.truth: list[tuple[float, tuple[float, float, float], str]] = []  # t, pose, mode
         self.tap = None
         self.peer: Any = None
         self.rejected = 0
@@ -111,6 +116,9 @@ class ClockedAutopilot:
             if self.autopilot.time_s - self._polled >= POLL_S:
                 self._polled = self.autopilot.time_s
                 self._to_bridge(self.autopilot.poll()["onboard"])
+                state = self.autopilot.state
+                pose = (state.x, state.y, state.z)
+                self.truth.append((self.autopilot.time_s, pose, self.autopilot.mode.name))
 
     def _to_bridge(self, msgs: list[Any]) -> None:
         for msg in msgs:
