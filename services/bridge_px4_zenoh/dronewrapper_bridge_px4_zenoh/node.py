@@ -93,7 +93,20 @@ class Bridge(BridgeNode[Px4ZenohCore]):
         self._declared: list[Any] = []
 
     def start(self) -> list[threading.Thread]:
-        """Declare PX4's side and the services; start the stream loop."""
+        """Declare PX4's side and the services (:meth:`declare`); start the stream loop."""
+        self.declare()
+        thread = threading.Thread(
+            target=self.tick_loop,
+            args=(self.config.stream_rate_hz, "stream"),
+            name="px4z-stream",
+            daemon=True,
+        )
+        thread.start()
+        return [thread]
+
+    def declare(self) -> None:
+        """Declare PX4's side (the bridge's tokens and publishers, the subscribers to PX4's
+        samples and tokens) and serve the services."""
         domain = self.config.domain
         me = NodeName(domain, str(self.session.zid()), 0, "/", NODE_NAME)
         liveliness = self.session.liveliness()
@@ -119,14 +132,6 @@ class Bridge(BridgeNode[Px4ZenohCore]):
             liveliness.declare_subscriber(f"@ros2_lv/{domain}/**", self.on_token, history=True)
         )
         self.serve(SERVICES)
-        thread = threading.Thread(
-            target=self.tick_loop,
-            args=(self.config.stream_rate_hz, "stream"),
-            name="px4z-stream",
-            daemon=True,
-        )
-        thread.start()
-        return [thread]
 
     # ---- PX4's side
 
