@@ -3,11 +3,24 @@ value with its key named). Units are in each key's comment; see the package's RE
 
 from __future__ import annotations
 
+import math
+
 import msgspec
 
 from dronewrapper.envelope import Envelope
-from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
-from dronewrapper_bridge_mavlink.setpoints import Limits
+from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
+
+
+class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Bounds on accepted setpoints (m, m/s, rad/s), the bounds of
+    :func:`dronewrapper.setpoint_limits.validate`: beyond them a setpoint is refused."""
+
+    max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
+    min_altitude: float = -1_000.0  # ENU z, m
+    max_altitude: float = 10_000.0
+    max_horizontal_speed: float = 20.0  # m/s, norm of (vx, vy)
+    max_vertical_speed: float = 10.0  # m/s
+    max_yaw_rate: float = 2.0 * math.pi  # rad/s
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):

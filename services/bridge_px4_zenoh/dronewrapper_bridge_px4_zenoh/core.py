@@ -10,10 +10,10 @@ announced) and samples for the MAVROS-equivalent keys. Decoding happens here too
 pure), after the version check: a sample or token whose type hash is not the bridge's is never
 decoded, and the mismatch is reported once per topic, naming topic and both hashes.
 
-The rules are bridge_base's (commander lease, late setpoints, refusals published) and
-bridge_mavlink's PX4 failsafe (stream, hold, priming, commander lost; never fighting the
-pilot), with its setpoint validation and envelope; the service calls are operations
-(:mod:`.operations`, :mod:`.flight`).
+The rules are bridge_base's (commander lease, late setpoints, refusals published; the
+guided-mode failsafe: stream, hold, priming, commander lost, never fighting the pilot) and the
+SDK's (setpoint validation; the envelope, :mod:`.envelope_rules`); the service calls are
+operations (:mod:`.operations`, :mod:`.flight`).
 """
 
 from __future__ import annotations
@@ -42,15 +42,15 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.ros2 import cdr
 from dronewrapper.ros2.names import Endpoint
 from dronewrapper.runtime import ServiceError
+from dronewrapper.setpoint_limits import SetpointError, validate
 from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
-from dronewrapper_bridge_mavlink import missions
-from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
-from dronewrapper_bridge_mavlink.setpoints import SetpointError, hold_target, validate
-from dronewrapper_bridge_px4_zenoh import breach, trajectory
+from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, hold_target, is_airborne
+from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
 from dronewrapper_bridge_px4_zenoh import topics as t
+from dronewrapper_bridge_px4_zenoh import trajectory
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.versions import VersionMismatch, Versions
 
@@ -86,7 +86,7 @@ class Px4ZenohCore(PureCore):
         self.limits = config.limits
         self.versions = Versions(config.domain)
         self.failsafe = Failsafe(config.failsafe_config())
-        self.missions = missions.MissionState(config.envelope)
+        self.envelope = rules.EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
         self.connected = False
         self.status: dict[str, Any] | None = None  # the latest VehicleStatus
@@ -209,12 +209,10 @@ class Px4ZenohCore(PureCore):
             del self.acks[:-16]
 
     def _on_local_position(self, value: dict[str, Any]) -> None:
-        if value["xy_global"] and value["z_global"] and self.missions.home_geo is None:
-            # home is PX4's local origin (the estimator's reference; home_position is not
-            # among the module's topics): local ENU (0, 0, 0) there
-            self.missions.home_geo = (value["ref_lat"], value["ref_lon"], value["ref_alt"])
-            self.missions.home_known = True
-            missions.publish_home(self)
+        if value["xy_global"] and value["z_global"] and self.envelope.home_geo is None:
+            # home is PX4's local origin (envelope_rules): local ENU (0, 0, 0)
+            self.envelope.home_geo = (value["ref_lat"], value["ref_lon"], value["ref_alt"])
+            rules.publish_home(self)
         q = self.q_enu_flu
         if q is None:
             return
@@ -271,7 +269,7 @@ class Px4ZenohCore(PureCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state or missions.breach_state(self),
+            failsafe=self.failsafe.state or rules.breach_state(self),
             commander=self.commander,
         )
 
@@ -309,7 +307,7 @@ class Px4ZenohCore(PureCore):
             tick.send = None  # just written by the setpoint's arrival
         self._act(tick, send=self.connected)
         self.show_commander()
-        breach.tick(self)
+        rules.tick(self)
         self._periodic()
         self.advance(now, stamp)
 
@@ -342,7 +340,7 @@ class Px4ZenohCore(PureCore):
         else remembered and written to PX4 at once."""
         self._at(now, stamp)
         kind = self.screen_setpoint(
-            target, commander, sent, lambda x: validate(x, self.limits), missions.refuse_setpoint
+            target, commander, sent, lambda x: validate(x, self.limits), rules.refuse_setpoint
         )
         if kind is None:
             return

@@ -10,7 +10,7 @@ answered with a :class:`~dronewrapper.msgs.flight.FlightResult` as on the other 
 - return: refused on the ground; PX4's RTL; done on the ground and disarmed.
 
 Heights and points in metres (local ENU), time the core's (monotonic s). The request checks
-and result shapes are bridge_mavlink's (:mod:`dronewrapper_bridge_mavlink.flight`).
+and result shapes are those of bridge_mavlink's ``flight`` and ``actions``.
 """
 
 from __future__ import annotations
@@ -45,12 +45,10 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.operation import Steps
-from dronewrapper_bridge_mavlink import missions
-from dronewrapper_bridge_mavlink.actions import flying
-from dronewrapper_bridge_mavlink.flight import MAX_HEIGHT_M, MAX_TIMEOUT_S, checked, failed, landed
-from dronewrapper_bridge_mavlink.setpoints import hold_target
 from dronewrapper_bridge_px4_zenoh import commands as cmds
+from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 
 if TYPE_CHECKING:
@@ -58,6 +56,30 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("bridge_px4_zenoh")
 NOT_CONNECTED = "PX4 is not connected (no sample on its Zenoh keys)"
+MAX_HEIGHT_M = 1000.0
+MAX_TIMEOUT_S = 600.0
+
+
+def checked(name: str, value: float, low: float, high: float) -> float:
+    """``value`` if finite and in (``low``, ``high``]; ValueError naming ``name`` otherwise."""
+    if not (isinstance(value, int | float) and math.isfinite(value) and low < value <= high):
+        raise ValueError(f"{name} must be in ({low:g}, {high:g}], got {value!r}")
+    return float(value)
+
+
+def failed(failure: str, message: str, step: str = "", result: int | None = None):
+    return FlightResult(success=False, failure=failure, step=step, result=result, message=message)
+
+
+def flying(core: Px4ZenohCore) -> bool:
+    """Armed and in the air (per the landed state)."""
+    return core.failsafe.airborne and core.failsafe.armed
+
+
+def landed(core: Px4ZenohCore) -> bool:
+    """On the ground and disarmed."""
+    state = core.heartbeat_state
+    return core.ext.landed_state == LANDED_STATE_ON_GROUND and state is not None and not state.armed
 
 
 def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
@@ -72,7 +94,7 @@ def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
     if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
         return FlightResult(success=True, message="already flying: nothing done")
     try:
-        missions.refuse_takeoff(core, height)
+        rules.refuse_takeoff(core, height)
     except ServiceError as exc:
         return failed(REFUSED, exc.message, "takeoff")
     pose = core.pose()
@@ -169,7 +191,7 @@ def goto_point(core: Px4ZenohCore, request: GotoRequest) -> Steps:
         return failed(NOT_READY, NOT_CONNECTED)
     if not flying(core):
         return failed(REFUSED, "goto refused: not flying (take off first)", "goto")
-    state = core.missions
+    state = core.envelope
     if request.geodetic:
         if state.home_geo is None:
             return failed(NO_HOME, "home has no latitude and longitude (no GPS): go to x, y")

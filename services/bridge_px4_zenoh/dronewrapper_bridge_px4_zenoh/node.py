@@ -17,6 +17,7 @@ Threads: Zenoh callbacks (samples, tokens, setpoints), a stream loop at ``stream
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import itertools
 import logging
 import threading
@@ -35,7 +36,6 @@ from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.core import Outbox, Px4ZenohCore
-from dronewrapper_ros2_gateway.node import gid_of
 
 log = logging.getLogger("bridge_px4_zenoh")
 
@@ -50,7 +50,6 @@ PUBLISHED = (
     registry.STATUSTEXT,
     registry.ENVELOPE,
     registry.HOME_POSITION,
-    registry.MISSION_WAYPOINTS,
     registry.REFUSAL,
 )
 SERVICES = {
@@ -65,6 +64,11 @@ SERVICES = {
 }
 WRITTEN = (t.OFFBOARD_MODE, t.TRAJECTORY, t.COMMAND)
 NODE_NAME = "dronewrapper_bridge_px4_zenoh"
+
+
+def gid_of(token: str) -> bytes:
+    """A 16-byte id for an endpoint, derived from its token (receivers only carry it)."""
+    return hashlib.blake2b(token.encode(), digest_size=attachment.GID_SIZE).digest()
 
 
 class Writer:

@@ -28,8 +28,8 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 from dronewrapper_bridge_base.operation import Steps
-from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_px4_zenoh import commands as cmds
+from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.modes import mode_name, nav_state_of
 
@@ -103,8 +103,8 @@ def takeoff(core: Px4ZenohCore, request: CommandTOL) -> Steps:
         raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
     if core.ext.landed_state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
-    missions.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
-    home = core.missions.home_geo
+    rules.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
+    home = core.envelope.home_geo
     altitude = math.nan if math.isnan(height) or home is None else home[2] + height
     yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
     for mode in ("AUTO.TAKEOFF", HOLD_MODE):
@@ -171,7 +171,7 @@ def set_mode(core: Px4ZenohCore, request: SetMode) -> Steps:
     primed = mode == GUIDED
     if primed:
         yield from prime(core)
-    missions.refuse_mode(core, mode)  # no guided mode while outside the envelope
+    rules.refuse_mode(core, mode)  # no guided mode while outside the envelope
     core.failsafe.on_mode_requested(mode, core.now)
     result, message = yield from command(
         core, cmds.set_nav_state(nav_state_of(mode), **target(core))
