@@ -249,3 +249,37 @@ def test_a_command_from_another_commander_is_refused_by_the_lease():
     rig.core.on_lease_request(LeaseRequest(action="take"), USER, rig.now, rig.stamp)
     op = rig.command(registry.ARMING, ops.arming(rig.core, CommandBool(value=True)), "intruder")
     assert op.done and op.error is not None and rig.commands() == []
+
+
+# ---- flights
+
+
+def test_a_takeoff_primes_enters_offboard_arms_and_holds_the_height(rig):
+    from dronewrapper.msgs.flight import TakeoffRequest
+    from dronewrapper_bridge_px4_zenoh import flight
+
+    rig.boot()
+    op = rig.request(flight.takeoff_to(rig.core, TakeoffRequest(height=2.5)), "takeoff")
+    rig.run(1.5)
+    assert [c["command"] for c in rig.commands()] == [cmds.SET_NAV_STATE]
+    rig.ack(cmds.SET_NAV_STATE)
+    rig.vehicle(nav_state=NAV_OFFBOARD)
+    assert [c["command"] for c in rig.commands()][-1] == cmds.ARM_DISARM
+    rig.ack(cmds.ARM_DISARM)
+    rig.vehicle(armed=True, landed=False)
+    rig.run(0.2)
+    z0 = rig.core.position_enu[2]
+    assert rig.writes(t.TRAJECTORY)[-1]["position"][2] == pytest.approx(-(z0 + 2.5), abs=1e-3)
+    rig.at(0.0, 0.0, z0 + 2.45)
+    rig.run(0.1)
+    assert op.done and op.reply.success, op.reply
+
+
+def test_a_takeoff_waits_for_pxs_preflight_checks(rig):
+    from dronewrapper.msgs.flight import NOT_READY, TakeoffRequest
+    from dronewrapper_bridge_px4_zenoh import flight
+
+    rig.boot()
+    rig.send(t.VEHICLE_STATUS, pre_flight_checks_pass=False)
+    op = rig.request(flight.takeoff_to(rig.core, TakeoffRequest(height=2.5)), "takeoff")
+    assert op.done and op.reply.failure == NOT_READY and rig.commands() == []

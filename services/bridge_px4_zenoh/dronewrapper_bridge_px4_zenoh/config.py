@@ -27,8 +27,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """bridge_px4_zenoh configuration (see module docstring)."""
 
     domain: int = 0  # PX4's ZENOH_DOMAIN_ID: the first chunk of its keys
-    target_system: int = 1  # PX4's MAV_SYS_ID: vehicle commands are addressed to it
-    target_component: int = 1
+    target_system: int = 0  # PX4's MAV_SYS_ID (instance N: N + 1); 0 = vehicle_status's
+    target_component: int = 0  # PX4's component id; 0 = vehicle_status's
     link_timeout: float = 1.0  # s without a sample from PX4 -> State.connected false
     stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded (contract: >= 20)
     offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
@@ -53,8 +53,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         if not 0 <= self.domain <= 232:
             raise ValueError(f"domain must be in [0, 232] (a ROS 2 domain), got {self.domain!r}")
         for name in ("target_system", "target_component"):
-            if not 1 <= getattr(self, name) <= 255:
-                raise ValueError(f"{name} must be in [1, 255], got {getattr(self, name)!r}")
+            if not 0 <= getattr(self, name) <= 255:
+                raise ValueError(f"{name} must be in [0, 255], got {getattr(self, name)!r}")
         if self.stream_rate_hz < 20.0:
             raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
         for name in (

@@ -88,6 +88,8 @@ class Px4ZenohCore(PureCore):
         self.failsafe = Failsafe(config.failsafe_config())
         self.envelope = rules.EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
+        self.target_system = config.target_system  # 0 until vehicle_status names it
+        self.target_component = config.target_component
         self.connected = False
         self.status: dict[str, Any] | None = None  # the latest VehicleStatus
         self.heartbeat_state: State | None = None  # VehicleStatus as State (the shown mode)
@@ -182,6 +184,10 @@ class Px4ZenohCore(PureCore):
         """A decoded sample of ``topic`` (time already set)."""
         if topic is t.VEHICLE_STATUS:
             self.status = value
+            if not self.config.target_system:
+                self.target_system = int(value["system_id"])
+            if not self.config.target_component:
+                self.target_component = int(value["component_id"])
             self._show_vehicle()
         elif topic is t.ATTITUDE:
             q = tm.attitude_enu_flu(value)
@@ -378,6 +384,9 @@ class Px4ZenohCore(PureCore):
         self.setpoints_sent += 1
         if self.now - self._last_send > STREAM_GAP_S:
             self._stream_since = self.now
+            if self.failsafe.armed and self.failsafe.mode == "OFFBOARD":
+                gap = self.now - self._last_send
+                log.warning("setpoint stream resumed after %.2f s, armed in OFFBOARD", gap)
         self._last_send = self.now
 
     def streamed_for(self, now: float) -> float:

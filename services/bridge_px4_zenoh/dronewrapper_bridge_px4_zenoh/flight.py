@@ -1,7 +1,8 @@
 """Take-off, landing, go-to and return over PX4's Zenoh, each one waiting operation (pure),
 answered with a :class:`~dronewrapper.msgs.flight.FlightResult` as on the other bridges:
 
-- take-off: OFFBOARD (primed), the bridge's own hold at the ground, arm, the hold moved
+- take-off: refused (``not_ready``) while PX4's vehicle_status says its preflight checks do not
+  pass; else OFFBOARD (primed), the bridge's own hold at the ground, arm, the hold moved
   ``height`` m up; done within ``tolerance``; fails when PX4 disarms or leaves OFFBOARD, or
   at ``timeout`` (then it holds where it is). Already flying: done at once, nothing sent.
 - landing: NAV_LAND here; done on the ground and disarmed.
@@ -93,6 +94,8 @@ def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
         return failed(NOT_READY, NOT_CONNECTED)
     if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
         return FlightResult(success=True, message="already flying: nothing done")
+    if core.status is not None and not core.status["pre_flight_checks_pass"]:
+        return failed(NOT_READY, "PX4's preflight checks do not pass yet (vehicle_status)")
     try:
         rules.refuse_takeoff(core, height)
     except ServiceError as exc:
@@ -142,7 +145,10 @@ def wait_at(
     z_only: bool = False,
 ) -> Generator[float, None, FlightResult | None]:
     """Wait until within ``tolerance`` m of ``target`` (only its height with ``z_only``):
-    None, or the failure (PX4 disarmed, left OFFBOARD, ``deadline`` passed)."""
+    None, or the failure (PX4 disarmed or left OFFBOARD after showing it armed in OFFBOARD:
+    vehicle_status, ~2 Hz, may show an accepted arming later than its ack; ``deadline``
+    passed)."""
+    seen_armed = seen_mode = False
     while True:
         position = core.position_enu
         if position is not None:
@@ -150,10 +156,13 @@ def wait_at(
             if distance <= tolerance:
                 return None
         state = core.heartbeat_state
-        if state is not None and not state.armed:
-            return failed(REFUSED, "PX4 disarmed", step)
-        if state is not None and state.mode != ops.GUIDED:
-            return failed(REFUSED, f"PX4 left {ops.GUIDED} for {state.mode}", step)
+        if state is not None:
+            seen_armed |= state.armed
+            seen_mode |= state.mode == ops.GUIDED
+            if seen_armed and not state.armed:
+                return failed(REFUSED, "PX4 disarmed", step)
+            if seen_mode and state.mode != ops.GUIDED:
+                return failed(REFUSED, f"PX4 left {ops.GUIDED} for {state.mode}", step)
         if core.now >= deadline:
             where = "no position" if position is None else f"z={position[2]:.2f} m"
             return failed(TOO_LATE, f"not within {tolerance:g} m of the target in time ({where})")

@@ -78,9 +78,11 @@ def command(core: Px4ZenohCore, value: dict) -> Generator[float, None, tuple[int
 
 
 def target(core: Px4ZenohCore) -> dict[str, int]:
+    """The system and component a vehicle command is for: PX4's own (its vehicle_status's,
+    unless configured); 1, 1 before it is known."""
     return {
-        "target_system": core.config.target_system,
-        "target_component": core.config.target_component,
+        "target_system": core.target_system or 1,
+        "target_component": core.target_component or 1,
     }
 
 
