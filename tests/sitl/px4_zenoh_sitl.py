@@ -13,17 +13,13 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import socket
-import subprocess
-from collections.abc import Iterator
 from pathlib import Path
 
 from firmware import px4_dir
 
-from dronewrapper.runtime.children import die_with_parent
 from dronewrapper.runtime.options import DEFAULT_ROUTER
-from dronewrapper_sim.external.firmware import px4_version
+from dronewrapper_sim.external.firmware import Firmware, px4_sih
 
 ROUTER_PORT = int(DEFAULT_ROUTER.rsplit(":", 1)[1])  # 7447: where PX4's zenoh-pico dials
 
@@ -56,40 +52,8 @@ def router_port_free() -> bool:
         return sock.connect_ex(("127.0.0.1", ROUTER_PORT)) != 0
 
 
-@contextlib.contextmanager
-def px4_zenoh(workdir: Path) -> Iterator[tuple[str, Path]]:
-    """PX4 SIH (``sihsim_quadx``) with its zenoh module on, in ``workdir``: (version, log)."""
+def px4_zenoh(workdir: Path) -> contextlib.AbstractContextManager[Firmware]:
+    """PX4 SIH with its zenoh module on, in ``workdir`` (PX4's own starter)."""
     build = zenoh_build()
     assert build is not None, "PX4_SITL_DIR names no px4_sitl_zenoh build"
-    home = workdir / "px4"
-    (home / "rootfs").mkdir(parents=True, exist_ok=True)
-    for name in ("bin", "etc"):
-        if not (home / name).exists():
-            (home / name).symlink_to(build / name)
-    env = {
-        **os.environ,
-        "PX4_SIM_MODEL": "sihsim_quadx",
-        "PX4_SIMULATOR": "sihsim",
-        "HEADLESS": "1",
-        "PX4_PARAM_ZENOH_ENABLE": "1",
-    }
-    log_path = workdir / "px4.log"
-    with open(log_path, "wb") as log:
-        proc = subprocess.Popen(
-            ["../bin/px4", "-i", str(instance()), "-d"],
-            cwd=home / "rootfs",
-            env=env,
-            stdin=subprocess.DEVNULL,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            preexec_fn=die_with_parent,
-        )
-        try:
-            yield px4_version(build), log_path
-        finally:
-            proc.send_signal(signal.SIGTERM)
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+    return px4_sih(build, workdir, instance=instance(), env={"PX4_PARAM_ZENOH_ENABLE": "1"})

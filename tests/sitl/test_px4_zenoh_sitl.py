@@ -49,8 +49,8 @@ def graph(tmp_path):
     launcher = Launcher.from_file(REPO / "compose" / "px4_zenoh.yaml", out=log)
     launcher.start()
     try:
-        with px4_zenoh(tmp_path) as (version, px4_log):
-            yield version, px4_log
+        with px4_zenoh(tmp_path) as firmware:
+            yield firmware.version, firmware.log
     finally:
         launcher.stop()
         log.close()

@@ -283,3 +283,19 @@ def test_a_takeoff_waits_for_pxs_preflight_checks(rig):
     rig.send(t.VEHICLE_STATUS, pre_flight_checks_pass=False)
     op = rig.request(flight.takeoff_to(rig.core, TakeoffRequest(height=2.5)), "takeoff")
     assert op.done and op.reply.failure == NOT_READY and rig.commands() == []
+
+
+def test_the_envelope_can_be_set_and_then_refuses_by_it(rig):
+    from dronewrapper.envelope import Envelope
+    from dronewrapper.msgs.mission import EnvelopeSet
+
+    from dronewrapper_bridge_px4_zenoh import envelope_rules
+
+    rig.flying_offboard()
+    request = EnvelopeSet(envelope=Envelope(max_altitude=5.0))
+    op = rig.request(envelope_rules.set_envelope(rig.core, request), "envelope")
+    assert op.done and op.reply.envelope.max_altitude == 5.0 and op.reply.set_by == USER
+    rig.clear()
+    rig.setpoint(position(0.0, 0.0, 8.0))
+    assert rig.writes(t.TRAJECTORY) == []
+    assert rig.published(registry.REFUSAL)[0].limit == "max_altitude"

@@ -6,7 +6,8 @@
   (:func:`refuse_mode`: a breach action must not be undone by a commander);
 * while armed and airborne outside it, the breach is reported to whoever commands and the
   envelope's action runs (``land``, ``return``: PX4's own; ``hold``: AUTO.LOITER);
-* the envelope and home are published every :data:`PUBLISH_PERIOD_S` s.
+* the envelope and home are published every :data:`PUBLISH_PERIOD_S` s; ``envelope/set``
+  replaces or resets the envelope (:func:`set_envelope`, the lease holder's only).
 
 Home is PX4's local origin (the estimator's reference, from ``vehicle_local_position``'s
 ``ref_lat``/``ref_lon``/``ref_alt``): the envelope is ENU m from it. PX4's ``home_position``
@@ -22,10 +23,11 @@ from dronewrapper import envelope as env
 from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
-from dronewrapper.msgs.mission import HomePosition
+from dronewrapper.msgs.mission import EnvelopeSet, HomePosition
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.operation import Steps
 
 if TYPE_CHECKING:
@@ -40,6 +42,7 @@ class EnvelopeState:
 
     def __init__(self, envelope: Envelope) -> None:
         self.envelope = envelope
+        self.set_by = ""  # who set the envelope in force ("": the configured one)
         self.monitor = BreachMonitor()
         self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
@@ -127,6 +130,22 @@ def publish_home(core: Px4ZenohCore) -> None:
         header=Header(stamp=core.stamp), latitude=lat, longitude=lon, altitude=alt, x=x, y=y, z=z
     )
     core.publish(registry.HOME_POSITION, home)
+
+
+def set_envelope(core: Px4ZenohCore, request: EnvelopeSet) -> Steps:
+    """envelope/set: replace or reset the envelope (neither: read it; see
+    :mod:`dronewrapper_bridge_base.envelope_set`). PX4 gets no fence: the bridge's envelope
+    is the only one."""
+    state = core.envelope
+    pose = core.pose()
+    aircraft = None if pose is None else state.relative(*pose[0])[:2]
+    changed = envelope_set.apply(
+        state, request, configured=core.config.envelope, caller=core.caller, aircraft=aircraft
+    )
+    if changed:
+        core.publish(registry.ENVELOPE, state.envelope)
+    yield from ()
+    return envelope_set.result(state)
 
 
 def breach_action(core: Px4ZenohCore, action: str) -> Steps:

@@ -31,6 +31,7 @@ from dronewrapper.ros2 import attachment, cdr
 from dronewrapper.ros2.names import PUBLISHER, NodeName, parse_endpoint, qos_text
 from dronewrapper.runtime import Node
 from dronewrapper_bridge_base.bridge_node import BridgeNode
+from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import topics as t
@@ -135,7 +136,7 @@ class Bridge(BridgeNode[Px4ZenohCore]):
         self._declared.append(
             liveliness.declare_subscriber(f"@ros2_lv/{domain}/**", self.on_token, history=True)
         )
-        self.serve(SERVICES)
+        self.serve(SERVICES, [(registry.ENVELOPE_SET, rules.set_envelope, "envelope")])
 
     # ---- PX4's side
 
