@@ -17,10 +17,14 @@ from px4_zenoh_rig import (
     velocity,
 )
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import NOT_READY, TakeoffRequest
 from dronewrapper.msgs.lease import LeaseRequest
-from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, CommandBool
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, CommandBool, SetMode
+from dronewrapper.msgs.mission import EnvelopeSet
 from dronewrapper_bridge_px4_zenoh import commands as cmds
+from dronewrapper_bridge_px4_zenoh import envelope_rules, flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.versions import Versions
@@ -228,8 +232,6 @@ def test_an_unanswered_command_is_written_again_then_fails(rig):
 
 
 def test_offboard_is_asked_for_only_after_priming(rig):
-    from dronewrapper.msgs.mavros import SetMode
-
     rig.boot()
     rig.clear()
     op = rig.request(ops.set_mode(rig.core, SetMode(custom_mode="OFFBOARD")), "set_mode")
@@ -255,9 +257,6 @@ def test_a_command_from_another_commander_is_refused_by_the_lease():
 
 
 def test_a_takeoff_primes_enters_offboard_arms_and_holds_the_height(rig):
-    from dronewrapper.msgs.flight import TakeoffRequest
-    from dronewrapper_bridge_px4_zenoh import flight
-
     rig.boot()
     op = rig.request(flight.takeoff_to(rig.core, TakeoffRequest(height=2.5)), "takeoff")
     rig.run(1.5)
@@ -276,9 +275,6 @@ def test_a_takeoff_primes_enters_offboard_arms_and_holds_the_height(rig):
 
 
 def test_a_takeoff_waits_for_pxs_preflight_checks(rig):
-    from dronewrapper.msgs.flight import NOT_READY, TakeoffRequest
-    from dronewrapper_bridge_px4_zenoh import flight
-
     rig.boot()
     rig.send(t.VEHICLE_STATUS, pre_flight_checks_pass=False)
     op = rig.request(flight.takeoff_to(rig.core, TakeoffRequest(height=2.5)), "takeoff")
@@ -286,11 +282,6 @@ def test_a_takeoff_waits_for_pxs_preflight_checks(rig):
 
 
 def test_the_envelope_can_be_set_and_then_refuses_by_it(rig):
-    from dronewrapper.envelope import Envelope
-    from dronewrapper.msgs.mission import EnvelopeSet
-
-    from dronewrapper_bridge_px4_zenoh import envelope_rules
-
     rig.flying_offboard()
     request = EnvelopeSet(envelope=Envelope(max_altitude=5.0))
     op = rig.request(envelope_rules.set_envelope(rig.core, request), "envelope")
