@@ -157,7 +157,8 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
             with DroneWrapper("zen", DEFAULT_ROUTER, timeout=90, land_on_exit=True) as drone:
                 take_off(drone, 2.5)
                 drone.set_cmd_vel(vx=0.5, az=0.3)
-                time.sleep(2.0)
+                time.sleep(1.0)
+                trips = {ns: round_trips(node, ns, 10) for ns in reversed(NAMESPACES)}
                 cpu0 = {ns: cpu_seconds(pid) for ns, pid in bridges.items()}
                 since = time.monotonic()
                 time.sleep(seconds)
@@ -166,7 +167,6 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
                     ns: (cpu_seconds(pid) - cpu0[ns]) / (until - since)
                     for ns, pid in bridges.items()
                 }
-                trips = {ns: round_trips(node, ns, 20) for ns in reversed(NAMESPACES)}
                 drone.set_cmd_vel()
                 drone.land()
             figures = observer.window(since, until)
@@ -185,7 +185,7 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = CommandParser(description=first_line(__doc__))
-    parser.add_argument("--seconds", type=float, default=20.0, help="measurement window (s)")
+    parser.add_argument("--seconds", type=float, default=15.0, help="measurement window (s)")
     parser.add_argument("--instance", type=int, default=1, help="PX4's instance (-i N)")
     parser.add_argument("--workdir", default="", help="keep PX4's and the graphs' logs here")
     args = parser.parse_args(argv)

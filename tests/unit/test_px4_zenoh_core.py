@@ -290,3 +290,11 @@ def test_the_envelope_can_be_set_and_then_refuses_by_it(rig):
     rig.setpoint(position(0.0, 0.0, 8.0))
     assert rig.writes(t.TRAJECTORY) == []
     assert rig.published(registry.REFUSAL)[0].limit == "max_altitude"
+
+
+def test_a_command_whose_effect_vehicle_status_shows_needs_no_ack(rig):
+    rig.boot()
+    op = rig.request(ops.arming(rig.core, CommandBool(value=True)), "arming")
+    rig.vehicle(armed=True)  # no ack: PX4's module published another in its place
+    assert op.done and op.reply.success and "vehicle_status shows it" in op.reply.message
+    assert len(rig.commands()) == 1
