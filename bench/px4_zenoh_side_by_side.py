@@ -11,10 +11,11 @@ flies it through ``zen`` (take-off, then a slow forward turn) while an observer 
   of it reaches the observer (ms; PX4's MAVLink module sends the same values later, at the rate
   the bridge asked);
 * pose rate at the observer (Hz), and PX4's own vehicle_local_position rate;
-* command round trip: a SET_MODE OFFBOARD request (the mode it flies in) from the observer
-  through each bridge to PX4's ack and confirmation and back (ms); a bound on the one-way
-  request -> firmware delay, which PX4 reports nowhere;
 * bridge CPU: each bridge process's user + system time over the window (% of one core).
+
+The setpoint -> firmware delay is not measured: PX4 reports a setpoint's arrival nowhere (a
+command's ack, the one echo, is not a setpoint's, and a command through the MAVLink bridge in
+OFFBOARD would make it a second commander).
 
 Run in a network namespace of its own (PX4 dials a fixed port)::
 
@@ -36,7 +37,6 @@ from bench.common import cpu_seconds, percentiles, print_table, write_results
 from dronewrapper import DroneWrapper
 from dronewrapper.errors import CommandRefused, NotConnected
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.ros2 import cdr
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import Node
@@ -51,8 +51,6 @@ ROW_KEYS = (
     "pose_rate_hz",
     "pose_age_p50_ms",
     "pose_age_p90_ms",
-    "round_trip_p50_ms",
-    "round_trip_p90_ms",
     "cpu_percent",
 )
 
@@ -120,20 +118,6 @@ def take_off(drone: DroneWrapper, height: float, wait_s: float = 90.0) -> None:
             time.sleep(2.0)
 
 
-def round_trips(node: Node, ns: str, runs: int) -> tuple[list[float], set[str]]:
-    """``runs`` SET_MODE OFFBOARD requests (the mode PX4 flies in already) through namespace
-    ``ns``: each one's time to PX4's ack and confirmation and back (s, whatever it says), and
-    the replies' messages."""
-    times, messages = [], set()
-    for _ in range(runs):
-        started = time.monotonic()
-        reply = node.call(registry.SET_MODE, SetMode(custom_mode="OFFBOARD"), ns=ns, timeout=8.0)
-        times.append(time.monotonic() - started)
-        messages.add(reply.message)
-        time.sleep(0.1)
-    return times, messages
-
-
 def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
     build = Path(os.environ["PX4_SITL_DIR"])
     log = open(workdir / "graphs.log", "w")  # noqa: SIM115 (closed below)
@@ -158,7 +142,6 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
                 take_off(drone, 2.5)
                 drone.set_cmd_vel(vx=0.5, az=0.3)
                 time.sleep(1.0)
-                trips = {ns: round_trips(node, ns, 10) for ns in reversed(NAMESPACES)}
                 cpu0 = {ns: cpu_seconds(pid) for ns, pid in bridges.items()}
                 since = time.monotonic()
                 time.sleep(seconds)
@@ -172,9 +155,6 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
             figures = observer.window(since, until)
             for ns in NAMESPACES:
                 figures[ns]["cpu_percent"] = 100.0 * cpu[ns]
-                times, messages = trips[ns]
-                figures[ns].update({f"round_trip_{k}": v for k, v in percentiles(times).items()})
-                figures[ns]["round_trip_replies"] = sorted(messages)
             return {"firmware": firmware.version, "seconds": seconds, "figures": figures}
     finally:
         node.close()
@@ -203,15 +183,13 @@ def main(argv: list[str] | None = None) -> int:
                 f"{f['pose_rate_hz']:.0f}",
                 f"{f['pose_age_p50_ms']:.1f}",
                 f"{f['pose_age_p90_ms']:.1f}",
-                f"{f['round_trip_p50_ms']:.1f}",
-                f"{f['round_trip_p90_ms']:.1f}",
                 f"{f['cpu_percent']:.1f}",
             ]
         )
     print_table(
         f"{result['firmware']}, one SIH run ({figures['px4_zenoh_raw']['rate_hz']:.0f} Hz "
         "vehicle_local_position on PX4's Zenoh)",
-        ["bridge", "pose Hz", "age p50 ms", "age p90 ms", "cmd RTT p50", "p90", "CPU %"],
+        ["bridge", "pose Hz", "age p50 ms", "age p90 ms", "CPU %"],
         rows,
     )
     write_results("px4_zenoh_side_by_side", result)
