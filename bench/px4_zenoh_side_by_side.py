@@ -37,12 +37,12 @@ from bench.common import cpu_seconds, percentiles, print_table, write_results
 from dronewrapper import DroneWrapper
 from dronewrapper.errors import CommandRefused, NotConnected
 from dronewrapper.msgs import registry
-from dronewrapper.ros2 import cdr
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper_bridge_px4_zenoh import topics
 from dronewrapper_compose.launcher import Launcher
+from dronewrapper_ros2_codec import cdr
 from dronewrapper_sim.external.firmware import px4_sih
 
 REPO = Path(__file__).resolve().parents[1]

@@ -19,8 +19,6 @@ from ros2_session import RosSession
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, CommandBool, PositionTarget
-from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.names import PUBLISHER, parse_endpoint
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -28,6 +26,8 @@ from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.node import Bridge
 from dronewrapper_bridge_px4_zenoh.versions import Versions
+from dronewrapper_ros2_codec import attachment, cdr
+from dronewrapper_ros2_codec.names import PUBLISHER, parse_endpoint
 
 RECORDING = json.loads(
     (Path(__file__).resolve().parents[1] / "data" / "px4_zenoh" / "sih_ground.json").read_text()

@@ -23,8 +23,6 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
-from dronewrapper.ros2 import cdr
-from dronewrapper.ros2.names import parse_endpoint
 from dronewrapper_bridge_base.bridge_node import COMMANDS
 from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -32,6 +30,8 @@ from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
 from dronewrapper_bridge_px4_zenoh.versions import Versions
+from dronewrapper_ros2_codec import cdr
+from dronewrapper_ros2_codec.names import parse_endpoint
 
 RECORDING = json.loads(
     (Path(__file__).resolve().parents[1] / "data" / "px4_zenoh" / "sih_ground.json").read_text()

@@ -298,3 +298,16 @@ def test_a_command_whose_effect_vehicle_status_shows_needs_no_ack(rig):
     rig.vehicle(armed=True)  # no ack: PX4's module published another in its place
     assert op.done and op.reply.success and "vehicle_status shows it" in op.reply.message
     assert len(rig.commands()) == 1
+
+
+def test_a_breach_is_reported_and_its_action_asked_of_px4():
+    rig = Px4Rig(envelope={"max_altitude": 10.0, "breach_action": "land"})
+    rig.flying_offboard()
+    rig.setpoint(velocity(0.5))
+    rig.clear()
+    rig.at(0.0, 0.0, 12.0)
+    rig.tick()
+    (refusal,) = rig.published(registry.REFUSAL)
+    assert (refusal.kind, refusal.limit, refusal.action) == ("breach", "max_altitude", "land")
+    assert [c["command"] for c in rig.commands()] == [cmds.NAV_LAND]
+    assert rig.published(registry.STATE)[-1].failsafe == "breach:land"

@@ -58,7 +58,7 @@ from dronewrapper.msgs.mavros import (
     MASK_POSITION,
     PositionTarget,
 )
-from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_base.setpoint_watchdog import (
     ACTIONS,
     HOLD,

@@ -13,7 +13,7 @@ from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
 
 class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
     """Bounds on accepted setpoints (m, m/s, rad/s), the bounds of
-    :func:`dronewrapper.setpoint_limits.validate`: beyond them a setpoint is refused."""
+    :func:`dronewrapper_bridge_base.setpoint_limits.validate`: beyond them a setpoint is refused."""
 
     max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
     min_altitude: float = -1_000.0  # ENU z, m

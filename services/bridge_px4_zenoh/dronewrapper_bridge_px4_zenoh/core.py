@@ -39,13 +39,11 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
-from dronewrapper.ros2 import cdr
-from dronewrapper.ros2.names import Endpoint
 from dronewrapper.runtime import ServiceError
-from dronewrapper.setpoint_limits import SetpointError, validate
 from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, hold_target, is_airborne
+from dronewrapper_bridge_base.setpoint_limits import SetpointError, validate
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
@@ -53,6 +51,8 @@ from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh import trajectory
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.versions import VersionMismatch, Versions
+from dronewrapper_ros2_codec import cdr
+from dronewrapper_ros2_codec.names import Endpoint
 
 log = logging.getLogger("bridge_px4_zenoh")
 
@@ -313,7 +313,9 @@ class Px4ZenohCore(PureCore):
             tick.send = None  # just written by the setpoint's arrival
         self._act(tick, send=self.connected)
         self.show_commander()
-        rules.tick(self)
+        breach = rules.tick(self)
+        if breach:
+            self.start(ops.breach_action(self, breach), now, stamp, background=True)
         self._periodic()
         self.advance(now, stamp)
 

@@ -17,21 +17,22 @@ is not among its zenoh module's default topics.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Any
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import PositionTarget, SetMode
+from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.mission import EnvelopeSet, HomePosition
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.setpoint_limits import Kind
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_base.setpoint_limits import Kind
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
+Px4ZenohCore = Any
+"""The core (core.py imports this module, so the type is not imported here)."""
 
 PUBLISH_PERIOD_S = 2.0
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
@@ -105,21 +106,25 @@ def breach_state(core: Px4ZenohCore) -> str:
     return f"breach:{state.envelope.breach_action}" if state.monitor.outside else ""
 
 
-def tick(core: Px4ZenohCore) -> None:
-    """Each stream tick: act on a breach; publish the envelope and home periodically."""
+def tick(core: Px4ZenohCore) -> str:
+    """Each stream tick: on a breach, report it and return the envelope's action (the core
+    starts it: ``land``, ``return`` or ``hold``), else ""; publish the envelope and home
+    periodically."""
     state = core.envelope
     pose = core.pose()
+    breach = ""
     if pose is not None and core.failsafe.airborne and core.failsafe.armed:
         reason = state.monitor.update(state.envelope, state.relative(*pose[0]))
         if reason:
             action = state.envelope.breach_action
             core.bridge_text(f"envelope breach: {reason}; {action}")
             core.report_breach(state.monitor.limit, reason, action)
-            core.start(breach_action(core, action), core.now, core.stamp, background=True)
+            breach = action
     if core.now >= state.next_publish:
         state.next_publish = core.now + PUBLISH_PERIOD_S
         core.publish(registry.ENVELOPE, state.envelope)
         publish_home(core)
+    return breach
 
 
 def publish_home(core: Px4ZenohCore) -> None:
@@ -146,13 +151,3 @@ def set_envelope(core: Px4ZenohCore, request: EnvelopeSet) -> Steps:
         core.publish(registry.ENVELOPE, state.envelope)
     yield from ()
     return envelope_set.result(state)
-
-
-def breach_action(core: Px4ZenohCore, action: str) -> Steps:
-    """``land`` or ``return`` (the failsafe's own requests), or ``hold`` (AUTO.LOITER)."""
-    from dronewrapper_bridge_px4_zenoh import operations as ops
-
-    if action in ("land", "return"):
-        return (yield from ops.failsafe_action(core, action))
-    reply = yield from ops.set_mode(core, SetMode(custom_mode=ops.HOLD_MODE))
-    return reply.result

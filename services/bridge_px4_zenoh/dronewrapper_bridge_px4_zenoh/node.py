@@ -8,7 +8,7 @@ Only I/O here. Everything the bridge decides is in
 subscriber to ``<domain>/fmu/out/**`` and its tokens on a liveliness subscriber (with history),
 both on the node's own session: the router PX4's zenoh-pico dials is the project's. What the
 core writes to ``/fmu/in`` is CDR-encoded with rmw_zenoh's attachment
-(:mod:`dronewrapper.ros2`, the ROS 2 gateway's codec) on the exact key of the bridge's version,
+(:mod:`dronewrapper_ros2_codec`, the ROS 2 codec) on the exact key of the bridge's version,
 and the bridge announces its publishers with liveliness tokens as an rmw_zenoh node would.
 Threads: Zenoh callbacks (samples, tokens, setpoints), a stream loop at ``stream_rate_hz``
 (the core's tick) and the node's service workers.
@@ -27,8 +27,6 @@ from typing import Any
 import zenoh
 
 from dronewrapper.msgs import registry
-from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.names import PUBLISHER, NodeName, parse_endpoint, qos_text
 from dronewrapper.runtime import Node
 from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
@@ -37,6 +35,8 @@ from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.core import Outbox, Px4ZenohCore
+from dronewrapper_ros2_codec import attachment, cdr
+from dronewrapper_ros2_codec.names import PUBLISHER, NodeName, parse_endpoint, qos_text
 
 log = logging.getLogger("bridge_px4_zenoh")
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Generator
-from typing import TYPE_CHECKING
+from typing import Any
 
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -35,8 +35,8 @@ from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.modes import mode_name, nav_state_of
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
+Px4ZenohCore = Any
+"""The core (core.py imports this module, so the type is not imported here)."""
 
 log = logging.getLogger("bridge_px4_zenoh")
 
@@ -234,3 +234,12 @@ def prime(core: Px4ZenohCore) -> Generator[float, None, None]:
         if core.now >= deadline:
             raise ServiceError("could not stream setpoints before OFFBOARD", "refused")
         yield deadline
+
+
+def breach_action(core: Px4ZenohCore, action: str) -> Steps:
+    """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
+    requests), or ``hold`` (AUTO.LOITER)."""
+    if action in ("land", "return"):
+        return (yield from failsafe_action(core, action))
+    reply = yield from set_mode(core, SetMode(custom_mode=HOLD_MODE))
+    return reply.result
