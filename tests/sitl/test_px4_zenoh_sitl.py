@@ -6,6 +6,8 @@ a network namespace of its own (PX4 dials the router on 7447). The graph compose
 
 * Listing 1 from an SDK app: connect, take off to 2.5 m, fly forward at 1 m/s for 3 s, land;
   judged from what the app reads (height, distance flown, landed and disarmed);
+* follow-color (beacon_smooth) through compose/px4_zenoh_follow_color.yaml, judged from
+  ground truth with the scenario tier's thresholds (as tests/sitl/test_follow_sitl.py);
 * the failsafe contract when the app is killed (SIGKILL) while streaming: the bridge holds
   within ``setpoint_timeout`` + a tick and asks PX4 to land after ``commander_lost_timeout``,
   and PX4 lands and disarms.
@@ -24,6 +26,8 @@ from pathlib import Path
 
 import pytest
 from px4_zenoh_sitl import ROUTER_PORT, px4_zenoh, router_port_free
+from scenario_flight import fly, record_result
+from test_follow_scenarios import CASES, passes
 
 from dronewrapper import DroneWrapper
 from dronewrapper.errors import CommandRefused, NotConnected
@@ -183,3 +187,29 @@ def test_a_killed_app_is_held_then_landed_by_the_failsafe(graph, tmp_path):
     assert hold is not None and hold < 0.5 + 1.0, after[:5]
     assert land is not None and 4.0 <= land < 5.0 + 1.5, after[:10]
     assert down is not None, "PX4 did not land and disarm within 90 s"
+
+
+def test_follow_color_flies_px4_through_its_own_zenoh(tmp_path):
+    _, _, seconds, max_acquire, min_centred, min_distance = CASES["beacon_smooth"]
+    assert router_port_free(), f"port {ROUTER_PORT} is taken: run in a network namespace"
+    with px4_zenoh(tmp_path) as firmware:  # its zenoh-pico retries until the graph's router is up
+        variables = {"truth_port": firmware.variables["truth_port"]}
+        flight = fly(
+            "px4_zenoh_follow_color",
+            "beacon_smooth",
+            seconds,
+            tmp_path,
+            variables,
+            start_timeout=120.0,
+            router=DEFAULT_ROUTER,
+        )
+    s = flight.summary
+    print(f"\n{firmware.version} over Zenoh: {flight.describe()}")
+    passed = passes(flight, max_acquire, min_centred, min_distance)
+    record_result(flight, "follow_color", "px4_zenoh", firmware.version, passed)
+    detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
+    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
+    assert s.samples > 50, detail
+    assert s.time_to_acquire <= max_acquire, detail
+    assert s.centred_share >= min_centred, detail
+    assert s.distance_share >= min_distance, detail

@@ -4,8 +4,10 @@ MAVROS-equivalent keys every bridge presents (see README.md).
 Only I/O here. Everything the bridge decides is in
 :class:`~dronewrapper_bridge_px4_zenoh.core.Px4ZenohCore` (pure); the wiring every bridge shares
 (driver, publishers, services, setpoints, the lease, the tick loop) is
-:class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. PX4's samples arrive on a
-subscriber to ``<domain>/fmu/out/**`` and its tokens on a liveliness subscriber (with history),
+:class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. PX4's samples arrive on one
+subscriber per topic the bridge reads (``<domain>/fmu/out/<topic>/*/*``, any version: a
+subscriber to all of ``/fmu/out`` would also take sensor_combined (~245 Hz) and the rest, and a
+slow reader pushes back on PX4) and its tokens on a liveliness subscriber (with history),
 both on the node's own session: the router PX4's zenoh-pico dials is the project's. What the
 core writes to ``/fmu/in`` is CDR-encoded with rmw_zenoh's attachment
 (:mod:`dronewrapper_ros2_codec`, the ROS 2 codec) on the exact key of the bridge's version,
@@ -130,9 +132,10 @@ class Bridge(BridgeNode[Px4ZenohCore]):
             publisher = self.session.declare_publisher(key)
             self._declared.append(publisher)
             self.writers[topic.name] = Writer(publisher, topic, gid_of(token))
-        self._declared.append(
-            self.session.declare_subscriber(f"{domain}/fmu/out/**", self.on_px4_sample)
-        )
+        for topic in t.TOPICS:  # only those it reads: PX4 publishes ~50 topics
+            if topic.direction == t.OUT:
+                key = topic.any_version(domain)
+                self._declared.append(self.session.declare_subscriber(key, self.on_px4_sample))
         self._declared.append(
             liveliness.declare_subscriber(f"@ros2_lv/{domain}/**", self.on_token, history=True)
         )
