@@ -6,8 +6,9 @@ a network namespace of its own (PX4 dials the router on 7447). The graph compose
 
 * Listing 1 from an SDK app: connect, take off to 2.5 m, fly forward at 1 m/s for 3 s, land;
   judged from what the app reads (height, distance flown, landed and disarmed);
-* follow-color (beacon_smooth) through compose/px4_zenoh_follow_color.yaml, judged from
-  ground truth with the scenario tier's thresholds (as tests/sitl/test_follow_sitl.py);
+* follow-color (beacon_smooth) and follow-person (people_crossing_front) through
+  compose/px4_zenoh_follow_{color,person}.yaml, judged from ground truth with the scenario
+  tier's thresholds, as tests/sitl/test_follow_sitl.py judges them through the MAVLink bridge;
 * the failsafe contract when the app is killed (SIGKILL) while streaming: the bridge holds
   within ``setpoint_timeout`` + a tick and asks PX4 to land after ``commander_lost_timeout``,
   and PX4 lands and disarms.
@@ -17,6 +18,7 @@ Each run prints its figures (pose rate and age at the app, take-off and landing 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import signal
 import subprocess
@@ -25,9 +27,10 @@ import time
 from pathlib import Path
 
 import pytest
+from busy_core import one_core_busy
 from px4_zenoh_sitl import ROUTER_PORT, px4_zenoh, router_port_free
 from scenario_flight import fly, record_result
-from test_follow_scenarios import CASES, passes
+from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
 from dronewrapper import DroneWrapper
 from dronewrapper.errors import CommandRefused, NotConnected
@@ -189,27 +192,37 @@ def test_a_killed_app_is_held_then_landed_by_the_failsafe(graph, tmp_path):
     assert down is not None, "PX4 did not land and disarm within 90 s"
 
 
-def test_follow_color_flies_px4_through_its_own_zenoh(tmp_path):
-    _, _, seconds, max_acquire, min_centred, min_distance = CASES["beacon_smooth"]
+@pytest.mark.parametrize("scenario", ["beacon_smooth", "people_crossing_front"])
+def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
+    sim_graph, detector, seconds, max_acquire, min_centred, min_distance = CASES[scenario]
+    app = "color" if sim_graph == "sim_follow_color" else "person"
     assert router_port_free(), f"port {ROUTER_PORT} is taken: run in a network namespace"
     with px4_zenoh(tmp_path) as firmware:  # its zenoh-pico retries until the graph's router is up
         variables = {"truth_port": firmware.variables["truth_port"]}
-        flight = fly(
-            "px4_zenoh_follow_color",
-            "beacon_smooth",
-            seconds,
-            tmp_path,
-            variables,
-            start_timeout=120.0,
-            router=DEFAULT_ROUTER,
-        )
+        if app == "person":
+            variables["detector"] = detector
+        crossing = scenario in CROSSING
+        if crossing:
+            variables["detect_rate_hz"] = LOADED_DETECT_RATE_HZ
+        with one_core_busy() if crossing else contextlib.nullcontext():
+            flight = fly(
+                f"px4_zenoh_follow_{app}",
+                scenario,
+                seconds,
+                tmp_path,
+                variables,
+                start_timeout=120.0,
+                router=DEFAULT_ROUTER,
+            )
     s = flight.summary
     print(f"\n{firmware.version} over Zenoh: {flight.describe()}")
     passed = passes(flight, max_acquire, min_centred, min_distance)
-    record_result(flight, "follow_color", "px4_zenoh", firmware.version, passed)
+    record_result(flight, f"follow_{app}", "px4_zenoh", firmware.version, passed)
     detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
     assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
     assert s.samples > 50, detail
     assert s.time_to_acquire <= max_acquire, detail
     assert s.centred_share >= min_centred, detail
     assert s.distance_share >= min_distance, detail
+    if crossing:
+        assert sum(crossed(x) for x in flight.samples) > 0, "no passer-by crossed: proves nothing"
