@@ -27,7 +27,6 @@ import msgspec
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
-    LANDED_STATE_UNDEFINED,
     SEVERITY_ERROR,
     SEVERITY_WARNING,
     ExtendedState,
@@ -396,8 +395,3 @@ class Px4ZenohCore(PureCore):
         if now - self._last_send > STREAM_GAP_S:
             return 0.0
         return now - self._stream_since
-
-    @property
-    def landed_state(self) -> int:
-        """ExtendedState's landed state (UNDEFINED before PX4's first vehicle_land_detected)."""
-        return self.ext.landed_state if self.ext else LANDED_STATE_UNDEFINED
