@@ -11,6 +11,7 @@ import pytest
 from px4_zenoh_rig import (
     NAV_LAND,
     NAV_OFFBOARD,
+    NAV_RTL,
     USER,
     Px4Rig,
     position,
@@ -311,3 +312,19 @@ def test_a_breach_is_reported_and_its_action_asked_of_px4():
     assert (refusal.kind, refusal.limit, refusal.action) == ("breach", "max_altitude", "land")
     assert [c["command"] for c in rig.commands()] == [cmds.NAV_LAND]
     assert rig.published(registry.STATE)[-1].failsafe == "breach:land"
+
+
+def test_a_status_older_than_an_accepted_mode_does_not_bring_offboard_back(rig):
+    rig.flying_offboard()
+    rig.setpoint(velocity(0.5))
+    op = rig.request(ops.failsafe_action(rig.core, "return"), "")
+    rig.ack(cmds.NAV_RETURN_TO_LAUNCH)
+    assert op.done and rig.published(registry.STATE)[-1].mode == "AUTO.RTL"
+    rig.run(1.0, status_every=0.25)  # PX4's status still shows OFFBOARD (sent before the ack)
+    rig.clear()
+    rig.run(0.3, status_every=1.0)
+    assert rig.core.heartbeat_state.mode == "AUTO.RTL"
+    assert rig.writes(t.TRAJECTORY) == []  # no stream: PX4 stays in its return
+    rig.vehicle(nav_state=NAV_RTL)
+    rig.run(1.0)
+    assert rig.core.heartbeat_state.mode == "AUTO.RTL" and rig.writes(t.TRAJECTORY) == []

@@ -56,6 +56,7 @@ from dronewrapper_ros2_codec.names import Endpoint
 log = logging.getLogger("bridge_px4_zenoh")
 
 STREAM_GAP_S = 0.5  # s without a setpoint written: the stream has stopped (priming restarts)
+ENTERED_HOLD_S = 1.5  # s a status showing the mode an accepted command left is taken as stale
 
 
 @dataclass
@@ -102,6 +103,7 @@ class Px4ZenohCore(PureCore):
         self.setpoints_sent = 0
         self.last_sample_at = -math.inf
         self._reported: set[str] = set()  # topics whose mismatch was reported
+        self._entered = ("", "", -math.inf)  # (mode entered, mode left, until when)
         self._last_state_key: tuple | None = None
         self._last_state_pub = -math.inf
         self._last_ext_pub = -math.inf
@@ -242,6 +244,11 @@ class Px4ZenohCore(PureCore):
         if self.status is None:
             return
         state = tm.state(self.status, connected=True, failsafe="", commander="")
+        mode, left, until = self._entered
+        if state.mode == left and self.now < until:  # sent before PX4 took the command
+            state = msgspec.structs.replace(state, mode=mode, guided=mode == "OFFBOARD")
+        elif state.mode == mode:
+            self._entered = ("", "", -math.inf)  # confirmed
         self.heartbeat_state = state
         self.update_failsafe_vehicle()
         self.publish_state()
@@ -261,6 +268,9 @@ class Px4ZenohCore(PureCore):
         hb = self.heartbeat_state
         if hb is None or hb.mode == mode:
             return
+        # a vehicle_status still showing the mode left is older than the ack: kept out for
+        # ENTERED_HOLD_S (it would have the failsafe stream OFFBOARD back on)
+        self._entered = (mode, hb.mode, self.now + ENTERED_HOLD_S)
         self.heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=mode == "OFFBOARD")
         self.update_failsafe_vehicle()
         self.publish_state()
