@@ -12,7 +12,9 @@ both on the node's own session: the router PX4's zenoh-pico dials is the project
 core writes to ``/fmu/in`` is CDR-encoded with rmw_zenoh's attachment
 (:mod:`dronewrapper_ros2_codec`, the ROS 2 codec) on the exact key of the bridge's version,
 and the bridge announces its publishers with liveliness tokens as an rmw_zenoh node would.
-Threads: Zenoh callbacks (samples, tokens, setpoints), a stream loop at ``stream_rate_hz``
+Time is the node's clock alone (the core starts at it, the driver and the stream loop read
+it, the attachment's stamp is its wall time). Threads: Zenoh callbacks (samples, tokens,
+setpoints), a stream loop at ``stream_rate_hz``
 (the core's tick) and the node's service workers.
 """
 
@@ -23,7 +25,7 @@ import hashlib
 import itertools
 import logging
 import threading
-import time
+from collections.abc import Callable
 from typing import Any
 
 import zenoh
@@ -77,13 +79,15 @@ def gid_of(token: str) -> bytes:
 class Writer:
     """The bridge's publisher of one ``/fmu/in`` topic, on the key of its version."""
 
-    def __init__(self, publisher: Any, topic: t.Px4Topic, gid: bytes) -> None:
-        self.publisher, self.topic, self.gid = publisher, topic, gid
+    def __init__(
+        self, publisher: Any, topic: t.Px4Topic, gid: bytes, wall: Callable[[], float]
+    ) -> None:
+        self.publisher, self.topic, self.gid, self.wall = publisher, topic, gid, wall
         self._seq = itertools.count(1)
 
     def __call__(self, value: dict[str, Any]) -> None:
         payload = cdr.encode(self.topic.type_name, value)
-        meta = attachment.pack(next(self._seq), time.time_ns(), self.gid)
+        meta = attachment.pack(next(self._seq), int(self.wall() * 1e9), self.gid)
         self.publisher.put(payload, attachment=meta)
 
 
@@ -93,7 +97,7 @@ class Bridge(BridgeNode[Px4ZenohCore]):
 
     def __init__(self, node: Node, config: Config, session: Any = None) -> None:
         publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
-        super().__init__(node, Px4ZenohCore(config, time.monotonic()), publishers, log)
+        super().__init__(node, Px4ZenohCore(config, node.clock.monotonic()), publishers, log)
         self.config = config
         self.session = session if session is not None else node.session
         self.writers: dict[str, Writer] = {}
@@ -102,12 +106,8 @@ class Bridge(BridgeNode[Px4ZenohCore]):
     def start(self) -> list[threading.Thread]:
         """Declare PX4's side and the services (:meth:`declare`); start the stream loop."""
         self.declare()
-        thread = threading.Thread(
-            target=self.tick_loop,
-            args=(self.config.stream_rate_hz, "stream"),
-            name="px4z-stream",
-            daemon=True,
-        )
+        rate = self.config.stream_rate_hz
+        thread = self.node.clock.thread(lambda: self.tick_loop(rate, "stream"), "px4z-stream")
         thread.start()
         return [thread]
 
@@ -131,7 +131,7 @@ class Bridge(BridgeNode[Px4ZenohCore]):
             self._declared.append(liveliness.declare_token(token))
             publisher = self.session.declare_publisher(key)
             self._declared.append(publisher)
-            self.writers[topic.name] = Writer(publisher, topic, gid_of(token))
+            self.writers[topic.name] = Writer(publisher, topic, gid_of(token), self.node.clock.time)
         for topic in t.TOPICS:  # only those it reads: PX4 publishes ~50 topics
             if topic.direction == t.OUT:
                 key = topic.any_version(domain)
