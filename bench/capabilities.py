@@ -38,6 +38,7 @@ MATRIX = REPO / "docs" / "capabilities.md"
 BACKENDS = {
     "sim": "our sim (Iris)",
     "px4": "PX4 SITL (SIH)",
+    "px4_zenoh": "PX4 SITL (SIH) over its Zenoh",
     "ardupilot": "ArduCopter SITL",
     "tello": "our sim (Tello)",
 }
@@ -52,8 +53,20 @@ CALLS = (
     "start_mission", "mission_progress", "pause_mission", "resume_mission", "return_to_launch",
     "land", "wait_for_landed_state",
 )  # fmt: skip
-PARAM = {"sim": "MPC_XY_VEL_MAX", "px4": "MPC_XY_VEL_MAX", "ardupilot": "WP_SPD", "tello": ""}
-HOLD_MODE = {"sim": "AUTO.LOITER", "px4": "AUTO.LOITER", "ardupilot": "GUIDED", "tello": ""}
+PARAM = {
+    "sim": "MPC_XY_VEL_MAX",
+    "px4": "MPC_XY_VEL_MAX",
+    "px4_zenoh": "MPC_XY_VEL_MAX",
+    "ardupilot": "WP_SPD",
+    "tello": "",
+}
+HOLD_MODE = {
+    "sim": "AUTO.LOITER",
+    "px4": "AUTO.LOITER",
+    "px4_zenoh": "AUTO.LOITER",
+    "ardupilot": "GUIDED",
+    "tello": "",
+}
 READY_S = 180.0
 
 

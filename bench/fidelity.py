@@ -61,6 +61,7 @@ def backend(
     name: str, workdir: Path, px4: Path | None, ardupilot: Path | None
 ) -> Iterator[tuple[str, str]]:
     """Run ``name``'s graph (and firmware); yields (router endpoint, firmware version)."""
+    from dronewrapper.runtime.options import DEFAULT_ROUTER
     from dronewrapper_compose.launcher import Launcher
     from dronewrapper_sim.external.firmware import arducopter, px4_sih
 
@@ -78,6 +79,15 @@ def backend(
                 raise SystemExit("px4: give --px4 PX4_TREE (or set PX4_SITL_DIR)")
             fw = stack.enter_context(px4_sih(px4, workdir))
             graph, version, variables = "px4_sitl_world", fw.version, dict(fw.variables)
+        elif name == "px4_zenoh":  # PX4's zenoh-pico dials 7447: run in a namespace of its own
+            if px4 is None:
+                raise SystemExit("px4_zenoh: give --px4 PX4_SITL_ZENOH_BUILD (or PX4_SITL_DIR)")
+            instance = int(os.environ.get("PX4_SITL_INSTANCE") or 1)
+            zenoh_on = {"PX4_PARAM_ZENOH_ENABLE": "1"}
+            fw = stack.enter_context(px4_sih(px4, workdir, instance=instance, env=zenoh_on))
+            router = DEFAULT_ROUTER
+            graph, version = "px4_zenoh_world", f"{fw.version} over its Zenoh"
+            variables = {"truth_port": fw.variables["truth_port"]}
         else:
             if ardupilot is None:
                 raise SystemExit("ardupilot: give --ardupilot TREE (or set AP_SITL_DIR)")

@@ -138,6 +138,12 @@ PLAN: dict[str, Run | Excluded] = {
     "docs/sitl_world.md: PX4_SITL_DIR=/path/to/PX4-Autopilot AP_SITL_DIR=/p": Excluded(
         "the opt-in firmware tier (needs PX4 and ArduPilot SITL builds)"
     ),
+    "docs/px4_zenoh.md: .venv/bin/dronewrapper up compose/px4_zenoh.yaml": Excluded(
+        "the graphs wait for px4_sitl_zenoh to dial their router (tests/sitl flies it, opt-in)"
+    ),
+    "docs/px4_zenoh.md: PX4_SIM_MODEL=sihsim_quadx PX4_SIMULATOR=sihsim HE": Excluded(
+        "runs a px4_sitl_zenoh build of PX4 (not installed here)"
+    ),
     "docs/px4_real.md: git clone <this repository> dronewrapper && cd dro": Excluded(
         "sets up a Jetson (apt groups, GPU wheels, the model)"
     ),

@@ -166,11 +166,13 @@ def fly(
     tmp_path: Path,
     variables: dict[str, str] | None = None,
     start_timeout: float = START_TIMEOUT_S,
+    router: str = "",
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record until the controller has been
     servoing (after its take-off) for ``seconds`` and, when it acquired the target late, for
-    MIN_TRACKED_S after that; or until ``start_timeout`` s passed without servoing."""
-    router = f"tcp/127.0.0.1:{free_port()}"
+    MIN_TRACKED_S after that; or until ``start_timeout`` s passed without servoing. ``router``:
+    the graph's router endpoint ("": a free loopback port)."""
+    router = router or f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
         "onboard_port": str(free_port(socket.SOCK_DGRAM)),

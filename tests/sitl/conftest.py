@@ -17,6 +17,7 @@ from ardupilot_sitl import ENV, sitl_binary
 sys.path.append(str(Path(__file__).parents[1] / "scenario"))  # the scenario tier's flight helper
 
 from firmware import AP_ENV, PX4_ENV, ardupilot_dir, px4_dir
+from px4_zenoh_sitl import zenoh_build
 
 MARKER = "ardupilot_sitl"
 _deselected: list[str] = []
@@ -24,6 +25,7 @@ _deselected: list[str] = []
 FIRMWARE_MARKERS = {
     "px4_sih": (PX4_ENV, lambda: px4_dir() is not None),
     "ap_sitl": (AP_ENV, lambda: ardupilot_dir() is not None),
+    "px4_zenoh": (PX4_ENV, lambda: zenoh_build() is not None),  # a px4_sitl_zenoh build
 }
 _firmware_deselected: dict[str, list[str]] = {}
 

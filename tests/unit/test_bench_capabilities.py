@@ -43,7 +43,7 @@ def test_matrix_from_records(tmp_path):
     rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith("| ")}
     assert len([r for r in rows if r.startswith("`")]) == len(CALLS)
     takeoff = [c.strip() for c in rows["`takeoff`"].split("|")[2:-1]]
-    assert takeoff == ["not run", "ok", "not run", "not run"]
+    assert takeoff == ["not run", "ok", "not run", "not run", "not run"]  # + PX4 over Zenoh
     assert "**fails**: NoData: no such parameter / really" in rows["`param_get`"]
     assert "**fails** (centred 50%, within distance 25%)" in rows["follow_color beacon_smooth"]
     assert "- PX4 SITL (SIH): PX4 v0.0.0 (02e73e3b6f), 2026-11-26\n" in text  # the newest

@@ -69,6 +69,9 @@ FIXED_BY_PEER = {  # the other end's port: refused if taken
     "px4_sitl_world": "PX4 SITL sends to 14540 and its SIH truth to 19410",
     "px4_sitl_follow_color": "PX4 SITL sends to 14540 and its SIH truth to 19410",
     "px4_sitl_follow_person": "PX4 SITL sends to 14540 and its SIH truth to 19410",
+    "px4_zenoh_world": "PX4 SIH sends its truth to 19410",
+    "px4_zenoh_follow_color": "PX4 SIH sends its truth to 19410",
+    "px4_zenoh_follow_person": "PX4 SIH sends its truth to 19410",
 }
 # fleet graphs: each drone's autopilot port is a free one the launcher picks per drone
 # (``${drone_port}``, dronewrapper_compose.fleet), and each Tello has an address of its own

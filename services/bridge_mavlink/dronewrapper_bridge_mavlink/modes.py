@@ -16,6 +16,10 @@ from pymavlink.dialects.v20.common import (
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
 )
 
+from dronewrapper_bridge_base.guided_failsafe import GUIDED_MODES as GUIDED_MODES
+from dronewrapper_bridge_base.guided_failsafe import holds_on_the_ground as holds_on_the_ground
+from dronewrapper_bridge_base.guided_failsafe import is_guided as is_guided
+
 AUTOPILOT_PX4 = "px4"
 AUTOPILOT_ARDUPILOT = "ardupilotmega"
 
@@ -83,7 +87,6 @@ ARDUCOPTER_ALIASES = {"HOLD": "LOITER", "AUTO.LAND": "LAND", "AUTO.RTL": "RTL"}
 
 # The mode in which each autopilot follows external setpoints.
 GUIDED_MODE = {AUTOPILOT_PX4: "OFFBOARD", AUTOPILOT_ARDUPILOT: "GUIDED"}
-GUIDED_MODES = frozenset({"OFFBOARD", "GUIDED", "GUIDED_NOGPS"})
 # The mode the bridge asks for to land / return / hold, per autopilot.
 LAND_MODE = {AUTOPILOT_PX4: "AUTO.LAND", AUTOPILOT_ARDUPILOT: "LAND"}
 RETURN_MODE = {AUTOPILOT_PX4: "AUTO.RTL", AUTOPILOT_ARDUPILOT: "RTL"}
@@ -164,15 +167,3 @@ def set_mode_params(autopilot: str, name: str) -> SetModeParams:
         return SetModeParams(canonical, flag, float(ARDUCOPTER_MODES[canonical]), 0.0)
     main, sub = PX4_MODES[canonical]
     return SetModeParams(canonical, flag, float(main), float(sub))
-
-
-def is_guided(mode: str) -> bool:
-    """True in a mode where the autopilot follows external setpoints (OFFBOARD, GUIDED)."""
-    return mode in GUIDED_MODES
-
-
-def holds_on_the_ground(mode: str) -> bool:
-    """True in a guided mode where a position hold streamed on the ground is safe and needed:
-    PX4's OFFBOARD (no stream, no mode, no arming). Not ArduCopter's GUIDED, where a position
-    target overrides NAV_TAKEOFF and keeps the vehicle on the ground until it disarms."""
-    return mode == GUIDED_MODE[AUTOPILOT_PX4]

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import msgspec
 
-from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     FRAME_LOCAL_NED,
@@ -36,6 +35,7 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper_bridge_base import setpoint_limits
 from dronewrapper_bridge_base.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
+from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
@@ -132,17 +132,6 @@ def to_local_ned(
         vy=east,
         vz=-target.velocity.z,
         yaw_rate=yaw_rate_ned,
-    )
-
-
-def hold_target(position_enu: tuple[float, float, float], yaw_enu: float) -> PositionTarget:
-    """A position + yaw PositionTarget (mask 3064, ENU) that holds ``position_enu``."""
-    x, y, z = position_enu
-    return PositionTarget(
-        coordinate_frame=FRAME_LOCAL_NED,
-        type_mask=MASK_POSITION,
-        position=Point(x=x, y=y, z=z),
-        yaw=yaw_enu,
     )
 
 

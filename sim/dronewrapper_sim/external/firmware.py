@@ -108,10 +108,19 @@ def _stop(proc: subprocess.Popen) -> None:
 
 
 @contextlib.contextmanager
-def px4_sih(root: Path, workdir: Path) -> Iterator[Firmware]:
-    """PX4 SITL with its SIH quadrotor (``sihsim_quadx``), a free instance, in ``workdir``."""
+def px4_sih(
+    root: Path,
+    workdir: Path,
+    *,
+    instance: int | None = None,
+    env: dict[str, str] | None = None,
+) -> Iterator[Firmware]:
+    """PX4 SITL with its SIH quadrotor (``sihsim_quadx``) in ``workdir``: ``instance`` (None: a
+    free one), ``env`` added to its environment (``PX4_PARAM_ZENOH_ENABLE=1``: its zenoh
+    module on, in a px4_sitl_zenoh build)."""
     build = px4_build_dir(root)
-    instance = free_px4_instance()
+    instance = free_px4_instance() if instance is None else instance
+    extra = env or {}
     home = workdir / "px4"
     (home / "rootfs").mkdir(parents=True, exist_ok=True)
     for name in ("bin", "etc"):
@@ -122,6 +131,7 @@ def px4_sih(root: Path, workdir: Path) -> Iterator[Firmware]:
         "PX4_SIM_MODEL": "sihsim_quadx",
         "PX4_SIMULATOR": "sihsim",
         "HEADLESS": "1",
+        **extra,
     }
     log_path = workdir / "px4.log"
     with open(log_path, "wb") as log:

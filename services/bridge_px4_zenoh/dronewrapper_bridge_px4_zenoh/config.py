@@ -1,0 +1,87 @@
+"""bridge_px4_zenoh configuration: a strict schema (an unknown key is refused by name, a bad
+value with its key named). Units are in each key's comment; see the package's README.md."""
+
+from __future__ import annotations
+
+import math
+
+import msgspec
+
+from dronewrapper.envelope import Envelope
+from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
+
+
+class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Bounds on accepted setpoints (m, m/s, rad/s), the bounds of
+    :func:`dronewrapper_bridge_base.setpoint_limits.validate`: beyond them a setpoint is refused."""
+
+    max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
+    min_altitude: float = -1_000.0  # ENU z, m
+    max_altitude: float = 10_000.0
+    max_horizontal_speed: float = 20.0  # m/s, norm of (vx, vy)
+    max_vertical_speed: float = 10.0  # m/s
+    max_yaw_rate: float = 2.0 * math.pi  # rad/s
+
+
+class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """bridge_px4_zenoh configuration (see module docstring)."""
+
+    domain: int = 0  # PX4's ZENOH_DOMAIN_ID: the first chunk of its keys
+    target_system: int = 0  # PX4's MAV_SYS_ID (instance N: N + 1); 0 = vehicle_status's
+    target_component: int = 0  # PX4's component id; 0 = vehicle_status's
+    link_timeout: float = 1.0  # s without a sample from PX4 -> State.connected false
+    stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded (contract: >= 20)
+    offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
+    mode_confirm_timeout: float = 2.5  # s for vehicle_status to show an accepted mode
+    setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
+    commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
+    commander_lost_action: str = "land"  # hold | land | return
+    command_attempts: int = 3  # sends of a vehicle command before giving up
+    command_ack_timeout: float = 0.5  # s to wait for each vehicle_command_ack
+    state_rate_hz: float = 2.0  # periodic State (also on change)
+    extended_state_rate_hz: float = 4.0  # periodic ExtendedState (also on change)
+    battery_rate_hz: float = 2.0
+    pose_max_hz: float = 0.0  # cap on pose and velocity samples; 0: every local position
+    global_position_max_hz: float = 10.0
+    limits: Limits = msgspec.field(default_factory=Limits)
+    envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly
+    command_lease: bool = False  # obey one commander at a time (bridge_base.commander_lease)
+    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
+    late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.domain <= 232:
+            raise ValueError(f"domain must be in [0, 232] (a ROS 2 domain), got {self.domain!r}")
+        for name in ("target_system", "target_component"):
+            if not 0 <= getattr(self, name) <= 255:
+                raise ValueError(f"{name} must be in [0, 255], got {getattr(self, name)!r}")
+        if self.stream_rate_hz < 20.0:
+            raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
+        for name in (
+            "link_timeout",
+            "offboard_prime_s",
+            "mode_confirm_timeout",
+            "command_ack_timeout",
+            "command_lease_ttl_s",
+        ):
+            if not 0 < getattr(self, name) <= 60:
+                raise ValueError(f"{name} must be in (0, 60] s, got {getattr(self, name)!r}")
+        if not 0 < self.late_setpoint_s <= 5:
+            raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
+        if self.command_attempts < 1:
+            raise ValueError(f"command_attempts must be >= 1, got {self.command_attempts!r}")
+        for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("pose_max_hz", "global_position_max_hz"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"{name} must be >= 0 (0: uncapped), got {getattr(self, name)!r}")
+        self.failsafe_config()  # raises ValueError naming a bad timeout or action
+
+    def failsafe_config(self) -> FailsafeConfig:
+        """The failsafe's settings, from this config's flat keys (validated there)."""
+        return FailsafeConfig(
+            setpoint_timeout=self.setpoint_timeout,
+            commander_lost_timeout=self.commander_lost_timeout,
+            commander_lost_action=self.commander_lost_action,
+        )

@@ -1,0 +1,255 @@
+"""Take-off, landing, go-to and return over PX4's Zenoh, each one waiting operation (pure),
+answered with a :class:`~dronewrapper.msgs.flight.FlightResult` as on the other bridges:
+
+- take-off: refused (``not_ready``) while PX4's vehicle_status says its preflight checks do not
+  pass; else OFFBOARD (primed), the bridge's own hold at the ground, arm, the hold moved
+  ``height`` m up; done within ``tolerance``; fails when PX4 disarms or leaves OFFBOARD, or
+  at ``timeout`` (then it holds where it is). Already flying: done at once, nothing sent.
+- landing: NAV_LAND here; done on the ground and disarmed.
+- go-to: refused on the ground or outside the envelope; OFFBOARD and the bridge's own hold at
+  the point (ENU m from home, home being PX4's local origin); done within ``tolerance``.
+- return: refused on the ground; PX4's RTL; done on the ground and disarmed.
+
+Heights and points in metres (local ENU), time the core's (monotonic s). The request checks
+and result shapes are those of bridge_mavlink's ``flight`` and ``actions``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Generator
+from typing import TYPE_CHECKING
+
+from dronewrapper import envelope as env
+from dronewrapper.envelope import EnvelopeError
+from dronewrapper.geodesy import to_enu
+from dronewrapper.msgs.flight import (
+    NO_HOME,
+    NO_POSITION,
+    NOT_READY,
+    REFUSED,
+    TOO_LATE,
+    FlightResult,
+    GotoRequest,
+    LandRequest,
+    ReturnRequest,
+    TakeoffRequest,
+)
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    LANDED_STATE_ON_GROUND,
+    LANDED_STATE_TAKEOFF,
+    LANDED_STATE_UNDEFINED,
+    CommandBool,
+    CommandTOL,
+    SetMode,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.guided_failsafe import hold_target
+from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_px4_zenoh import commands as cmds
+from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
+from dronewrapper_bridge_px4_zenoh import operations as ops
+
+if TYPE_CHECKING:
+    from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
+
+log = logging.getLogger("bridge_px4_zenoh")
+NOT_CONNECTED = "PX4 is not connected (no sample on its Zenoh keys)"
+MAX_HEIGHT_M = 1000.0
+MAX_TIMEOUT_S = 600.0
+
+
+def checked(name: str, value: float, low: float, high: float) -> float:
+    """``value`` if finite and in (``low``, ``high``]; ValueError naming ``name`` otherwise."""
+    if not (isinstance(value, int | float) and math.isfinite(value) and low < value <= high):
+        raise ValueError(f"{name} must be in ({low:g}, {high:g}], got {value!r}")
+    return float(value)
+
+
+def failed(failure: str, message: str, step: str = "", result: int | None = None):
+    return FlightResult(success=False, failure=failure, step=step, result=result, message=message)
+
+
+def flying(core: Px4ZenohCore) -> bool:
+    """Armed and in the air (per the landed state)."""
+    return core.failsafe.airborne and core.failsafe.armed
+
+
+def landed(core: Px4ZenohCore) -> bool:
+    """On the ground and disarmed."""
+    state = core.heartbeat_state
+    return core.ext.landed_state == LANDED_STATE_ON_GROUND and state is not None and not state.armed
+
+
+def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
+    """Take off to ``request.height`` m above the take-off point (see module docstring)."""
+    height = checked("height", request.height, 0.0, MAX_HEIGHT_M)
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    tolerance = request.tolerance
+    if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
+        raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
+    if not core.connected:
+        return failed(NOT_READY, NOT_CONNECTED)
+    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
+        return FlightResult(success=True, message="already flying: nothing done")
+    if core.status is not None and not core.status["pre_flight_checks_pass"]:
+        return failed(NOT_READY, "PX4's preflight checks do not pass yet (vehicle_status)")
+    try:
+        rules.refuse_takeoff(core, height)
+    except ServiceError as exc:
+        return failed(REFUSED, exc.message, "takeoff")
+    pose = core.pose()
+    if pose is None:
+        return failed(NO_POSITION, "no local position: no point to take off from")
+    (x, y, z0), yaw = pose
+    on_ground = core.ext.landed_state in (LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED)
+    start_z = z0 if on_ground else 0.0
+    target_z = start_z + height
+    deadline = core.now + timeout
+    reply = yield from ops.set_mode(core, SetMode(custom_mode=ops.GUIDED))
+    if not reply.mode_sent:
+        return failed(REFUSED, reply.message, f"set_mode {ops.GUIDED}", reply.result)
+    core.failsafe.hold_at(hold_target((x, y, start_z), yaw))
+    armed = yield from ops.arming(core, CommandBool(value=True))
+    if not armed.success:
+        core.failsafe.release_hold()
+        return failed(REFUSED, armed.message, "arming", armed.result)
+    core.failsafe.hold_at(hold_target((x, y, target_z), yaw))
+    log.info("takeoff: OFFBOARD, armed, climbing to %.2f m", target_z)
+    outcome = yield from wait_at(
+        core, (x, y, target_z), tolerance, deadline, "takeoff", z_only=True
+    )
+    if outcome is not None:
+        if outcome.failure == TOO_LATE:
+            core.hold_here()
+        else:
+            core.failsafe.release_hold()
+        return outcome
+    z = core.position_enu[2] if core.position_enu else math.nan
+    return FlightResult(
+        success=True,
+        message=f"took off: {z - start_z:.2f} m above the take-off point ({height:g} m asked)",
+        height=z - start_z,
+    )
+
+
+def wait_at(
+    core: Px4ZenohCore,
+    target: tuple[float, float, float],
+    tolerance: float,
+    deadline: float,
+    step: str,
+    *,
+    z_only: bool = False,
+) -> Generator[float, None, FlightResult | None]:
+    """Wait until within ``tolerance`` m of ``target`` (only its height with ``z_only``):
+    None, or the failure (PX4 disarmed or left OFFBOARD after showing it armed in OFFBOARD:
+    vehicle_status, ~2 Hz, may show an accepted arming later than its ack; ``deadline``
+    passed)."""
+    seen_armed = seen_mode = False
+    while True:
+        position = core.position_enu
+        if position is not None:
+            distance = abs(target[2] - position[2]) if z_only else math.dist(position, target)
+            if distance <= tolerance:
+                return None
+        state = core.heartbeat_state
+        if state is not None:
+            seen_armed |= state.armed
+            seen_mode |= state.mode == ops.GUIDED
+            if seen_armed and not state.armed:
+                return failed(REFUSED, "PX4 disarmed", step)
+            if seen_mode and state.mode != ops.GUIDED:
+                return failed(REFUSED, f"PX4 left {ops.GUIDED} for {state.mode}", step)
+        if core.now >= deadline:
+            where = "no position" if position is None else f"z={position[2]:.2f} m"
+            return failed(TOO_LATE, f"not within {tolerance:g} m of the target in time ({where})")
+        yield deadline
+
+
+def land_here(core: Px4ZenohCore, request: LandRequest) -> Steps:
+    """Land where the aircraft is; done once on the ground and disarmed."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    if not core.connected:
+        return failed(NOT_READY, NOT_CONNECTED)
+    if landed(core):
+        return FlightResult(success=True, message="already on the ground and disarmed")
+    deadline = core.now + timeout
+    core.failsafe.release_hold()
+    reply = yield from ops.land(core, CommandTOL.land())
+    if not reply.success:
+        return failed(REFUSED, reply.message, "land", reply.result)
+    return (yield from wait_landed(core, deadline, timeout))
+
+
+def wait_landed(core: Px4ZenohCore, deadline: float, timeout: float) -> Steps:
+    while not landed(core):
+        if core.now >= deadline:
+            return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
+        yield deadline
+    return FlightResult(success=True, message="on the ground and disarmed")
+
+
+def goto_point(core: Px4ZenohCore, request: GotoRequest) -> Steps:
+    """Fly to the point and hold there (see module docstring)."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    tolerance = checked("tolerance", request.tolerance, 0.0, 100.0)
+    if not core.connected:
+        return failed(NOT_READY, NOT_CONNECTED)
+    if not flying(core):
+        return failed(REFUSED, "goto refused: not flying (take off first)", "goto")
+    state = core.envelope
+    if request.geodetic:
+        if state.home_geo is None:
+            return failed(NO_HOME, "home has no latitude and longitude (no GPS): go to x, y")
+        east, north = to_enu(state.home_geo, request.latitude, request.longitude)
+    else:
+        east, north = request.x, request.y
+    try:
+        env.check_position(state.envelope, east, north, request.z)
+    except EnvelopeError as exc:
+        return failed(REFUSED, f"goto refused: {exc}", "goto")
+    hx, hy, hz = state.home_local
+    target = (hx + east, hy + north, hz + request.z)
+    deadline = core.now + timeout
+    if ops.shown_mode(core) != ops.GUIDED:
+        reply = yield from ops.set_mode(core, SetMode(custom_mode=ops.GUIDED))
+        if not reply.mode_sent:
+            return failed(REFUSED, reply.message, f"set_mode {ops.GUIDED}", reply.result)
+    core.failsafe.hold_at(hold_target(target, core.yaw_enu))
+    outcome = yield from wait_at(core, target, tolerance, deadline, "goto")
+    if outcome is not None:
+        if outcome.failure == TOO_LATE:
+            core.hold_here()
+        return outcome
+    distance = math.dist(core.position_enu, target) if core.position_enu else math.nan
+    return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
+
+
+def return_home(core: Px4ZenohCore, request: ReturnRequest) -> Steps:
+    """PX4's return (RTL); done on the ground, disarmed."""
+    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
+    if not core.connected:
+        return failed(NOT_READY, NOT_CONNECTED)
+    if not flying(core):
+        return failed(REFUSED, "return refused: not flying (take off first)", "return")
+    deadline = core.now + timeout
+    core.failsafe.release_hold()
+    for mode in (ops.RETURN_MODE, ops.LAND_MODE):
+        core.failsafe.on_mode_requested(mode, core.now)
+    result, message = yield from ops.command(
+        core, cmds.vehicle_command(cmds.NAV_RETURN_TO_LAUNCH, **ops.target(core))
+    )
+    if result != ops.ACCEPTED:
+        return failed(REFUSED, message, "return", max(result, 0))
+    core.mode_entered(ops.RETURN_MODE)
+    while not landed(core):
+        hb = core.heartbeat_state
+        if hb is not None and hb.armed and hb.mode not in (ops.RETURN_MODE, ops.LAND_MODE):
+            return failed(REFUSED, f"PX4 left {ops.RETURN_MODE} for {hb.mode}", "return")
+        if core.now >= deadline:
+            return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
+        yield deadline
+    return FlightResult(success=True, message="returned: on the ground and disarmed")

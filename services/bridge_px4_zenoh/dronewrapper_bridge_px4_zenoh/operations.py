@@ -1,0 +1,245 @@
+"""Service calls that wait for PX4, as pure operations the core advances (see
+:mod:`dronewrapper_bridge_base.operation`): vehicle commands on ``/fmu/in/vehicle_command``,
+answered by ``/fmu/out/vehicle_command_ack``.
+
+A command is written up to ``command_attempts`` times, ``command_ack_timeout`` s apart, until
+an ack for the same command arrives or vehicle_status shows its effect (one exchange at a
+time): with PX4's MAVLink link busy beside it, PX4's zenoh module was measured to publish no
+ack for some commands it carried out. A mode is asked for with
+``VEHICLE_CMD_SET_NAV_STATE``; an accepted one must show in vehicle_status within
+``mode_confirm_timeout``. OFFBOARD is asked for only after > ``offboard_prime_s`` of
+streaming (PX4 refuses it without a setpoint stream).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Generator
+from typing import Any
+
+from dronewrapper.msgs.mavros import (
+    LANDED_STATE_IN_AIR,
+    CommandBool,
+    CommandBoolResult,
+    CommandTOL,
+    CommandTOLResult,
+    SetMode,
+    SetModeResult,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.frames import yaw_enu_to_ned
+from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_px4_zenoh import commands as cmds
+from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
+from dronewrapper_bridge_px4_zenoh import topics as t
+from dronewrapper_bridge_px4_zenoh.modes import mode_name, nav_state_of
+
+Px4ZenohCore = Any
+"""The core (core.py imports this module, so the type is not imported here)."""
+
+log = logging.getLogger("bridge_px4_zenoh")
+
+ACCEPTED = cmds.ACCEPTED
+NO_ACK = -1
+GUIDED, LAND_MODE, RETURN_MODE, HOLD_MODE = "OFFBOARD", "AUTO.LAND", "AUTO.RTL", "AUTO.LOITER"
+NAMES = {
+    cmds.ARM_DISARM: "ARM_DISARM",
+    cmds.NAV_TAKEOFF: "NAV_TAKEOFF",
+    cmds.NAV_LAND: "NAV_LAND",
+    cmds.NAV_RETURN_TO_LAUNCH: "NAV_RETURN_TO_LAUNCH",
+    cmds.SET_NAV_STATE: "SET_NAV_STATE",
+}
+
+
+def command(
+    core: Px4ZenohCore, value: dict, shown: Callable[[], bool] | None = None
+) -> Generator[float, None, tuple[int, str]]:
+    """Write a VehicleCommand and wait for its ack: (result, explanation); ``NO_ACK`` when
+    none came after every attempt. ``shown``: True once vehicle_status shows the command's
+    effect (armed, the mode asked for): then it counts as accepted without an ack (PX4's
+    module may publish a later ack in its place, measured beside a MAVLink link)."""
+    config = core.config
+    number = value["command"]
+    name = NAMES.get(number, f"command {number}")
+    while core.command_busy:
+        yield core.now + 0.05
+    core.take_command_slot()
+    try:
+        for _ in range(config.command_attempts):
+            sent = core.now
+            core.write(t.COMMAND, value)
+            deadline = sent + config.command_ack_timeout
+            while core.now < deadline:
+                if shown is not None and shown():
+                    return ACCEPTED, f"{name} accepted (no ack; vehicle_status shows it)"
+                for at, acked, result in reversed(core.acks):
+                    if at >= sent and acked == number and result != cmds.IN_PROGRESS:
+                        text = cmds.result_text(result)
+                        return result, f"{name} {text}" if result == ACCEPTED else (
+                            f"{name} refused: {text}"
+                        )
+                yield deadline
+        return NO_ACK, f"{name}: no vehicle_command_ack after {config.command_attempts} attempt(s)"
+    finally:
+        core.release_command_slot()
+
+
+def target(core: Px4ZenohCore) -> dict[str, int]:
+    """The system and component a vehicle command is for: PX4's own (its vehicle_status's,
+    unless configured); 1, 1 before it is known."""
+    return {
+        "target_system": core.target_system or 1,
+        "target_component": core.target_component or 1,
+    }
+
+
+def arming(core: Px4ZenohCore, request: CommandBool) -> Steps:
+    """ARMING: VEHICLE_CMD_COMPONENT_ARM_DISARM; the reply carries PX4's ack."""
+    core.require_connected()
+    value = bool(request.value)
+    result, message = yield from command(
+        core, cmds.arm(value, **target(core)), lambda: armed(core) == value
+    )
+    return CommandBoolResult(success=result == ACCEPTED, result=max(result, 0), message=message)
+
+
+def takeoff(core: Px4ZenohCore, request: CommandTOL) -> Steps:
+    """TAKEOFF: VEHICLE_CMD_NAV_TAKEOFF to ``altitude`` m above PX4's local origin (NaN: PX4's
+    MIS_TAKEOFF_ALT); while flying it does nothing."""
+    core.require_connected()
+    height = request.altitude
+    if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
+        raise ValueError(f"altitude must be in (0, 1000] m or NaN, got {height!r}")
+    yaw = request.yaw
+    if not (math.isnan(yaw) or math.isfinite(yaw)):
+        raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
+    if core.ext.landed_state == LANDED_STATE_IN_AIR:
+        return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
+    rules.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
+    home = core.envelope.home_geo
+    altitude = math.nan if math.isnan(height) or home is None else home[2] + height
+    yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
+    for mode in ("AUTO.TAKEOFF", HOLD_MODE):
+        core.failsafe.on_mode_requested(mode, core.now)
+    core.failsafe.on_takeoff_requested(core.now)  # no priming, no hold into the climb
+    value = cmds.vehicle_command(
+        cmds.NAV_TAKEOFF,
+        request.min_pitch,
+        0,
+        0,
+        yaw_deg,
+        math.nan,
+        math.nan,
+        altitude,
+        **target(core),
+    )
+    result, message = yield from command(core, value, lambda: shown_mode(core) == "AUTO.TAKEOFF")
+    if result == ACCEPTED:
+        core.mode_entered("AUTO.TAKEOFF")
+    return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
+
+
+def land(core: Px4ZenohCore, request: CommandTOL) -> Steps:
+    """LAND: VEHICLE_CMD_NAV_LAND here (NaN latitude/longitude: where it is)."""
+    core.require_connected()
+    lat, lon = request.latitude, request.longitude
+    for name, v, bound in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
+        if not math.isnan(v) and not (math.isfinite(v) and abs(v) <= bound):
+            raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {v!r}")
+    core.failsafe.on_mode_requested(LAND_MODE, core.now)
+    value = cmds.vehicle_command(
+        cmds.NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan, **target(core)
+    )
+    result, message = yield from command(core, value, lambda: shown_mode(core) == LAND_MODE)
+    if result == ACCEPTED:
+        core.mode_entered(LAND_MODE)
+    return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
+
+
+def failsafe_action(core: Px4ZenohCore, action: str) -> Steps:
+    """The failsafe's own request (``land`` or ``return``); nobody waits for it."""
+    mode = LAND_MODE if action == "land" else RETURN_MODE
+    core.failsafe.on_mode_requested(mode, core.now)
+    nan = math.nan
+    value = (
+        cmds.vehicle_command(cmds.NAV_LAND, 0, 0, 0, nan, nan, nan, nan, **target(core))
+        if action == "land"
+        else cmds.vehicle_command(cmds.NAV_RETURN_TO_LAUNCH, **target(core))
+    )
+    result, message = yield from command(core, value, lambda: shown_mode(core) == mode)
+    if result == ACCEPTED:
+        core.mode_entered(mode)
+        log.warning("failsafe %s: accepted by PX4", action)
+    else:
+        log.error("failsafe %s refused: %s", action, message)
+    return result
+
+
+def set_mode(core: Px4ZenohCore, request: SetMode) -> Steps:
+    """SET_MODE by MAVROS name (OFFBOARD, AUTO.LOITER ...); replies once PX4 shows the mode
+    in vehicle_status, or refused it. OFFBOARD is preceded by priming."""
+    core.require_connected()
+    mode = mode_name(nav_state_of(request.custom_mode))  # ValueError lists the modes
+    primed = mode == GUIDED
+    if primed:
+        yield from prime(core)
+    rules.refuse_mode(core, mode)  # no guided mode while outside the envelope
+    core.failsafe.on_mode_requested(mode, core.now)
+    result, message = yield from command(
+        core,
+        cmds.set_nav_state(nav_state_of(mode), **target(core)),
+        lambda: shown_mode(core) == mode,
+    )
+    if result == ACCEPTED:
+        deadline = core.now + core.config.mode_confirm_timeout
+        while shown_mode(core) != mode and core.now < deadline:
+            yield deadline
+        if shown_mode(core) == mode:
+            message += " (shown by vehicle_status)"
+        else:
+            result = cmds.FAILED
+            message = (
+                f"SET_NAV_STATE {mode}: accepted, but PX4 is still in "
+                f"{shown_mode(core) or 'an unknown mode'} after "
+                f"{core.config.mode_confirm_timeout:g} s"
+            )
+    core.failsafe.end_priming(core.now, engage=primed and result == ACCEPTED)
+    return SetModeResult(mode_sent=result == ACCEPTED, result=max(result, 0), message=message)
+
+
+def armed(core: Px4ZenohCore) -> bool:
+    """Whether PX4's last vehicle_status showed it armed."""
+    return core.heartbeat_state is not None and core.heartbeat_state.armed
+
+
+def shown_mode(core: Px4ZenohCore) -> str:
+    """The mode PX4's last vehicle_status showed, "" before any."""
+    return core.heartbeat_state.mode if core.heartbeat_state else ""
+
+
+def prime(core: Px4ZenohCore) -> Generator[float, None, None]:
+    """Stream for > ``offboard_prime_s`` before OFFBOARD: the fresh setpoint, else a hold at
+    the current pose (streamed by the core's tick). ServiceError when it cannot."""
+    need = core.config.offboard_prime_s
+    if core.streamed_for(core.now) >= need:
+        return
+    if core.pose() is None and core.failsafe.fresh_target(core.now) is None:
+        raise ServiceError(
+            "cannot enter OFFBOARD: no local position to hold and no setpoint stream", "refused"
+        )
+    core.failsafe.start_priming(core.now, need + 2.0)
+    deadline = core.now + need + 2.0
+    while core.streamed_for(core.now) < need:
+        if core.now >= deadline:
+            raise ServiceError("could not stream setpoints before OFFBOARD", "refused")
+        yield deadline
+
+
+def breach_action(core: Px4ZenohCore, action: str) -> Steps:
+    """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
+    requests), or ``hold`` (AUTO.LOITER)."""
+    if action in ("land", "return"):
+        return (yield from failsafe_action(core, action))
+    reply = yield from set_mode(core, SetMode(custom_mode=HOLD_MODE))
+    return reply.result

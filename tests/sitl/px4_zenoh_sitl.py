@@ -1,0 +1,59 @@
+"""Real PX4 over its own Zenoh for the opt-in tier: a ``px4_sitl_zenoh`` build (PX4's ``zenoh``
+module, built outside the repository from PX4's documentation), started with
+``PX4_PARAM_ZENOH_ENABLE=1`` so its zenoh-pico dials ``tcp/127.0.0.1:7447``, and the graph
+whose router listens there (compose/px4_zenoh*.yaml).
+
+PX4 dials a fixed port, so the flights run in a network namespace of their own
+(``unshare -rn``, loopback up): the router port must be free, or the flight fails saying so.
+``PX4_SITL_INSTANCE`` picks PX4's instance (its /tmp/px4-sock-N is shared across namespaces);
+unset, the first N in 1..9 with no such socket.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+from pathlib import Path
+
+from firmware import px4_dir
+
+from dronewrapper.runtime.options import DEFAULT_ROUTER
+from dronewrapper_sim.external.firmware import Firmware, px4_sih
+
+ROUTER_PORT = int(DEFAULT_ROUTER.rsplit(":", 1)[1])  # 7447: where PX4's zenoh-pico dials
+
+
+def zenoh_build() -> Path | None:
+    """The ``px4_sitl_zenoh`` build ``PX4_SITL_DIR`` names (the build, or a PX4 tree holding
+    build/px4_sitl_zenoh), None when it names none with PX4's zenoh module."""
+    root = px4_dir()
+    if root is None:
+        return None
+    for build in (root, root / "build" / "px4_sitl_zenoh"):
+        if (build / "bin" / "px4").is_file() and (build / "src" / "modules" / "zenoh").is_dir():
+            return build
+    return None
+
+
+def instance() -> int:
+    """PX4's instance: ``PX4_SITL_INSTANCE``, else the first without a lock socket."""
+    chosen = os.environ.get("PX4_SITL_INSTANCE", "").strip()
+    if chosen:
+        return int(chosen)
+    for n in range(1, 10):
+        if not Path(f"/tmp/px4-sock-{n}").exists():
+            return n
+    raise RuntimeError("no free PX4 SITL instance (1..9)")
+
+
+def router_port_free() -> bool:
+    with socket.socket() as sock:
+        return sock.connect_ex(("127.0.0.1", ROUTER_PORT)) != 0
+
+
+def px4_zenoh(workdir: Path) -> contextlib.AbstractContextManager[Firmware]:
+    """PX4 SIH with its zenoh module on, in ``workdir`` (PX4's own starter)."""
+    build = zenoh_build()
+    assert build is not None, "PX4_SITL_DIR names no px4_sitl_zenoh build"
+    return px4_sih(build, workdir, instance=instance(), env={"PX4_PARAM_ZENOH_ENABLE": "1"})
