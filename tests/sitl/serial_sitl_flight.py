@@ -3,7 +3,7 @@ tests/sitl/test_serial_sitl.py inside a private network namespace (the firmware'
 PX4's instance lock are fixed). Prints one JSON line of figures; exits 0 when it ran to the end.
 
     python serial_sitl_flight.py px4 57600 PX4_BUILD_DIR WORKDIR
-    python serial_sitl_flight.py ardupilot 921600 ARDUPILOT_TREE WORKDIR
+    python serial_sitl_flight.py ardupilot 921600 ARDUPILOT_TREE WORKDIR [signed]
 
 The line: a pseudo-terminal pair for the bridge, paced at ``baud / 10`` B/s each way behind the
 autopilot's 1 kB transmit buffer, and a second pseudo-terminal that the firmware opens as its
@@ -14,7 +14,9 @@ rate left to PX4: baud / 20 B/s), ArduCopter its SERIAL0 (``--serial0 uart:DEVIC
 ``SERIAL0_BAUD`` to match). The firmware sizes its streams to the baud as on a flight
 controller, the bridge fits its stream requests to the line, and the SDK flies: Listing 1
 (take off, turn, move, land), a parameter sweep, a 20-item mission upload, then a small square
-mission flown.
+mission flown. ``signed``: a new MAVLink 2 signing key is provisioned on the autopilot over the
+line first (``dronewrapper_bridge_mavlink.provision``, SETUP_SIGNING) and the bridge signs and
+checks every frame with it (ArduCopter; PX4 at this version has no MAVLink signing).
 """
 
 from __future__ import annotations
@@ -35,6 +37,8 @@ from dronewrapper import CommandRefused, DroneWrapper
 from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper.security.keystore import KeyStore
+from dronewrapper_bridge_mavlink.provision import provision
 from dronewrapper_sim.serial_line import SerialLine
 from dronewrapper_sim.serial_relay import SerialRelay
 from support import Process, free_endpoint, python_module, wait_for, zenoh_router
@@ -84,7 +88,9 @@ def px4(build: Path, work: Path, device: str, baud: int) -> Iterator[Path]:
         start = [str(build / "bin" / "px4-mavlink"), "--instance", str(PX4_INSTANCE), "start",
                  "-d", device, "-b", str(baud), "-m", "onboard"]  # fmt: skip
 
-        def started() -> bool:
+        def started() -> bool:  # the client's status can be lost while PX4 boots: its log says
+            if f"on {device} @" in log.read_text(errors="replace"):
+                return True
             return subprocess.run(start, capture_output=True, timeout=10).returncode == 0
 
         wait_for(started, 60, interval=1.0, what="PX4's MAVLink instance on the serial device")
@@ -251,12 +257,13 @@ def fly(kind: str, baud: int, relay: SerialRelay, drone: DroneWrapper, report: d
                                 "reached": list(progress.reached_items)}  # fmt: skip
     drone.land()
     report["final_link"] = link_figures(watch.links[-1])
+    report["rejected"] = watch.links[-1].rejected
     report["dropped_frames_total"] = relay.down.dropped_frames
     report["dropped_toward_autopilot"] = relay.up.dropped_frames
 
 
-def main(kind: str, baud: int, firmware: Path, work: Path) -> int:
-    report: dict = {"autopilot": kind, "baud": baud}
+def main(kind: str, baud: int, firmware: Path, work: Path, signed: bool = False) -> int:
+    report: dict = {"autopilot": kind, "baud": baud, "signed": signed}
     with SerialRelay(baud, pty=True) as relay:
         relay.down = CountingLine(baud, now=time.monotonic())  # before any byte comes
         start = px4 if kind == "px4" else arducopter
@@ -264,6 +271,11 @@ def main(kind: str, baud: int, firmware: Path, work: Path) -> int:
             "--config", "services/bridge_mavlink/dronewrapper_bridge_mavlink/config/"
             "ardupilot_sitl.yaml"]  # fmt: skip
         with start(firmware, work, relay.autopilot_path, baud), zenoh_router(free_endpoint()) as r:
+            if signed:
+                store = KeyStore(work / "keys")
+                key = store.new_mavlink_key()
+                report["provision"] = provision(relay.path, key, baud=baud, timeout=60)
+                config += ["--set", f"signing_key_file={store.mavlink_key}"]
             bridge = Process(
                 python_module("dronewrapper_bridge_mavlink", "--connect", r, *config,
                               "--connection", relay.path, "--baud", str(baud)),
@@ -287,4 +299,5 @@ def main(kind: str, baud: int, firmware: Path, work: Path) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1], int(sys.argv[2]), Path(sys.argv[3]), Path(sys.argv[4])))
+    args = sys.argv[1:]
+    sys.exit(main(args[0], int(args[1]), Path(args[2]), Path(args[3]), args[4:] == ["signed"]))
