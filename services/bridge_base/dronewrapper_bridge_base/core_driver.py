@@ -32,11 +32,11 @@ from dronewrapper.msgs.refusal import BREACH, ENVELOPE, LATE, LEASE, VALIDATION,
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.setpoint_limits import SetpointError
 from dronewrapper_bridge_base.commander_lease import LeaseDecision, LeaseGate
 from dronewrapper_bridge_base.operation import Operation, Operations, Steps
 from dronewrapper_bridge_base.refusals import RefusalThrottle
 from dronewrapper_bridge_base.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
+from dronewrapper_bridge_base.setpoint_limits import SetpointError
 
 MAX_WAIT_S = 0.05
 """A waiting service call looks at its operation at least this often (s)."""

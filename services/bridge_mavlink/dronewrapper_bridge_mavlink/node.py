@@ -11,7 +11,6 @@ Node's service workers, which start an operation in the core and wait until it i
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import sys
 import threading
@@ -303,27 +302,16 @@ def run(node: Node, config: Config) -> int:
     exposure = network_exposure(config.connection)
     if exposure is not None:
         log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
-    with _ros2_gateway(node, config):  # ROS 2 from this process, when configured
-        threads = bridge.start()
-        node.announce()
-        log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
-        node.spin()
-        for thread in threads:
-            thread.join(timeout=2.0)
+    threads = bridge.start()
+    node.announce()
+    log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
+    node.spin()
+    for thread in threads:
+        thread.join(timeout=2.0)
     bridge.link.close()
     if bridge.gcs is not None:
         bridge.gcs.close()
     return 0
-
-
-def _ros2_gateway(node: Node, config: Config) -> Any:
-    """The hosted ROS 2 gateway when ``config`` has a ``ros2`` section; its codec is imported
-    only then (a bridge without one never loads it)."""
-    if config.ros2 is None:
-        return contextlib.nullcontext()
-    from dronewrapper_ros2_gateway.hosted import hosted_gateway
-
-    return hosted_gateway(node, config.ros2)
 
 
 __all__ = ["Bridge", "canonical_mode", "run"]

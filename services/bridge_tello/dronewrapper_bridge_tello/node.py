@@ -35,7 +35,6 @@ from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
 from dronewrapper_bridge_tello.telemetry import Telemetry
 from dronewrapper_bridge_tello.video import VideoReceiver
 from dronewrapper_bridge_tello.video_demand import OFF
-from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
 log = logging.getLogger("bridge_tello")
 
@@ -249,22 +248,21 @@ def run(node: Node, config: Config) -> int:
     except OSError as exc:
         log.error("cannot open the Tello sockets on %s: %s", config.local_address, exc)
         return 1
-    with hosted_gateway(node, config.ros2):  # ROS 2 from this process, when configured
-        threads = bridge.start()
-        node.announce()
-        warning = open_wifi_warning()  # a Tello's Wi-Fi is open until a password is set
-        if warning:
-            log.warning("%s", warning)
-        log.info(
-            "bridge_tello ready: Tello %s:%d, listening on %s (namespace %s)",
-            config.tello_address,
-            config.command_port,
-            config.local_address,
-            node.ns,
-        )
-        node.spin()
-        for thread in threads:
-            thread.join(timeout=2.0)
+    threads = bridge.start()
+    node.announce()
+    warning = open_wifi_warning()  # a Tello's Wi-Fi is open until a password is set
+    if warning:
+        log.warning("%s", warning)
+    log.info(
+        "bridge_tello ready: Tello %s:%d, listening on %s (namespace %s)",
+        config.tello_address,
+        config.command_port,
+        config.local_address,
+        node.ns,
+    )
+    node.spin()
+    for thread in threads:
+        thread.join(timeout=2.0)
     bridge.camera.close()
     bridge.link.close()
     return 0

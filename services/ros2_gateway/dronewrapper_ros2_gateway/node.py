@@ -1,6 +1,6 @@
 """The gateway process: each drone's keys as ROS 2 entities on rmw_zenoh's wire (README.md).
 
-Only I/O here; the formats are :mod:`dronewrapper.ros2`'s and the table is :mod:`entities`.
+Only I/O here; the formats are :mod:`dronewrapper_ros2_codec`'s and the table is :mod:`entities`.
 Per drone it holds a node token (``/<ns>/<node_name>``) and, per entity, an endpoint token
 and one Zenoh declaration on the ROS 2 key:
 
@@ -14,7 +14,7 @@ and one Zenoh declaration on the ROS 2 key:
   reply from the bridge is MAV_RESULT_FAILED (ROS 2 clients get no error channel).
 
 It also reads every ROS 2 endpoint's token on its domain and logs each type disagreement with
-one of its own entities (:mod:`dronewrapper.ros2.mismatch`). :func:`run` is the gateway as a
+one of its own entities (:mod:`dronewrapper_ros2_codec.mismatch`). :func:`run` is the gateway as a
 process of its own; :mod:`dronewrapper_ros2_gateway.hosted` runs the same :class:`Gateway`
 inside a bridge. (Over 400 lines: one class holds every declaration of both directions, which
 share its ids, tokens and close; the formats, rules and checks are in the modules named.)
@@ -38,16 +38,23 @@ import zenoh
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import MAV_RESULT_DENIED, MAV_RESULT_FAILED
-from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.convert import (
+from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.node import Node, open_session
+from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.qos import qos_for
+from dronewrapper_bridge_base.setpoint_limits import SetpointError, validate
+from dronewrapper_ros2_codec import attachment, cdr
+from dronewrapper_ros2_codec.convert import (
     position_target,
     refusal_of,
     request_of,
     response_of,
     to_ros,
 )
-from dronewrapper.ros2.mismatch import disagreements
-from dronewrapper.ros2.names import (
+from dronewrapper_ros2_codec.mismatch import disagreements
+from dronewrapper_ros2_codec.names import (
     ADMIN,
     PUBLISHER,
     SERVICE,
@@ -57,14 +64,7 @@ from dronewrapper.ros2.names import (
     parse_endpoint,
     topic_key,
 )
-from dronewrapper.ros2.typehash import type_hash
-from dronewrapper.runtime.caller import commander_attachment
-from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
-from dronewrapper.runtime.node import Node, open_session
-from dronewrapper.runtime.options import ZenohOptions
-from dronewrapper.runtime.qos import qos_for
-from dronewrapper.setpoint_limits import SetpointError, validate
+from dronewrapper_ros2_codec.typehash import type_hash
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import IN, OUT, SERVE, Entity, selected
 from dronewrapper_ros2_gateway.presence import PresenceWatch
