@@ -153,15 +153,22 @@ def wait_ready(drone: DroneWrapper, kind: str) -> float:
     raise AssertionError(f"{kind} not ready within {READY_TIMEOUT_S:g} s: {last}")
 
 
+def quantile_ms(delays, q: float) -> float | None:
+    ordered = sorted(delays)
+    return round(1000 * ordered[int(q * (len(ordered) - 1))], 1) if ordered else None
+
+
 def line_figures(relay: SerialRelay, offered_before: collections.Counter, seconds: float) -> dict:
-    """The autopilot's frames a second by name (the busiest), drops and time on the line."""
+    """The autopilot's frames a second by name (the busiest), and each frame's time on the line
+    (write to last byte across): autopilot to bridge, and bridge to autopilot (the setpoints)."""
     offered = relay.down.offered - offered_before
-    delays = sorted(relay.down.delays)
     top = {name: round(n / seconds, 1) for name, n in offered.most_common(8)}
     return {
         "autopilot_sends_hz": top,
-        "line_ms_p50": round(1000 * delays[len(delays) // 2], 1) if delays else None,
-        "line_ms_p95": round(1000 * delays[int(0.95 * (len(delays) - 1))], 1) if delays else None,
+        "line_ms_p50": quantile_ms(relay.down.delays, 0.5),
+        "line_ms_p95": quantile_ms(relay.down.delays, 0.95),
+        "uplink_ms_p50": quantile_ms(relay.up.delays, 0.5),
+        "uplink_ms_p95": quantile_ms(relay.up.delays, 0.95),
     }
 
 
@@ -184,6 +191,7 @@ def fly(kind: str, baud: int, relay: SerialRelay, drone: DroneWrapper, report: d
     # on the ground, the streams settled: what comes down the line
     wait_for(lambda: len(watch.links) >= 3, 10, what="link status")
     relay.down.delays.clear()
+    relay.up.delays.clear()
     before, dropped, since = relay.down.offered.copy(), relay.down.dropped_frames, time.monotonic()
     time.sleep(8.0)
     now = time.monotonic()
@@ -219,6 +227,7 @@ def fly(kind: str, baud: int, relay: SerialRelay, drone: DroneWrapper, report: d
     drone.takeoff(h=2.5)
     report["takeoff_s"] = round(time.monotonic() - started, 1)
     relay.down.delays.clear()
+    relay.up.delays.clear()
     before, dropped, since = relay.down.offered.copy(), relay.down.dropped_frames, time.monotonic()
     yaw0 = drone.get_yaw()
     drone.set_cmd_vel(az=1)
@@ -249,12 +258,14 @@ def fly(kind: str, baud: int, relay: SerialRelay, drone: DroneWrapper, report: d
     square = [(*to_geodetic((lat, lon), east, north), 5.0) for north, east in corners]
     assert drone.upload_mission(square) == 4
     drone.takeoff(h=5.0)
+    current = drone.mission_progress().current  # the autopilot's current item, as published
     started = time.monotonic()
     drone.start_mission()
     drone.wait_for(lambda: drone.mission_progress().finished, 120, "the square flown")
     progress = drone.mission_progress()
     report["square_mission"] = {"seconds": round(time.monotonic() - started, 1),
-                                "reached": list(progress.reached_items)}  # fmt: skip
+                                "reached": list(progress.reached_items),
+                                "current_before_start": current}  # fmt: skip
     drone.land()
     report["final_link"] = link_figures(watch.links[-1])
     report["rejected"] = watch.links[-1].rejected
