@@ -19,7 +19,6 @@ from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_base.core_driver import CoreDriver
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
 from dronewrapper_bridge_mavlink.core import BridgeCore
@@ -34,7 +33,8 @@ ARM = cdr.encode("mavros_msgs/srv/CommandBool_Request", {"value": True})
 
 
 class Wired(BridgeNode):
-    """bridge_mavlink's core on the bridge wiring in the bus's time, sends dropped."""
+    """bridge_mavlink's core on the bridge wiring (in the bus's time: the node's), sends
+    dropped."""
 
     def send(self, out) -> None:
         pass
@@ -59,13 +59,6 @@ class HostingBridge:
         core = BridgeCore(MavlinkConfig(**config))
         publishers = {t: self.node.publisher(t) for t in mavlink_node.PUBLISHED}
         self.bridge = Wired(self.node, core, publishers, logging.getLogger("bridge"))
-        self.bridge.driver = CoreDriver(
-            core,
-            self.bridge.execute,
-            self.node.stop_event,
-            clock=self.bus.clock.monotonic,
-            wall=self.bus.clock.time,
-        )
         self.bridge.serve(mavlink_node.SERVICES)
         self.user = FakeNode("apps", self.bus)
 
@@ -128,7 +121,7 @@ def test_a_bridge_presents_its_own_drone_only():
 def test_telemetry_is_taken_on_the_putting_thread_and_cameras_on_zenoh_s():
     bridge = HostingBridge()
     with hosted_gateway(bridge.node, Config()) as gateway:
-        bridge.bridge.driver.feed(lambda now, stamp: bridge.bridge.core.publish_state(force=True))
+        bridge.bridge.driver.feed(bridge.bridge.core.on_started)
         state_key = ros_key("/drone/mavros/state", "mavros_msgs/msg/State")
         ((payload, _meta),) = bridge.session.publishers[state_key].sent
         assert cdr.decode("mavros_msgs/msg/State", payload)["mode"] == ""

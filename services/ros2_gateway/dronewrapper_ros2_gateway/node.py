@@ -28,7 +28,6 @@ import itertools
 import logging
 import math
 import threading
-import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -39,6 +38,7 @@ import zenoh
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import MAV_RESULT_DENIED, MAV_RESULT_FAILED
 from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.clock import Clock
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.node import Node, open_session
@@ -93,11 +93,18 @@ def gid_of(token: str) -> bytes:
     return hashlib.blake2b(token.encode(), digest_size=attachment.GID_SIZE).digest()
 
 
-class Outgoing:
-    """Our samples of one key, republished on its ROS 2 key."""
+def _ns(clock: Clock) -> int:
+    """``clock``'s Unix time in integer nanoseconds (a ROS 2 attachment's stamp)."""
+    return round(clock.time() * 1e9)
 
-    def __init__(self, publisher: Any, ros_type: str, gid: bytes) -> None:
+
+class Outgoing:
+    """Our samples of one key, republished on its ROS 2 key, each attachment stamped with
+    ``clock`` (the node's)."""
+
+    def __init__(self, publisher: Any, ros_type: str, gid: bytes, clock: Clock) -> None:
         self.publisher = publisher
+        self.clock = clock
         self.ros_type = ros_type
         self.gid = gid
         self.count = 0
@@ -106,7 +113,7 @@ class Outgoing:
 
     def __call__(self, msg: Any) -> None:
         payload = cdr.encode(self.ros_type, to_ros(msg))
-        meta = attachment.pack(next(self._seq), time.time_ns(), self.gid)
+        meta = attachment.pack(next(self._seq), _ns(self.clock), self.gid)
         self.publisher.put(payload, attachment=meta)
         self.count += 1
 
@@ -222,7 +229,7 @@ class Gateway:
         options["express"] = entity.registry_entry.transport != registry.STREAM
         publisher = self.session.declare_publisher(key, **options)
         self._declared.append(publisher)
-        out = Outgoing(publisher, entity.ros_type, gid)
+        out = Outgoing(publisher, entity.ros_type, gid, self.node.clock)
         self.outgoing.append((ns, entity, out))
         if entity.registry_entry.transport != registry.STREAM:
             out.subscription = self._subscribe(ns, entity, out)
@@ -332,7 +339,7 @@ class Gateway:
             payload = query.payload.to_bytes() if query.payload is not None else None
             response = self.serve(ns, entity, payload)
             reply = cdr.encode(f"{entity.ros_type}_Response", response)
-            back = attachment.pack(meta.sequence, time.time_ns(), meta.gid)
+            back = attachment.pack(meta.sequence, _ns(self.node.clock), meta.gid)
             query.reply(query.key_expr, reply, attachment=back)
         except Exception:
             log.exception("answering %s failed", entity.name)
