@@ -168,8 +168,7 @@ class SerialRelay:
                 frames = self._down_frames.feed(data) if data else []
         except (BlockingIOError, InterruptedError, ConnectionRefusedError):
             return
-        except OSError:  # the autopilot closed its pseudo-terminal (EIO): wait for it again
-            time.sleep(TICK_S)
+        except OSError:  # a hang-up cannot last: the relay holds the autopilot's side open
             return
         if self.unplugged:
             return
