@@ -97,6 +97,7 @@ def px4(build: Path, work: Path, device: str, baud: int) -> Iterator[Path]:
         yield log
     finally:
         proc.stop(10)
+        Path(f"/tmp/px4-sock-{PX4_INSTANCE}").unlink(missing_ok=True)  # PX4 leaves its socket
 
 
 @contextlib.contextmanager
