@@ -87,7 +87,13 @@ def wait_for(
 class Process:
     """A child process with its output captured to a file; stopped with SIGINT, then killed."""
 
-    def __init__(self, argv: Sequence[str], log_path: Path, env: dict[str, str] | None = None):
+    def __init__(
+        self,
+        argv: Sequence[str],
+        log_path: Path,
+        env: dict[str, str] | None = None,
+        cwd: Path = REPO,
+    ):
         self.argv = list(argv)
         self.log_path = log_path
         self._log = open(log_path, "wb")  # noqa: SIM115 - closed in stop()
@@ -96,7 +102,7 @@ class Process:
             stdout=self._log,
             stderr=subprocess.STDOUT,
             env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
-            cwd=REPO,
+            cwd=cwd,
             preexec_fn=die_with_parent,  # a killed test run leaves no sim or bridge behind
         )
 

@@ -25,6 +25,7 @@ from dronewrapper import images, telemetry
 from dronewrapper.errors import InvalidArgument, NoData
 from dronewrapper.health import stale_after
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF, State, StatusText
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.contract import Declared, NodeApi
@@ -89,6 +90,7 @@ class Inputs:
         self.velocity_local = self.latest(registry.VELOCITY_LOCAL)
         self.global_ = self.latest(registry.GLOBAL_POSITION)
         self.battery = self.latest(registry.BATTERY)
+        self.link = self.latest(registry.LINK_STATUS)
         self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
         self.subscribe(registry.STATUSTEXT, self.status_texts.append)
         self.images: dict[str, Latest[Any]] = {}
@@ -243,6 +245,13 @@ class Getters:
     def get_battery(self) -> float:
         """Battery charge as a fraction 0..1 (NaN if the aircraft does not report it)."""
         return float(self.inputs.need(self.inputs.battery, "battery state").percentage)
+
+    def get_link(self) -> LinkStatus:
+        """The autopilot link as the bridge last reported it (about once a second): its load
+        (``load``, 1.0 = a serial line full), rates, frames lost, reconnects; ``describe()``
+        says ``link 94 % full (serial 57600 baud: 5.4 / 1.8 kB/s down/up), 0 lost, ...``.
+        NoData when the bridge reports none (the Tello's)."""
+        return self.inputs.need(self.inputs.link, "link status")
 
     def get_global_position(self) -> np.ndarray:
         """``np.array([latitude, longitude, altitude])``: degrees, degrees, metres AMSL.

@@ -8,11 +8,15 @@ does not fit in a 57600-baud line is late, then dropped, as on the wire.
 
     python -m dronewrapper_sim.serial_relay --baud 57600 --udp-listen 127.0.0.1:14540
     python -m dronewrapper_sim.serial_relay --baud 921600 --tcp 127.0.0.1:5760 --link /tmp/ttyAP
+    python -m dronewrapper_sim.serial_relay --baud 57600 --pty --link /tmp/ttyAP
 
 ``--udp-listen`` binds the port the autopilot sends to (the bridge's ``udpin`` port: PX4 SITL's
 14540, the simulator's ``--udp-onboard`` port) and answers whoever sent last, one datagram per
-MAVLink frame; ``--tcp`` connects to an ArduPilot SITL serial port. The device path is printed
-(and linked at ``--link``).
+MAVLink frame; ``--tcp`` connects to an ArduPilot SITL serial port; ``--pty`` makes a second
+pseudo-terminal for the autopilot to open as its own serial port (PX4 SITL's ``mavlink start -d
+DEVICE -b BAUD``, ArduCopter SITL's ``--serial0 uart:DEVICE:BAUD``), so that the firmware sizes
+its streams to the baud as on a flight controller. The bridge's device path is printed (and
+linked at ``--link``), then, with ``--pty``, the autopilot's.
 """
 
 from __future__ import annotations
@@ -49,7 +53,9 @@ class SerialRelay:
     Args:
         baud: the line's rate, bits/s.
         udp_listen: (host, port) to bind; replies go to whoever sent last.
-        tcp: (host, port) to connect to (exactly one of ``udp_listen`` and ``tcp``).
+        tcp: (host, port) to connect to.
+        pty: make a pseudo-terminal for the autopilot (its path: :attr:`autopilot_path`).
+            Exactly one of ``udp_listen``, ``tcp`` and ``pty``.
         buffer_bytes: the autopilot's transmit buffer toward the bridge.
     """
 
@@ -59,10 +65,11 @@ class SerialRelay:
         *,
         udp_listen: tuple[str, int] | None = None,
         tcp: tuple[str, int] | None = None,
+        pty: bool = False,
         buffer_bytes: int = 1024,
     ) -> None:
-        if (udp_listen is None) == (tcp is None):
-            raise ValueError("give exactly one of udp_listen and tcp")
+        if [udp_listen is not None, tcp is not None, pty].count(True) != 1:
+            raise ValueError("give exactly one of udp_listen, tcp and pty")
         now = time.monotonic()
         self.baud = baud
         self.down = SerialLine(baud, buffer_bytes=buffer_bytes, now=now)  # autopilot -> bridge
@@ -74,16 +81,27 @@ class SerialRelay:
         os.set_blocking(self._master, False)
         self.path = os.ttyname(self._slave)
         self._remote: tuple[str, int] | None = None
-        if udp_listen is not None:
+        self.autopilot_path = ""
+        self._far_fd = -1  # the autopilot's pseudo-terminal (master side), with pty
+        self._far_slave = -1  # kept open: the master reads no hang-up before the autopilot opens
+        self._sock: socket.socket | None = None
+        self._udp = False
+        self._down_frames = FrameCutter()
+        if pty:
+            self._far_fd, self._far_slave = os.openpty()
+            tty.setraw(self._far_fd)
+            tty.setraw(self._far_slave)
+            os.set_blocking(self._far_fd, False)
+            self.autopilot_path = os.ttyname(self._far_slave)
+        elif udp_listen is not None:
             self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
             self._sock.bind(udp_listen)
             self._udp = True
         else:
             self._sock = socket.create_connection(tcp, timeout=5.0)
             self._sock.settimeout(None)
-            self._udp = False
-            self._down_frames = FrameCutter()
-        self._sock.setblocking(False)
+        if self._sock is not None:
+            self._sock.setblocking(False)
         self.unwritten = 0  # bytes the pseudo-terminal would not take (nobody reading)
         self.unplugged = False  # set: the cable is out, every byte either way is lost
         self._stop = threading.Event()
@@ -101,11 +119,13 @@ class SerialRelay:
         if self._thread is not None:
             self._thread.join(timeout=2.0)
             self._thread = None
-        for fd in (self._master, self._slave):
-            with contextlib.suppress(OSError):
-                os.close(fd)
-        self._master = self._slave = -1
-        self._sock.close()
+        for fd in (self._master, self._slave, self._far_fd, self._far_slave):
+            if fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+        self._master = self._slave = self._far_fd = self._far_slave = -1
+        if self._sock is not None:
+            self._sock.close()
 
     def __enter__(self) -> SerialRelay:
         return self.start()
@@ -120,25 +140,35 @@ class SerialRelay:
             waits = [self.down.next_byte_in(now), self.up.next_byte_in(now)]
             timeout = max(MIN_WAIT_S, min([TICK_S, *(w for w in waits if w is not None)]))
             try:
-                readable, _, _ = select.select([self._master, self._sock], [], [], timeout)
+                readable, _, _ = select.select([self._master, self._far], [], [], timeout)
             except (OSError, ValueError):
                 return  # closed under us
             now = time.monotonic()
-            if self._sock in readable:
+            if self._far in readable:
                 self._from_autopilot(now)
             if self._master in readable:
                 self._from_bridge(now)
             self._deliver(now)
 
+    @property
+    def _far(self) -> socket.socket | int:
+        """What the autopilot's side reads from: its socket or its pseudo-terminal."""
+        return self._sock if self._sock is not None else self._far_fd
+
     def _from_autopilot(self, now: float) -> None:
         try:
-            if self._udp:
+            if self._sock is None:
+                data = os.read(self._far_fd, 65535)
+                frames = self._down_frames.feed(data)
+            elif self._udp:
                 data, self._remote = self._sock.recvfrom(65535)
                 frames = FrameCutter().feed(data)  # a datagram holds whole frames
             else:
                 data = self._sock.recv(65535)
                 frames = self._down_frames.feed(data) if data else []
         except (BlockingIOError, InterruptedError, ConnectionRefusedError):
+            return
+        except OSError:  # a hang-up cannot last: the relay holds the autopilot's side open
             return
         if self.unplugged:
             return
@@ -166,6 +196,10 @@ class SerialRelay:
         up = self.up.take(now)
         if not up:
             return
+        if self._sock is None:
+            with contextlib.suppress(BlockingIOError, OSError):
+                os.write(self._far_fd, up)
+            return
         if not self._udp:
             with contextlib.suppress(BlockingIOError):
                 self._sock.sendall(up)
@@ -185,6 +219,7 @@ def main(argv: list[str] | None = None) -> int:
     where = parser.add_mutually_exclusive_group(required=True)
     where.add_argument("--udp-listen", metavar="[HOST:]PORT", help="bind this UDP port")
     where.add_argument("--tcp", metavar="HOST:PORT", help="connect to this TCP port")
+    where.add_argument("--pty", action="store_true", help="a pseudo-terminal for the autopilot")
     parser.add_argument("--link", metavar="PATH", help="also make PATH a link to the device")
     args = parser.parse_args(argv)
     try:
@@ -192,6 +227,7 @@ def main(argv: list[str] | None = None) -> int:
             args.baud,
             udp_listen=parse_address(args.udp_listen) if args.udp_listen else None,
             tcp=parse_address(args.tcp) if args.tcp else None,
+            pty=args.pty,
         )
     except (ValueError, OSError) as exc:
         parser.error(str(exc))
@@ -200,6 +236,8 @@ def main(argv: list[str] | None = None) -> int:
         link.unlink(missing_ok=True)
         link.symlink_to(relay.path)
     print(relay.path, flush=True)
+    if relay.autopilot_path:
+        print(relay.autopilot_path, flush=True)
     stop = threading.Event()
     try:
         relay.run(stop)

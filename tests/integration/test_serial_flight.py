@@ -9,11 +9,14 @@ prints its figures (pose rate, load, the frames' time on the line, drops) for do
 from __future__ import annotations
 
 import math
+import os
+import select
 import socket
 import subprocess
 import time
 
 import pytest
+from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper import DroneWrapper
 from dronewrapper.geodesy import to_geodetic
@@ -240,3 +243,32 @@ def test_a_mission_and_parameters_over_a_serial_line(baud, router, spawn):
         f"\n{baud} baud: 20-item mission uploaded in {upload_s:.2f} s; a parameter written and "
         f"read back in {params_s:.2f} s"
     )
+
+
+def read_exactly(fd: int, count: int, timeout: float = 5.0) -> bytes:
+    data = b""
+    deadline = time.monotonic() + timeout
+    while len(data) < count and time.monotonic() < deadline:
+        if select.select([fd], [], [], 0.05)[0]:
+            data += os.read(fd, count - len(data))
+    return data
+
+
+def test_a_pseudo_terminal_for_the_autopilot_carries_whole_frames_both_ways():
+    """``pty``: the firmware opens a device of its own (PX4 SITL's ``mavlink start -d``,
+    ArduCopter SITL's ``--serial0 uart:``, as tests/sitl/test_serial_sitl.py runs them); frames
+    cross whole both ways at the line's pace (about 0.1 s, no process)."""
+    mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    frame = mav.heartbeat_encode(2, 12, 0, 0, 4).pack(mav)
+    with SerialRelay(115200, pty=True) as relay:
+        autopilot = os.open(relay.autopilot_path, os.O_RDWR | os.O_NOCTTY)
+        bridge = os.open(relay.path, os.O_RDWR | os.O_NOCTTY)
+        try:
+            os.write(autopilot, frame * 3)
+            assert read_exactly(bridge, 3 * len(frame)) == frame * 3
+            os.write(bridge, frame)
+            assert read_exactly(autopilot, len(frame)) == frame
+        finally:
+            os.close(autopilot)
+            os.close(bridge)
+    assert relay.down.carried == 3 * len(frame) and relay.up.carried == len(frame)

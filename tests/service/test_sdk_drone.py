@@ -28,6 +28,7 @@ from dronewrapper import (
     Timeout,
 )
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_ON_GROUND,
     MASK_MIXED,
@@ -75,6 +76,18 @@ def test_getters_return_the_newest_values_at_once(rig):
     assert drone.get_battery() == pytest.approx(0.8)
     with pytest.raises(NoData, match="GPS"):
         drone.get_global_position()
+
+
+def test_the_app_sees_how_full_the_autopilot_link_is(rig):
+    drone = rig.drone
+    with pytest.raises(NoData, match="bridge/link"):
+        drone.get_link()  # a bridge that reports no link (the Tello's)
+    bridge = FakeNode("bridge_link", rig.bus).publisher(registry.LINK_STATUS)
+    bridge.put(LinkStatus(kind="serial", baud=57600, capacity=5760.0, received_rate=5414.0,
+                          sent_rate=1800.0, load=0.94))  # fmt: skip
+    link = drone.get_link()
+    assert link.load == 0.94
+    assert link.describe().startswith("link 94 % full (serial 57600 baud: 5.4 / 1.8 kB/s")
 
 
 def test_setpoints_carry_their_mask_frame_and_stamp_and_stop_on_request(rig):

@@ -60,6 +60,22 @@ def test_attitude_is_stopped_while_quaternions_arrive_and_asked_back_when_they_s
     assert pose.attitude != (0.0, 0.0, 0.0, 1.0)  # ATTITUDE is read again
 
 
+@pytest.mark.parametrize("connection", ["/dev/ttyTHS1", "udpin:127.0.0.1:14540"])
+def test_a_serial_link_also_stops_what_pxs_onboard_mode_sends_unread(connection):
+    """PX4 shares a serial port's data rate among all its streams: HIGHRES_IMU and ODOMETRY
+    would crowd out the pose. Stopped on a serial link; a network link keeps them."""
+    rig = CoreRig(connection=connection, baud=921600).connect()
+    rig.run(0.5)
+    asked = intervals(rig)
+    serial = connection.startswith("/dev/")
+    for name in ("HIGHRES_IMU", "ODOMETRY", "ATTITUDE_TARGET", "SERVO_OUTPUT_RAW"):
+        msg_id = getattr(mavlink, f"MAVLINK_MSG_ID_{name}")
+        assert (asked.get(msg_id) == [-1.0]) is serial, name
+    assert all(asked[msg_id] == [-1.0] for msg_id in UNUSED)  # stopped on both
+    with pytest.raises(ValueError, match="serial_unused_streams: 'NO_SUCH'"):
+        Config(serial_unused_streams=["NO_SUCH"])
+
+
 @pytest.mark.parametrize(
     "forwarding", [{"gcs_url": "udp:127.0.0.1:14550"}, {"gcs_over_zenoh": True}]
 )

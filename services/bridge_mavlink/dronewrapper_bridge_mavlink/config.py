@@ -24,6 +24,15 @@ DEFAULT_MESSAGE_RATES = {
 }
 UNUSED_STREAMS = ["ALTITUDE", "VFR_HUD", "POSITION_TARGET_LOCAL_NED"]
 """Streams of PX4's onboard link the bridge never reads: asked to stop (see streams.py)."""
+SERIAL_UNUSED_STREAMS = [
+    "HIGHRES_IMU", "ODOMETRY", "TIMESYNC", "DISTANCE_SENSOR", "ATTITUDE_TARGET",
+    "SERVO_OUTPUT_RAW", "NAV_CONTROLLER_OUTPUT", "POSITION_TARGET_GLOBAL_INT", "RC_CHANNELS",
+    "ESTIMATOR_STATUS", "VIBRATION", "SCALED_PRESSURE", "WIND_COV", "OPTICAL_FLOW_RAD",
+    "OBSTACLE_DISTANCE", "DEBUG", "DEBUG_VECT", "DEBUG_FLOAT_ARRAY", "NAMED_VALUE_FLOAT",
+]  # fmt: skip
+"""More streams of PX4's onboard mode the bridge never reads, stopped on a serial link only:
+PX4 shares its port's data rate (``MAV_x_RATE``, baud / 20 B/s by default) among every stream
+it sends, so at 57600 baud HIGHRES_IMU and ODOMETRY left the asked pose at 4.7 Hz."""
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -63,6 +72,9 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     unused_streams: list[str] = msgspec.field(
         default_factory=lambda: list(UNUSED_STREAMS)
     )  # messages asked to stop (SET_MESSAGE_INTERVAL -1) unless forwarding to a ground station
+    serial_unused_streams: list[str] = msgspec.field(
+        default_factory=lambda: list(SERIAL_UNUSED_STREAMS)
+    )  # on a serial link, these are asked to stop too (same exception)
     limits: Limits = msgspec.field(default_factory=Limits)
     envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly (envelope.py)
     upload_fence: bool = True  # give the autopilot the envelope as its fence once home is known
@@ -94,9 +106,10 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError("command_attempts and param_attempts must be >= 1")
         if self.gcs_url:
             parse_gcs_url(self.gcs_url)  # raises ValueError naming the expected form
-        for name in self.unused_streams:
-            if message_id(name) is None:
-                raise ValueError(f"unused_streams: {name!r} is not a MAVLink message name")
+        for key in ("unused_streams", "serial_unused_streams"):
+            for name in getattr(self, key):
+                if message_id(name) is None:
+                    raise ValueError(f"{key}: {name!r} is not a MAVLink message name")
         for name in ("final_ack_timeout", "mode_confirm_timeout"):
             if not 0 < getattr(self, name) <= 30:
                 raise ValueError(f"{name} must be in (0, 30] s, got {getattr(self, name)!r}")

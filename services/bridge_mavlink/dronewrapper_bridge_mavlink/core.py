@@ -108,15 +108,16 @@ class BridgeCore(PureCore):
         self.missions = missions.MissionState(config.envelope)
         self.unattended = Unattended(config.unattended_config())
         self.params = ParamCache()
+        serial = is_serial_url(config.connection)
         self.budget = fit_rates(
             config.message_rates,
-            config.baud if is_serial_url(config.connection) else None,
+            config.baud if serial else None,
             signed=bool(config.signing_key_file),
             share=config.link_share,
         )
         self.streams = StreamRequests(
             self.budget.rates,
-            config.unused_streams,
+            config.unused_streams + (config.serial_unused_streams if serial else []),
             forwarding=bool(config.gcs_url) or config.gcs_over_zenoh,
         )
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
