@@ -67,7 +67,8 @@ class SerialRelay:
         self.baud = baud
         self.down = SerialLine(baud, buffer_bytes=buffer_bytes, now=now)  # autopilot -> bridge
         self.up = SerialLine(baud, buffer_bytes=UPLINK_BUFFER_BYTES, now=now)  # bridge -> AP
-        self._up_frames, self._up_out, self._down_frames = FrameCutter(), FrameCutter(), None
+        self._up_frames, self._up_out = FrameCutter(), FrameCutter()
+        self._down_frames = FrameCutter()  # the TCP stream's (a datagram holds whole frames)
         self._master, self._slave = os.openpty()
         tty.setraw(self._master)
         tty.setraw(self._slave)  # no echo before the bridge opens it
@@ -79,10 +80,10 @@ class SerialRelay:
             self._sock.bind(udp_listen)
             self._udp = True
         else:
+            assert tcp is not None  # exactly one of the two, checked above
             self._sock = socket.create_connection(tcp, timeout=5.0)
             self._sock.settimeout(None)
             self._udp = False
-            self._down_frames = FrameCutter()
         self._sock.setblocking(False)
         self.unwritten = 0  # bytes the pseudo-terminal would not take (nobody reading)
         self.unplugged = False  # set: the cable is out, every byte either way is lost
@@ -120,7 +121,8 @@ class SerialRelay:
             waits = [self.down.next_byte_in(now), self.up.next_byte_in(now)]
             timeout = max(MIN_WAIT_S, min([TICK_S, *(w for w in waits if w is not None)]))
             try:
-                readable, _, _ = select.select([self._master, self._sock], [], [], timeout)
+                ends: list[int | socket.socket] = [self._master, self._sock]
+                readable, _, _ = select.select(ends, [], [], timeout)
             except (OSError, ValueError):
                 return  # closed under us
             now = time.monotonic()
