@@ -49,4 +49,4 @@ format: setup
 	$(BIN)/ruff format .
 
 clean:
-	rm -rf $(VENV) build .pytest_cache .ruff_cache bench/results/*.json
+	rm -rf $(VENV) build .pytest_cache .ruff_cache .mypy_cache bench/results/*.json
