@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 # every distribution of the repository: the SDK, one per service, the simulator and the graphs
 DISTS  := sdk $(patsubst %/pyproject.toml,%,$(wildcard services/*/pyproject.toml)) sim compose
 
-.PHONY: setup onboard demo test test-unit test-fast bench lint format clean
+.PHONY: setup onboard demo test test-unit test-fast bench lint typecheck format clean
 
 setup: $(STAMP)
 
@@ -25,7 +25,7 @@ onboard:  # a companion computer (a Jetson): the stack without the test tools (d
 demo: setup
 	$(BIN)/python -m dronewrapper_compose.demo $(ARGS)
 
-test: setup lint
+test: setup lint typecheck
 	$(BIN)/python -m pytest -q $(ARGS)
 
 test-unit: setup
@@ -41,9 +41,12 @@ lint: setup
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 
+typecheck: setup  # mypy over every package (the files and settings: pyproject.toml)
+	$(BIN)/mypy
+
 format: setup
 	$(BIN)/ruff check --fix .
 	$(BIN)/ruff format .
 
 clean:
-	rm -rf $(VENV) build .pytest_cache .ruff_cache bench/results/*.json
+	rm -rf $(VENV) build .pytest_cache .ruff_cache .mypy_cache bench/results/*.json

@@ -157,7 +157,7 @@ class VideoRecorder:
         self.path = path
         self.frames = 0
         self._status_text = status_text
-        self._writer = None
+        self._writer: cv2.VideoWriter | None = None
         self._fps = fps
         self._last = 0.0
         self._lock = threading.Lock()

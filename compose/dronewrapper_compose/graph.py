@@ -256,15 +256,17 @@ def load_graph(path: str | Path) -> Graph:
             )
         if var not in graph.vars:
             raise GraphError(f"{path}: port {var!r} has no variable - at `$.ports.{var}`")
-    for var, kind in graph.types.items():
+    for var, var_type in graph.types.items():
         at = f"at `$.types.{var}`"
         if var not in graph.vars:
             raise GraphError(f"{path}: type for {var!r}, which is not a variable - {at}")
         if var in graph.ports:
             raise GraphError(f"{path}: {var!r} is a port (ports:); it takes no type - {at}")
-        if kind == [] or (isinstance(kind, str) and kind not in VAR_TYPES):
+        if var_type == [] or (isinstance(var_type, str) and var_type not in VAR_TYPES):
             allowed = ", ".join(VAR_TYPES)
-            raise GraphError(f"{path}: type {kind!r} must be {allowed} or a list of values - {at}")
+            raise GraphError(
+                f"{path}: type {var_type!r} must be {allowed} or a list of values - {at}"
+            )
         if why := check_value(graph, var, graph.vars[var]):
             raise GraphError(f"{path}: default {graph.vars[var]!r} {why} - at `$.vars.{var}`")
     seen: set[tuple[str, str | None]] = set()

@@ -47,7 +47,8 @@ def parse_requirement(text: str) -> tuple[str, list[str]]:
 
 def local_projects(repo: Path = REPO) -> dict[str, dict]:
     """Each distribution of the repository (normalized name -> its ``[project]`` table)."""
-    import tomllib  # novermin (Python 3.11: the check runs on the CI machine, not on a Jetson)
+    # Python 3.11 (novermin): the check runs on the CI machine, not on a Jetson (3.10)
+    import tomllib  # type: ignore[import-not-found]  # the type check is of Python 3.10
 
     files = [repo / "pyproject.toml", *sorted(repo.glob("*/pyproject.toml"))]
     files += sorted(repo.glob("services/*/pyproject.toml"))
@@ -64,7 +65,7 @@ def third_party_requirements(repo: Path = REPO, root: str = "dronewrapper-stack"
     projects = local_projects(repo)
     out: list[str] = []
     seen: set[tuple[str, tuple[str, ...]]] = set()
-    todo = [(normalize(root), ())]
+    todo: list[tuple[str, tuple[str, ...]]] = [(normalize(root), ())]
     while todo:
         name, extras = todo.pop()
         if (name, tuple(extras)) in seen:

@@ -170,7 +170,7 @@ class Launcher:
         self._alive_cond = threading.Condition()
         self._out_lock = threading.Lock()
         self._session: zenoh.Session | None = None
-        self._token_sub = None
+        self._token_sub: zenoh.Subscriber[None] | None = None
         self._width = max(len(inst.label) for group in self.groups for inst in group)
 
     def plan(self) -> list[list[Instance]]:

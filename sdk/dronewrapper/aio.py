@@ -267,7 +267,9 @@ class Drone:
 
     async def frames(self, camera: str = "frontal") -> AsyncIterator[np.ndarray]:
         """Camera frames (BGR ``uint8``), the newest each time; slow consumers skip frames."""
-        topic = registry.IMAGE_COMPRESSED if self.sync.compressed_images else registry.IMAGE_RAW
+        topic: Topic[Any] = (
+            registry.IMAGE_COMPRESSED if self.sync.compressed_images else registry.IMAGE_RAW
+        )
         async for msg in self._newest(topic, camera=camera_key_name(camera)):
             yield self.sync.decode_image(msg)
 

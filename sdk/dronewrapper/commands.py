@@ -42,8 +42,10 @@ class Commands:
     _attachment: bytes
     _forbidden: str  # why our certificate's role may not command ("" when it may)
 
-    if TYPE_CHECKING:
-        commanding: PositionTarget | None
+    if TYPE_CHECKING:  # Motion's, next to this part in DroneWrapper
+
+        @property
+        def commanding(self) -> PositionTarget | None: ...
 
         def _no_reply(self, what: str, key: str, timeout: float) -> DroneError: ...
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import datetime as dt
 from pathlib import Path
+from typing import TypedDict
 
 from dronewrapper.errors import CommandRefused, DroneError, NotConnected, Timeout
 
@@ -97,14 +98,21 @@ def node_forbidden(node: object) -> str:
     identity and the first ``tls/`` router it connects to; ``""`` for a node without options
     (the fake bus) or identity."""
     options = getattr(node, "options", None)
-    identity = getattr(options, "identity", "") if options is not None else ""
-    if not identity:
+    identity = getattr(options, "identity", "")
+    if options is None or not identity:
         return ""
     tls = next((ep for ep in options.connect if ep.startswith("tls/")), "")
     return forbidden(identity, tls, options.keys_dir or None)
 
 
-def identity_facts(identity: str, connect: str) -> dict[str, object]:
+class IdentityFacts(TypedDict):
+    """Our identity as the diagnoses take it (keywords of :func:`no_reply` and others)."""
+
+    identity: str
+    standing: tuple[str, bool] | None
+
+
+def identity_facts(identity: str, connect: str) -> IdentityFacts:
     """What the diagnoses take about our identity: ``identity`` (only on a ``tls/`` router,
     the one kind with access control) and its local ``standing``."""
     identity = identity if connect.startswith("tls/") else ""

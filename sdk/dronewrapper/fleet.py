@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import functools
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeVar
@@ -198,7 +199,7 @@ class Fleet:
         """Call ``callback(name, refusal)`` as each drone's refusals arrive (on a Zenoh
         thread: keep it short). Returns a function that stops the calls."""
         stops = [
-            drone.on_refusal(lambda refusal, name=name: callback(name, refusal))
+            drone.on_refusal(functools.partial(callback, name))
             for name, drone in self.drones.items()
         ]
 
@@ -212,9 +213,10 @@ class Fleet:
 
     def submit(
         self, call: Callable[[DroneWrapper], T], names: Iterable[str] | None = None
-    ) -> dict[str, concurrent.futures.Future[T]]:
+    ) -> dict[str, concurrent.futures.Future[tuple[T, float]]]:
         """Start ``call(drone)`` on each drone's worker (all of them, or ``names``); returns at
-        once with one future per drone."""
+        once with one future per drone, whose result is ``(value, seconds the call took)``
+        (:meth:`collect` makes them outcomes)."""
         chosen = self._chosen(names)
         return {name: self._workers[name].submit(timed, call, self.drones[name]) for name in chosen}
 
@@ -303,7 +305,7 @@ class Fleet:
         result.what = "set_cmd_pos"
         for name in self._chosen(targets):
             target = tuple(targets[name])
-            args = target if len(target) == 4 else (*target, yaw)
+            args: tuple[Any, ...] = target if len(target) == 4 else (*target, yaw)
             started = time.monotonic()
             try:
                 self.drones[name].set_cmd_pos(*args)

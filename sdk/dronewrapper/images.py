@@ -138,7 +138,7 @@ def bgr_to_image(bgr: np.ndarray, stamp: float, frame_id: str, seq: int = 0) -> 
         width=width,
         encoding="bgr8",
         step=width * 3,
-        data=memoryview(np.ascontiguousarray(bgr).reshape(-1)),
+        data=memoryview(np.ascontiguousarray(bgr).reshape(-1)),  # type: ignore[arg-type]  # numpy types __buffer__ from 3.12
     )
 
 

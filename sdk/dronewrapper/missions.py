@@ -172,11 +172,12 @@ class MissionsMixin:
             if target.type_mask != MASK_POSITION:
                 v = target.velocity
                 env.check_velocity(envelope, v.x, v.y, v.z)
-            p = target.position
             if target.type_mask == MASK_POSITION and home is not None:
+                p = target.required_position()
                 env.check_position(envelope, p.x - home.x, p.y - home.y, p.z - home.z)
             elif target.type_mask == MASK_MIXED and home is not None:
-                z, ceiling = p.z - home.z, envelope.max_altitude  # its altitude only
+                z = target.required_position().z - home.z  # its altitude only
+                ceiling = envelope.max_altitude
                 if z > ceiling:
                     reason = f"altitude {z:g} m above the envelope's {ceiling:g} m"
                     raise EnvelopeError(reason, "max_altitude")

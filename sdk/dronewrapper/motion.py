@@ -129,7 +129,7 @@ class Motion:
         """The altitude a setpoint without ``z`` keeps: the commanded one, else the current."""
         commanded = self._streamer.target
         if commanded is not None and commanded.type_mask in (MASK_POSITION, MASK_MIXED):
-            return float(commanded.position.z)
+            return float(commanded.required_position().z)
         pose = self.inputs.pose.value
         if pose is None:
             raise NoData(f"{what}: z left out, and no position yet to keep the altitude of")

@@ -179,7 +179,9 @@ def _triples(points: Sequence[Any], names: str) -> list[tuple[float, float, floa
     return out
 
 
-def load_plan(plan: str | PathLike[str] | Sequence[Any], *, frame: str = "global") -> Plan:
+def load_plan(
+    plan: str | PathLike[str] | Mapping[str, Any] | Sequence[Any], *, frame: str = "global"
+) -> Plan:
     """The :class:`Plan` of a ``.plan`` path or document, or of a list of points (see module
     docstring; a list has no fence)."""
     if isinstance(plan, str | PathLike):
@@ -190,7 +192,7 @@ def load_plan(plan: str | PathLike[str] | Sequence[Any], *, frame: str = "global
 
 
 def waypoints_of(
-    plan: str | PathLike[str] | Sequence[Any], *, frame: str = "global"
+    plan: str | PathLike[str] | Mapping[str, Any] | Sequence[Any], *, frame: str = "global"
 ) -> list[Waypoint]:
     """Mission items of ``plan`` (see module docstring)."""
     if frame not in ("global", "local"):

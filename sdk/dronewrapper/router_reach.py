@@ -41,8 +41,8 @@ def no_router(
 ) -> str | None:
     """A sentence when no router listens at any of ``endpoints`` (every one a TCP endpoint
     that refused a connection), else None."""
-    addresses = [tcp_address(endpoint) for endpoint in endpoints]
-    if not endpoints or None in addresses:
+    addresses = [a for endpoint in endpoints if (a := tcp_address(endpoint)) is not None]
+    if not endpoints or len(addresses) < len(endpoints):
         return None
     if not all(refused(address) for address in addresses):
         return None

@@ -8,13 +8,13 @@ what it saw; ``NoData`` from a getter counts as "not yet".
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
 from dronewrapper import setpoints
 from dronewrapper.errors import NoData, Timeout
-from dronewrapper.inputs import Getters, Inputs
+from dronewrapper.inputs import Inputs
 from dronewrapper.runtime.clock import Clock
 
 T = TypeVar("T")
@@ -33,14 +33,15 @@ class Waits:
     ns: str
     clock: Clock
     inputs: Inputs
-    if TYPE_CHECKING:
-        get_position = Getters.get_position
-        get_landed_state = Getters.get_landed_state
-        get_image = Getters.get_image
+    if TYPE_CHECKING:  # the getters this part uses (Getters', next to it in DroneWrapper)
+
+        def get_position(self) -> np.ndarray: ...
+        def get_landed_state(self) -> int: ...
+        def get_image(self, camera: str = "frontal", *, with_stamp: bool = False) -> Any: ...
 
     def wait_for(
         self,
-        predicate: Callable[[], T],
+        predicate: Callable[[], T | None],
         timeout: float,
         what: str = "condition",
         *,
@@ -60,7 +61,7 @@ class Waits:
                 value = predicate()
             except NoData:
                 value = None
-            if _satisfied(value):
+            if value is not None and _satisfied(value):
                 return value
             if self.clock.monotonic() >= deadline:
                 raise Timeout(f"timed out after {timeout:g} s waiting for {what}")

@@ -17,7 +17,7 @@ import numpy as np
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.runtime import Ratekeeper
-from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.contract import Declared, NodeApi
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 
 log = logging.getLogger("sim")
@@ -85,6 +85,7 @@ class CameraStreamer(threading.Thread):
             jpeg.put(bgr_to_jpeg(image, stamp, mount.name, seq, self.jpeg_quality))
 
     def close(self) -> None:
-        for pub in [*self._raw.values(), *self._jpeg.values()]:
+        pubs: list[Declared] = [*self._raw.values(), *self._jpeg.values()]
+        for pub in pubs:
             with contextlib.suppress(Exception):  # already gone with the session
                 pub.undeclare()

@@ -74,7 +74,8 @@ class SerialRelay:
         self.baud = baud
         self.down = SerialLine(baud, buffer_bytes=buffer_bytes, now=now)  # autopilot -> bridge
         self.up = SerialLine(baud, buffer_bytes=UPLINK_BUFFER_BYTES, now=now)  # bridge -> AP
-        self._up_frames, self._up_out, self._down_frames = FrameCutter(), FrameCutter(), None
+        self._up_frames, self._up_out = FrameCutter(), FrameCutter()
+        self._down_frames = FrameCutter()  # the TCP stream's (a datagram holds whole frames)
         self._master, self._slave = os.openpty()
         tty.setraw(self._master)
         tty.setraw(self._slave)  # no echo before the bridge opens it
@@ -98,6 +99,7 @@ class SerialRelay:
             self._sock.bind(udp_listen)
             self._udp = True
         else:
+            assert tcp is not None  # exactly one of the two, checked above
             self._sock = socket.create_connection(tcp, timeout=5.0)
             self._sock.settimeout(None)
         if self._sock is not None:
@@ -140,7 +142,8 @@ class SerialRelay:
             waits = [self.down.next_byte_in(now), self.up.next_byte_in(now)]
             timeout = max(MIN_WAIT_S, min([TICK_S, *(w for w in waits if w is not None)]))
             try:
-                readable, _, _ = select.select([self._master, self._far], [], [], timeout)
+                ends: list[int | socket.socket] = [self._master, self._far]
+                readable, _, _ = select.select(ends, [], [], timeout)
             except (OSError, ValueError):
                 return  # closed under us
             now = time.monotonic()

@@ -88,6 +88,20 @@ def test_refusals_say_why(store, tmp_path):
         store.revoke("nobody")
 
 
+def test_a_ca_key_of_another_kind_is_refused_by_name(store):
+    from cryptography.hazmat.primitives import serialization
+    from cryptography.hazmat.primitives.asymmetric import ed25519
+
+    other = ed25519.Ed25519PrivateKey.generate().private_bytes(
+        serialization.Encoding.PEM,
+        serialization.PrivateFormat.PKCS8,
+        serialization.NoEncryption(),
+    )
+    store.ca_key.write_bytes(other)
+    with pytest.raises(KeyStoreError, match="not an elliptic-curve private key"):
+        store.issue("drone1", "drone")
+
+
 def test_mavlink_key_is_32_bytes(store):
     key = store.new_mavlink_key()
     assert len(key) == 32 and read_mavlink_key(store.mavlink_key) == key

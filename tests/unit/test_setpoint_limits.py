@@ -113,3 +113,15 @@ def test_both_bridges_refuse_in_the_same_words():
         with pytest.raises(SetpointError) as by_tello:
             tello_sticks.validate(bad, StickScale())
         assert str(by_mavlink.value) == str(by_tello.value)
+
+
+def test_a_target_without_its_position_says_so_where_it_is_read():
+    """``required_position`` is how bridges read a position or mixed target's position: a
+    target that left it out raises ValueError naming the mask, never an AttributeError."""
+    left_out = PositionTarget(coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_MIXED)
+    with pytest.raises(ValueError, match=f"position is required with type_mask {MASK_MIXED}"):
+        left_out.required_position()
+    given = PositionTarget(
+        coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION, position=Point(x=1.0, z=2.0)
+    )
+    assert given.required_position() == Point(x=1.0, z=2.0)

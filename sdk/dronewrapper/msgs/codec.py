@@ -7,7 +7,6 @@
 
 from __future__ import annotations
 
-from functools import cache
 from typing import Any, TypeVar
 
 import msgspec
@@ -25,10 +24,15 @@ def encode(msg: Any) -> bytes:
     return _encoder.encode(msg)
 
 
-@cache
+_DECODERS: dict[type, msgspec.msgpack.Decoder[Any]] = {}
+
+
 def decoder(msg_type: type[T]) -> msgspec.msgpack.Decoder[T]:
-    """The cached decoder for ``msg_type``."""
-    return msgspec.msgpack.Decoder(msg_type)
+    """The cached decoder for ``msg_type`` (made once; a race makes one twice, harmlessly)."""
+    found = _DECODERS.get(msg_type)
+    if found is None:
+        found = _DECODERS.setdefault(msg_type, msgspec.msgpack.Decoder(msg_type))
+    return found
 
 
 def decode(msg_type: type[T], data: bytes | bytearray | memoryview) -> T:

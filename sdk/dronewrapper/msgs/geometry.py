@@ -13,7 +13,7 @@ import msgspec
 from dronewrapper.msgs.std import Header
 
 if TYPE_CHECKING:
-    from typing import Self  # novermin (Python 3.11; only for type checkers: JetPack 6 has 3.10)
+    from typing_extensions import Self  # only for type checkers (typing's is Python 3.11)
 
 
 class _XYZ(msgspec.Struct, frozen=True, kw_only=True):

@@ -134,6 +134,12 @@ class PositionTarget(msgspec.Struct, kw_only=True, frozen=True):
     yaw: float = 0.0
     yaw_rate: float = 0.0
 
+    def required_position(self) -> Point:
+        """``position``, which a position or mixed target carries; ValueError when left out."""
+        if isinstance(self.position, msgspec.UnsetType):
+            raise ValueError(f"position is required with type_mask {self.type_mask}")
+        return self.position
+
 
 class StatusText(msgspec.Struct, kw_only=True, frozen=True):
     """A text message from the autopilot (mavros_msgs/StatusText); severity is MAV_SEVERITY."""

@@ -51,8 +51,8 @@ class ImageThrottle:
             return False
         # step from the due time while on schedule, so the mean rate holds with jittered
         # arrivals; from now after a gap (or the first frame), so no burst catches up
-        on_schedule = due is not None and now - due < self.period
-        self._next[key] = (due if on_schedule else now) + self.period
+        start = due if due is not None and now - due < self.period else now
+        self._next[key] = start + self.period
         return True
 
 

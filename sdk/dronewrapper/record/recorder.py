@@ -152,7 +152,9 @@ class Recorder:
                 if self.view_errors[key] == 1:
                     log.warning("%s: no Foxglove view (raw kept): %s", key, exc)
         if topic is None or msg is None or out is None:
-            schema = message_schema(topic.type) if topic is not None else None
+            schema = None
+            if topic is not None:
+                schema = message_schema(topic.type)  # type: ignore[arg-type]  # mypy: type[Any] not Hashable
             meta = {"key": key, "type": topic.type.__name__ if topic is not None else ""}
             cid = self._channel_id(key, RAW_ENCODING, schema, meta)
             self._add(cid, log_time_ns, pub_ns, payload)
@@ -175,7 +177,8 @@ class Recorder:
         is_image = isinstance(msg, Image | CompressedImage)
         if not is_image:
             meta = {"key": key, "type": type_name}
-            cid = self._channel_id(key, RAW_ENCODING, message_schema(topic.type), meta)
+            schema = message_schema(topic.type)  # type: ignore[arg-type]  # mypy: type[Any] not Hashable
+            cid = self._channel_id(key, RAW_ENCODING, schema, meta)
             self._add(cid, log_ns, pub_ns, payload)
         for i, view in enumerate(out):
             meta = {}

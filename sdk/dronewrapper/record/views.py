@@ -64,7 +64,7 @@ class View:
 
 
 @cache
-def foxglove_schema(message_class: type) -> SchemaSpec:
+def foxglove_schema(message_class: type[Any]) -> SchemaSpec:
     """The protobuf schema of a ``foxglove.messages`` class."""
     schema = message_class.get_schema()
     return SchemaSpec(schema.name, schema.encoding, bytes(schema.data))
@@ -86,7 +86,8 @@ def timestamp(stamp: float) -> fox.Timestamp:
 
 
 def _protobuf(topic: str, message: Any) -> View:
-    return View(topic, "protobuf", foxglove_schema(type(message)), message.encode())
+    schema = foxglove_schema(type(message))  # type: ignore[arg-type]  # mypy: type[Any] not Hashable
+    return View(topic, "protobuf", schema, message.encode())
 
 
 def jpeg_encode(msg: Image, quality: int) -> bytes:
@@ -138,7 +139,7 @@ def image_view(topic: str, msg: Image | CompressedImage, jpeg_quality: int | Non
     )
 
 
-def annotations(msg: Detections) -> fox.ImageAnnotations:
+def detection_annotations(msg: Detections) -> fox.ImageAnnotations:
     """Detections as image annotations: a box and a label per detection (pixels)."""
     stamp = timestamp(msg.header.stamp)
     boxes, labels = [], []
@@ -228,9 +229,10 @@ def views(
     own = "/" + key
     if isinstance(msg, Image | CompressedImage):
         return [image_view(own, msg, jpeg_quality)]
-    out = [View(own, "json", message_schema(topic.type), to_json(msg))]
+    schema = message_schema(topic.type)  # type: ignore[arg-type]  # mypy: type[Any] not Hashable
+    out = [View(own, "json", schema, to_json(msg))]
     if isinstance(msg, Detections):
-        out.append(_protobuf(own + "/annotations", annotations(msg)))
+        out.append(_protobuf(own + "/annotations", detection_annotations(msg)))
     elif isinstance(msg, PoseStamped):
         child = _child_frame(topic, key)
         if child is not None:

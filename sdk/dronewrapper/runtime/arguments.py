@@ -26,8 +26,8 @@ def plain_text(text: str) -> str:
 class CommandParser(argparse.ArgumentParser):
     """An ArgumentParser that takes whole option names only and prints plain-text help."""
 
-    def __init__(self, *args: Any, allow_abbrev: bool = False, **kwargs: Any) -> None:
-        super().__init__(*args, allow_abbrev=allow_abbrev, **kwargs)
+    def __init__(self, *, allow_abbrev: bool = False, **kwargs: Any) -> None:
+        super().__init__(allow_abbrev=allow_abbrev, **kwargs)
 
     def format_usage(self) -> str:
         return plain_text(super().format_usage())

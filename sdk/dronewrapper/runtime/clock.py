@@ -104,7 +104,7 @@ class VirtualClock(Clock):
         self._waiters: dict[threading.Thread, _Waiter] = {}
         self._workers: set[threading.Thread] = set()
         self._order = itertools.count()
-        self.stepper: Callable[[float, Callable[[], bool]], None] | None = None
+        self.stepper: Callable[[float, Callable[[], bool]], object] | None = None
         """``stepper(until, done)``: moves time to ``until`` or until ``done()`` for a wait on
         the driving thread (stepped use); None: the workers run, as in :meth:`run_until`."""
 

@@ -111,7 +111,7 @@ class FakeBus:
         self._held: list[tuple[str, bytes, bytes | None]] | None = None
         self._queue: list[tuple[float, int, str, bytes]] = []
         self._seq = itertools.count()
-        self._services: dict[str, Callable[[bytes], Any]] = {}
+        self._services: dict[str, Callable[[bytes, bytes | None, str], Any]] = {}
         self.tokens: set[str] = set()
         """The liveliness tokens declared on the bus (``{ns}/alive/{name}``, see
         :meth:`FakeNode.announce`)."""
@@ -341,11 +341,12 @@ class FakeNode:
         return self.bus.subscribe(keyexpr, on_payload)
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
-        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)
-        self.subscribe(topic, holder.update, key=key, **parts)
+        name = key or topic.key(self.ns, **parts)
+        holder: Latest[T] = Latest(name=name, clock=self.clock)
+        self.subscribe(topic, holder.update, key=name)
         return holder
 
-    def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str):
+    def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str) -> str:
         key = service.key(self.ns, **parts)
 
         def answer(payload: bytes, attachment: bytes | None = None, asked: str = "") -> Rep:

@@ -105,15 +105,18 @@ class Publisher(Generic[T]):
         """
         if type(msg) is not self.type:
             raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
-        payload = self._shm.payload(msg, wait_s=self._shm_wait_s) if self._shm else None
+        payload: zenoh.ZBytes | bytes | None = None
+        if self._shm:
+            payload = self._shm.payload(msg, wait_s=self._shm_wait_s)
         if payload is None:
-            payload = codec.encode(msg)
-            if self._max_bytes is not None and len(payload) > self._max_bytes:
+            data = codec.encode(msg)
+            if self._max_bytes is not None and len(data) > self._max_bytes:
                 raise ValueError(
-                    f"{self.key}: a {len(payload)}-byte {self.type.__name__} is over the "
+                    f"{self.key}: a {len(data)}-byte {self.type.__name__} is over the "
                     f"{self._max_bytes} bytes a low-latency session carries outside shared "
                     "memory (it does not fragment); not sent"
                 )
+            payload = data
         if attachment is None:
             self._pub.put(payload)  # quicker in the binding than attachment=None
         else:
@@ -123,14 +126,19 @@ class Publisher(Generic[T]):
     def watched(self) -> bool:
         """True while at least one subscriber matches this key (so the work can be skipped)."""
         try:
-            return bool(self._pub.matching_status.matching)
+            status = self._pub.matching_status  # a MatchingStatus; zenoh's stub says bool
+            return bool(status.matching)  # type: ignore[attr-defined]
         except zenoh.ZError:
             return False
 
     def on_matching(self, callback: Callable[[bool], None]) -> Any:
         """Call ``callback(matching)`` whenever subscribers start or stop matching this key
         (a direct callback: keep it short); returns the listener (``undeclare()`` it)."""
-        handler = zenoh.handlers.Callback(lambda s: callback(s.matching), indirect=False)
+
+        def on_status(status: zenoh.MatchingStatus) -> None:
+            callback(status.matching)
+
+        handler = zenoh.handlers.Callback(on_status, indirect=False)
         return self._pub.declare_matching_listener(handler)
 
     def undeclare(self) -> None:
@@ -358,8 +366,9 @@ class Node:
 
     def latest(self, topic: Topic[T], *, key: str | None = None, **parts: str) -> Latest[T]:
         """Subscribe to ``topic`` and keep only its newest value and its age (node clock)."""
-        holder: Latest[T] = Latest(name=key or topic.key(self.ns, **parts), clock=self.clock)
-        self.subscribe(topic, holder.update, key=key, **parts)
+        name = key or topic.key(self.ns, **parts)
+        holder: Latest[T] = Latest(name=name, clock=self.clock)
+        self.subscribe(topic, holder.update, key=name)
         return holder
 
     # ---- services ----

@@ -192,6 +192,8 @@ class KeyStore:
         if any(e.name == name and e.revoked for e in entries):
             raise KeyStoreError(f"{name!r} was revoked; issue a certificate under a new name")
         ca_key = serialization.load_pem_private_key(self.ca_key.read_bytes(), None)
+        if not isinstance(ca_key, ec.EllipticCurvePrivateKey):  # `keys init` makes one
+            raise KeyStoreError(f"{self.ca_key} is not an elliptic-curve private key")
         ca_cert = x509.load_pem_x509_certificate(self.ca_cert.read_bytes())
         now = now or dt.datetime.now(dt.timezone.utc)
         key = ec.generate_private_key(ec.SECP256R1())

@@ -16,7 +16,9 @@ REPLAY_WINDOW = 6_000_000  # 10 µs units: a new stream may start at most 1 min 
 SIGNATURE_BYTES = 6
 
 
-def verify_signed_frame(signing: Any, msgbuf: bytes, src_system: int, src_component: int) -> bool:
+def verify_signed_frame(
+    signing: Any, msgbuf: bytes | bytearray, src_system: int, src_component: int
+) -> bool:
     """Whether a signed MAVLink 2 frame is genuine and new for its stream.
 
     Args:

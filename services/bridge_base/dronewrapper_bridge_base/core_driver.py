@@ -24,7 +24,7 @@ import logging
 import math
 import threading
 from collections.abc import Callable
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CANCELLED, CancelRequest, FlightResult
@@ -58,6 +58,10 @@ class PureCore:
         late_setpoint_s: a setpoint arriving this much later after its sending than its
             commander's usually do is refused (:mod:`~dronewrapper_bridge_base.setpoint_delay`).
     """
+
+    if TYPE_CHECKING:  # every bridge's core has them, each with its own arguments
+        on_setpoint: Callable[..., Any]
+        tick: Callable[..., Any]
 
     def __init__(
         self,
@@ -127,7 +131,7 @@ class PureCore:
         commander: str,
         sent: float | None,
         check: Callable[[Any], Any],
-        refuse: Callable[[Any, Any, Any], bool],
+        refuse: Callable[[Any, Any, Any], object],
     ) -> Any:
         """The kind of a setpoint that may fly, or None: refused when it arrives late or the
         lease refuses it (:meth:`admit_setpoint`), when ``check(target)`` (the bridge's own
@@ -379,13 +383,11 @@ class CoreDriver(Generic[C]):
                     break
                 wait = op.wake_at - self.clock.monotonic()
                 finished = self.core.operations.finished  # woken when an operation ends
-                self.clock.wait_for(
-                    self.cond,
-                    lambda ended=finished: (
-                        self.core.operations.finished != ended or self._stop.is_set()
-                    ),
-                    min(max(wait, 0.001), MAX_WAIT_S),
-                )
+
+                def woken(ended: int = finished) -> bool:
+                    return self.core.operations.finished != ended or self._stop.is_set()
+
+                self.clock.wait_for(self.cond, woken, min(max(wait, 0.001), MAX_WAIT_S))
             self.feed(self.core.advance)
         with self._executing:  # the reply never overtakes what ended it (a State, a sample)
             pass

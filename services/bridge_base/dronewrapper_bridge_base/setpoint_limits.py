@@ -98,10 +98,11 @@ def validate(target: PositionTarget, bounds: Bounds) -> Kind:
             "coordinate_frame",
         )
     kind = KIND_OF_MASK[mask]
-    p, v = target.position, target.velocity
-    if kind in (Kind.POSITION, Kind.MIXED) and p is msgspec.UNSET:
+    v = target.velocity
+    if kind in (Kind.POSITION, Kind.MIXED) and target.position is msgspec.UNSET:
         raise SetpointError(f"position is required with type_mask {mask}", "position")
     if kind is Kind.POSITION:
+        p = target.required_position()
         x, y = finite_field("position.x", p.x), finite_field("position.y", p.y)
         z = finite_field("position.z", p.z)
         finite_field("yaw", target.yaw)
@@ -130,7 +131,7 @@ def validate(target: PositionTarget, bounds: Bounds) -> Kind:
             f"yaw_rate {yaw_rate:g} rad/s exceeds {bounds.max_yaw_rate:g}", "max_yaw_rate"
         )
     if kind is Kind.MIXED:
-        _check_altitude(finite_field("position.z", p.z), bounds)
+        _check_altitude(finite_field("position.z", target.required_position().z), bounds)
     return kind
 
 

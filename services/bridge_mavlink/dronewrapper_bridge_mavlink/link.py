@@ -35,7 +35,8 @@ os.environ.setdefault("MAVLINK20", "1")
 os.environ.setdefault("MAVLINK_DIALECT", "common")  # what the bridge reads and sends; "all"
 # (pymavlink's default) would load a second, larger copy of the message tables
 if "pymavlink.dialects.v10.all" not in sys.modules:  # mavutil imports MAVLink 1's "all" only
-    sys.modules["pymavlink.dialects.v10.all"] = None  # for freezers, and lets it fail (6 MB)
+    # for freezers, and lets it fail (6 MB); typeshed allows only modules in sys.modules
+    sys.modules["pymavlink.dialects.v10.all"] = None  # type: ignore[assignment]
 
 import contextlib
 from collections import deque
@@ -361,7 +362,7 @@ class LinkCounts(NamedTuple):
     sent: int
     lost: int
 
-    def __add__(self, other: tuple) -> LinkCounts:  # type: ignore[override]
+    def __add__(self, other: tuple) -> LinkCounts:
         return LinkCounts(*(a + b for a, b in zip(self, other, strict=True)))
 
 

@@ -8,6 +8,7 @@ case-insensitively; a few common aliases (``HOLD``, ``LAND``, ``RTL`` on PX4) ar
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20.common import (
@@ -134,6 +135,7 @@ def canonical_mode(autopilot: str, name: str) -> str:
         ValueError: unknown mode; the message lists the valid names.
     """
     wanted = name.strip().upper() if isinstance(name, str) else ""
+    table: Mapping[str, object]
     if autopilot == AUTOPILOT_ARDUPILOT:
         table, aliases = ARDUCOPTER_MODES, ARDUCOPTER_ALIASES
     else:

@@ -25,11 +25,12 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import State
+from dronewrapper.msgs.registry import Service
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.host import shared_ticker
-from dronewrapper_bridge_base.bridge_node import BridgeNode
+from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters, receive
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
@@ -58,7 +59,7 @@ PUBLISHED = (
     registry.MISSION_REACHED,
     registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
-SERVICES = {
+SERVICES: dict[Service[Any, Any], Operation] = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,
     registry.FLIGHT_GOTO: actions.goto_point,

@@ -101,7 +101,7 @@ def to_local_ned(
     """
     kind = validate(target, limits)
     if kind is Kind.POSITION:
-        p = target.position
+        p = target.required_position()
         n, e, d = enu_to_ned((p.x, p.y, p.z))
         return LocalNedTarget(
             FRAME_LOCAL_NED, MASK_POSITION, x=n, y=e, z=d, yaw=yaw_enu_to_ned(target.yaw)
@@ -118,7 +118,7 @@ def to_local_ned(
             yaw_rate=yaw_rate_ned,
         )
     if autopilot == AUTOPILOT_ARDUPILOT:
-        error = target.position.z - z_enu
+        error = target.required_position().z - z_enu
         climb = limits.mixed_altitude_gain * error
         climb = max(-limits.mixed_max_climb, min(limits.mixed_max_climb, climb))
         return LocalNedTarget(
@@ -127,7 +127,7 @@ def to_local_ned(
     return LocalNedTarget(
         FRAME_LOCAL_NED,
         MASK_MIXED,
-        z=-target.position.z,
+        z=-target.required_position().z,
         vx=north,
         vy=east,
         vz=-target.velocity.z,

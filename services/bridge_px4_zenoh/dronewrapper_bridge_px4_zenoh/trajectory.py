@@ -48,7 +48,7 @@ def trajectory_setpoint(target: PositionTarget, kind: Kind, yaw_enu: float) -> d
     velocity = [NAN, NAN, NAN]
     yaw = yawspeed = NAN
     if kind is Kind.POSITION:
-        p = target.position
+        p = target.required_position()
         position = list(enu_to_ned((p.x, p.y, p.z)))
         yaw = yaw_enu_to_ned(target.yaw)
     else:
@@ -61,7 +61,7 @@ def trajectory_setpoint(target: PositionTarget, kind: Kind, yaw_enu: float) -> d
         velocity = [north, east, -v.z]
         yawspeed = -target.yaw_rate  # CCW-positive (ENU) -> CW-positive (NED)
         if kind is Kind.MIXED:
-            position[2] = -target.position.z
+            position[2] = -target.required_position().z
             velocity[2] = NAN
     return {
         "timestamp": 0,

@@ -103,13 +103,13 @@ def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> Enve
     state = core.missions
     try:
         if kind is Kind.POSITION:
-            p = target.position
+            p = target.required_position()
             env.check_position(state.envelope, p.x, p.y, p.z)
         else:
             v = target.velocity
             env.check_velocity(state.envelope, v.x, v.y, v.z)
             if kind is Kind.MIXED:
-                env.check_position(state.envelope, 0.0, 0.0, target.position.z)
+                env.check_position(state.envelope, 0.0, 0.0, target.required_position().z)
     except EnvelopeError as exc:
         reason = f"setpoint refused: {exc}"
         if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
@@ -235,8 +235,8 @@ def control(core: TelloCore, request: MissionControl) -> Steps:
 def fly_to(core: TelloCore, target: tuple[float, float, float]) -> Steps:
     """Fly to ``target`` (ENU m from home) with go moves; False when paused or refused."""
     position = core.telemetry.position_enu or (0.0, 0.0, 0.0)
-    offset = [t - p for t, p in zip(target, position, strict=True)]
-    for move in go_moves(*offset, core.telemetry.yaw_enu):
+    east, north, up = (t - p for t, p in zip(target, position, strict=True))
+    for move in go_moves(east, north, up, core.telemetry.yaw_enu):
         if core.missions.paused:
             return False
         command = f"go {move[0]} {move[1]} {move[2]} {MOVE_SPEED_CM_S}"

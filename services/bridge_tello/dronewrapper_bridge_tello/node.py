@@ -14,6 +14,7 @@ driver and the loops read and wait on it, and it makes the loops' threads.
 
 from __future__ import annotations
 
+import functools
 import logging
 import threading
 from collections.abc import Callable
@@ -22,10 +23,11 @@ from typing import Any
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
+from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.security.wifi import open_wifi_warning
-from dronewrapper_bridge_base.bridge_node import BridgeNode
+from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation
 from dronewrapper_bridge_tello import actions, flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
@@ -53,7 +55,7 @@ PUBLISHED = (
     registry.MISSION_REACHED,
     registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
-SERVICES = {
+SERVICES: dict[Service[Any, Any], Operation] = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,
     registry.FLIGHT_GOTO: actions.goto_point,
@@ -146,7 +148,7 @@ class Bridge(BridgeNode[TelloCore]):
     def start(self) -> list[threading.Thread]:
         """Subscribe, serve, and start the loops (returns the threads)."""
         serve_services(self)
-        loops = [
+        loops: list[tuple[Callable[..., None], tuple[Any, ...], str]] = [
             (self._receive_loop, (self.link.command, self._on_reply, "replies"), "tello-replies"),
             (self._receive_loop, (self.link.state, self._on_state, "state"), "tello-state"),
             (self._control_loop, (), "tello-control"),
@@ -154,7 +156,7 @@ class Bridge(BridgeNode[TelloCore]):
         if self.config.video != OFF:
             loops += [(self._video_loop, (), "tello-video"), (self._image_loop, (), "tello-images")]
         clock = self.node.clock
-        threads = [clock.thread(lambda f=f, a=a: f(*a), n) for f, a, n in loops]
+        threads = [clock.thread(functools.partial(f, *a), n) for f, a, n in loops]
         for thread in threads:
             thread.start()
         self.driver.feed(self.core.on_started)

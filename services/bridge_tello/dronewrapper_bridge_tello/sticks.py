@@ -110,7 +110,7 @@ def body_velocity(
     ``position`` is the estimated ENU position (m), ``yaw`` the ENU heading (rad).
     """
     if kind is Kind.POSITION:
-        p = target.position
+        p = target.required_position()
         east = scale.kp_xy * (p.x - position[0])
         north = scale.kp_xy * (p.y - position[1])
         speed = math.hypot(east, north)
@@ -126,7 +126,9 @@ def body_velocity(
     else:
         forward, left = v.x, v.y
     if kind is Kind.MIXED:
-        climb = _clamp(scale.kp_z * (target.position.z - position[2]), scale.position_climb)
+        climb = _clamp(
+            scale.kp_z * (target.required_position().z - position[2]), scale.position_climb
+        )
     else:
         climb = v.z
     return forward, left, climb, target.yaw_rate

@@ -92,7 +92,7 @@ class OpenCVSource:
         self.kind = config.source_kind
         self.factory = factory
         self.description = (
-            sources.device_path(config.source) if self.kind == "device" else config.source
+            sources.device_path(config.location) if self.kind == "device" else config.location
         )
         self.mode = Mode(0, 0, 0.0, "")
         self.pace_hz = 0.0
@@ -148,7 +148,7 @@ class OpenCVSource:
     def _open_file(self) -> Mode:
         import cv2
 
-        path = sources.check_file_present(self.config.source)
+        path = sources.check_file_present(self.config.location)
         cap = self.factory(str(path), cv2.CAP_FFMPEG, [])
         if not cap.isOpened():
             raise SourceError(f"cannot decode video file {path}")
@@ -168,10 +168,10 @@ class OpenCVSource:
             cv2.CAP_PROP_READ_TIMEOUT_MSEC,
             int(self.config.read_timeout * 1000),
         ]
-        cap = self.factory(self.config.source, cv2.CAP_FFMPEG, params)
+        cap = self.factory(self.config.location, cv2.CAP_FFMPEG, params)
         if not cap.isOpened():
             cap.release()
-            raise SourceUnavailable(f"cannot open stream {self.config.source}")
+            raise SourceUnavailable(f"cannot open stream {self.config.location}")
         self._cap = cap
         self.mode = sources.granted_mode(cap)
         return self.mode

@@ -125,6 +125,12 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError(f"max_read_failures must be >= 1, got {self.max_read_failures}")
 
     @property
+    def location(self) -> str:
+        """``source`` as text (it is made one on load): a device index or path, a file, a URL
+        or a pattern."""
+        return str(self.source)
+
+    @property
     def source_kind(self) -> str:
         """The resolved kind of ``source``: device, file, url or pattern."""
-        return classify_source(self.source, self.kind)
+        return classify_source(self.location, self.kind)

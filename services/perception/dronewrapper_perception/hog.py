@@ -15,7 +15,7 @@ from dronewrapper_perception.yolox import nms
 
 
 class HogDetector:
-    """People detection with ``cv2.HOGDescriptor_getDefaultPeopleDetector``.
+    """People detection with ``cv2.HOGDescriptor.getDefaultPeopleDetector``.
 
     Args:
         score_threshold: minimum SVM margin mapped to 0..1 as ``1 - exp(-margin)``.
@@ -36,7 +36,7 @@ class HogDetector:
         scale: float = 1.1,
     ) -> None:
         self.hog = cv2.HOGDescriptor()
-        self.hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+        self.hog.setSVMDetector(np.asarray(cv2.HOGDescriptor.getDefaultPeopleDetector()))
         self.score_threshold = score_threshold
         self.nms_threshold = nms_threshold
         self.max_width = max_width

@@ -219,10 +219,10 @@ class KalmanTracker:
                 self._apply(track, j, dets, boxes, features, t)
                 ids[j] = track.track_id
                 unmatched.discard(j)
-        j = self._reidentify_target(unmatched, ids, dets, boxes, features, t)
-        if j is not None:
-            ids[j] = self.target_id
-            unmatched.discard(j)
+        found = self._reidentify_target(unmatched, ids, dets, boxes, features, t)
+        if found is not None:
+            ids[found] = self.target_id
+            unmatched.discard(found)
         for j in sorted(unmatched):
             feature = None if features is None or self._occluded(j, dets) else features[j]
             track = Track(

@@ -15,11 +15,13 @@ import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field
+from typing import Any
 
 import msgspec
 
 from dronewrapper.images import BadFrame, compressed_to_bgr, image_to_bgr
 from dronewrapper.msgs import CompressedImage, Header, Image, registry
+from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime import Latest
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_perception.config import Config
@@ -54,6 +56,11 @@ class Stats:
         )
 
 
+def frames_topic(compressed: bool) -> Topic[Any]:
+    """The topic of the camera's frames: JPEG (``compressed``) or raw."""
+    return registry.IMAGE_COMPRESSED if compressed else registry.IMAGE_RAW
+
+
 class PerceptionService:
     """Subscribes to the camera, runs the pipeline on the newest frame, publishes Detections.
 
@@ -66,21 +73,21 @@ class PerceptionService:
         self.config = config
         self.pipeline = pipeline or Pipeline(config)
         self.stats = Stats()
-        self.topic = registry.IMAGE_COMPRESSED if config.compressed else registry.IMAGE_RAW
+        self.topic = frames_topic(config.compressed)
         self.clock = node.clock
         self.frames: Latest[tuple[float, Image | CompressedImage]] = Latest(
             name="camera frames", clock=node.clock
         )
-        node.subscribe(
-            self.topic,
-            lambda msg: self.frames.update((self.clock.time(), msg)),
-            camera=config.camera,
-        )
+        node.subscribe(self.topic, self._on_frame, camera=config.camera)
         self.publisher = node.publisher(registry.DETECTIONS)
         self.debug = node.publisher(registry.DETECTIONS_DEBUG_IMAGE) if config.debug_image else None
         self.rate_cap = FrameRateCap(config.max_rate_hz)
         self._seen = 0
         self._last_bad_log: dict[str, float] = {}
+
+    def _on_frame(self, msg: Image | CompressedImage) -> None:
+        """A frame from the camera: kept, with when it came (node clock), for the spin."""
+        self.frames.update((self.clock.time(), msg))
 
     def spin(self) -> None:
         """Process frames until the node is asked to stop."""
@@ -160,7 +167,9 @@ class PerceptionService:
             jpeg = encode_jpeg(annotate(bgr, result), self.config.debug_jpeg_quality)
             self.debug.put(
                 CompressedImage(
-                    header=Header(stamp=header.stamp, frame_id=frame_id), format="jpeg", data=jpeg
+                    header=Header(stamp=header.stamp, frame_id=frame_id),
+                    format="jpeg",
+                    data=memoryview(jpeg),
                 )
             )
 

@@ -110,7 +110,7 @@ def position_target(value: dict[str, Any]) -> msgs.PositionTarget:
     )
 
 
-def from_ros(msg_type: type, value: dict[str, Any]) -> Any:
+def from_ros(msg_type: type[Any], value: dict[str, Any]) -> Any:
     """One of our messages from its decoded ROS 2 value (the inverse of :func:`to_ros` where
     ROS has the fields; our extensions take their defaults)."""
     if msg_type is msgs.PositionTarget:
@@ -170,7 +170,9 @@ def response_of(reply: Any) -> dict[str, Any]:
         return {"mode_sent": reply.mode_sent}
     if isinstance(reply, msgs.ParamGetResult | msgs.ParamSetResult):
         number = reply.value.as_number()
-        param = {"integer": number, "real": 0.0} if isinstance(number, int) else {"integer": 0}
+        param: dict[str, int | float] = (
+            {"integer": number, "real": 0.0} if isinstance(number, int) else {"integer": 0}
+        )
         if not isinstance(number, int):
             param["real"] = number
         return {"success": reply.success, "value": param}

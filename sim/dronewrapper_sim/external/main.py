@@ -5,13 +5,13 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-from dronewrapper.runtime import Node
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.world.scenario import Scenario
 
 log = logging.getLogger("sim")
 
 
-def run_external(node: Node, config: Any, scenario: Scenario) -> int:
+def run_external(node: NodeApi, config: Any, scenario: Scenario) -> int:
     """Run the world around ``config.autopilot`` on ``node`` until SIGINT/SIGTERM."""
     from dronewrapper_sim.external.world_runner import ExternalWorldRunner
 

@@ -25,7 +25,7 @@ from typing import Any
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.simulation import PoseSourceStatus
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.external.alignment import Alignment
 from dronewrapper_sim.external.links import TruthLink, default_link
 from dronewrapper_sim.external.pose_buffer import AgeStats, ClockMap, PoseBuffer, TimedPose
@@ -113,7 +113,9 @@ class ExternalPose:
         )
 
 
-def make_cameras(config: Any, scenario: Scenario, node: Node, world: Any, pose_source: Any) -> Any:
+def make_cameras(
+    config: Any, scenario: Scenario, node: NodeApi, world: Any, pose_source: Any
+) -> Any:
     """The frontal and ventral cameras of ``scenario`` rendering ``world`` from ``pose_source``."""
     from pathlib import Path
 
@@ -149,7 +151,7 @@ class ExternalWorldRunner:
         node: the Zenoh node.
     """
 
-    def __init__(self, config: Any, scenario: Scenario, node: Node) -> None:
+    def __init__(self, config: Any, scenario: Scenario, node: NodeApi) -> None:
         from dronewrapper_sim.world.world import World
 
         self.config = config

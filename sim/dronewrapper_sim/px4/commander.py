@@ -33,7 +33,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_sim.dynamics import QuadState
 from dronewrapper_sim.px4 import geofence, mission
-from dronewrapper_sim.px4.flight_control import NAN, Target
+from dronewrapper_sim.px4.flight_control import NAN, Limits, Target
 from dronewrapper_sim.px4.modes import Mode
 from dronewrapper_sim.px4.offboard import OffboardSetpoint
 from dronewrapper_sim.px4.params import ParamStore
@@ -372,7 +372,7 @@ class Commander:
         elif mode is Mode.RTL:
             target = self._rtl_target(state, now)
         elif mode is Mode.MISSION and self.mission is not None:
-            target = mission.mission_target(self, now, state)
+            target = mission.mission_target(self, self.mission, now, state)
         else:  # LOITER and anything that cannot fly: hold where the mode started
             target = Target(
                 position=(x0, y0, z0),
@@ -400,7 +400,7 @@ class Commander:
         p = self.params
         hx, hy, hz = self.home
         x0, y0, _, yaw0 = self._hold
-        limits = {
+        limits: Limits = {
             "max_xy": p["MPC_XY_CRUISE"],
             "max_up": p["MPC_Z_V_AUTO_UP"],
             "max_down": p["MPC_Z_V_AUTO_DN"],

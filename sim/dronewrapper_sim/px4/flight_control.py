@@ -11,11 +11,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TypedDict
 
 from dronewrapper_sim.dynamics import GRAVITY, ControlInput, QuadState
 from dronewrapper_sim.frames import wrap_pi
 
 NAN = float("nan")
+
+
+class Limits(TypedDict):
+    """A mode's speed limits, as :class:`Target` keywords (m/s, rad/s)."""
+
+    max_xy: float
+    max_up: float
+    max_down: float
+    max_yaw_rate: float
 
 
 def _finite(a: float, b: float) -> bool:

@@ -35,8 +35,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
+from pymavlink.dialects.v20.common import MAVLink_message as Message
 
-from dronewrapper_sim.px4.flight_control import Target
+from dronewrapper_sim.px4.flight_control import Limits, Target
 from dronewrapper_sim.px4.modes import Mode
 
 if TYPE_CHECKING:
@@ -97,8 +98,6 @@ FRAMES = {
     mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
     mavlink.MAV_FRAME_MISSION,
 }
-
-Message = mavlink.MAVLink_message
 
 
 @dataclass
@@ -390,16 +389,16 @@ class MissionRunner:
 # ---------------------------------------------------------------- the commander's side
 
 
-def mission_target(cmd: Commander, now: float, state: QuadState) -> Target:
+def mission_target(cmd: Commander, runner: MissionRunner, now: float, state: QuadState) -> Target:
     """AUTO.MISSION's target for the commander now: the runner's leg, or a switch to the mode
     the mission ends in (hold, land, return)."""
     p = cmd.params
     position = (state.x, state.y, state.z)
-    leg = cmd.mission.step(now, position)
-    for text in cmd.mission.notes:
+    leg = runner.step(now, position)
+    for text in runner.notes:
         cmd._say(mavlink.MAV_SEVERITY_INFO, text)
-    cmd.mission.notes.clear()
-    limits = {
+    runner.notes.clear()
+    limits: Limits = {
         "max_xy": p["MPC_XY_CRUISE"] if leg.speed is None else leg.speed,
         "max_up": p["MPC_Z_V_AUTO_UP"],
         "max_down": p["MPC_Z_V_AUTO_DN"],

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Any
 
 import cv2
 import numpy as np
@@ -200,9 +201,11 @@ def draw_person(
         "shins": look.skin_bgr if look.shorts else look.pants_bgr,
         "long_hair": look.hair_bgr if look.long_hair else None,
     }
-    drawn: list[tuple[float, int, str, object, float, tuple[int, int, int]]] = []
-    for k, ((kind, _, radius, color), idx) in enumerate(zip(_LIMBS, _LIMB_INDEX, strict=True)):
-        if colors[color] is None:
+    # depth, order, kind, points (pixel list or array), radius px, BGR
+    drawn: list[tuple[float, int, str, Any, float, tuple[int, int, int]]] = []
+    for k, ((kind, _, radius, part), idx) in enumerate(zip(_LIMBS, _LIMB_INDEX, strict=True)):
+        bgr = colors[part]
+        if bgr is None:
             continue
         ds = [d[i] for i in idx]
         r_m = radius * h
@@ -211,23 +214,25 @@ def draw_person(
         mean = sum(ds) / len(ds)
         if idx == _FACE:  # the face is in front of the hair when seen from the side
             mean -= 0.01 * h
-        drawn.append((mean, k, kind, [px[i] for i in idx], f * r_m / mean, colors[color]))
-    for k, (start, stop, color, bias) in enumerate(
+        drawn.append((mean, k, kind, [px[i] for i in idx], f * r_m / mean, bgr))
+    for k, (start, stop, part, bias) in enumerate(
         ((n_j, n_j + n_s, "shirt", 0.04), (n_j + n_s, len(d), "pants", 0.045))
     ):
         part_depth = depth[start:stop]
         if part_depth.min() < NEAR_PLANE_M:
             continue
         mean = float(part_depth.mean()) + bias * h
-        drawn.append((mean, 100 + k, "hull", pixels[start:stop], 0.0, colors[color]))
+        bgr = colors[part]
+        assert bgr is not None  # shirt and pants are always drawn
+        drawn.append((mean, 100 + k, "hull", pixels[start:stop], 0.0, bgr))
     drawn.sort(key=lambda item: (-item[0], item[1]))
     for _, _, kind, pts, radius_px, color in drawn:
         if kind == "hull":
-            _draw_hull(image, pts, color)  # type: ignore[arg-type]
+            _draw_hull(image, pts, color)
         elif kind == "sphere":
-            _draw_ball(image, pts[0], radius_px, color)  # type: ignore[index]
+            _draw_ball(image, pts[0], radius_px, color)
         else:
-            _draw_capsule(image, pts[0], pts[1], radius_px, color)  # type: ignore[index]
+            _draw_capsule(image, pts[0], pts[1], radius_px, color)
 
 
 def _fix(u: float, v: float) -> tuple[int, int]:

@@ -52,7 +52,7 @@ def _cut_out(bgr: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
         bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
         cv2.setRNGSeed(0)
         cv2.grabCut(bgr, mask, rect, bgd, fgd, 4, cv2.GC_INIT_WITH_RECT)
-        fg = np.isin(mask, (cv2.GC_FGD, cv2.GC_PR_FGD)).astype(np.float32)
+        fg: np.ndarray = np.isin(mask, (cv2.GC_FGD, cv2.GC_PR_FGD)).astype(np.float32)
     except cv2.error:
         fg = np.zeros((h, w), np.float32)
     if fg.sum() < 0.25 * rect[2] * rect[3]:  # GrabCut lost the person: an ellipse in the box

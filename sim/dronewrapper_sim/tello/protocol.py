@@ -454,10 +454,11 @@ def arc_through(
     end = angle(c)
     if angle(b) > end:  # p1 lies on the other way round: go the long way in reverse
         end -= 2 * math.pi
-    return [
-        tuple(float(v) for v in center + radius * (math.cos(t) * u + math.sin(t) * w))
+    points = [
+        center + radius * (math.cos(t) * u + math.sin(t) * w)
         for t in np.linspace(0.0, end, samples + 1)
     ]
+    return [(float(p[0]), float(p[1]), float(p[2])) for p in points]
 
 
 def _printable(text: str, limit: int = 64) -> str:

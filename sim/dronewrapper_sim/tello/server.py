@@ -19,8 +19,8 @@ from dataclasses import replace
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
-from dronewrapper.runtime import Node
 from dronewrapper.runtime.clock import REAL, Clock
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.dynamics import WindModel
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.tello.config import TelloConfig
@@ -68,7 +68,7 @@ class TelloServer:
         self,
         config: TelloConfig,
         scenario: Scenario,
-        node: Node | None,
+        node: NodeApi | None,
         command_socket: socket.socket,
         seed: int | None = None,
     ) -> None:

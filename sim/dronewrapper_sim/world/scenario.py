@@ -60,10 +60,11 @@ BGR = tuple[int, int, int]
 
 
 class _Strict(msgspec.Struct, forbid_unknown_fields=True, frozen=True):
-    pass
+    """A scenario record: unknown keys refused, immutable (each subclass restates
+    ``frozen=True`` so that type checkers see it too)."""
 
 
-class VehicleStart(_Strict):
+class VehicleStart(_Strict, frozen=True):
     """Where the vehicle starts, on the ground: ENU x, y (m) and yaw (rad, CCW from east)."""
 
     x: float = 0.0
@@ -71,7 +72,7 @@ class VehicleStart(_Strict):
     yaw: float = 0.0
 
 
-class Home(_Strict):
+class Home(_Strict, frozen=True):
     """The GPS position of the local origin (PX4 SITL's default home, Zurich, by default)."""
 
     latitude_deg: float = 47.397742
@@ -79,7 +80,7 @@ class Home(_Strict):
     altitude_m: float = 488.0
 
 
-class Wind(_Strict):
+class Wind(_Strict, frozen=True):
     """Steady wind (m/s, the direction it blows towards) and gust amplitude (m/s)."""
 
     east_m_s: float = 0.0
@@ -87,7 +88,7 @@ class Wind(_Strict):
     gust_m_s: float = 0.0
 
 
-class CameraSettings(_Strict):
+class CameraSettings(_Strict, frozen=True):
     """Both vehicle cameras: image size (px), frame rate (Hz), horizontal field of view (deg)."""
 
     width: int = 640
@@ -109,11 +110,11 @@ def _ordered(name: str, low: float, high: float, *, allow_zero: bool = False) ->
 # ---- motion models (a tagged union on the key ``type``) ------------------------------------
 
 
-class StaticMotion(_Strict, tag="static", tag_field="type"):
+class StaticMotion(_Strict, frozen=True, tag="static", tag_field="type"):
     """The object stays where it is."""
 
 
-class WaypointsMotion(_Strict, tag="waypoints", tag_field="type"):
+class WaypointsMotion(_Strict, frozen=True, tag="waypoints", tag_field="type"):
     """Straight lines through ``points`` (ENU m) at ``speed_m_s``.
 
     ``mode``: ``pingpong`` (back and forth), ``loop`` (back to the first point and again) or
@@ -131,7 +132,7 @@ class WaypointsMotion(_Strict, tag="waypoints", tag_field="type"):
             raise ValueError("waypoints need at least one point")
 
 
-class CircleMotion(_Strict, tag="circle", tag_field="type"):
+class CircleMotion(_Strict, frozen=True, tag="circle", tag_field="type"):
     """A horizontal circle around ``center`` (ENU m; its z is the height of the path) at
     ``speed_m_s``, counter-clockwise unless ``clockwise``; starts at the angle of ``position``."""
 
@@ -145,7 +146,7 @@ class CircleMotion(_Strict, tag="circle", tag_field="type"):
         _positive("speed_m_s", self.speed_m_s)
 
 
-class ZigZagMotion(_Strict, tag="zigzag", tag_field="type"):
+class ZigZagMotion(_Strict, frozen=True, tag="zigzag", tag_field="type"):
     """The paper's abrupt zig-zag: up and down between ``z_min_m`` and ``z_max_m`` with a new
     random vertical speed in [``vertical_speed_min_m_s``, ``vertical_speed_max_m_s``] at each
     turn, while moving ``horizontal_speed_m_s`` along ``direction`` (ENU x, y), flipping sides at
@@ -168,7 +169,7 @@ class ZigZagMotion(_Strict, tag="zigzag", tag_field="type"):
             raise ValueError("direction must not be (0, 0)")
 
 
-class SmoothMotion(_Strict, tag="smooth", tag_field="type"):
+class SmoothMotion(_Strict, frozen=True, tag="smooth", tag_field="type"):
     """Smooth oscillation about the start: per ENU axis ``amplitude_m * sin(2 pi t / period_s +
     phase)``, phases drawn from the seed. An axis with amplitude 0 stays put."""
 
@@ -180,7 +181,7 @@ class SmoothMotion(_Strict, tag="smooth", tag_field="type"):
             _positive("period_s", period)
 
 
-class RandomWalkMotion(_Strict, tag="random_walk", tag_field="type"):
+class RandomWalkMotion(_Strict, frozen=True, tag="random_walk", tag_field="type"):
     """Random straight walks (as the paper's Gazebo person plugin): to a random point inside the
     circle (``center`` ENU x, y; ``radius_m``) at a random speed in [``speed_min_m_s``,
     ``speed_max_m_s``], then a pause of [``pause_min_s``, ``pause_max_s``], and again."""
@@ -201,7 +202,7 @@ class RandomWalkMotion(_Strict, tag="random_walk", tag_field="type"):
             raise ValueError("min_leg_m must be in [0, radius_m]")
 
 
-class TeleopMotion(_Strict, tag="teleop", tag_field="type"):
+class TeleopMotion(_Strict, frozen=True, tag="teleop", tag_field="type"):
     """Still until a command arrives on ``sim/objects/{name}/cmd_vel`` (then follows it)."""
 
 
@@ -216,7 +217,7 @@ Motion = (
 )
 
 
-class PersonLookSpec(_Strict):
+class PersonLookSpec(_Strict, frozen=True):
     """Clothing of a procedurally drawn person (BGR 0-255); what is left out is drawn at random
     from the seed."""
 
@@ -230,7 +231,7 @@ class PersonLookSpec(_Strict):
     shorts: bool | None = None
 
 
-class ObjectSpec(_Strict):
+class ObjectSpec(_Strict, frozen=True):
     """One object of the world.
 
     Attributes:
@@ -260,7 +261,7 @@ class ObjectSpec(_Strict):
     sprite: str | None = None
 
 
-class Scenario(_Strict):
+class Scenario(_Strict, frozen=True):
     """A simulated world: vehicle start, GPS home, wind, cameras, objects."""
 
     name: str
