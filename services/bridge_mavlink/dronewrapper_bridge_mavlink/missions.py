@@ -262,8 +262,13 @@ def on_mission_current(core: BridgeCore, msg: Any) -> None:
 
 
 def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
-    """MISSION_ITEM_REACHED, published once per item (PX4 repeats it for a while)."""
-    if int(msg.seq) == core.missions.last_reached:
+    """MISSION_ITEM_REACHED, published once per item (PX4 repeats it for a while). An item
+    beyond the one being flown is not this mission's: PX4 reports its previous mission's last
+    item again after an upload (its reached is reset by the upload, its navigator's is not),
+    which would read as this mission finished before it began. Items are reached in order, and
+    the item flown (MISSION_CURRENT, reset to 0 by an upload) is never behind the one
+    reached (PX4 sends the new current first, ArduPilot the reached item first)."""
+    if int(msg.seq) == core.missions.last_reached or int(msg.seq) > core.missions.current_seq:
         return
     core.missions.last_reached = int(msg.seq)
     reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=int(msg.seq))
