@@ -17,6 +17,7 @@ offset: fine within the envelope's kilometre).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Generator
@@ -356,6 +357,10 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [item_of(wp) for wp in waypoints]
+    if items and not any(item.current for item in items):
+        # the first item is the one to fly: PX4 keeps its last mission's current item through
+        # an upload that marks none (MAVLink's ``current``; ArduPilot reads only 2 and 3)
+        items[0] = dataclasses.replace(items[0], current=1)
     upload = mt.Upload(items, core.target(), core.now, **_transfer_args())
     yield from run_transfer(core, upload)
     if not upload.error:
