@@ -166,7 +166,18 @@ def px4_sih(root: Path, workdir: Path) -> Iterator[Firmware]:
     log_path = workdir / "px4.log"
     with open(log_path, "wb") as log:
         proc = subprocess.Popen(
-            ["../bin/px4", "-i", str(instance), "-d"],
+            # its working directory named (-w), with the build's etc/ as its data: without
+            # them PX4 works in the build's rootfs/N, and its missions and parameters outlive
+            # the run (a new mission flown from the last one's current item)
+            [
+                "../bin/px4",
+                "-i",
+                str(instance),
+                "-d",
+                "-w",
+                str(home / "rootfs"),
+                str(build / "etc"),
+            ],
             cwd=home / "rootfs",
             env=env,
             stdin=subprocess.DEVNULL,
