@@ -71,3 +71,23 @@ def test_on_px4_the_first_item_is_marked_current_and_no_home_item_is_added():
     rig.call(missions.push, WaypointPush(waypoints=square(3)))
     items = answer_upload(rig)
     assert len(items) == 3 and [i.current for i in items] == [1, 0, 0]
+
+
+def test_on_ardupilot_a_start_already_in_auto_passes_through_guided_first():
+    # a finished mission leaves ArduCopter in AUTO, where it starts a new one only on entering
+    from dronewrapper.msgs.flight import MissionRequest
+    from dronewrapper_bridge_mavlink import actions
+
+    rig = ardupilot()
+    rig.core.missions.waypoints = square(2)
+    rig.custom_mode = 3  # AUTO
+    rig.heartbeat()
+    rig.run(0.1)
+    rig.call(actions.mission_action, MissionRequest(action="start", timeout=10.0))
+    rig.run(0.1)
+    modes = [
+        m.param2
+        for _, m in rig.sent
+        if m.get_type() == "COMMAND_LONG" and m.command == mavlink.MAV_CMD_DO_SET_MODE
+    ]
+    assert modes[:1] == [GUIDED], modes
