@@ -4,8 +4,9 @@ Two ways to present a drone to ROS 2 (docs/ros2.md), measured side by side on on
 
 * **standalone**: the real gateway process (``python -m dronewrapper_ros2_gateway``) relays a
   publisher process's samples (drone ``drone``);
-* **hosted**: the publisher process runs the gateway itself, as a bridge does with a ``ros2:``
-  section (:func:`dronewrapper_ros2_gateway.hosted.hosted_gateway`; drone ``drone_h``).
+* **hosted**: the publisher process runs the gateway on its own session, as a bridge's process
+  does with the gateway beside it (:func:`dronewrapper_ros2_gateway.hosted.hosted_gateway`;
+  drone ``drone_h``).
 
 Each publisher is a child process of this script (``--publisher``), the same code for both
 modes, standing in for a bridge: it puts our messages from its main thread. A receiver session
@@ -53,12 +54,12 @@ from dronewrapper.msgs.geometry import Point, Pose, PoseStamped, TwistStamped
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.sensor import BatteryState, Image, NavSatFix
 from dronewrapper.msgs.std import Header
-from dronewrapper.ros2 import cdr
-from dronewrapper.ros2.convert import ROS_TYPES
-from dronewrapper.ros2.names import topic_key
-from dronewrapper.ros2.typehash import type_hash
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper.runtime.arguments import CommandParser, first_line
+from dronewrapper_ros2_codec import cdr
+from dronewrapper_ros2_codec.convert import ROS_TYPES
+from dronewrapper_ros2_codec.names import topic_key
+from dronewrapper_ros2_codec.typehash import type_hash
 
 REPO = Path(__file__).resolve().parents[1]
 NS = "drone"  # the standalone gateway's drone

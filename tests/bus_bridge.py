@@ -1,121 +1,104 @@
-"""bridge_mavlink's core and the simulated autopilot (tests/sim_pair.py) behind the fake bus,
-so the SDK's DroneWrapper flies the simulator through the real bridge logic in bus time.
+"""bridge_mavlink's real ``Bridge`` facing the simulated autopilot on the fake bus, so the SDK's
+DroneWrapper and the ground station fly the simulator through the real bridge in bus time.
 
-:class:`BusBridge` serves the bridge's keys on a FakeNode: each service call runs the core's
-operation while the pair (and the bus clock with it) moves on; what the core publishes goes
-on the bus; the SDK's setpoints reach the core at 20 Hz while the SDK streams. :class:`SimSdk`
-is the DroneWrapper on that bus, its blocking calls moving the bus time.
+:class:`SimBridge` is the bridge as its process makes it (``Bridge(node, config, link)``,
+``start()``) on a FakeNode, its link the simulator's PX4-like autopilot in process
+(tests/clocked_autopilot.py): the bridge's threads, the autopilot's physics and every waiting
+call move on the bus's virtual clock together. :class:`SimSdk` is the DroneWrapper on that
+bus, its blocking calls moving the bus time.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
 from typing import Any
 
-from bus_autopilot import drive
-from sim_pair import EPOCH, SimPair
+from clocked_autopilot import ClockedAutopilot
 
 from dronewrapper import DroneWrapper
-from dronewrapper.msgs import registry
-from dronewrapper.runtime.caller import current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
-from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.node import Bridge
+from dronewrapper_sim.px4.autopilot import AutopilotConfig
 
-STEP_S = 0.02
+EPOCH = 1.7e9
+"""The bus's start (s); the autopilot's time 0."""
 
 
-class BusBridge:
-    """The pair's bridge on ``bus`` (see module docstring); bus time = EPOCH + pair time."""
+class SimBridge:
+    """The real bridge on a node of ``bus`` facing the simulated autopilot (started).
 
-    def __init__(self, bus: FakeBus, pair: SimPair, ns: str = "drone") -> None:
-        self.bus = bus
-        self.pair = pair
-        self.node = FakeNode("bridge_mavlink", bus, ns=ns)
-        self._published = 0
-        self._publishers: dict[Any, Any] = {}
-        self.node.subscribe(registry.SETPOINT_RAW_LOCAL, self._on_setpoint)
-        services = [
-            (registry.FLIGHT_TAKEOFF, flight.takeoff_to),
-            (registry.FLIGHT_LAND, flight.land_here),
-            (registry.FLIGHT_GOTO, actions.goto_point),
-            (registry.FLIGHT_RETURN, actions.return_home),
-            (registry.FLIGHT_MISSION, actions.mission_action),
-            (registry.MISSION_CONTROL, actions.control),
-            (registry.ARMING, ops.arming),
-            (registry.TAKEOFF, ops.takeoff),
-            (registry.LAND, ops.land),
-            (registry.SET_MODE, ops.set_mode),
-            (registry.PARAM_GET, parameters.param_get),
-            (registry.PARAM_SET, parameters.param_set),
-            *((service, steps) for service, steps, _ in missions.SERVICES),
-        ]
-        for service, steps in services:
-            self.node.serve(service, lambda request, steps=steps: self._call(steps, request))
+    Args:
+        bus: the fake bus (its clock is the bridge's and the autopilot's).
+        wind: east and north wind (m/s); params: the autopilot's parameters; start: where it
+            starts (local ENU m).
+        bridge_config: the bridge's config (``message_rates`` empty unless given).
+    """
+
+    def __init__(
+        self,
+        bus: FakeBus,
+        *,
+        wind: tuple[float, float] = (0.0, 0.0),
+        params: dict[str, float] | None = None,
+        start: tuple[float, float] = (0.0, 0.0),
+        **bridge_config: Any,
+    ) -> None:
+        self.node = FakeNode("bridge_mavlink", bus)
+        autopilot = AutopilotConfig(
+            wind_east=wind[0],
+            wind_north=wind[1],
+            params=params or {},
+            start_x=start[0],
+            start_y=start[1],
+        )
+        self.link = ClockedAutopilot(bus.clock, self.node.stop_event, config=autopilot)
+        bridge_config.setdefault("message_rates", {})  # the autopilot's own rates, kept low
+        self.bridge = Bridge(self.node, Config(**bridge_config), link=self.link)
+        self.threads = self.bridge.start()
         self.node.announce()
-        self._beats: dict[str, float] = {}  # key -> bus time of its last beat
-        self.node.subscribe(registry.COMMANDER_BEAT, self._on_beat)
-        pair.alive = lambda: {k for k, t in self._beats.items() if self.pair.t + EPOCH - t < 1.5}
+        self.autopilot = self.link.autopilot
+        self.core = self.bridge.core
 
-    def _on_beat(self, beat: Any) -> None:
-        self._beats[beat.key] = self.bus.clock()
+    @property
+    def t(self) -> float:
+        """The autopilot's time (s since the bus's EPOCH)."""
+        return self.autopilot.time_s
 
-    def _on_setpoint(self, target: Any) -> None:
-        self.pair.setpoint = target
+    @property
+    def truth(self) -> list[tuple[float, tuple[float, float, float], str]]:
+        """Ground truth: (t, local ENU position, mode) at each of the autopilot's polls."""
+        return self.link.truth
 
-    def _publish(self) -> None:
-        self.bus.clock.advance_to(EPOCH + self.pair.t)
-        for _, topic, msg in self.pair.samples[self._published :]:
-            if topic not in self._publishers:
-                self._publishers[topic] = self.node.publisher(topic)
-            self._publishers[topic].put(msg)
-        self._published = len(self.pair.samples)
+    @property
+    def position(self) -> tuple[float, float, float]:
+        s = self.autopilot.state
+        return (s.x, s.y, s.z)
 
-    def _advance(self, until: float) -> None:
-        while self.pair.t < until - EPOCH:
-            self.pair.step()
-        self._publish()
+    def closest_approach(self, point: tuple[float, float, float], since: float = 0.0) -> float:
+        """The ground truth's closest distance (m) to ``point`` since ``since``."""
+        return min(math.dist(p, point) for t, p, _ in self.truth if t >= since)
 
-    def _call(self, steps: Any, request: Any, limit: float = 60.0) -> Any:
-        core = self.pair.core  # the request's commander as the real wiring hands it on
-        steps = steps(core, request)
-        op = core.request(steps, current_commander(), "", self.pair.t, EPOCH + self.pair.t)
-        end = self.pair.t + limit
-        steps = 0
-        while not op.done and self.pair.t < end:
-            self.pair.step()
-            steps += 1
-            if steps % 5 == 0:
-                self._publish()
-        self._publish()
-        return op.result()
-
-    def step(self, now: float) -> None:
-        self._advance(now)
-
-    def next_wake(self, now: float) -> float:
-        return now + STEP_S
+    def close(self) -> None:
+        self.node.stop()
+        for thread in self.threads:
+            thread.join(10.0)
 
 
 class SimSdk:
-    """A DroneWrapper flying the simulator through :class:`BusBridge`, in bus time."""
+    """A DroneWrapper flying the simulator through :class:`SimBridge`, in bus time
+    (``pair``: the flight, as tests read it)."""
 
     def __init__(self, **pair: Any) -> None:
-        self.pair = SimPair(**pair)
         self.bus = FakeBus(start=EPOCH)
-        self.bridge = BusBridge(self.bus, self.pair)
+        self.pair = SimBridge(self.bus, **pair)
         self.node = FakeNode("app", self.bus)
-        self.bus.clock.stepper = self.run_until  # the wrapper's waits fly the simulator
         self.drone = DroneWrapper("drone", node=self.node, wait=False)
-        self.pair.streaming = lambda: self.drone.commanding is not None
         self.run(3.0)  # connected, home and envelope known
 
     def run(self, seconds: float) -> None:
-        drive(self.bus, self.bus.clock() + seconds, self.bridge)
-
-    def run_until(self, until: float, done: Callable[[], bool]) -> None:
-        """The bus clock's stepper: the simulator runs until ``until`` or ``done()``."""
-        drive(self.bus, until, self.bridge, stop=done)
+        self.bus.clock.run_for(seconds)
 
     def close(self) -> None:
         self.drone.close()
+        self.pair.close()

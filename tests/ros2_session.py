@@ -6,8 +6,8 @@ from __future__ import annotations
 from types import SimpleNamespace
 from typing import Any
 
-from dronewrapper.ros2.names import topic_key
-from dronewrapper.ros2.typehash import type_hash
+from dronewrapper_ros2_codec.names import topic_key
+from dronewrapper_ros2_codec.typehash import type_hash
 
 ZID = "c0ffee00c0ffee00c0ffee00c0ffee00"
 PT = "mavros_msgs/msg/PositionTarget"

@@ -2,6 +2,7 @@
 
 :func:`running_bridge` gives the Tello (on a random loopback address of its own), the started
 Bridge and a user node, on the fake bus or on a real Zenoh router, and stops all of them after.
+The Tello answers in real time, so the bridge's node runs on the real clock on either bus.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from typing import Any
 
 from tello_peer import ScriptedTello
 
+from dronewrapper.runtime.clock import REAL
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_tello.config import Config
@@ -41,6 +43,7 @@ def running_bridge(
     else:
         bus = FakeBus()
         node, user = FakeNode("bridge_tello", bus), FakeNode("test", bus)
+        node.clock = REAL  # the bridge's time is its node's: real, as the Tello answers in it
     bridge = Bridge(node, config)
     threads = bridge.start()
     try:

@@ -10,7 +10,6 @@ from typing import Any
 
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_base.core_driver import CoreDriver
 
 
 class Wired(BridgeNode):
@@ -22,13 +21,11 @@ class Wired(BridgeNode):
 
 def wire(core: Any, module: ModuleType, bus: FakeBus) -> Wired:
     """``core`` on a bridge node of ``bus`` publishing ``module.PUBLISHED`` and serving
-    ``module.SERVICES`` (``module``: a bridge's ``node`` module), its driver on the bus clock."""
+    ``module.SERVICES`` (``module``: a bridge's ``node`` module): in the bus's time, which the
+    node's clock is."""
     node = FakeNode("bridge", bus)
     bridge = Wired(
         node, core, {t: node.publisher(t) for t in module.PUBLISHED}, logging.getLogger()
-    )
-    bridge.driver = CoreDriver(
-        core, bridge.execute, node.stop_event, clock=bus.clock.monotonic, wall=bus.clock.time
     )
     bridge.serve(module.SERVICES)
     return bridge

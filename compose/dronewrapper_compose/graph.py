@@ -68,6 +68,9 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         each_drone: run once per drone of a fleet graph of this kind (``iris``, ``tello``,
             ``any``), under the drone's namespace, all of them started together
             (:mod:`dronewrapper_compose.fleet`).
+        beside: run in the process of the earlier process of this name, as a service of its
+            own on the same Zenoh session (:mod:`dronewrapper.runtime.host`): a ROS 2 gateway
+            beside its drone's bridge (:mod:`dronewrapper_compose.hosting`).
     """
 
     name: str
@@ -82,6 +85,7 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     stop_timeout_s: float = 10.0
     zenoh_args: bool = True
     each_drone: str | None = None
+    beside: str | None = None
 
 
 class Graph(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -284,4 +288,22 @@ def load_graph(path: str | Path) -> Graph:
             )
         if proc.ready not in ("alive", "none"):
             raise GraphError(f"{path}: process {proc.name!r}: ready must be alive or none - {at}")
+        if proc.beside is not None:
+            _check_beside(path, proc, graph.processes[:i], at)
     return graph
+
+
+def _check_beside(path: Path | str, proc: ProcessSpec, earlier: list[ProcessSpec], at: str) -> None:
+    """GraphError unless ``proc.beside`` names an earlier process it can share a process with:
+    both run once (no ``each_drone``) and as modules (``python -m``), the other beside none."""
+    target = next((p for p in earlier if p.name == proc.beside), None)
+    if (
+        target is None
+        or target.beside is not None
+        or None in (proc.module, target.module)
+        or (proc.each_drone, target.each_drone) != (None, None)
+    ):
+        raise GraphError(
+            f"{path}: process {proc.name!r}: beside {proc.beside!r} must name an earlier "
+            f"process, run once as a module (python -m) and beside none - {at}"
+        )

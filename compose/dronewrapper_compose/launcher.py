@@ -41,7 +41,7 @@ from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper.runtime.service import setup_logging
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.security.keystore import default_keys_dir
-from dronewrapper_compose import fleet
+from dronewrapper_compose import fleet, hosting
 from dronewrapper_compose.child import Child
 from dronewrapper_compose.graph import (
     REPO,
@@ -174,9 +174,9 @@ class Launcher:
         self._width = max(len(inst.label) for group in self.groups for inst in group)
 
     def plan(self) -> list[list[Instance]]:
-        """The processes to start, in groups started together: one group per spec, holding
-        one instance, or one per drone for an ``each_drone`` spec; with ``per_process`` > 1,
-        one group of host processes in place of the ``each_drone`` specs."""
+        """The processes to start, in groups started together: a group per spec, of one
+        instance, or one per drone (``each_drone``); ``per_process`` > 1 and ``beside`` make
+        host processes in their place (:mod:`~dronewrapper_compose.hosting`)."""
         size = per_process(self.values, self.graph_path)
         groups: list[list[Instance]] = []
         hosted: list[Instance] = []
@@ -202,7 +202,7 @@ class Launcher:
                 groups[hosts_at] = host_instances(hosted, [d.ns for d in self.drones], size)
             except GraphError as exc:
                 raise GraphError(f"{self.graph_path}: {exc}") from exc
-        return [group for group in groups if group]
+        return hosting.join_beside([group for group in groups if group])
 
     def argv_of(self, inst: Instance) -> tuple[list[str], dict[str, str]]:
         """The argv and extra environment of one instance (a host's: its members' argvs,

@@ -211,9 +211,13 @@ def stream_findings(heard: Heard) -> list[StreamHealth]:
 def ros2_findings(session: zenoh.Session, timeout: float = 1.0) -> list[tuple[str, str]]:
     """ROS 2 endpoints (rmw_zenoh liveliness tokens) on this router: each topic or service
     whose endpoints disagree on its type or hash is a FAIL naming both sides (they never
-    exchange a message); none at all, no finding."""
-    from dronewrapper.ros2.mismatch import disagreements
-    from dronewrapper.ros2.names import ADMIN, parse_endpoint
+    exchange a message); none at all, no finding. The ROS 2 codec ships with the on-board
+    stack, not with the SDK: without it, no finding either."""
+    try:
+        from dronewrapper_ros2_codec.mismatch import disagreements
+        from dronewrapper_ros2_codec.names import ADMIN, parse_endpoint
+    except ImportError:  # a laptop's SDK alone (pip install ./sdk)
+        return []
 
     endpoints = []
     for reply in session.liveliness().get(f"{ADMIN}/**", timeout=timeout):

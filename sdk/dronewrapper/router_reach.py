@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 import zenoh
 
 from dronewrapper.runtime.node import open_session
-from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.options import ZenohOptions, tcp_address
 
 NO_ROUTER_HINT = (
     "start one with `dronewrapper up compose/GRAPH.yaml` (or `dronewrapper router`), "
@@ -23,21 +23,6 @@ NO_ROUTER_HINT = (
 )
 PROBE_TIMEOUT_S = 1.0
 """Seconds one TCP connect may take before the endpoint is left to the session."""
-
-
-def tcp_address(endpoint: str) -> tuple[str, int] | None:
-    """``(host, port)`` of a ``tcp/`` or ``tls/`` endpoint, else None (pure).
-
-    >>> tcp_address("tcp/127.0.0.1:7447"), tcp_address("tls/[::1]:7448#iface=lo")
-    (('127.0.0.1', 7447), ('::1', 7448))
-    """
-    protocol, _, address = endpoint.partition("/")
-    if protocol not in ("tcp", "tls"):
-        return None
-    host, _, port = address.split("#", 1)[0].split("?", 1)[0].rpartition(":")
-    if not host or not port.isdigit():
-        return None
-    return host.strip("[]"), int(port)
 
 
 def refuses(address: tuple[str, int], timeout: float = PROBE_TIMEOUT_S) -> bool:

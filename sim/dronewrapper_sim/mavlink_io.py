@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import logging
 import socket
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -149,13 +148,16 @@ class MavlinkUdpLink:
         self.bad = 0
         self.send_errors = 0
 
-    def set_signing_key(self, key: bytes | None, allow_unsigned: Callable[[int], bool]) -> None:
-        """Sign what we send and verify what arrives with ``key`` (None: signing off)."""
+    def set_signing_key(
+        self, key: bytes | None, allow_unsigned: Callable[[int], bool], now: float
+    ) -> None:
+        """Sign what we send and verify what arrives with ``key`` (None: signing off); our
+        signing timestamps start no earlier than ``now`` (Unix s, the simulator's clock)."""
         signing = self.mav.signing
         signing.secret_key = key
         signing.sign_outgoing = key is not None
         signing.allow_unsigned_callback = None if key is None else (lambda _m, i: allow_unsigned(i))
-        signing.timestamp = max(signing.timestamp, signing_timestamp(time.time()))
+        signing.timestamp = max(signing.timestamp, signing_timestamp(now))
         signing.link_id = 0
 
     @property

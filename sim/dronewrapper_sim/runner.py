@@ -242,7 +242,7 @@ class SimRunner:
 
     def _set_signing_key(self, key: bytes | None) -> None:
         for link in self.links.values():
-            link.set_signing_key(key, self.signing.allow_unsigned)
+            link.set_signing_key(key, self.signing.allow_unsigned, self.time.time())
 
     def _setup_signing(self, link: MavlinkUdpLink, msg: Any) -> None:
         if msg.target_system not in (0, self.autopilot.sysid):

@@ -164,9 +164,9 @@ def test_garbage_and_commands_without_the_lease_are_refused(ros, graph):
     seen = _setpoints_seen(node)
     time.sleep(0.5)
     # garbage bytes with a valid attachment on the exact ROS 2 key: nothing reaches the bridge
-    from dronewrapper.ros2 import attachment
-    from dronewrapper.ros2.names import topic_key
-    from dronewrapper.ros2.typehash import type_hash
+    from dronewrapper_ros2_codec import attachment
+    from dronewrapper_ros2_codec.names import topic_key
+    from dronewrapper_ros2_codec.typehash import type_hash
 
     key = topic_key(
         0, SETPOINT, "mavros_msgs/msg/PositionTarget", type_hash("mavros_msgs/msg/PositionTarget")
@@ -186,7 +186,7 @@ def test_garbage_and_commands_without_the_lease_are_refused(ros, graph):
         raw.undeclare()
         pub.close()
     # garbage as a service request: answered, refused
-    from dronewrapper.ros2 import cdr
+    from dronewrapper_ros2_codec import cdr
 
     arming_key = topic_key(
         0,
@@ -302,7 +302,7 @@ def test_peer_arms_takes_off_moves_the_drone_and_lands(ros, graph):
 
 def test_a_humble_peer_is_reported_by_name_by_the_gateway_and_doctor(graph):
     from dronewrapper.doctor import FAIL, ros2_findings
-    from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text
+    from dronewrapper_ros2_codec.names import SUBSCRIBER, NodeName, qos_text
 
     _router, node, proc = graph
     humble = NodeName(0, "0123456789abcdef0123456789abcdef", 0, "/", "humble_echo")

@@ -1,6 +1,6 @@
 """The gateway hosted by the bridge, seen by a ROS 2 peer that shares no code with the project
-(zenoh-ros2-sdk): compose/sim_iris_ros2_hosted.yaml (sim, bridge with the command lease and a
-``ros2:`` section, no gateway process) on a real router on loopback. The peer discovers the
+(zenoh-ros2-sdk): compose/sim_iris_ros2_hosted.yaml (sim, bridge with the command lease, and
+the gateway beside it in the bridge's process) on a real router on loopback. The peer discovers the
 entities, echoes a State and arms and disarms the drone through the bridge's lease, under the
 gateway's commander name; and on the same router, a hosted gateway's conversion of a pose is
 done on the putting thread before ``put`` returns."""
@@ -70,6 +70,9 @@ def test_a_ros2_peer_sees_and_commands_the_bridge_hosted_gateway(spawn):
         finally:
             arming.close()
     wait_for(lambda: "command lease acquired: ros2_gateway" in graph.output(), 10, what="lease")
+    output = graph.output()  # one process, the gateway a service of its own in it, hosted
+    assert "bridge_mavlink+ros2_gateway |" in output
+    assert "beside the bridge, in its process" in output
 
     # the hosted conversion runs inside put(): on a real session, no thread in between
     with (

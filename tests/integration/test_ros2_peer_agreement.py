@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from dronewrapper.ros2 import attachment, interfaces
-from dronewrapper.ros2.names import PUBLISHER, NodeName
-from dronewrapper.ros2.typehash import type_hash
+from dronewrapper_ros2_codec import attachment, interfaces
+from dronewrapper_ros2_codec.names import PUBLISHER, NodeName
+from dronewrapper_ros2_codec.typehash import type_hash
 
 pytestmark = pytest.mark.integration
 

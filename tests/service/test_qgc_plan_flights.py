@@ -1,4 +1,4 @@
-"""QGroundControl plans uploaded and flown through the SDK and bridge_mavlink's core on the
+"""QGroundControl plans uploaded and flown through the SDK and bridge_mavlink's bridge on the
 simulator (tests/bus_bridge.py), in bus time, judged from the simulator's ground truth: the
 plan's fence reaches the envelope, payload items are taken and skipped, a speed change is
 flown, an item the autopilot refuses is named, every item reached is counted."""

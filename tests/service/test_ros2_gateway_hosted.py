@@ -15,16 +15,15 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import Header
-from dronewrapper.ros2 import attachment, cdr
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_base.core_driver import CoreDriver
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
 from dronewrapper_bridge_mavlink.core import BridgeCore
 from dronewrapper_bridge_tello.config import Config as TelloConfig
+from dronewrapper_ros2_codec import attachment, cdr
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import ENTITIES
 from dronewrapper_ros2_gateway.hosted import check_hosted, hosted_gateway
@@ -34,7 +33,8 @@ ARM = cdr.encode("mavros_msgs/srv/CommandBool_Request", {"value": True})
 
 
 class Wired(BridgeNode):
-    """bridge_mavlink's core on the bridge wiring in the bus's time, sends dropped."""
+    """bridge_mavlink's core on the bridge wiring (in the bus's time: the node's), sends
+    dropped."""
 
     def send(self, out) -> None:
         pass
@@ -59,13 +59,6 @@ class HostingBridge:
         core = BridgeCore(MavlinkConfig(**config))
         publishers = {t: self.node.publisher(t) for t in mavlink_node.PUBLISHED}
         self.bridge = Wired(self.node, core, publishers, logging.getLogger("bridge"))
-        self.bridge.driver = CoreDriver(
-            core,
-            self.bridge.execute,
-            self.node.stop_event,
-            clock=self.bus.clock.monotonic,
-            wall=self.bus.clock.time,
-        )
         self.bridge.serve(mavlink_node.SERVICES)
         self.user = FakeNode("apps", self.bus)
 
@@ -112,11 +105,13 @@ def test_no_ros2_section_hosts_nothing():
 
 def test_a_bridge_presents_its_own_drone_only():
     check_hosted(Config(drones=["drone"]), "drone")
-    with pytest.raises(ValueError, match=r"ros2\.drones: a bridge presents its own drone only"):
+    with pytest.raises(
+        ValueError, match=r"drones: beside a bridge, the gateway presents its drone only"
+    ):
         check_hosted(Config(drones=["drone", "drone2"]), "drone")
     bridge = HostingBridge()
     with (  # refused before anything is declared
-        pytest.raises(ValueError, match=r"ros2\.drones"),
+        pytest.raises(ValueError, match=r"drones: beside a bridge"),
         hosted_gateway(bridge.node, Config(drones=["drone2"])),
     ):
         pass
@@ -126,7 +121,7 @@ def test_a_bridge_presents_its_own_drone_only():
 def test_telemetry_is_taken_on_the_putting_thread_and_cameras_on_zenoh_s():
     bridge = HostingBridge()
     with hosted_gateway(bridge.node, Config()) as gateway:
-        bridge.bridge.driver.feed(lambda now, stamp: bridge.bridge.core.publish_state(force=True))
+        bridge.bridge.driver.feed(bridge.bridge.core.on_started)
         state_key = ros_key("/drone/mavros/state", "mavros_msgs/msg/State")
         ((payload, _meta),) = bridge.session.publishers[state_key].sent
         assert cdr.decode("mavros_msgs/msg/State", payload)["mode"] == ""
@@ -179,9 +174,8 @@ def test_a_burst_held_on_the_ros2_side_is_refused_by_the_bridge_s_late_rule():
 
 
 @pytest.mark.parametrize("schema", [MavlinkConfig, TelloConfig])
-def test_a_bridge_config_takes_the_gateway_s_section_strictly(schema):
-    assert load_config(schema).ros2 is None
-    config = load_config(schema, overrides=["ros2.domain_id=3"])
-    assert config.ros2 == Config(domain_id=3)
-    with pytest.raises(ConfigError, match="keyz"):
-        load_config(schema, overrides=["ros2.keyz=[]"])
+def test_a_bridge_config_has_no_gateway_section(schema):
+    """The gateway beside a bridge is a service of its own in the bridge's process
+    (process.py, runtime/host.py), with its own config: the bridge's names no ROS 2 key."""
+    with pytest.raises(ConfigError, match="ros2"):
+        load_config(schema, overrides=["ros2.domain_id=3"])

@@ -18,12 +18,12 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import CommandBoolResult, PositionTarget, State
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import Header
-from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.names import SUBSCRIBER, NodeName, qos_text
-from dronewrapper.ros2.typehash import type_hash
 from dronewrapper.runtime.caller import commander_of, current_commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_base.commander_lease import LeaseGate
+from dronewrapper_ros2_codec import attachment, cdr
+from dronewrapper_ros2_codec.names import SUBSCRIBER, NodeName, qos_text
+from dronewrapper_ros2_codec.typehash import type_hash
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import ENTITIES
 from dronewrapper_ros2_gateway.node import Gateway, commander_name

@@ -1,5 +1,5 @@
 """The SDK's go-to, return, missions and envelope (dronewrapper/missions.py), flying the
-simulator through bridge_mavlink's real core on the fake bus (tests/bus_bridge.py), in bus
+simulator through bridge_mavlink's real bridge on the fake bus (tests/bus_bridge.py), in bus
 time, judged from the simulator's ground truth."""
 
 from __future__ import annotations

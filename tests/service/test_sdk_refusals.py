@@ -2,7 +2,7 @@
 outside the envelope it holds, an envelope it cannot be), what only the bridge knows arrives
 as a warning line, the ``refusals`` view, ``on_refusal`` callbacks and, in ``aio``, an async
 iterator; an envelope set by a commander is named to the next one on connect. The simulator
-flown through bridge_mavlink's real core on the fake bus (tests/bus_bridge.py), in bus time."""
+flown through bridge_mavlink's real bridge on the fake bus (tests/bus_bridge.py), in bus time."""
 
 from __future__ import annotations
 

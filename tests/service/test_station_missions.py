@@ -1,6 +1,6 @@
 """The station's mission and fence: the map's data (home, mission, envelope) in a drone's
 snapshot, a ``.plan`` uploaded from the page, mission start and return, with the real bridge
-core and the simulator behind the fake bus (tests/bus_bridge.py), the app driven in process."""
+and the simulator behind the fake bus (tests/bus_bridge.py), the app driven in process."""
 
 from __future__ import annotations
 
@@ -8,9 +8,7 @@ import math
 
 import pytest
 from asgi_driver import AsgiClient
-from bus_autopilot import drive
-from bus_bridge import BusBridge
-from sim_pair import EPOCH, SimPair
+from bus_bridge import EPOCH, SimBridge
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.geodesy import to_geodetic
@@ -27,22 +25,17 @@ FAST_RTL = {"RTL_RETURN_ALT": 6.0, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0
 
 class Station:
     def __init__(self) -> None:
-        self.pair = SimPair(envelope=Envelope(fence=FENCE), params=FAST_RTL)
         self.bus = FakeBus(start=EPOCH)
-        self.bridge = BusBridge(self.bus, self.pair)
+        self.pair = SimBridge(self.bus, envelope=Envelope(fence=FENCE), params=FAST_RTL)
         self.node = FakeNode("station", self.bus)
         config = Config(port=0, command_timeout=120.0)
-        self.bus.clock.stepper = self.run_until  # blocking commands fly the simulator
         self.fleet = Fleet(self.node, config)
         self.client = AsgiClient(create_app(self.fleet, config, Access("operator-token-0123")))
         self.fleet.discover()
         self.run(3.0)
 
     def run(self, seconds: float) -> None:
-        drive(self.bus, self.bus.clock() + seconds, self.bridge)
-
-    def run_until(self, until: float, done) -> None:
-        drive(self.bus, until, self.bridge, stop=done)
+        self.bus.clock.run_for(seconds)
 
     def post(self, command: str, body: dict | None = None):
         return self.client.http("POST", f"/api/drones/drone/{command}", body or {})
@@ -53,6 +46,7 @@ class Station:
     def close(self) -> None:
         self.client.close()
         self.fleet.close()
+        self.pair.close()
 
 
 @pytest.fixture

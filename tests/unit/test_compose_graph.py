@@ -31,10 +31,12 @@ def test_shipped_graphs_validate_and_resolve(path: Path):
     for inst in (inst for group in launcher.groups for inst in group):
         argv, _ = launcher.argv_of(inst)
         assert "${" not in " ".join(argv), argv
-        assert argv[-8:] == [
-            "--connect", "tcp/127.0.0.1:1", "--namespace", inst.ns,
-            "--name", inst.spec.name, "--mode", "peer",
-        ]  # fmt: skip
+        for one in inst.members or (inst,):  # a host process: each of its services
+            argv, _ = launcher.argv_of(one)
+            assert argv[-8:] == [
+                "--connect", "tcp/127.0.0.1:1", "--namespace", one.ns,
+                "--name", one.spec.name, "--mode", "peer",
+            ]  # fmt: skip
 
 
 def write(tmp_path, text: str) -> Path:

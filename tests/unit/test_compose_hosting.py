@@ -1,5 +1,6 @@
 """A fleet graph's ``per_process``: N drones' sims and bridges packed into one host process
-(dronewrapper_compose.hosting), and the host's command line (dronewrapper.runtime.host)."""
+(dronewrapper_compose.hosting), a process ``beside`` another in its process, and the host's
+command line (dronewrapper.runtime.host)."""
 
 from __future__ import annotations
 
@@ -67,3 +68,38 @@ def test_a_bad_per_process_is_a_graph_error(value):
 def test_each_hosted_member_starts_with_dash_m_module(argv):
     with pytest.raises(ValueError, match="-m MODULE"):
         split_members(argv)
+
+
+def test_a_process_beside_another_runs_in_its_process_as_a_service_of_its_own():
+    launcher = Launcher.from_file("sim_iris_ros2_hosted", router="tcp/127.0.0.1:1")
+    assert [[inst.label for inst in group] for group in launcher.groups] == [
+        ["sim"],
+        ["bridge_mavlink+ros2_gateway"],
+    ]
+    host = launcher.groups[1][0]
+    assert host.tokens() == [("drone", "bridge_mavlink"), ("drone", "ros2_gateway")]
+    argv, _ = launcher.argv_of(host)
+    assert argv[:3] == [sys.executable, "-m", "dronewrapper.runtime.host"]
+    members = split_members(argv[3:])
+    assert [module for module, _ in members] == [
+        "dronewrapper_bridge_mavlink",
+        "dronewrapper_ros2_gateway",
+    ]
+    assert "domain_id=0" in members[1][1]  # each its own config
+    assert not any(arg.startswith("ros2.") for arg in members[0][1])
+
+
+@pytest.mark.parametrize(
+    "beside", ["nowhere", "gateway", "sim_fleet_member"], ids=["unknown", "later", "each_drone"]
+)
+def test_beside_names_an_earlier_process_run_once(tmp_path, beside):
+    graph = tmp_path / "g.yaml"
+    graph.write_text(
+        "version: 1\nprocesses:\n"
+        "  - {name: sim_fleet_member, module: dronewrapper_sim, each_drone: any}\n"
+        "  - {name: bridge, module: dronewrapper_bridge_mavlink}\n"
+        f"  - {{name: gw, module: dronewrapper_ros2_gateway, beside: {beside}}}\n"
+        "  - {name: gateway, module: dronewrapper_ros2_gateway}\n"
+    )
+    with pytest.raises(GraphError, match=rf"beside {beside!r} must name an earlier process"):
+        Launcher.from_file(graph, router="tcp/127.0.0.1:1")

@@ -4,12 +4,14 @@ commander lease applied in the core (holder only, take-over, lapse, off)."""
 
 from __future__ import annotations
 
+import itertools
 import logging
 import threading
 
 import pytest
 
 from dronewrapper.msgs.lease import LeaseRequest
+from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper_bridge_base.core_driver import CoreDriver, PureCore
 from dronewrapper_bridge_base.operation import Steps
@@ -80,9 +82,32 @@ def test_inputs_get_the_time_and_effects_run_outside_the_lock():
         executed.append((out, lock_is_free(drivers[0].cond)))
 
     core = EchoCore()
-    drivers.append(CoreDriver(core, execute, threading.Event(), clock=lambda: 5.0, wall=lambda: 9))
+    clock = VirtualClock(monotonic=5.0, time=9.0)
+    drivers.append(CoreDriver(core, execute, threading.Event(), clock=clock))
     assert drivers[0].feed(core.on_input, "hello") == "fed"
-    assert executed == [([("hello", 5.0, 9)], True)]
+    assert executed == [([("hello", 5.0, 9.0)], True)]
+
+
+def test_a_call_waits_on_the_drivers_clock():
+    """An operation that ends by time (a timeout) ends in the clock's time: on a virtual
+    clock the caller's wait moves it, and the core is fed each moment it was resumed at."""
+    core = EchoCore()
+    clock = VirtualClock(monotonic=100.0, time=1_700_000_000.0)
+    driver = CoreDriver(core, lambda out: None, threading.Event(), clock=clock)
+    resumed: list[float] = []
+
+    def time_out() -> Steps:
+        deadline = core.now + 2.0
+        while core.now < deadline:
+            resumed.append(core.now)
+            yield deadline
+        return core.now, core.stamp
+
+    ended, stamp = driver.call(time_out())  # waits of 1 ms at least, as in real time
+    assert 102.0 <= ended == clock.monotonic() < 102.002
+    assert stamp == clock.time()
+    assert resumed[0] == 100.0 and resumed == sorted(resumed) and resumed[-1] < 102.0
+    assert all(b - a <= 0.05 + 1e-9 for a, b in itertools.pairwise(resumed))
 
 
 def test_a_call_returns_when_another_threads_input_ends_its_operation():

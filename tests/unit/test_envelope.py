@@ -8,16 +8,15 @@ import msgspec
 import pytest
 
 from dronewrapper.envelope import (
-    BreachMonitor,
     Envelope,
     EnvelopeError,
-    breach,
     check_position,
     check_takeoff,
     check_velocity,
     distance_outside,
     inside,
 )
+from dronewrapper_bridge_base.breach import BreachMonitor, breach
 
 SQUARE = [(-10.0, -10.0), (10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)]
 

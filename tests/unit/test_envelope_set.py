@@ -1,6 +1,7 @@
 """What an envelope may be, and a bridge's envelope/set request applied to it: a ceiling of at
 least 1 m, a fence containing home or the aircraft, a reset to the configured envelope, and
-who set the one in force (dronewrapper.envelope, services/bridge_base envelope_set.py)."""
+who set the one in force (dronewrapper.envelope; services/bridge_base: breach.py,
+envelope_set.py)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,11 @@ from dataclasses import dataclass, field
 import pytest
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs.mission import EnvelopeSet
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.breach import BreachMonitor, check_replacement
 
 AWAY = [(20.0, 20.0), (30.0, 20.0), (30.0, 30.0), (20.0, 30.0)]
 AROUND_HOME = [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)]
@@ -32,11 +34,11 @@ def test_a_ceiling_below_one_metre_is_refused_naming_the_field():
 
 
 def test_a_fence_must_contain_home_or_the_aircraft():
-    env.check_replacement(Envelope(fence=AROUND_HOME), None)
-    env.check_replacement(Envelope(fence=AWAY), (25.0, 25.0))  # the aircraft is in it
-    env.check_replacement(Envelope(), None)  # no fence
+    check_replacement(Envelope(fence=AROUND_HOME), None)
+    check_replacement(Envelope(fence=AWAY), (25.0, 25.0))  # the aircraft is in it
+    check_replacement(Envelope(), None)  # no fence
     with pytest.raises(EnvelopeError, match="neither home nor the aircraft at") as error:
-        env.check_replacement(Envelope(fence=AWAY), (0.0, 0.0))
+        check_replacement(Envelope(fence=AWAY), (0.0, 0.0))
     assert error.value.limit == "fence"
 
 

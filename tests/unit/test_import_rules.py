@@ -1,79 +1,180 @@
 """Which floor of the house may import which, read from the source (``ast``, no import run).
 
-Floors from the bottom: the SDK (``dronewrapper``, what everything stands on), the bridges'
-shared base (``dronewrapper_bridge_base``), the services, the simulator, the graphs
-(``dronewrapper_compose``, which names them all). A package imports only floors below it, and
-a service imports no other service. :data:`KNOWN` lists the imports that break a rule today,
-each with its file: the list may only shrink (a new break fails, and so does a listed one that
-is gone, so the list stays true).
+Floors from the bottom:
+
+- the contract, ``dronewrapper.msgs`` (the messages, the keys and plain data such as the
+  envelope): it imports nothing of ours but itself;
+- the rest of the SDK, ``dronewrapper`` (the runtime and the thin client a laptop installs);
+- the libraries the on-board side shares and no laptop needs: the bridges' rules
+  (``dronewrapper_bridge_base``) and the ROS 2 codec (``dronewrapper_ros2_codec``);
+- the services (one package each under ``services/``): a service imports no other service;
+  two services that share a process do so as two ``run(node, config)`` on one session
+  (``dronewrapper.runtime.host``), never by importing each other;
+- the simulator, then the graphs (``dronewrapper_compose``, which names them all).
+
+A package imports only floors below it. The SDK's tools (``dronewrapper`` CLI, doctor, record,
+...) may name on-board packages below the graphs; the rest of the SDK imports a tool only
+inside a function, so that ``import dronewrapper`` never loads them. :data:`KNOWN` lists the
+imports that break a rule today, each with its file: the list may only shrink (a new break
+fails, and so does a listed one that is gone, so the list stays true).
+
+Within and across floors, no import circle: :data:`KNOWN_CIRCLES`, the circles of today, may
+only shrink the same way.
 """
 
 from __future__ import annotations
 
 import ast
+from collections.abc import Mapping
 from functools import cache
 from pathlib import Path
+from typing import NamedTuple
+
+import tomllib
 
 REPO = Path(__file__).resolve().parents[2]
-SERVICES = sorted(p.parent.name for p in (REPO / "services").glob("*/pyproject.toml"))
-SERVICE_PACKAGES = {f"dronewrapper_{name}" for name in SERVICES}
-SHARED_BASE = "dronewrapper_bridge_base"
+LIBRARIES = {"dronewrapper_bridge_base", "dronewrapper_ros2_codec"}
+"""Packages under ``services/`` that are shared code, not services."""
+PACKAGES = {f"dronewrapper_{p.parent.name}" for p in (REPO / "services").glob("*/pyproject.toml")}
+SERVICE_PACKAGES = PACKAGES - LIBRARIES
+SDK = {"dronewrapper", "drone_wrapper"}
+CONTRACT = "dronewrapper.msgs"
+COMPOSE = "dronewrapper_compose"
+TOOLS = (
+    "sdk/dronewrapper/__main__.py",
+    "sdk/dronewrapper/cli.py",
+    "sdk/dronewrapper/doctor.py",
+    "sdk/dronewrapper/echo.py",
+    "sdk/dronewrapper/mavlink_forward.py",
+    "sdk/dronewrapper/record/",
+    "sdk/dronewrapper/router.py",
+    "sdk/dronewrapper/security/keys_cli.py",
+)
+"""The SDK's tools: the only SDK modules that may name on-board packages."""
 
 KNOWN = {
     ("sdk/dronewrapper/cli.py", "dronewrapper_compose"),
-    ("services/bridge_mavlink/dronewrapper_bridge_mavlink/config.py", "dronewrapper_ros2_gateway"),
-    ("services/bridge_mavlink/dronewrapper_bridge_mavlink/node.py", "dronewrapper_ros2_gateway"),
-    ("services/bridge_tello/dronewrapper_bridge_tello/config.py", "dronewrapper_ros2_gateway"),
-    ("services/bridge_tello/dronewrapper_bridge_tello/node.py", "dronewrapper_ros2_gateway"),
 }
 """(file, imported package) pairs that break a rule today."""
+
+KNOWN_CIRCLES = {
+    frozenset(
+        f"dronewrapper_bridge_mavlink.{name}"
+        for name in ("autopilot_limits", "core", "missions", "operations", "parameters")
+    )
+    | {"dronewrapper_bridge_mavlink.receive", "dronewrapper_bridge_mavlink.watch"},
+    frozenset(f"dronewrapper_bridge_tello.{name}" for name in ("core", "missions", "operations")),
+    frozenset(f"dronewrapper_sim.px4.{name}" for name in ("commander", "geofence", "mission")),
+}
+"""The circles of today, each as its modules' dotted names: each is one object spread over
+sibling modules that call back into it (a bridge's core, the simulated PX4's commander)."""
+
+
+class Import:
+    """One absolute import of a source file: the module named, and whether it sits inside a
+    function (run only when called) or at module level (run on import)."""
+
+    def __init__(self, module: str, lazy: bool) -> None:
+        self.module = module
+        self.lazy = lazy
+
+    @property
+    def package(self) -> str:
+        return self.module.split(".")[0]
+
+
+def imports_of(path: Path) -> list[Import]:
+    """Every absolute import of ``path`` (``from X import y`` names X.y: y may be a module,
+    else it is a name in X). Imports are statements: only statement bodies are walked."""
+    found: list[Import] = []
+
+    def visit(body: list[ast.stmt], lazy: bool) -> None:
+        for statement in body:
+            if isinstance(statement, ast.Import):
+                found.extend(Import(alias.name, lazy) for alias in statement.names)
+            elif isinstance(statement, ast.ImportFrom) and statement.level == 0:
+                module = statement.module or ""
+                found.extend(Import(f"{module}.{a.name}", lazy) for a in statement.names)
+            inner = lazy or isinstance(statement, ast.FunctionDef | ast.AsyncFunctionDef)
+            for field in ("body", "orelse", "finalbody", "handlers"):
+                visit(getattr(statement, field, None) or [], inner)
+            for case in getattr(statement, "cases", None) or []:
+                visit(case.body, inner)
+
+    visit(ast.parse(path.read_text(), str(path)).body, False)
+    return found
 
 
 def imported_packages(path: Path) -> set[str]:
     """The top-level packages a source file imports (absolute imports only)."""
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            found.update(alias.name.split(".")[0] for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            found.add(node.module.split(".")[0])
+    return {found.package for found in imports_of(path)}
+
+
+def is_ours(package: str) -> bool:
+    return package.startswith("dronewrapper") or package == "drone_wrapper"
+
+
+class Source(NamedTuple):
+    """One source file: its top-level package, its dotted module name and its imports."""
+
+    package: str
+    module: str
+    imports: list[Import]
+
+
+@cache
+def sources() -> dict[str, Source]:
+    """Each source file of a distribution (repo-relative path) -> what it is and imports."""
+    roots = [REPO / "sdk", REPO / "sim", REPO / "compose"]
+    roots += [p.parent for p in sorted((REPO / "services").glob("*/pyproject.toml"))]
+    found = {}
+    for root in roots:
+        for path in sorted(root.rglob("*.py")):
+            inside = path.relative_to(root).with_suffix("").parts
+            if inside[0] in (".venv", "build") or inside[0].endswith(".egg-info"):
+                continue
+            module = ".".join(inside[:-1] if inside[-1] == "__init__" else inside)
+            relative = path.relative_to(REPO).as_posix()
+            found[relative] = Source(inside[0], module, imports_of(path))
     return found
 
 
 def allowed(package: str) -> set[str] | None:
     """The project packages ``package`` may import (None: any of them)."""
-    below_services = {"dronewrapper", "drone_wrapper", SHARED_BASE}
-    if package in ("dronewrapper", "drone_wrapper"):
-        return {"dronewrapper", "drone_wrapper"}
-    if package == SHARED_BASE:
-        return {"dronewrapper", SHARED_BASE}
+    if package in SDK:
+        return set(SDK)
+    if package in LIBRARIES:
+        return SDK | {package}
     if package in SERVICE_PACKAGES:
-        return below_services | {package}
+        return SDK | LIBRARIES | {package}
     if package == "dronewrapper_sim":
-        return below_services | SERVICE_PACKAGES | {package}
+        return SDK | LIBRARIES | SERVICE_PACKAGES | {package}
     return None
+
+
+def is_tool(relative: str) -> bool:
+    return relative.startswith(TOOLS)
+
+
+def names_a_tool(found: Import) -> bool:
+    parts = found.module.split(".")
+    paths = ("sdk/" + "/".join(parts[:n]) for n in range(1, len(parts) + 1))
+    return any(is_tool(path + ".py") or is_tool(path + "/") for path in paths)
 
 
 @cache
 def breaks() -> frozenset[tuple[str, str]]:
     """Every (file, imported project package) that its floor does not allow."""
-    roots = [REPO / "sdk", REPO / "sim", *(REPO / "services" / name for name in SERVICES)]
     found = set()
-    for root in roots:
-        for path in root.rglob("*.py"):
-            relative = path.relative_to(REPO)
-            if ".venv" in relative.parts or "build" in relative.parts:
-                continue
-            package = (
-                relative.parts[1] if relative.parts[0] in ("sdk", "sim") else relative.parts[2]
-            )
-            rule = allowed(package)
-            if rule is None:
-                continue
-            for imported in imported_packages(path):
-                is_ours = imported.startswith("dronewrapper") or imported == "drone_wrapper"
-                if is_ours and imported not in rule:
-                    found.add((relative.as_posix(), imported))
+    for relative, (package, _, imports) in sources().items():
+        rule = allowed(package)
+        if rule is None:
+            continue
+        if is_tool(relative):  # anything on board below the graphs
+            rule = rule | {i.package for i in imports if i.package != COMPOSE}
+        for imported in imports:
+            if is_ours(imported.package) and imported.package not in rule:
+                found.add((relative, imported.package))
     return frozenset(found)
 
 
@@ -85,11 +186,153 @@ def test_the_known_breaks_are_still_there():
     assert KNOWN - breaks() == set()
 
 
+def test_the_contract_imports_nothing_of_ours_but_itself():
+    wrong = [
+        (relative, i.module)
+        for relative, (_, _, imports) in sources().items()
+        if relative.startswith("sdk/dronewrapper/msgs/")
+        for i in imports
+        if is_ours(i.package) and not (i.module == CONTRACT or i.module.startswith(CONTRACT + "."))
+    ]
+    assert wrong == []
+
+
+def test_no_service_imports_another_service():
+    wrong = [
+        (relative, i.package)
+        for relative, (package, _, imports) in sources().items()
+        if package in PACKAGES
+        for i in imports
+        if i.package in SERVICE_PACKAGES and i.package != package
+    ]
+    assert wrong == []
+
+
+def test_the_thin_client_loads_no_bridge_rule_and_no_ros2_codec():
+    """Outside the tools, no SDK module names an on-board package (a lazy import included),
+    and none imports a tool but inside a function; the SDK's distribution does not depend on
+    them (``pip install ./sdk`` on a laptop)."""
+    wrong = [
+        (relative, i.module)
+        for relative, (package, _, imports) in sources().items()
+        if package in SDK and not is_tool(relative)
+        for i in imports
+        if (is_ours(i.package) and i.package not in SDK) or (names_a_tool(i) and not i.lazy)
+    ]
+    assert wrong == []
+    project = tomllib.loads((REPO / "sdk" / "pyproject.toml").read_text())["project"]
+    extras = [r for extra in project["optional-dependencies"].values() for r in extra]
+    requirements = [*project["dependencies"], *extras]
+    assert not [r for r in requirements if r.startswith(("dronewrapper-", "dronewrapper_"))]
+
+
+def test_the_simulator_does_not_import_the_graphs():
+    wrong = [
+        (relative, i.module)
+        for relative, (package, _, imports) in sources().items()
+        if package == "dronewrapper_sim"
+        for i in imports
+        if i.package == COMPOSE
+    ]
+    assert wrong == []
+
+
 def test_the_rule_sees_an_import_from_a_higher_floor(tmp_path):
     source = tmp_path / "x.py"
     source.write_text(
         "import dronewrapper_compose.launcher\nfrom dronewrapper.msgs import registry\n"
+        "def f():\n    import dronewrapper_ros2_codec\n"
     )
-    assert imported_packages(source) == {"dronewrapper_compose", "dronewrapper"}
+    assert imported_packages(source) == {
+        "dronewrapper_compose",
+        "dronewrapper",
+        "dronewrapper_ros2_codec",
+    }
+    assert [i.lazy for i in imports_of(source)] == [False, False, True]
     assert "dronewrapper_compose" not in allowed("dronewrapper_sim")
     assert "dronewrapper_bridge_tello" not in allowed("dronewrapper_bridge_mavlink")
+    assert "dronewrapper_ros2_gateway" not in allowed("dronewrapper_bridge_mavlink")
+    assert "dronewrapper_ros2_codec" in allowed("dronewrapper_bridge_px4_zenoh")
+    assert "dronewrapper_bridge_base" not in allowed("dronewrapper")
+
+
+def module_graph(found: dict[str, Source]) -> dict[str, set[str]]:
+    """Module -> the project modules it imports, at module level or inside a function (an
+    import names a module: ``from a.b import c`` is ``a.b.c`` when that is one, else ``a.b``;
+    never the packages above it)."""
+    modules = {source.module for source in found.values()}
+
+    def nearest(name: str) -> str | None:
+        while name and name not in modules:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    graph: dict[str, set[str]] = {}
+    for source in found.values():
+        targets = {nearest(i.module) for i in source.imports} - {None, source.module}
+        graph.setdefault(source.module, set()).update(t for t in targets if t is not None)
+    return graph
+
+
+def circles(graph: Mapping[str, set[str]]) -> set[frozenset[str]]:
+    """The strongly connected components of more than one node (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: set[frozenset[str]] = set()
+    for start in sorted(graph):
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = len(index)
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[node])
+            if low[node] == index[node]:
+                component = set()
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.add(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.add(frozenset(component))
+    return found
+
+
+def test_no_import_circle_beyond_the_known_ones():
+    """A circle: modules that reach each other by imports (a strongly connected component of
+    more than one), an import inside a function counted as one at module level: either way
+    they cannot be read, tested or moved one without the other. The known ones may only go."""
+    new = circles(module_graph(sources())) - KNOWN_CIRCLES
+    assert new == set(), [sorted(circle) for circle in new]
+
+
+def test_the_known_circles_are_still_there():
+    assert KNOWN_CIRCLES - circles(module_graph(sources())) == set()
+
+
+def test_a_circle_is_found_through_an_import_inside_a_function(tmp_path):
+    (tmp_path / "a.py").write_text("import b\n")
+    (tmp_path / "b.py").write_text("if True:\n    def f():\n        from a import g\n")
+    (tmp_path / "c.py").write_text("import a\n")
+    found = {p.name: Source("", p.stem, imports_of(p)) for p in sorted(tmp_path.glob("*.py"))}
+    assert module_graph(found) == {"a": {"b"}, "b": {"a"}, "c": {"a"}}
+    assert circles(module_graph(found)) == {frozenset({"a", "b"})}

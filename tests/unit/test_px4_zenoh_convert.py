@@ -18,7 +18,7 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
-from dronewrapper.setpoint_limits import Kind
+from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_px4_zenoh import commands, modes, telemetry, trajectory
 
 LEVEL_NORTH = {"q": [1.0, 0.0, 0.0, 0.0]}  # body FRD aligned with NED: nose north

@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
-from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.names import parse_endpoint
 from dronewrapper_bridge_px4_zenoh import telemetry, topics
 from dronewrapper_bridge_px4_zenoh.versions import Versions
+from dronewrapper_ros2_codec import attachment, cdr
+from dronewrapper_ros2_codec.names import parse_endpoint
 
 RECORDING = json.loads(
     (Path(__file__).resolve().parents[1] / "data" / "px4_zenoh" / "sih_ground.json").read_text()

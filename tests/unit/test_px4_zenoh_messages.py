@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from dronewrapper.ros2 import cdr, interfaces
-from dronewrapper.ros2.typehash import type_hash
 from dronewrapper_bridge_px4_zenoh import px4_msgs
+from dronewrapper_ros2_codec import cdr, interfaces
+from dronewrapper_ros2_codec.typehash import type_hash
 
 
 @pytest.fixture(scope="module")

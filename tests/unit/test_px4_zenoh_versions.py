@@ -4,10 +4,10 @@ topic and both versions, and keys are read and written as PX4's zenoh module spe
 
 from __future__ import annotations
 
-from dronewrapper.ros2.names import PUBLISHER, SUBSCRIBER, parse_endpoint
-from dronewrapper.ros2.typehash import type_hash
 from dronewrapper_bridge_px4_zenoh import topics
 from dronewrapper_bridge_px4_zenoh.versions import Versions
+from dronewrapper_ros2_codec.names import PUBLISHER, SUBSCRIBER, parse_endpoint
+from dronewrapper_ros2_codec.typehash import type_hash
 
 ZID = "1f2e3d4c5b6a79881f2e3d4c5b6a7988"
 MEASURED_KEY = (

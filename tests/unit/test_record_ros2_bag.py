@@ -18,7 +18,7 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.record.reader import read_bus
 from dronewrapper.record.recorder import Recorder
 from dronewrapper.record.ros2_bag import convert_to_ros2
-from dronewrapper.ros2 import convert
+from dronewrapper_ros2_codec import convert
 
 T0 = 1_700_000_000.0
 

@@ -20,8 +20,8 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.sensor import BatteryState, CompressedImage, Image, NavSatFix
 from dronewrapper.msgs.std import Header
-from dronewrapper.ros2 import cdr, convert, interfaces
-from dronewrapper.ros2.typehash import type_hash
+from dronewrapper_ros2_codec import cdr, convert, interfaces
+from dronewrapper_ros2_codec.typehash import type_hash
 
 UPSTREAM = Path(__file__).resolve().parents[1] / "data" / "ros2_interfaces"
 JAZZY_TYPES = [

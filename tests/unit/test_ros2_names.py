@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from dronewrapper.ros2 import attachment
-from dronewrapper.ros2.mismatch import disagreements
-from dronewrapper.ros2.names import (
+from dronewrapper_ros2_codec import attachment
+from dronewrapper_ros2_codec.mismatch import disagreements
+from dronewrapper_ros2_codec.names import (
     BEST_EFFORT,
     PUBLISHER,
     SUBSCRIBER,

@@ -17,7 +17,7 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
-from dronewrapper.setpoint_limits import Kind, SetpointError, validate
+from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
 from dronewrapper_bridge_mavlink.setpoints import Limits
 
 

@@ -12,7 +12,7 @@ import math
 
 import msgspec
 
-from dronewrapper.envelope import Envelope
+from dronewrapper.msgs.envelope import Envelope
 from dronewrapper.msgs.std import Header
 
 # MAV_FRAME values a mission item takes.

@@ -17,8 +17,8 @@ from dataclasses import KW_ONLY, dataclass, field
 from functools import cached_property
 from typing import Any, Generic, TypeVar
 
-from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.control import ControllerStatus
+from dronewrapper.msgs.envelope import Envelope
 from dronewrapper.msgs.flight import (
     CancelRequest,
     CommanderBeat,

@@ -1,10 +1,10 @@
 """Our recordings as ROS 2 bags: MCAP with ``ros2msg`` schemas and CDR messages.
 
-What ``ros2 bag play``, Foxglove and the rosbags reader open: profile ``ros2``, one schema per
-ROS 2 type (its ``.msg`` text and its dependencies', :func:`dronewrapper.ros2.interfaces.msg_text`),
+What ``ros2 bag play``, Foxglove and the rosbags reader open: profile ``ros2``, one schema per ROS 2
+type (its ``.msg`` text and its dependencies', :func:`dronewrapper_ros2_codec.interfaces.msg_text`),
 one channel per key named as the gateway names it (``/drone/mavros/state``), message encoding
-``cdr``. Keys without a ROS 2 type (detections, controller status, the raw MAVLink) are left out
-and counted. Log and publish times are the recording's.
+``cdr``. Keys without a ROS 2 type (detections, controller status, the raw MAVLink) are left out and
+counted. Log and publish times are the recording's.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from typing import BinaryIO
 from mcap.writer import CompressionType, Writer
 
 from dronewrapper.record.reader import BusMessage, read_bus
-from dronewrapper.ros2 import cdr
-from dronewrapper.ros2.convert import ROS_TYPES, to_ros
-from dronewrapper.ros2.interfaces import msg_text
+from dronewrapper_ros2_codec import cdr
+from dronewrapper_ros2_codec.convert import ROS_TYPES, to_ros
+from dronewrapper_ros2_codec.interfaces import msg_text
 
 COMPRESSION = {
     "zstd": CompressionType.ZSTD,

@@ -245,3 +245,18 @@ def zenoh_config(options: ZenohOptions) -> zenoh.Config:
     if options.access_control is not None:
         conf.insert_json5("access_control", json.dumps(options.access_control))
     return conf
+
+
+def tcp_address(endpoint: str) -> tuple[str, int] | None:
+    """``(host, port)`` of a ``tcp/`` or ``tls/`` endpoint, else None (pure).
+
+    >>> tcp_address("tcp/127.0.0.1:7447"), tcp_address("tls/[::1]:7448#iface=lo")
+    (('127.0.0.1', 7447), ('::1', 7448))
+    """
+    protocol, _, address = endpoint.partition("/")
+    if protocol not in ("tcp", "tls"):
+        return None
+    host, _, port = address.split("#", 1)[0].split("?", 1)[0].rpartition(":")
+    if not host or not port.isdigit():
+        return None
+    return host.strip("[]"), int(port)

@@ -1,11 +1,17 @@
 """The common entry point of every service process.
 
-A service's ``__main__`` is three lines::
+A service's ``__main__`` is a ``main(argv)`` and a guard, so that a host process
+(:mod:`dronewrapper.runtime.host`) can run it beside other services as well::
 
     from dronewrapper.runtime.service import run_service
     from dronewrapper_perception.config import Config
     from dronewrapper_perception.node import run
-    raise SystemExit(run_service("perception", __doc__, Config, run))
+
+    def main(argv=None):
+        return run_service("perception", __doc__, Config, run, argv)
+
+    if __name__ == "__main__":
+        raise SystemExit(main())
 
 ``run_service`` parses the common flags (Zenoh flags, ``--config FILE``, ``--set KEY=VALUE``,
 ``--log-level``), loads the config strictly, opens the Node (SIGINT/SIGTERM -> stop), calls

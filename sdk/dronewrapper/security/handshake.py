@@ -236,7 +236,7 @@ class RejectionLog:
 def explain(connect: list[str], identity: str, keys_dir: str = "") -> str | None:
     """Why no session opens on ``connect`` with ``identity``, when a TLS handshake says so
     (one :func:`probe` per ``tls/`` or ``tcp/`` endpoint, I/O), else None."""
-    from dronewrapper.router_reach import tcp_address
+    from dronewrapper.runtime.options import tcp_address
     from dronewrapper.security.identity import Identity
 
     files: Identity | None = None

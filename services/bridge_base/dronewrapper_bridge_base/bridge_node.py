@@ -7,6 +7,13 @@ take-off and landing operations, the MAVROS-parity ones, the command lease), eac
 to the core with its commander (the core applies the lease), and the core's tick loop. A
 bridge subclasses it with its link: it executes the aircraft's part of the core's outbox
 (:meth:`BridgeNode.send`) and runs its receive loops.
+
+Time is the node's (``node.clock``) and only the node's: a bridge makes its core at the clock's
+``monotonic()``, the driver feeds the core the clock's ``monotonic()`` and ``time()``, the tick
+loop is paced on it, and a bridge's threads are made by it (``node.clock.thread``) and wait
+through it. So a bridge on a fake bus runs in the bus's virtual time, threads and all, with
+nothing swapped (given a link that waits through the clock too: a thread blocked in a socket
+is busy to a virtual clock, which then stands still).
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import current_commander, current_sent_at
-from dronewrapper.runtime.node import Node
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.rate import Ratekeeper
 from dronewrapper_bridge_base.core_driver import CoreDriver, PureCore, cancel_steps
 from dronewrapper_bridge_base.operation import Steps
@@ -53,19 +60,21 @@ class BridgeNode(Generic[C]):
     """A pure core on a node: driver, publishers, subscriptions, services, tick loop.
 
     Args:
-        node: the process's node (the bus).
-        core: the bridge's pure core.
+        node: the process's node (the bus and the clock).
+        core: the bridge's pure core, its time started at ``node.clock.monotonic()``.
         publishers: the node's publisher of each topic the core publishes on.
         log: the bridge's logger.
     """
 
     def __init__(
-        self, node: Node, core: C, publishers: Mapping[Topic[Any], Any], log: logging.Logger
+        self, node: NodeApi, core: C, publishers: Mapping[Topic[Any], Any], log: logging.Logger
     ) -> None:
         self.node = node
         self.core = core
         self.log = log
-        self.driver: CoreDriver[C] = CoreDriver(core, self.execute, node.stop_event)
+        self.driver: CoreDriver[C] = CoreDriver(
+            core, self.execute, node.stop_event, clock=node.clock
+        )
         self._publishers = publishers
 
     # ---- the core's effects
@@ -129,9 +138,9 @@ class BridgeNode(Generic[C]):
     # ---- the tick
 
     def tick_loop(self, rate_hz: float, what: str) -> None:
-        """Feed the core's ``tick`` at ``rate_hz`` until the node stops (errors counted under
-        ``what`` and logged; the loop goes on)."""
-        rate = Ratekeeper(rate_hz, stop=self.node.stop_event)
+        """Feed the core's ``tick`` at ``rate_hz`` of the node's clock until the node stops
+        (errors counted under ``what`` and logged; the loop goes on)."""
+        rate = Ratekeeper(rate_hz, stop=self.node.stop_event, clock=self.node.clock)
         while rate.sleep():
             try:
                 self.driver.feed(self.core.tick)

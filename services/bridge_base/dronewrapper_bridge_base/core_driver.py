@@ -1,5 +1,5 @@
 """What a pure bridge core shares (:class:`PureCore`), and the thin node's side of it
-(:class:`CoreDriver`: feed the core under one lock, execute its effects).
+(:class:`CoreDriver`: feed the core under one lock, in the node's time, execute its effects).
 
 A bridge's core (bridge_mavlink's ``BridgeCore``, bridge_tello's ``TelloCore``) takes inputs
 with the time as arguments and queues what to send and publish in an outbox. It applies the
@@ -10,10 +10,12 @@ that overrides a commander is published to that commander on ``{ns}/dronewrapper
 (:meth:`PureCore.refuse`, repeats throttled by :class:`~.refusals.RefusalThrottle`).
 
 :class:`CoreDriver` is the only place a node touches a core: every input goes through
-:meth:`CoreDriver.feed` (the core called under the lock with the monotonic and wall-clock time,
-its outbox executed after the lock is released), and a service call runs its operation to the
-end with :meth:`CoreDriver.call`, waiting on the lock's condition until the operation ends,
-asks to be resumed, or the node stops.
+:meth:`CoreDriver.feed` (the core called under the lock with the monotonic and wall-clock time
+of the driver's clock, the node's, its outbox executed after the lock is released), and a
+service call runs its operation to the end with :meth:`CoreDriver.call`, waiting through that
+clock on the lock's condition until the operation ends, asks to be resumed, or the node stops.
+On a fake bus's :class:`~dronewrapper.runtime.clock.VirtualClock` a waiting call moves the bus
+time itself (it is the test's thread) or waits in virtual time (a worker's).
 """
 
 from __future__ import annotations
@@ -21,7 +23,6 @@ from __future__ import annotations
 import logging
 import math
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
@@ -31,12 +32,13 @@ from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.msgs.refusal import BREACH, ENVELOPE, LATE, LEASE, VALIDATION, Refusal
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper.setpoint_limits import SetpointError
 from dronewrapper_bridge_base.commander_lease import LeaseDecision, LeaseGate
 from dronewrapper_bridge_base.operation import Operation, Operations, Steps
 from dronewrapper_bridge_base.refusals import RefusalThrottle
 from dronewrapper_bridge_base.setpoint_delay import DEFAULT_THRESHOLD_S, SetpointDelay
+from dronewrapper_bridge_base.setpoint_limits import SetpointError
 
 MAX_WAIT_S = 0.05
 """A waiting service call looks at its operation at least this often (s)."""
@@ -111,6 +113,11 @@ class PureCore:
     def publish_state(self, *, force: bool = False) -> None:
         """Publish State (the core's own; called when the lease's holder changed)."""
         raise NotImplementedError
+
+    def on_started(self, now: float, stamp: float) -> None:
+        """The bridge has started: State published at once, stamped ``stamp``."""
+        self._at(now, stamp)
+        self.publish_state(force=True)
 
     # ---- the commander lease
 
@@ -324,7 +331,8 @@ class CoreDriver(Generic[C]):
         core: the pure core.
         execute: carries out one outbox (sends, publications); runs on the feeding thread.
         stop: set when the node stops; a waiting service call then cancels its operation.
-        clock, wall: monotonic and Unix time (s), injectable.
+        clock: the node's clock (``node.clock``): ``monotonic()`` is the core's ``now``,
+            ``time()`` its ``stamp`` (s), and a waiting call waits through it.
     """
 
     def __init__(
@@ -333,16 +341,14 @@ class CoreDriver(Generic[C]):
         execute: Callable[[Any], None],
         stop: threading.Event,
         *,
-        clock: Callable[[], float] = time.monotonic,
-        wall: Callable[[], float] = time.time,
+        clock: Clock = REAL,
     ) -> None:
         self.core = core
         self.cond = threading.Condition()  # guards the core; notified when an operation ends
         self._executing = threading.RLock()  # outboxes run one at a time, in the core's order
         self._execute = execute
         self._stop = stop
-        self._clock = clock
-        self._wall = wall
+        self.clock = clock
 
     def feed(self, call: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         """Run ``call(*args, now, stamp, **kwargs)`` on the core under the lock, then execute
@@ -351,7 +357,7 @@ class CoreDriver(Generic[C]):
         with self._executing:
             with self.cond:
                 finished = self.core.operations.finished
-                result = call(*args, self._clock(), self._wall(), **kwargs)
+                result = call(*args, self.clock.monotonic(), self.clock.time(), **kwargs)
                 out = self.core.take()
                 if self.core.operations.finished != finished:
                     self.cond.notify_all()
@@ -371,8 +377,15 @@ class CoreDriver(Generic[C]):
             with self.cond:
                 if op.done:  # ended by another thread's input (checked under the lock)
                     break
-                wait = op.wake_at - self._clock()
-                self.cond.wait(min(max(wait, 0.001), MAX_WAIT_S))
+                wait = op.wake_at - self.clock.monotonic()
+                finished = self.core.operations.finished  # woken when an operation ends
+                self.clock.wait_for(
+                    self.cond,
+                    lambda ended=finished: (
+                        self.core.operations.finished != ended or self._stop.is_set()
+                    ),
+                    min(max(wait, 0.001), MAX_WAIT_S),
+                )
             self.feed(self.core.advance)
         with self._executing:  # the reply never overtakes what ended it (a State, a sample)
             pass

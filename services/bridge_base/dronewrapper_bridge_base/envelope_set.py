@@ -1,22 +1,21 @@
 """The ``{ns}/dronewrapper/envelope/set`` request applied to a bridge's envelope (pure).
 
-Every bridge keeps its envelope in force and who set it (``set_by``: the commander whose
-request put it there; ``""``: the bridge's configured one). :func:`apply` reads, replaces or
-resets it: a replacement whose fence contains neither home nor the aircraft is refused
-(:func:`dronewrapper.envelope.check_replacement`); a reset puts the configured envelope back.
-The envelope is not reset when its commander goes: the SDK warns on connect that an envelope
-set by a commander is in force (docs/api.md), and ``reset_envelope()`` puts the configured
-one back.
+Every bridge keeps its envelope in force and who set it (``set_by``: the commander whose request put
+it there; ``""``: the bridge's configured one). :func:`apply` reads, replaces or resets it: a
+replacement whose fence contains neither home nor the aircraft is refused
+(:func:`dronewrapper_bridge_base.breach.check_replacement`); a reset puts the configured envelope
+back. The envelope is not reset when its commander goes: the SDK warns on connect that an envelope
+set by a commander is in force (docs/api.md), and ``reset_envelope()`` puts the configured one back.
 """
 
 from __future__ import annotations
 
 from typing import Protocol
 
-from dronewrapper import envelope as env
-from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs.mission import EnvelopeResult, EnvelopeSet
 from dronewrapper.runtime.errors import ServiceError
+from dronewrapper_bridge_base.breach import BreachMonitor, check_replacement
 
 
 class EnvelopeHolder(Protocol):
@@ -45,7 +44,7 @@ def apply(
         new, by = configured, ""
     elif request.envelope is not None:
         try:
-            env.check_replacement(request.envelope, aircraft)
+            check_replacement(request.envelope, aircraft)
         except EnvelopeError as exc:
             raise ServiceError(f"envelope refused: {exc}", "refused") from None
         new, by = request.envelope, caller

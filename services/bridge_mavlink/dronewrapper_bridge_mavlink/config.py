@@ -11,7 +11,6 @@ from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
 from dronewrapper_bridge_mavlink.setpoints import Limits
 from dronewrapper_bridge_mavlink.streams import message_id
-from dronewrapper_ros2_gateway.config import Config as Ros2Config
 
 DEFAULT_MESSAGE_RATES = {
     "LOCAL_POSITION_NED": 50.0,
@@ -75,7 +74,6 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     signing_key_file: str = ""  # MAVLink 2 signing key (dronewrapper keys mavlink); "" = off
     gcs_url: str = ""  # udp:HOST:PORT of a ground station (QGC 14550) to forward MAVLink to
     gcs_over_zenoh: bool = False  # also forward on {ns}/mavlink/* (dronewrapper mavlink-forward)
-    ros2: Ros2Config | None = None  # present this drone to ROS 2 from this process (docs/ros2.md)
 
     def __post_init__(self) -> None:
         if self.baud <= 0:

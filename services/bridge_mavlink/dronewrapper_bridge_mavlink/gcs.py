@@ -16,11 +16,11 @@ import logging
 import select
 import socket
 import threading
-import time
 from collections.abc import Callable
 
 from dronewrapper.msgs.mavlink import MavlinkFrames
 from dronewrapper.msgs.std import Header
+from dronewrapper.runtime.clock import REAL, Clock
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -59,6 +59,7 @@ class GcsForwarder:
         to_autopilot: writes raw frames to the autopilot link (thread-safe).
         gcs_address: (host, port) of a UDP ground station, or None.
         publish: sends a MavlinkFrames batch on Zenoh, or None.
+        clock: the node's clock (batch ages, their stamps, the wait without a UDP station).
     """
 
     def __init__(
@@ -66,10 +67,13 @@ class GcsForwarder:
         to_autopilot: Callable[[bytes], None],
         gcs_address: tuple[str, int] | None,
         publish: Callable[[MavlinkFrames], None] | None = None,
+        *,
+        clock: Clock = REAL,
     ) -> None:
         self._to_autopilot = to_autopilot
         self._gcs = gcs_address
         self._publish = publish
+        self._clock = clock
         self._sock: socket.socket | None = None
         if gcs_address is not None:
             self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -91,7 +95,7 @@ class GcsForwarder:
         if self._publish is not None:
             with self._lock:
                 if not self._batch:
-                    self._batch_since = time.monotonic()
+                    self._batch_since = self._clock.monotonic()
                 self._batch.append(frame)
 
     def from_zenoh(self, frames: MavlinkFrames) -> None:
@@ -115,13 +119,13 @@ class GcsForwarder:
             if not self._batch or now - self._batch_since < BATCH_S:
                 return
             batch, self._batch = self._batch, []
-        self._publish(MavlinkFrames(header=Header.now(), frames=batch))
+        self._publish(MavlinkFrames(header=Header(stamp=self._clock.time()), frames=batch))
 
     def run(self, stop: threading.Event) -> None:
         """Read the UDP ground station's frames and flush Zenoh batches until ``stop``."""
         while not stop.is_set():
             if self._sock is None:
-                stop.wait(BATCH_S)
+                self._clock.wait(stop, BATCH_S)
             else:
                 readable, _, _ = select.select([self._sock], [], [], BATCH_S)
                 if readable:
@@ -131,7 +135,7 @@ class GcsForwarder:
                         data = b""
                     if data:
                         self._write(data)
-            self.flush(time.monotonic())
+            self.flush(self._clock.monotonic())
 
     def close(self) -> None:
         if self._sock is not None:

@@ -29,7 +29,6 @@ import logging
 import os
 import sys
 import threading
-import time
 from typing import Any, NamedTuple
 
 os.environ.setdefault("MAVLINK20", "1")
@@ -45,6 +44,7 @@ from dataclasses import dataclass
 
 from pymavlink import mavutil
 
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.security.mavlink_signing import verify_signed_frame
 from dronewrapper_bridge_mavlink.link_budget import NETWORK_SCHEMES
 from dronewrapper_bridge_mavlink.wire import Frame, FrameCutter, SequenceGaps, cut_datagram
@@ -126,6 +126,7 @@ class MavLink:
         signing_key_file: the 32-byte MAVLink 2 signing key (64 hex digits); "" = unsigned.
         wanted: the message ids to decode (the others are dropped before decoding); None:
             decode every frame.
+        clock: the node's clock (a wait with no connection open waits on it).
     """
 
     def __init__(
@@ -137,6 +138,7 @@ class MavLink:
         source_component: int = 190,
         signing_key_file: str = "",
         wanted: frozenset[int] | None = None,
+        clock: Clock = REAL,
     ) -> None:
         self.wanted = wanted
         self.tap: Callable[[bytes], None] | None = None
@@ -157,7 +159,7 @@ class MavLink:
         self.source_component = source_component
         self._send_lock = threading.Lock()
         self._conn: Any = None
-        self._t0 = time.monotonic()
+        self._clock = clock
         self.last_source: Any = None  # (host, port) the last message came from (UDP), else None
         self.peer: Any = None  # UDP listen: the address replies go to (None: the last sender)
         self.sent = 0
@@ -267,7 +269,7 @@ class MavLink:
         would send to every recent sender: a second autopilot would receive our commands)."""
         conn = self._conn
         if conn is None:
-            time.sleep(timeout)
+            self._clock.sleep(timeout)
             return []
         if isinstance(conn, mavutil.mavtcp) and (port := _tcp_socket(conn)) is not self._socket:
             self._socket = port  # a new connection: what the old one left of a frame is none
@@ -311,10 +313,6 @@ class MavLink:
                 continue
             counts.decoded += 1
             out.append(Received(msg, source))
-
-    def time_boot_ms(self) -> int:
-        """Milliseconds since this link was created (our ``time_boot_ms``)."""
-        return int((time.monotonic() - self._t0) * 1000) & 0xFFFFFFFF
 
     def write_raw(self, frame: bytes) -> None:
         """Write whole frames as they are (a ground station's, forwarded); raises OSError.

@@ -26,7 +26,7 @@ import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
@@ -46,9 +46,10 @@ from dronewrapper.msgs.mission import (
 )
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.setpoint_limits import Kind
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops

@@ -7,15 +7,15 @@ setpoints, tick loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNod
 receive loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
 stream, our heartbeat, periodic samples), Zenoh callbacks (setpoints forwarded at once) and the
 Node's service workers, which start an operation in the core and wait until it is done.
+Time is the node's clock alone: the core starts at it, the driver and the loops read and wait
+on it, and it makes the loops' threads (on a fake bus they run in its virtual time).
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import sys
 import threading
-import time
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -25,6 +25,7 @@ from dronewrapper.msgs.link import LinkStatus
 from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
 from dronewrapper_bridge_mavlink import operations as ops
@@ -80,9 +81,9 @@ def serve_services(bridge: BridgeNode[Any]) -> None:
 class Bridge(BridgeNode[BridgeCore]):
     """The core wired to one Node and one MAVLink link."""
 
-    def __init__(self, node: Node, config: Config, link: MavLink | None = None) -> None:
+    def __init__(self, node: NodeApi, config: Config, link: MavLink | None = None) -> None:
         publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
-        super().__init__(node, BridgeCore(config, time.monotonic()), publishers, log)
+        super().__init__(node, BridgeCore(config, node.clock.monotonic()), publishers, log)
         self.config = config
         self.gcs: GcsForwarder | None = None  # ground-station forwarding, made at start()
         self.link = link or MavLink(
@@ -92,6 +93,7 @@ class Bridge(BridgeNode[BridgeCore]):
             source_component=config.source_component,
             signing_key_file=config.signing_key_file,
             wanted=wanted_ids(BridgeCore.read_messages(), mavlink),
+            clock=node.clock,
         )
         self.link_status = publishers[registry.LINK_STATUS]
         self.load = LinkLoad(self.core.budget.capacity)
@@ -159,26 +161,18 @@ class Bridge(BridgeNode[BridgeCore]):
         """Open the link, subscribe, serve, and start the loops (returns the threads)."""
         self._open_link()
         serve_services(self)
+        clock, stop = self.node.clock, self.node.stop_event
         threads = [
-            threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True),
-            threading.Thread(target=self._link_status_loop, name="link-status", daemon=True),
-            threading.Thread(
-                target=self.tick_loop,
-                args=(self.config.stream_rate_hz, "stream"),
-                name="stream",
-                daemon=True,
-            ),
+            clock.thread(self._receive_loop, "mavlink-rx"),
+            clock.thread(self._link_status_loop, "link-status"),
+            clock.thread(lambda: self.tick_loop(self.config.stream_rate_hz, "stream"), "stream"),
         ]
         self.gcs = self._make_gcs_forwarder()
-        if self.gcs is not None:
-            threads.append(
-                threading.Thread(
-                    target=self.gcs.run, args=(self.node.stop_event,), name="gcs", daemon=True
-                )
-            )
+        if (gcs := self.gcs) is not None:
+            threads.append(clock.thread(lambda: gcs.run(stop), "gcs"))
         for thread in threads:
             thread.start()
-        self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
+        self.driver.feed(self.core.on_started)
         return threads
 
     def _make_gcs_forwarder(self) -> GcsForwarder | None:
@@ -190,7 +184,7 @@ class Bridge(BridgeNode[BridgeCore]):
         if self.config.gcs_over_zenoh:
             publisher = self.node.publisher(registry.MAVLINK_FROM_AUTOPILOT)
             publish = publisher.put
-        forwarder = GcsForwarder(self.link.write_raw, address, publish)
+        forwarder = GcsForwarder(self.link.write_raw, address, publish, clock=self.node.clock)
         self.link.tap = forwarder.from_autopilot  # every frame, read or not
         if self.config.gcs_over_zenoh:
             self.node.subscribe(registry.MAVLINK_TO_AUTOPILOT, forwarder.from_zenoh)
@@ -223,16 +217,17 @@ class Bridge(BridgeNode[BridgeCore]):
         """Once a second: the link's load, losses and reconnects on ``LINK_STATUS``, and a
         warning in the log when a serial line is nearly full."""
         log.info("%s", self.core.budget.describe())
-        stop = self.node.stop_event
-        while not stop.wait(1.0):
+        clock, stop = self.node.clock, self.node.stop_event
+        while not clock.wait(stop, 1.0):
             try:
-                self.link_status.put(self.measure_link(time.monotonic()))
+                self.link_status.put(self.measure_link(clock.monotonic()))
             except Exception:
                 self.node.callback_errors["link status"] += 1
                 log.exception("link status")
 
     def measure_link(self, now: float) -> LinkStatus:
-        """The link as it is now (counts heartbeats regained as a reconnect)."""
+        """The link as it is at ``now`` (the node's monotonic s; counts heartbeats regained
+        as a reconnect), stamped with the node's clock."""
         with self._reconnects_lock:
             self.reconnects.heartbeat(self.core.connected)
         counts = self.link.counts()
@@ -240,7 +235,7 @@ class Bridge(BridgeNode[BridgeCore]):
         received, sent = self.load.rates()
         budget = self.core.budget
         status = LinkStatus(
-            header=Header.now(),
+            header=Header(stamp=self.node.clock.time()),
             kind=link_kind(self.config.connection),
             baud=self.config.baud if budget.capacity > 0 else 0,
             capacity=budget.capacity,
@@ -259,18 +254,18 @@ class Bridge(BridgeNode[BridgeCore]):
         return status
 
     def _receive_loop(self) -> None:
-        stop = self.node.stop_event
+        clock, stop = self.node.clock, self.node.stop_event
         while not stop.is_set():
             if not self.link.is_open:
                 if not self._open_link():
-                    stop.wait(1.0)
+                    clock.wait(stop, 1.0)
                 continue
             try:
                 batch = self.link.recv_batch(0.1)
             except (OSError, ValueError) as exc:  # serial unplugged, socket error ...
                 log.warning("link error on %s: %s; reopening", self.config.connection, exc)
                 self.link.close()
-                stop.wait(1.0)
+                clock.wait(stop, 1.0)
                 continue
             for received in batch:
                 try:
@@ -303,27 +298,16 @@ def run(node: Node, config: Config) -> int:
     exposure = network_exposure(config.connection)
     if exposure is not None:
         log.warning("autopilot link beyond loopback (a deliberate setting): %s", exposure)
-    with _ros2_gateway(node, config):  # ROS 2 from this process, when configured
-        threads = bridge.start()
-        node.announce()
-        log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
-        node.spin()
-        for thread in threads:
-            thread.join(timeout=2.0)
+    threads = bridge.start()
+    node.announce()
+    log.info("bridge_mavlink ready on %s (namespace %s)", config.connection, node.ns)
+    node.spin()
+    for thread in threads:
+        thread.join(timeout=2.0)
     bridge.link.close()
     if bridge.gcs is not None:
         bridge.gcs.close()
     return 0
-
-
-def _ros2_gateway(node: Node, config: Config) -> Any:
-    """The hosted ROS 2 gateway when ``config`` has a ``ros2`` section; its codec is imported
-    only then (a bridge without one never loads it)."""
-    if config.ros2 is None:
-        return contextlib.nullcontext()
-    from dronewrapper_ros2_gateway.hosted import hosted_gateway
-
-    return hosted_gateway(node, config.ros2)
 
 
 __all__ = ["Bridge", "canonical_mode", "run"]

@@ -15,7 +15,7 @@ Accepted controls (type_mask, coordinate_frame):
 
 Anything else, NaN/inf in a used field or values outside :class:`Limits` is refused with a
 reason (:class:`SetpointError`), by the rules every bridge shares
-(:mod:`dronewrapper.setpoint_limits`).
+(:mod:`dronewrapper_bridge_base.setpoint_limits`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import msgspec
 
-from dronewrapper import setpoint_limits
 from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -35,8 +34,9 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
-from dronewrapper.setpoint_limits import Kind, SetpointError
+from dronewrapper_bridge_base import setpoint_limits
 from dronewrapper_bridge_base.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
+from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
 
@@ -75,7 +75,7 @@ class LocalNedTarget:
 
 def validate(target: PositionTarget, limits: Limits = DEFAULT_LIMITS) -> Kind:
     """The control ``target`` asks for, or SetpointError saying what is wrong with it (the
-    rules every bridge shares: :mod:`dronewrapper.setpoint_limits`)."""
+    rules every bridge shares: :mod:`dronewrapper_bridge_base.setpoint_limits`)."""
     return setpoint_limits.validate(target, limits)
 
 

@@ -12,7 +12,7 @@ microseconds since the autopilot's boot for ``timestamp``.
 
 from __future__ import annotations
 
-from dronewrapper.ros2 import interfaces
+from dronewrapper_ros2_codec import interfaces
 
 PACKAGE = "px4_msgs"
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from dronewrapper.ros2.interfaces import dds_type_name
 from dronewrapper_bridge_px4_zenoh.px4_msgs import full_name
+from dronewrapper_ros2_codec.interfaces import dds_type_name
 
 OUT, IN = "out", "in"
 

@@ -17,8 +17,8 @@ import math
 from typing import Any
 
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, PositionTarget
-from dronewrapper.setpoint_limits import Kind
 from dronewrapper_bridge_base.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
+from dronewrapper_bridge_base.setpoint_limits import Kind
 
 NAN = math.nan
 _MODE_FIELDS = (

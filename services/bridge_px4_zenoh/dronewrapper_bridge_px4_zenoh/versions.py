@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from dronewrapper.ros2.interfaces import dds_type_name
-from dronewrapper.ros2.names import PUBLISHER, SUBSCRIBER, Endpoint
-from dronewrapper.ros2.typehash import type_hash
 from dronewrapper_bridge_px4_zenoh.topics import BY_NAME, Px4Topic
+from dronewrapper_ros2_codec.interfaces import dds_type_name
+from dronewrapper_ros2_codec.names import PUBLISHER, SUBSCRIBER, Endpoint
+from dronewrapper_ros2_codec.typehash import type_hash
 
 FIRMWARE = "PX4 main of 2026-03-02 (02e73e3b6f)"
 """The firmware whose messages the bridge's definitions are (its hashes match them)."""

@@ -11,7 +11,6 @@ from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig
 from dronewrapper_bridge_tello.sticks import StickScale
 from dronewrapper_bridge_tello.video_demand import VideoPolicy
-from dronewrapper_ros2_gateway.config import Config as Ros2Config
 
 TELLO_ENVELOPE = Envelope(
     max_altitude=10.0,
@@ -68,7 +67,6 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
     scale: StickScale = msgspec.field(default_factory=StickScale)
     envelope: Envelope = msgspec.field(default_factory=lambda: TELLO_ENVELOPE)  # envelope.py
-    ros2: Ros2Config | None = None  # present this drone to ROS 2 from this process (docs/ros2.md)
 
     def __post_init__(self) -> None:
         if isinstance(self.video, bool):

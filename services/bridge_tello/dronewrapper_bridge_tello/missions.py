@@ -25,7 +25,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import BreachMonitor, Envelope, EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, PositionTarget
 from dronewrapper.msgs.mission import (
@@ -42,9 +42,10 @@ from dronewrapper.msgs.mission import (
 )
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper.setpoint_limits import Kind
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Operation, Steps
+from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import operations as ops
 
 if TYPE_CHECKING:

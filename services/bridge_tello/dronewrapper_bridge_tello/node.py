@@ -8,14 +8,14 @@ loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: rep
 tick: failsafe, ``rc`` sticks, keep-alive, link supervision, periodic State, and the video's
 ``streamon``/``streamoff`` as the camera's subscribers come and go), video (datagrams -> decoder
 -> newest frame) and its publisher, plus the Node's service workers, which start an operation in
-the core and wait until it is done.
+the core and wait until it is done. Time is the node's clock alone: the core starts at it, the
+driver and the loops read and wait on it, and it makes the loops' threads.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -23,6 +23,7 @@ from dronewrapper.images import bgr_to_image, bgr_to_jpeg
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime import Latest, Node, Ratekeeper
+from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.security.wifi import open_wifi_warning
 from dronewrapper_bridge_base.bridge_node import BridgeNode
 from dronewrapper_bridge_tello import actions, flight, missions
@@ -35,7 +36,6 @@ from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
 from dronewrapper_bridge_tello.telemetry import Telemetry
 from dronewrapper_bridge_tello.video import VideoReceiver
 from dronewrapper_bridge_tello.video_demand import OFF
-from dronewrapper_ros2_gateway.hosted import hosted_gateway
 
 log = logging.getLogger("bridge_tello")
 
@@ -77,13 +77,13 @@ def serve_services(bridge: BridgeNode[Any]) -> None:
 
 class Bridge(BridgeNode[TelloCore]):
     """The core wired to one Node and one Tello (its three sockets open at construction:
-    ``OSError`` when an address is taken)."""
+    ``OSError`` when an address is taken; ``link``: one already made instead)."""
 
-    def __init__(self, node: Node, config: Config) -> None:
+    def __init__(self, node: NodeApi, config: Config, link: TelloLink | None = None) -> None:
         publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
-        super().__init__(node, TelloCore(config, time.monotonic()), publishers, log)
+        super().__init__(node, TelloCore(config, node.clock.monotonic()), publishers, log)
         self.config = config
-        self.link = TelloLink(
+        self.link = link or TelloLink(
             TelloAddress(
                 tello_address=config.tello_address,
                 command_port=config.command_port,
@@ -153,16 +153,17 @@ class Bridge(BridgeNode[TelloCore]):
         ]
         if self.config.video != OFF:
             loops += [(self._video_loop, (), "tello-video"), (self._image_loop, (), "tello-images")]
-        threads = [threading.Thread(target=f, args=a, name=n, daemon=True) for f, a, n in loops]
+        clock = self.node.clock
+        threads = [clock.thread(lambda f=f, a=a: f(*a), n) for f, a, n in loops]
         for thread in threads:
             thread.start()
-        self.driver.feed(lambda now, stamp: self.core.publish_state(force=True))
+        self.driver.feed(self.core.on_started)
         return threads
 
     def _control_loop(self) -> None:
         """The core's tick at ``rc_rate_hz`` with whether the camera is watched (errors counted
         under ``control`` and logged; the loop goes on)."""
-        rate = Ratekeeper(self.config.rc_rate_hz, stop=self.node.stop_event)
+        rate = Ratekeeper(self.config.rc_rate_hz, stop=self.node.stop_event, clock=self.node.clock)
         while rate.sleep():
             try:
                 self.driver.feed(self.core.tick, camera_watched=self.camera.watched)
@@ -178,14 +179,14 @@ class Bridge(BridgeNode[TelloCore]):
 
     def _receive_loop(self, sock: Any, handle: Callable[[bytes], None], what: str) -> None:
         """Every datagram of ``sock`` to ``handle`` (errors counted under ``what``)."""
-        stop = self.node.stop_event
+        clock, stop = self.node.clock, self.node.stop_event
         while not stop.is_set():
             try:
                 data, _ = sock.recvfrom(2048)
             except TimeoutError:
                 continue
             except OSError:
-                if stop.wait(0.2):
+                if clock.wait(stop, 0.2):
                     return
                 continue
             try:
@@ -201,7 +202,7 @@ class Bridge(BridgeNode[TelloCore]):
         return self.config.compressed or self.pub_jpeg.watched()
 
     def _video_loop(self) -> None:
-        stop = self.node.stop_event
+        clock, stop = self.node.clock, self.node.stop_event
         sock = self.link.video
         assert sock is not None
         receiver, run = self.receiver, self._runs
@@ -211,13 +212,13 @@ class Bridge(BridgeNode[TelloCore]):
             except TimeoutError:
                 continue
             except OSError:
-                if stop.wait(0.2):
+                if clock.wait(stop, 0.2):
                     return
                 continue
             if run != self._runs:  # a streamon was sent: a clean start at its key frame
                 run = self._runs
                 receiver.restart()
-            stamp = time.time()
+            stamp = clock.time()
             for decoded in receiver.feed(data):
                 self.newest.update((decoded, stamp))
 
@@ -249,22 +250,21 @@ def run(node: Node, config: Config) -> int:
     except OSError as exc:
         log.error("cannot open the Tello sockets on %s: %s", config.local_address, exc)
         return 1
-    with hosted_gateway(node, config.ros2):  # ROS 2 from this process, when configured
-        threads = bridge.start()
-        node.announce()
-        warning = open_wifi_warning()  # a Tello's Wi-Fi is open until a password is set
-        if warning:
-            log.warning("%s", warning)
-        log.info(
-            "bridge_tello ready: Tello %s:%d, listening on %s (namespace %s)",
-            config.tello_address,
-            config.command_port,
-            config.local_address,
-            node.ns,
-        )
-        node.spin()
-        for thread in threads:
-            thread.join(timeout=2.0)
+    threads = bridge.start()
+    node.announce()
+    warning = open_wifi_warning()  # a Tello's Wi-Fi is open until a password is set
+    if warning:
+        log.warning("%s", warning)
+    log.info(
+        "bridge_tello ready: Tello %s:%d, listening on %s (namespace %s)",
+        config.tello_address,
+        config.command_port,
+        config.local_address,
+        node.ns,
+    )
+    node.spin()
+    for thread in threads:
+        thread.join(timeout=2.0)
     bridge.camera.close()
     bridge.link.close()
     return 0

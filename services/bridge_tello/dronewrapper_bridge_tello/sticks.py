@@ -27,12 +27,12 @@ import math
 
 import msgspec
 
-from dronewrapper import setpoint_limits
 from dronewrapper.msgs.mavros import (
     FRAME_LOCAL_NED,
     PositionTarget,
 )
-from dronewrapper.setpoint_limits import Kind, SetpointError
+from dronewrapper_bridge_base import setpoint_limits
+from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError
 from dronewrapper_bridge_tello.frames import Vec3, enu_to_heading_flu, wrap_pi
 
 Sticks = tuple[int, int, int, int]
@@ -79,7 +79,7 @@ class StickScale(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_field
 
 def validate(target: PositionTarget, scale: StickScale) -> Kind:
     """The control ``target`` asks for, or SetpointError saying what is wrong with it (the
-    rules every bridge shares: :mod:`dronewrapper.setpoint_limits`)."""
+    rules every bridge shares: :mod:`dronewrapper_bridge_base.setpoint_limits`)."""
     return setpoint_limits.validate(target, scale)
 
 

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_ros2_gateway.config import Config
-from dronewrapper_ros2_gateway.node import run
+from dronewrapper_ros2_gateway.process import run
 
 
 def _same_name(args: argparse.Namespace, _overrides: list[str]) -> None:

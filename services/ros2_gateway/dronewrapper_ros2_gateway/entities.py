@@ -11,8 +11,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from dronewrapper.msgs import registry
-from dronewrapper.ros2.convert import ROS_SERVICES, ROS_TYPES
-from dronewrapper.ros2.names import BEST_EFFORT, qos_text
+from dronewrapper_ros2_codec.convert import ROS_SERVICES, ROS_TYPES
+from dronewrapper_ros2_codec.names import BEST_EFFORT, qos_text
 
 OUT, IN, SERVE = "out", "in", "serve"
 

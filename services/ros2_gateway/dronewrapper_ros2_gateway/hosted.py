@@ -1,15 +1,16 @@
 """The gateway hosted by the process that publishes the drone's telemetry (a bridge).
 
-A bridge whose config has a ``ros2:`` section (this package's
-:class:`~dronewrapper_ros2_gateway.config.Config`) runs the gateway on its own node, so a pose
-reaches ROS 2 without a hop through another process. It is the same :class:`Gateway` as the
-standalone process's, with two differences:
+The gateway and the bridge run as two services of one process, each ``run(node, config)`` on a
+node of its own over one Zenoh session (:mod:`dronewrapper.runtime.host`; in a graph, the
+gateway's ``beside: bridge_mavlink``), so a pose reaches ROS 2 without a hop through another
+process; neither imports the other. It is the same :class:`Gateway` as the standalone
+process's, with two differences:
 
-- our telemetry comes by direct callbacks on the bridge's own Zenoh session. Zenoh delivers a
-  session's own put to such a callback synchronously, on the putting thread, once the sample
-  has left for the router: each pose is converted and put on its ROS 2 key before the bridge's
-  ``put`` returns, with no thread or GIL hand-off and no second process. Cameras stay on
-  Zenoh's callback threads (a frame's copy never holds up the bridge's loops);
+- our telemetry comes by direct callbacks on the session it shares with the bridge. Zenoh delivers a
+  session's own put to such a callback synchronously, on the putting thread, once the sample has
+  left for the router: each pose is converted and put on its ROS 2 key before the bridge's ``put``
+  returns, with no thread or GIL hand-off and no second process. Cameras stay on Zenoh's callback
+  threads (a frame's copy never holds up the bridge's loops);
 - its commander name is ``commander``, else ``ros2_gateway``: never the bridge's identity.
 
 Setpoints and service calls from ROS 2 take the standalone gateway's road: the gateway puts
@@ -22,6 +23,7 @@ never the bridge.
 from __future__ import annotations
 
 import contextlib
+import logging
 import threading
 from collections.abc import Iterator
 
@@ -35,14 +37,31 @@ from dronewrapper_ros2_gateway.node import (
     ros_session_for,
 )
 
+log = logging.getLogger("ros2_gateway")
+
 
 def check_hosted(config: Config, ns: str) -> None:
     """Raise ValueError (naming the key) unless ``config`` fits a gateway hosted by the process
-    of drone ``ns``: a bridge presents its own drone only."""
+    of drone ``ns``: beside a bridge, the gateway presents that bridge's drone only."""
     if config.drones not in ([], [ns]):
         raise ValueError(
-            f"ros2.drones: a bridge presents its own drone only ({ns!r}); got {config.drones}"
+            f"drones: beside a bridge, the gateway presents its drone only ({ns!r}); "
+            f"got {config.drones}"
         )
+
+
+def run_hosted(node: Node, config: Config) -> int:
+    """The gateway hosted beside the bridge until ``node`` stops; the exit status (2: a
+    config :func:`check_hosted` refuses)."""
+    try:
+        check_hosted(config, node.ns)
+    except ValueError as exc:
+        log.error("bad config: %s", exc)
+        return 2
+    with hosted_gateway(node, config):
+        node.announce()
+        node.spin()
+    return 0
 
 
 @contextlib.contextmanager
@@ -61,7 +80,7 @@ def hosted_gateway(node: Node, config: Config | None) -> Iterator[Gateway | None
     try:
         gateway.start()
         watcher.start()
-        log_started(gateway, f"hosted by {node.name}")
+        log_started(gateway, "beside the bridge, in its process")
         yield gateway
     finally:
         done.set()

@@ -1,6 +1,6 @@
 """The gateway process: each drone's keys as ROS 2 entities on rmw_zenoh's wire (README.md).
 
-Only I/O here; the formats are :mod:`dronewrapper.ros2`'s and the table is :mod:`entities`.
+Only I/O here; the formats are :mod:`dronewrapper_ros2_codec`'s and the table is :mod:`entities`.
 Per drone it holds a node token (``/<ns>/<node_name>``) and, per entity, an endpoint token
 and one Zenoh declaration on the ROS 2 key:
 
@@ -14,7 +14,7 @@ and one Zenoh declaration on the ROS 2 key:
   reply from the bridge is MAV_RESULT_FAILED (ROS 2 clients get no error channel).
 
 It also reads every ROS 2 endpoint's token on its domain and logs each type disagreement with
-one of its own entities (:mod:`dronewrapper.ros2.mismatch`). :func:`run` is the gateway as a
+one of its own entities (:mod:`dronewrapper_ros2_codec.mismatch`). :func:`run` is the gateway as a
 process of its own; :mod:`dronewrapper_ros2_gateway.hosted` runs the same :class:`Gateway`
 inside a bridge. (Over 400 lines: one class holds every declaration of both directions, which
 share its ids, tokens and close; the formats, rules and checks are in the modules named.)
@@ -28,7 +28,6 @@ import itertools
 import logging
 import math
 import threading
-import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -38,16 +37,24 @@ import zenoh
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import MAV_RESULT_DENIED, MAV_RESULT_FAILED
-from dronewrapper.ros2 import attachment, cdr
-from dronewrapper.ros2.convert import (
+from dronewrapper.runtime.caller import commander_attachment
+from dronewrapper.runtime.clock import Clock
+from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.node import Node, open_session
+from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.qos import qos_for
+from dronewrapper_bridge_base.setpoint_limits import SetpointError, validate
+from dronewrapper_ros2_codec import attachment, cdr
+from dronewrapper_ros2_codec.convert import (
     position_target,
     refusal_of,
     request_of,
     response_of,
     to_ros,
 )
-from dronewrapper.ros2.mismatch import disagreements
-from dronewrapper.ros2.names import (
+from dronewrapper_ros2_codec.mismatch import disagreements
+from dronewrapper_ros2_codec.names import (
     ADMIN,
     PUBLISHER,
     SERVICE,
@@ -57,14 +64,7 @@ from dronewrapper.ros2.names import (
     parse_endpoint,
     topic_key,
 )
-from dronewrapper.ros2.typehash import type_hash
-from dronewrapper.runtime.caller import commander_attachment
-from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
-from dronewrapper.runtime.node import Node, open_session
-from dronewrapper.runtime.options import ZenohOptions
-from dronewrapper.runtime.qos import qos_for
-from dronewrapper.setpoint_limits import SetpointError, validate
+from dronewrapper_ros2_codec.typehash import type_hash
 from dronewrapper_ros2_gateway.config import Config
 from dronewrapper_ros2_gateway.entities import IN, OUT, SERVE, Entity, selected
 from dronewrapper_ros2_gateway.presence import PresenceWatch
@@ -93,11 +93,18 @@ def gid_of(token: str) -> bytes:
     return hashlib.blake2b(token.encode(), digest_size=attachment.GID_SIZE).digest()
 
 
-class Outgoing:
-    """Our samples of one key, republished on its ROS 2 key."""
+def _ns(clock: Clock) -> int:
+    """``clock``'s Unix time in integer nanoseconds (a ROS 2 attachment's stamp)."""
+    return round(clock.time() * 1e9)
 
-    def __init__(self, publisher: Any, ros_type: str, gid: bytes) -> None:
+
+class Outgoing:
+    """Our samples of one key, republished on its ROS 2 key, each attachment stamped with
+    ``clock`` (the node's)."""
+
+    def __init__(self, publisher: Any, ros_type: str, gid: bytes, clock: Clock) -> None:
         self.publisher = publisher
+        self.clock = clock
         self.ros_type = ros_type
         self.gid = gid
         self.count = 0
@@ -106,7 +113,7 @@ class Outgoing:
 
     def __call__(self, msg: Any) -> None:
         payload = cdr.encode(self.ros_type, to_ros(msg))
-        meta = attachment.pack(next(self._seq), time.time_ns(), self.gid)
+        meta = attachment.pack(next(self._seq), _ns(self.clock), self.gid)
         self.publisher.put(payload, attachment=meta)
         self.count += 1
 
@@ -222,7 +229,7 @@ class Gateway:
         options["express"] = entity.registry_entry.transport != registry.STREAM
         publisher = self.session.declare_publisher(key, **options)
         self._declared.append(publisher)
-        out = Outgoing(publisher, entity.ros_type, gid)
+        out = Outgoing(publisher, entity.ros_type, gid, self.node.clock)
         self.outgoing.append((ns, entity, out))
         if entity.registry_entry.transport != registry.STREAM:
             out.subscription = self._subscribe(ns, entity, out)
@@ -332,7 +339,7 @@ class Gateway:
             payload = query.payload.to_bytes() if query.payload is not None else None
             response = self.serve(ns, entity, payload)
             reply = cdr.encode(f"{entity.ros_type}_Response", response)
-            back = attachment.pack(meta.sequence, time.time_ns(), meta.gid)
+            back = attachment.pack(meta.sequence, _ns(self.node.clock), meta.gid)
             query.reply(query.key_expr, reply, attachment=back)
         except Exception:
             log.exception("answering %s failed", entity.name)

@@ -9,7 +9,6 @@ scenario tests; not part of the controller process.
 from __future__ import annotations
 
 import threading
-import time
 
 import zenoh
 
@@ -17,6 +16,7 @@ from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.control import ControllerStatus
 from dronewrapper.msgs.geometry import PoseStamped
 from dronewrapper.runtime import Latest
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.telemetry import euler_from_quaternion
 from dronewrapper_sim.evaluation.metrics import FollowSample
 
@@ -36,6 +36,7 @@ class FollowMonitor:
             (its pose is its centre), about half a person's height for people (their pose is
             the base point on the ground).
         rate_hz: sampling rate (Hz).
+        clock: what its samples' times and its pacing read (default: the real clocks).
     """
 
     def __init__(
@@ -45,13 +46,15 @@ class FollowMonitor:
         *,
         aim_height: float = 0.0,
         rate_hz: float = 10.0,
+        clock: Clock = REAL,
     ) -> None:
         self.ns = ns
+        self.clock = clock
         self.aim_height = aim_height
         self.period = 1.0 / rate_hz
         self.samples: list[FollowSample] = []
-        self.status: Latest[ControllerStatus] = Latest("controller status")
-        self.vehicle: Latest[PoseStamped] = Latest("ground truth")
+        self.status: Latest[ControllerStatus] = Latest("controller status", clock)
+        self.vehicle: Latest[PoseStamped] = Latest("ground truth", clock)
         self.objects: dict[str, PoseStamped] = {}
         self._pose_dec = codec.decoder(PoseStamped)
         self._status_dec = codec.decoder(ControllerStatus)
@@ -67,8 +70,8 @@ class FollowMonitor:
             ),
         ]
         self._stop = threading.Event()
-        self._t0 = time.monotonic()
-        self._thread = threading.Thread(target=self._run, name="follow-monitor", daemon=True)
+        self._t0 = self.clock.monotonic()
+        self._thread = clock.thread(self._run, "follow-monitor")
 
     def _on_object(self, sample: zenoh.Sample) -> None:
         match = registry.SIM_OBJECT_POSE.match(str(sample.key_expr))
@@ -76,7 +79,7 @@ class FollowMonitor:
             self.objects[match["name"]] = self._pose_dec.decode(sample.payload.to_bytes())
 
     def start(self) -> FollowMonitor:
-        self._t0 = time.monotonic()
+        self._t0 = self.clock.monotonic()
         self._thread.start()
         return self
 
@@ -89,7 +92,7 @@ class FollowMonitor:
         status = self.status.fresh(1.0)
         lift = self.aim_height
         return FollowSample(
-            t=time.monotonic() - self._t0,
+            t=self.clock.monotonic() - self._t0,
             vehicle=_xyz(vehicle),
             yaw=euler_from_quaternion(vehicle.pose.orientation)[2],
             target=_xyz(target, lift),
@@ -99,8 +102,9 @@ class FollowMonitor:
         )
 
     def _run(self) -> None:
-        next_at = time.monotonic()
-        while not self._stop.wait(max(0.0, next_at - time.monotonic())):
+        clock = self.clock
+        next_at = clock.monotonic()
+        while not clock.wait(self._stop, next_at - clock.monotonic()):
             next_at += self.period
             sample = self.sample()
             if sample is not None:

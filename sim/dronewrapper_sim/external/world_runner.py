@@ -20,7 +20,6 @@ import logging
 import math
 import select
 import threading
-import time
 from typing import Any
 
 from dronewrapper.msgs import registry
@@ -170,7 +169,7 @@ class ExternalWorldRunner:
         self._status_pub = node.publisher(registry.SIM_POSE_SOURCE)
         self.cameras = (
             make_cameras(
-                config, scenario, node, self.world, lambda: self.pose.frame_pose(time.time())
+                config, scenario, node, self.world, lambda: self.pose.frame_pose(node.clock.time())
             )
             if config.cameras
             else None
@@ -186,26 +185,27 @@ class ExternalWorldRunner:
         )
 
     def run(self, stop: threading.Event, duration_s: float | None = None) -> None:
-        """Run until ``stop`` is set (or ``duration_s`` of wall time passed)."""
+        """Run until ``stop`` is set (or ``duration_s`` of the node's clock passed)."""
         if self.cameras is not None:
             self.cameras.start()
-        start = last_step = time.monotonic()
+        clock = self.node.clock
+        start = last_step = clock.monotonic()
         obj_period = 1.0 / self.config.object_pose_rate_hz
         next_obj = next_status = start
         next_log = start + LOG_PERIOD_S
         while not stop.is_set():
-            now = time.monotonic()
+            now = clock.monotonic()
             if duration_s is not None and now - start >= duration_s:
                 break
-            self.link.tick(time.time())
+            self.link.tick(clock.time())
             fd = self.link.fileno()
             if fd >= 0:
                 readable, _, _ = select.select([fd], [], [], WORLD_STEP_S)
                 if readable:
                     self._receive()
             else:
-                stop.wait(WORLD_STEP_S)
-            now = time.monotonic()
+                clock.wait(stop, WORLD_STEP_S)
+            now = clock.monotonic()
             if now - last_step >= WORLD_STEP_S:
                 if self.pose.airborne:
                     with self.world_lock:
@@ -216,7 +216,7 @@ class ExternalWorldRunner:
                 self.world_topics.publish_objects()
             if now >= next_status:
                 next_status = max(next_status + STATUS_PERIOD_S, now)
-                status = self.pose.status(self.source, self.link, time.time())
+                status = self.pose.status(self.source, self.link, clock.time())
                 self._status_pub.put(status)
                 if now >= next_log:
                     next_log = now + LOG_PERIOD_S
@@ -229,7 +229,7 @@ class ExternalWorldRunner:
                     )  # fmt: skip
 
     def _receive(self) -> None:
-        arrival = time.time()
+        arrival = self.node.clock.time()
         for msg in self.link.receive(arrival):
             snapshot = self.pose.add(msg, arrival)
             if snapshot is not None:

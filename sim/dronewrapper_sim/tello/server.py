@@ -15,12 +15,12 @@ import logging
 import select
 import socket
 import threading
-import time
 from dataclasses import replace
 from typing import Any
 
 from dronewrapper.rotations import quat_from_rpy
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper_sim.dynamics import WindModel
 from dronewrapper_sim.pose_snapshot import PoseSnapshot
 from dronewrapper_sim.tello.config import TelloConfig
@@ -77,6 +77,7 @@ class TelloServer:
         self.config = config
         self.scenario = scenario
         self.node = node
+        self.time: Clock = REAL if node is None else node.clock  # its pacing and stamps
         seed_override = seed  # None: each scenario loaded later uses its own seed
         seed = scenario.seed if seed is None else seed
         self.world = World(scenario, seed=seed)
@@ -125,18 +126,18 @@ class TelloServer:
     # ---- the loop ----
 
     def run(self, stop: threading.Event, duration_s: float | None = None) -> None:
-        """Run until ``stop`` is set (or ``duration_s`` of wall time passed)."""
+        """Run until ``stop`` is set (or ``duration_s`` of its clock passed)."""
         if self.video is not None:
             self.video.start()
         dt = 1.0 / self.config.physics_rate_hz
-        start = time.monotonic()
+        start = self.time.monotonic()
         t0 = start
         steps = 0
         state_period = 1.0 / self.config.state_rate_hz
         next_state = start
         next_gt = next_obj = start
         while not stop.is_set():
-            now = time.monotonic()
+            now = self.time.monotonic()
             if duration_s is not None and now - start >= duration_s:
                 break
             next_tick = t0 + (steps + 1) * dt
@@ -144,7 +145,7 @@ class TelloServer:
             readable, _, _ = select.select([self.sock], [], [], wait)
             if readable:
                 self._receive()
-            now = time.monotonic()
+            now = self.time.monotonic()
             if now < next_tick:
                 continue
             owed = int((now - t0) / dt) - steps
@@ -190,7 +191,7 @@ class TelloServer:
                 continue
             self.datagrams += 1
             with self.lock:
-                replies = self.protocol.handle(data, sender, time.monotonic())
+                replies = self.protocol.handle(data, sender, self.time.monotonic())
             self._send(replies)
 
     def _send(self, replies: list[Reply]) -> None:
@@ -215,7 +216,9 @@ class TelloServer:
 
     def _make_snapshot(self) -> PoseSnapshot:
         s = self.flight.state
-        return PoseSnapshot((s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), time.time())
+        return PoseSnapshot(
+            (s.x, s.y, s.z), quat_from_rpy(s.roll, s.pitch, s.yaw), self.time.time()
+        )
 
     def close(self) -> None:
         """Stop the video thread and close the socket."""

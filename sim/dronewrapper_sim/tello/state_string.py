@@ -22,14 +22,13 @@ Field order and format of the real drone (SDK 2.0, mission pads off)::
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from dronewrapper_sim.dynamics import GRAVITY, QuadState
 from dronewrapper_sim.frames import wrap_pi
 
 if TYPE_CHECKING:
     from dronewrapper_sim.tello.flight import TelloFlight
-    from dronewrapper_sim.tello.protocol import TelloProtocol
 
 MISSION_PAD_FIELDS = "mid:-1;x:-100;y:-100;z:-100;mpry:-1,-1,-1;"
 """What a Tello sends with no mission pad in view (and what a non-EDU Tello always sends)."""
@@ -78,7 +77,19 @@ def acceleration_mg(s: QuadState) -> tuple[float, float, float]:
     return fwd * scale, -left * scale, -up * scale
 
 
-def format_state(protocol: TelloProtocol) -> str:
+class StateSource(Protocol):
+    """What a state datagram reads of a simulated Tello (its
+    :class:`~dronewrapper_sim.tello.protocol.TelloProtocol`)."""
+
+    flight: TelloFlight
+
+    def temperatures(self) -> tuple[int, int]: ...
+    def tof_cm(self) -> int: ...
+    def height_cm(self) -> int: ...
+    def baro_m(self) -> float: ...
+
+
+def format_state(protocol: StateSource) -> str:
     """The state datagram of ``protocol``'s Tello now."""
     flight = protocol.flight
     pitch, roll, yaw = attitude_deg(flight)

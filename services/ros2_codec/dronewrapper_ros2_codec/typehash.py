@@ -17,7 +17,7 @@ import json
 from functools import cache
 from typing import Any
 
-from dronewrapper.ros2.interfaces import (
+from dronewrapper_ros2_codec.interfaces import (
     ARRAY,
     BOUNDED,
     SEQUENCE,

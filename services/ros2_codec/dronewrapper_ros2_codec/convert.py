@@ -1,4 +1,4 @@
-"""Our messages as ROS 2 values (the dicts :mod:`dronewrapper.ros2.cdr` encodes) and back.
+"""Our messages as ROS 2 values (the dicts :mod:`dronewrapper_ros2_codec.cdr` encodes) and back.
 
 Field names are already ROS's; what differs is the header stamp (float seconds since the epoch
 here; ``builtin_interfaces/Time`` ``sec``/``nanosec`` in ROS), our extensions (``Header.seq``,

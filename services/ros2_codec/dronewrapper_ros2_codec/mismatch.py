@@ -13,14 +13,14 @@ from collections import defaultdict
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from dronewrapper.ros2.names import (
+from dronewrapper_ros2_codec.names import (
     CLIENT,
     PUBLISHER,
     SERVICE,
     SUBSCRIBER,
     Endpoint,
 )
-from dronewrapper.ros2.typehash import HUMBLE
+from dronewrapper_ros2_codec.typehash import HUMBLE
 
 ROLE = {PUBLISHER: "publishes", SUBSCRIBER: "subscribes", SERVICE: "serves", CLIENT: "calls"}
 

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from functools import cache
 from typing import Any
 
-from dronewrapper.ros2.interfaces import ARRAY, BOUNDED, SCALAR, Field, message
+from dronewrapper_ros2_codec.interfaces import ARRAY, BOUNDED, SCALAR, Field, message
 
 HEADER = b"\x00\x01\x00\x00"
 """The encapsulation header: CDR_LE, options 0."""

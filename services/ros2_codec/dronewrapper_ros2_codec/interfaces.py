@@ -225,7 +225,7 @@ def message(name: str) -> Message:
     service = name.rsplit("_", 1)[0]
     if "/srv/" in name and service in SERVICES:
         return service_messages(service)[name]
-    raise KeyError(f"no ROS 2 interface {name!r} in dronewrapper.ros2.interfaces")
+    raise KeyError(f"no ROS 2 interface {name!r} in dronewrapper_ros2_codec.interfaces")
 
 
 def dependencies(name: str) -> list[str]:

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from dronewrapper.ros2.interfaces import dds_type_name
+from dronewrapper_ros2_codec.interfaces import dds_type_name
 
 ADMIN = "@ros2_lv"
 NODE, PUBLISHER, SUBSCRIBER, SERVICE, CLIENT = "NN", "MP", "MS", "SS", "SC"

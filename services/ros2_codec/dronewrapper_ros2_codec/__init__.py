@@ -5,5 +5,6 @@ MAVROS-equivalent keys map to, written here as ``.msg`` text), :mod:`typehash` (
 hashes, REP-2011), :mod:`cdr` (the CDR payloads), :mod:`names` (rmw_zenoh key expressions and
 liveliness tokens), :mod:`attachment` (the per-sample attachment), :mod:`convert` (our messages
 to and from ROS 2 values), :mod:`mismatch` (type hash disagreements read from liveliness).
-The gateway process (``dronewrapper ros2``) and the ROS 2 bag writer use them.
+The ROS 2 gateway (``dronewrapper ros2``), the PX4 uXRCE/Zenoh bridge and the ROS 2 bag
+writer use them; the laptop SDK does not ship them (services/ros2_codec/README.md).
 """
