@@ -18,15 +18,14 @@ sends the new current item (MISSION_CURRENT, 0 after an upload) before the item 
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
+from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+BridgeCore = Any  # the bridge's core (core.BridgeCore), not imported: no import circle
 
 
 def offset(core: BridgeCore) -> int:
