@@ -239,6 +239,9 @@ def probe_actions(p: Probe, drone, position) -> None:
         from dronewrapper.geodesy import to_geodetic
 
         home = drone.home()
+        if not math.isfinite(home.latitude):  # no GPS (the Tello): the call's own answer
+            drone.goto(0.0, 0.0, 3.0, timeout=40.0, tolerance=0.5)
+            return
         lat, lon = to_geodetic((home.latitude, home.longitude), 2.0, 2.0)
         drone.goto(lat, lon, 3.0, timeout=40.0, tolerance=0.5)
 

@@ -54,6 +54,7 @@ if TYPE_CHECKING:
     from dronewrapper.runtime.latest import Latest
 
 log = logging.getLogger("dronewrapper")
+NAV_COMMANDS_START = 16  # MAV_CMD_NAV_WAYPOINT: the NAV_* commands are 16-99
 
 
 @dataclass(frozen=True)
@@ -61,12 +62,15 @@ class MissionProgress:
     """Where the mission stands: ``current`` (the item being flown, 0-based), ``total``
     items, ``reached`` (the last item reached, 0-based; None until one is heard reached) and
     ``reached_items`` (every item reported reached since the upload, in order, each once:
-    PX4 and our simulator report the items that fly somewhere, not speed or camera items)."""
+    PX4 and our simulator report the items that fly somewhere, not speed or camera items).
+    ``last_flown`` is the last item that flies somewhere (a ``NAV_*`` command); None: the last
+    item."""
 
     current: int
     total: int
     reached: int | None = None
     reached_items: tuple[int, ...] = ()
+    last_flown: int | None = None
 
     @property
     def reached_count(self) -> int:
@@ -75,8 +79,12 @@ class MissionProgress:
 
     @property
     def finished(self) -> bool:
-        """The last item was reached."""
-        return self.total > 0 and self.reached is not None and self.reached >= self.total - 1
+        """The last item that flies somewhere was reached. The speed, camera and payload items
+        after it (a QGroundControl survey ends with its camera trigger off) are never reported
+        reached, so they are not waited for; a mission with no such item never reads
+        finished."""
+        end = self.total - 1 if self.last_flown is None else self.last_flown
+        return self.total > 0 and self.reached is not None and self.reached >= end
 
 
 class MissionsMixin:
@@ -89,11 +97,15 @@ class MissionsMixin:
         self._reached: Latest[WaypointReached] = self.inputs.latest(registry.MISSION_REACHED)
         self._beat: Beat | None = None  # started by the first go-to, return or mission
         self._reached_items: list[int] = []  # every item reached since the last upload
+        self._last_reached: int | None = None  # the item last reached since the last upload
         self._reached.listen(self._on_reached)
 
     def _on_reached(self: Any) -> None:
         reached = self._reached.value
-        if reached is not None and reached.wp_seq not in self._reached_items:
+        if reached is None:
+            return
+        self._last_reached = reached.wp_seq
+        if reached.wp_seq not in self._reached_items:
             self._reached_items.append(reached.wp_seq)
 
     # ------------------------------------------------------------------ envelope
@@ -362,7 +374,8 @@ class MissionsMixin:
                     registry.ENVELOPE_SET, EnvelopeSet(envelope=before), "upload_mission", timeout
                 )
             raise
-        self._reached_items.clear()
+        self._reached_items.clear()  # the last mission's items are not this one's
+        self._last_reached = None
         return reply.wp_transfered
 
     def _fold(self: Any, fence: PlanFence, returns_home: bool, timeout: float) -> Envelope:
@@ -416,15 +429,21 @@ class MissionsMixin:
     def mission_progress(self: Any) -> MissionProgress:
         """The mission's progress as the bridge last published it."""
         listing = self._waypoints.value
-        reached = self._reached.value
         if listing is None:
             raise NoData(f"no mission list yet on {registry.MISSION_WAYPOINTS.key(self.ns)}")
         return MissionProgress(
             current=listing.current_seq,
             total=len(listing.waypoints),
-            reached=None if reached is None else reached.wp_seq,
+            reached=self._last_reached,
             reached_items=tuple(self._reached_items),
+            last_flown=_last_flown(listing),
         )
+
+
+def _last_flown(listing: WaypointList) -> int | None:
+    """The index of the last item that flies somewhere (MAV_CMD_NAV_*: 16-99), or None."""
+    flown = [i for i, wp in enumerate(listing.waypoints) if NAV_COMMANDS_START <= wp.command < 100]
+    return flown[-1] if flown else None
 
 
 def _named(exc: msgspec.ValidationError) -> str:

@@ -94,5 +94,8 @@ def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
     binary = tree / "build" / "sitl" / "bin" / "arducopter"
     assert binary.is_file(), f"{binary}: not built"
     defaults = tree / "Tools" / "autotest" / "default_params" / "copter.parm"
-    firmware = f"exec setsid {binary} --model quad --speedup 1 -I0 -w --defaults {defaults}"
-    _judge(_flight(tmp_path, firmware, "ardupilot", "tcp:127.0.0.1:5760"))
+    instance = int(os.environ.get("DRONEWRAPPER_SITL_INSTANCE", "3"))  # SERIAL0 5760 + 10 N
+    firmware = (
+        f"exec setsid {binary} --model quad --speedup 1 -I{instance} -w --defaults {defaults}"
+    )
+    _judge(_flight(tmp_path, firmware, "ardupilot", f"tcp:127.0.0.1:{5760 + 10 * instance}"))

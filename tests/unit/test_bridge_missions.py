@@ -249,10 +249,25 @@ def test_mission_clear_and_progress():
     op = rig.call(missions.clear, WaypointClear())
     rig.deliver(mavlink.MAVLink_mission_ack_message(255, 191, 0, 0))
     assert op.result().success
+    rig.deliver(mavlink.MAVLink_mission_current_message(3))  # PX4: the next item first
     rig.deliver(mavlink.MAVLink_mission_item_reached_message(2))
     rig.deliver(mavlink.MAVLink_mission_item_reached_message(2))  # PX4 repeats it
     rig.deliver(mavlink.MAVLink_mission_item_reached_message(3))
     assert [m.wp_seq for m in rig.published(registry.MISSION_REACHED)] == [2, 3]
+
+
+def test_the_last_missions_reached_item_repeated_after_an_upload_is_not_this_missions():
+    # PX4 SITL, 2026-11-28: after a 4-item mission, a new upload, then MISSION_ITEM_REACHED 3
+    # again (its navigator's seq_reached outlives the upload): the new mission read finished,
+    # and an unattended mission returned home before its first item
+    rig = flying()
+    rig.deliver(mavlink.MAVLink_mission_current_message(3))
+    rig.deliver(mavlink.MAVLink_mission_item_reached_message(3))
+    rig.core.missions.current_seq, rig.core.missions.last_reached = 0, -1  # as an upload does
+    rig.deliver(mavlink.MAVLink_mission_item_reached_message(3))
+    assert [m.wp_seq for m in rig.published(registry.MISSION_REACHED)] == [3]
+    rig.deliver(mavlink.MAVLink_mission_item_reached_message(0))  # ArduPilot: reached first
+    assert [m.wp_seq for m in rig.published(registry.MISSION_REACHED)] == [3, 0]
 
 
 def test_mission_start_without_a_mission_is_refused():
@@ -313,3 +328,20 @@ def test_a_home_without_a_fix_or_with_a_non_finite_position_is_dropped():
     rig.run(0.5)
     assert rig.core.missions.home_known
     assert rig.core.missions.home_local == (2.0, 1.0, 0.5)
+
+
+def test_a_mission_ending_in_a_camera_item_counts_as_ended_at_its_last_waypoint():
+    # the unattended rule acts once the mission has ended; a QGroundControl survey's last item
+    # (the camera trigger off) is never reported reached
+    from dronewrapper_bridge_mavlink import watch
+
+    rig = flying()
+    rig.core.missions.waypoints = [
+        Waypoint(command=command, x_lat=47.4, y_long=8.5, z_alt=5.0)
+        for command in (16, 16, mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST)
+    ]
+    rig.core.unattended.start("mission", "drone/alive/app", rig.core.now)
+    rig.core.missions.last_reached = 0
+    assert not watch.holding(rig.core)
+    rig.core.missions.last_reached = 1
+    assert watch.holding(rig.core)

@@ -159,3 +159,24 @@ def test_a_lost_request_is_asked_again_on_the_uploads_link_until_the_item_comes(
     assert [m.seq for m in store.retry(0.8, "onboard")] == [1]
     (ack,) = store.handle(item(1), 0.9, "onboard")
     assert ack.get_type() == "MISSION_ACK" and store.retry(5.0, "onboard") == []
+
+
+def test_a_new_mission_starts_at_the_item_marked_current_else_the_last_current_one():
+    # as PX4 02e73e3b6f: an upload that marks no item keeps the last mission's current item
+    store = MissionStore(1)
+
+    def upload(n: int, marked: int | None = None) -> None:
+        store.handle(gcs(mavlink.MAVLink_mission_count_message(1, 1, n, MISSION)), 0.0)
+        for seq in range(n):
+            msg = item(seq)
+            msg.current = int(seq == marked)
+            store.handle(msg, 0.1)
+
+    upload(3)
+    store.set_current(2)
+    upload(4)
+    assert store.current == 2
+    upload(2)
+    assert store.current == 1  # within the new mission
+    upload(4, marked=0)
+    assert store.current == 0

@@ -213,9 +213,14 @@ def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:
         if not reply.mode_sent:
             return failed(REFUSED, reply.message, "pause", reply.result)
         return FlightResult(success=True, message="mission paused: holding here")
+    mode = MISSION_MODE[autopilot]
     if request.action == "start":
         core.missions.last_reached = -1
-    mode = MISSION_MODE[autopilot]
+        if autopilot != AUTOPILOT_PX4 and ops.shown_mode(core) == mode:
+            # ArduPilot starts a mission (again, once finished) only on entering AUTO
+            reply = yield from ops.set_mode(core, SetMode(custom_mode=GUIDED_MODE[autopilot]))
+            if not reply.mode_sent:
+                return failed(REFUSED, reply.message, request.action, reply.result)
     deadline = core.now + min(timeout, MISSION_CHECK_WAIT_S)
     core.failsafe.release_hold()
     while True:

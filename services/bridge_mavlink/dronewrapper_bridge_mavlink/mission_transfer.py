@@ -139,10 +139,20 @@ class Transfer:
 
 class Upload(Transfer):
     """Upload ``items`` (see module docstring); ``transferred``: items the autopilot asked
-    for, in order, so far."""
+    for, in order, so far. ``numbered_from``: the item named item 0 in messages (1 where the
+    first item is ArduPilot's home)."""
 
-    def __init__(self, items: list[Item], target: tuple[int, int], now: float, **kw: Any) -> None:
+    def __init__(
+        self,
+        items: list[Item],
+        target: tuple[int, int],
+        now: float,
+        *,
+        numbered_from: int = 0,
+        **kw: Any,
+    ) -> None:
         super().__init__(target, now, **kw)
+        self.numbered_from = numbered_from
         self.items = list(items)
         self.transferred = 0
         self._asked = -1  # the highest item asked for
@@ -188,7 +198,7 @@ class Upload(Transfer):
         item = self.items[self._asked]
         entry = mavlink.enums["MAV_CMD"].get(item.command)
         name = entry.name.removeprefix("MAV_CMD_") if entry is not None else str(item.command)
-        return f" at item {self._asked} ({name}, frame {item.frame})"
+        return f" at item {self._asked - self.numbered_from} ({name}, frame {item.frame})"
 
     def _item_fields(self, seq: int) -> tuple:
         item = self.items[seq]

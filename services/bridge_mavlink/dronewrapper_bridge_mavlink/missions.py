@@ -50,7 +50,7 @@ from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
-from dronewrapper_bridge_mavlink import autopilot_limits, mission_frames
+from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import (
@@ -257,17 +257,20 @@ def on_transfer_message(core: BridgeCore, msg: Any) -> None:
 
 def on_mission_current(core: BridgeCore, msg: Any) -> None:
     state = core.missions
-    if int(msg.seq) != state.current_seq:
-        state.current_seq = int(msg.seq)
+    seq = home_slot.ours(core, int(msg.seq)) or 0
+    if seq != state.current_seq:
+        state.current_seq = seq
         publish_waypoints(core)
 
 
 def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
-    """MISSION_ITEM_REACHED, published once per item (PX4 repeats it for a while)."""
-    if int(msg.seq) == core.missions.last_reached:
+    """MISSION_ITEM_REACHED, published once per item of this mission (:func:`home_slot.reached`;
+    PX4 repeats it for a while)."""
+    seq = home_slot.reached(core, int(msg.seq))
+    if seq is None or seq == core.missions.last_reached:
         return
-    core.missions.last_reached = int(msg.seq)
-    reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=int(msg.seq))
+    core.missions.last_reached = seq
+    reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=seq)
     core.publish(registry.MISSION_REACHED, reached)
 
 
@@ -352,7 +355,13 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [item_of(wp) for wp in waypoints]
-    upload = mt.Upload(items, core.target(), core.now, **_transfer_args())
+    upload = mt.Upload(
+        home_slot.uploaded(core, items),
+        core.target(),
+        core.now,
+        numbered_from=home_slot.offset(core),
+        **_transfer_args(),
+    )
     yield from run_transfer(core, upload)
     if not upload.error:
         core.missions.waypoints = waypoints
@@ -361,7 +370,9 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
         publish_waypoints(core)
     message = upload.error or f"{len(items)} item(s) uploaded"
     return WaypointPushResult(
-        success=not upload.error, wp_transfered=upload.transferred, message=message
+        success=not upload.error,
+        wp_transfered=max(0, upload.transferred - home_slot.offset(core)),
+        message=message,
     )
 
 
@@ -370,7 +381,7 @@ def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
     core.require_connected()
     download = mt.Download(core.target(), core.now, **_transfer_args())
     yield from run_transfer(core, download)
-    waypoints = [waypoint_of(item) for item in download.items]
+    waypoints = [waypoint_of(item) for item in home_slot.downloaded(core, download.items)]
     if not download.error:
         core.missions.waypoints = waypoints
         publish_waypoints(core)
@@ -401,7 +412,7 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
     if count and request.wp_seq >= count:
         raise ValueError(f"wp_seq {request.wp_seq} is beyond the mission's {count} item(s)")
     result, message = yield from ops.command(
-        core, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, float(request.wp_seq)
+        core, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, float(home_slot.theirs(core, request.wp_seq))
     )
     return MissionResult(success=result == ops.ACCEPTED, message=message)
 

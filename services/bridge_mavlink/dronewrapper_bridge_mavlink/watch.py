@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, HOLD_MODE
 
+NAV_FIRST, NAV_LAST = 16, 99  # MAV_CMD_NAV_*: the items that fly somewhere
+
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core import BridgeCore
 
@@ -29,11 +31,14 @@ def on_vehicle(core: BridgeCore) -> None:
 
 
 def holding(core: BridgeCore) -> bool:
-    """The aircraft holds on its own: the autopilot's hold mode, or a mission flown to its
-    last item."""
+    """The aircraft holds on its own: the autopilot's hold mode, or a mission flown to its last
+    item that flies somewhere (a NAV_* command; the camera or speed items after it are never
+    reported reached: a QGroundControl survey ends with its camera trigger off)."""
     autopilot = core.autopilot or AUTOPILOT_PX4
     missions = core.missions
-    done = bool(missions.waypoints) and missions.last_reached >= len(missions.waypoints) - 1
+    flown = [i for i, wp in enumerate(missions.waypoints) if NAV_FIRST <= wp.command <= NAV_LAST]
+    last = flown[-1] if flown else len(missions.waypoints) - 1
+    done = bool(missions.waypoints) and missions.last_reached >= last
     return ops.shown_mode(core) == HOLD_MODE[autopilot] or (
         core.unattended.what == "mission" and done
     )

@@ -5,12 +5,15 @@ Nothing here builds or fetches firmware: it runs a build that exists. An instanc
 the firmware's fixed ports out of the way of anything else on the machine (PX4 ``-i N``: onboard
 link UDP 14540+N, SIH truth 19410+N; ArduCopter ``-I N``: SERIAL0/1/2 on TCP 5760/5762/5763 +
 10 N). :attr:`Firmware.variables` are the graph variables that reach it
-(compose/{px4,ardupilot}_sitl_*.yaml).
+(compose/{px4,ardupilot}_sitl_*.yaml). ``DRONEWRAPPER_SITL_INSTANCE=N`` names the instance
+instead (for a machine where instance numbers are shared out among users: PX4's lock
+``/tmp/px4_lock-N`` is machine-wide, even across network namespaces).
 """
 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import re
 import signal
@@ -24,6 +27,8 @@ from dronewrapper.runtime.children import die_with_parent
 
 PX4_UDP_PORTS = (14540, 14580, 18570, 19410, 19450)  # + N: every UDP port PX4 instance N uses
 AP_TCP_BASE = 5760  # SERIAL0 of ArduCopter instance N: 5760 + 10 N; SERIAL1 + 2, SERIAL2 + 3
+INSTANCE_ENV = "DRONEWRAPPER_SITL_INSTANCE"
+PX4_LOCK = "/tmp/px4_lock-{}"  # PX4's server lock of instance N (POSIX record lock)
 
 
 @dataclass(frozen=True)
@@ -65,16 +70,51 @@ def _free(kind: int, port: int) -> bool:
     return True
 
 
+def _px4_unlocked(n: int) -> bool:
+    """No PX4 server of instance ``n`` holds its lock (on this machine, any namespace)."""
+    try:
+        fd = os.open(PX4_LOCK.format(n), os.O_RDWR)
+    except FileNotFoundError:
+        return True
+    except OSError:
+        return False
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.lockf(fd, fcntl.LOCK_UN)
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
+
+
+def _named_instance() -> int | None:
+    value = os.environ.get(INSTANCE_ENV, "").strip()
+    if not value:
+        return None
+    if not value.isdigit():
+        raise ValueError(f"{INSTANCE_ENV}={value!r}: not an instance number")
+    return int(value)
+
+
 def free_px4_instance() -> int:
-    """An instance 1..9 whose UDP ports are all free now (PX4 shifts them only up to 9)."""
+    """``DRONEWRAPPER_SITL_INSTANCE``, or an instance 1..9 whose UDP ports are all free now and
+    whose lock no PX4 holds (PX4 shifts its ports only up to 9)."""
+    named = _named_instance()
+    if named is not None:
+        return named
     for n in range(1, 10):
-        if all(_free(socket.SOCK_DGRAM, port + n) for port in PX4_UDP_PORTS):
+        if _px4_unlocked(n) and all(_free(socket.SOCK_DGRAM, port + n) for port in PX4_UDP_PORTS):
             return n
     raise RuntimeError("no free PX4 SITL instance (1..9)")
 
 
 def free_ardupilot_instance() -> int:
-    """An instance 1..59 whose SERIAL0..2 TCP ports are free now."""
+    """``DRONEWRAPPER_SITL_INSTANCE``, or an instance 1..59 whose SERIAL0..2 TCP ports are free
+    now."""
+    named = _named_instance()
+    if named is not None:
+        return named
     for n in range(1, 60):
         if all(_free(socket.SOCK_STREAM, AP_TCP_BASE + 10 * n + k) for k in range(4)):
             return n
@@ -136,7 +176,18 @@ def px4_sih(
     log_path = workdir / "px4.log"
     with open(log_path, "wb") as log:
         proc = subprocess.Popen(
-            ["../bin/px4", "-i", str(instance), "-d"],
+            # its working directory named (-w), with the build's etc/ as its data: without
+            # them PX4 works in the build's rootfs/N, and its missions and parameters outlive
+            # the run (a new mission flown from the last one's current item)
+            [
+                "../bin/px4",
+                "-i",
+                str(instance),
+                "-d",
+                "-w",
+                str(home / "rootfs"),
+                str(build / "etc"),
+            ],
             cwd=home / "rootfs",
             env=env,
             stdin=subprocess.DEVNULL,

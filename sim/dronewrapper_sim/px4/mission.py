@@ -13,7 +13,9 @@ the upload).
 :class:`MissionRunner` flies the mission in AUTO.MISSION: NAV_TAKEOFF climbs, NAV_WAYPOINT
 flies to the item (acceptance radius param2, else NAV_ACC_RAD; hold param1 s), NAV_LAND
 lands there, NAV_RETURN_TO_LAUNCH returns; each item reached is MISSION_ITEM_REACHED, and the
-item being flown is MISSION_CURRENT. After the last item the vehicle holds (AUTO.LOITER).
+item being flown is MISSION_CURRENT; a new mission is flown from the item its upload marks
+current (MAVLink's ``current``), else from the last mission's current item, as PX4 does. After
+the last item the vehicle holds (AUTO.LOITER).
 Altitudes: GLOBAL_RELATIVE_ALT items are m above home, GLOBAL items m AMSL (the local origin
 lies at ``origin_amsl``). DO_CHANGE_SPEED (param1 0 or 1: horizontal; param2 m/s, capped at
 MPC_XY_VEL_MAX; -2 or 0: back to MPC_XY_CRUISE; -1: unchanged) sets the speed of the legs
@@ -224,8 +226,9 @@ class MissionStore:
 
     def _store(self, mission_type: int, items: list[Message]) -> None:
         self.lists[mission_type] = list(items)
-        if mission_type == MISSION:
-            self.current = 0
+        if mission_type == MISSION:  # as PX4: the item marked current, else the last current
+            marked = [item.seq for item in items if getattr(item, "current", 0)]
+            self.current = marked[0] if marked else max(0, min(self.current, len(items) - 1))
             self.version += 1
         elif mission_type == FENCE:
             self.fence_version += 1

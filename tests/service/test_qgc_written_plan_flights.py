@@ -1,0 +1,97 @@
+"""Plans written by QGroundControl itself (tests/data/qgc_plans/mavsdk, MAVSDK's test data)
+uploaded and flown through the SDK and bridge_mavlink's core on the simulator
+(tests/bus_bridge.py), in bus time, judged from the simulator's ground truth; and a second
+mission after a first, whose progress starts afresh."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from bus_bridge import SimSdk
+
+from dronewrapper.errors import InvalidArgument
+from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.plan import read_plan
+
+PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans" / "mavsdk"
+HOME = (47.397742, 8.545594)  # the simulator's home
+ACCEPTANCE_M = 2.0  # the items' acceptance radius is 0: the autopilot's NAV_ACC_RAD, 2 m
+
+
+@pytest.fixture
+def sim():
+    rig = SimSdk(params={"RTL_RETURN_ALT": 10.0, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0})
+    yield rig
+    rig.close()
+
+
+def fly(sim: SimSdk, seconds: float) -> None:
+    sim.drone.start_mission()
+    for _ in range(round(seconds / 0.5)):
+        sim.run(0.5)
+        if sim.drone.mission_progress().finished:
+            break
+
+
+def assert_each_waypoint_passed(sim: SimSdk, name: str, start: float) -> None:
+    for wp in read_plan(PLANS / name).waypoints:
+        if wp.command == 16:  # NAV_WAYPOINT, frame 3: m above home
+            east, north = to_enu(HOME, wp.x_lat, wp.y_long)
+            assert sim.pair.closest_approach((east, north, wp.z_alt), start) <= ACCEPTANCE_M
+
+
+def test_the_sample_mission_is_flown_and_its_camera_item_skipped_with_a_note(sim):
+    name = "qgroundcontrol_sample.plan"
+    assert sim.drone.upload_mission(PLANS / name) == 6
+    sim.drone.takeoff(5.0)
+    start = sim.pair.t
+    fly(sim, 120.0)
+    assert sim.drone.mission_progress().finished  # its last item: return to launch
+    assert_each_waypoint_passed(sim, name, start)
+    texts = [t.text for t in sim.drone.status_texts]
+    assert "Mission item 2: IMAGE_START_CAPTURE skipped (no camera, gimbal or gripper)" in texts
+
+
+def test_a_survey_ending_in_a_camera_item_reads_finished_after_its_last_waypoint(sim):
+    # its last item turns the camera trigger off; no autopilot reports such an item reached
+    name = "qgroundcontrol_sample_with_survey.plan"
+    assert sim.drone.upload_mission(PLANS / name) == 13
+    sim.drone.takeoff(5.0)
+    start = sim.pair.t
+    fly(sim, 400.0)
+    progress = sim.drone.mission_progress()
+    assert progress.finished and progress.reached == 11, progress
+    assert progress.reached_items == (1, 3, 5, 6, 7, 8, 10, 11)  # the eight waypoints
+    assert_each_waypoint_passed(sim, name, start)
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        ("qgroundcontrol_sample_with_survey_missing_items.plan", "survey"),
+        ("qgroundcontrol_sample_with_structured_scan.plan", "StructureScan"),
+    ],
+)
+def test_a_plan_that_cannot_fly_is_refused_before_anything_is_uploaded(sim, name, kind):
+    with pytest.raises(InvalidArgument, match=rf"mission.items\[1\]: a {kind} ComplexItem"):
+        sim.drone.upload_mission(PLANS / name)
+    assert sim.drone.mission_progress().total == 0
+
+
+def test_a_second_mission_is_not_finished_by_the_first_ones_last_item(sim):
+    sim.drone.takeoff(5.0)
+    first = [(6.0, 0.0, 5.0), (6.0, 6.0, 5.0)]
+    sim.drone.upload_mission(first, frame="local")
+    fly(sim, 60.0)
+    assert sim.drone.mission_progress().finished
+    second = [(*to_geodetic(HOME, x, y), z) for x, y, z in [(0.0, 6.0, 5.0), (0.0, 0.0, 5.0)]]
+    sim.drone.upload_mission(second)
+    progress = sim.drone.mission_progress()
+    assert progress.reached is None and not progress.finished, progress
+    start = sim.pair.t
+    fly(sim, 60.0)
+    assert sim.drone.mission_progress().finished
+    # flown from its first item (PX4 keeps the last mission's current item through an upload
+    # that marks none: the bridge marks the first)
+    assert sim.pair.closest_approach((0.0, 6.0, 5.0), start) <= 1.0
