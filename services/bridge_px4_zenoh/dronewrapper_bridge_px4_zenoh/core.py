@@ -156,9 +156,9 @@ class Px4ZenohCore(PureCore):
         type, decoded, handled."""
         self._at(now, stamp)
         parsed = t.parse_key(key)
-        topic = (
-            t.BY_NAME.get(parsed.topic) if parsed and parsed.domain == self.config.domain else None
-        )
+        if parsed is None or parsed.domain != self.config.domain:
+            return
+        topic = t.BY_NAME.get(parsed.topic)
         if topic is None or topic.direction != t.OUT:
             return
         mismatch = self.versions.check(topic.name, parsed.type_name, parsed.type_hash)

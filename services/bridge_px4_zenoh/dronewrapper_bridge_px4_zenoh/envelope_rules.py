@@ -61,13 +61,13 @@ def refuse_setpoint(core: Px4ZenohCore, target: PositionTarget, kind: Kind) -> E
     state = core.envelope
     try:
         if kind is Kind.POSITION:
-            p = target.position
+            p = target.required_position()
             env.check_position(state.envelope, *state.relative(p.x, p.y, p.z))
         else:
             v = target.velocity
             env.check_velocity(state.envelope, v.x, v.y, v.z)
             if kind is Kind.MIXED:
-                z = target.position.z - state.home_local[2]
+                z = target.required_position().z - state.home_local[2]
                 if z > state.envelope.max_altitude:
                     raise EnvelopeError(
                         f"altitude {z:g} m above the envelope's {state.envelope.max_altitude:g} m",

@@ -31,8 +31,9 @@ from typing import Any
 import zenoh
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime import Node
-from dronewrapper_bridge_base.bridge_node import BridgeNode
+from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
@@ -57,7 +58,7 @@ PUBLISHED = (
     registry.HOME_POSITION,
     registry.REFUSAL,
 )
-SERVICES = {
+SERVICES: dict[Service[Any, Any], Operation] = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,
     registry.FLIGHT_GOTO: flight.goto_point,
