@@ -5,15 +5,18 @@ JetPack 6 is Ubuntu 22.04 on aarch64 with Python 3.10 and glibc 2.35, so it take
 dependency with no such wheel would be built from source on the Jetson (minutes to hours, and
 a compiler and headers it may not have), or not install at all.
 
-    python -m dronewrapper_compose.jetson_wheels            # pip download into a temp folder
+    python -m dronewrapper_compose.jetson_wheels
 
-asks pip to resolve and download the third-party requirements of every distribution of the
+asks pip to resolve the third-party requirements of every distribution of the
 stack (``pyproject.toml`` of the repository, the SDK's extras included) for that platform,
-``--only-binary=:all:``: nothing is built, installed or emulated. It names what has no wheel.
+``--only-binary=:all:``, as ``pip download`` would, but as a dry-run install that reads each
+wheel's metadata from the index (PEP 658) instead of downloading the wheels: nothing is
+downloaded, built, installed or emulated. It names what has no wheel.
 """
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -80,14 +83,22 @@ def third_party_requirements(repo: Path = REPO, root: str = "dronewrapper-stack"
     return sorted(out, key=lambda r: parse_requirement(r)[0])
 
 
-def pip_download_argv(requirements: list[str], dest: Path) -> list[str]:
-    """``pip download`` of ``requirements`` as wheels for a Jetson, into ``dest``."""
+def pip_resolve_argv(requirements: list[str], target: Path, report: Path) -> list[str]:
+    """``pip install --dry-run`` of ``requirements`` as wheels for a Jetson, writing what pip
+    would install to the JSON ``report`` (``target`` is a folder pip is told to install to and
+    never writes)."""
     platforms = [arg for p in PLATFORMS for arg in ("--platform", p)]
     return [
-        sys.executable, "-m", "pip", "download", "--dest", str(dest),
+        sys.executable, "-m", "pip", "install", "--dry-run", "--ignore-installed",
+        "--target", str(target), "--report", str(report),
         "--only-binary=:all:", "--python-version", PYTHON_VERSION, "--implementation", "cp",
         *platforms, "--quiet", *requirements,
     ]  # fmt: skip
+
+
+def wheel_names(report: dict) -> list[str]:
+    """The wheel file names in a ``pip install --report`` (its format is version 1)."""
+    return sorted(item["download_info"]["url"].rsplit("/", 1)[-1] for item in report["install"])
 
 
 def missing_wheel(pip_output: str) -> str | None:
@@ -100,11 +111,14 @@ def main() -> int:
     requirements = third_party_requirements()
     print(f"checking {len(requirements)} requirements for aarch64, Python {PYTHON_VERSION}:")
     print("  " + " ".join(requirements))
-    with tempfile.TemporaryDirectory() as dest:
+    with tempfile.TemporaryDirectory() as scratch:
+        report = Path(scratch) / "report.json"
         done = subprocess.run(
-            pip_download_argv(requirements, Path(dest)), capture_output=True, text=True
+            pip_resolve_argv(requirements, Path(scratch) / "target", report),
+            capture_output=True,
+            text=True,
         )
-        wheels = sorted(p.name for p in Path(dest).glob("*.whl"))
+        wheels = wheel_names(json.loads(report.read_text())) if done.returncode == 0 else []
     if done.returncode != 0:
         missing = missing_wheel(done.stderr + done.stdout)
         print(done.stderr[-3000:], file=sys.stderr)

@@ -7,7 +7,9 @@ from dronewrapper_compose.jetson_wheels import (
     PLATFORMS,
     missing_wheel,
     parse_requirement,
+    pip_resolve_argv,
     third_party_requirements,
+    wheel_names,
 )
 from dronewrapper_compose.systemd_unit import (
     UnitSpec,
@@ -106,3 +108,14 @@ def test_the_jetson_check_covers_every_third_party_requirement():
         "dronewrapper",
         ["images", "security"],
     )
+
+
+def test_the_jetson_check_resolves_binary_wheels_for_aarch64_without_installing():
+    argv = pip_resolve_argv(["lap>=0.4"], Path("/t"), Path("/r.json"))
+    assert argv[argv.index("install") :][:2] == ["install", "--dry-run"]
+    assert "--only-binary=:all:" in argv and argv[argv.index("--python-version") + 1] == "3.10"
+    assert argv[argv.index("--report") + 1] == "/r.json" and argv[-1] == "lap>=0.4"
+    report = {
+        "install": [{"download_info": {"url": "https://x/lap-0.5-cp310-manylinux2014_aarch64.whl"}}]
+    }
+    assert wheel_names(report) == ["lap-0.5-cp310-manylinux2014_aarch64.whl"]
