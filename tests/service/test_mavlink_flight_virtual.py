@@ -20,7 +20,9 @@ from clocked_autopilot import ClockedAutopilot
 from clocked_setpoints import ClockedSetpoints
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper import CommandRefused
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.flight import TakeoffRequest
 from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -253,3 +255,28 @@ def test_ground_station_mode_switch_not_fought():
         rig.wait_landed_disarmed(40)
     finally:
         rig.close()
+
+
+def test_refused_mode_reaches_set_mode_with_px4s_reason(rig: Rig):
+    """The autopilot answers DO_SET_MODE as PX4 does (ACCEPTED from its MAVLink receiver,
+    then the commander's TEMPORARILY_REJECTED with its text for a mode that needs RC): the
+    bridge's set_mode answers the refusal with PX4's reason, which the SDK raises as
+    CommandRefused (that raise over a real router: tests/integration/test_bridge_mode_acks.py)."""
+    rig.clock.run_for(3.0)  # connected, home known
+    result = rig.user.call(registry.FLIGHT_TAKEOFF, TakeoffRequest(height=1.5), timeout=60.0)
+    assert result.success, result.message
+    assert rig.state.value.mode == "OFFBOARD"
+    for mode, name in (("POSCTL", "Position"), ("ALTCTL", "Altitude")):
+        started = rig.clock.monotonic()
+        reply = rig.call(registry.SET_MODE, SetMode(custom_mode=mode))
+        took = rig.clock.monotonic() - started
+        assert not reply.mode_sent
+        refused = str(CommandRefused(f"set_mode {mode}", reply.message, reply.result))  # as the SDK
+        assert "TEMPORARILY_REJECTED" in refused
+        assert f"Switching to {name} is currently not available" in refused
+        rig.clock.run_for(0.5)  # the next State
+        assert rig.state.value.mode == "OFFBOARD" and rig.state.value.armed
+        assert rig.link.autopilot.mode.name == "OFFBOARD"  # ground truth
+        rig.clock.run_for(max(0.0, 1.1 - took - 0.5))  # PX4 repeats a refusal's text at most 1/s
+    assert rig.call(registry.LAND, CommandTOL.land()).success
+    rig.wait_landed_disarmed(60)
