@@ -6,8 +6,9 @@ and over ``--seconds`` measures:
 
 * CPU (% of one core, ``/proc/PID/stat`` utime + stime) and memory (RSS) of every sim, every
   bridge and the router (the launcher process: the router, and a thread per child's log);
-* each drone's pose age at one subscriber (this process, a client of the router): our wall
-  clock at arrival minus the pose's ``header.stamp``, p50/p99 per drone;
+* each drone's pose age at one subscriber (``bench.pose_ages``: a process of its own, a client
+  of the router, doing nothing else): its wall clock at arrival minus the pose's
+  ``header.stamp``, p50/p99 per drone, and the slowest drone's pose rate;
 * the command round trip of the arming service (a disarm on the ground: answered, changes
   nothing), each drone in turn and each at most every 0.5 s, p50/p99 over all the calls;
 * setpoint -> MAVLink: one more bridge in namespace ``probe``, against a PX4 stand-in in this
@@ -27,6 +28,10 @@ The knee is the first N where the machine no longer keeps up: a drone's pose age
 the cost per drone against N goes to bench/results/fleet.png. Targets: bridge <= 2 % of a core
 per drone at full telemetry, 80 MB per drone (sim + bridge); 30 drones each with pose age p99
 <= 50 ms, with one core busy; cost flat per drone in N.
+
+Over 400 lines: one N's whole measurement (the fleet, the probes, the SDK's fleet, the
+flight) and its report read in one place; the pose subscriber is ``bench.pose_ages`` and the
+plots are ``bench.fleet_plot``.
 
     nice -n 5 python -m bench.fleet [--seconds 10] [--max 60] [--counts 1 5 10 20]
         [--per-process N] [--busy] [--fly]
@@ -48,8 +53,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from bench.common import RESULTS, percentiles, print_table, write_results
-from dronewrapper.msgs import codec, registry
-from dronewrapper.msgs.geometry import PoseStamped, Vector3
+from bench.fleet_plot import per_drone, plot
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, CommandBool, PositionTarget
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
@@ -110,22 +116,11 @@ def children_of(pid: int) -> dict[int, str]:
 # ---------------------------------------------------------------------------- one fleet
 
 
-class PoseAges:
-    """Ages of every drone's poses at this subscriber (s), by namespace."""
-
-    def __init__(self) -> None:
-        self.ages: dict[str, list[float]] = defaultdict(list)
-        self.recording = False
-
-    def on_sample(self, sample) -> None:
-        if not self.recording:
-            return
-        now = time.time()
-        try:
-            pose = codec.decode(PoseStamped, sample.payload.to_bytes())
-        except Exception:
-            return
-        self.ages[str(sample.key_expr).split("/", 1)[0]].append(now - pose.header.stamp)
+def command(child: subprocess.Popen, line: str) -> dict[str, object]:
+    """Send ``line`` to the pose subscriber (``bench.pose_ages``); its answer to ``stop``."""
+    child.stdin.write(line + "\n")
+    child.stdin.flush()
+    return json.loads(child.stdout.readline()) if line == "stop" else {}
 
 
 def arming_round_trips(session, names: list[str], until: float) -> tuple[list[float], int]:
@@ -238,7 +233,6 @@ def measure(
     fly: bool = False,
 ) -> dict[str, object]:
     """Start a fleet of ``count`` drones, measure it, stop it."""
-    import zenoh
 
     from dronewrapper.runtime.node import open_session
     from dronewrapper.runtime.options import ZenohOptions
@@ -253,7 +247,7 @@ def measure(
     with open(log_path, "w") as log:
         up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
     stop, probe = threading.Event(), None
-    session = None
+    session = ages = None
     try:
         while "all processes ready" not in log_path.read_text():
             if up.poll() is not None or time.monotonic() - started > 60 + 5 * count:
@@ -263,10 +257,12 @@ def measure(
         out["start_s"] = time.monotonic() - started
         names = [f"drone{i}" for i in range(1, count + 1)]
         session = open_session(ZenohOptions(mode="client", connect=[endpoint]))
-        ages = PoseAges()
-        session.declare_subscriber(
-            registry.LOCAL_POSE.wildcard("*"), zenoh.handlers.Callback(ages.on_sample)
-        )
+        ages = subprocess.Popen([sys.executable, "-m", "bench.pose_ages", endpoint],
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                                cwd=REPO)  # fmt: skip
+        if ages.stdout.readline().strip() != "ready":
+            out["error"] = "the pose subscriber did not start"
+            return out
         stream, setpoint_latencies, close_probe = setpoint_probe(endpoint, stop)
         probe = close_probe
         holder = subprocess.Popen(
@@ -281,11 +277,11 @@ def measure(
         pids = {**children_of(up.pid), up.pid: "router"}
         before = {pid: cpu_seconds(pid) for pid in pids}
         threading.Thread(target=stream, daemon=True).start()
-        ages.recording = True
+        command(ages, "start")
         t0 = time.monotonic()
         rtts, failures = arming_round_trips(session, names, t0 + seconds)
         elapsed = time.monotonic() - t0
-        ages.recording = False
+        window = command(ages, "stop")
         stop.set()
         usage: dict[str, list[float]] = defaultdict(list)
         memory: dict[str, list[float]] = defaultdict(list)
@@ -294,22 +290,18 @@ def measure(
             memory[role].append(rss_mb(pid))
         sdk = json.loads(holder.stdout.readline())
         if fly:  # all take off and land together; the poses' ages meanwhile
-            window_ages, ages.ages = ages.ages, defaultdict(list)
-            ages.recording = True
+            command(ages, "start")
             holder.stdin.write("fly\n")
             holder.stdin.flush()
             sdk["flight"] = json.loads(holder.stdout.readline())
-            ages.recording = False
-            flight_ages = [a for v in ages.ages.values() for a in v]
-            sdk["flight"]["pose_age"] = percentiles(flight_ages)
-            ages.ages = window_ages
+            sdk["flight"]["pose_age"] = command(ages, "stop")["all"]
         holder.stdin.close()
         holder.wait(30)
         hosts = usage.pop("host", None)
         if hosts is not None:  # a host's CPU and memory, split evenly over its drones
             usage["drone (sim+bridge)"] = [sum(hosts) / count] * count
             memory["drone (sim+bridge)"] = [sum(memory.pop("host")) / count] * count
-        per_drone = {ns: percentiles(ages.ages.get(ns, [])) for ns in names}
+        per_drone = {ns: window["per_drone"].get(ns, {"n": 0}) for ns in names}
         out.update(
             cpu_percent={role: sum(v) for role, v in usage.items()},
             cpu_percent_per_process={role: sum(v) / len(v) for role, v in usage.items()},
@@ -318,7 +310,8 @@ def measure(
             sdk_fleet=sdk,
             pose_age=per_drone,
             pose_age_worst_p99_ms=max(p.get("p99_ms", float("inf")) for p in per_drone.values()),
-            pose_age_p50_ms=percentiles([a for v in ages.ages.values() for a in v]).get("p50_ms"),
+            pose_age_p50_ms=window["all"].get("p50_ms"),
+            pose_rate_hz_min=min((window["rate_hz"].get(ns, 0.0) for ns in names), default=0),
             arming_rtt={**percentiles(rtts), "failures": failures},
             setpoint_to_mavlink=percentiles(setpoint_latencies()),
             loadavg=os.getloadavg()[0],
@@ -326,6 +319,9 @@ def measure(
         return out
     finally:
         stop.set()
+        if ages is not None:
+            ages.stdin.close()
+            ages.wait(10)
         if probe is not None:
             probe()
         if session is not None:
@@ -356,50 +352,11 @@ def knee_reason(result: dict[str, object]) -> str:
     return ""
 
 
-DRONE_ROLES = ("sim", "bridge", "drone (sim+bridge)")
-
-
-def per_drone(result: dict[str, object], table: str) -> float:
-    """A drone's share (sim and bridge, without the router) of ``cpu_percent`` or ``rss_mb``."""
-    return sum(result[table].get(role, 0.0) for role in DRONE_ROLES) / result["drones"]
-
-
-def plot(results: list[dict[str, object]], path: Path, title: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ok = [r for r in results if "error" not in r]
-    counts = [r["drones"] for r in ok]
-    fig, (cpu, mem) = plt.subplots(1, 2, figsize=(9, 3.6))
-    roles = [role for role in (*DRONE_ROLES, "router") if any(role in r["cpu_percent"] for r in ok)]
-    for role in roles:
-        cpu.plot(counts, [r["cpu_percent"].get(role, 0) / r["drones"] for r in ok], "o-",
-                 label=role)  # fmt: skip
-    cpu.axhline(BRIDGE_SHARE_PER_DRONE, color="grey", ls="--", label="bridge target")
-    cpu.set_xlabel("drones (N)")
-    cpu.set_ylabel("CPU per drone (% of one core)")
-    cpu.legend(fontsize=8)
-    mem.plot(counts, [per_drone(r, "rss_mb") for r in ok], "o-", label="sim + bridge")
-    mem.axhline(MEMORY_PER_DRONE_MB, color="grey", ls="--", label="target")
-    mem.set_xlabel("drones (N)")
-    mem.set_ylabel("memory per drone (MB RSS)")
-    mem.set_ylim(bottom=0)
-    mem.legend(fontsize=8)
-    for ax in (cpu, mem):
-        ax.grid(alpha=0.3)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    print(f"wrote {path}")
-
-
 def report(results: list[dict[str, object]], title: str) -> None:
     rows = []
     for r in results:
         if "error" in r:
-            rows.append([r["drones"], r["error"], *[""] * 10])
+            rows.append([r["drones"], r["error"], *[""] * 11])
             continue
         n, cpu, each = r["drones"], r["cpu_percent"], r["cpu_percent_per_process"]
         flight = r["sdk_fleet"].get("flight") or {}
@@ -411,19 +368,21 @@ def report(results: list[dict[str, object]], title: str) -> None:
             n, r["start_s"], each.get("sim", float("nan")), each.get("bridge", float("nan")),
             per_drone(r, "cpu_percent"), cpu["router"], r["sdk_fleet"]["cpu_percent"],
             per_drone(r, "rss_mb"), r["pose_age_p50_ms"], r["pose_age_worst_p99_ms"],
+            r.get("pose_rate_hz_min", float("nan")),
             f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}",
             flown,
         ])  # fmt: skip
     print_table(
         title,
         ["N", "start s", "sim %/each", "bridge %/each", "drone %", "router %", "SDK fleet %",
-         "MB/drone", "pose age p50", "worst p99", "arming p50/p99", "up/down"],
+         "MB/drone", "pose age p50", "worst p99", "min Hz", "arming p50/p99", "up/down"],
         rows,
     )  # fmt: skip
     print(
         "  (drone % / MB = sim + bridge per drone, without the router; router = the launcher\n"
         "   process holding it; SDK fleet = one Fleet over all N drones, a process of its own;\n"
-        "   pose age = arrival here - header.stamp, worst drone's p99; up/down = drones that\n"
+        "   pose age = arrival at one subscriber - header.stamp, worst drone's p99; min Hz =\n"
+        "   the slowest drone's pose rate there; up/down = drones that\n"
         "   took off / landed through the Fleet, with --fly, and the pose age p99 meanwhile)"
     )
 
@@ -488,13 +447,16 @@ def main(argv: list[str] | None = None) -> int:
              f"load {os.getloadavg()[0]:.1f}): CPU % of one core, memory, latency ms")  # fmt: skip
     report(results, title)
     ok = [r for r in results if "error" not in r]
-    bridge_share = max((per_drone(r, "cpu_percent") for r in ok), default=0)
+    biggest = max(ok, key=lambda r: r["drones"], default=None)
+    targets: dict[str, object] = {}
     if args.per_process == 1:
         bridge_share = max((r["cpu_percent_per_process"]["bridge"] for r in ok), default=0)
-    biggest = max(ok, key=lambda r: r["drones"], default=None)
-    targets = {
-        f"bridge <= {BRIDGE_SHARE_PER_DRONE:g} % of a core per drone": bridge_share
-        <= BRIDGE_SHARE_PER_DRONE,
+        targets[f"bridge <= {BRIDGE_SHARE_PER_DRONE:g} % of a core per drone"] = (
+            bridge_share <= BRIDGE_SHARE_PER_DRONE
+        )
+    else:  # a host holds sims and bridges: bench.drone_cost --split measures them apart
+        targets["bridge <= 2 % a drone (bench.drone_cost --split)"] = "not measured here"
+    targets |= {
         f"{biggest['drones'] if biggest else 0} drones: pose age p99 <= 50 ms": bool(
             biggest and biggest["pose_age_worst_p99_ms"] <= POSE_AGE_P99_MS
         ),

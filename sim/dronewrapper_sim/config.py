@@ -28,6 +28,12 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         udp_gcs: GCS link, same form; "" = 127.0.0.1:14550 from 18570+N [--udp-gcs].
         realtime_factor: simulated seconds per wall-clock second [--realtime-factor].
         physics_rate_hz: physics and autopilot step rate (Hz).
+        loop_rate_hz: how often the loop wakes at most to step the physics and send the
+            telemetry due (Hz); below ``physics_rate_hz`` each wake-up runs the steps owed
+            (the physics keeps its fixed step) and sends what is due within half a wake-up
+            period, so the streams keep their rates up to this one (a fleet: fewer wake-ups
+            of its sims and bridges). MAVLink that arrives still wakes it at once. None =
+            ``physics_rate_hz`` (a wake-up a step).
         ground_truth_rate_hz: rate of ``{ns}/sim/ground_truth`` (Hz).
         object_pose_rate_hz: rate of ``sim/objects/{name}/pose`` (Hz).
         compressed: always publish JPEG images too (else only while someone subscribes).
@@ -67,6 +73,7 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     udp_gcs: str = ""
     realtime_factor: float = 1.0
     physics_rate_hz: float = 250.0
+    loop_rate_hz: float | None = None
     ground_truth_rate_hz: float = 50.0
     object_pose_rate_hz: float = 20.0
     compressed: bool = False
@@ -89,6 +96,8 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
         for name in ("realtime_factor", "physics_rate_hz", "ground_truth_rate_hz"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if self.loop_rate_hz is not None and not self.loop_rate_hz > 0:
+            raise ValueError(f"loop_rate_hz must be > 0, got {self.loop_rate_hz}")
         if not self.object_pose_rate_hz > 0:
             raise ValueError(f"object_pose_rate_hz must be > 0, got {self.object_pose_rate_hz}")
         if self.camera_rate_hz is not None and not self.camera_rate_hz > 0:

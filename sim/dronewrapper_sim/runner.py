@@ -4,7 +4,10 @@ Threads:
 - the main loop steps the autopilot and physics at ``physics_rate_hz`` (fixed step, simulated
   time = wall time x ``realtime_factor``), steps the world, answers MAVLink as soon as a
   datagram arrives (``select`` on the link sockets), sends the telemetry due, and publishes
-  ``{ns}/sim/ground_truth`` and ``sim/objects/{name}/pose`` on Zenoh;
+  ``{ns}/sim/ground_truth`` and ``sim/objects/{name}/pose`` on Zenoh. It wakes for the next
+  step, or at most ``loop_rate_hz`` times a second (then runs the steps owed at once, and sends
+  the telemetry due before the next wake-up's midpoint: a fleet's sims and bridges wake
+  fewer times for the same streams);
 - the camera thread renders ``cam_frontal`` and ``cam_ventral`` at the camera rate from a
   snapshot of the true pose and publishes ``{ns}/{camera}/image_raw`` (bgr8) and, while
   someone subscribes (or ``compressed`` is set), ``.../image_raw/compressed`` (JPEG); a camera
@@ -191,8 +194,12 @@ class SimRunner:
             self.cameras.start()
         dt = 1.0 / self.config.physics_rate_hz
         rtf = self.config.realtime_factor
+        loop_hz = self.config.loop_rate_hz
+        gap = 1.0 / loop_hz if loop_hz else 0.0  # wall s between two wake-ups, at least
+        ahead = gap / 2 if gap > dt / rtf else 0.0  # wall s: sent early, due by the midpoint
         start = self.time.monotonic()
         t0 = start
+        next_wake = start  # the wake-ups' own schedule (every ``gap``)
         steps = 0
         gt_period = 1.0 / self.config.ground_truth_rate_hz
         obj_period = 1.0 / self.config.object_pose_rate_hz
@@ -202,7 +209,7 @@ class SimRunner:
             now = self.time.monotonic()
             if duration_s is not None and now - start >= duration_s:
                 break
-            next_tick = t0 + (steps + 1) * dt / rtf
+            next_tick = max(t0 + (steps + 1) * dt / rtf, next_wake)
             wait = min(max(next_tick - now, 0.0), 0.05)
             if socks:
                 readable, _, _ = select.select(socks, [], [], wait)
@@ -226,17 +233,18 @@ class SimRunner:
             for _ in range(owed):
                 self.autopilot.step(dt)
             steps += owed
+            next_wake = max(next_wake + gap, now) if gap else now
             self.clock = (now, self.autopilot.time_s, self.slipped_s)
             with self.world_lock:
                 self.world.step(owed * dt)
             self._snapshot = self._make_snapshot()
-            for name, msgs in self.autopilot.poll().items():
+            for name, msgs in self.autopilot.poll(ahead * rtf).items():
                 if msgs:
                     self.links[name].send(msgs)
-            if now >= next_gt:
+            if now + ahead >= next_gt:
                 next_gt = max(next_gt + gt_period, now)
                 self._publish_ground_truth()
-            if now >= next_obj:
+            if now + ahead >= next_obj:
                 next_obj = max(next_obj + obj_period, now)
                 self._publish_objects()
 

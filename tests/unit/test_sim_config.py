@@ -73,6 +73,7 @@ def test_flags_become_config_and_port_strings_stay_strings():
     [
         "instance=-1",
         "realtime_factor=0",
+        "loop_rate_hz=0",
         "jpeg_quality=0",
         "width=4",
         "nonsense=1",

@@ -487,6 +487,38 @@ def test_telemetry_rates_per_link():
         assert counts["onboard"].get(kind, 0) >= 1, kind
 
 
+def test_a_loop_waking_at_50_hz_keeps_the_streams_up_to_50_hz():
+    """Five physics steps a wake-up, streams due within half a wake-up sent early: a 50 Hz
+    stream keeps 50 Hz, a 100 Hz one is capped at the loop's 50 Hz, slower ones keep theirs."""
+    ap = Autopilot()
+    counts: dict[str, int] = {}
+    wakes = 0
+    while ap.time_s < 2.0 - 1e-9:
+        for _ in range(5):  # 250 Hz physics, a wake-up every 20 ms
+            ap.step(DT)
+        wakes += 1
+        for m in ap.poll(ahead_s=0.01)["onboard"]:
+            counts[m.get_type()] = counts.get(m.get_type(), 0) + 1
+    assert wakes == 100
+    rate = {k: v / 2.0 for k, v in counts.items()}
+    assert rate["ATTITUDE_QUATERNION"] == pytest.approx(50, abs=0.5)
+    assert rate["GLOBAL_POSITION_INT"] == pytest.approx(50, abs=0.5)
+    assert rate["ATTITUDE"] == pytest.approx(50, abs=0.5)  # 100 Hz asked: one a wake-up
+    assert rate["LOCAL_POSITION_NED"] == pytest.approx(30, abs=1)
+    assert rate["EXTENDED_SYS_STATE"] == pytest.approx(5, abs=0.5)
+
+
+def test_stream_due_ahead_keeps_its_period_when_wake_ups_jitter():
+    """Wake-ups on a 20 ms grid, each up to a physics step (4 ms) early or 9 ms late: a
+    50 Hz stream is sent at each, none lost, none doubled."""
+    from dronewrapper_sim.px4.telemetry import StreamScheduler
+
+    sched = StreamScheduler({1: 50.0}, now=0.0)
+    jitter = [0.0, 0.009, -0.004, 0.005, -0.004, 0.0, 0.008, -0.002]
+    sent = [len(sched.due(0.02 * k + jitter[k % 8], ahead_s=0.01)) for k in range(1, 501)]
+    assert sent == [1] * 500
+
+
 def test_nan_setpoints_hold_and_never_crash():
     ap = Autopilot()
     client = Client(ap)

@@ -20,6 +20,10 @@ What one process for N drones shares, and what it does not:
   Zenoh's runtime: tens of MB that N processes each hold), one session to the router, the GIL;
 - each member's own: its node and token, its config, its threads, its failsafe and commander
   lease (they live in its bridge), its sockets;
+- shared timers: a member that ticks at a fixed rate may join the host's one thread for that
+  rate (:func:`shared_ticker`, :mod:`~dronewrapper.runtime.ticker`) instead of waking a
+  thread of its own: the MAVLink bridges' 30 Hz tick, one wake-up for all N of them. A tick
+  that takes long delays its siblings' ticks of that period;
 - a member that raises (an exception out of its ``run``) ends alone: run_service logs it and
   closes its node, which withdraws its liveliness token and undeclares its publishers,
   subscribers and services; its bridge threads stop with its node's stop event, so its
@@ -48,6 +52,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.ticker import Ticker
 
 log = logging.getLogger("host")
 
@@ -107,6 +112,13 @@ def current() -> Member | None:
     return getattr(_local, "member", None)
 
 
+def shared_ticker(rate_hz: float) -> Ticker | None:
+    """The host's one :class:`~dronewrapper.runtime.ticker.Ticker` at ``rate_hz`` for the
+    calling member to join, or None outside a host (the caller then ticks on its own)."""
+    member = current()
+    return None if member is None else member.host.ticker(rate_hz)
+
+
 def main_of(module: str) -> Callable[[list[str]], int | None]:
     """The entry point ``python -m module`` runs: ``module.main``, else ``module.__main__.main``."""
     mod = importlib.import_module(module)
@@ -125,6 +137,15 @@ class Host:
         self._lock = threading.Lock()
         self._session: Any = None
         self._session_key: tuple[str, tuple[str, ...]] | None = None
+        self._tickers: dict[float, Ticker] = {}
+
+    def ticker(self, rate_hz: float) -> Ticker:
+        """The members' shared ticker at ``rate_hz`` (made on first use)."""
+        with self._lock:
+            ticker = self._tickers.get(rate_hz)
+            if ticker is None:
+                ticker = self._tickers[rate_hz] = Ticker(rate_hz, name=f"tick-{rate_hz:g}Hz")
+            return ticker
 
     def session_for(self, options: ZenohOptions) -> Any:
         """The shared session, opened with the first caller's router flags.

@@ -142,8 +142,12 @@ class BridgeNode(Generic[C]):
         (errors counted under ``what`` and logged; the loop goes on)."""
         rate = Ratekeeper(rate_hz, stop=self.node.stop_event, clock=self.node.clock)
         while rate.sleep():
-            try:
-                self.driver.feed(self.core.tick)
-            except Exception:
-                self.node.callback_errors[what] += 1
-                self.log.exception("%s loop error", what)
+            self.tick_once(what)
+
+    def tick_once(self, what: str) -> None:
+        """Feed the core's ``tick`` once (an error counted under ``what`` and logged)."""
+        try:
+            self.driver.feed(self.core.tick)
+        except Exception:
+            self.node.callback_errors[what] += 1
+            self.log.exception("%s loop error", what)

@@ -5,10 +5,12 @@ decides (the commander lease included) is in :class:`~dronewrapper_bridge_mavlin
 (pure, time as an argument); the wiring every bridge shares (driver, publishers, services,
 setpoints, tick loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a
 receive loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
-stream, our heartbeat, periodic samples), Zenoh callbacks (setpoints forwarded at once) and the
-Node's service workers, which start an operation in the core and wait until it is done.
-Time is the node's clock alone: the core starts at it, the driver and the loops read and wait
-on it, and it makes the loops' threads (on a fake bus they run in its virtual time).
+stream, our heartbeat, periodic samples; in a host, its one thread ticking every hosted
+bridge, :func:`~dronewrapper.runtime.host.shared_ticker`), Zenoh callbacks (setpoints
+forwarded at once) and the Node's service workers, which start an operation in the core and
+wait until it is done. Time is the node's clock alone: the core starts at it, the driver and
+the loops read and wait on it, and it makes the loops' threads (on a fake bus they run in its
+virtual time).
 """
 
 from __future__ import annotations
@@ -26,8 +28,9 @@ from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.host import shared_ticker
 from dronewrapper_bridge_base.bridge_node import BridgeNode
-from dronewrapper_bridge_mavlink import actions, flight, missions, parameters
+from dronewrapper_bridge_mavlink import actions, flight, missions, parameters, receive
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore, Outbox
@@ -165,8 +168,13 @@ class Bridge(BridgeNode[BridgeCore]):
         threads = [
             clock.thread(self._receive_loop, "mavlink-rx"),
             clock.thread(self._link_status_loop, "link-status"),
-            clock.thread(lambda: self.tick_loop(self.config.stream_rate_hz, "stream"), "stream"),
         ]
+        rate_hz = self.config.stream_rate_hz
+        ticker = shared_ticker(rate_hz)  # a host's, for all its bridges (the real clock)
+        if ticker is not None:
+            ticker.join(lambda: self.tick_once("stream"), stop)
+        else:
+            threads.append(clock.thread(lambda: self.tick_loop(rate_hz, "stream"), "stream"))
         self.gcs = self._make_gcs_forwarder()
         if (gcs := self.gcs) is not None:
             threads.append(clock.thread(lambda: gcs.run(stop), "gcs"))
@@ -267,12 +275,13 @@ class Bridge(BridgeNode[BridgeCore]):
                 self.link.close()
                 clock.wait(stop, 1.0)
                 continue
-            for received in batch:
-                try:
-                    self.handle_mavlink(received.msg, received.source)
-                except Exception:
-                    self.node.callback_errors["mavlink"] += 1
-                    log.exception("error handling %s", received.msg.get_type())
+            if not batch:
+                continue
+            try:  # the wake-up's messages in one call of the core (receive.on_batch)
+                self.driver.feed(receive.on_batch, self.core, batch)
+            except Exception:
+                self.node.callback_errors["mavlink"] += 1
+                log.exception("error executing the effects of %d message(s)", len(batch))
 
 
 def link_kind(url: str) -> str:

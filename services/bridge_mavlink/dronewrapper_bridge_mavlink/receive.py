@@ -11,7 +11,7 @@ core's. Time is the core's ``now`` (monotonic s) and ``stamp`` (wall-clock s for
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -110,6 +110,19 @@ def on_command_ack(core: BridgeCore, msg: Any) -> None:
 
 def on_param_value(core: BridgeCore, msg: Any) -> None:
     core.params.on_value(msg)
+
+
+def on_batch(core: BridgeCore, batch: Sequence[Any], now: float, stamp: float) -> None:
+    """Every message one wake-up of the receive thread read (each with ``msg`` and its
+    ``source``), in order, at one time (they arrived together): one call of the core for all
+    of them. A message whose handling raises is logged and counted (``mavlink``); the others
+    are handled."""
+    for received in batch:
+        try:
+            core.on_mavlink(received.msg, received.source, now, stamp)
+        except Exception:
+            core.out.errors.append("mavlink")
+            log.exception("error handling %s", type(received.msg).__name__)
 
 
 HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {

@@ -408,9 +408,10 @@ class Autopilot:
 
     # ---- outgoing ----
 
-    def poll(self) -> dict[str, list[mavlink.MAVLink_message]]:
+    def poll(self, ahead_s: float = 0.0) -> dict[str, list[mavlink.MAVLink_message]]:
         """Everything due now on each link: replies queued earlier, status texts (GCS links
-        only), due telemetry streams and the next chunk of a parameter list."""
+        only), the telemetry streams due within ``ahead_s`` (s) and the next chunk of a
+        parameter list."""
         texts = self.commander.drain_texts()
         mission_events = self.commander.mission.drain() if self.commander.mission else []
         out: dict[str, list[mavlink.MAVLink_message]] = {}
@@ -422,7 +423,7 @@ class Autopilot:
                     msgs.extend(self.statustext(text))
             msgs.extend(mission_events)
             msgs.extend(self.missions.retry(now, name))
-            msgs.extend(self._builders[msgid]() for msgid in link.scheduler.due(now))
+            msgs.extend(self._builders[msgid]() for msgid in link.scheduler.due(now, ahead_s))
             for _ in range(min(PARAMS_PER_POLL, len(link.param_queue))):
                 name_at = self.params.name_at(link.param_queue.popleft())
                 if name_at is not None:

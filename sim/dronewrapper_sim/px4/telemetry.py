@@ -104,15 +104,20 @@ class StreamScheduler:
         rate = self.rates.get(msgid)
         return round(1e6 / rate) if rate else -1
 
-    def due(self, now: float) -> list[int]:
-        """Streams to send now; each is then scheduled one period later."""
+    def due(self, now: float, ahead_s: float = 0.0) -> list[int]:
+        """Streams to send now: those due by ``now + ahead_s`` (a loop that wakes every
+        2 x ``ahead_s`` sends what falls due before its next wake-up's midpoint, so a stream
+        as fast as the loop keeps its rate); each is then scheduled one period later. A
+        stream that fell behind by more than a period restarts its schedule from now, due
+        ``ahead_s`` before a period has passed (mid-way between two such wake-ups)."""
         out = []
+        until = now + ahead_s
         for msgid, when in self._next.items():
-            if now >= when:
+            if until >= when:
                 out.append(msgid)
                 period = 1.0 / self.rates[msgid]
                 when += period
                 if when < now:  # fell behind by more than one period: restart the schedule
-                    when = now + period
+                    when = now + max(period - ahead_s, 0.0)
                 self._next[msgid] = when
         return out
