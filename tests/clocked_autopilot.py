@@ -42,7 +42,8 @@ RATES = {
 class ClockedAutopilot:
     """The autopilot behind a bridge's link on ``clock`` (see the module doc); ``stop``: the
     bridge node's stop event (a waiting ``recv_batch`` returns when it is set); ``source``:
-    the bridge's MAVLink system and component ids (its config's)."""
+    the bridge's MAVLink system and component ids (its config's); ``ground_station``: the
+    autopilot has a GCS link too (no streams), for :meth:`from_ground_station`."""
 
     def __init__(
         self,
@@ -50,8 +51,12 @@ class ClockedAutopilot:
         stop: threading.Event,
         source: tuple[int, int] = (255, 191),
         config: AutopilotConfig | None = None,
+        ground_station: bool = False,
     ) -> None:
-        self.autopilot = Autopilot(config or AutopilotConfig(), link_rates={"onboard": dict(RATES)})
+        links: dict[str, dict[int, float]] = {"onboard": dict(RATES)}
+        if ground_station:
+            links["gcs"] = {}
+        self.autopilot = Autopilot(config or AutopilotConfig(), link_rates=links)
         self.truth: list[tuple[float, tuple[float, float, float], str]] = []  # t, pose, mode
         self.tap = None
         self.peer: Any = None
@@ -99,6 +104,13 @@ class ClockedAutopilot:
                 self._to_bridge(self.autopilot.handle("onboard", parsed))
             self.sent += 1
         return True
+
+    def from_ground_station(self, msg: Any) -> list[Any]:
+        """``msg`` (packed by a ground station's ``MAVLink``) handled on the autopilot's GCS
+        link at the clock's now; the autopilot's replies to it."""
+        with self._lock:
+            self._catch_up()
+            return self.autopilot.handle("gcs", msg)
 
     def recv_batch(self, timeout: float) -> list[Received]:
         """What the autopilot sent by the next poll (or ``timeout``), waited for on the clock."""

@@ -51,11 +51,13 @@ class ClockedEnd:
 
 class ClockedTello:
     """The simulated Tello behind a bridge's link on ``clock`` (see the module doc); ``stop``:
-    the bridge node's stop event."""
+    the bridge node's stop event; ``flight``: the aircraft (a default Tello if None)."""
 
-    def __init__(self, clock: Clock, stop: threading.Event) -> None:
+    def __init__(
+        self, clock: Clock, stop: threading.Event, flight: TelloFlight | None = None
+    ) -> None:
         self.clock, self.stop = clock, stop
-        self.protocol = TelloProtocol(TelloFlight())
+        self.protocol = TelloProtocol(flight or TelloFlight())
         self.lock = threading.Lock()  # the flight, shared by the bridge's threads
         self.command, self.state = ClockedEnd(self), ClockedEnd(self)
         self.video = None

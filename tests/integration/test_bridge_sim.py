@@ -2,7 +2,10 @@
 
 Every test runs the real processes: a Zenoh router (fixture), ``python -m dronewrapper_sim``
 and ``python -m dronewrapper_bridge_mavlink`` on free ports, and drives them at key level the
-way the SDK does. Waits are bounded and generous (2 shared cores).
+way the SDK does: what only real processes show (MAVLink over real UDP sockets, the telemetry
+rates, a restarted simulator). The bridge's failsafes after a commander dies, a lossy link and
+a ground station's mode switch are held in virtual time by
+tests/service/test_mavlink_flight_virtual.py. Waits are bounded and generous (2 shared cores).
 """
 
 from __future__ import annotations
@@ -10,10 +13,7 @@ from __future__ import annotations
 import itertools
 import math
 import os
-import random
 import socket
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -23,7 +23,6 @@ import pytest
 os.environ.setdefault("MAVLINK20", "1")
 
 from bridge_user import BridgeUser
-from pymavlink import mavutil
 from setpoint_stream import yaw_of
 
 from dronewrapper.msgs import registry
@@ -45,22 +44,6 @@ from dronewrapper.runtime import Node, ServiceError
 from support import client_node, free_port, python_module, wait_for
 
 pytestmark = pytest.mark.integration
-
-COMMANDER = """
-import sys, time
-from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import PositionTarget, FRAME_BODY_NED, MASK_MIXED
-from dronewrapper.msgs.geometry import Vector3, Point
-from dronewrapper.msgs.std import Header
-from dronewrapper.runtime import Node, ZenohOptions
-endpoint, vx, z = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
-with Node("commander", ZenohOptions(connect=[endpoint], name="commander")) as node:
-    pub = node.publisher(registry.SETPOINT_RAW_LOCAL)
-    print("commanding", flush=True)
-    while node.sleep(0.05):  # each setpoint stamped with the (wall) time it is sent
-        pub.put(PositionTarget(header=Header.now(), coordinate_frame=FRAME_BODY_NED,
-                               type_mask=MASK_MIXED, velocity=Vector3(x=vx), position=Point(z=z)))
-"""
 
 
 @dataclass
@@ -236,178 +219,6 @@ def test_dronewrapper_flight_at_key_level(rig):
     assert reply.success, reply.message
     wait_for(lambda: rig.state.value.mode == "AUTO.LAND", 10, what="AUTO.LAND")
     rig.wait_landed_disarmed()
-
-
-def horizontal_speed(twist_stamped) -> float:
-    return math.hypot(twist_stamped.twist.linear.x, twist_stamped.twist.linear.y)
-
-
-def test_killed_commander_hover_then_land(rig, spawn):
-    """Judged on the publishers' clocks: the commander stamps each setpoint when it sends it,
-    the bridge stamps State and velocities when it publishes them (one machine, one clock)."""
-    rig.take_off_offboard(2.0)
-    commander = spawn([sys.executable, "-c", COMMANDER, rig.router, "1.5", "2.0"], "commander")
-    wait_for(lambda: "commanding" in commander.output(), 30, what="commander up")
-    rig.command(None)  # only the commander process commands now (two would alternate)
-    wait_for(lambda: rig.vlocal.value and horizontal_speed(rig.vlocal.value) > 0.8, 20,
-             what="commander flies")  # fmt: skip
-    sent: list[float] = []
-    rig.user.subscribe(registry.SETPOINT_RAW_LOCAL, lambda m: sent.append(m.header.stamp))
-    velocities: list = []
-    rig.user.subscribe(registry.VELOCITY_LOCAL, velocities.append)
-    wait_for(lambda: len(sent) >= 5, 10, what="the commander's setpoints")
-    commander.proc.kill()  # SIGKILL: no goodbye
-    commander.proc.wait(5)
-
-    def first_state(failsafe: str, after: float):
-        return next((s for s in rig.states if s.failsafe == failsafe and s.header.stamp > after),
-                    None)  # fmt: skip
-
-    last_setpoint = max(sent)  # when the commander sent its last setpoint (heard here)
-    # setpoint_timeout 0.5 s -> hold; never before (the bridge got the setpoint after it was
-    # sent), and well before 3 x the timeout (delivery, the bridge's 30 Hz tick)
-    hold = wait_for(lambda: first_state("hold", last_setpoint), 10, what="failsafe hold")
-    silence = hold.header.stamp - last_setpoint
-    assert 0.45 < silence < 1.5, f"hold {silence:.2f} s after the last setpoint"
-    # commander_lost_timeout 5 s -> land
-    land = wait_for(lambda: first_state("land", last_setpoint), 15, what="failsafe land")
-    silence = land.header.stamp - last_setpoint
-    assert 4.95 < silence < 7.5, f"land {silence:.2f} s after the last setpoint"
-    # hovering in between: the horizontal velocity decayed to near zero before the landing
-    hovering = [
-        v
-        for v in velocities
-        if hold.header.stamp < v.header.stamp < land.header.stamp and horizontal_speed(v) < 0.3
-    ]
-    assert hovering, "still moving when the bridge decided to land"
-    wait_for(lambda: rig.state.value.mode == "AUTO.LAND", 10, what="AUTO.LAND")
-    rig.wait_landed_disarmed(40)
-
-
-class LossyRelay:
-    """A UDP relay between the sim and the bridge dropping ``loss`` of packets each way."""
-
-    def __init__(self, bridge_port: int, loss: float, seed: int = 42) -> None:
-        self.sim_side = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sim_side.bind(("127.0.0.1", 0))
-        self.port = self.sim_side.getsockname()[1]
-        self.bridge_side = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.bridge_side.bind(("127.0.0.1", 0))
-        self.bridge_addr = ("127.0.0.1", bridge_port)
-        self.sim_addr = None
-        self.loss = loss
-        # one generator per direction: each direction's drops do not depend on how the two
-        # pump threads interleave
-        self.rngs = (random.Random(seed), random.Random(seed + 1))
-        self.dropped = [0, 0]
-        self.passed = [0, 0]
-        self._stop = threading.Event()
-        for sock in (self.sim_side, self.bridge_side):
-            sock.settimeout(0.1)
-        self._threads = [
-            threading.Thread(target=self._pump, args=(0,), daemon=True),
-            threading.Thread(target=self._pump, args=(1,), daemon=True),
-        ]
-        for t in self._threads:
-            t.start()
-
-    def _pump(self, direction: int) -> None:
-        src = self.sim_side if direction == 0 else self.bridge_side
-        while not self._stop.is_set():
-            try:
-                data, addr = src.recvfrom(65535)
-            except TimeoutError:
-                continue
-            if direction == 0:
-                self.sim_addr = addr
-            if self.rngs[direction].random() < self.loss:
-                self.dropped[direction] += 1
-                continue
-            self.passed[direction] += 1
-            if direction == 0:
-                self.bridge_side.sendto(data, self.bridge_addr)
-            elif self.sim_addr is not None:
-                self.sim_side.sendto(data, self.sim_addr)
-
-    def close(self) -> None:
-        self._stop.set()
-        for t in self._threads:
-            t.join(2)
-        self.sim_side.close()
-        self.bridge_side.close()
-
-
-def test_lossy_link_arm_takeoff_land(router, spawn):
-    bridge_port, gcs = free_port(socket.SOCK_DGRAM), free_port(socket.SOCK_DGRAM)
-    relay = LossyRelay(bridge_port, loss=0.2)
-    bridge = start_bridge(spawn, router, bridge_port)
-    start_sim(spawn, router, relay.port, gcs)
-    user = client_node(router, name="test")
-    rig = Rig(router, relay.port, gcs, user, None, bridge)
-    try:
-        wait_for(lambda: rig.state.value and rig.state.value.connected, 30, what="connected")
-        wait_for(lambda: rig.pose.value, 10)
-        armed = rig.call(registry.ARMING, CommandBool(value=True), timeout=30)
-        assert armed.success, armed.message
-        # 3.5 m, not the autopilot's default 2.5 m: proves the AMSL conversion of param7
-        took_off = rig.call(registry.TAKEOFF, CommandTOL.takeoff(3.5), timeout=30)
-        assert took_off.success, took_off.message
-        wait_for(lambda: rig.z() > 3.2, 25, what="take-off to 3.5 m")
-        time.sleep(1.0)
-        assert 3.2 < rig.z() < 3.9
-        landing = rig.call(registry.LAND, CommandTOL.land(), timeout=30)
-        assert landing.success, landing.message
-        rig.wait_landed_disarmed(40)
-        # the link really was lossy, both ways (the bridge -> sim way carries little traffic)
-        down = relay.dropped[0] / (relay.dropped[0] + relay.passed[0])
-        assert 0.15 < down < 0.25 and relay.dropped[1] >= 2, (relay.dropped, relay.passed)
-    finally:
-        rig.close()
-        user.close()
-        relay.close()
-        assert bridge.stop() == 0
-
-
-def test_ground_station_mode_switch_not_fought(rig):
-    rig.take_off_offboard(2.0)
-    gcs = mavutil.mavlink_connection(
-        f"udpin:127.0.0.1:{rig.gcs_port}", source_system=254, source_component=190
-    )
-    try:
-        hb = gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=10)
-        assert hb is not None, "no heartbeat on the GCS link"
-        main, sub = 4, 3  # AUTO.LOITER
-        for _ in range(3):
-            gcs.mav.command_long_send(
-                hb.get_srcSystem(),
-                1,
-                mavutil.mavlink.MAV_CMD_DO_SET_MODE,
-                0,
-                1,
-                main,
-                sub,
-                0,
-                0,
-                0,
-                0,
-            )
-            if gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=2):
-                break
-        wait_for(lambda: rig.state.value.mode == "AUTO.LOITER", 10, what="pilot's AUTO.LOITER")
-        wait_for(lambda: any("not switching back" in t.text for t in rig.texts), 10, what="report")
-        # the SDK keeps streaming; the bridge must not switch back, nor land on its own
-        rig.command(mixed(0.5, 2.0))
-        since = len(rig.states)
-        time.sleep(5.5)  # longer than commander_lost_timeout
-        assert rig.state.value.mode == "AUTO.LOITER" and rig.state.value.armed
-        after = rig.states[since:]  # State is periodic (2 Hz): about 11 in that time
-        assert len(after) >= 4 and all(s.mode == "AUTO.LOITER" for s in after)
-        assert rig.state.value.failsafe in ("", "hold") and rig.z() > 1.4
-    finally:
-        gcs.close()
-    rig.command(None)
-    assert rig.call(registry.LAND, CommandTOL.land()).success
-    rig.wait_landed_disarmed(40)
 
 
 def test_sim_restart_reconnects(rig, spawn):

@@ -1,6 +1,8 @@
 """The simulator process as a MAVLink client sees it: real UDP on free loopback ports, real
-MAVLink 2 bytes (pymavlink), the full PX4 offboard sequence, the offboard-loss failsafe, the
-parameter protocol, message intervals and bad input."""
+MAVLink 2 bytes (pymavlink), the offboard-loss failsafe, the parameter protocol, message
+intervals, bad input and a clean exit. The full PX4 offboard sequence (modes, arming, body and
+local velocities, yaw rate, position, landing) is held in simulated time by
+tests/service/test_sim_offboard_virtual.py."""
 
 from __future__ import annotations
 
@@ -236,128 +238,18 @@ def acks(replies: list) -> list[int]:
     return [m.result for m in replies]
 
 
-def yaw_of(client: MavClient) -> float:
-    return client.latest("ATTITUDE").yaw
-
-
-def turned_from(start_yaw: float, yaw: float) -> float:
-    """The signed turn (rad, NED: clockwise > 0) from ``start_yaw`` to ``yaw``."""
-    return math.remainder(yaw - start_yaw, math.tau)
-
-
 def boot_s(msg) -> float:
     """The vehicle's simulated time (s since boot) stamped on ``msg``."""
     return msg.time_boot_ms / 1000.0
-
-
-def test_full_px4_offboard_sequence(spawn, router, clients):
-    onboard = clients(mavlink.MAV_TYPE_ONBOARD_CONTROLLER)
-    gcs = clients(mavlink.MAV_TYPE_GCS)
-    proc = start_sim(spawn, router, onboard, gcs)
-    hb = onboard.latest("HEARTBEAT")
-    assert (hb.type, hb.autopilot, hb.base_mode) == (2, 12, 29)
-    assert hb.get_srcSystem() == 1 and hb.get_srcComponent() == 1
-    gcs.sync_heartbeat()  # the sim knows the GCS now: it gets STATUSTEXT
-
-    # OFFBOARD while disarmed with no stream: accepted (acked twice), arming then refused
-    mode_acks = onboard.set_mode(Mode.OFFBOARD)
-    assert acks(mode_acks) == [mavlink.MAV_RESULT_ACCEPTED] * 2
-    assert mode_acks[0].get_seq() != mode_acks[1].get_seq()
-    t_deny = time.monotonic()
-    assert acks(onboard.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)) == [
-        mavlink.MAV_RESULT_TEMPORARILY_REJECTED
-    ]
-    gcs.wait_msg("STATUSTEXT", lambda m: "Arming denied" in m.text, 10, t_deny)
-    assert onboard.texts() == []  # a companion (non-GCS) link gets no STATUSTEXT
-
-    # stream > 1 s, then OFFBOARD and arm are accepted; climb in body frame (vz up = -1.5)
-    t_stream = time.monotonic()
-    onboard.stream(vz=-1.5)
-    wait_for(lambda: onboard.last_setpoint_sent > t_stream, 10, what="the setpoint stream")
-    time.sleep(1.2)
-    assert acks(onboard.set_mode(Mode.OFFBOARD)) == [mavlink.MAV_RESULT_ACCEPTED] * 2
-    assert acks(onboard.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)) == [
-        mavlink.MAV_RESULT_ACCEPTED
-    ]
-    onboard.wait_heartbeat(lambda m: m.base_mode & 128, 6)
-    wait_for(lambda: onboard.latest("LOCAL_POSITION_NED").z < -4.0, 20, what="climb to 4 m")
-    assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_IN_AIR
-
-    # turn with a yaw rate (NED yaw rate > 0 = clockwise) of 0.5 rad/s, as in the PX4 trial
-    # (97 degrees in 3.4 s). The rate is judged in simulated time (ATTITUDE.time_boot_ms), so
-    # a slow machine (a late stop command, a stalled simulator) cannot change the verdict.
-    start_yaw = yaw_of(onboard)
-    t_turn = time.monotonic()
-    onboard.stream(yaw_rate=0.5)
-    wait_for(
-        lambda: turned_from(start_yaw, yaw_of(onboard)) > math.radians(90), 20, what="turn 90 deg"
-    )
-    t_stop = time.monotonic()
-    onboard.stream()
-    turning = [
-        m
-        for t, m in onboard.timed(t_turn, "ATTITUDE")
-        if t <= t_stop and math.radians(20) < turned_from(start_yaw, m.yaw) < math.radians(85)
-    ]
-    assert len(turning) > 20, len(turning)
-    first, last = turning[0], turning[-1]
-    rate = turned_from(first.yaw, last.yaw) / (boot_s(last) - boot_s(first))
-    print(f"steady yaw rate {rate:.3f} rad/s over {len(turning)} ATTITUDE messages")
-    assert 0.42 < rate < 0.58, f"steady yaw rate {rate:.3f} rad/s, commanded 0.5"
-    wait_for(lambda: abs(onboard.latest("ATTITUDE").yawspeed) < 0.05, 10, what="turn stopped")
-    turned = turned_from(start_yaw, yaw_of(onboard))
-    assert math.radians(90) < turned < math.radians(150), math.degrees(turned)
-    yaw = yaw_of(onboard)
-
-    # body velocity: forward goes along the heading, right goes 90 degrees clockwise from it
-    def moving(speed: float, heading: float):
-        def check() -> bool:
-            lpn = onboard.latest("LOCAL_POSITION_NED")
-            direction = math.atan2(lpn.vy, lpn.vx)  # NED: atan2(east, north) = heading
-            along = abs(math.remainder(direction - heading, math.tau)) < math.radians(15)
-            return math.hypot(lpn.vx, lpn.vy) > 0.8 * speed and along
-
-        return check
-
-    for body, heading in (((2.0, 0.0), yaw), ((0.0, 1.5), yaw + math.pi / 2)):
-        onboard.stream(vx=body[0], vy=body[1])
-        wait_for(moving(math.hypot(*body), heading), 15, what=f"body velocity {body}")
-
-    # local NED velocity: north whatever the heading
-    onboard.stream(vx=1.5, frame=FRAME_LOCAL_NED)
-    wait_for(moving(1.25, 0.0), 15, what="north in the local frame")  # > 1 m/s north
-
-    # local position and yaw
-    onboard.stream(x=2.0, y=-3.0, z=-3.0, yaw=0.0)
-
-    def at_position():
-        p = onboard.latest("LOCAL_POSITION_NED")
-        near = math.dist((p.x, p.y, p.z), (2.0, -3.0, -3.0)) < 0.4
-        return near and abs(yaw_of(onboard)) < 0.15
-
-    wait_for(at_position, 30, what="reach the position and yaw setpoint")
-    t_target = time.monotonic()
-    target = onboard.wait_msg("POSITION_TARGET_LOCAL_NED", timeout=10, t0=t_target)
-    assert (target.x, target.y, target.z) == pytest.approx((2.0, -3.0, -3.0))
-
-    # land: AUTO.LAND, "Landing detected", auto-disarm, then the intended mode (OFFBOARD) again
-    t_land = time.monotonic()
-    assert acks(onboard.command(21, *[math.nan] * 7)) == [mavlink.MAV_RESULT_ACCEPTED]
-    onboard.wait_heartbeat(lambda m: divmod_mode(m.custom_mode) == Mode.LAND.value, 6, t_land)
-    onboard.stop_stream()
-    disarmed = onboard.wait_heartbeat(lambda m: not m.base_mode & 128, 40, t_land)
-    assert divmod_mode(disarmed.custom_mode) == Mode.OFFBOARD.value
-    for text in ("Landing detected", "Disarmed by landing"):
-        gcs.wait_msg("STATUSTEXT", lambda m, text=text: text in m.text, 10, t_land)
-    assert onboard.latest("EXTENDED_SYS_STATE").landed_state == mavlink.MAV_LANDED_STATE_ON_GROUND
-    assert onboard.latest("LOCAL_POSITION_NED").z == pytest.approx(0.0, abs=0.05)
-    assert proc.stop() == 0  # SIGINT: clean exit
 
 
 def test_offboard_loss_failsafe_and_unlatched_return(spawn, router, clients):
     onboard = clients(mavlink.MAV_TYPE_ONBOARD_CONTROLLER)
     gcs = clients(mavlink.MAV_TYPE_GCS)
     start_sim(spawn, router, onboard, gcs)
+    hb = onboard.latest("HEARTBEAT")  # the process's links send as system 1, component 1
+    assert (hb.type, hb.autopilot, hb.base_mode) == (2, 12, 29)
+    assert hb.get_srcSystem() == 1 and hb.get_srcComponent() == 1
     gcs.sync_heartbeat()  # the sim knows the GCS now: it gets STATUSTEXT
     t_stream = time.monotonic()
     onboard.stream(vz=-1.5)
