@@ -81,6 +81,8 @@ class Inputs:
     ) -> None:
         self.node, self.ns, self.compressed_images = node, ns, compressed_images
         self.subscriptions: list[Declared] = []
+        self.holders: dict[str, Latest[Any]] = {}
+        """The newest-value holders by key (see :meth:`latest`)."""
         self._stale_after: dict[str, float] = {}
         self._stale_warned: set[str] = set()
         self.state: Latest[State] = self.latest(registry.STATE)
@@ -106,10 +108,17 @@ class Inputs:
         return sub
 
     def latest(self, topic: Topic[T], **parts: str) -> Latest[T]:
-        """A holder of ``topic``'s newest value, aged on the node's clock."""
-        holder: Latest[T] = Latest(name=topic.key(self.ns, **parts), clock=self.node.clock)
+        """The holder of ``topic``'s newest value, aged on the node's clock: one per key, so
+        asked again (by another reader of this drone, the station) it is the same holder and
+        the key is subscribed once."""
+        key = topic.key(self.ns, **parts)
+        held = self.holders.get(key)
+        if held is not None:
+            return held
+        holder: Latest[T] = Latest(name=key, clock=self.node.clock)
         self.subscribe(topic, holder.update, **parts)
-        self._stale_after[holder.name] = stale_after(topic.rate_hz)
+        self._stale_after[key] = stale_after(topic.rate_hz)
+        self.holders[key] = holder
         return holder
 
     def close(self) -> None:

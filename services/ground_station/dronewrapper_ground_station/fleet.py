@@ -1,14 +1,15 @@
 """The bus side of the station: the drones online, their telemetry, video and commands.
 
-Everything goes through the station's runtime Node (a FakeNode on the fake bus in tests):
-commands through the DroneWrapper SDK (one wrapper per drone on that node); telemetry, video,
-detections, the controller's status and the simulator's topics are subscribed by their
-registry topics. Nothing here spells a key.
+Everything goes through the station's runtime Node (a FakeNode on the fake bus in tests), one
+DroneWrapper per drone on it: its commands, and its input holders (``DroneWrapper.inputs``),
+which the station reads for every telemetry section it shows (asking the wrapper for the ones
+the SDK does not hold itself: ground truth, the controller's status, detections), so each
+telemetry key is subscribed once per drone. Video and the simulator's topics are subscribed
+here. Everything is named by its registry topic; nothing here spells a key.
 """
 
 from __future__ import annotations
 
-import collections
 import logging
 import threading
 from collections.abc import Callable
@@ -73,16 +74,11 @@ class DroneLink:
         self.online = True
         self._node = node
         self._subs: list[Any] = []
-        self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {}
-        for name, topic, fields in TELEMETRY:
-            holder: Latest[Any] = Latest(name=topic.key(ns), clock=node.clock)
-            self._subscribe(topic, holder.update)
-            self._latest[name] = (holder, topic.rate_hz, fields)
-        self.status_texts: collections.deque[dict[str, Any]] = collections.deque(maxlen=50)
-        self._subscribe(
-            registry.STATUSTEXT,
-            lambda m: self.status_texts.append(snapshot.status_text_entry(m)),
-        )
+        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False)
+        self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {
+            name: (self.drone.inputs.latest(topic), topic.rate_hz, fields)
+            for name, topic, fields in TELEMETRY
+        }
         self.slots: dict[str, Latest[CompressedImage]] = {
             camera: Latest(name=f"{ns} {camera} video", clock=node.clock) for camera in CAMERAS
         }
@@ -92,7 +88,6 @@ class DroneLink:
         self.deadman = DeadMan(config.teleop.timeout)
         self._command_lock = threading.Lock()
         self.last_command: dict[str, Any] | None = None
-        self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False)
 
     def _subscribe(self, topic: Topic[T], callback: Callable[[T], None], **parts: str) -> Any:
         sub = self._node.subscribe(topic, callback, key=topic.key(self.ns, **parts))
@@ -115,7 +110,7 @@ class DroneLink:
                 holder.age(),
                 snapshot.stale_limit(rate, self.config.stale_after),
             )
-        out["log"] = list(self.status_texts)[-20:]
+        out["log"] = [snapshot.status_text_entry(m) for m in list(self.drone.status_texts)[-20:]]
         out["command"] = self.last_command
         out["refusals"] = [snapshot.refusal_entry(r) for r in self.drone.refusals[-5:]]
         out["teleop"] = self.deadman.active
