@@ -9,6 +9,7 @@ from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_base.unattended import UnattendedConfig
 from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
+from dronewrapper_bridge_mavlink.keepalive import MAX_PERIOD_S
 from dronewrapper_bridge_mavlink.setpoints import Limits
 from dronewrapper_bridge_mavlink.streams import message_id
 
@@ -48,7 +49,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     target_system: int = 0  # autopilot system id; 0 = the first autopilot heard
     target_component: int = 1
     heartbeat_timeout: float = 3.0  # s without heartbeat -> State.connected false
-    stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded
+    stream_rate_hz: float = 30.0  # the stream tick's rate (keep-alive and holds are sent on it)
+    setpoint_keepalive_s: float = 0.1  # s: no setpoint sent for this long -> the tick re-sends
     offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
     final_ack_timeout: float = 1.0  # s to wait for PX4's second (real) DO_SET_MODE ack
     mode_confirm_timeout: float = 2.5  # s for HEARTBEAT to show a mode acked only once
@@ -97,6 +99,11 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
         self.unattended_config()
+        if not 0 < self.setpoint_keepalive_s <= MAX_PERIOD_S:
+            raise ValueError(
+                f"setpoint_keepalive_s must be in (0, {MAX_PERIOD_S}] s, "
+                f"got {self.setpoint_keepalive_s!r}"
+            )
         if self.stream_rate_hz < 20.0:
             raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
         for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):

@@ -44,6 +44,7 @@ from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
+from dronewrapper_bridge_mavlink.keepalive import KeepAlive
 from dronewrapper_bridge_mavlink.link_budget import fit_rates, is_serial_url
 from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, GUIDED_MODE, is_guided
@@ -68,8 +69,6 @@ from dronewrapper_bridge_mavlink.telemetry import (
 )
 
 log = logging.getLogger("bridge_mavlink")
-
-STREAM_GAP_S = 0.5  # s without a setpoint sent: the stream has stopped (priming restarts)
 
 
 @dataclass
@@ -140,8 +139,7 @@ class BridgeCore(PureCore):
         self.last_ext_pub = -math.inf
         self._last_battery_pub = -math.inf
         self.last_global_pub = -math.inf
-        self._last_send = -math.inf
-        self._stream_since = -math.inf
+        self.keepalive = KeepAlive(config.setpoint_keepalive_s, 0.5 / config.stream_rate_hz)
         self.rates_round = 0
         self.next_rates = math.inf
 
@@ -379,8 +377,9 @@ class BridgeCore(PureCore):
                 mavlink.MAV_STATE_ACTIVE,
             )
         tick = self.failsafe.tick(now, self.pose())
-        if now - self._last_send < 0.5 / self.config.stream_rate_hz:
-            tick.send = None  # just forwarded by the subscriber
+        fresh = tick.send is not None and tick.send is self.failsafe.fresh_target(now)
+        if tick.send is not None and not self.keepalive.due(tick.send, now, fresh=fresh):
+            tick.send = None  # a fresh setpoint forwarded within the keep-alive period
         self._act(tick, send=self.connected)
         self.show_commander()
         missions.tick(self)
@@ -489,12 +488,8 @@ class BridgeCore(PureCore):
         fields = (ned.coordinate_frame, ned.type_mask, *kinematics, ned.yaw, ned.yaw_rate)
         self.send("set_position_target_local_ned", boot_ms, *self.target(), *fields)
         self.setpoints_sent += 1
-        if self.now - self._last_send > STREAM_GAP_S:
-            self._stream_since = self.now
-        self._last_send = self.now
+        self.keepalive.sent(target, self.now)
 
     def streamed_for(self, now: float) -> float:
         """Seconds the bridge has been streaming setpoints without a gap (0 if not now)."""
-        if now - self._last_send > STREAM_GAP_S:
-            return 0.0
-        return now - self._stream_since
+        return self.keepalive.streamed_for(now)
