@@ -14,7 +14,8 @@ The envelope is ENU m in the home frame. A mission item is placed there by its f
 
 :func:`placed` gives an item's ENU position from home (None: no position); :func:`prepare`
 checks every item against the envelope (the first one outside named with the limit) and
-returns the items to upload.
+returns the items to upload. Rally points (NAV_RALLY_POINT) are placed and checked the same
+way: a return must not fly outside the envelope either.
 """
 
 from __future__ import annotations
@@ -83,12 +84,17 @@ def uploadable(wp: Waypoint, home_geo: Sequence[float] | None) -> Waypoint:
 
 
 def prepare(
-    waypoints: Sequence[Waypoint], envelope: Envelope, home_geo: Sequence[float] | None
+    waypoints: Sequence[Waypoint],
+    envelope: Envelope,
+    home_geo: Sequence[float] | None,
+    *,
+    what: str = "mission item",
 ) -> list[Waypoint]:
     """The items to upload, every positioned one checked against ``envelope``.
 
     Raises:
-        MissionFrameError: naming the first item that cannot be placed or is outside.
+        MissionFrameError: naming the first item that cannot be placed or is outside
+            (``what`` and its number: ``mission item 2``, ``rally point 0``).
     """
     out = []
     for seq, wp in enumerate(waypoints):
@@ -98,7 +104,7 @@ def prepare(
                 env.check_position(envelope, *position)
             out.append(uploadable(wp, home_geo))
         except (EnvelopeError, MissionFrameError) as exc:
-            raise MissionFrameError(f"mission item {seq}: {exc}") from None
+            raise MissionFrameError(f"{what} {seq}: {exc}") from None
     return out
 
 
