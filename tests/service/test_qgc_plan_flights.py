@@ -94,6 +94,21 @@ def test_a_rally_point_outside_the_plans_fence_is_refused_naming_it(sim):
         sim.drone.upload_mission(document, returns_home=True)
 
 
+def test_a_return_lands_at_the_closest_rally_point_as_px4s(sim):
+    document = json.loads((PLANS / "square_relative.plan").read_text())
+    document["rallyPoints"] = {"points": [[*to_geodetic(HOME, 40.0, 0.0), 10.0]], "version": 2}
+    sim.drone.upload_mission(document)
+    sim.drone.takeoff(5.0)
+    sim.drone.goto_local(15.0, 0.0, 5.0)  # home is the closer: 15 m against 25 m
+    sim.drone.return_to_launch()
+    assert math.hypot(*sim.pair.position[:2]) <= 1.0 and not sim.pair.autopilot.armed
+    sim.drone.takeoff(5.0)
+    sim.drone.goto_local(30.0, 0.0, 5.0)  # 10 m from the rally point, 30 m from home
+    sim.drone.return_to_launch()
+    east, north, _ = sim.pair.position
+    assert math.hypot(east - 40.0, north) <= 1.0 and not sim.pair.autopilot.armed
+
+
 def test_an_item_the_autopilot_refuses_is_named_with_its_command(sim):
     with pytest.raises(CommandRefused, match=r"at item 2 \(NAV_SPLINE_WAYPOINT, frame 3\)"):
         sim.drone.upload_mission(PLANS / "spline_waypoints.plan")

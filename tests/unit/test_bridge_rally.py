@@ -43,6 +43,16 @@ def rally(east: float, north: float, up: float) -> Waypoint:
     return at(east, north, up, command=NAV_RALLY_POINT)
 
 
+def push(rig: CoreRig, request: WaypointPush, return_alt: float | None = 10.0):
+    """Start mission/push; answer PX4's RTL_RETURN_ALT read (None: never answered)."""
+    op = rig.call(missions.push, request)
+    rig.run(0.1)
+    if request.rally and return_alt is not None:
+        rig.param("RTL_RETURN_ALT", return_alt, mavlink.MAV_PARAM_TYPE_REAL32)
+    rig.run(0.1 if return_alt is not None else 20.0)
+    return op
+
+
 def answer(rig: CoreRig, mission_type: int, result: int = mavlink.MAV_MISSION_ACCEPTED) -> list:
     """Play the autopilot's side of the last upload; returns the items received."""
     count = rig.sent_since(-math.inf, "MISSION_COUNT")[-1]
@@ -59,7 +69,7 @@ def answer(rig: CoreRig, mission_type: int, result: int = mavlink.MAV_MISSION_AC
 def test_rally_points_are_uploaded_after_the_mission_as_rally_items():
     rig = rig_with_home()
     points = [rally(30.0, 0.0, 15.0), rally(-20.0, 40.0, 10.0)]
-    op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 10)], rally=points))
+    op = push(rig, WaypointPush(waypoints=[at(10, 0, 10)], rally=points))
     answer(rig, MISSION)
     assert not op.done  # the rally points follow
     items = answer(rig, RALLY)
@@ -77,11 +87,11 @@ def test_rally_points_are_uploaded_after_the_mission_as_rally_items():
 
 def test_an_empty_rally_list_clears_and_none_leaves_the_autopilots():
     rig = rig_with_home()
-    op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 10)], rally=[]))
+    op = push(rig, WaypointPush(waypoints=[at(10, 0, 10)], rally=[]))
     answer(rig, MISSION)
     assert answer(rig, RALLY) == []  # MISSION_COUNT 0 of type rally: cleared
     assert op.result().success
-    op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 10)]))
+    op = push(rig, WaypointPush(waypoints=[at(10, 0, 10)]))
     answer(rig, MISSION)
     assert op.result().success
     counts = rig.sent_since(-math.inf, "MISSION_COUNT")
@@ -91,7 +101,7 @@ def test_an_empty_rally_list_clears_and_none_leaves_the_autopilots():
 def test_a_local_rally_point_goes_up_as_a_global_one():
     rig = rig_with_home()
     local = Waypoint(frame=4, command=NAV_RALLY_POINT, x_lat=30.0, y_long=0.0, z_alt=12.0)
-    op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 10)], rally=[local]))
+    op = push(rig, WaypointPush(waypoints=[at(10, 0, 10)], rally=[local]))
     answer(rig, MISSION)
     (item,) = answer(rig, RALLY)
     assert op.result().success
@@ -108,8 +118,8 @@ def test_a_local_rally_point_goes_up_as_a_global_one():
 )
 def test_a_rally_point_outside_the_envelope_is_refused_before_anything_is_sent(point, reason):
     rig = rig_with_home()
-    push = WaypointPush(waypoints=[at(10, 0, 10)], rally=[rally(5, 5, 10), point])
-    op = rig.call(missions.push, push)
+    request = WaypointPush(waypoints=[at(10, 0, 10)], rally=[rally(5, 5, 10), point])
+    op = push(rig, request)
     with pytest.raises(ServiceError, match=reason):
         op.result()
     assert not rig.sent_since(-math.inf, "MISSION_COUNT")
@@ -117,7 +127,7 @@ def test_a_rally_point_outside_the_envelope_is_refused_before_anything_is_sent(p
 
 def test_a_refused_rally_upload_is_reported_with_the_mission_kept():
     rig = rig_with_home()
-    op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 10)], rally=[rally(5, 5, 9)]))
+    op = push(rig, WaypointPush(waypoints=[at(10, 0, 10)], rally=[rally(5, 5, 9)]))
     answer(rig, MISSION)
     answer(rig, RALLY, mavlink.MAV_MISSION_UNSUPPORTED)
     reply = op.result()
@@ -132,3 +142,20 @@ def test_a_push_refuses_a_rally_item_that_is_not_a_rally_point():
         WaypointPush(waypoints=[], rally=[at(1, 1, 5)])
     with pytest.raises(ValueError, match="at most 100 rally points"):
         WaypointPush(rally=[rally(1, 1, 5)] * 101)
+
+
+def test_on_px4_a_rally_point_whose_return_climbs_above_the_ceiling_is_refused():
+    """PX4 returns at the rally point's altitude plus RTL_RETURN_ALT: the sum is bound."""
+    rig = rig_with_home()
+    request = WaypointPush(waypoints=[at(10, 0, 10)], rally=[rally(30, 0, 15)])
+    op = push(rig, request, return_alt=110.0)
+    with pytest.raises(ServiceError, match=r"rally point 0: a return there climbs to 125 m"):
+        op.result()
+    op = push(rig, request, return_alt=None)  # unanswered: the bound the bridge keeps, 119 m
+    with pytest.raises(ServiceError, match=r"climbs to 134 m above home .* the envelope's 120 m"):
+        op.result()
+    assert not rig.sent_since(-math.inf, "MISSION_COUNT")
+    op = push(rig, request, return_alt=100.0)
+    answer(rig, MISSION)
+    answer(rig, RALLY)
+    assert op.result().success

@@ -108,4 +108,28 @@ def prepare(
     return out
 
 
-__all__ = ["MissionFrameError", "placed", "prepare", "uploadable"]
+def check_rally_returns(
+    rally: Sequence[Waypoint],
+    envelope: Envelope,
+    home_geo: Sequence[float] | None,
+    return_altitude: float,
+) -> None:
+    """Refuse a rally point a PX4 return would climb above the ceiling from: PX4 returns at
+    the rally point's altitude plus its return altitude (``RTL_RETURN_ALT``, m; its RTL takes
+    the point's altitude as the destination's ground), so both together stay under
+    ``envelope.max_altitude``.
+
+    Raises:
+        MissionFrameError: naming the first rally point, the climb and the limit.
+    """
+    for seq, wp in enumerate(rally):
+        up = (placed(wp, home_geo) or (0.0, 0.0, 0.0))[2]
+        if up + return_altitude > envelope.max_altitude:
+            raise MissionFrameError(
+                f"rally point {seq}: a return there climbs to {up + return_altitude:g} m above "
+                f"home (its {up:g} m plus the return altitude of {return_altitude:g} m), above "
+                f"the envelope's {envelope.max_altitude:g} m: lower the rally point"
+            )
+
+
+__all__ = ["MissionFrameError", "check_rally_returns", "placed", "prepare", "uploadable"]

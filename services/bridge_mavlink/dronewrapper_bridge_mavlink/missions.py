@@ -55,6 +55,7 @@ from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_fra
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import (
+    AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
     HOLD_MODE,
     is_guided,
@@ -289,7 +290,9 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     """mission/push: place and check every item and rally point against the envelope
     (:mod:`~dronewrapper_bridge_mavlink.mission_frames`: local items go up as global ones),
     then upload the items, then the rally points (MAV_MISSION_TYPE_RALLY, when the request
-    carries them: :func:`push_rally`)."""
+    carries them: :func:`uploads.push_rally`). On PX4, whose return climbs to its return
+    altitude above a rally point, that climb must stay under the ceiling too
+    (:func:`mission_frames.check_rally_returns`)."""
     core.require_connected()
     state = core.missions
     try:
@@ -299,6 +302,9 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
             rally = mission_frames.prepare(
                 request.rally, state.envelope, state.home_geo, what="rally point"
             )
+        if rally and core.autopilot != AUTOPILOT_ARDUPILOT:  # PX4 returns above the point
+            return_alt = yield from autopilot_limits.px4_return_altitude(core)
+            mission_frames.check_rally_returns(rally, state.envelope, state.home_geo, return_alt)
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [uploads.item_of(wp) for wp in waypoints]
