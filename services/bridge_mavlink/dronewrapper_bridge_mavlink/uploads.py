@@ -13,19 +13,18 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs.mission import MissionResult, Waypoint, WaypointClear
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
-    from dronewrapper_bridge_mavlink.missions import MissionState
+BridgeCore = Any  # the bridge's core (core.BridgeCore), not imported: no import circle
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -91,14 +90,10 @@ def waypoint_of(item: mt.Item) -> Waypoint:
     )
 
 
-def fence_items(state: MissionState) -> list[mt.Item]:
-    """The envelope as MAV_MISSION_TYPE_FENCE items: a circle around home of max_distance
-    plus the margin and :data:`FENCE_BACKUP_M` (the autopilot's fence is the backstop: the
-    bridge acts first), the inclusion polygon, the exclusion zones (needs home's geodetic
-    position)."""
-    assert state.home_geo is not None
-    home = state.home_geo
-    envelope = state.envelope
+def fence_items(envelope: Envelope, home: tuple[float, float, float]) -> list[mt.Item]:
+    """``envelope`` as MAV_MISSION_TYPE_FENCE items around ``home`` (deg, deg, m AMSL): a
+    circle of max_distance plus the margin and :data:`FENCE_BACKUP_M` (the autopilot's fence
+    is the backstop: the bridge acts first), the inclusion polygon, the exclusion zones."""
     frame = mavlink.MAV_FRAME_GLOBAL
     items = [
         mt.Item(
@@ -132,7 +127,7 @@ def push_fence(core: BridgeCore, _request: WaypointClear) -> Steps:
     core.require_connected()
     if core.missions.home_geo is None:
         raise ServiceError("home is not known yet: the fence cannot be placed", "refused")
-    items = fence_items(core.missions)
+    items = fence_items(core.missions.envelope, core.missions.home_geo)
     upload = mt.Upload(items, core.target(), core.now, mission_type=mt.FENCE, **transfer_args())
     yield from run_transfer(core, upload)
     if upload.error:
