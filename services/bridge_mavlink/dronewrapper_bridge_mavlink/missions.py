@@ -287,12 +287,10 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
 
 
 def push(core: BridgeCore, request: WaypointPush) -> Steps:
-    """mission/push: place and check every item and rally point against the envelope
-    (:mod:`~dronewrapper_bridge_mavlink.mission_frames`: local items go up as global ones),
-    then upload the items, then the rally points (MAV_MISSION_TYPE_RALLY, when the request
-    carries them: :func:`uploads.push_rally`). On PX4, whose return climbs to its return
-    altitude above a rally point, that climb must stay under the ceiling too
-    (:func:`mission_frames.check_rally_returns`)."""
+    """mission/push: check every item and rally point against the envelope (and, on PX4, a
+    return's climb above each rally point: :func:`mission_frames.check_rally_returns`; local
+    items go up as global ones), upload the items, then any rally points
+    (:func:`uploads.push_rally`)."""
     core.require_connected()
     state = core.missions
     try:
