@@ -8,6 +8,8 @@ import typing
 
 import msgspec
 
+from dronewrapper.msgs.mission import NAV_RALLY_POINT, Waypoint
+
 
 def _value(tp, rng: random.Random):
     origin = typing.get_origin(tp)
@@ -43,6 +45,11 @@ def _polygon(rng: random.Random) -> list[tuple[float, float]]:
     return [(rng.uniform(-50, 50), rng.uniform(-50, 50)) for _ in range(rng.randint(3, 5))]
 
 
+def _rally_point(rng: random.Random) -> Waypoint:
+    lat, lon = rng.uniform(-90.0, 90.0), rng.uniform(-180.0, 180.0)
+    return Waypoint(command=NAV_RALLY_POINT, x_lat=lat, y_long=lon, z_alt=rng.uniform(0, 50))
+
+
 _WATCHING = ("GotoRequest", "ReturnRequest", "MissionRequest")
 
 # Fields whose messages check their range (requests): a random value within it.
@@ -64,6 +71,7 @@ _RANGED = {
     ("Waypoint", "frame"): lambda rng: 3,
     ("Waypoint", "command"): lambda rng: 16,
     ("WaypointPush", "start_index"): lambda rng: 0,
+    ("WaypointPush", "rally"): lambda rng: [_rally_point(rng)],
     ("WaypointSetCurrent", "wp_seq"): lambda rng: rng.randint(0, 100),
     ("MissionControl", "action"): lambda rng: rng.choice(("start", "pause", "return")),
     ("GotoRequest", "latitude"): lambda rng: math.nan,  # x and y give the point

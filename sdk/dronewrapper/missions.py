@@ -351,21 +351,26 @@ class MissionsMixin:
         m from home (the Tello's only kind). Returns the number of items.
 
         A plan's ``geoFence`` is folded into the envelope first (:mod:`dronewrapper.plan_fence`;
-        it stays after the mission, put back if the upload fails); rally points and a
-        breach-return point are refused unless ``returns_home`` accepts returns to home.
+        it stays after the mission, put back if the upload fails); a breach-return point is
+        refused unless ``returns_home`` accepts returns to home. A plan's rally points are
+        uploaded with it as the autopilot's (checked against the envelope; a plan without
+        them clears the autopilot's; a list of points leaves them as they are); a backend
+        without rally points (the Tello) refuses a plan that has some.
 
         Raises:
             InvalidArgument: the plan cannot be read or flown, or its fence cannot be held.
             NoData: the plan has a fence and home's position is not known yet.
-            CommandRefused: an item is outside the envelope, or the autopilot refused the
-                upload (naming the item it refused and its command).
+            CommandRefused: an item or rally point is outside the envelope, or the autopilot
+                refused the upload (naming the item it refused and its command).
         """
         try:
             loaded = load_plan(plan, frame=frame)
         except PlanError as exc:
             raise InvalidArgument(f"upload_mission: {exc}") from None
-        before = None if loaded.fence.empty else self._fold(loaded.fence, returns_home, timeout)
-        push = WaypointPush(waypoints=loaded.waypoints)
+        before = self._fold(loaded.fence, returns_home, timeout) if loaded.fence.folds else None
+        document = isinstance(plan, str | PathLike | Mapping)
+        rally = plan_fence.rally_waypoints(loaded.fence) if document else None
+        push = WaypointPush(waypoints=loaded.waypoints, rally=rally)
         try:
             reply = self._command(registry.MISSION_PUSH, push, "upload_mission", timeout)
         except DroneError:

@@ -7,15 +7,19 @@ envelope.
 (``[lat, lon, alt]``, where ArduPilot flies after a fence breach) and ``rallyPoints.points``
 (``[lat, lon, alt]``, alt m above home, where a return may go instead of home).
 
+:func:`rally_waypoints` gives the rally points as NAV_RALLY_POINT items (frame 3, m above
+home), which the bridge checks against the envelope and uploads to the autopilot
+(MAV_MISSION_TYPE_RALLY) with the mission.
+
 :func:`fold` carries the fence into the bridge's envelope (ENU m from home, so it binds every
 setpoint, take-off and mission item, and the bridge uploads it to the autopilot as its fence):
 an inclusion zone becomes the envelope's ``fence``, exclusion zones join its ``exclusions``.
 A circle becomes a polygon of :data:`CIRCLE_VERTICES` vertices that errs on the safe side: an
 inclusion circle's polygon lies inside the circle, an exclusion circle's around it. What the
 envelope cannot hold is refused, never dropped: more than one inclusion zone (the envelope
-has one fence), an inclusion zone while the envelope already has another fence, and rally
-points or a breach-return point (the envelope's return flies home) unless the caller accepts
-returns to home (``returns_home``).
+has one fence), an inclusion zone while the envelope already has another fence, and a
+breach-return point (the envelope's return flies home) unless the caller accepts returns to
+home (``returns_home``). Rally points are not the envelope's: they are uploaded.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import msgspec
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.geodesy import to_enu
+from dronewrapper.msgs.mission import FRAME_GLOBAL_REL_ALT, NAV_RALLY_POINT, Waypoint
 
 CIRCLE_VERTICES = 24
 
@@ -63,6 +68,11 @@ class PlanFence:
     @property
     def empty(self) -> bool:
         return not self.zones and self.breach_return is None and not self.rally_points
+
+    @property
+    def folds(self) -> bool:
+        """Whether anything here goes into the envelope (zones, a breach-return point)."""
+        return bool(self.zones) or self.breach_return is not None
 
 
 def _point(value: Any, size: int, where: str) -> tuple[float, ...]:
@@ -137,15 +147,10 @@ def fold(
     Raises:
         ValueError: what the envelope cannot hold, named (nothing is dropped).
     """
-    if not returns_home and (fence.rally_points or fence.breach_return is not None):
-        what = []
-        if fence.rally_points:
-            what.append(f"{len(fence.rally_points)} rally point(s)")
-        if fence.breach_return is not None:
-            what.append("a geoFence breachReturn point")
+    if not returns_home and fence.breach_return is not None:
         raise ValueError(
-            f"the plan has {' and '.join(what)}, which are not flown: the envelope's return "
-            "flies home. Remove them, or pass returns_home=True to accept returns to home"
+            "the plan has a geoFence breachReturn point, which is not flown: the envelope's "
+            "return flies home. Remove it, or pass returns_home=True to accept returns to home"
         )
     inclusions = [z for z in fence.zones if z.inclusion]
     if len(inclusions) > 1:
@@ -171,6 +176,21 @@ def fold(
     return msgspec.structs.replace(envelope, fence=fence_polygon, exclusions=exclusions)
 
 
+def rally_waypoints(fence: PlanFence) -> list[Waypoint]:
+    """``fence``'s rally points as NAV_RALLY_POINT items (degrees, m above home)."""
+    return [
+        Waypoint(
+            frame=FRAME_GLOBAL_REL_ALT,
+            command=NAV_RALLY_POINT,
+            x_lat=lat,
+            y_long=lon,
+            z_alt=alt,
+            param4=0.0,
+        )
+        for lat, lon, alt in fence.rally_points
+    ]
+
+
 def _same(a: Sequence[Sequence[float]], b: Sequence[Sequence[float]], tol: float = 0.01) -> bool:
     return len(a) == len(b) and all(
         math.isclose(p[0], q[0], abs_tol=tol) and math.isclose(p[1], q[1], abs_tol=tol)
@@ -178,4 +198,12 @@ def _same(a: Sequence[Sequence[float]], b: Sequence[Sequence[float]], tol: float
     )
 
 
-__all__ = ["CIRCLE_VERTICES", "PlanFence", "Zone", "fold", "parse_fence", "zone_polygon"]
+__all__ = [
+    "CIRCLE_VERTICES",
+    "PlanFence",
+    "Zone",
+    "fold",
+    "parse_fence",
+    "rally_waypoints",
+    "zone_polygon",
+]

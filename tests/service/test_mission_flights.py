@@ -16,6 +16,7 @@ import pytest
 from sim_pair import SimPair, position_target
 
 from dronewrapper.envelope import Envelope
+from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import (
@@ -37,7 +38,7 @@ def waypoints(pair: SimPair, points: list[tuple[float, float, float]]) -> list[W
     home = pair.core.missions.home_geo
     items = []
     for x, y, z in points:
-        lat, lon = missions.to_geodetic(home, x, y)
+        lat, lon = to_geodetic(home, x, y)
         items.append(Waypoint(x_lat=lat, y_long=lon, z_alt=z, param1=0.5, param2=0.5))
     return items
 

@@ -1,7 +1,8 @@
 """QGroundControl plans uploaded and flown through the SDK and bridge_mavlink's bridge on the
 simulator (tests/bus_bridge.py), in bus time, judged from the simulator's ground truth: the
-plan's fence reaches the envelope, payload items are taken and skipped, a speed change is
-flown, an item the autopilot refuses is named, every item reached is counted."""
+plan's fence reaches the envelope, its rally points the autopilot (checked against the
+envelope), payload items are taken and skipped, a speed change is flown, an item the autopilot
+refuses is named, every item reached is counted."""
 
 from __future__ import annotations
 
@@ -15,8 +16,11 @@ from bus_bridge import SimSdk
 
 from dronewrapper.errors import CommandRefused, InvalidArgument
 from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.msgs.mission import NAV_RALLY_POINT
 from dronewrapper.plan import read_plan
+from dronewrapper.plan_fence import rally_waypoints
 
+RALLY = 2  # MAV_MISSION_TYPE_RALLY
 PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans"
 HOME = (47.397742, 8.545594)
 
@@ -59,13 +63,50 @@ def test_a_plan_fence_reaches_the_envelope_and_binds_the_items(sim):
     assert len(sim.drone.envelope().exclusions) == 1  # the same zone, not twice
 
 
-def test_rally_points_are_refused_unless_returns_home_is_accepted(sim):
+def test_rally_points_are_uploaded_to_the_autopilot_with_the_plan(sim):
     path = PLANS / "rally_breach_return.plan"
-    with pytest.raises(InvalidArgument, match="2 rally point"):
+    with pytest.raises(InvalidArgument, match="a geoFence breachReturn point"):
         sim.drone.upload_mission(path)
     assert sim.drone.envelope().fence == []  # nothing was changed
     assert sim.drone.upload_mission(path, returns_home=True) == 4
     assert len(sim.drone.envelope().fence) == 24
+    held = sim.pair.autopilot.missions.lists[RALLY]
+    plan = read_plan(path).fence.rally_points
+    assert [(i.command, i.frame) for i in held] == [(NAV_RALLY_POINT, 3)] * 2
+    assert [(i.x, i.y, i.z) for i in held] == [
+        (round(lat * 1e7), round(lon * 1e7), alt) for lat, lon, alt in plan
+    ]
+    assert sim.pair.core.missions.rally == rally_waypoints(read_plan(path).fence)
+    # a plan without rally points clears the autopilot's
+    assert sim.drone.upload_mission(PLANS / "square_relative.plan") > 0
+    assert sim.pair.autopilot.missions.lists[RALLY] == []
+
+
+def test_a_rally_point_outside_the_plans_fence_is_refused_naming_it(sim):
+    document = json.loads((PLANS / "rally_breach_return.plan").read_text())
+    document["rallyPoints"]["points"][1][:2] = to_geodetic(HOME, 0.0, 200.0)  # fence: 150 m
+    with pytest.raises(CommandRefused, match=r"rally point 1: .*outside the envelope's fence"):
+        sim.drone.upload_mission(document, returns_home=True)
+    assert sim.drone.envelope().fence == []  # put back: nothing was uploaded
+    assert sim.pair.autopilot.missions.lists[RALLY] == []
+    document["rallyPoints"]["points"][1][:3] = [*to_geodetic(HOME, 0.0, 20.0), 200.0]
+    with pytest.raises(CommandRefused, match=r"rally point 1: altitude 200 m above"):
+        sim.drone.upload_mission(document, returns_home=True)
+
+
+def test_a_return_lands_at_the_closest_rally_point_as_px4s(sim):
+    document = json.loads((PLANS / "square_relative.plan").read_text())
+    document["rallyPoints"] = {"points": [[*to_geodetic(HOME, 40.0, 0.0), 10.0]], "version": 2}
+    sim.drone.upload_mission(document)
+    sim.drone.takeoff(5.0)
+    sim.drone.goto_local(15.0, 0.0, 5.0)  # home is the closer: 15 m against 25 m
+    sim.drone.return_to_launch()
+    assert math.hypot(*sim.pair.position[:2]) <= 1.0 and not sim.pair.autopilot.armed
+    sim.drone.takeoff(5.0)
+    sim.drone.goto_local(30.0, 0.0, 5.0)  # 10 m from the rally point, 30 m from home
+    sim.drone.return_to_launch()
+    east, north, _ = sim.pair.position
+    assert math.hypot(east - 40.0, north) <= 1.0 and not sim.pair.autopilot.armed
 
 
 def test_an_item_the_autopilot_refuses_is_named_with_its_command(sim):

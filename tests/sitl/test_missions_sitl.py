@@ -1,4 +1,4 @@
-"""Opt-in: missions, return-to-launch and the envelope against real firmware.
+"""Opt-in: missions, rally points, return-to-launch and the envelope against real firmware.
 
 ``PX4_SITL_DIR`` (a PX4-Autopilot tree with ``build/px4_sitl_default``, SIH quadrotor) and
 ``AP_SITL_DIR`` (an ardupilot tree with ``build/sitl/bin/arducopter``) each turn on one test;
@@ -27,13 +27,15 @@ TIMEOUT_S = 800  # s for one flight (the firmware flies in real time)
 STOP_GROUP = "kill -KILL -- -$fw"  # the firmware's process group (its state is not kept)
 
 
-def _flight(tmp_path: Path, firmware: str, kind: str, connection: str) -> dict:
+def _flight(
+    tmp_path: Path, firmware: str, kind: str, connection: str, script: str = "mission_flight.py"
+) -> dict:
     """Run the firmware (``firmware`` execs it in a session of its own, whose process group
-    is stopped at the end) and the flight in one private namespace; the flight's report."""
+    is stopped at the end) and the flight (``script``) in one private namespace; its report."""
     script = (
         "ip link set lo up ; "
         f"({firmware}) > {tmp_path}/firmware.log 2>&1 & fw=$! ; echo $fw > {tmp_path}/fw.pid ; "
-        f"{sys.executable} {HERE / 'mission_flight.py'} {kind} '{connection}' ; rc=$? ; "
+        f"{sys.executable} {HERE / script} {kind} '{connection}' ; rc=$? ; "
         f"{STOP_GROUP} ; exit $rc"
     )
     env = {**os.environ, "PYTHONPATH": f"{HERE}:{os.environ.get('PYTHONPATH', '')}"}
@@ -73,23 +75,17 @@ def _judge(report: dict) -> None:
     assert report["breach_max_altitude_m"] <= CEILING_M, report
 
 
-@pytest.mark.timeout(TIMEOUT_S + 60)
-@pytest.mark.px4_sih  # opt-in: deselected unless PX4_SITL_DIR is set (tests/sitl/conftest.py)
-@pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
-def test_px4_sitl_mission_rtl_and_fence(tmp_path):
+def _px4(tmp_path: Path) -> str:
     build = px4_build_dir(Path(os.environ["PX4_SITL_DIR"]))  # px4_sitl_default or _zenoh
     (tmp_path / "etc").symlink_to(build / "etc")
-    firmware = (
+    return (
         "exec setsid env PX4_SIM_MODEL=sihsim_quadx PX4_SIMULATOR=sihsim HEADLESS=1 "
         f"{build / 'bin' / 'px4'} -d -i 7 {tmp_path}"
     )  # instance 7: its own lock and ports beside anyone's instance 0; tmp_path its rootfs
-    _judge(_flight(tmp_path, firmware, "px4", "udpin:127.0.0.1:14547"))
 
 
-@pytest.mark.timeout(TIMEOUT_S + 60)
-@pytest.mark.ap_sitl  # opt-in: deselected unless AP_SITL_DIR is set (tests/sitl/conftest.py)
-@pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
-def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
+def _ardupilot() -> tuple[str, str]:
+    """The ArduCopter command line and its connection."""
     tree = Path(os.environ["AP_SITL_DIR"])
     binary = tree / "build" / "sitl" / "bin" / "arducopter"
     assert binary.is_file(), f"{binary}: not built"
@@ -98,4 +94,45 @@ def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
     firmware = (
         f"exec setsid {binary} --model quad --speedup 1 -I{instance} -w --defaults {defaults}"
     )
-    _judge(_flight(tmp_path, firmware, "ardupilot", f"tcp:127.0.0.1:{5760 + 10 * instance}"))
+    return firmware, f"tcp:127.0.0.1:{5760 + 10 * instance}"
+
+
+@pytest.mark.timeout(TIMEOUT_S + 60)
+@pytest.mark.px4_sih  # opt-in: deselected unless PX4_SITL_DIR is set (tests/sitl/conftest.py)
+@pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
+def test_px4_sitl_mission_rtl_and_fence(tmp_path):
+    _judge(_flight(tmp_path, _px4(tmp_path), "px4", "udpin:127.0.0.1:14547"))
+
+
+def _judge_rally(report: dict) -> None:
+    """The rally points read back (MISSION_REQUEST_LIST, mission_type rally) as uploaded, an
+    empty list clears them, and a return 8 m from the first (22 m from home) lands there:
+    PX4 SIH 0.65 m from it, ArduCopter 0.01 m (2026-11-28)."""
+    assert report["push"].endswith("and 2 rally point(s)"), report
+    assert report["same"] and report["after_clear"] == 0, report
+    assert {item[0] for item in report["rally_read_back"]} == {5100}, report
+    assert report["rtl_landed"] and report["landed_from_rally_0_m"] < 1.5, report
+
+
+@pytest.mark.timeout(TIMEOUT_S + 60)
+@pytest.mark.px4_sih
+@pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
+def test_px4_sitl_takes_and_returns_rally_points(tmp_path):
+    report = _flight(tmp_path, _px4(tmp_path), "px4", "udpin:127.0.0.1:14547", "rally_upload.py")
+    _judge_rally(report)
+
+
+@pytest.mark.timeout(TIMEOUT_S + 60)
+@pytest.mark.ap_sitl  # opt-in: deselected unless AP_SITL_DIR is set (tests/sitl/conftest.py)
+@pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
+def test_ardupilot_sitl_mission_rtl_and_fence(tmp_path):
+    firmware, connection = _ardupilot()
+    _judge(_flight(tmp_path, firmware, "ardupilot", connection))
+
+
+@pytest.mark.timeout(TIMEOUT_S + 60)
+@pytest.mark.ap_sitl
+@pytest.mark.skipif(os.geteuid() != 0, reason="a private network namespace needs root")
+def test_ardupilot_sitl_takes_and_returns_rally_points(tmp_path):
+    firmware, connection = _ardupilot()
+    _judge_rally(_flight(tmp_path, firmware, "ardupilot", connection, "rally_upload.py"))

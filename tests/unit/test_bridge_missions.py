@@ -27,7 +27,7 @@ from dronewrapper.msgs.mission import (
     WaypointPush,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_mavlink import actions, missions
+from dronewrapper_bridge_mavlink import actions, missions, uploads
 
 HOME_LAT, HOME_LON = 47.397742, 8.545594
 
@@ -284,7 +284,7 @@ def test_home_known_uploads_the_envelope_as_the_autopilots_fence():
     assert count.mission_type == mavlink.MAV_MISSION_TYPE_FENCE and count.count == 1
     (circle,) = answer_upload(rig, mavlink.MAV_MISSION_TYPE_FENCE)
     assert circle.command == mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
-    assert circle.param1 == 500.0 + 1.0 + missions.FENCE_BACKUP_M  # beyond the bridge's breach
+    assert circle.param1 == 500.0 + 1.0 + uploads.FENCE_BACKUP_M  # beyond the bridge's breach
     home(rig)  # again: no second upload
     assert len(rig.sent_since(-math.inf, "MISSION_COUNT")) == 1
 

@@ -14,8 +14,9 @@ import pytest
 from dronewrapper import envelope as env
 from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.geodesy import to_enu
+from dronewrapper.msgs.mission import NAV_RALLY_POINT
 from dronewrapper.plan import PlanError, read_plan, waypoints_of
-from dronewrapper.plan_fence import CIRCLE_VERTICES, fold
+from dronewrapper.plan_fence import CIRCLE_VERTICES, PlanFence, fold, rally_waypoints
 
 PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans"
 HOME = (47.3977419, 8.5455938, 488.0)  # the plans' plannedHomePosition
@@ -108,10 +109,12 @@ def test_a_plan_fence_folds_into_the_envelope_and_binds_the_items():
 def test_what_the_envelope_cannot_hold_is_refused_never_dropped():
     rally = read_plan(PLANS / "rally_breach_return.plan").fence
     assert len(rally.rally_points) == 2 and rally.breach_return is not None
-    with pytest.raises(ValueError, match=r"2 rally point.* and a geoFence breachReturn point"):
+    with pytest.raises(ValueError, match=r"a geoFence breachReturn point, which is not flown"):
         fold(rally, Envelope(), HOME)
     folded = fold(rally, Envelope(), HOME, returns_home=True)
     assert max(math.hypot(*v) for v in folded.fence) <= 150.0  # inside the inclusion circle
+    no_breach_return = PlanFence(zones=rally.zones, rally_points=rally.rally_points)
+    assert fold(no_breach_return, Envelope(), HOME) == folded  # rally points are uploaded
     two = read_plan(PLANS / "two_inclusion_zones.plan").fence
     with pytest.raises(ValueError, match="2 inclusion zones"):
         fold(two, Envelope(), HOME)
@@ -126,3 +129,12 @@ def test_far_distances_read_in_metres_and_kilometres():
     assert env.metres(1113.19) == "1113.19 m"
     reason = env.violation(Envelope(), 8_000_000.0, 4_000_000.0, 5.0)
     assert "e+" not in reason and "8944.3 km" in reason
+
+
+def test_rally_points_become_rally_items_above_home():
+    fence = read_plan(PLANS / "rally_breach_return.plan").fence
+    items = rally_waypoints(fence)
+    assert [(i.command, i.frame) for i in items] == [(NAV_RALLY_POINT, 3)] * 2
+    assert [(i.x_lat, i.y_long, i.z_alt) for i in items] == list(fence.rally_points)
+    assert rally_waypoints(PlanFence()) == []
+    assert not PlanFence(rally_points=fence.rally_points).folds  # nothing for the envelope

@@ -21,7 +21,7 @@ from dronewrapper.msgs.mavros import (
     CommandTOL,
     PositionTarget,
 )
-from dronewrapper.msgs.mission import MissionControl, Waypoint, WaypointPush
+from dronewrapper.msgs.mission import NAV_RALLY_POINT, MissionControl, Waypoint, WaypointPush
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_tello import actions, missions
 from dronewrapper_bridge_tello import operations as ops
@@ -126,6 +126,14 @@ def test_a_global_mission_is_refused_honestly():
         rig.call(
             missions.push, WaypointPush(waypoints=[Waypoint(x_lat=47.0, y_long=8.0, z_alt=5.0)])
         )
+
+
+def test_rally_points_are_refused_by_the_tello_and_an_empty_list_is_taken():
+    rig = flying_rig()
+    rally = [Waypoint(frame=4, command=NAV_RALLY_POINT, x_lat=2.0, y_long=0.0, z_alt=1.0)]
+    with pytest.raises(ServiceError, match=r"the Tello has no rally points \(1 given\)"):
+        rig.call(missions.push, WaypointPush(waypoints=[local(1, 0, 1)], rally=rally))
+    assert rig.call(missions.push, WaypointPush(waypoints=[local(1, 0, 1)], rally=[])).success
 
 
 def test_a_mission_item_outside_the_envelope_is_refused():

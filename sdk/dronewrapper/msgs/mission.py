@@ -28,6 +28,8 @@ NAV_WAYPOINT = 16
 NAV_RETURN_TO_LAUNCH = 20
 NAV_LAND = 21
 NAV_TAKEOFF = 22
+NAV_RALLY_POINT = 5100  # a place a return may fly to instead of home (MAV_MISSION_TYPE_RALLY)
+MAX_RALLY_POINTS = 100
 
 COMMAND_NAMES = {  # MAV_CMD names (without MAV_CMD_) of the items mission plans hold
     16: "NAV_WAYPOINT",
@@ -67,6 +69,7 @@ COMMAND_NAMES = {  # MAV_CMD names (without MAV_CMD_) of the items mission plans
     2001: "IMAGE_STOP_CAPTURE",
     2500: "VIDEO_START_CAPTURE",
     2501: "VIDEO_STOP_CAPTURE",
+    5100: "NAV_RALLY_POINT",
 }
 
 
@@ -126,16 +129,30 @@ class WaypointReached(msgspec.Struct, kw_only=True, frozen=True):
 
 
 class WaypointPush(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=True):
-    """Upload ``waypoints`` as the new mission (mavros_msgs/WaypointPush; full uploads only)."""
+    """Upload ``waypoints`` as the new mission (mavros_msgs/WaypointPush; full uploads only).
+
+    ``rally``: the rally points uploaded with it (NAV_RALLY_POINT items, each a position in a
+    mission frame; ``[]`` clears the autopilot's), None leaves the autopilot's rally points as
+    they are (a mission given as a list of points)."""
 
     start_index: int = 0
     waypoints: list[Waypoint] = msgspec.field(default_factory=list)
+    rally: list[Waypoint] | None = None
 
     def __post_init__(self) -> None:
         if self.start_index != 0:
             raise ValueError("start_index must be 0: only whole missions are uploaded")
         if len(self.waypoints) > 1000:
             raise ValueError(f"at most 1000 waypoints, got {len(self.waypoints)}")
+        rally = self.rally or []
+        if len(rally) > MAX_RALLY_POINTS:
+            raise ValueError(f"at most {MAX_RALLY_POINTS} rally points, got {len(rally)}")
+        for number, point in enumerate(rally):
+            if point.command != NAV_RALLY_POINT or point.frame == FRAME_MISSION:
+                raise ValueError(
+                    f"rally point {number}: a NAV_RALLY_POINT ({NAV_RALLY_POINT}) with a "
+                    f"position, got command {point.command} in frame {point.frame}"
+                )
 
 
 class WaypointPushResult(msgspec.Struct, kw_only=True, frozen=True):
@@ -222,7 +239,9 @@ class HomePosition(msgspec.Struct, kw_only=True, frozen=True):
 __all__ = [
     "COMMAND_NAMES",
     "FRAME_GLOBAL_REL_ALT",
+    "MAX_RALLY_POINTS",
     "NAV_LAND",
+    "NAV_RALLY_POINT",
     "NAV_RETURN_TO_LAUNCH",
     "NAV_TAKEOFF",
     "NAV_WAYPOINT",

@@ -66,6 +66,17 @@ def return_altitude(envelope: Envelope) -> float:
     return max(MIN_RETURN_ALT_M, envelope.max_altitude - RETURN_ALT_BELOW_CEILING_M)
 
 
+def px4_return_altitude(core: BridgeCore) -> Generator[float, None, float]:
+    """The return altitude a PX4 return climbs to above its destination (m): its
+    ``RTL_RETURN_ALT``, at most :func:`return_altitude` (the bridge lowers it to that), that
+    bound where the autopilot does not answer."""
+    bound = return_altitude(core.missions.envelope)
+    got = yield from parameters.param_read(core, "RTL_RETURN_ALT")
+    if got is None:
+        return bound
+    return min(bound, float(parameters.decode(core, *got).as_number()))
+
+
 def wanted(autopilot: str, envelope: Envelope) -> list[tuple[str, float, str]]:
     """The parameters to keep: (name, value, :data:`AT_MOST` or :data:`EXACTLY`)."""
     alt = return_altitude(envelope)

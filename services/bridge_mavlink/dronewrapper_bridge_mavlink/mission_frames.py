@@ -14,7 +14,8 @@ The envelope is ENU m in the home frame. A mission item is placed there by its f
 
 :func:`placed` gives an item's ENU position from home (None: no position); :func:`prepare`
 checks every item against the envelope (the first one outside named with the limit) and
-returns the items to upload.
+returns the items to upload. Rally points (NAV_RALLY_POINT) are placed and checked the same
+way: a return must not fly outside the envelope either.
 """
 
 from __future__ import annotations
@@ -83,12 +84,17 @@ def uploadable(wp: Waypoint, home_geo: Sequence[float] | None) -> Waypoint:
 
 
 def prepare(
-    waypoints: Sequence[Waypoint], envelope: Envelope, home_geo: Sequence[float] | None
+    waypoints: Sequence[Waypoint],
+    envelope: Envelope,
+    home_geo: Sequence[float] | None,
+    *,
+    what: str = "mission item",
 ) -> list[Waypoint]:
     """The items to upload, every positioned one checked against ``envelope``.
 
     Raises:
-        MissionFrameError: naming the first item that cannot be placed or is outside.
+        MissionFrameError: naming the first item that cannot be placed or is outside
+            (``what`` and its number: ``mission item 2``, ``rally point 0``).
     """
     out = []
     for seq, wp in enumerate(waypoints):
@@ -98,8 +104,32 @@ def prepare(
                 env.check_position(envelope, *position)
             out.append(uploadable(wp, home_geo))
         except (EnvelopeError, MissionFrameError) as exc:
-            raise MissionFrameError(f"mission item {seq}: {exc}") from None
+            raise MissionFrameError(f"{what} {seq}: {exc}") from None
     return out
 
 
-__all__ = ["MissionFrameError", "placed", "prepare", "uploadable"]
+def check_rally_returns(
+    rally: Sequence[Waypoint],
+    envelope: Envelope,
+    home_geo: Sequence[float] | None,
+    return_altitude: float,
+) -> None:
+    """Refuse a rally point a PX4 return would climb above the ceiling from: PX4 returns at
+    the rally point's altitude plus its return altitude (``RTL_RETURN_ALT``, m; its RTL takes
+    the point's altitude as the destination's ground), so both together stay under
+    ``envelope.max_altitude``.
+
+    Raises:
+        MissionFrameError: naming the first rally point, the climb and the limit.
+    """
+    for seq, wp in enumerate(rally):
+        up = (placed(wp, home_geo) or (0.0, 0.0, 0.0))[2]
+        if up + return_altitude > envelope.max_altitude:
+            raise MissionFrameError(
+                f"rally point {seq}: a return there climbs to {up + return_altitude:g} m above "
+                f"home (its {up:g} m plus the return altitude of {return_altitude:g} m), above "
+                f"the envelope's {envelope.max_altitude:g} m: lower the rally point"
+            )
+
+
+__all__ = ["MissionFrameError", "check_rally_returns", "placed", "prepare", "uploadable"]

@@ -27,6 +27,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 FENCE = mavlink.MAV_MISSION_TYPE_FENCE
+RALLY = mavlink.MAV_MISSION_TYPE_RALLY
 ACCEPTED = mavlink.MAV_MISSION_ACCEPTED
 
 
@@ -276,4 +277,14 @@ class Clear(Transfer):
             self._finish(f"refused by the autopilot: {result_name(msg.type)}")
 
 
-__all__ = ["FENCE", "MISSION", "Clear", "Download", "Item", "Transfer", "Upload", "result_name"]
+__all__ = [
+    "FENCE",
+    "MISSION",
+    "RALLY",
+    "Clear",
+    "Download",
+    "Item",
+    "Transfer",
+    "Upload",
+    "result_name",
+]

@@ -7,19 +7,21 @@ the envelope is refused, the limit named), :func:`refuse_takeoff` and :func:`tic
 starts the envelope's action: hold, return or land; home, envelope and mission are published).
 :data:`HANDLERS` are the receive side of the mission protocol; the service operations
 (:func:`push`, :func:`pull`, :func:`clear`, :func:`set_current`, :func:`control`,
-:func:`set_envelope`, :func:`push_fence`) run the pure machines of :mod:`mission_transfer`.
+:func:`set_envelope`) run the pure machines of :mod:`mission_transfer` through
+:mod:`~dronewrapper_bridge_mavlink.uploads`, which also uploads the fence and, with a mission
+that carries them, its rally points.
 
 Frames: the envelope is ENU m in the home frame; a local position minus home (local ENU, from
-HOME_POSITION; the local origin until it arrives) is in that frame. Mission items and the
-fence uploaded to the autopilot are WGS-84 (home's geodetic position plus a flat-earth
-offset: fine within the envelope's kilometre).
+HOME_POSITION; the local origin until it arrives) is in that frame. Mission items, rally
+points and the fence uploaded to the autopilot are WGS-84 (home's geodetic position plus a
+flat-earth offset: fine within the envelope's kilometre).
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Generator
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -27,7 +29,6 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper import envelope as env
 from dronewrapper.envelope import Envelope, EnvelopeError
-from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
 from dronewrapper.msgs.mission import (
@@ -50,10 +51,11 @@ from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
-from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames
+from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import (
+    AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
     HOLD_MODE,
     is_guided,
@@ -67,12 +69,6 @@ log = logging.getLogger("bridge_mavlink")
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
 SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
-FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's breach
-TRANSFER_TIMEOUT_S = 1.5
-TRANSFER_ATTEMPTS = 5
-FENCE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
-FENCE_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
-FENCE_CIRCLE = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
 
 
 class MissionState:
@@ -87,6 +83,7 @@ class MissionState:
         self.limits = autopilot_limits.Limits()  # the autopilot's return and fence parameters
         self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
         self.waypoints: list[Waypoint] = []
+        self.rally: list[Waypoint] = []  # the rally points last uploaded (global frames)
         self.current_seq = 0
         self.last_reached = -1  # the item last reported on mission/reached
         self.transfer: mt.Transfer | None = None
@@ -243,7 +240,7 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
 
 def follow_envelope(core: BridgeCore) -> None:
     """Give the autopilot the envelope: its fence, its return altitude and fence action."""
-    core.start(push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+    core.start(uploads.push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
     core.start(autopilot_limits.sync_steps(core), core.now, core.stamp, background=True)
 
 
@@ -289,99 +286,54 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
 # ---------------------------------------------------------------- operations
 
 
-def run_transfer(core: BridgeCore, transfer: mt.Transfer) -> Generator[float, None, None]:
-    """Drive ``transfer`` to its end (one transfer at a time; the others wait)."""
-    state = core.missions
-    while state.transfer is not None and not state.transfer.done:
-        yield core.now + 0.05
-    state.transfer = transfer
-    try:
-        while True:
-            for name, fields in transfer.due(core.now):
-                core.send(name, *fields)
-            if transfer.done:
-                return
-            yield transfer.wake_at()
-    finally:
-        state.transfer = None
-
-
-def _transfer_args() -> dict[str, Any]:
-    return {"timeout": TRANSFER_TIMEOUT_S, "attempts": TRANSFER_ATTEMPTS}
-
-
-def item_of(waypoint: Waypoint) -> mt.Item:
-    """A Waypoint as MISSION_ITEM_INT content (degrees * 1e7)."""
-    return mt.Item(
-        frame=waypoint.frame,
-        command=waypoint.command,
-        current=int(waypoint.is_current),
-        autocontinue=int(waypoint.autocontinue),
-        param1=waypoint.param1,
-        param2=waypoint.param2,
-        param3=waypoint.param3,
-        param4=waypoint.param4,
-        x=round(waypoint.x_lat * 1e7),
-        y=round(waypoint.y_long * 1e7),
-        z=waypoint.z_alt,
-    )
-
-
-def waypoint_of(item: mt.Item) -> Waypoint:
-    return Waypoint(
-        frame=item.frame,
-        command=item.command,
-        is_current=bool(item.current),
-        autocontinue=bool(item.autocontinue),
-        param1=item.param1,
-        param2=item.param2,
-        param3=item.param3,
-        param4=item.param4,
-        x_lat=item.x / 1e7,
-        y_long=item.y / 1e7,
-        z_alt=item.z,
-    )
-
-
 def push(core: BridgeCore, request: WaypointPush) -> Steps:
-    """mission/push: place and check every item against the envelope
-    (:mod:`~dronewrapper_bridge_mavlink.mission_frames`: local items go up as global ones),
-    then upload them."""
+    """mission/push: check every item and rally point against the envelope (and, on PX4, a
+    return's climb above each rally point: :func:`mission_frames.check_rally_returns`; local
+    items go up as global ones), upload the items, then any rally points
+    (:func:`uploads.push_rally`)."""
     core.require_connected()
+    state = core.missions
     try:
-        waypoints = mission_frames.prepare(
-            request.waypoints, core.missions.envelope, core.missions.home_geo
-        )
+        waypoints = mission_frames.prepare(request.waypoints, state.envelope, state.home_geo)
+        rally = None
+        if request.rally is not None:
+            rally = mission_frames.prepare(
+                request.rally, state.envelope, state.home_geo, what="rally point"
+            )
+        if rally and core.autopilot != AUTOPILOT_ARDUPILOT:  # PX4 returns above the point
+            return_alt = yield from autopilot_limits.px4_return_altitude(core)
+            mission_frames.check_rally_returns(rally, state.envelope, state.home_geo, return_alt)
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
-    items = [item_of(wp) for wp in waypoints]
+    items = [uploads.item_of(wp) for wp in waypoints]
     upload = mt.Upload(
         home_slot.uploaded(core, items),
         core.target(),
         core.now,
         numbered_from=home_slot.offset(core),
-        **_transfer_args(),
+        **uploads.transfer_args(),
     )
-    yield from run_transfer(core, upload)
+    yield from uploads.run_transfer(core, upload)
     if not upload.error:
-        core.missions.waypoints = waypoints
-        core.missions.current_seq = 0
-        core.missions.last_reached = -1
+        state.waypoints = waypoints
+        state.current_seq = 0
+        state.last_reached = -1
         publish_waypoints(core)
-    message = upload.error or f"{len(items)} item(s) uploaded"
-    return WaypointPushResult(
-        success=not upload.error,
-        wp_transfered=max(0, upload.transferred - home_slot.offset(core)),
-        message=message,
-    )
+    transferred = max(0, upload.transferred - home_slot.offset(core))
+    error = upload.error
+    message = error or f"{len(items)} item(s) uploaded"
+    if not error and rally is not None:
+        error = yield from uploads.push_rally(core, rally)
+        message = error or f"{message} and {len(rally)} rally point(s)"
+    return WaypointPushResult(success=not error, wp_transfered=transferred, message=message)
 
 
 def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
     """mission/pull: download the autopilot's mission."""
     core.require_connected()
-    download = mt.Download(core.target(), core.now, **_transfer_args())
-    yield from run_transfer(core, download)
-    waypoints = [waypoint_of(item) for item in home_slot.downloaded(core, download.items)]
+    download = mt.Download(core.target(), core.now, **uploads.transfer_args())
+    yield from uploads.run_transfer(core, download)
+    waypoints = [uploads.waypoint_of(item) for item in home_slot.downloaded(core, download.items)]
     if not download.error:
         core.missions.waypoints = waypoints
         publish_waypoints(core)
@@ -396,8 +348,8 @@ def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
 def clear(core: BridgeCore, _request: WaypointClear) -> Steps:
     """mission/clear: MISSION_CLEAR_ALL."""
     core.require_connected()
-    transfer = mt.Clear(core.target(), core.now, **_transfer_args())
-    yield from run_transfer(core, transfer)
+    transfer = mt.Clear(core.target(), core.now, **uploads.transfer_args())
+    yield from uploads.run_transfer(core, transfer)
     if not transfer.error:
         core.missions.waypoints = []
         core.missions.current_seq = 0
@@ -436,62 +388,12 @@ def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
     return envelope_set.result(state)
 
 
-def fence_items(state: MissionState) -> list[mt.Item]:
-    """The envelope as MAV_MISSION_TYPE_FENCE items: a circle around home of max_distance
-    plus the margin and :data:`FENCE_BACKUP_M` (the autopilot's fence is the backstop: the
-    bridge acts first), the inclusion polygon, the exclusion zones (needs home's geodetic
-    position)."""
-    assert state.home_geo is not None
-    home = state.home_geo
-    envelope = state.envelope
-    frame = mavlink.MAV_FRAME_GLOBAL
-    items = [
-        mt.Item(
-            frame=frame,
-            command=FENCE_CIRCLE,
-            param1=envelope.max_distance + envelope.margin + FENCE_BACKUP_M,
-            x=round(home[0] * 1e7),
-            y=round(home[1] * 1e7),
-        )
-    ]
-    polygons = [(FENCE_INCLUSION, envelope.fence)] if envelope.fence else []
-    polygons += [(FENCE_EXCLUSION, zone) for zone in envelope.exclusions]
-    for command, polygon in polygons:
-        for east, north in polygon:
-            lat, lon = to_geodetic(home, east, north)
-            items.append(
-                mt.Item(
-                    frame=frame,
-                    command=command,
-                    param1=float(len(polygon)),
-                    x=round(lat * 1e7),
-                    y=round(lon * 1e7),
-                )
-            )
-    return items
-
-
-def push_fence(core: BridgeCore, _request: WaypointClear) -> Steps:
-    """geofence/push: upload the envelope's fence to the autopilot (MAV_MISSION_TYPE_FENCE),
-    so it holds even if this bridge stops."""
-    core.require_connected()
-    if core.missions.home_geo is None:
-        raise ServiceError("home is not known yet: the fence cannot be placed", "refused")
-    items = fence_items(core.missions)
-    upload = mt.Upload(items, core.target(), core.now, mission_type=mt.FENCE, **_transfer_args())
-    yield from run_transfer(core, upload)
-    if upload.error:
-        log.warning("fence upload: %s", upload.error)
-    message = upload.error or f"fence of {len(items)} item(s) uploaded"
-    return MissionResult(success=not upload.error, message=message)
-
-
 SERVICES: tuple[tuple[Any, Callable[..., Steps], str], ...] = (
     (registry.MISSION_PUSH, push, "mission"),
     (registry.MISSION_PULL, pull, ""),
     (registry.MISSION_CLEAR, clear, "mission"),
     (registry.MISSION_SET_CURRENT, set_current, "mission"),
-    (registry.GEOFENCE_PUSH, push_fence, "mission"),
+    (registry.GEOFENCE_PUSH, uploads.push_fence, "mission"),
     (registry.ENVELOPE_SET, set_envelope, "envelope"),
 )
 """(service, operation, the command-lease action that guards it; "" unguarded)."""

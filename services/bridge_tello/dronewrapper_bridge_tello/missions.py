@@ -167,7 +167,14 @@ def publish_waypoints(core: TelloCore) -> None:
 
 
 def push(core: TelloCore, request: WaypointPush) -> Steps:
-    """mission/push: local waypoints only, each inside the envelope."""
+    """mission/push: local waypoints only, each inside the envelope; no rally points (the
+    Tello's return flies home)."""
+    if request.rally:
+        raise ServiceError(
+            f"the Tello has no rally points ({len(request.rally)} given): its return flies "
+            "home. Upload the plan without its rallyPoints",
+            "refused",
+        )
     for seq, wp in enumerate(request.waypoints):
         if wp.frame != FRAME_LOCAL_ENU:
             raise ServiceError(

@@ -28,7 +28,7 @@ from dronewrapper_sim.px4 import modes, offboard, telemetry
 from dronewrapper_sim.px4.commander import FORCE_MAGIC, Commander, StatusText
 from dronewrapper_sim.px4.flight_control import Gains, PositionController
 from dronewrapper_sim.px4.geofence import Geofence
-from dronewrapper_sim.px4.mission import MissionRunner, MissionStore
+from dronewrapper_sim.px4.mission import RALLY, MissionRunner, MissionStore
 from dronewrapper_sim.px4.params import ParamStore
 
 log = logging.getLogger("sim.autopilot")
@@ -146,6 +146,9 @@ class Autopilot:
             max_speed=lambda: self.params["MPC_XY_VEL_MAX"],
         )
         self.commander.geofence = Geofence(self.missions, self.local_of)
+        self.commander.rally_points = lambda: [
+            self.local_of(item.x / 1e7, item.y / 1e7) for item in self.missions.lists[RALLY]
+        ]
         self.controller = PositionController()
         self.battery = Battery(
             cells=int(self.params["BAT1_N_CELLS"]), capacity_mah=self.params["BAT1_CAPACITY"]

@@ -17,7 +17,10 @@ Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
 - OFFBOARD: the signal is lost COM_OF_LOSS_T s after the last setpoint -> "Failsafe
   activated" and the fallback (COM_OBL_RC_ACT, and NAV_RCL_ACT when that needs RC): RTL by
   default; not latched: the vehicle is back in OFFBOARD as soon as setpoints resume;
-- after a disarm, a LAND or RTL intention reverts to the mode intended before it.
+- after a disarm, a LAND or RTL intention reverts to the mode intended before it;
+- RTL flies to the closest of home and the rally points (PX4's RTL_TYPE 0, its default: a
+  rally point within 10 m of home is ignored, one is chosen when 2 m closer than home); the
+  ground there is at home's height (a flat world; the rally point's altitude is not flown).
 
 PX4's mode and arming rules are one state machine, each rule next to the PX4 behaviour it
 reproduces.
@@ -26,6 +29,7 @@ reproduces.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -44,6 +48,7 @@ from dronewrapper_sim.px4.params import ParamStore
 
 ARM_DENIED = "Arming denied: Resolve system health failures first"
 FORCE_MAGIC = 21196  # COMPONENT_ARM_DISARM param2 that forces arm/disarm
+RALLY_MIN_FROM_HOME_M = 10.0  # PX4's MAX_DIST_FROM_HOME_FOR_LAND_APPROACHES
 
 
 class LandedState(IntEnum):
@@ -120,6 +125,8 @@ class Commander:
         self._rtl_phase = ""
         self._rtl_z = 0.0
         self._rtl_wait_since = 0.0
+        self._rtl_dest = self.home  # local ENU m: home or a rally point
+        self.rally_points: Callable[[], list[tuple[float, float]]] = list  # local ENU m
         self.mission: mission.MissionRunner | None = None  # set by the autopilot
         self.geofence: geofence.Geofence | None = None
 
@@ -305,8 +312,19 @@ class Commander:
         if mode is Mode.RTL:
             self._start_rtl(state)
 
-    def _start_rtl(self, state: QuadState) -> None:
+    def _rtl_destination(self, state: QuadState) -> tuple[float, float, float]:
+        """The closest of home and the rally points (module docstring), local ENU m."""
         hx, hy, hz = self.home
+        best, best_dist = self.home, math.hypot(state.x - hx, state.y - hy)
+        for x, y in self.rally_points():
+            dist = math.hypot(state.x - x, state.y - y)
+            if math.hypot(x - hx, y - hy) > RALLY_MIN_FROM_HOME_M and dist + 2.0 < best_dist:
+                best, best_dist = (x, y, hz), dist
+        return best
+
+    def _start_rtl(self, state: QuadState) -> None:
+        self._rtl_dest = self._rtl_destination(state)
+        hx, hy, hz = self._rtl_dest
         dist = math.hypot(state.x - hx, state.y - hy)
         if self.landed:
             self._rtl_phase = "done"
@@ -398,7 +416,7 @@ class Commander:
 
     def _rtl_target(self, state: QuadState, now: float) -> Target:
         p = self.params
-        hx, hy, hz = self.home
+        hx, hy, hz = self._rtl_dest
         x0, y0, _, yaw0 = self._hold
         limits: Limits = {
             "max_xy": p["MPC_XY_CRUISE"],
