@@ -177,3 +177,19 @@ def test_a_doctored_token_is_refused_by_name_on_statustext(rig):
     (text,) = [m.text for m in texts]
     assert "/fmu/out/vehicle_status" in text and DOCTORED in text
     assert Versions().expected["/fmu/out/vehicle_status"] in text
+
+
+def test_pxs_high_rate_samples_wait_undecoded_for_the_tick(rig):
+    rig.session.replay()
+    rig.bridge.driver.feed(rig.bridge.core.tick)
+    decoded = rig.bridge.core.samples_received
+    key = next(k for k in RECORDING["samples"] if "/vehicle_local_position/" in k)
+    payload = bytes.fromhex(RECORDING["samples"][key]["payload"])
+    for _ in range(50):  # PX4's ~110 Hz local position between two ticks, and more
+        rig.session.px4_publishes(key, payload)
+    assert rig.bridge.core.samples_received == decoded  # the callback decoded nothing
+    assert rig.bridge.core.inbox.replaced >= 49
+    poses = []
+    rig.user.subscribe(registry.LOCAL_POSE, poses.append)
+    rig.bridge.driver.feed(rig.bridge.core.tick)
+    assert rig.bridge.core.samples_received == decoded + 1 and len(poses) == 1

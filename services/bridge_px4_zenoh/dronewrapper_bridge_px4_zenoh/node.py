@@ -7,7 +7,9 @@ Only I/O here. Everything the bridge decides is in
 :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. PX4's samples arrive on one
 subscriber per topic the bridge reads (``<domain>/fmu/out/<topic>/*/*``, any version: a
 subscriber to all of ``/fmu/out`` would also take sensor_combined (~245 Hz) and the rest, and a
-slow reader pushes back on PX4) and its tokens on a liveliness subscriber (with history),
+slow reader pushes back on PX4); those of the high-rate topics (:data:`~.core.COALESCED`) only
+keep the newest raw sample for the core's tick (:mod:`.newest`), the others feed the core; and
+its tokens on a liveliness subscriber (with history),
 both on the node's own session: the router PX4's zenoh-pico dials is the project's. What the
 core writes to ``/fmu/in`` is CDR-encoded with rmw_zenoh's attachment
 (:mod:`dronewrapper_ros2_codec`, the ROS 2 codec) on the exact key of the bridge's version,
@@ -39,7 +41,7 @@ from dronewrapper_bridge_px4_zenoh import flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
-from dronewrapper_bridge_px4_zenoh.core import Outbox, Px4ZenohCore
+from dronewrapper_bridge_px4_zenoh.core import COALESCED, Outbox, Px4ZenohCore
 from dronewrapper_ros2_codec import attachment, cdr
 from dronewrapper_ros2_codec.names import PUBLISHER, NodeName, parse_endpoint, qos_text
 
@@ -136,7 +138,10 @@ class Bridge(BridgeNode[Px4ZenohCore]):
         for topic in t.TOPICS:  # only those it reads: PX4 publishes ~50 topics
             if topic.direction == t.OUT:
                 key = topic.any_version(domain)
-                self._declared.append(self.session.declare_subscriber(key, self.on_px4_sample))
+                receive = self.on_px4_sample
+                if topic in COALESCED:
+                    receive = self.newest_of(topic)
+                self._declared.append(self.session.declare_subscriber(key, receive))
         self._declared.append(
             liveliness.declare_subscriber(f"@ros2_lv/{domain}/**", self.on_token, history=True)
         )
@@ -147,6 +152,16 @@ class Bridge(BridgeNode[Px4ZenohCore]):
     def on_px4_sample(self, sample: Any) -> None:
         """A sample on ``<domain>/fmu/out/**``."""
         self.driver.feed(self.core.on_data, str(sample.key_expr), sample.payload.to_bytes())
+
+    def newest_of(self, topic: t.Px4Topic) -> Callable[[Any], None]:
+        """The receive callback of a high-rate topic: it only keeps the raw sample as the
+        topic's newest (the core decodes it at its tick; no core lock taken here)."""
+        put, name = self.core.inbox.put, topic.name
+
+        def receive(sample: Any) -> None:
+            put(name, str(sample.key_expr), sample.payload.to_bytes())
+
+        return receive
 
     def on_token(self, sample: Any) -> None:
         """A liveliness token appearing (a vanished one changes nothing the bridge decodes)."""
