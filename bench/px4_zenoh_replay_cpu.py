@@ -4,8 +4,8 @@ A replayer process plays PX4's part on the graph's router (``compose/px4_zenoh.y
 declares the liveliness tokens recorded from a PX4 SIH (``tests/data/px4_zenoh/sih_ground.json``)
 and publishes each recorded sample on its data key, with its rmw attachment, at PX4's rates
 (``--rates``, Hz per topic; the default is what PX4 SIH publishes: vehicle_attitude ~230 Hz,
-vehicle_local_position ~120 Hz, vehicle_global_position ~120 Hz, ...). An observer counts the
-bridge's poses. Over ``--seconds`` it reports:
+vehicle_local_position and vehicle_global_position ~120 Hz, battery_status ~100 Hz, ...).
+An observer counts the bridge's poses. Over ``--seconds`` it reports:
 
 * the bridge process's CPU (user + system time per second of wall time, % of one core);
 * the load it ran under (PX4 samples/s actually published);
@@ -41,7 +41,7 @@ RATES = {
     "vehicle_local_position": 120.0,
     "vehicle_global_position": 120.0,
     "vehicle_status": 2.0,
-    "battery_status": 1.0,
+    "battery_status": 100.0,
     "vehicle_land_detected": 1.0,
 }
 

@@ -81,3 +81,15 @@ def test_global_position_is_decoded_only_when_due(rig):
     assert 9 <= published <= 11  # global_position_max_hz: 10
     assert rig.core.samples_received - decoded == published
     assert rig.core.connected  # skipped samples still show PX4 is there
+
+
+def test_battery_is_decoded_only_for_its_periodic_publication(rig):
+    decoded = rig.core.samples_received
+    for i in range(60):  # 2 s of ticks at 30 Hz, PX4's ~100 Hz battery_status before each
+        put(rig, t.BATTERY, voltage_v=15.0 + i / 100)
+        rig.now += 1 / 30
+        rig.tick()
+    published = rig.published(registry.BATTERY)
+    assert 3 <= len(published) <= 5  # battery_rate_hz: 2
+    assert rig.core.samples_received - decoded <= len(published) + 1
+    assert published[-1].voltage > 15.4  # a recent sample, not the first one kept

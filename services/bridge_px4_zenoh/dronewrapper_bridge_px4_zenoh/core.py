@@ -12,7 +12,7 @@ decoded, and the mismatch is reported once per topic, naming topic and both hash
 high-rate topics (:data:`COALESCED`) are not fed sample by sample: the node puts their raw
 samples in :attr:`Px4ZenohCore.inbox` (:mod:`.newest`) and :meth:`Px4ZenohCore.tick` decodes
 the newest of each, so the bridge decodes at its stream rate whatever PX4's rate; the others
-(status, landed state, battery, command acks: a few Hz) go through :meth:`Px4ZenohCore.on_data`.
+(status, landed state, command acks: a few Hz) go through :meth:`Px4ZenohCore.on_data`.
 
 The rules are bridge_base's (commander lease, late setpoints, refusals published; the
 guided-mode failsafe: stream, hold, priming, commander lost, never fighting the pilot) and the
@@ -66,7 +66,7 @@ log = logging.getLogger("bridge_px4_zenoh")
 
 STREAM_GAP_S = 0.5  # s without a setpoint written: the stream has stopped (priming restarts)
 ENTERED_HOLD_S = 1.5  # s a status showing the mode an accepted command left is taken as stale
-COALESCED: tuple[t.Px4Topic, ...] = (t.ATTITUDE, t.LOCAL_POSITION, t.GLOBAL_POSITION)
+COALESCED: tuple[t.Px4Topic, ...] = (t.ATTITUDE, t.LOCAL_POSITION, t.GLOBAL_POSITION, t.BATTERY)
 """PX4's high-rate topics, decoded at the tick from :attr:`Px4ZenohCore.inbox`, in this order
 (a pose needs the attitude)."""
 
@@ -198,14 +198,16 @@ class Px4ZenohCore(PureCore):
         self.on_value(topic, value)
 
     def _drain(self) -> None:
-        """Decode the newest inbox sample of each coalesced topic (global position only when
-        one is due for publication)."""
+        """Decode the newest inbox sample of each coalesced topic (global position and battery
+        only when one is due for publication: PX4 SIH sends each at ~100 Hz)."""
         newest = self.inbox.take()
         for topic in COALESCED:
             raw = newest.get(topic.name)
             if raw is None:
                 continue
-            if topic is t.GLOBAL_POSITION and not self._global_due():
+            if (topic is t.GLOBAL_POSITION and not self._global_due()) or (
+                topic is t.BATTERY and not self._battery_due()
+            ):
                 self.last_sample_at = self.now  # PX4 is there; the sample is not needed
                 continue
             self._on_raw(raw.key, raw.payload)
@@ -213,6 +215,11 @@ class Px4ZenohCore(PureCore):
     def _global_due(self) -> bool:
         max_hz = self.config.global_position_max_hz
         return max_hz <= 0 or self.now - self._last_global_pub >= 0.9 / max_hz
+
+    def _battery_due(self) -> bool:
+        """A battery sample is needed: none yet, or this tick publishes it (:meth:`_periodic`)."""
+        period = 1.0 / self.config.battery_rate_hz
+        return self.battery is None or self.now - self._last_battery_pub >= period
 
     def on_value(self, topic: t.Px4Topic, value: dict[str, Any]) -> None:
         """A decoded sample of ``topic`` (time already set)."""
