@@ -2,14 +2,15 @@
 
 PX4 publishes ``vehicle_local_position`` at ~110 Hz and ``vehicle_attitude`` at ~200 Hz (global
 position ~50 Hz); the bridge publishes pose at its stream rate (``stream_rate_hz``, the
-contract's 30 Hz). Decoding every sample as it arrives cost one core's worth of Python on a
-loaded machine and starved the setpoint stream. So a receive callback only stores the raw
-sample here (one dict assignment under a small lock, nothing decoded, no core lock taken), a
-newer one replacing the one not yet read; the core's tick takes what is there and decodes only
-that (:meth:`~dronewrapper_bridge_px4_zenoh.core.Px4ZenohCore.tick`).
+contract's 30 Hz). Decoding every sample as it arrives cost a large share of a core in Python
+on a loaded machine and starved the setpoint stream. So raw samples are only stored here (one
+dict assignment under a small lock, nothing decoded, no core lock taken), a newer one
+replacing the one not yet read; the core's tick takes what is there and decodes only that
+(:meth:`~dronewrapper_bridge_px4_zenoh.core.Px4ZenohCore.tick`). The node puts, before each
+tick, the newest sample its Zenoh subscriber kept (a ring of one).
 
-:class:`NewestSamples` is the one thread-safe piece of the core's state: the receive threads
-put, the tick takes, each under the store's own lock (held for a dict operation only).
+:class:`NewestSamples` is the one thread-safe piece of the core's state: whoever puts and the
+tick that takes each hold the store's own lock (for a dict operation only).
 """
 
 from __future__ import annotations
