@@ -37,9 +37,11 @@ test-fast: setup  # the unit and service tiers: no sockets, no processes, inject
 bench: setup
 	$(BIN)/python -m bench $(ARGS)
 
-lint: setup
+lint: setup  # ruff; vermin: the on-board code runs on a Jetson's Python 3.10
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+	$(BIN)/vermin -t=3.10- --no-tips --violations --eval-annotations -q \
+	  sdk/dronewrapper $(filter-out %.egg-info,$(wildcard services/*/dronewrapper_*)) sim/dronewrapper_sim compose/dronewrapper_compose
 
 typecheck: setup  # mypy over every package (the files and settings: pyproject.toml)
 	$(BIN)/mypy

@@ -47,8 +47,7 @@ def parse_requirement(text: str) -> tuple[str, list[str]]:
 
 def local_projects(repo: Path = REPO) -> dict[str, dict]:
     """Each distribution of the repository (normalized name -> its ``[project]`` table)."""
-    # Python 3.11 (novermin): the check runs on the CI machine, not on a Jetson (3.10)
-    import tomllib  # type: ignore[import-not-found]  # the type check is of Python 3.10
+    import tomllib  # type: ignore[import-not-found]  # novermin: the check runs on CI, not a Jetson
 
     files = [repo / "pyproject.toml", *sorted(repo.glob("*/pyproject.toml"))]
     files += sorted(repo.glob("services/*/pyproject.toml"))

@@ -37,8 +37,10 @@ PROBE = textwrap.dedent(
     heavy = [m for m in ("cv2", "pymavlink", "onnxruntime", "yaml", "matplotlib")
              if m in sys.modules]
     dists = sorted(d.metadata["Name"].lower() for d in md.distributions())
+    import importlib.resources
+    typed = importlib.resources.files("dronewrapper").joinpath("py.typed").is_file()
     print(json.dumps({"error": error, "jpeg_error": jpeg_error, "heavy_imported": heavy,
-                      "dists": dists}))
+                      "dists": dists, "typed": typed}))
     """
 )
 
@@ -77,6 +79,7 @@ def test_sdk_installs_alone_with_light_dependencies(tmp_path):
     for heavy in ("opencv-python-headless", "opencv-python", "pymavlink", "onnxruntime"):
         assert heavy not in report["dists"]
     assert report["heavy_imported"] == []
+    assert report["typed"]  # PEP 561: an app's type checker reads the SDK's annotations
     assert "cannot reach the Zenoh router" in report["error"]
     assert "pip install 'dronewrapper[images]'" in report["jpeg_error"]  # cv2 is optional
 

@@ -40,6 +40,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.runtime.errors import ServiceError
+from dronewrapper_bridge_base.flight_request import checked, failed
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
@@ -53,17 +54,6 @@ log = logging.getLogger("bridge_mavlink")
 
 MAX_HEIGHT_M = 1000.0
 MAX_TIMEOUT_S = 600.0
-
-
-def checked(name: str, value: float, low: float, high: float) -> float:
-    """``value`` if finite and in (``low``, ``high``]; ValueError naming ``name`` otherwise."""
-    if not (isinstance(value, int | float) and math.isfinite(value) and low < value <= high):
-        raise ValueError(f"{name} must be in ({low:g}, {high:g}], got {value!r}")
-    return float(value)
-
-
-def failed(failure: str, message: str, step: str = "", result: int | None = None):
-    return FlightResult(success=False, failure=failure, step=step, result=result, message=message)
 
 
 def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:

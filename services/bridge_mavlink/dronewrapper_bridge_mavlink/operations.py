@@ -33,8 +33,8 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
-from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.frames import yaw_enu_to_ned
+from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions
@@ -263,21 +263,3 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
 def shown_mode(core: BridgeCore) -> str:
     """The mode the last HEARTBEAT showed (or an accepted command set), "" before any."""
     return core.heartbeat_state.mode if core.heartbeat_state else ""
-
-
-def prime(core: BridgeCore) -> Generator[float, None, None]:
-    """Stream for > ``offboard_prime_s`` before OFFBOARD: the fresh setpoint, else a hold at
-    the current pose (streamed by the core's tick). ServiceError when it cannot."""
-    need = core.config.offboard_prime_s
-    if core.streamed_for(core.now) >= need:
-        return
-    if core.pose() is None and core.failsafe.fresh_target(core.now) is None:
-        raise ServiceError(
-            "cannot enter OFFBOARD: no local position to hold and no setpoint stream", "refused"
-        )
-    core.failsafe.start_priming(core.now, need + 2.0)
-    deadline = core.now + need + 2.0
-    while core.streamed_for(core.now) < need:
-        if core.now >= deadline:
-            raise ServiceError("could not stream setpoints before OFFBOARD", "refused")
-        yield deadline

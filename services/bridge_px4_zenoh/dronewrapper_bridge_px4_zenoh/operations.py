@@ -27,8 +27,8 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
-from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.frames import yaw_enu_to_ned
+from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
@@ -216,24 +216,6 @@ def armed(core: Px4ZenohCore) -> bool:
 def shown_mode(core: Px4ZenohCore) -> str:
     """The mode PX4's last vehicle_status showed, "" before any."""
     return core.heartbeat_state.mode if core.heartbeat_state else ""
-
-
-def prime(core: Px4ZenohCore) -> Generator[float, None, None]:
-    """Stream for > ``offboard_prime_s`` before OFFBOARD: the fresh setpoint, else a hold at
-    the current pose (streamed by the core's tick). ServiceError when it cannot."""
-    need = core.config.offboard_prime_s
-    if core.streamed_for(core.now) >= need:
-        return
-    if core.pose() is None and core.failsafe.fresh_target(core.now) is None:
-        raise ServiceError(
-            "cannot enter OFFBOARD: no local position to hold and no setpoint stream", "refused"
-        )
-    core.failsafe.start_priming(core.now, need + 2.0)
-    deadline = core.now + need + 2.0
-    while core.streamed_for(core.now) < need:
-        if core.now >= deadline:
-            raise ServiceError("could not stream setpoints before OFFBOARD", "refused")
-        yield deadline
 
 
 def breach_action(core: Px4ZenohCore, action: str) -> Steps:
