@@ -44,6 +44,24 @@ def sample(key: str, payload: bytes, att: bytes | None = None) -> Any:
     )
 
 
+class Ring:
+    """A subscriber with Zenoh's ``RingChannel(1)``: the newest sample, taken by try_recv."""
+
+    def __init__(self) -> None:
+        self.newest: Any = None
+        self.received = 0
+
+    def __call__(self, sample: Any) -> None:
+        self.newest, self.received = sample, self.received + 1
+
+    def try_recv(self) -> Any:
+        sample, self.newest = self.newest, None
+        return sample
+
+    def undeclare(self) -> None:
+        pass
+
+
 class Px4Session(RosSession):
     """PX4's side of the router: replays the recording, answers vehicle commands."""
 
@@ -69,6 +87,13 @@ class Px4Session(RosSession):
         for key, recorded in RECORDING["samples"].items():
             att = bytes.fromhex(recorded["attachment"])
             self.px4_publishes(key, bytes.fromhex(recorded["payload"]), att)
+
+    def declare_subscriber(self, key: str, callback: Any, **kw: Any) -> Any:
+        if isinstance(callback, zenoh.handlers.RingChannel):
+            ring = Ring()
+            super().declare_subscriber(key, ring, **kw)
+            return ring
+        return super().declare_subscriber(key, callback, **kw)
 
     def declare_publisher(self, key: str, **qos: Any) -> Any:
         publisher = super().declare_publisher(key, **qos)
@@ -125,7 +150,7 @@ def test_pxs_recorded_samples_arrive_on_the_mavros_keys(rig):
         rig.latest(registry.BATTERY),
     )
     rig.session.replay()
-    rig.bridge.driver.feed(rig.bridge.core.tick)
+    rig.bridge.tick_once("stream")
     assert state.value.connected and state.value.mode == "AUTO.LOITER" and not state.value.armed
     assert pose.value.header.frame_id == "map"
     assert 14.0 < battery.value.voltage < 17.0
@@ -177,3 +202,20 @@ def test_a_doctored_token_is_refused_by_name_on_statustext(rig):
     (text,) = [m.text for m in texts]
     assert "/fmu/out/vehicle_status" in text and DOCTORED in text
     assert Versions().expected["/fmu/out/vehicle_status"] in text
+
+
+def test_pxs_high_rate_samples_wait_undecoded_for_the_tick(rig):
+    rig.session.replay()
+    rig.bridge.tick_once("stream")
+    decoded = rig.bridge.core.samples_received
+    key = next(k for k in RECORDING["samples"] if "/vehicle_local_position/" in k)
+    payload = bytes.fromhex(RECORDING["samples"][key]["payload"])
+    for _ in range(50):  # PX4's ~110 Hz local position between two ticks, and more
+        rig.session.px4_publishes(key, payload)
+    assert rig.bridge.core.samples_received == decoded  # nothing decoded on arrival
+    poses = []
+    rig.user.subscribe(registry.LOCAL_POSE, poses.append)
+    rig.bridge.tick_once("stream")
+    assert rig.bridge.core.samples_received == decoded + 1 and len(poses) == 1
+    rig.bridge.tick_once("stream")  # nothing new from PX4: nothing decoded, no pose
+    assert rig.bridge.core.samples_received == decoded + 1 and len(poses) == 1

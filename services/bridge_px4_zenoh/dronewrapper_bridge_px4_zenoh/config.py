@@ -41,7 +41,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     state_rate_hz: float = 2.0  # periodic State (also on change)
     extended_state_rate_hz: float = 4.0  # periodic ExtendedState (also on change)
     battery_rate_hz: float = 2.0
-    pose_max_hz: float = 0.0  # cap on pose and velocity samples; 0: every local position
+    pose_max_hz: float = 0.0  # cap on pose and velocity samples; 0: one a tick (stream rate)
     global_position_max_hz: float = 10.0
     limits: Limits = msgspec.field(default_factory=Limits)
     envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly

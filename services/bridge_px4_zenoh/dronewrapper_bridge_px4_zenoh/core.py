@@ -8,12 +8,20 @@ no sockets, no threads, no clock. Every entry point takes the time (``now`` mono
 values for PX4's ``/fmu/in`` topics (the node encodes and writes them on the key the firmware
 announced) and samples for the MAVROS-equivalent keys. Decoding happens here too (CDR is
 pure), after the version check: a sample or token whose type hash is not the bridge's is never
-decoded, and the mismatch is reported once per topic, naming topic and both hashes.
+decoded, and the mismatch is reported once per topic, naming topic and both hashes. PX4's
+high-rate topics (:data:`COALESCED`) are not fed sample by sample: the node puts their raw
+samples in :attr:`Px4ZenohCore.inbox` (:mod:`.newest`) and :meth:`Px4ZenohCore.tick` decodes
+the newest of each, so the bridge decodes at its stream rate whatever PX4's rate; the others
+(status, landed state, command acks: a few Hz) go through :meth:`Px4ZenohCore.on_data`.
 
 The rules are bridge_base's (commander lease, late setpoints, refusals published; the
 guided-mode failsafe: stream, hold, priming, commander lost, never fighting the pilot) and the
 SDK's (setpoint validation; the envelope, :mod:`.envelope_rules`); the service calls are
 operations (:mod:`.operations`, :mod:`.flight`).
+
+Over 400 lines because :class:`Px4ZenohCore` is one state machine whose parts (PX4's samples,
+the stream tick, setpoints, state publication) read and write the same state; its rules and
+operations already live in the modules named above.
 """
 
 from __future__ import annotations
@@ -49,6 +57,7 @@ from dronewrapper_bridge_px4_zenoh import telemetry as tm
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh import trajectory
 from dronewrapper_bridge_px4_zenoh.config import Config
+from dronewrapper_bridge_px4_zenoh.newest import NewestSamples
 from dronewrapper_bridge_px4_zenoh.versions import VersionMismatch, Versions
 from dronewrapper_ros2_codec import cdr
 from dronewrapper_ros2_codec.names import Endpoint
@@ -57,6 +66,9 @@ log = logging.getLogger("bridge_px4_zenoh")
 
 STREAM_GAP_S = 0.5  # s without a setpoint written: the stream has stopped (priming restarts)
 ENTERED_HOLD_S = 1.5  # s a status showing the mode an accepted command left is taken as stale
+COALESCED: tuple[t.Px4Topic, ...] = (t.ATTITUDE, t.LOCAL_POSITION, t.GLOBAL_POSITION, t.BATTERY)
+"""PX4's high-rate topics, decoded at the tick from :attr:`Px4ZenohCore.inbox`, in this order
+(a pose needs the attitude)."""
 
 
 @dataclass
@@ -99,7 +111,8 @@ class Px4ZenohCore(PureCore):
         self.ext = ExtendedState()
         self.battery: BatteryState | None = None
         self.acks: list[tuple[float, int, int]] = []  # (when, command, result), newest last
-        self.samples_received = 0
+        self.inbox = NewestSamples()  # COALESCED topics' newest raw samples (thread-safe)
+        self.samples_received = 0  # samples decoded
         self.setpoints_sent = 0
         self.last_sample_at = -math.inf
         self._reported: set[str] = set()  # topics whose mismatch was reported
@@ -155,6 +168,11 @@ class Px4ZenohCore(PureCore):
         """One sample on PX4's ``/fmu/out`` keys: checked against the bridge's version of its
         type, decoded, handled."""
         self._at(now, stamp)
+        self._on_raw(key, payload)
+        if self.operations:
+            self.advance(now, stamp)
+
+    def _on_raw(self, key: str, payload: bytes) -> None:
         parsed = t.parse_key(key)
         if parsed is None or parsed.domain != self.config.domain:
             return
@@ -173,13 +191,35 @@ class Px4ZenohCore(PureCore):
             log.debug("undecodable %s: %s", topic.name, exc)
             return
         self.samples_received += 1
-        self.last_sample_at = now
+        self.last_sample_at = self.now
         if not self.connected:
             self.connected = True
             log.info("PX4 connected (samples on its Zenoh keys)")
         self.on_value(topic, value)
-        if self.operations:
-            self.advance(now, stamp)
+
+    def _drain(self) -> None:
+        """Decode the newest inbox sample of each coalesced topic (global position and battery
+        only when one is due for publication: PX4 SIH sends each at ~100 Hz)."""
+        newest = self.inbox.take()
+        for topic in COALESCED:
+            raw = newest.get(topic.name)
+            if raw is None:
+                continue
+            if (topic is t.GLOBAL_POSITION and not self._global_due()) or (
+                topic is t.BATTERY and not self._battery_due()
+            ):
+                self.last_sample_at = self.now  # PX4 is there; the sample is not needed
+                continue
+            self._on_raw(raw.key, raw.payload)
+
+    def _global_due(self) -> bool:
+        max_hz = self.config.global_position_max_hz
+        return max_hz <= 0 or self.now - self._last_global_pub >= 0.9 / max_hz
+
+    def _battery_due(self) -> bool:
+        """A battery sample is needed: none yet, or this tick publishes it (:meth:`_periodic`)."""
+        period = 1.0 / self.config.battery_rate_hz
+        return self.battery is None or self.now - self._last_battery_pub >= period
 
     def on_value(self, topic: t.Px4Topic, value: dict[str, Any]) -> None:
         """A decoded sample of ``topic`` (time already set)."""
@@ -197,8 +237,7 @@ class Px4ZenohCore(PureCore):
         elif topic is t.LOCAL_POSITION:
             self._on_local_position(value)
         elif topic is t.GLOBAL_POSITION:
-            max_hz = self.config.global_position_max_hz
-            if max_hz <= 0 or self.now - self._last_global_pub >= 0.9 / max_hz:
+            if self._global_due():
                 self._last_global_pub = self.now
                 self.publish(registry.GLOBAL_POSITION, tm.global_position(value, self.stamp))
         elif topic is t.BATTERY:
@@ -312,8 +351,10 @@ class Px4ZenohCore(PureCore):
 
     def tick(self, now: float, stamp: float) -> None:
         """The stream loop's tick (>= 20 Hz): the failsafe's stream and actions, link
-        supervision, the envelope, periodic samples, operations."""
+        supervision, the envelope, periodic samples, operations; first the newest samples of
+        PX4's high-rate topics (:meth:`_drain`)."""
         self._at(now, stamp)
+        self._drain()
         if self.connected and now - self.last_sample_at > self.config.link_timeout:
             self.connected = False
             log.warning("no sample from PX4 for %.1f s: disconnected", now - self.last_sample_at)

@@ -7,15 +7,18 @@ Only I/O here. Everything the bridge decides is in
 :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. PX4's samples arrive on one
 subscriber per topic the bridge reads (``<domain>/fmu/out/<topic>/*/*``, any version: a
 subscriber to all of ``/fmu/out`` would also take sensor_combined (~245 Hz) and the rest, and a
-slow reader pushes back on PX4) and its tokens on a liveliness subscriber (with history),
-both on the node's own session: the router PX4's zenoh-pico dials is the project's. What the
-core writes to ``/fmu/in`` is CDR-encoded with rmw_zenoh's attachment
+slow reader pushes back on PX4); those of the high-rate topics (:data:`~.core.COALESCED`,
+~100-230 Hz each) keep only their newest sample, in Zenoh (a ring of one: no Python runs per
+sample), which the stream loop moves to the core's inbox (:mod:`.newest`) before each tick;
+the others (a few Hz) feed the core from their callbacks; and its tokens on a liveliness
+subscriber (with history), all on the node's own session: the router PX4's zenoh-pico dials is
+the project's. What the core writes to ``/fmu/in`` is CDR-encoded with rmw_zenoh's attachment
 (:mod:`dronewrapper_ros2_codec`, the ROS 2 codec) on the exact key of the bridge's version,
 and the bridge announces its publishers with liveliness tokens as an rmw_zenoh node would.
 Time is the node's clock alone (the core starts at it, the driver and the stream loop read
 it, the attachment's stamp is its wall time). Threads: Zenoh callbacks (samples, tokens,
-setpoints), a stream loop at ``stream_rate_hz``
-(the core's tick) and the node's service workers.
+setpoints), a stream loop at ``stream_rate_hz`` (the high-rate samples collected, then the
+core's tick) and the node's service workers.
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ from dronewrapper_bridge_px4_zenoh import flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
-from dronewrapper_bridge_px4_zenoh.core import Outbox, Px4ZenohCore
+from dronewrapper_bridge_px4_zenoh.core import COALESCED, Outbox, Px4ZenohCore
 from dronewrapper_ros2_codec import attachment, cdr
 from dronewrapper_ros2_codec.names import PUBLISHER, NodeName, parse_endpoint, qos_text
 
@@ -103,6 +106,7 @@ class Bridge(BridgeNode[Px4ZenohCore]):
         self.session = session if session is not None else node.session
         self.writers: dict[str, Writer] = {}
         self._declared: list[Any] = []
+        self._rings: list[tuple[str, Any]] = []  # (topic name, its ring subscriber)
 
     def start(self) -> list[threading.Thread]:
         """Declare PX4's side and the services (:meth:`declare`); start the stream loop."""
@@ -136,7 +140,13 @@ class Bridge(BridgeNode[Px4ZenohCore]):
         for topic in t.TOPICS:  # only those it reads: PX4 publishes ~50 topics
             if topic.direction == t.OUT:
                 key = topic.any_version(domain)
-                self._declared.append(self.session.declare_subscriber(key, self.on_px4_sample))
+                if topic in COALESCED:  # the newest sample kept in Zenoh, no Python per sample
+                    ring = self.session.declare_subscriber(key, zenoh.handlers.RingChannel(1))
+                    self._rings.append((topic.name, ring))
+                    self._declared.append(ring)
+                else:
+                    sub = self.session.declare_subscriber(key, self.on_px4_sample)
+                    self._declared.append(sub)
         self._declared.append(
             liveliness.declare_subscriber(f"@ros2_lv/{domain}/**", self.on_token, history=True)
         )
@@ -147,6 +157,24 @@ class Bridge(BridgeNode[Px4ZenohCore]):
     def on_px4_sample(self, sample: Any) -> None:
         """A sample on ``<domain>/fmu/out/**``."""
         self.driver.feed(self.core.on_data, str(sample.key_expr), sample.payload.to_bytes())
+
+    def collect(self) -> None:
+        """Move each high-rate topic's newest sample from its subscriber's ring (one sample,
+        replaced in Zenoh as PX4 publishes) into the core's inbox, for the tick to decode."""
+        put = self.core.inbox.put
+        for name, ring in self._rings:
+            sample = ring.try_recv()
+            if sample is not None:
+                put(name, str(sample.key_expr), sample.payload.to_bytes())
+
+    def tick_once(self, what: str) -> None:
+        """One stream tick: PX4's newest high-rate samples collected, then the core's tick."""
+        try:
+            self.collect()
+        except Exception:
+            self.node.callback_errors[what] += 1
+            self.log.exception("%s collect error", what)
+        super().tick_once(what)
 
     def on_token(self, sample: Any) -> None:
         """A liveliness token appearing (a vanished one changes nothing the bridge decodes)."""
