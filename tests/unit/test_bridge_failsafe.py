@@ -13,7 +13,7 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
-from dronewrapper_bridge_mavlink.failsafe import Failsafe, FailsafeConfig, is_airborne
+from dronewrapper_bridge_base.guided_failsafe import Failsafe, FailsafeConfig, is_airborne
 from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
 
 POSE = ((1.0, 2.0, 5.0), 0.3)

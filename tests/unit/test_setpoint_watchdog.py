@@ -11,6 +11,7 @@ import pytest
 
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig as MavlinkFailsafeConfig
 from dronewrapper_bridge_base.setpoint_watchdog import (
     HOLD,
     LAND,
@@ -20,7 +21,6 @@ from dronewrapper_bridge_base.setpoint_watchdog import (
     Transition,
     WatchdogConfig,
 )
-from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig as MavlinkFailsafeConfig
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig as TelloFailsafeConfig
 
 TARGET = PositionTarget(

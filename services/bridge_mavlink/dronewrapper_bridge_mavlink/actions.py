@@ -8,7 +8,7 @@ autopilot's modes nor reads its status texts:
   named) or when home stays unknown for :data:`HOME_WAIT_S` (``no_home``: the point cannot
   be placed, never a guess); else the autopilot's guided mode (PX4 OFFBOARD, primed;
   ArduPilot GUIDED) and the bridge's own position hold at the point
-  (:meth:`~dronewrapper_bridge_mavlink.failsafe.Failsafe.hold_at`), done within ``tolerance``.
+  (:meth:`~dronewrapper_bridge_base.guided_failsafe.Failsafe.hold_at`), done within ``tolerance``.
   A timeout holds where the aircraft is.
 - return: refused on the ground; the autopilot's return (its altitude kept under the
   envelope's ceiling, :mod:`~dronewrapper_bridge_mavlink.autopilot_limits`), done once on the

@@ -6,8 +6,8 @@ import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.envelope import Envelope
+from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
 from dronewrapper_bridge_base.unattended import UnattendedConfig
-from dronewrapper_bridge_mavlink.failsafe import FailsafeConfig
 from dronewrapper_bridge_mavlink.gcs import parse_gcs_url
 from dronewrapper_bridge_mavlink.keepalive import MAX_PERIOD_S
 from dronewrapper_bridge_mavlink.setpoints import Limits

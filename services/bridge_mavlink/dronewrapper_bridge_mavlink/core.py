@@ -37,12 +37,12 @@ from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.core_driver import PureCore
+from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_base.unattended import Unattended
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
-from dronewrapper_bridge_mavlink.failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.keepalive import KeepAlive
 from dronewrapper_bridge_mavlink.link_budget import fit_rates, is_serial_url

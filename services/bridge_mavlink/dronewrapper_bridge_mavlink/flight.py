@@ -1,7 +1,7 @@
 """Take-off and landing, each one waiting operation flown the autopilot's way (pure).
 
 - take-off, PX4: OFFBOARD (the stream primed for > ``offboard_prime_s`` first), the bridge's
-  own hold at the ground (:meth:`~dronewrapper_bridge_mavlink.failsafe.Failsafe.hold_at`),
+  own hold at the ground (:meth:`~dronewrapper_bridge_base.guided_failsafe.Failsafe.hold_at`),
   arm, the own hold moved ``height`` m up; ArduPilot: GUIDED, arm, MAV_CMD_NAV_TAKEOFF. Then
   the climb is watched until within ``tolerance`` of the height: it fails when the autopilot
   disarms or leaves the mode it was put in, or the ``timeout`` passes (then the aircraft holds
