@@ -334,8 +334,10 @@ def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float 
     )
 
 
-def stream(pub, target, seconds: float, hz: float = 20.0) -> float:
-    """Publish ``target`` at ``hz`` for ``seconds``; returns the time just before the last put."""
+def stream(pub, target, seconds: float, hz: float = 30.0) -> float:
+    """Publish ``target`` at ``hz`` (the SDK's stream rate) for ``seconds``; returns the time
+    just before the last put. The bridge forwards each setpoint once, so its rate is the
+    commander's: a sleep-paced "20 Hz" loop runs just under 20 Hz."""
     end = time.monotonic() + seconds
     last = time.monotonic()
     while time.monotonic() < end:
