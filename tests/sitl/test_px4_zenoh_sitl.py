@@ -127,7 +127,7 @@ def test_listing_1_flies_px4_through_its_own_zenoh(graph):
         f"(bridge stamp -> app) median {watch.age_ms(0.5):.1f} ms, 95 % {watch.age_ms(0.95):.1f} ms"
     )
     assert 1.5 < moved < 4.5, moved  # PX4 SIH settles at ~0.9 of a commanded speed
-    assert pose_rate > 50.0, pose_rate  # PX4 publishes vehicle_local_position at ~120 Hz
+    assert pose_rate > 25.0, pose_rate  # one pose a stream tick (30 Hz), PX4's ~120 Hz coalesced
 
 
 APP = """
