@@ -25,3 +25,15 @@ def failed(failure: str, message: str, step: str = "", result: int | None = None
     :data:`dronewrapper.msgs.flight.FAILURES`, ``step`` the step it stopped at, ``result`` the
     autopilot's result code when it gave one."""
     return FlightResult(success=False, failure=failure, step=step, result=result, message=message)
+
+
+def takeoff_request(
+    height: float, timeout: float, tolerance: float, max_height: float, max_timeout: float
+) -> tuple[float, float, float]:
+    """A take-off request's (height m, timeout s, tolerance m), each checked: height in
+    (0, ``max_height``], timeout in (0, ``max_timeout``], tolerance in [0, height)."""
+    height = checked("height", height, 0.0, max_height)
+    timeout = checked("timeout", timeout, 0.0, max_timeout)
+    if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
+        raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
+    return height, timeout, float(tolerance)

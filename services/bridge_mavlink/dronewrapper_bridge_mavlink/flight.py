@@ -40,7 +40,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper_bridge_base.flight_request import checked, failed
+from dronewrapper_bridge_base.flight_request import checked, failed, takeoff_request
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
@@ -58,11 +58,9 @@ MAX_TIMEOUT_S = 600.0
 
 def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
-    height = checked("height", request.height, 0.0, MAX_HEIGHT_M)
-    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
-    tolerance = request.tolerance
-    if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
-        raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
+    height, timeout, tolerance = takeoff_request(
+        request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
+    )
     if not core.connected:
         return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
     autopilot = core.autopilot or AUTOPILOT_PX4

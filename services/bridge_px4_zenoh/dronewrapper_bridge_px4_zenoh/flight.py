@@ -46,7 +46,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.flight_request import checked, failed
+from dronewrapper_bridge_base.flight_request import checked, failed, takeoff_request
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -75,11 +75,9 @@ def landed(core: Px4ZenohCore) -> bool:
 
 def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
-    height = checked("height", request.height, 0.0, MAX_HEIGHT_M)
-    timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
-    tolerance = request.tolerance
-    if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
-        raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
+    height, timeout, tolerance = takeoff_request(
+        request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
+    )
     if not core.connected:
         return failed(NOT_READY, NOT_CONNECTED)
     if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
