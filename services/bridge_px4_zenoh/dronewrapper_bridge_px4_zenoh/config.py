@@ -9,6 +9,7 @@ import msgspec
 
 from dronewrapper.envelope import Envelope
 from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
+from dronewrapper_bridge_base.unattended import UnattendedConfig
 
 
 class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
@@ -36,6 +37,8 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
     commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
     commander_lost_action: str = "land"  # hold | land | return
+    unattended_action: str = "return"  # return | land: a go-to whose commander's process died
+    unattended_lost_timeout: float = 5.0  # s its commander's process may be gone
     command_attempts: int = 3  # sends of a vehicle command before giving up
     command_ack_timeout: float = 0.5  # s to wait for each vehicle_command_ack
     state_rate_hz: float = 2.0  # periodic State (also on change)
@@ -77,6 +80,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"{name} must be >= 0 (0: uncapped), got {getattr(self, name)!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
+        self.unattended_config()
 
     def failsafe_config(self) -> FailsafeConfig:
         """The failsafe's settings, from this config's flat keys (validated there)."""
@@ -84,4 +88,10 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             setpoint_timeout=self.setpoint_timeout,
             commander_lost_timeout=self.commander_lost_timeout,
             commander_lost_action=self.commander_lost_action,
+        )
+
+    def unattended_config(self) -> UnattendedConfig:
+        """The unattended-action rule's settings (validated there)."""
+        return UnattendedConfig(
+            lost_timeout=self.unattended_lost_timeout, action=self.unattended_action
         )

@@ -51,11 +51,12 @@ from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, hold_target, is_airborne
 from dronewrapper_bridge_base.setpoint_limits import SetpointError, validate
+from dronewrapper_bridge_base.unattended import Unattended
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
 from dronewrapper_bridge_px4_zenoh import topics as t
-from dronewrapper_bridge_px4_zenoh import trajectory
+from dronewrapper_bridge_px4_zenoh import trajectory, watch
 from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.newest import NewestSamples
 from dronewrapper_bridge_px4_zenoh.versions import VersionMismatch, Versions
@@ -98,6 +99,7 @@ class Px4ZenohCore(PureCore):
         self.limits = config.limits
         self.versions = Versions(config.domain)
         self.failsafe = Failsafe(config.failsafe_config())
+        self.unattended = Unattended(config.unattended_config())  # a go-to's commander (watch.py)
         self.envelope = rules.EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
         self.target_system = config.target_system  # 0 until vehicle_status names it
@@ -299,7 +301,13 @@ class Px4ZenohCore(PureCore):
             return
         airborne = is_airborne(self.ext.landed_state, hb.armed)
         self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+        watch.on_vehicle(self)
         self._act(self.failsafe.tick(self.now, self.pose()), send=False)
+
+    def on_alive(self, keys: set[str], now: float, stamp: float) -> None:
+        """A commander's beat (its process's key) arrived now."""
+        self._at(now, stamp)
+        watch.on_alive(self, keys)
 
     def mode_entered(self, mode: str) -> None:
         """PX4 accepted a command that puts it in ``mode``: known now (vehicle_status, ~2 Hz,
@@ -363,6 +371,7 @@ class Px4ZenohCore(PureCore):
             tick.send = None  # just written by the setpoint's arrival
         self._act(tick, send=self.connected)
         self.show_commander()
+        watch.tick(self)
         breach = rules.tick(self)
         if breach:
             self.start(ops.breach_action(self, breach), now, stamp, background=True)
@@ -402,6 +411,7 @@ class Px4ZenohCore(PureCore):
         )
         if kind is None:
             return
+        self.unattended.clear()  # a commander steers: the unattended action is over
         self.failsafe.on_setpoint(target, kind, now)
         self._act(self.failsafe.tick(now, self.pose()), send=True)
 

@@ -10,6 +10,10 @@ answered with a :class:`~dronewrapper.msgs.flight.FlightResult` as on the other 
   the point (ENU m from home, home being PX4's local origin); done within ``tolerance``.
 - return: refused on the ground; PX4's RTL; done on the ground and disarmed.
 
+A go-to or return whose request names its commander's process (``watch``) is watched
+(:mod:`.watch`): once a go-to has ended and that process has stopped beating, the bridge
+returns or lands as for a lost commander.
+
 Heights and points in metres (local ENU), time the core's (monotonic s). The request checks
 and result shapes are those of bridge_mavlink's ``flight`` and ``actions``.
 """
@@ -52,6 +56,7 @@ from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
+from dronewrapper_bridge_px4_zenoh import watch
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
@@ -207,7 +212,11 @@ def goto_point(core: Px4ZenohCore, request: GotoRequest) -> Steps:
         if not reply.mode_sent:
             return failed(REFUSED, reply.message, f"set_mode {ops.GUIDED}", reply.result)
     core.failsafe.hold_at(hold_target(target, core.yaw_enu))
-    outcome = yield from wait_at(core, target, tolerance, deadline, "goto")
+    watch.start(core, "goto", request.watch)
+    try:
+        outcome = yield from wait_at(core, target, tolerance, deadline, "goto")
+    finally:
+        core.unattended.ended(core.now)  # reached, given up or cancelled: the go-to is over
     if outcome is not None:
         if outcome.failure == TOO_LATE:
             core.hold_here()
@@ -233,6 +242,7 @@ def return_home(core: Px4ZenohCore, request: ReturnRequest) -> Steps:
     if result != ops.ACCEPTED:
         return failed(REFUSED, message, "return", max(result, 0))
     core.mode_entered(ops.RETURN_MODE)
+    watch.start(core, "return", request.watch)
     while not landed(core):
         hb = core.heartbeat_state
         if hb is not None and hb.armed and hb.mode not in (ops.RETURN_MODE, ops.LAND_MODE):
@@ -240,4 +250,5 @@ def return_home(core: Px4ZenohCore, request: ReturnRequest) -> Steps:
         if core.now >= deadline:
             return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
         yield deadline
+    core.unattended.clear()
     return FlightResult(success=True, message="returned: on the ground and disarmed")
