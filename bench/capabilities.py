@@ -277,11 +277,17 @@ def _retry(action, seconds: float):
             time.sleep(2.0)
 
 
-def run_probe(backend: str, px4: Path | None, ardupilot: Path | None) -> int:
+def run_probe(
+    backend: str, px4: Path | None, ardupilot: Path | None, workdir: Path | None = None
+) -> int:
     from dronewrapper import DroneWrapper
 
     with contextlib.ExitStack() as stack:
-        tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix=f"caps-{backend}-")))
+        if workdir is None:
+            tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix=f"caps-{backend}-")))
+        else:
+            tmp = workdir
+            tmp.mkdir(parents=True, exist_ok=True)
         if backend == "tello":
             router, version = stack.enter_context(tello_backend(tmp))
         else:
@@ -368,10 +374,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--backend", choices=list(BACKENDS), required=True)
     p.add_argument("--px4", type=Path, default=os.environ.get("PX4_SITL_DIR") or None)
     p.add_argument("--ardupilot", type=Path, default=os.environ.get("AP_SITL_DIR") or None)
+    p.add_argument("--workdir", type=Path, help="keep the firmware's and the graph's logs here")
     sub.add_parser("render", help="write docs/capabilities.md from the records")
     args = parser.parse_args(argv)
     if args.command == "probe":
-        return run_probe(args.backend, args.px4, args.ardupilot)
+        return run_probe(args.backend, args.px4, args.ardupilot, args.workdir)
     render()
     return 0
 

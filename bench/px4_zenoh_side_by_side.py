@@ -13,9 +13,18 @@ flies it through ``zen`` (take-off, then a slow forward turn) while an observer 
 * pose rate at the observer (Hz), and PX4's own vehicle_local_position rate;
 * bridge CPU: each bridge process's user + system time over the window (% of one core).
 
-The setpoint -> firmware delay is not measured: PX4 reports a setpoint's arrival nowhere (a
-command's ack, the one echo, is not a setpoint's, and a command through the MAVLink bridge in
-OFFBOARD would make it a second commander).
+Then the setpoint -> firmware delay, through each bridge in turn (``--echo-seconds`` each):
+PX4's zenoh module is told to publish the uORB ``trajectory_setpoint`` back
+(``zenoh config add publisher``, PX4's own shell command, before the module starts), the topic
+both paths end in: PX4's MAVLink receiver publishes each SET_POSITION_TARGET_LOCAL_NED there
+while in OFFBOARD, its zenoh module each ``/fmu/in/trajectory_setpoint``. An app holds the
+aircraft with position setpoints whose yaw steps by :data:`YAW_STEP` rad at
+:data:`ECHO_RATE_HZ` (a sequence number in the heading), first through ``zen``, then, after
+that app asked for AUTO.LOITER and stopped, through ``mav`` (OFFBOARD asked by it). The delay
+of one setpoint: from the app's ``set_cmd_pos`` to the first echo carrying its yaw at the
+observer, both on this machine's clock. The echo's own path (PX4's zenoh publisher, the
+router) is the same for both bridges, so the difference between them is the bridges' and
+their links'.
 
 Run in a network namespace of its own (PX4 dials a fixed port)::
 
@@ -27,6 +36,7 @@ Writes bench/results/px4_zenoh_side_by_side.json.
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
 import tempfile
 import threading
@@ -40,6 +50,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
+from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 from dronewrapper_bridge_px4_zenoh import topics
 from dronewrapper_compose.launcher import Launcher
 from dronewrapper_ros2_codec import cdr
@@ -52,7 +63,16 @@ ROW_KEYS = (
     "pose_age_p50_ms",
     "pose_age_p90_ms",
     "cpu_percent",
+    "setpoint_p50_ms",
+    "setpoint_p90_ms",
+    "setpoint_max_ms",
+    "setpoint_echoed",
 )
+ECHO = "/fmu/out/trajectory_setpoint"  # PX4's uORB trajectory_setpoint, published back
+ECHO_RATE_HZ = 5.0  # new yaw setpoints a second
+YAW_STEP = 0.02  # rad between two successive setpoints' headings
+YAW_VALUES = 10  # headings before one repeats (2 s at 5 Hz: far beyond any delay)
+YAW_MATCH = 0.004  # rad: an echo carries a setpoint's yaw (float32, two conversions)
 
 
 class Observer:
@@ -101,6 +121,71 @@ class Observer:
         return figures
 
 
+class SetpointEcho:
+    """Setpoints sent with a heading that encodes their sequence number, and PX4's echo of them
+    (its uORB ``trajectory_setpoint`` over its Zenoh, see module docstring)."""
+
+    def __init__(self, node: Node) -> None:
+        self.echoes: list[tuple[float, float]] = []  # (arrival, yaw NED rad)
+        self.sent: dict[str, list[tuple[float, float]]] = {ns: [] for ns in NAMESPACES}
+        self.lock = threading.Lock()
+        node.session.declare_subscriber(f"0{ECHO}/**", self.on_echo)
+
+    def on_echo(self, sample) -> None:
+        now = time.monotonic()
+        value = cdr.decode(topics.TRAJECTORY.type_name, sample.payload.to_bytes())
+        with self.lock:
+            self.echoes.append((now, value["yaw"]))
+
+    def hold(self, drone: DroneWrapper, ns: str, seconds: float) -> None:
+        """Hold where the aircraft is, a new heading every 1 / ECHO_RATE_HZ s, through ``ns``."""
+        x, y, z = (float(v) for v in drone.get_position())
+        period = 1.0 / ECHO_RATE_HZ
+        start = time.monotonic()
+        for k in range(int(seconds * ECHO_RATE_HZ)):
+            yaw = YAW_STEP * (k % YAW_VALUES)
+            now = time.monotonic()
+            drone.set_cmd_pos(x, y, z, az=yaw)
+            with self.lock:
+                self.sent[ns].append((now, yaw_enu_to_ned(yaw)))
+            time.sleep(max(0.0, start + (k + 1) * period - time.monotonic()))
+
+    def delays(self, ns: str) -> dict[str, float]:
+        """Percentiles of the delays (ms) of the setpoints sent through ``ns`` but the first
+        (whose heading the mode change may have carried already), and the share of them
+        echoed."""
+        with self.lock:
+            sent, echoes = list(self.sent[ns]), list(self.echoes)
+        delays = []
+        for at, yaw in sent[1:]:
+            first = next(
+                (t for t, echoed in echoes if t >= at and abs(echoed - yaw) < YAW_MATCH), None
+            )
+            if first is not None and first - at < YAW_VALUES / ECHO_RATE_HZ:
+                delays.append(first - at)
+        figures = {f"setpoint_{k}": v for k, v in percentiles(delays).items()}
+        return {**figures, "setpoint_echoed": len(delays) / max(len(sent) - 1, 1)}
+
+
+def zenoh_with_echo(build: Path, instance: int, workdir: Path) -> None:
+    """PX4's zenoh module started with the uORB trajectory_setpoint among its publishers
+    (PX4's shell: ``zenoh config add publisher``, then ``zenoh start``)."""
+    client = str(build / "bin" / "px4-zenoh")
+    deadline = time.monotonic() + 60.0
+    add = ["config", "add", "publisher", ECHO, "trajectory_setpoint"]
+    config = workdir / "px4" / "rootfs" / "zenoh" / "pub.csv"
+    while not (config.is_file() and ECHO in config.read_text()):
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"PX4's zenoh config has no {ECHO} after 60 s ({config})")
+        subprocess.run([client, "--instance", str(instance), *add], capture_output=True)
+        time.sleep(1.0)
+    started = subprocess.run(
+        [client, "--instance", str(instance), "start"], capture_output=True, text=True
+    )
+    if started.returncode != 0:
+        raise RuntimeError(f"zenoh start failed: {started.stdout}{started.stderr}")
+
+
 def rate(times: list[float]) -> float:
     return (len(times) - 1) / (times[-1] - times[0]) if len(times) > 1 else 0.0
 
@@ -118,7 +203,7 @@ def take_off(drone: DroneWrapper, height: float, wait_s: float = 90.0) -> None:
             time.sleep(2.0)
 
 
-def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
+def measure(seconds: float, echo_seconds: float, instance: int, workdir: Path) -> dict[str, object]:
     build = Path(os.environ["PX4_SITL_DIR"])
     log = open(workdir / "graphs.log", "w")  # noqa: SIM115 (closed below)
     zen = Launcher.from_file(REPO / "compose" / "px4_zenoh.yaml", namespace="zen", out=log)
@@ -134,13 +219,17 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
     bridges = {"zen": zen.children[0].proc.pid, "mav": mav.children[0].proc.pid}
     options = ZenohOptions(mode="client", connect=[DEFAULT_ROUTER])
     node = Node("observer", options, handle_signals=False, direct_callbacks=True)
-    env = {"PX4_PARAM_ZENOH_ENABLE": "1"}
     try:
-        with px4_sih(build, workdir, instance=instance, env=env) as firmware:
+        with px4_sih(build, workdir, instance=instance) as firmware:  # its zenoh module off
+            zenoh_with_echo(build, instance, workdir)
             observer = Observer(node)
-            with DroneWrapper("zen", DEFAULT_ROUTER, timeout=90, land_on_exit=True) as drone:
-                take_off(drone, 2.5)
-                drone.set_cmd_vel(vx=0.5, az=0.3)
+            echo = SetpointEcho(node)
+            with (
+                DroneWrapper("zen", DEFAULT_ROUTER, timeout=90, land_on_exit=False) as via_zen,
+                DroneWrapper("mav", DEFAULT_ROUTER, timeout=90, land_on_exit=True) as via_mav,
+            ):
+                take_off(via_zen, 2.5)
+                via_zen.set_cmd_vel(vx=0.5, az=0.3)
                 time.sleep(1.0)
                 cpu0 = {ns: cpu_seconds(pid) for ns, pid in bridges.items()}
                 since = time.monotonic()
@@ -150,12 +239,24 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
                     ns: (cpu_seconds(pid) - cpu0[ns]) / (until - since)
                     for ns, pid in bridges.items()
                 }
-                drone.set_cmd_vel()
-                drone.land()
+                echo.hold(via_zen, "zen", echo_seconds)
+                via_zen.stop_commanding()
+                via_zen.set_mode("AUTO.LOITER")  # the zen bridge lets go: no hold stream of its own
+                x, y, z = (float(v) for v in via_mav.get_position())
+                via_mav.set_cmd_pos(x, y, z, az=0.0)
+                via_mav.set_mode("OFFBOARD")  # primed by bridge_mavlink's stream of that setpoint
+                echo.hold(via_mav, "mav", echo_seconds)
+                via_mav.land()
             figures = observer.window(since, until)
             for ns in NAMESPACES:
                 figures[ns]["cpu_percent"] = 100.0 * cpu[ns]
-            return {"firmware": firmware.version, "seconds": seconds, "figures": figures}
+                figures[ns].update(echo.delays(ns))
+            return {
+                "firmware": firmware.version,
+                "seconds": seconds,
+                "echo_seconds": echo_seconds,
+                "figures": figures,
+            }
     finally:
         node.close()
         mav.stop()
@@ -166,13 +267,16 @@ def measure(seconds: float, instance: int, workdir: Path) -> dict[str, object]:
 def main(argv: list[str] | None = None) -> int:
     parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=15.0, help="measurement window (s)")
+    parser.add_argument(
+        "--echo-seconds", type=float, default=12.0, help="setpoint echo phase per bridge (s)"
+    )
     parser.add_argument("--instance", type=int, default=1, help="PX4's instance (-i N)")
     parser.add_argument("--workdir", default="", help="keep PX4's and the graphs' logs here")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         workdir = Path(args.workdir or tmp)
         workdir.mkdir(parents=True, exist_ok=True)
-        result = measure(args.seconds, args.instance, workdir)
+        result = measure(args.seconds, args.echo_seconds, args.instance, workdir)
     figures = result["figures"]
     rows = []
     for ns, name in (("mav", "bridge_mavlink"), ("zen", "bridge_px4_zenoh")):
@@ -184,12 +288,26 @@ def main(argv: list[str] | None = None) -> int:
                 f"{f['pose_age_p50_ms']:.1f}",
                 f"{f['pose_age_p90_ms']:.1f}",
                 f"{f['cpu_percent']:.1f}",
+                f"{f['setpoint_p50_ms']:.1f}",
+                f"{f['setpoint_p90_ms']:.1f}",
+                f"{f['setpoint_max_ms']:.1f}",
+                f"{f['setpoint_echoed']:.0%}",
             ]
         )
     print_table(
         f"{result['firmware']}, one SIH run ({figures['px4_zenoh_raw']['rate_hz']:.0f} Hz "
         "vehicle_local_position on PX4's Zenoh)",
-        ["bridge", "pose Hz", "age p50 ms", "age p90 ms", "CPU %"],
+        [
+            "bridge",
+            "pose Hz",
+            "age p50 ms",
+            "age p90 ms",
+            "CPU %",
+            "sp p50 ms",
+            "sp p90",
+            "sp max",
+            "echoed",
+        ],
         rows,
     )
     write_results("px4_zenoh_side_by_side", result)

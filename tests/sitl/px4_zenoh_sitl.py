@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import os
 import socket
+from collections.abc import Iterator
 from pathlib import Path
 
 from firmware import px4_dir
@@ -52,8 +53,26 @@ def router_port_free() -> bool:
         return sock.connect_ex(("127.0.0.1", ROUTER_PORT)) != 0
 
 
-def px4_zenoh(workdir: Path) -> contextlib.AbstractContextManager[Firmware]:
-    """PX4 SIH with its zenoh module on, in ``workdir`` (PX4's own starter)."""
+@contextlib.contextmanager
+def px4_zenoh(workdir: Path) -> Iterator[Firmware]:
+    """PX4 SIH with its zenoh module on, in ``workdir`` (PX4's own starter); when the body
+    fails, PX4's warnings and errors are printed (the workdir of a failed flight does not
+    outlive the next runs)."""
     build = zenoh_build()
     assert build is not None, "PX4_SITL_DIR names no px4_sitl_zenoh build"
-    return px4_sih(build, workdir, instance=instance(), env={"PX4_PARAM_ZENOH_ENABLE": "1"})
+    env = {"PX4_PARAM_ZENOH_ENABLE": "1"}
+    with px4_sih(build, workdir, instance=instance(), env=env) as firmware:
+        try:
+            yield firmware
+        except BaseException:
+            print(
+                f"\nPX4's log ({firmware.log}), warnings and errors:\n{log_problems(firmware.log)}"
+            )
+            raise
+
+
+def log_problems(path: Path, limit: int = 60) -> str:
+    """The last ``limit`` WARN / ERROR lines of PX4's log (its own words: failsafes, zenoh)."""
+    lines = path.read_text(errors="replace").splitlines() if path.is_file() else []
+    problems = [line for line in lines if "WARN" in line or "ERROR" in line]
+    return "\n".join(problems[-limit:])
