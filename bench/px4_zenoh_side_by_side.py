@@ -35,6 +35,7 @@ Writes bench/results/px4_zenoh_side_by_side.json.
 
 from __future__ import annotations
 
+import itertools
 import os
 import subprocess
 import sys
@@ -128,8 +129,21 @@ class SetpointEcho:
     def __init__(self, node: Node) -> None:
         self.echoes: list[tuple[float, float]] = []  # (arrival, yaw NED rad)
         self.sent: dict[str, list[tuple[float, float]]] = {ns: [] for ns in NAMESPACES}
+        self.written: list[float] = []  # arrivals of the Zenoh bridge's offboard_control_mode
         self.lock = threading.Lock()
         node.session.declare_subscriber(f"0{ECHO}/**", self.on_echo)
+        node.session.declare_subscriber("0/fmu/in/offboard_control_mode/**", self.on_written)
+
+    def on_written(self, _sample) -> None:
+        with self.lock:
+            self.written.append(time.monotonic())
+
+    def longest_write_gap(self) -> float:
+        """The longest pause (s) of the Zenoh bridge's offboard_control_mode stream, as it
+        reached the router (PX4 leaves OFFBOARD after 1 s without one)."""
+        with self.lock:
+            times = list(self.written)
+        return max((b - a for a, b in itertools.pairwise(times)), default=0.0)
 
     def on_echo(self, sample) -> None:
         now = time.monotonic()
@@ -239,7 +253,12 @@ def measure(seconds: float, echo_seconds: float, instance: int, workdir: Path) -
                     ns: (cpu_seconds(pid) - cpu0[ns]) / (until - since)
                     for ns, pid in bridges.items()
                 }
-                echo.hold(via_zen, "zen", echo_seconds)
+                try:
+                    echo.hold(via_zen, "zen", echo_seconds)
+                finally:
+                    print(
+                        f"zen: longest offboard_control_mode pause {echo.longest_write_gap():.2f} s"
+                    )
                 via_zen.stop_commanding()
                 via_zen.set_mode("AUTO.LOITER")  # the zen bridge lets go: no hold stream of its own
                 x, y, z = (float(v) for v in via_mav.get_position())
@@ -248,6 +267,7 @@ def measure(seconds: float, echo_seconds: float, instance: int, workdir: Path) -
                 echo.hold(via_mav, "mav", echo_seconds)
                 via_mav.land()
             figures = observer.window(since, until)
+            figures["zen"]["offboard_mode_longest_pause_s"] = echo.longest_write_gap()
             for ns in NAMESPACES:
                 figures[ns]["cpu_percent"] = 100.0 * cpu[ns]
                 figures[ns].update(echo.delays(ns))
