@@ -14,12 +14,12 @@ left to finish; a setpoint (a commander steering), a new action or a disarm ends
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from typing import Any
 
 from dronewrapper_bridge_px4_zenoh import operations as ops
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
+Px4ZenohCore = Any
+"""The core (core.py imports this module, so the type is not imported here)."""
 
 log = logging.getLogger("bridge_px4_zenoh")
 
