@@ -12,14 +12,19 @@ unset, the first N in 1..9 with no such socket.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
 import socket
+import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import ClassVar
 
 from firmware import px4_dir
 
-from dronewrapper.runtime.options import DEFAULT_ROUTER
+from dronewrapper.runtime.node import open_session
+from dronewrapper.runtime.options import DEFAULT_ROUTER, ZenohOptions
 from dronewrapper_sim.external.firmware import Firmware, px4_sih
 
 ROUTER_PORT = int(DEFAULT_ROUTER.rsplit(":", 1)[1])  # 7447: where PX4's zenoh-pico dials
@@ -76,3 +81,56 @@ def log_problems(path: Path, limit: int = 60) -> str:
     lines = path.read_text(errors="replace").splitlines() if path.is_file() else []
     problems = [line for line in lines if "WARN" in line or "ERROR" in line]
     return "\n".join(problems[-limit:])
+
+
+class LinkWatch:
+    """When, on the router PX4 dials, the bridge's ``offboard_control_mode`` writes and PX4's
+    ``vehicle_local_position`` samples arrive (Unix s, to read beside the logs): their longest
+    pauses tell a bridge that stopped writing from a PX4 link that stopped carrying (PX4 leaves
+    OFFBOARD after 1 s without an ``offboard_control_mode``). It connects once the graph's
+    router is up."""
+
+    KEYS: ClassVar[dict[str, str]] = {
+        "bridge writes": "0/fmu/in/offboard_control_mode/**",
+        "PX4 samples": "0/fmu/out/vehicle_local_position/**",
+    }
+
+    def __init__(self) -> None:
+        self.times: dict[str, list[float]] = {name: [] for name in self.KEYS}
+        self._stop = threading.Event()
+        self._session = None
+        self._thread = threading.Thread(target=self._connect, daemon=True)
+
+    def __enter__(self) -> LinkWatch:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        if self._session is not None:
+            self._session.close()
+
+    def _connect(self) -> None:
+        while not self._stop.is_set():
+            with contextlib.suppress(Exception):  # the router is not up yet
+                session = open_session(ZenohOptions(mode="client", connect=[DEFAULT_ROUTER]))
+                for name, key in self.KEYS.items():
+                    session.declare_subscriber(key, self._arrived(self.times[name]))
+                self._session = session
+                return
+            self._stop.wait(1.0)
+
+    @staticmethod
+    def _arrived(times: list[float]):
+        return lambda _sample: times.append(time.time())
+
+    def describe(self) -> str:
+        """The longest pause of each stream, and how many samples it had."""
+        parts = []
+        for name, times in self.times.items():
+            gaps = [(b - a, a) for a, b in itertools.pairwise(list(times))]
+            gap, since = max(gaps, default=(0.0, 0.0))
+            at = time.strftime("%H:%M:%S", time.gmtime(since))
+            parts.append(f"{name}: {len(times)}, longest pause {gap:.2f} s from {at} UTC")
+        return "; ".join(parts)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import pytest
 from busy_core import one_core_busy
-from px4_zenoh_sitl import ROUTER_PORT, log_problems, px4_zenoh, router_port_free
+from px4_zenoh_sitl import ROUTER_PORT, LinkWatch, log_problems, px4_zenoh, router_port_free
 from scenario_flight import fly, record_result
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
@@ -204,7 +204,10 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
         crossing = scenario in CROSSING
         if crossing:
             variables["detect_rate_hz"] = LOADED_DETECT_RATE_HZ
-        with one_core_busy() if crossing else contextlib.nullcontext():
+        with (
+            one_core_busy() if crossing else contextlib.nullcontext(),
+            LinkWatch() as link,
+        ):
             flight = fly(
                 f"px4_zenoh_follow_{app}",
                 scenario,
@@ -215,7 +218,7 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
                 router=DEFAULT_ROUTER,
             )
     s = flight.summary
-    print(f"\n{firmware.version} over Zenoh: {flight.describe()}")
+    print(f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}")
     passed = passes(flight, max_acquire, min_centred, min_distance)
     record_result(flight, f"follow_{app}", "px4_zenoh", firmware.version, passed)
     if not passed:
