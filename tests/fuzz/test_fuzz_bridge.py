@@ -54,7 +54,7 @@ def error_text(reply) -> str:
 
 
 def assert_alive(rig) -> None:
-    assert rig.bridge.connected, "the bridge lost its autopilot"
+    assert rig.bridge.core.connected, "the bridge lost its autopilot"
     assert not rig.bridge.node.stop_event.is_set()
     assert rig.bridge.node.callback_errors.get("mavlink", 0) == 0
 
@@ -91,7 +91,7 @@ def test_bad_setpoints_are_each_refused_and_never_forwarded(rig):
     since = time.monotonic()
 
     def refused_count() -> int:
-        return bridge.rejected_setpoints + sum(node.decode_errors.values())
+        return bridge.core.rejected_setpoints + sum(node.decode_errors.values())
 
     @FUZZ
     @given(bad=bad_setpoint())
@@ -103,7 +103,7 @@ def test_bad_setpoints_are_each_refused_and_never_forwarded(rig):
     refused()
     time.sleep(0.2)
     assert not [m for m in rig.peer.actuating(since) if "POSITION_TARGET" in m.get_type()]
-    assert bridge.failsafe.fresh_target(time.monotonic()) is None  # nothing was taken as valid
+    assert bridge.core.failsafe.fresh_target(time.monotonic()) is None  # nothing was taken as valid
     assert_alive(rig)
     assert codec.decode(registry.SETPOINT_RAW_LOCAL.type, codec.encode(SETPOINT_BASE)) is not None
 
@@ -141,10 +141,10 @@ def _mavlink_frames(peer, rng: random.Random) -> list[bytes]:
 def test_bad_mavlink_traffic_never_breaks_the_bridge(rig):
     rng = random.Random(12)
     since = time.monotonic()
-    before = rig.bridge.messages_received
+    before = rig.bridge.core.messages_received
     for data in _mavlink_frames(rig.peer, rng):
         rig.peer.send_raw(data)
-    wait_for(lambda: rig.bridge.messages_received > before + 20, 10)
+    wait_for(lambda: rig.bridge.core.messages_received > before + 20, 10)
     time.sleep(0.5)
     assert_alive(rig)
     for pose in rig.poses.values(since):

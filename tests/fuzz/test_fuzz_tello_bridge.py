@@ -58,7 +58,7 @@ def error_text(reply) -> str:
 
 
 def assert_alive(rig: Rig) -> None:
-    assert rig.bridge.connected and not rig.bridge.node.stop_event.is_set()
+    assert rig.bridge.core.connected and not rig.bridge.node.stop_event.is_set()
     assert rig.bridge.node.callback_errors.get("control", 0) == 0
     assert rig.user.call(registry.PARAM_GET, ParamGet(param_id="BATTERY")).success
 
@@ -106,6 +106,6 @@ def test_bad_setpoints_while_flying_leave_the_sticks_centred(rig):
         publisher.undeclare()
     moved = [t for t in rig.tello.actuating(since) if t.startswith("rc ")]
     assert moved == []
-    assert rig.bridge.rejected_setpoints + sum(rig.bridge.node.decode_errors.values()) > 0
+    assert rig.bridge.core.rejected_setpoints + sum(rig.bridge.node.decode_errors.values()) > 0
     assert_alive(rig)
     assert rig.user.call(registry.LAND, CommandTOL.land(), timeout=30).success

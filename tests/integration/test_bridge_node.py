@@ -291,7 +291,7 @@ def make_rig(router, autopilot: int) -> Iterator[tuple[Bridge, FakePX4, object]]
         fake.custom_mode = 5  # LOITER
     user = client_node(router, name="user")
     try:
-        wait_for(lambda: bridge.connected, 20, what="bridge connected to the fake PX4")
+        wait_for(lambda: bridge.core.connected, 20, what="bridge connected to the fake PX4")
         wait_for(lambda: reaches_bridge(user), 20, what="the user's session to reach the bridge")
         yield bridge, fake, user
     finally:
@@ -370,7 +370,7 @@ def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
     bridge, fake, user = rig
     fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
     fake.position_ned = (1.0, 1.0, -5.0)
-    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD" and bridge.failsafe.airborne, 10)
+    wait_for(lambda: bridge.core.failsafe.mode == "OFFBOARD" and bridge.core.failsafe.airborne, 10)
     failsafe_states: list[str] = []  # State.failsafe as published, in order
     user.subscribe(registry.STATE, lambda s: failsafe_states.append(s.failsafe))
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
@@ -393,7 +393,7 @@ def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
     # commander lost (2 s in this config) while airborne -> NAV_LAND, requested exactly once
     # (a re-send of the same request would carry confirmation > 0)
     wait_for(lambda: fake.commands_named(21), 10, what="NAV_LAND")
-    assert bridge.failsafe.state == "land"
+    assert bridge.core.failsafe.state == "land"
     wait_for(lambda: "land" in failsafe_states, 10, what="failsafe land published")
     assert failsafe_states.index("hold") < failsafe_states.index("land")
     time.sleep(1.0)
@@ -408,7 +408,7 @@ def test_bad_setpoints_and_bytes_change_nothing(rig):
     for bad in (velocity(vx=math.nan), velocity(vz=math.inf), velocity(vx=99.0)):
         pub.put(bad)
     user.session.put(registry.SETPOINT_RAW_LOCAL.key("drone"), b"\x00garbage")
-    wait_for(lambda: bridge.rejected_setpoints == 3, 10)
+    wait_for(lambda: bridge.core.rejected_setpoints == 3, 10)
     wait_for(lambda: sum(bridge.node.decode_errors.values()) >= 1, 10)
     time.sleep(0.3)
     assert len(fake.setpoints) == before  # not in OFFBOARD, nothing fresh: nothing sent
