@@ -18,10 +18,7 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_LOCAL_NED,
-    MASK_POSITION,
     CommandBool,
     CommandTOL,
     PositionTarget,
@@ -36,16 +33,6 @@ POLL_EVERY = 4  # physics steps between the autopilot's sends (62.5 Hz)
 SETPOINT_HZ = 20.0
 EPOCH = 1.7e9
 ALIVE_PERIOD_S = 1.0
-
-
-def position_target(x: float, y: float, z: float, yaw: float = 0.0) -> PositionTarget:
-    """A position + yaw setpoint (local ENU m, rad)."""
-    return PositionTarget(
-        coordinate_frame=FRAME_LOCAL_NED,
-        type_mask=MASK_POSITION,
-        position=Point(x=x, y=y, z=z),
-        yaw=yaw,
-    )
 
 
 class SimPair:

@@ -24,6 +24,7 @@ import pytest
 os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink import mavutil
+from targets import velocity
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -323,15 +324,6 @@ def reaches_bridge(user) -> bool:
     except ServiceError:
         return True
     return True
-
-
-def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float = 0.0):
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 def stream(pub, target, seconds: float, hz: float = 30.0) -> float:

@@ -19,16 +19,15 @@ import pytest
 from clocked_autopilot import ClockedAutopilot
 from clocked_setpoints import ClockedSetpoints
 from pymavlink.dialects.v20 import common as mavlink
+from targets import mixed
 
 from dronewrapper import CommandRefused
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import TakeoffRequest
-from dronewrapper.msgs.geometry import Point, Vector3
+from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
     FRAME_LOCAL_NED,
     LANDED_STATE_ON_GROUND,
-    MASK_MIXED,
     MASK_POSITION,
     CommandBool,
     CommandTOL,
@@ -41,16 +40,6 @@ from dronewrapper_bridge_mavlink.node import Bridge
 
 T0 = 1_700_000_000.0
 """The bus's start (monotonic and Unix s alike)."""
-
-
-def mixed(vx: float, z: float, yaw_rate: float = 0.0) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_MIXED,
-        velocity=Vector3(x=vx),
-        position=Point(z=z),
-        yaw_rate=yaw_rate,
-    )
 
 
 def yaw_of(pose) -> float:

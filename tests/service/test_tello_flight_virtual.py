@@ -21,16 +21,15 @@ import numpy as np
 import pytest
 from clocked_setpoints import ClockedSetpoints
 from clocked_tello import ClockedTello
+from targets import velocity
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point, Vector3
+from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
     FRAME_LOCAL_NED,
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     MASK_POSITION,
-    MASK_VELOCITY,
     CommandTOL,
     ParamGet,
     PositionTarget,
@@ -46,15 +45,6 @@ T0 = 1_700_000_000.0
 AUTO_LAND_S = 8.0
 """The simulated Tello's auto-land timeout where a test waits for it (the real drone's 15 s is
 the default): a keep-alive every ``keepalive_s`` (3 s) must still beat it."""
-
-
-def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 class LossyTello(ClockedTello):
