@@ -23,6 +23,7 @@ import pytest
 
 os.environ.setdefault("MAVLINK20", "1")
 
+from bridge_rig import reaches_bridge
 from pymavlink import mavutil
 from targets import velocity
 
@@ -40,7 +41,7 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
     SetMode,
 )
-from dronewrapper.runtime import ServiceError, ServiceUnavailable
+from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
 from support import client_node, free_port, wait_for
@@ -311,19 +312,6 @@ def median_gap(times: list[float]) -> float:
     slower than the bound shifts every interval."""
     gaps = sorted(b - a for a, b in itertools.pairwise(times))
     return gaps[len(gaps) // 2] if gaps else math.inf
-
-
-def reaches_bridge(user) -> bool:
-    """True once the user's session knows the bridge's queryables (and so its subscriber,
-    declared just before them): a call with an invalid param_id gets an error reply without
-    any MAVLink traffic."""
-    try:
-        user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=5)
-    except ServiceUnavailable:
-        return False
-    except ServiceError:
-        return True
-    return True
 
 
 def stream(pub, target, seconds: float, hz: float = 30.0) -> float:
