@@ -13,6 +13,7 @@ import threading
 import time
 
 import pytest
+from mavlink_log import MessageLog
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
@@ -26,11 +27,12 @@ FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
 FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
 
-class MavClient:
+class MavClient(MessageLog):
     """A MAVLink endpoint on a free UDP port (like a bridge's ``udpin``), with a background
     reader that keeps every message and a setpoint streamer that can be started and stopped."""
 
     def __init__(self, mav_type: int, sysid: int = 245) -> None:
+        super().__init__()
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
         self.sock.settimeout(0.1)
@@ -40,8 +42,6 @@ class MavClient:
         self.parser = mavlink.MAVLink(None)
         self.parser.robust_parsing = True
         self.peer: tuple[str, int] | None = None
-        self.log: list[tuple[float, object]] = []
-        self.lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._stream_lock = threading.Lock()
         self._stop = threading.Event()
@@ -107,36 +107,10 @@ class MavClient:
             thread.join(2)
         self.sock.close()
 
-    # ---- reading ----
+    # ---- reading: MessageLog ----
 
-    def since(self, t0: float, kind: str | None = None) -> list:
-        return [m for _, m in self.timed(t0, kind)]
-
-    def timed(self, t0: float, kind: str | None = None) -> list[tuple[float, object]]:
-        """(receive time, message) pairs received at or after ``t0`` (monotonic s)."""
-        with self.lock:
-            return [
-                (t, m) for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)
-            ]
-
-    def latest(self, kind: str):
-        with self.lock:
-            for _, msg in reversed(self.log):
-                if msg.get_type() == kind:
-                    return msg
-        return None
-
-    def wait_msg(self, kind: str, pred=lambda m: True, timeout: float = 10.0, t0: float = 0.0):
-        def found():
-            for msg in self.since(t0, kind):
-                if pred(msg):
-                    return msg
-            return None
-
-        return wait_for(found, timeout, what=f"{kind} matching {pred}")
-
-    def texts(self, t0: float = 0.0) -> list[str]:
-        return [m.text for m in self.since(t0, "STATUSTEXT")]
+    def wait_until(self, found, timeout: float, what: str):
+        return wait_for(found, timeout, what=what)
 
     # ---- commands ----
 

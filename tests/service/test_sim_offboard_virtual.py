@@ -18,6 +18,7 @@ from collections.abc import Callable
 os.environ.setdefault("MAVLINK20", "1")
 
 import pytest
+from mavlink_log import MessageLog
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
@@ -33,16 +34,16 @@ FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
 FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
 
-class Client:
+class Client(MessageLog):
     """A MAVLink endpoint of the vehicle's ``link``: keeps every message it is sent with the
     vehicle's time, sends a heartbeat every 0.5 s once it has heard the vehicle, and streams
     ``setpoint`` at 20 Hz while it is set."""
 
     def __init__(self, vehicle: Vehicle, link: str, mav_type: int, sysid: int = 245) -> None:
+        super().__init__()
         self.vehicle, self.link, self.mav_type = vehicle, link, mav_type
         self.out = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=191)
         self.parser = mavlink.MAVLink(None)
-        self.log: list[tuple[float, object]] = []
         self.heard = False
         self.setpoint: object | None = None
         self.setpoint_period = 0.05
@@ -77,28 +78,10 @@ class Client:
         self.setpoint = None
         return self.last_setpoint_sent
 
-    # ---- reading ----
+    # ---- reading: MessageLog ----
 
-    def since(self, t0: float, kind: str | None = None) -> list:
-        return [m for _, m in self.timed(t0, kind)]
-
-    def timed(self, t0: float, kind: str | None = None) -> list[tuple[float, object]]:
-        return [(t, m) for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)]
-
-    def latest(self, kind: str):
-        for _, msg in reversed(self.log):
-            if msg.get_type() == kind:
-                return msg
-        return None
-
-    def wait_msg(self, kind: str, pred=lambda m: True, timeout: float = 10.0, t0: float = 0.0):
-        def found():
-            return next((m for m in self.since(t0, kind) if pred(m)), None)
-
-        return self.vehicle.run_until(found, timeout, f"{kind} matching {pred}")
-
-    def texts(self, t0: float = 0.0) -> list[str]:
-        return [m.text for m in self.since(t0, "STATUSTEXT")]
+    def wait_until(self, found, timeout: float, what: str):
+        return self.vehicle.run_until(found, timeout, what)
 
     # ---- commands ----
 
