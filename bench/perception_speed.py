@@ -206,6 +206,7 @@ def bench_latency(duration: float, fps: float, detector: str) -> dict[str, objec
 def bench_crossings(seconds: float, fps: float) -> list[dict[str, object]]:
     from dronewrapper.runtime.config import load_config
     from dronewrapper_perception.config import Config
+    from dronewrapper_perception.detection import iou
     from dronewrapper_perception.pipeline import Pipeline
     from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera, project, yaw_to_quat
     from dronewrapper_sim.render.renderer import Renderer
@@ -214,13 +215,6 @@ def bench_crossings(seconds: float, fps: float) -> list[dict[str, object]]:
 
     vehicle = np.array([0.0, 0.0, 1.5])
     quat = yaw_to_quat(0.0)
-
-    def iou(a, b) -> float:
-        ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-        iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-        inter = ix * iy
-        union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-        return inter / union if union > 0 else 0.0
 
     rows = []
     for scenario in ("people_crossing_front", "people_crossing_behind"):

@@ -14,6 +14,7 @@ import pytest
 
 from dronewrapper.runtime.config import load_config
 from dronewrapper_perception.config import Config
+from dronewrapper_perception.detection import iou
 from dronewrapper_perception.pipeline import Pipeline
 from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera, project, yaw_to_quat
 from dronewrapper_sim.render.renderer import Renderer
@@ -42,14 +43,6 @@ def person_boxes(world: World, camera: PinholeCamera, quat: np.ndarray) -> dict[
         cx = (px[0, 0] + px[1, 0]) / 2
         out[obj.name] = ((cx - 0.2 * height, px[1, 1], cx + 0.2 * height, px[0, 1]), depth[0])
     return out
-
-
-def iou(a, b) -> float:
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
 
 
 def owner(box, people: dict[str, tuple]) -> str | None:
