@@ -13,11 +13,11 @@ from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_perception.color_filter import RED
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.detect_cli import main as detect_main
-from dronewrapper_perception.detection import iou
 from dronewrapper_perception.detectors import ColorDetector
 from dronewrapper_perception.hog import HogDetector
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
 from dronewrapper_perception.yolox import YoloxDetector
+from dronewrapper_sim.evaluation.boxes import iou
 from support import ASSETS, YOLOX_NANO
 
 IMAGES = ASSETS / "images"
@@ -177,10 +177,3 @@ def test_detector_runs_once_per_frame_even_with_the_debug_image():
     to_message(result, stamp=0.0, frame_id="c", detector="color")
     annotate(img, result)
     assert detector.calls == 1
-
-
-def test_iou_of_boxes():
-    assert iou((0, 0, 10, 10), (0, 0, 10, 10)) == 1.0
-    assert iou((0, 0, 10, 10), (5, 0, 15, 10)) == pytest.approx(50 / 150)
-    assert iou((0, 0, 10, 10), (20, 20, 30, 30)) == 0.0
-    assert iou((0, 0, 0, 0), (0, 0, 0, 0)) == 0.0  # no area: no overlap to speak of

@@ -32,13 +32,3 @@ class Detection:
         """Width and height of the box, px."""
         x1, y1, x2, y2 = self.box_xyxy
         return (x2 - x1, y2 - y1)
-
-
-def iou(a: tuple[float, ...], b: tuple[float, ...]) -> float:
-    """Intersection over union of two (left, top, right, bottom) boxes in the same pixels
-    (0..1; 0 when neither has an area)."""
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
