@@ -1,5 +1,6 @@
 """What every world process of the simulator does around its runner (the built-in autopilot's
-:class:`~dronewrapper_sim.runner.SimRunner`, or the world around an external autopilot): make
+:class:`~dronewrapper_sim.runner.SimRunner`, the world around an external autopilot, or the
+simulated Tello's :class:`~dronewrapper_sim.tello.server.TelloServer`): make
 it, announce it ready on the node, run it until the node stops, close it.
 """
 
