@@ -14,17 +14,15 @@ import time
 
 import pytest
 from mavlink_log import MessageLog
+from mavlink_setpoints import FRAME_BODY_NED, setpoint, velocity_target
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
+from dronewrapper.msgs.mavros import MASK_VELOCITY
 from dronewrapper_sim.px4 import params
 from dronewrapper_sim.px4.modes import Mode
 from support import python_module, wait_for
 
 pytestmark = pytest.mark.integration
-
-FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
-FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
 
 class MavClient(MessageLog):
@@ -160,20 +158,7 @@ class MavClient(MessageLog):
         return self.wait_msg("HEARTBEAT", pred, timeout, t0)
 
     def stream(self, vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED, **pos) -> None:
-        if pos:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, FRAME_LOCAL_NED, MASK_POSITION,
-                pos["x"], pos["y"], pos["z"], 0, 0, 0, 0, 0, 0, pos.get("yaw", 0.0), 0,
-            )  # fmt: skip
-        else:
-            self.setpoint = velocity_target(vx, vy, vz, yaw_rate, frame)
-
-
-def velocity_target(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED):
-    """SET_POSITION_TARGET_LOCAL_NED with velocity (m/s) and yaw rate (rad/s) in ``frame``."""
-    return mavlink.MAVLink_set_position_target_local_ned_message(
-        0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
-    )
+        self.setpoint = setpoint(vx, vy, vz, yaw_rate, frame, **pos)
 
 
 def divmod_mode(custom_mode: int) -> tuple[int, int]:

@@ -19,9 +19,9 @@ os.environ.setdefault("MAVLINK20", "1")
 
 import pytest
 from mavlink_log import MessageLog
+from mavlink_setpoints import FRAME_BODY_NED, FRAME_LOCAL_NED, setpoint
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
 from dronewrapper_sim.px4 import telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 from dronewrapper_sim.px4.modes import Mode
@@ -30,8 +30,6 @@ PHYSICS_S = 1.0 / 250.0
 """One physics step (s)."""
 POLL_S = 0.016
 """How often the autopilot's links are polled (s)."""
-FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
-FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
 
 class Client(MessageLog):
@@ -110,15 +108,7 @@ class Client(MessageLog):
         return self.wait_msg("HEARTBEAT", pred, timeout, self.vehicle.now if t0 is None else t0)
 
     def stream(self, vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED, **pos) -> None:
-        if pos:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, FRAME_LOCAL_NED, MASK_POSITION,
-                pos["x"], pos["y"], pos["z"], 0, 0, 0, 0, 0, 0, pos.get("yaw", 0.0), 0,
-            )  # fmt: skip
-        else:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
-            )
+        self.setpoint = setpoint(vx, vy, vz, yaw_rate, frame, **pos)
 
 
 class Vehicle:
