@@ -8,7 +8,8 @@ import os
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.tello.config import default_address
-from dronewrapper_sim.tello.server import COMMAND_PORT, TelloServer, bind_udp
+from dronewrapper_sim.tello.server import COMMAND_PORT, TelloServer
+from dronewrapper_sim.udp import bind_udp
 from dronewrapper_sim.world.scenario import Scenario
 from dronewrapper_sim.world_process import run_world
 
