@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -37,7 +36,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from bench.common import CLK_TCK, free_endpoint, print_table, write_results
+from bench.common import CLK_TCK, free_endpoint, print_table, stop_process, write_results
 from bench.fleet import busy_core
 from dronewrapper.runtime.arguments import CommandParser, first_line
 
@@ -152,7 +151,7 @@ def cpu_window(
 
 def measure_split(n: int, seconds: float, settle: float, subscribe: bool) -> dict[str, object]:
     """N sims in one host, N bridges in another: each one's CPU per drone."""
-    from bench.common import LoopbackRouter, stop_process
+    from bench.common import LoopbackRouter
 
     router = LoopbackRouter()
     router.start()
@@ -229,11 +228,7 @@ def measure(
     finally:
         if poses is not None:
             poses.close()
-        up.send_signal(signal.SIGINT)
-        try:
-            up.wait(60 + n)
-        except subprocess.TimeoutExpired:
-            up.kill()
+        stop_process(up, timeout_s=60 + n)
 
 
 def main(argv: list[str] | None = None) -> int:
