@@ -33,8 +33,8 @@ import numpy as np
 import zenoh
 
 from bench import transport_breakdown
+from bench.breakdown_variants import SUMMARY
 from bench.common import percentiles, print_table, write_results
-from bench.transport_breakdown import SUMMARY
 from dronewrapper.msgs import CompressedImage, Header, Image, PoseStamped, codec, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions

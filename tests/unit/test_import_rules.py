@@ -52,9 +52,7 @@ TOOLS = (
 )
 """The SDK's tools: the only SDK modules that may name on-board packages."""
 
-KNOWN = {
-    ("sdk/dronewrapper/cli.py", "dronewrapper_compose"),
-}
+KNOWN: set[tuple[str, str]] = set()
 """(file, imported package) pairs that break a rule today."""
 
 KNOWN_CIRCLES = {
