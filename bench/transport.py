@@ -16,6 +16,9 @@ processes; small messages <= 0.3 ms.
 
     python -m bench.transport [--samples-small 2000] [--samples-image 400] [--seconds 4]
                               [--breakdown-rounds 3]
+
+Size: the measuring process and the peers it starts (serve, serve_raw) are one module, so that
+every topology runs the same code on both ends.
 """
 
 from __future__ import annotations

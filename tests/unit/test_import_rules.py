@@ -62,7 +62,6 @@ KNOWN_CIRCLES = {
     )
     | {"dronewrapper_bridge_mavlink.receive", "dronewrapper_bridge_mavlink.watch"},
     frozenset(f"dronewrapper_bridge_tello.{name}" for name in ("core", "missions", "operations")),
-    frozenset(f"dronewrapper_sim.px4.{name}" for name in ("commander", "geofence", "mission")),
 }
 """The circles of today, each as its modules' dotted names: each is one object spread over
 sibling modules that call back into it (a bridge's core, the simulated PX4's commander)."""

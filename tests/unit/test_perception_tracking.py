@@ -1,4 +1,7 @@
-"""Trackers on synthetic sequences: the paper method's fixed bugs, crossings in front and behind."""
+"""Trackers on synthetic sequences: the paper method's fixed bugs, crossings in front and behind.
+
+Size: the synthetic scenes and the trackers' tests on them are read together.
+"""
 
 from __future__ import annotations
 
