@@ -61,7 +61,6 @@ KNOWN_CIRCLES = {
         for name in ("autopilot_limits", "core", "missions", "operations", "parameters")
     )
     | {"dronewrapper_bridge_mavlink.receive", "dronewrapper_bridge_mavlink.watch"},
-    frozenset(f"dronewrapper_bridge_tello.{name}" for name in ("core", "missions", "operations")),
 }
 """The circles of today, each as its modules' dotted names: each is one object spread over
 sibling modules that call back into it (a bridge's core, the simulated PX4's commander)."""
