@@ -55,13 +55,7 @@ TOOLS = (
 KNOWN: set[tuple[str, str]] = set()
 """(file, imported package) pairs that break a rule today."""
 
-KNOWN_CIRCLES = {
-    frozenset(
-        f"dronewrapper_bridge_mavlink.{name}"
-        for name in ("autopilot_limits", "core", "missions", "operations", "parameters")
-    )
-    | {"dronewrapper_bridge_mavlink.receive", "dronewrapper_bridge_mavlink.watch"},
-}
+KNOWN_CIRCLES: set[frozenset[str]] = set()
 """The circles of today, each as its modules' dotted names: each is one object spread over
 sibling modules that call back into it (a bridge's core, the simulated PX4's commander)."""
 
