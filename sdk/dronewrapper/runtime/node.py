@@ -33,8 +33,7 @@ import threading
 import time
 from collections import Counter
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import msgspec
 import zenoh
@@ -61,6 +60,9 @@ from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.runtime.shm_put import ShmWriter
 from dronewrapper.runtime.thread_state import KEPT
 from dronewrapper.security import acl  # a module: acl imports the runtime's caller
+
+if TYPE_CHECKING:
+    from concurrent.futures import ThreadPoolExecutor
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -116,13 +118,13 @@ class Node:
         self._linger = linger
         self._declared: list[Any] = []
         self._token: Any = None
-        self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
+        self._pool: ThreadPoolExecutor | None = None  # made by the first serve()
         self._closed = False
         self._old_handlers: dict[int, Any] = {}
         self._parent_pid = os.getppid()
         self.shm_writer = ShmWriter() if self.options.shared_memory else None
         """Writes large messages (images) straight into Zenoh shared memory; None when off."""
-        self.bound_name = bound_name(self.options)
+        self.bound_name = caller.bound_name(self.options)
         """The certificate's name this node's commands are bound to ("" without identity)."""
         if handle_signals and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
@@ -207,7 +209,8 @@ class Node:
             return
         self._closed = True
         self.stop_event.set()
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
         if self._linger > 0:
             time.sleep(self._linger)
         try:
@@ -313,6 +316,11 @@ class Node:
         key = service.key(self.ns, **parts)
         dec = codec.decoder(service.request)
         reply_encoding = encoding_for(service.reply)
+        if self._pool is None:  # a node that serves nothing starts no workers
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
+        pool = self._pool
 
         def answer(query: zenoh.Query) -> None:
             try:
@@ -348,7 +356,7 @@ class Node:
 
         def on_query(query: zenoh.Query) -> None:
             try:
-                self._pool.submit(answer, query)
+                pool.submit(answer, query)
             except RuntimeError:  # pool shut down: the node is closing
                 query.drop()
 
@@ -385,13 +393,3 @@ class Node:
             bound_to=self.bound_name,
             **parts,
         )
-
-
-def bound_name(options: ZenohOptions) -> str:
-    """The name a node with ``options`` binds its commands to: its certificate's common name
-    (``""`` without an identity)."""
-    if not options.identity:
-        return ""
-    from dronewrapper.security.identity import Identity
-
-    return Identity.load(options.identity, options.keys_dir or None).subject().name
