@@ -5,6 +5,9 @@ Commander on a FakeNode; a :class:`~bus_autopilot.BusAutopilot` holds the bridge
 simple aircraft. Detections are scheduled at given bus times; every judgement reads bus-time
 stamps, so a loaded machine changes nothing. The real process is tested in
 test_controller_process.py.
+
+Size: the controller's whole life cycle on one rig, each stage's test beside the stages it
+follows.
 """
 
 from __future__ import annotations
