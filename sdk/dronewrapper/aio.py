@@ -38,9 +38,9 @@ from typing import Any, TypeVar
 import numpy as np
 
 from dronewrapper import telemetry
+from dronewrapper.client.inputs import camera_key_name
 from dronewrapper.drone import DroneWrapper
 from dronewrapper.fleet_aio import Fleet
-from dronewrapper.inputs import camera_key_name
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.refusal import Refusal

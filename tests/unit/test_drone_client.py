@@ -1,4 +1,4 @@
-"""The runtime's Commander on the fake bus: setpoints streamed by the loop, calls as Pending."""
+"""The DroneClient on the fake bus: setpoints streamed by the loop, calls as Pending, ready."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from concurrent.futures import Future
 import pytest
 from bus_autopilot import BusAutopilot
 
+from dronewrapper.client import DroneClient, Pending
 from dronewrapper.errors import InvalidArgument
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
@@ -20,17 +21,16 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceUnavailable
-from dronewrapper.runtime.commander import Commander, Pending
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 T0 = 1_700_000_000.0
 SETPOINTS = registry.SETPOINT_RAW_LOCAL.key("drone")
 
 
-def commander(bus: FakeBus, **kwargs) -> Commander:
+def commander(bus: FakeBus, **kwargs) -> DroneClient:
     node = FakeNode("svc", bus)
     kwargs.setdefault("inline_calls", True)
-    return Commander(node, name="svc", **kwargs)
+    return DroneClient(node, name="svc", **kwargs)
 
 
 def published(bus: FakeBus) -> list:
@@ -127,7 +127,7 @@ def test_calls_on_the_worker_thread_do_not_block_the_caller():
     bridge = FakeNode("bridge", bus)
     bridge.serve(registry.ARMING, slow_arming)
     bridge.serve(registry.SET_MODE, lambda _req: SetModeResult(mode_sent=True, result=0))
-    c = Commander(node, name="svc")
+    c = DroneClient(node, name="svc")
     try:
         pending = c.call(registry.ARMING, CommandBool(value=True), T0, timeout=5.0)
         assert not pending.done(T0)  # returned while the server still works
