@@ -1,11 +1,11 @@
 """A DroneWrapper's long actions, blocking: take-off, landing, go-to, return, mission steps.
 
 Each is one request to the bridge, which flies it its aircraft's way and answers once it has
-ended: the :mod:`dronewrapper.runtime.flight` sequence a service's loop steps, stepped here on
+ended: the :mod:`dronewrapper.client.flight` sequence a service's loop steps, stepped here on
 the caller's thread until done (:func:`fly`), on the drone client (its calls answered inline,
 since this thread waits anyway). A ``cancel`` event set from another thread asks the bridge to
 end the manoeuvre (:func:`cancel_on`; the aircraft holds where it is) and raises
-:class:`~dronewrapper.errors.Cancelled`. A :class:`~dronewrapper.runtime.flight.FlightError`
+:class:`~dronewrapper.errors.Cancelled`. A :class:`~dronewrapper.client.flight.FlightError`
 becomes the SDK's exception (:func:`drone_error`) with the same text. A go-to, a return and a
 mission name this process for the bridge (its beat, :mod:`dronewrapper.beat`): once the beats
 stop, the bridge ends them as for a lost commander. Heights in metres above the take-off point,
@@ -22,6 +22,19 @@ from typing import Any
 from dronewrapper import setpoints
 from dronewrapper.beat import Beat
 from dronewrapper.client import DroneClient
+from dronewrapper.client.flight import (
+    FlightError,
+    FlightSequence,
+    Goto,
+    Landing,
+    MissionStep,
+    NoPosition,
+    NoReply,
+    Return,
+    StepRefused,
+    Takeoff,
+    TooLate,
+)
 from dronewrapper.commands import NoReply as NoReplyError
 from dronewrapper.envelope_guard import EnvelopeGuard
 from dronewrapper.errors import (
@@ -37,19 +50,6 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CancelRequest, GotoRequest
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime.contract import Declared
-from dronewrapper.runtime.flight import (
-    FlightError,
-    FlightSequence,
-    Goto,
-    Landing,
-    MissionStep,
-    NoPosition,
-    NoReply,
-    Return,
-    StepRefused,
-    Takeoff,
-    TooLate,
-)
 
 log = logging.getLogger("dronewrapper")
 

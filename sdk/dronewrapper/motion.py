@@ -5,8 +5,8 @@ PositionTarget (local ENU positions in metres, body FLU velocities in m/s, yaw i
 in rad/s CCW positive), checks it against the bridge's envelope the wrapper holds (a target
 outside it raises CommandRefused naming the limit, and nothing is sent) and hands it to the
 drone client's setpoint stream, which publishes it at once and repeats it at the stream rate on
-its own thread (:mod:`dronewrapper.streamer`). What the bridge refuses later (the command lease,
-a late setpoint, an envelope the wrapper did not hold yet) arrives on the wrapper's
+its own thread (:mod:`dronewrapper.client.stream`). What the bridge refuses later (the command
+lease, a late setpoint, an envelope the wrapper did not hold yet) arrives on the wrapper's
 ``refusals``.
 """
 

@@ -9,7 +9,7 @@ A :class:`DroneClient` stands on a node (a service's, the SDK's own, or a
   :data:`STATE_FRESH_S` that says the autopilot is connected), :meth:`ready` (connected, a
   landed state and a position arrived: what take-off and landing read) and
   :meth:`not_ready_reason`;
-- **the setpoint stream** (:class:`~dronewrapper.streamer.SetpointStreamer`): :meth:`set`
+- **the setpoint stream** (:class:`~dronewrapper.client.stream.SetpointStreamer`): :meth:`set`
   publishes a PositionTarget at once and repeats it every ``1 / rate_hz`` s until changed or
   :meth:`stop`-ped, from a service's loop (:meth:`poll`, :meth:`next_due`) or on its own
   thread (``threaded_stream``, the SDK's blocking client); after a router gap a command older
@@ -39,6 +39,8 @@ from typing import Any, TypeVar
 from dronewrapper import setpoints
 from dronewrapper.client.calls import Calls, Pending
 from dronewrapper.client.inputs import FLIGHT_STREAMS, Inputs
+from dronewrapper.client.setpoint_stream import DEFAULT_EXPIRY_S
+from dronewrapper.client.stream import SetpointStreamer
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import PoseStamped
 from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State
@@ -47,8 +49,6 @@ from dronewrapper.refusals import RefusalInbox
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.latest import Latest
-from dronewrapper.runtime.setpoint_stream import DEFAULT_EXPIRY_S
-from dronewrapper.streamer import SetpointStreamer
 
 Req = TypeVar("Req")
 Rep = TypeVar("Rep")

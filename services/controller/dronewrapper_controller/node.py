@@ -5,7 +5,7 @@ Subscribes ``{ns}/perception/detections``; commands the aircraft through a
 :class:`~dronewrapper.client.DroneClient` on this process's node (setpoints on
 ``{ns}/mavros/setpoint_raw/local``, re-published at 30 Hz by the loop, each carrying the source
 camera frame's stamp; take-off and landing as non-blocking sequences, see
-:mod:`dronewrapper.runtime.flight`); publishes ``{ns}/controller/status`` at
+:mod:`dronewrapper.client.flight`); publishes ``{ns}/controller/status`` at
 ``status_rate_hz``.
 
 :class:`Controller` is the life cycle as steps in injected time: wait for the bridge ->
@@ -28,12 +28,12 @@ import math
 import os
 
 from dronewrapper.client.drone_client import DroneClient, default_commander
+from dronewrapper.client.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import CONTROLLER_IDLE, CONTROLLER_LANDING, CONTROLLER_TAKEOFF
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime import Latest
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop

@@ -8,11 +8,8 @@ import logging
 import pytest
 from bus_autopilot import BusAutopilot, drive
 
-from dronewrapper.client import DroneClient
-from dronewrapper.msgs.flight import NO_POSITION, REFUSED, TOO_LATE, FlightResult, TakeoffRequest
-from dronewrapper.runtime import flight
-from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper.runtime.flight import (
+from dronewrapper.client import DroneClient, flight
+from dronewrapper.client.flight import (
     FlightError,
     FlightSequence,
     Landing,
@@ -23,6 +20,8 @@ from dronewrapper.runtime.flight import (
     Takeoff,
     TooLate,
 )
+from dronewrapper.msgs.flight import NO_POSITION, REFUSED, TOO_LATE, FlightResult, TakeoffRequest
+from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 T0 = 1_700_000_000.0
 PERIOD = 0.02  # s between the loop's wakes

@@ -8,7 +8,7 @@ until it is changed or stopped; if the stream stops, the bridge holds position a
 publishes a new setpoint at once, :meth:`poll` repeats it when due, :meth:`next_due` says when.
 ``header.stamp`` keeps the stamp given with the command (the source frame's capture time),
 ``header.seq`` counts every publication. A :class:`~dronewrapper.client.DroneClient` drives it
-(:class:`~dronewrapper.streamer.SetpointStreamer`) from its own thread in the SDK, or from a
+(:class:`~dronewrapper.client.stream.SetpointStreamer`) from its own thread in the SDK, or from a
 service's loop; both on their node's clock.
 
 Link gaps: :meth:`SetpointStream.link` hears the publisher's matching status. While the bridge's

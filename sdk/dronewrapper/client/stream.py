@@ -1,7 +1,7 @@
 """A drone client's setpoint stream, locked, driven by its own thread or by a service's loop.
 
 The rules (rate, repetition, the idle deadman, the link-gap rule) are
-:class:`~dronewrapper.runtime.setpoint_stream.SetpointStream`'s. This module adds a lock, so the
+:class:`~dronewrapper.client.setpoint_stream.SetpointStream`'s. This module adds a lock, so the
 caller, the link's matching callback and the driver may touch the stream from their threads,
 and its two drivers: a thread (``threaded``, the SDK's blocking client: a new setpoint is
 published at once on the caller's thread, the thread then repeats it every period, waiting on
@@ -15,9 +15,9 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
+from dronewrapper.client.setpoint_stream import DEFAULT_EXPIRY_S, SetpointStream
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.runtime.clock import REAL, Clock
-from dronewrapper.runtime.setpoint_stream import DEFAULT_EXPIRY_S, SetpointStream
 
 
 class SetpointStreamer:
