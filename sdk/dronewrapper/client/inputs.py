@@ -115,7 +115,7 @@ class Inputs:
         self._stale_after: dict[str, float] = {}
         self._stale_warned: set[str] = set()
         for name in streams:
-            self.latest(STREAMS[name])
+            self.stream(name)
         self.status_texts: collections.deque[StatusText] = collections.deque(maxlen=20)
         self.subscribe(registry.STATUSTEXT, self.status_texts.append)
         self.images: dict[str, Latest[Any]] = {}
@@ -144,39 +144,32 @@ class Inputs:
         self.subscribe(topic, holder.update, **parts)
         return holder
 
-    # ---- the named streams (see STREAMS)
+    # ---- the named streams (see STREAMS): attributes once subscribed
 
-    @property
-    def state(self) -> Latest[State]:
-        return self.latest(registry.STATE)
+    state: Latest[State]
+    extended: Latest[ExtendedState]
+    pose: Latest[PoseStamped]
+    velocity_body: Latest[TwistStamped]
+    velocity_local: Latest[TwistStamped]
+    global_: Latest[NavSatFix]
+    battery: Latest[BatteryState]
+    link: Latest[LinkStatus]
 
-    @property
-    def extended(self) -> Latest[ExtendedState]:
-        return self.latest(registry.EXTENDED_STATE)
+    def stream(self, name: str) -> Latest[Any]:
+        """The holder of the named stream ``name`` (:data:`STREAMS`), subscribed on first use
+        and kept as the attribute ``name`` (a plain read after that: getters read it at any
+        rate)."""
+        holder = self.__dict__.get(name)
+        if holder is None:
+            holder = self.latest(STREAMS[name])  # one holder per key, whoever asks first
+            setattr(self, name, holder)
+        return holder
 
-    @property
-    def pose(self) -> Latest[PoseStamped]:
-        return self.latest(registry.LOCAL_POSE)
-
-    @property
-    def velocity_body(self) -> Latest[TwistStamped]:
-        return self.latest(registry.VELOCITY_BODY)
-
-    @property
-    def velocity_local(self) -> Latest[TwistStamped]:
-        return self.latest(registry.VELOCITY_LOCAL)
-
-    @property
-    def global_(self) -> Latest[NavSatFix]:
-        return self.latest(registry.GLOBAL_POSITION)
-
-    @property
-    def battery(self) -> Latest[BatteryState]:
-        return self.latest(registry.BATTERY)
-
-    @property
-    def link(self) -> Latest[LinkStatus]:
-        return self.latest(registry.LINK_STATUS)
+    def __getattr__(self, name: str) -> Any:
+        """A named stream not subscribed yet: subscribe it now (see :meth:`stream`)."""
+        if name in STREAMS:
+            return self.stream(name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def close(self) -> None:
         for sub in self.subscriptions:
@@ -217,7 +210,7 @@ class Inputs:
             return holder.age() if holder is not None else float("inf")
         if what not in AGES:
             raise InvalidArgument(f"age of {what!r}: use one of {', '.join(sorted(AGES))}")
-        return self.latest(STREAMS[AGES[what]]).age()
+        return self.stream(AGES[what]).age()
 
     # ---- cameras
 
