@@ -110,12 +110,9 @@ class DroneLink:
                 holder.age(),
                 snapshot.stale_limit(rate, self.config.stale_after),
             )
-        texts = list(self.client.inputs.status_texts)[-20:]
-        out["log"] = [snapshot.status_text_entry(m) for m in texts]
+        out["log"] = [snapshot.status_text_entry(m) for m in list(self.drone.status_texts)[-20:]]
         out["command"] = self.last_command
-        out["refusals"] = [
-            snapshot.refusal_entry(r) for r in list(self.client.refusals.recent)[-5:]
-        ]
+        out["refusals"] = [snapshot.refusal_entry(r) for r in self.drone.refusals[-5:]]
         out["teleop"] = self.deadman.active
         for camera, slot in self.slots.items():
             out[f"video_{camera}_age"] = None if slot.value is None else slot.age()
