@@ -119,7 +119,6 @@ class DroneClient:
             name=f"{self.ns}-setpoints",
             threaded=threaded_stream,
         )
-        self.period = self.stream.core.period
         self.calls = Calls(node, self.ns, name, inline=inline_calls, forbidden=forbidden)
         self.inputs = Inputs(
             node, self.ns, compressed_images=compressed_images, cameras=cameras, streams=streams
@@ -166,11 +165,6 @@ class DroneClient:
             and self.extended.value is not None
             and self.pose.value is not None
         )
-
-    def last_status_text(self) -> str:
-        """The autopilot's newest text message ("" before the first), to name a failure."""
-        texts = self.inputs.status_texts
-        return texts[-1].text if texts else ""
 
     def not_ready_reason(self) -> str:
         """What :meth:`ready` still misses, in words naming the keys."""
