@@ -170,8 +170,10 @@ def test_each_key_is_one_holder_and_one_subscription_whoever_reads_it():
     state_key = registry.STATE.key("drone")
     assert c.inputs.latest(registry.STATE) is c.state is c.inputs.state
     assert subscriptions(bus, state_key) == 1
-    battery = c.inputs.latest(registry.BATTERY)  # a stream read later: subscribed once, then
-    assert c.inputs.battery is battery and subscriptions(bus, battery.name) == 1
+    battery_key = registry.BATTERY.key("drone")
+    assert subscriptions(bus, battery_key) == 0  # a loop's client reads only what it flies by
+    battery = c.inputs.battery  # a stream read later: subscribed on the first read, once
+    assert c.inputs.latest(registry.BATTERY) is battery and subscriptions(bus, battery_key) == 1
     c.close()
     assert subscriptions(bus, state_key) == 0  # every subscription ends with the client
 
