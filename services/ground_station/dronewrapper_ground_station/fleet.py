@@ -1,11 +1,10 @@
 """The bus side of the station: the drones online, their telemetry, video and commands.
 
 Everything goes through the station's runtime Node (a FakeNode on the fake bus in tests), one
-DroneWrapper per drone on it: its commands, and its input holders (``DroneWrapper.inputs``),
-which the station reads for every telemetry section it shows (asking the wrapper for the ones
-the SDK does not hold itself: ground truth, the controller's status, detections), so each
-telemetry key is subscribed once per drone. Video and the simulator's topics are subscribed
-here. Everything is named by its registry topic; nothing here spells a key.
+drone client per drone on it (:class:`~dronewrapper.client.DroneClient`, under the DroneWrapper
+whose verbs the commands call): the station shows its input holders (each telemetry key
+subscribed once per drone), its texts and its refusals. Video (while someone watches) and the
+simulator's topics are subscribed here. Nothing here spells a key: each is a registry topic.
 """
 
 from __future__ import annotations
@@ -75,8 +74,9 @@ class DroneLink:
         self._node = node
         self._subs: list[Any] = []
         self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False)
+        self.client = self.drone.client
         self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {
-            name: (self.drone.inputs.latest(topic), topic.rate_hz, fields)
+            name: (self.client.inputs.latest(topic), topic.rate_hz, fields)
             for name, topic, fields in TELEMETRY
         }
         self.slots: dict[str, Latest[CompressedImage]] = {
