@@ -27,9 +27,6 @@ SKIPPED_DIRS = {"build", "node_modules", "__pycache__", "results"}
 name starts with a dot (``.venv``, ``.git``, caches) and ``*.egg-info`` are skipped too."""
 
 PENDING = {
-    # the drone client's tests and the station's drone link fold into one client
-    "services/ground_station/dronewrapper_ground_station/fleet.py",
-    "tests/service/test_sdk_drone.py",
     # its reason is written as prose ("Over 400 lines because ..."), not yet on a Size: line
     "services/bridge_px4_zenoh/dronewrapper_bridge_px4_zenoh/core.py",
 }
