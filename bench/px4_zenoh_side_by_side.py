@@ -24,7 +24,8 @@ that app asked for AUTO.LOITER and stopped, through ``mav`` (OFFBOARD asked by i
 of one setpoint: from the app's ``set_cmd_pos`` to the first echo carrying its yaw at the
 observer, both on this machine's clock. The echo's own path (PX4's zenoh publisher, the
 router) is the same for both bridges, so the difference between them is the bridges' and
-their links'.
+their links'. The longest pause of the Zenoh bridge's ``offboard_control_mode`` stream where
+it reaches the router is reported too (PX4 leaves OFFBOARD after 1 s without one).
 
 Run in a network namespace of its own (PX4 dials a fixed port)::
 
