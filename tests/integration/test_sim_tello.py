@@ -1,7 +1,10 @@
 """The simulated Tello as a process, over real UDP on loopback, flown by a minimal client of
 ours: every command and read, the state string parsed back, rc signs checked in ENU against
 the ground truth on Zenoh, emergency, bad input and floods, a second client, the video decoded
-by PyAV and by OpenCV, the ``port`` command, auto-landing, a clean exit."""
+by PyAV and by OpenCV, the ``port`` command, a clean exit. The protocol itself (every command
+in simulated time, auto-landing on a configured timeout) is held by
+tests/unit/test_sim_tello_protocol.py; the auto-land timeout set on a running simulator, by
+tests/integration/test_tello_bridge_sim.py."""
 
 from __future__ import annotations
 
@@ -294,36 +297,3 @@ def yaw_of(pose) -> float:
 
 def wrap(angle: float) -> float:
     return (angle + math.pi) % (2 * math.pi) - math.pi
-
-
-def test_auto_land_and_land(spawn):
-    drone, host = free_loopback_pair()
-    proc = spawn(
-        python_module(
-            "dronewrapper_sim", "--aircraft", "tello", "--address", drone,
-            "--set", "tello.auto_land_s=3", "--set", "tello.video=false",
-        ),
-        "tello",
-    )  # fmt: skip
-    client = TelloClient(drone, host)
-    try:
-
-        def up() -> bool:
-            assert proc.alive(), proc.output()
-            client.send("command")
-            try:
-                return client.reply(timeout=0.5) == "ok"
-            except TimeoutError:
-                return False
-
-        wait_for(up, 30, interval=0.1, what="the simulated Tello")
-        assert client.ask("takeoff") == "ok"
-        assert client.ask("land") == "ok"
-        assert client.states(1)[0][1]["h"] == 0
-        assert client.ask("takeoff") == "ok"
-        started = time.monotonic()
-        wait_for(lambda: client.states(1)[0][1]["h"] == 0, 15, what="the auto-landing")
-        assert time.monotonic() - started >= 2.5  # 3 s after the take-off finished
-    finally:
-        client.close()
-    assert proc.stop() == 0

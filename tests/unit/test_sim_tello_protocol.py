@@ -6,10 +6,12 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import pytest
 
 from dronewrapper_sim.tello.flight import Phase, TelloFlight
+from dronewrapper_sim.tello.params import TELLO, TelloEnvelope
 from dronewrapper_sim.tello.protocol import Reply, TelloProtocol, arc_through
 from dronewrapper_sim.tello.state_string import parse_state
 
@@ -21,8 +23,12 @@ DT = 0.01
 class Tello:
     """A protocol over a flight model, with a simulated clock."""
 
-    def __init__(self, battery_percent: float = 100.0, yaw: float = 0.0) -> None:
-        self.flight = TelloFlight(start=(0.0, 0.0, yaw), battery_percent=battery_percent)
+    def __init__(
+        self, battery_percent: float = 100.0, yaw: float = 0.0, envelope: TelloEnvelope = TELLO
+    ) -> None:
+        self.flight = TelloFlight(
+            start=(0.0, 0.0, yaw), envelope=envelope, battery_percent=battery_percent
+        )
         self.protocol = TelloProtocol(self.flight, baro_origin_m=100.0)
         self.now = 0.0
 
@@ -301,6 +307,26 @@ def test_auto_land_after_15_s_without_a_command():
     assert t.blocking("land") < 5.0  # a land during the auto-landing: ok on the ground
     assert t.flight.phase is Phase.LANDED
     assert t.flight.state.z == pytest.approx(0.0, abs=0.01)
+
+
+def test_a_configured_auto_land_after_3_s_and_land_on_request():
+    """``--set tello.auto_land_s=3`` (the simulator builds its envelope so): a take-off and a
+    land are answered, on the ground the state says h 0; a second take-off lands by itself 3 s
+    after it finished (the auto-land timeout reaching a running process:
+    tests/integration/test_tello_bridge_sim.py)."""
+    t = Tello(envelope=replace(TELLO, auto_land_s=3.0)).airborne()
+    t.blocking("land")
+    assert parse_state_of(t)["h"] == 0
+    t.blocking("takeoff")
+    started = t.now
+    while t.flight.phase is not Phase.LANDING:
+        t.run(DT)
+        assert t.now - started < 15.0, "no auto-landing"
+    assert t.now - started == pytest.approx(3.0, abs=2 * DT)  # from the take-off's end
+    while parse_state_of(t)["h"] != 0:
+        t.run(DT)
+        assert t.now - started < 15.0, "the auto-landing never reached the ground"
+    assert t.now - started >= 2.5
 
 
 def test_rc_keeps_it_flying():
