@@ -288,6 +288,52 @@ def test_rc_velocities_and_signs_in_enu():
     assert max(t.flight.env.rc_max_xy, 0) == pytest.approx(1.0)  # ~1 m/s at 100
 
 
+def test_a_flight_of_moves_turns_a_curve_a_flip_and_rc_in_one_sequence():
+    """The sequence a client flies after take-off and ``forward 50``, each answered ``ok`` when
+    finished, judged in ENU (the process's UDP, its ground truth on Zenoh and one of these
+    moves: tests/integration/test_sim_tello.py). Heading east at the start, as in
+    beacon_static."""
+    t = Tello().airborne()
+    assert t.blocking("forward 50") >= 0.5
+    p1 = t.position
+    t.blocking("up 30")
+    assert t.position[2] - p1[2] == pytest.approx(0.3, abs=0.1)
+    t.blocking("ccw 90")  # now heading north
+    assert parse_state(t.ask("attitude?"))["yaw"] == pytest.approx(-90, abs=3)  # ccw < 0
+    assert t.ask("speed 50") == "ok"
+    p2 = t.position
+    t.blocking("go 50 0 -30 60")  # forward (north) and down
+    p3 = t.position
+    assert (p3[0] - p2[0], p3[1] - p2[1], p3[2] - p2[2]) == pytest.approx((0, 0.5, -0.3), abs=0.1)
+    t.blocking("curve 60 60 0 120 0 0 60")
+    p4 = t.position
+    assert (p4[0] - p3[0], p4[1] - p3[1]) == pytest.approx((0.0, 1.2), abs=0.15)
+    t.blocking("flip b")
+    t.blocking("cw 90")  # east again
+
+    def velocity(command: str, seconds: float = 1.5) -> tuple[float, float, float]:
+        a = t.position
+        assert t.send(command) == []  # rc is never answered
+        t.run(seconds)
+        b = t.position
+        t.send("rc 0 0 0 0")
+        t.run(1.0)
+        return ((b[0] - a[0]) / seconds, (b[1] - a[1]) / seconds, (b[2] - a[2]) / seconds)
+
+    vx, vy, _ = velocity("rc 0 80 0 0")  # forward = east
+    assert vx > 0.3 and abs(vy) < 0.2
+    vx, vy, _ = velocity("rc 80 0 0 0")  # right = south
+    assert vy < -0.3 and abs(vx) < 0.2
+    _, _, vz = velocity("rc 0 0 60 0")  # up
+    assert vz > 0.2
+    yaw0 = t.flight.state.yaw
+    t.send("rc 0 0 0 60")  # clockwise: ENU yaw decreases
+    t.run(1.0)
+    t.send("rc 0 0 0 0")
+    turned = (t.flight.state.yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi
+    assert math.degrees(turned) < -20
+
+
 def test_half_stick_gives_half_speed():
     t = Tello().airborne()
     t.send("rc 0 50 0 0")
