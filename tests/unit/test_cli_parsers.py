@@ -165,7 +165,7 @@ def test_every_command_of_the_project_is_checked():
     covered = {
         "sdk/dronewrapper/cli.py",
         "sdk/dronewrapper/record/cli.py",
-        "sdk/dronewrapper/security/keys_cli.py",
+        "tools/dronewrapper/keys_cli.py",
         "sdk/dronewrapper/runtime/service.py",
         "compose/dronewrapper_compose/up.py",
         "compose/dronewrapper_compose/demo.py",

@@ -277,7 +277,7 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
 
 def _keys(argv: Sequence[str]) -> int:
     try:
-        from dronewrapper.security.keys_cli import main as keys_main
+        from dronewrapper.keys_cli import main as keys_main
     except ModuleNotFoundError as exc:  # the SDK without the security extra
         print(
             f"dronewrapper keys: needs {exc.name} (pip install './sdk[security]')", file=sys.stderr
