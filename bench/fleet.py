@@ -43,7 +43,6 @@ import argparse
 import contextlib
 import json
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -52,7 +51,7 @@ from collections import defaultdict
 from collections.abc import Iterator
 from pathlib import Path
 
-from bench.common import RESULTS, percentiles, print_table, write_results
+from bench.common import RESULTS, percentiles, print_table, stop_process, write_results
 from bench.fleet_plot import per_drone, plot
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
@@ -187,11 +186,7 @@ def setpoint_probe(endpoint: str, stop: threading.Event):
     def close() -> None:
         px4.stop.set()
         node.close()
-        bridge.send_signal(signal.SIGINT)
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
+        stop_process(bridge, timeout_s=10)
 
     return stream, latencies, close
 
@@ -326,11 +321,7 @@ def measure(
             probe()
         if session is not None:
             session.close()
-        up.send_signal(signal.SIGINT)
-        try:
-            up.wait(60 + count)
-        except subprocess.TimeoutExpired:
-            up.kill()
+        stop_process(up, timeout_s=60 + count)
 
 
 # ---------------------------------------------------------------------------- report
