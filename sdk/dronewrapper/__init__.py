@@ -8,11 +8,21 @@
 
 The SDK talks to the aircraft's bridge over Zenoh (see docs/design.md for keys, frames and units).
 Heavy parts load on first use, so ``import dronewrapper`` stays light for the runtime's tools.
+
+``dronewrapper`` is one package in four distributions, each importing only those below it: the
+contract (``dronewrapper.msgs``, from ``contract/``), the runtime (``dronewrapper.runtime`` and
+``dronewrapper.security``, from ``runtime/``), this client, and the tools (``dronewrapper.cli``,
+``doctor``, ``echo``, ``record``, ``router``, ..., from ``tools/``). Installed from wheels they
+share one folder; installed editable (``make setup``) each is its own path entry, which
+``extend_path`` below joins.
 """
 
 from __future__ import annotations
 
+from pkgutil import extend_path
 from typing import TYPE_CHECKING, Any
+
+__path__ = extend_path(__path__, __name__)
 
 __version__ = "0.1.0"
 

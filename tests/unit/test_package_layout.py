@@ -13,7 +13,9 @@ import tomllib
 
 REPO = Path(__file__).resolve().parents[2]
 SERVICES = sorted(p.parent for p in (REPO / "services").glob("*/pyproject.toml"))
-DISTRIBUTIONS = [REPO / "sdk", *SERVICES, REPO / "sim", REPO / "compose"]
+SDK_PARTS = [REPO / d for d in ("contract", "runtime", "sdk", "tools")]
+"""The ``dronewrapper`` package's four distributions."""
+DISTRIBUTIONS = [*SDK_PARTS, *SERVICES, REPO / "sim", REPO / "compose"]
 
 
 def packages_in_repo() -> list[tuple[str, Path]]:
