@@ -29,7 +29,11 @@ BASE = {"pip", "setuptools", "wheel"}
 
 PROBE = textwrap.dedent(
     """
-    import json, sys, importlib.metadata as md
+    import sys
+    before = set(sys.modules)
+    import dronewrapper
+    on_import = sorted(set(sys.modules) - before)
+    import json, importlib.metadata as md
     from dronewrapper import DroneWrapper, NotConnected, list_drones
     from drone_wrapper import DroneWrapper as PaperName
     assert PaperName is DroneWrapper
@@ -53,7 +57,8 @@ PROBE = textwrap.dedent(
     import importlib.resources
     typed = importlib.resources.files("dronewrapper").joinpath("py.typed").is_file()
     print(json.dumps({"error": error, "jpeg_error": jpeg_error, "heavy_imported": heavy,
-                      "dists": dists, "typed": typed, "tools": tools}))
+                      "dists": dists, "typed": typed, "tools": tools,
+                      "on_import": on_import}))
     """
 )
 
@@ -94,6 +99,7 @@ def test_sdk_installs_alone_with_light_dependencies(tmp_path):
     assert report["heavy_imported"] == []
     assert report["typed"]  # PEP 561: an app's type checker reads the SDK's annotations
     assert report["tools"] == []  # the client alone: no tool
+    assert report["on_import"] == ["dronewrapper"]  # `import dronewrapper` loads nothing else
     assert not (venv / "bin" / "dronewrapper").exists()
     assert "cannot reach the Zenoh router" in report["error"]
     assert "pip install 'dronewrapper[images]'" in report["jpeg_error"]  # cv2 is optional
