@@ -4,6 +4,7 @@ loopback."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import platform
@@ -11,10 +12,18 @@ import signal
 import subprocess
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
+
+
+class _Closes(Protocol):
+    def close(self) -> None: ...
+
+
+P = TypeVar("P", bound=_Closes)
 
 RESULTS = Path(__file__).resolve().parent / "results"
 CLK_TCK = os.sysconf("SC_CLK_TCK")
@@ -138,3 +147,24 @@ class LoopbackRouter:
         """Close the router and wait up to ``timeout_s`` for its thread to end."""
         self._stop.set()
         self._thread.join(timeout_s)
+
+
+@contextlib.contextmanager
+def probed_graph(launcher: Any, router: str, make_probe: Callable[[Any, str], P]) -> Iterator[P]:
+    """Start ``launcher``'s graph and ``make_probe(session, ns)`` on a client session to
+    ``router``; on the way out the probe and the session are closed and the graph stopped."""
+    from dronewrapper.runtime.node import open_session
+    from dronewrapper.runtime.options import ZenohOptions
+
+    session = probe = None
+    try:
+        launcher.start()
+        session = open_session(ZenohOptions(mode="client", connect=[router]))
+        probe = make_probe(session, launcher.ns)
+        yield probe
+    finally:
+        if probe is not None:
+            probe.close()
+        if session is not None:
+            session.close()
+        launcher.stop()

@@ -24,14 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import percentiles, print_table, write_results
+from bench.common import percentiles, print_table, probed_graph, write_results
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.config import load_config
-from dronewrapper.runtime.node import open_session
-from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.ports import free_port
 
 REPO = Path(__file__).resolve().parents[1]
@@ -156,19 +154,8 @@ def through_graph(graph: str, scenario: str, detector: str, seconds: float) -> d
         launcher = Launcher.from_file(
             REPO / "compose" / f"{graph}.yaml", router=router, variables=variables, out=log_file
         )
-        session = probe = None
-        try:
-            launcher.start()
-            session = open_session(ZenohOptions(mode="client", connect=[router]))
-            probe = Probe(session, launcher.ns)
+        with probed_graph(launcher, router, Probe) as probe:
             time.sleep(seconds)
-        finally:
-            if probe is not None:
-                probe.close()
-            if session is not None:
-                session.close()
-            launcher.stop()
-    assert probe is not None
     return {
         "frame_to_setpoint": percentiles(probe.setpoint_latency),
         "frame_to_detections": percentiles(probe.detection_latency),

@@ -28,14 +28,15 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
 import time
 from collections import defaultdict
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
-from bench.common import CLK_TCK, free_endpoint, print_table, write_results
+from bench.common import CLK_TCK, free_endpoint, print_table, stop_process, write_results
 from bench.fleet import busy_core
 from dronewrapper.runtime.arguments import CommandParser, first_line
 
@@ -132,9 +133,25 @@ def split_hosts(n: int, endpoint: str, loop_hz: str = "50") -> list[subprocess.P
     return [subprocess.Popen([*host, *members[:-1]], cwd=REPO) for members in (sims, bridges)]
 
 
+def cpu_window(
+    pids: Iterable[int], poses: Poses | None, seconds: float
+) -> tuple[dict[int, dict[str, float]], dict[int, dict[str, float]], float, Any]:
+    """Each process's CPU per thread (s) before and after ``seconds`` of wall time, the pose
+    subscriber (if any) counting in between: (before, after, elapsed s, its report)."""
+    before = {pid: thread_cpu(pid) for pid in pids}
+    if poses is not None:
+        poses.command("start")
+    t0 = time.monotonic()
+    time.sleep(seconds)
+    elapsed = time.monotonic() - t0
+    report = poses.command("stop") if poses is not None else None
+    after = {pid: thread_cpu(pid) for pid in pids}
+    return before, after, elapsed, report
+
+
 def measure_split(n: int, seconds: float, settle: float, subscribe: bool) -> dict[str, object]:
     """N sims in one host, N bridges in another: each one's CPU per drone."""
-    from bench.common import LoopbackRouter, stop_process
+    from bench.common import LoopbackRouter
 
     router = LoopbackRouter()
     router.start()
@@ -144,16 +161,10 @@ def measure_split(n: int, seconds: float, settle: float, subscribe: bool) -> dic
         if subscribe:
             poses = Poses(router.endpoint)
         time.sleep(settle + 0.3 * n)  # the members start one after another
-        before = {p.pid: thread_cpu(p.pid) for p in (sims, bridges)}
-        if poses is not None:
-            poses.command("start")
-        t0 = time.monotonic()
-        time.sleep(seconds)
-        elapsed = time.monotonic() - t0
-        report = poses.command("stop") if poses is not None else None
+        before, after, elapsed, report = cpu_window([sims.pid, bridges.pid], poses, seconds)
         per = {}
         for role, proc in (("sims' host", sims), ("bridges' host", bridges)):
-            spent = sum(thread_cpu(proc.pid).values()) - sum(before[proc.pid].values())
+            spent = sum(after[proc.pid].values()) - sum(before[proc.pid].values())
             per[role] = 100 * spent / elapsed / n
         return {
             "drones": n,
@@ -197,14 +208,7 @@ def measure(
             poses = Poses(endpoint)
         time.sleep(settle)
         pids = fleet_processes(up.pid)
-        before = {pid: thread_cpu(pid) for pid in pids}
-        if poses is not None:
-            poses.command("start")
-        t0 = time.monotonic()
-        time.sleep(seconds)
-        elapsed = time.monotonic() - t0
-        report = poses.command("stop") if poses is not None else None
-        after = {pid: thread_cpu(pid) for pid in pids}
+        before, after, elapsed, report = cpu_window(pids, poses, seconds)
         roles: dict[str, float] = defaultdict(float)
         by_thread: dict[str, float] = defaultdict(float)
         for pid, role in pids.items():
@@ -224,11 +228,7 @@ def measure(
     finally:
         if poses is not None:
             poses.close()
-        up.send_signal(signal.SIGINT)
-        try:
-            up.wait(60 + n)
-        except subprocess.TimeoutExpired:
-            up.kill()
+        stop_process(up, timeout_s=60 + n)
 
 
 def main(argv: list[str] | None = None) -> int:

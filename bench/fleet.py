@@ -29,12 +29,12 @@ the cost per drone against N goes to bench/results/fleet.png. Targets: bridge <=
 per drone at full telemetry, 80 MB per drone (sim + bridge); 30 drones each with pose age p99
 <= 50 ms, with one core busy; cost flat per drone in N.
 
-Over 400 lines: one N's whole measurement (the fleet, the probes, the SDK's fleet, the
-flight) and its report read in one place; the pose subscriber is ``bench.pose_ages`` and the
-plots are ``bench.fleet_plot``.
-
     nice -n 5 python -m bench.fleet [--seconds 10] [--max 60] [--counts 1 5 10 20]
         [--per-process N] [--busy] [--fly]
+
+Size: one N's whole measurement (the fleet, the probes, the SDK's fleet, the flight) and its
+report read in one place; the pose subscriber is bench.pose_ages and the plots are
+bench.fleet_plot.
 """
 
 from __future__ import annotations
@@ -43,7 +43,6 @@ import argparse
 import contextlib
 import json
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -52,7 +51,7 @@ from collections import defaultdict
 from collections.abc import Iterator
 from pathlib import Path
 
-from bench.common import RESULTS, percentiles, print_table, write_results
+from bench.common import RESULTS, percentiles, print_table, stop_process, write_results
 from bench.fleet_plot import per_drone, plot
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
@@ -187,11 +186,7 @@ def setpoint_probe(endpoint: str, stop: threading.Event):
     def close() -> None:
         px4.stop.set()
         node.close()
-        bridge.send_signal(signal.SIGINT)
-        try:
-            bridge.wait(10)
-        except subprocess.TimeoutExpired:
-            bridge.kill()
+        stop_process(bridge, timeout_s=10)
 
     return stream, latencies, close
 
@@ -326,11 +321,7 @@ def measure(
             probe()
         if session is not None:
             session.close()
-        up.send_signal(signal.SIGINT)
-        try:
-            up.wait(60 + count)
-        except subprocess.TimeoutExpired:
-            up.kill()
+        stop_process(up, timeout_s=60 + count)
 
 
 # ---------------------------------------------------------------------------- report

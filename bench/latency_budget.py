@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.budget import FrameTimes, budget_rows, first_datagram, growth, split_all, summarise
-from bench.common import percentiles, print_table, write_results
+from bench.common import percentiles, print_table, probed_graph, write_results
 from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.sensor import Image
@@ -44,8 +44,6 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.caller import origin_of
-from dronewrapper.runtime.node import open_session
-from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper.runtime.shm_put import ShmWriter
 from dronewrapper_compose.ports import free_port
 
@@ -285,30 +283,22 @@ def run_graph(app: str, seconds: float) -> tuple[list[FrameTimes], dict[str, obj
     facts: dict[str, object] = {"graph": graph, "scenario": scenario, "log": str(log_path)}
     with open(log_path, "w") as log_file:
         launcher = Launcher.from_file(path, router=router, variables=variables, out=log_file)
-        session = probe = None
         try:
-            launcher.start()
-            session = open_session(ZenohOptions(mode="client", connect=[router]))
-            probe = Probe(session, launcher.ns)
-            deadline = time.monotonic() + WAIT_FOR_COMMANDS_S
-            while not probe.setpoints and time.monotonic() < deadline:
-                time.sleep(0.2)
-            if not probe.setpoints:
-                raise RuntimeError(f"{graph}: no velocity setpoint in {WAIT_FOR_COMMANDS_S} s")
-            time.sleep(2.0)  # past the first commands
-            probe.clear()
-            tap.setpoints.clear()
-            start = time.time()
-            time.sleep(seconds)
-            facts["measured_s"] = time.time() - start
-            frames = match_frames(probe, list(tap.setpoints))
-            facts["detections_seen"] = len(probe.detections)
+            with probed_graph(launcher, router, Probe) as probe:
+                deadline = time.monotonic() + WAIT_FOR_COMMANDS_S
+                while not probe.setpoints and time.monotonic() < deadline:
+                    time.sleep(0.2)
+                if not probe.setpoints:
+                    raise RuntimeError(f"{graph}: no velocity setpoint in {WAIT_FOR_COMMANDS_S} s")
+                time.sleep(2.0)  # past the first commands
+                probe.clear()
+                tap.setpoints.clear()
+                start = time.time()
+                time.sleep(seconds)
+                facts["measured_s"] = time.time() - start
+                frames = match_frames(probe, list(tap.setpoints))
+                facts["detections_seen"] = len(probe.detections)
         finally:
-            if probe is not None:
-                probe.close()
-            if session is not None:
-                session.close()
-            launcher.stop()
             tap.close()
             path.unlink(missing_ok=True)
             path.parent.rmdir()

@@ -207,20 +207,14 @@ def bench_crossings(seconds: float, fps: float) -> list[dict[str, object]]:
     from dronewrapper.runtime.config import load_config
     from dronewrapper_perception.config import Config
     from dronewrapper_perception.pipeline import Pipeline
-    from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera, project, yaw_to_quat
+    from dronewrapper_sim.evaluation.boxes import owner, person_boxes
+    from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera, yaw_to_quat
     from dronewrapper_sim.render.renderer import Renderer
     from dronewrapper_sim.world.scenario import load_scenario
     from dronewrapper_sim.world.world import World
 
     vehicle = np.array([0.0, 0.0, 1.5])
     quat = yaw_to_quat(0.0)
-
-    def iou(a, b) -> float:
-        ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-        iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-        inter = ix * iy
-        union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-        return inter / union if union > 0 else 0.0
 
     rows = []
     for scenario in ("people_crossing_front", "people_crossing_behind"):
@@ -243,31 +237,8 @@ def bench_crossings(seconds: float, fps: float) -> list[dict[str, object]]:
                 for _ in range(int(seconds * fps)):
                     image = renderer.render(FRONTAL, vehicle, quat)
                     result = pipeline.process(image, world.time_s)
-                    people = {}
-                    for obj in world.objects:
-                        if obj.kind != "person":
-                            continue
-                        px, depth = project(
-                            np.array([obj.position, obj.top_enu]), vehicle, quat, FRONTAL, camera
-                        )
-                        if np.all(np.isfinite(px)):
-                            h = px[0, 1] - px[1, 1]
-                            cx = (px[0, 0] + px[1, 0]) / 2
-                            people[obj.name] = (
-                                (cx - 0.2 * h, px[1, 1], cx + 0.2 * h, px[0, 1]),
-                                depth[0],
-                            )
-                    owners = []
-                    for det in result.detections:
-                        scored = [(iou(det.box_xyxy, b), -d, n) for n, (b, d) in people.items()]
-                        scored = [s for s in scored if s[0] > 0.3]
-                        if not scored:
-                            owners.append(None)
-                            continue
-                        best = max(s[0] for s in scored)
-                        owners.append(
-                            max((s for s in scored if s[0] >= best - 0.1), key=lambda s: s[1])[2]
-                        )
+                    people = person_boxes(world, camera, vehicle, quat)
+                    owners = [owner(d.box_xyxy, people) for d in result.detections]
                     track = next(
                         (
                             t

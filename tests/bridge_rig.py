@@ -76,7 +76,7 @@ def bridge_rig(router: str, *, telemetry: bool = True, **config) -> Iterator[Rig
     try:
         user.subscribe(registry.LOCAL_POSE, poses)
         user.subscribe(registry.STATUSTEXT, texts)
-        wait_for(lambda: bridge.connected, 20, what="the bridge to hear the peer")
+        wait_for(lambda: bridge.core.connected, 20, what="the bridge to hear the peer")
         wait_for(lambda: reaches_bridge(user), 20, what="the user's calls to reach the bridge")
         yield Rig(bridge, peer, user, poses, texts)
     finally:

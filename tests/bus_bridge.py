@@ -99,6 +99,14 @@ class SimSdk:
     def run(self, seconds: float) -> None:
         self.bus.clock.run_for(seconds)
 
+    def fly_mission(self, seconds: float) -> None:
+        """Start the uploaded mission and run until it is finished, at most ``seconds``."""
+        self.drone.start_mission()
+        for _ in range(round(seconds / 0.5)):
+            self.run(0.5)
+            if self.drone.mission_progress().finished:
+                break
+
     def close(self) -> None:
         self.drone.close()
         self.pair.close()

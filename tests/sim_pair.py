@@ -16,12 +16,10 @@ from typing import Any
 
 os.environ.setdefault("MAVLINK20", "1")
 
+from clocked_autopilot import RATES
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_LOCAL_NED,
-    MASK_POSITION,
     CommandBool,
     CommandTOL,
     PositionTarget,
@@ -36,16 +34,6 @@ POLL_EVERY = 4  # physics steps between the autopilot's sends (62.5 Hz)
 SETPOINT_HZ = 20.0
 EPOCH = 1.7e9
 ALIVE_PERIOD_S = 1.0
-
-
-def position_target(x: float, y: float, z: float, yaw: float = 0.0) -> PositionTarget:
-    """A position + yaw setpoint (local ENU m, rad)."""
-    return PositionTarget(
-        coordinate_frame=FRAME_LOCAL_NED,
-        type_mask=MASK_POSITION,
-        position=Point(x=x, y=y, z=z),
-        yaw=yaw,
-    )
 
 
 class SimPair:
@@ -68,7 +56,7 @@ class SimPair:
                 start_x=start[0],
                 start_y=start[1],
             ),
-            link_rates={"onboard": dict(_ONBOARD)},
+            link_rates={"onboard": dict(RATES)},
         )
         bridge_config.setdefault("heartbeat_type", mavlink.MAV_TYPE_GCS)
         bridge_config.setdefault("message_rates", {})  # the rates below, kept low
@@ -179,14 +167,3 @@ class SimPair:
     def closest_approach(self, point: tuple[float, float, float], since: float = 0.0) -> float:
         """The ground truth's closest distance (m) to ``point`` since ``since``."""
         return min(math.dist(p, point) for t, p, _ in self.truth if t >= since)
-
-
-_ONBOARD = {
-    mavlink.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
-    mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION: 20.0,
-    mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED: 20.0,
-    mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 5.0,
-    mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 5.0,
-    mavlink.MAVLINK_MSG_ID_HOME_POSITION: 1.0,
-    mavlink.MAVLINK_MSG_ID_SYS_STATUS: 1.0,
-}

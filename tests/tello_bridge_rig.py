@@ -47,7 +47,9 @@ def running_bridge(
     bridge = Bridge(node, config)
     threads = bridge.start()
     try:
-        wait_for(lambda: bridge.connected and bridge.sdk_mode, 10, what="bridge connected")
+        wait_for(
+            lambda: bridge.core.connected and bridge.core.sdk_mode, 10, what="bridge connected"
+        )
         yield tello, bridge, user
     finally:
         node.stop()

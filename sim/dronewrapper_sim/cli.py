@@ -28,6 +28,7 @@ from dronewrapper.runtime.options import ENV_PREFIX
 from dronewrapper.runtime.service import run_service
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.world.scenario import SCENARIO_NAMES
+from dronewrapper_sim.world_process import run_world
 
 log = logging.getLogger("sim")
 
@@ -119,18 +120,9 @@ def run(node: NodeApi, config: SimConfig) -> int:
         from dronewrapper_sim.external.main import run_external
 
         return run_external(node, config, scenario)
-    try:
-        runner = SimRunner(config, scenario, node)
-    except OSError as exc:
-        log.error("%s", exc)
+    runner = run_world(node, lambda: SimRunner(config, scenario, node), log)
+    if runner is None:
         return 1
-    try:
-        log.info("ready: %s", runner.describe())
-        node.announce()
-        runner.run(node.stop_event)
-    finally:
-        node.stop()
-        runner.close()
     log.info(
         "stopped after %.1f s simulated (%.1f s of wall time slipped after stalls)",
         runner.autopilot.time_s,

@@ -15,13 +15,13 @@ link signs what it sends and drops what arrives unsigned, wrongly signed or repl
 from __future__ import annotations
 
 import logging
-import socket
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.security.mavlink_signing import verify_signed_frame
+from dronewrapper_sim.udp import bind_udp
 
 log = logging.getLogger("sim.mavlink")
 
@@ -131,16 +131,9 @@ class MavlinkUdpLink:
         self.name = name
         self.endpoint = endpoint
         self.remote: tuple[str, int] = (endpoint.remote_host, endpoint.remote_port)
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         loopback = endpoint.remote_host in (LOOPBACK, "localhost")
-        try:
-            self.sock.bind((LOOPBACK if loopback else "0.0.0.0", endpoint.local_port))
-        except OSError as exc:
-            self.sock.close()
-            raise OSError(
-                f"MAVLink {name} link: cannot bind UDP port {endpoint.local_port}: {exc.strerror}"
-            ) from exc
-        self.sock.setblocking(False)
+        address = LOOPBACK if loopback else "0.0.0.0"
+        self.sock = bind_udp(address, endpoint.local_port, f"MAVLink {name} link")
         self.local_port: int = self.sock.getsockname()[1]
         self.mav = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=compid)
         self.received = 0

@@ -16,12 +16,12 @@ import time
 
 import pytest
 from bridge_rig import bridge_rig
-from fuzz_inputs import REQUESTS, SETPOINT_BASE, Bad, bad_request, bad_setpoint
+from fuzz_calls import assert_refused, call_raw
+from fuzz_inputs import REQUESTS, SETPOINT_BASE, Bad, bad_setpoint
 from hypothesis import HealthCheck, given, settings
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import codec, registry
-from dronewrapper.msgs.std import ErrorReply
 from support import wait_for, zenoh_router
 
 pytestmark = pytest.mark.fuzz
@@ -41,20 +41,8 @@ def rig():
         yield rig
 
 
-def call_raw(rig, service: registry.Service, payload: bytes):
-    """One reply to a hand-made payload (Zenoh answers with exactly one, OK or error)."""
-    replies = list(rig.user.session.get(service.key("drone"), payload=payload, timeout=10))
-    assert len(replies) == 1, f"{len(replies)} replies"
-    return replies[0]
-
-
-def error_text(reply) -> str:
-    assert reply.err is not None, f"accepted: {reply.ok.payload.to_bytes()[:120]!r}"
-    return codec.decode(ErrorReply, reply.err.payload.to_bytes()).message
-
-
 def assert_alive(rig) -> None:
-    assert rig.bridge.connected, "the bridge lost its autopilot"
+    assert rig.bridge.core.connected, "the bridge lost its autopilot"
     assert not rig.bridge.node.stop_event.is_set()
     assert rig.bridge.node.callback_errors.get("mavlink", 0) == 0
 
@@ -64,13 +52,7 @@ def test_every_service_refuses_bad_requests_and_actuates_nothing(rig, name):
     shape = REQUESTS[name]
     since = time.monotonic()
 
-    @FUZZ
-    @given(bad=bad_request(shape))
-    def refused(bad: Bad) -> None:
-        message = error_text(call_raw(rig, shape.service, bad.payload))
-        assert bad.named in message, message
-
-    refused()
+    assert_refused(rig.user, shape, FUZZ)
     time.sleep(0.2)  # anything sent would have left by now (sends are synchronous)
     assert rig.peer.actuating(since) == []
     assert_alive(rig)
@@ -79,7 +61,7 @@ def test_every_service_refuses_bad_requests_and_actuates_nothing(rig, name):
 def test_the_assertion_can_fail_an_unbroken_request_does_reach_the_autopilot(rig):
     since = time.monotonic()
     arm = codec.encode(REQUESTS["arming"].service.request(value=True))
-    reply = call_raw(rig, registry.ARMING, arm)
+    reply = call_raw(rig.user, registry.ARMING, arm)
     assert reply.ok is not None  # the peer refuses (UNSUPPORTED), but the command went out
     sent = wait_for(lambda: rig.peer.actuating(since), 10, what="the arming command on the wire")
     assert sent[0].get_type() == "COMMAND_LONG" and sent[0].command == 400
@@ -91,7 +73,7 @@ def test_bad_setpoints_are_each_refused_and_never_forwarded(rig):
     since = time.monotonic()
 
     def refused_count() -> int:
-        return bridge.rejected_setpoints + sum(node.decode_errors.values())
+        return bridge.core.rejected_setpoints + sum(node.decode_errors.values())
 
     @FUZZ
     @given(bad=bad_setpoint())
@@ -103,7 +85,7 @@ def test_bad_setpoints_are_each_refused_and_never_forwarded(rig):
     refused()
     time.sleep(0.2)
     assert not [m for m in rig.peer.actuating(since) if "POSITION_TARGET" in m.get_type()]
-    assert bridge.failsafe.fresh_target(time.monotonic()) is None  # nothing was taken as valid
+    assert bridge.core.failsafe.fresh_target(time.monotonic()) is None  # nothing was taken as valid
     assert_alive(rig)
     assert codec.decode(registry.SETPOINT_RAW_LOCAL.type, codec.encode(SETPOINT_BASE)) is not None
 
@@ -141,10 +123,10 @@ def _mavlink_frames(peer, rng: random.Random) -> list[bytes]:
 def test_bad_mavlink_traffic_never_breaks_the_bridge(rig):
     rng = random.Random(12)
     since = time.monotonic()
-    before = rig.bridge.messages_received
+    before = rig.bridge.core.messages_received
     for data in _mavlink_frames(rig.peer, rng):
         rig.peer.send_raw(data)
-    wait_for(lambda: rig.bridge.messages_received > before + 20, 10)
+    wait_for(lambda: rig.bridge.core.messages_received > before + 20, 10)
     time.sleep(0.5)
     assert_alive(rig)
     for pose in rig.poses.values(since):

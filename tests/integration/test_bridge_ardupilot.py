@@ -43,7 +43,7 @@ def test_paper_listing_takes_off_lands_on_arducopter(ardu_rig, router):
     assert fake.custom_mode == LAND and not fake.armed
     yaw_rates = {round(m.yaw_rate, 3) for _, m in fake.setpoints if m.type_mask != MASK_POSITION}
     assert yaw_rates == {-1.0}  # ENU +1 rad/s (counter-clockwise) is NED -1 rad/s
-    assert bridge.failsafe.state == ""
+    assert bridge.core.failsafe.state == ""
 
 
 def test_scripted_arducopter_disarms_when_its_take_off_is_overridden(ardu_rig):
@@ -54,7 +54,7 @@ def test_scripted_arducopter_disarms_when_its_take_off_is_overridden(ardu_rig):
     texts: list[str] = []
     user.subscribe(registry.STATUSTEXT, lambda t: texts.append(t.text))
     fake.custom_mode, fake.armed, fake.armed_at = GUIDED, True, time.monotonic()
-    wait_for(lambda: bridge.failsafe.mode == "GUIDED", 10)
+    wait_for(lambda: bridge.core.failsafe.mode == "GUIDED", 10)
     fake.climb_to = 2.5  # as after NAV_TAKEOFF
     ground = PositionTarget(
         coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION, position=Point(z=0.0)

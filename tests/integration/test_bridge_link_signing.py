@@ -9,21 +9,13 @@ import socket
 import time
 
 import pytest
+from mavlink_signer import encoder
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.security.keystore import KeyStore
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_sim.mavlink_io import signing_timestamp
 from support import free_port
-
-
-def _encoder(key: bytes | None, timestamp: int | None = None) -> mavlink.MAVLink:
-    mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
-    if key is not None:
-        mav.signing.secret_key = key
-        mav.signing.sign_outgoing = True
-        mav.signing.timestamp = timestamp or signing_timestamp(time.time())
-    return mav
 
 
 def _heartbeat(mav: mavlink.MAVLink, custom_mode: int) -> bytes:
@@ -59,27 +51,27 @@ def _received(link: MavLink, wanted: int, seconds: float = 1.5) -> list:
 
 def test_keyed_link_signs_and_rejects(keyed_link):
     link, key, vehicle, bridge = keyed_link
-    genuine = _encoder(key)
+    genuine = encoder(key)
     vehicle.sendto(_heartbeat(genuine, 1), bridge)
     assert [m.custom_mode for m in _received(link, 1)] == [1]
     # what the bridge sends back is signed with the key
     link.send("heartbeat", 6, 8, 0, 0, 4)
     data, _ = vehicle.recvfrom(65535)
-    checker = _encoder(key)
+    checker = encoder(key)
     checker.signing.timestamp = 0
     (reply,) = checker.parse_buffer(data)
     assert reply.get_type() == "HEARTBEAT" and reply.get_signed()
 
     rejected_before = link.rejected
-    vehicle.sendto(_heartbeat(_encoder(None), 2), bridge)  # unsigned
-    vehicle.sendto(_heartbeat(_encoder(bytes(32)), 3), bridge)  # wrong key
+    vehicle.sendto(_heartbeat(encoder(None), 2), bridge)  # unsigned
+    vehicle.sendto(_heartbeat(encoder(bytes(32)), 3), bridge)  # wrong key
     replay = _heartbeat(genuine, 4)
     vehicle.sendto(replay, bridge)
     vehicle.sendto(replay, bridge)  # the same frame again: an old timestamp
-    future = _encoder(bytes(32), signing_timestamp(time.time() + 3600))
+    future = encoder(bytes(32), signing_timestamp(time.time() + 3600))
     vehicle.sendto(_heartbeat(future, 5), bridge)  # forged, from the future
     vehicle.sendto(_heartbeat(genuine, 6), bridge)  # the genuine stream goes on
-    radio = mavlink.MAVLink_radio_status_message(200, 190, 90, 10, 20, 0, 0).pack(_encoder(None))
+    radio = mavlink.MAVLink_radio_status_message(200, 190, 90, 10, 20, 0, 0).pack(encoder(None))
     vehicle.sendto(radio, bridge)
     got = _received(link, 3)
     assert [(m.get_type(), getattr(m, "custom_mode", None)) for m in got] == [

@@ -30,7 +30,7 @@ def rig(router):
 def flying_offboard(bridge, fake) -> None:
     fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
     fake.position_ned = (1.0, 1.0, -3.0)
-    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD" and bridge.failsafe.airborne, 10)
+    wait_for(lambda: bridge.core.failsafe.mode == "OFFBOARD" and bridge.core.failsafe.airborne, 10)
 
 
 def test_refused_mode_reaches_sdk_set_mode(rig, router):

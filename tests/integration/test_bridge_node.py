@@ -8,6 +8,9 @@ contract can be checked exactly on the wire. Each rule is tested at the core in 
 (tests/unit/test_bridge_core*.py); the tests here prove the wiring: threads, sockets, Zenoh
 keys, stream rates. Flights against the simulator are in tests/integration; against real
 ArduCopter SITL in tests/sitl.
+
+Size: the scripted PX4 and ArduCopter peers and the five wiring tests that drive them are read
+together.
 """
 
 from __future__ import annotations
@@ -23,7 +26,9 @@ import pytest
 
 os.environ.setdefault("MAVLINK20", "1")
 
+from bridge_rig import reaches_bridge
 from pymavlink import mavutil
+from targets import velocity
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Point, Vector3
@@ -39,7 +44,7 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
     SetMode,
 )
-from dronewrapper.runtime import ServiceError, ServiceUnavailable
+from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
 from support import client_node, free_port, wait_for
@@ -291,7 +296,7 @@ def make_rig(router, autopilot: int) -> Iterator[tuple[Bridge, FakePX4, object]]
         fake.custom_mode = 5  # LOITER
     user = client_node(router, name="user")
     try:
-        wait_for(lambda: bridge.connected, 20, what="bridge connected to the fake PX4")
+        wait_for(lambda: bridge.core.connected, 20, what="bridge connected to the fake PX4")
         wait_for(lambda: reaches_bridge(user), 20, what="the user's session to reach the bridge")
         yield bridge, fake, user
     finally:
@@ -310,28 +315,6 @@ def median_gap(times: list[float]) -> float:
     slower than the bound shifts every interval."""
     gaps = sorted(b - a for a, b in itertools.pairwise(times))
     return gaps[len(gaps) // 2] if gaps else math.inf
-
-
-def reaches_bridge(user) -> bool:
-    """True once the user's session knows the bridge's queryables (and so its subscriber,
-    declared just before them): a call with an invalid param_id gets an error reply without
-    any MAVLink traffic."""
-    try:
-        user.call(registry.PARAM_GET, ParamGet(param_id="X" * 17), timeout=5)
-    except ServiceUnavailable:
-        return False
-    except ServiceError:
-        return True
-    return True
-
-
-def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float = 0.0):
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 def stream(pub, target, seconds: float, hz: float = 30.0) -> float:
@@ -370,7 +353,7 @@ def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
     bridge, fake, user = rig
     fake.custom_mode, fake.armed, fake.landed_state = OFFBOARD, True, 2
     fake.position_ned = (1.0, 1.0, -5.0)
-    wait_for(lambda: bridge.failsafe.mode == "OFFBOARD" and bridge.failsafe.airborne, 10)
+    wait_for(lambda: bridge.core.failsafe.mode == "OFFBOARD" and bridge.core.failsafe.airborne, 10)
     failsafe_states: list[str] = []  # State.failsafe as published, in order
     user.subscribe(registry.STATE, lambda s: failsafe_states.append(s.failsafe))
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
@@ -393,7 +376,7 @@ def test_setpoints_forwarded_rotated_then_hold_then_land(rig):
     # commander lost (2 s in this config) while airborne -> NAV_LAND, requested exactly once
     # (a re-send of the same request would carry confirmation > 0)
     wait_for(lambda: fake.commands_named(21), 10, what="NAV_LAND")
-    assert bridge.failsafe.state == "land"
+    assert bridge.core.failsafe.state == "land"
     wait_for(lambda: "land" in failsafe_states, 10, what="failsafe land published")
     assert failsafe_states.index("hold") < failsafe_states.index("land")
     time.sleep(1.0)
@@ -408,7 +391,7 @@ def test_bad_setpoints_and_bytes_change_nothing(rig):
     for bad in (velocity(vx=math.nan), velocity(vz=math.inf), velocity(vx=99.0)):
         pub.put(bad)
     user.session.put(registry.SETPOINT_RAW_LOCAL.key("drone"), b"\x00garbage")
-    wait_for(lambda: bridge.rejected_setpoints == 3, 10)
+    wait_for(lambda: bridge.core.rejected_setpoints == 3, 10)
     wait_for(lambda: sum(bridge.node.decode_errors.values()) >= 1, 10)
     time.sleep(0.3)
     assert len(fake.setpoints) == before  # not in OFFBOARD, nothing fresh: nothing sent

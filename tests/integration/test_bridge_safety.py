@@ -96,7 +96,7 @@ def test_duplicated_and_reordered_datagrams_are_never_republished(router):
             what="the marker pose",
         )
         assert [p.pose.position.y for p in rig.poses.values(t1)] == [101.0, 102.0]
-        assert rig.bridge.freshness.duplicates >= 40 and rig.bridge.freshness.stale >= 1
+        assert rig.bridge.core.freshness.duplicates >= 40 and rig.bridge.core.freshness.stale >= 1
 
 
 def test_a_second_autopilot_with_the_same_system_id_is_flagged_and_ignored(router):
@@ -112,7 +112,7 @@ def test_a_second_autopilot_with_the_same_system_id_is_flagged_and_ignored(route
             heard_before = len(intruder.received)
             time.sleep(1.5)  # >= one of the bridge's 1 Hz heartbeats
             assert len(intruder.received) == heard_before  # replies go to the autopilot only
-            assert rig.bridge.connected and rig.bridge.sources.intruder_messages > 0
+            assert rig.bridge.core.connected and rig.bridge.core.sources.intruder_messages > 0
         finally:
             intruder.close()
 

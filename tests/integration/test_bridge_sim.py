@@ -24,17 +24,15 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from bridge_user import BridgeUser
 from setpoint_stream import yaw_of
+from targets import mixed, velocity
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point, Vector3
+from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
     FRAME_LOCAL_NED,
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
-    MASK_MIXED,
     MASK_POSITION,
-    MASK_VELOCITY,
     CommandBool,
     CommandTOL,
     PositionTarget,
@@ -99,22 +97,6 @@ class Rig(BridgeUser):
         )
         assert self.ext.value.landed_state == LANDED_STATE_ON_GROUND
         assert self.z() < 0.3
-
-
-def mixed(vx: float, z: float, yaw_rate: float = 0.0) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_MIXED,
-        velocity=Vector3(x=vx),
-        position=Point(z=z),
-        yaw_rate=yaw_rate,
-    )
-
-
-def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=vx, y=vy, z=vz)
-    )
 
 
 def start_sim(spawn, router: str, onboard_port: int, gcs_port: int, name: str = "sim"):

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 from doc_snippets import ASYNCIO, LISTING, PLAN, RECORDING, Run, adapt, snippets
+from key_store import issued_store
 
-from dronewrapper.security.keystore import KeyStore
 from dronewrapper_compose.launcher import Launcher
 from support import free_endpoint, free_port
 
@@ -43,12 +43,8 @@ def graph(tmp_path_factory):
     """sim_iris_secure on free ports with a TLS listener; the key store of alice (operator),
     bob (observer) and the drone."""
     root = tmp_path_factory.mktemp("docs")
-    store = KeyStore(root / "keys")
-    store.init()
-    store.issue("drone1", "drone")
-    store.issue("alice", "operator")
-    store.issue("bob", "observer")
-    store.new_mavlink_key()
+    roles = {"drone1": "drone", "alice": "operator", "bob": "observer"}
+    store = issued_store(root / "keys", roles)
     router, tls = free_endpoint(), f"tls/127.0.0.1:{free_port()}"
     variables = {
         "onboard_port": str(free_port(socket.SOCK_DGRAM)),

@@ -14,18 +14,23 @@ from support import free_endpoint, python_module
 pytestmark = pytest.mark.integration
 
 
+def up_refused(spawn, graph: str, variable: str) -> str:
+    """``dronewrapper up GRAPH --var VARIABLE`` on a free router port, which must exit 1; its
+    output."""
+    router = free_endpoint()
+    proc = spawn(
+        python_module("dronewrapper", "up", graph, "--var", variable, "--router", router), "up"
+    )
+    assert proc.proc.wait(60) == 1, proc.output()
+    return proc.output()
+
+
 def test_a_taken_autopilot_port_is_refused_with_a_clear_message(spawn):
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as held:
         held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the bridge holds it
         held.bind(("127.0.0.1", 0))
         port = held.getsockname()[1]
-        argv = python_module(
-            "dronewrapper", "up", "px4_sitl", "--var", f"onboard_port={port}",
-            "--router", free_endpoint(),
-        )  # fmt: skip
-        proc = spawn(argv, "up")
-        assert proc.proc.wait(60) == 1, proc.output()
-    out = proc.output()
+        out = up_refused(spawn, "px4_sitl", f"onboard_port={port}")
     assert f"UDP port {port} (${{onboard_port}}) is already in use" in out, out
     assert "--var onboard_port=N" in out
     assert "starting bridge_mavlink" not in out  # nothing was started
@@ -58,13 +63,7 @@ def test_a_tello_graph_on_a_taken_address_refuses_to_start(spawn):
     address = f"127.0.0.{100 + os.getpid() % 100}"  # a loopback address of this test's own
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as held:
         held.bind((address, 8889))  # as the first Tello graph's simulator holds it
-        argv = python_module(
-            "dronewrapper", "up", "sim_tello", "--var", f"address={address}",
-            "--router", free_endpoint(),
-        )  # fmt: skip
-        proc = spawn(argv, "up")
-        assert proc.proc.wait(60) == 1, proc.output()
-    out = proc.output()
+        out = up_refused(spawn, "sim_tello", f"address={address}")
     assert f"cannot bind udp {address}:8889" in out and "Address already in use" in out, out
     assert "start failed: sim exited with code 1 before it was ready" in out
     assert "starting bridge_tello" not in out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import cv2
 import pytest
@@ -14,21 +15,17 @@ from support import ASSETS, YOLOX_NANO, client_node, python_module, wait_for
 pytestmark = pytest.mark.integration
 
 
-def test_yolox_process_detects_people_and_stops_cleanly(router, spawn):
-    proc = spawn(
-        python_module(
-            "dronewrapper_perception",
-            "--connect",
-            router,
-            "--set",
-            "detector=yolox",
-            "--set",
-            f"model_path={YOLOX_NANO}",
-            "--set",
-            "threads=1",
-        ),
-        "perception",
+def spawn_yolox(spawn, router: str, model: Path, *args: str):
+    """The perception process with the YOLOX detector on ``model``, connected to ``router``."""
+    command = python_module(
+        "dronewrapper_perception",
+        *("--connect", router, "--set", "detector=yolox", "--set", f"model_path={model}", *args),
     )
+    return spawn(command, "perception")
+
+
+def test_yolox_process_detects_people_and_stops_cleanly(router, spawn):
+    proc = spawn_yolox(spawn, router, YOLOX_NANO, "--set", "threads=1")
     frame = cv2.imread(str(ASSETS / "images" / "basketball1.png"))
     with client_node(router) as node:
         received: list[Detections] = []
@@ -55,18 +52,7 @@ def test_yolox_process_detects_people_and_stops_cleanly(router, spawn):
 
 def test_missing_model_is_a_clear_error_at_start(router, spawn, tmp_path):
     missing = tmp_path / "nowhere.onnx"
-    proc = spawn(
-        python_module(
-            "dronewrapper_perception",
-            "--connect",
-            router,
-            "--set",
-            "detector=yolox",
-            "--set",
-            f"model_path={missing}",
-        ),
-        "perception",
-    )
+    proc = spawn_yolox(spawn, router, missing)
     deadline = time.monotonic() + 60
     while proc.alive() and time.monotonic() < deadline:
         time.sleep(0.1)

@@ -9,9 +9,9 @@ from __future__ import annotations
 import socket
 
 import pytest
+from key_store import issued_store
 from ros2_peer import ros2_peer
 
-from dronewrapper.security.keystore import KeyStore
 from support import free_endpoint, free_port, python_module, wait_for, zenoh_router
 
 pytestmark = pytest.mark.integration
@@ -20,11 +20,7 @@ pytestmark = pytest.mark.integration
 def test_gateway_commands_with_its_own_identity(spawn, tmp_path, monkeypatch):
     from zenoh_ros2_sdk import ROS2ServiceClient
 
-    store = KeyStore(tmp_path / "keys")
-    store.init()
-    store.issue("drone1", "drone")
-    store.issue("ros2-gw", "operator")
-    store.new_mavlink_key()
+    store = issued_store(tmp_path / "keys", {"drone1": "drone", "ros2-gw": "operator"})
     monkeypatch.setenv("DRONEWRAPPER_KEYS", str(store.root))
     tls = f"tls/127.0.0.1:{free_port()}"
     graph = spawn(

@@ -8,6 +8,7 @@ from __future__ import annotations
 import socket
 
 import pytest
+from key_store import issued_store
 
 from dronewrapper import DroneWrapper
 from dronewrapper.errors import CommandRefused, NotConnected
@@ -18,12 +19,8 @@ pytestmark = pytest.mark.integration
 
 
 def test_secure_graph_flies_with_an_operator_certificate(spawn, tmp_path, monkeypatch):
-    store = KeyStore(tmp_path / "keys")
-    store.init()
-    store.issue("drone1", "drone")
-    store.issue("alice", "operator")
-    store.issue("olga", "observer")
-    store.new_mavlink_key()
+    roles = {"drone1": "drone", "alice": "operator", "olga": "observer"}
+    store = issued_store(tmp_path / "keys", roles)
     other = KeyStore(tmp_path / "other")
     other.init()
     other.issue("mallory", "operator")

@@ -8,6 +8,7 @@ import socket
 import time
 
 import pytest
+from mavlink_signer import encoder
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.security.keystore import KeyStore
@@ -35,12 +36,8 @@ class Station:
         self.heartbeats = 0
 
     def encoder(self, key: bytes | None, *, timestamp: int | None = None) -> mavlink.MAVLink:
-        mav = mavlink.MAVLink(None, srcSystem=245, srcComponent=191)
-        if key is not None:
-            mav.signing.secret_key = key
-            mav.signing.sign_outgoing = True
-            mav.signing.timestamp = timestamp or signing_timestamp(time.time())
-        return mav
+        """This station's encoder (system 245, component 191), signing with ``key``."""
+        return encoder(key, timestamp, system=245, component=191)
 
     def pump(self, seconds: float, until=None) -> list:
         """Read for ``seconds``, or until ``until(acks)`` holds; returns the COMMAND_ACKs seen

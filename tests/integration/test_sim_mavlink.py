@@ -2,7 +2,10 @@
 MAVLink 2 bytes (pymavlink), the offboard-loss failsafe, the parameter protocol, message
 intervals, bad input and a clean exit. The full PX4 offboard sequence (modes, arming, body and
 local velocities, yaw rate, position, landing) is held in simulated time by
-tests/service/test_sim_offboard_virtual.py."""
+tests/service/test_sim_offboard_virtual.py.
+
+Size: one MAVLink client rig (its timed receive log and waits) shared by every test of the file.
+"""
 
 from __future__ import annotations
 
@@ -13,24 +16,24 @@ import threading
 import time
 
 import pytest
+from mavlink_log import MessageLog
+from mavlink_setpoints import FRAME_BODY_NED, setpoint, velocity_target
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
+from dronewrapper.msgs.mavros import MASK_VELOCITY
 from dronewrapper_sim.px4 import params
 from dronewrapper_sim.px4.modes import Mode
 from support import python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
-FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
-FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
-
-class MavClient:
+class MavClient(MessageLog):
     """A MAVLink endpoint on a free UDP port (like a bridge's ``udpin``), with a background
     reader that keeps every message and a setpoint streamer that can be started and stopped."""
 
     def __init__(self, mav_type: int, sysid: int = 245) -> None:
+        super().__init__()
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
         self.sock.settimeout(0.1)
@@ -40,8 +43,6 @@ class MavClient:
         self.parser = mavlink.MAVLink(None)
         self.parser.robust_parsing = True
         self.peer: tuple[str, int] | None = None
-        self.log: list[tuple[float, object]] = []
-        self.lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._stream_lock = threading.Lock()
         self._stop = threading.Event()
@@ -107,36 +108,10 @@ class MavClient:
             thread.join(2)
         self.sock.close()
 
-    # ---- reading ----
+    # ---- reading: MessageLog ----
 
-    def since(self, t0: float, kind: str | None = None) -> list:
-        return [m for _, m in self.timed(t0, kind)]
-
-    def timed(self, t0: float, kind: str | None = None) -> list[tuple[float, object]]:
-        """(receive time, message) pairs received at or after ``t0`` (monotonic s)."""
-        with self.lock:
-            return [
-                (t, m) for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)
-            ]
-
-    def latest(self, kind: str):
-        with self.lock:
-            for _, msg in reversed(self.log):
-                if msg.get_type() == kind:
-                    return msg
-        return None
-
-    def wait_msg(self, kind: str, pred=lambda m: True, timeout: float = 10.0, t0: float = 0.0):
-        def found():
-            for msg in self.since(t0, kind):
-                if pred(msg):
-                    return msg
-            return None
-
-        return wait_for(found, timeout, what=f"{kind} matching {pred}")
-
-    def texts(self, t0: float = 0.0) -> list[str]:
-        return [m.text for m in self.since(t0, "STATUSTEXT")]
+    def wait_until(self, found, timeout: float, what: str):
+        return wait_for(found, timeout, what=what)
 
     # ---- commands ----
 
@@ -186,20 +161,7 @@ class MavClient:
         return self.wait_msg("HEARTBEAT", pred, timeout, t0)
 
     def stream(self, vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED, **pos) -> None:
-        if pos:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, FRAME_LOCAL_NED, MASK_POSITION,
-                pos["x"], pos["y"], pos["z"], 0, 0, 0, 0, 0, 0, pos.get("yaw", 0.0), 0,
-            )  # fmt: skip
-        else:
-            self.setpoint = velocity_target(vx, vy, vz, yaw_rate, frame)
-
-
-def velocity_target(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED):
-    """SET_POSITION_TARGET_LOCAL_NED with velocity (m/s) and yaw rate (rad/s) in ``frame``."""
-    return mavlink.MAVLink_set_position_target_local_ned_message(
-        0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
-    )
+        self.setpoint = setpoint(vx, vy, vz, yaw_rate, frame, **pos)
 
 
 def divmod_mode(custom_mode: int) -> tuple[int, int]:

@@ -114,6 +114,20 @@ def decode_pyav(stream: bytes) -> list:
     return frames
 
 
+def wait_answering(client: TelloClient, proc) -> None:
+    """Wait until the simulated Tello (``proc``, alive throughout) answers ``command`` ok."""
+
+    def up() -> bool:
+        assert proc.alive(), proc.output()
+        client.send("command")
+        try:
+            return client.reply(timeout=0.5) == "ok"
+        except TimeoutError:
+            return False
+
+    wait_for(up, 30, interval=0.1, what="the simulated Tello answering 'command'")
+
+
 @pytest.fixture
 def tello(spawn, router, tmp_path):
     """A simulated Tello on a free loopback address with a Zenoh router; our client."""
@@ -126,16 +140,7 @@ def tello(spawn, router, tmp_path):
         "tello",
     )  # fmt: skip
     client = TelloClient(drone, host)
-
-    def up() -> bool:
-        assert proc.alive(), proc.output()
-        client.send("command")
-        try:
-            return client.reply(timeout=0.5) == "ok"
-        except TimeoutError:
-            return False
-
-    wait_for(up, 30, interval=0.1, what="the simulated Tello answering 'command'")
+    wait_answering(client, proc)
     yield client, proc, router
     client.close()
 
@@ -307,16 +312,7 @@ def test_auto_land_and_land(spawn):
     )  # fmt: skip
     client = TelloClient(drone, host)
     try:
-
-        def up() -> bool:
-            assert proc.alive(), proc.output()
-            client.send("command")
-            try:
-                return client.reply(timeout=0.5) == "ok"
-            except TimeoutError:
-                return False
-
-        wait_for(up, 30, interval=0.1, what="the simulated Tello")
+        wait_answering(client, proc)
         assert client.ask("takeoff") == "ok"
         assert client.ask("land") == "ok"
         assert client.states(1)[0][1]["h"] == 0

@@ -63,7 +63,7 @@ def test_services_setpoints_and_replies_travel_over_real_udp(tello_and_bridge):
     stopped = time.monotonic()
     wait_for(lambda: (0, 0, 0, 0) in {s for _, s in tello.rcs(stopped)}, 5, what="a stop")
     assert (-20, 30, 10, -23) in {s for _, s in tello.rcs(start)}
-    wait_for(lambda: bridge.failsafe.state == "hold", 5, what="failsafe hold")
+    wait_for(lambda: bridge.core.failsafe.state == "hold", 5, what="failsafe hold")
     tello.script["speed 50"] = "out of range"
     reply = user.call(registry.PARAM_SET, ParamSet(param_id="SPEED", value=ParamValue.of(50)))
     assert not reply.success and "out of range" in reply.message
@@ -77,7 +77,7 @@ def test_a_second_bridge_on_the_same_address_fails_loudly(tello_and_bridge):
     _, bridge, user = tello_and_bridge
     with pytest.raises(OSError):
         Bridge(user, bridge.config)
-    assert bridge.connected
+    assert bridge.core.connected
 
 
 def test_command_lease_one_commander_at_a_time(router):

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dronewrapper.rotations import wrap_pi
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
@@ -26,6 +27,7 @@ from dronewrapper_sim.evaluation.metrics import (
     TRACKING_STATES,
     FollowSample,
     FollowSummary,
+    bearing_error,
     colour_intended_distance,
     person_intended_distance,
     summarize,
@@ -220,3 +222,39 @@ def fly(
         distance_tolerance=DISTANCE_TOLERANCE,
     )
     return Flight(scenario, samples, summary, code, log_path.read_text(), list(launcher.failures))
+
+
+def passes(flight: Flight, max_acquire: float, min_centred: float, min_distance: float) -> bool:
+    """Whether ``flight`` meets its bounds (acquired within ``max_acquire`` s, centred and at
+    the intended distance at least these shares of the time), as the capability matrix
+    records it."""
+    s = flight.summary
+    return (
+        flight.exit_code == 0
+        and s.samples > 50
+        and s.time_to_acquire <= max_acquire
+        and s.centred_share >= min_centred
+        and s.distance_share >= min_distance
+    )
+
+
+def check_flight(flight: Flight, max_acquire: float, min_centred: float, min_distance: float):
+    """Assert each bound of :func:`passes`, the flight's description and timeline in the
+    failure."""
+    s = flight.summary
+    print(flight.describe())
+    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{flight.log[-3000:]}"
+    assert s.samples > 50, f"too few samples: {flight.describe()}\n{flight.log[-3000:]}"
+    detail = f"{flight.describe()}\n{flight.timeline()}"
+    assert s.time_to_acquire <= max_acquire, detail
+    assert s.centred_share >= min_centred, detail
+    assert s.distance_share >= min_distance, detail
+
+
+def crossed(sample: FollowSample) -> bool:
+    """A passer-by is within 5 deg of the target's bearing (in front of or behind it)."""
+    return any(
+        abs(wrap_pi(bearing_error(sample.vehicle, sample.yaw, pos) - sample.bearing))
+        < math.radians(5)
+        for pos in sample.others.values()
+    )

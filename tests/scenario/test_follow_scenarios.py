@@ -17,10 +17,7 @@ import math
 
 import pytest
 from busy_core import one_core_busy
-from scenario_flight import fly, record_result
-
-from dronewrapper.rotations import wrap_pi
-from dronewrapper_sim.evaluation.metrics import bearing_error
+from scenario_flight import check_flight, crossed, fly, passes, record_result
 
 pytestmark = [pytest.mark.scenario, pytest.mark.timeout(240)]
 
@@ -38,37 +35,6 @@ CASES = {
 CROSSING = ("people_crossing_behind", "people_crossing_front")
 LOADED_DETECT_RATE_HZ = "10"  # crossing flights: perception capped, one core kept busy
 CENTRED = math.radians(10.0)
-
-
-def crossed(sample) -> bool:
-    """A passer-by is within 5 deg of the target's bearing (in front of or behind it)."""
-    target = sample.bearing
-    return any(
-        abs(wrap_pi(bearing_error(sample.vehicle, sample.yaw, pos) - target)) < math.radians(5)
-        for pos in sample.others.values()
-    )
-
-
-def passes(flight, max_acquire, min_centred, min_distance) -> bool:
-    s = flight.summary
-    return (
-        flight.exit_code == 0
-        and s.samples > 50
-        and s.time_to_acquire <= max_acquire
-        and s.centred_share >= min_centred
-        and s.distance_share >= min_distance
-    )
-
-
-def check_flight(flight, max_acquire, min_centred, min_distance):
-    s = flight.summary
-    print(flight.describe())
-    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{flight.log[-3000:]}"
-    assert s.samples > 50, f"too few samples: {flight.describe()}\n{flight.log[-3000:]}"
-    detail = f"{flight.describe()}\n{flight.timeline()}"
-    assert s.time_to_acquire <= max_acquire, detail
-    assert s.centred_share >= min_centred, detail
-    assert s.distance_share >= min_distance, detail
 
 
 @pytest.mark.parametrize("scenario", list(CASES))

@@ -11,13 +11,20 @@ import math
 import random
 
 import pytest
-from scenario_flight import CENTRED_TOLERANCE, DISTANCE_TOLERANCE, PERSON_BOX, fly, record_result
+from scenario_flight import (
+    CENTRED_TOLERANCE,
+    DISTANCE_TOLERANCE,
+    PERSON_BOX,
+    check_flight,
+    crossed,
+    fly,
+    passes,
+    record_result,
+)
 
-from dronewrapper.rotations import wrap_pi
 from dronewrapper.runtime.config import load_config
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_sim.evaluation.metrics import (
-    bearing_error,
     colour_intended_distance,
     person_intended_distance,
     summarize,
@@ -74,33 +81,15 @@ def test_tello_follow(scenario, tmp_path):
         distance_tolerance=DISTANCE_TOLERANCE,
     )
     flight.summary = s
-    print(flight.describe())
-    passed = (
-        flight.exit_code == 0
-        and s.samples > 50
-        and s.time_to_acquire <= max_acquire
-        and s.centred_share >= min_centred
-        and s.distance_share >= min_distance
-    )
+    passed = passes(flight, max_acquire, min_centred, min_distance)
     app = "follow_color" if graph.endswith("color") else "follow_person"
     record_result(flight, app, "tello", "dronewrapper_sim Tello (ours)", passed)
-    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{flight.log[-3000:]}"
-    assert s.samples > 50, f"too few samples: {flight.describe()}\n{flight.log[-3000:]}"
-    detail = f"{flight.describe()}\n{flight.timeline()}"
-    assert s.time_to_acquire <= max_acquire, detail
-    assert s.centred_share >= min_centred, detail
-    assert s.distance_share >= min_distance, detail
+    check_flight(flight, max_acquire, min_centred, min_distance)
     assert math.isfinite(goal) and goal > 1.0
     if scenario.startswith("people_crossing"):
         # passers-by did cross the line of sight, and the drone still points at `target` in
         # the last quarter (as the Iris test judges identity)
-        crossings = sum(
-            any(
-                abs(wrap_pi(bearing_error(x.vehicle, x.yaw, pos) - x.bearing)) < math.radians(5)
-                for pos in x.others.values()
-            )
-            for x in flight.samples
-        )
+        crossings = sum(crossed(x) for x in flight.samples)
         assert crossings > 0, "no passer-by crossed the line of sight: the test proves nothing"
         tail = flight.samples[-len(flight.samples) // 4 :]
         nearest = sum(x.closest_to_axis() == "target" for x in tail) / len(tail)

@@ -75,7 +75,7 @@ def test_the_bridge_runs_on_the_node_clock_threads_and_all(rig: Rig):
     clock = rig.bus.clock
     assert rig.bridge.core.now == T0  # the core starts at the node's clock
     clock.run_for(3.5)
-    assert rig.bridge.connected
+    assert rig.bridge.core.connected
     # the link-status thread waits a second of the node's clock between reports, exactly
     statuses = rig.bus.published[registry.LINK_STATUS.key("drone")]
     assert [d.time for d in statuses] == [T0 + 1.0, T0 + 2.0, T0 + 3.0]
@@ -86,7 +86,7 @@ def test_the_bridge_runs_on_the_node_clock_threads_and_all(rig: Rig):
         assert published, key
         assert all(T0 <= d.msg.header.stamp <= d.time for d in published), key
     # the receive thread fed the core what the autopilot sent, on the same clock
-    assert rig.bridge.messages_received > 0
+    assert rig.bridge.core.messages_received > 0
     assert clock.monotonic() == T0 + 3.5
 
 
@@ -140,7 +140,7 @@ def test_the_tello_bridge_runs_on_the_node_clock_and_takes_off_in_it(tello: Rig)
     clock = tello.bus.clock
     assert tello.bridge.core.now == T0
     clock.run_for(3.0)
-    assert tello.bridge.connected and tello.bridge.sdk_mode
+    assert tello.bridge.core.connected and tello.bridge.core.sdk_mode
     assert tello.tello.sent[0] == (T0 + 1 / 20, "command")  # the control thread's first tick
     for key in (registry.STATE.key("drone"), registry.LOCAL_POSE.key("drone")):
         published = tello.bus.published[key]

@@ -13,44 +13,26 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import pytest
 from clocked_autopilot import ClockedAutopilot
-from clocked_setpoints import ClockedSetpoints
 from pymavlink.dialects.v20 import common as mavlink
+from targets import mixed, position
+from virtual_bridge import VirtualBridge
 
 from dronewrapper import CommandRefused
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import TakeoffRequest
-from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
-    FRAME_LOCAL_NED,
     LANDED_STATE_ON_GROUND,
-    MASK_MIXED,
-    MASK_POSITION,
     CommandBool,
     CommandTOL,
     PositionTarget,
     SetMode,
 )
-from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.node import Bridge
-
-T0 = 1_700_000_000.0
-"""The bus's start (monotonic and Unix s alike)."""
-
-
-def mixed(vx: float, z: float, yaw_rate: float = 0.0) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_MIXED,
-        velocity=Vector3(x=vx),
-        position=Point(z=z),
-        yaw_rate=yaw_rate,
-    )
 
 
 def yaw_of(pose) -> float:
@@ -78,63 +60,30 @@ class LossyParser:
         return self.inner.parse_buffer(data)
 
 
-class Rig:
-    """A started MAVLink bridge on a fake bus facing the clocked autopilot (``link``);
-    ``user``: the app's node with the newest telemetry, every State and a commander."""
+class Rig(VirtualBridge):
+    """A started MAVLink bridge on a fake bus facing the clocked autopilot (``link``;
+    tests/virtual_bridge.py), the app's node also keeping the local velocity and the
+    STATUSTEXTs."""
 
     def __init__(self, loss: float = 0.0, ground_station: bool = False) -> None:
-        self.bus = FakeBus(start=T0)
-        self.clock = self.bus.clock
-        self.node = FakeNode("bridge", self.bus)
-        self.user = FakeNode("apps", self.bus)
+        super().__init__()
         self.link = ClockedAutopilot(
             self.node.clock, self.node.stop_event, ground_station=ground_station
         )
         if loss:  # one generator per direction, as a lossy relay's: sim->bridge, bridge->sim
             self.link._at_bridge = LossyParser(self.link._at_bridge, loss, seed=42)
             self.link._at_autopilot = LossyParser(self.link._at_autopilot, loss, seed=43)
-        self.bridge = Bridge(self.node, Config(message_rates={}, upload_fence=False), self.link)
-        u = self.user
-        self.state = u.latest(registry.STATE)
-        self.ext = u.latest(registry.EXTENDED_STATE)
-        self.pose = u.latest(registry.LOCAL_POSE)
-        self.vlocal = u.latest(registry.VELOCITY_LOCAL)
-        self.states: list = []
-        u.subscribe(registry.STATE, self.states.append)
+        self.vlocal = self.user.latest(registry.VELOCITY_LOCAL)
         self.texts: list = []
-        u.subscribe(registry.STATUSTEXT, self.texts.append)
-        self.stream = ClockedSetpoints(u)
-        self.threads = self.bridge.start()
-
-    def close(self) -> None:
-        self.stream.close()
-        self.node.stop()
-        for thread in self.threads:
-            thread.join(10.0)
-        assert not any(thread.is_alive() for thread in self.threads)
+        self.user.subscribe(registry.STATUSTEXT, self.texts.append)
+        self.start(Bridge(self.node, Config(message_rates={}, upload_fence=False), self.link))
 
     def z(self) -> float:
         return self.pose.value.pose.position.z if self.pose.value else math.nan
 
-    def call(self, service, request):
-        return self.user.call(service, request, timeout=30.0)
-
-    def command(self, target: PositionTarget | None) -> None:
-        self.stream.command(target)
-
-    def wait_for(self, predicate: Callable[[], object], timeout: float, what: str):
-        """Run until ``predicate()``, at most ``timeout`` s of virtual time; its value."""
-        self.clock.run_until(predicate, timeout, what)
-        return predicate()
-
     def hold_here(self) -> PositionTarget:
         p = self.pose.value.pose.position
-        return PositionTarget(
-            coordinate_frame=FRAME_LOCAL_NED,
-            type_mask=MASK_POSITION,
-            position=Point(x=p.x, y=p.y, z=p.z),
-            yaw=yaw_of(self.pose.value),
-        )
+        return position(p.x, p.y, p.z, yaw_of(self.pose.value))
 
     def take_off_offboard(self, height: float) -> None:
         """The SDK's PX4 take-off: hold stream -> OFFBOARD -> arm -> mixed climb."""

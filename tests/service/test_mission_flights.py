@@ -13,7 +13,8 @@ import math
 
 import msgspec
 import pytest
-from sim_pair import SimPair, position_target
+from sim_pair import SimPair
+from targets import position
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.geodesy import to_geodetic
@@ -113,10 +114,10 @@ def test_a_setpoint_beyond_the_fence_is_refused_and_never_flown():
     fence = [(-15.0, -15.0), (15.0, -15.0), (15.0, 15.0), (-15.0, 15.0)]
     pair = SimPair(envelope=Envelope(fence=fence))
     pair.take_off(4.0)
-    pair.setpoint = position_target(0.0, 0.0, 4.0)
+    pair.setpoint = position(0.0, 0.0, 4.0)
     pair.call(ops.set_mode, SetMode(custom_mode="OFFBOARD"))
     since = pair.t
-    pair.setpoint = position_target(25.0, 0.0, 4.0)
+    pair.setpoint = position(25.0, 0.0, 4.0)
     pair.run(5.0)
     assert pair.core.rejected_setpoints > 0
     texts = [m.text for m in pair.published(registry.STATUSTEXT, since)]
@@ -129,7 +130,7 @@ def test_a_breach_by_the_wind_returns_the_aircraft_and_refuses_offboard_meanwhil
     envelope = Envelope(max_distance=20.0, margin=1.0, breach_action="return")
     pair = SimPair(wind=(12.0, 0.0), envelope=envelope, params=FAST_RTL)
     pair.take_off(5.0)
-    pair.setpoint = position_target(19.5, 0.0, 5.0)
+    pair.setpoint = position(19.5, 0.0, 5.0)
     pair.call(ops.set_mode, SetMode(custom_mode="OFFBOARD"))
     assert pair.run(30.0, until=lambda: pair.autopilot.mode.name == "RTL"), "no breach action"
     crossed = next(t for t, p, _ in pair.truth if math.hypot(p[0], p[1]) > 21.0)

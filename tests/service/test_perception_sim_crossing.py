@@ -15,7 +15,8 @@ import pytest
 from dronewrapper.runtime.config import load_config
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.pipeline import Pipeline
-from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera, project, yaw_to_quat
+from dronewrapper_sim.evaluation.boxes import owner, person_boxes
+from dronewrapper_sim.render.camera import FRONTAL, PinholeCamera, yaw_to_quat
 from dronewrapper_sim.render.renderer import Renderer
 from dronewrapper_sim.world.scenario import load_scenario
 from dronewrapper_sim.world.world import World
@@ -25,41 +26,6 @@ VEHICLE_POS = np.array([0.0, 0.0, 1.5])  # hovering 1.5 m up at the start point,
 FPS = 10.0
 START_S, END_S = 3.0, 11.0  # both passers-by cross the target's line of sight in this window
 IMAGE_SIZE = (320, 240)  # a quarter of the pixels of the scenario's camera: renders 4x faster
-
-
-def person_boxes(world: World, camera: PinholeCamera, quat: np.ndarray) -> dict[str, tuple]:
-    """Projected box (xyxy px) and depth (m) of every person in view."""
-    out = {}
-    for obj in world.objects:
-        if obj.kind != "person":
-            continue
-        px, depth = project(
-            np.array([obj.position, obj.top_enu]), VEHICLE_POS, quat, FRONTAL, camera
-        )
-        if not np.all(np.isfinite(px)):
-            continue
-        height = px[0, 1] - px[1, 1]
-        cx = (px[0, 0] + px[1, 0]) / 2
-        out[obj.name] = ((cx - 0.2 * height, px[1, 1], cx + 0.2 * height, px[0, 1]), depth[0])
-    return out
-
-
-def iou(a, b) -> float:
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
-
-
-def owner(box, people: dict[str, tuple]) -> str | None:
-    """The person a detected box belongs to (best IoU > 0.3, nearer wins within 0.1)."""
-    scored = [(iou(box, pbox), -depth, name) for name, (pbox, depth) in people.items()]
-    scored = [s for s in scored if s[0] > 0.3]
-    if not scored:
-        return None
-    best = max(s[0] for s in scored)
-    return max((s for s in scored if s[0] >= best - 0.1), key=lambda s: s[1])[2]
 
 
 def run_crossing(scenario: str, sprites: bool, tracker: str = "kalman"):
@@ -80,7 +46,7 @@ def run_crossing(scenario: str, sprites: bool, tracker: str = "kalman"):
     for _ in range(int((END_S - START_S) * FPS)):
         image = renderer.render(FRONTAL, VEHICLE_POS, quat)
         result = pipeline.process(image, world.time_s)
-        people = person_boxes(world, camera, quat)
+        people = person_boxes(world, camera, VEHICLE_POS, quat)
         owners = [owner(d.box_xyxy, people) for d in result.detections]
         target_track = next(
             (

@@ -32,19 +32,11 @@ def sim():
     rig.close()
 
 
-def fly_mission(sim: SimSdk, seconds: float) -> None:
-    sim.drone.start_mission()
-    for _ in range(round(seconds / 0.5)):
-        sim.run(0.5)
-        if sim.drone.mission_progress().finished:
-            break
-
-
 def test_every_item_reached_is_counted(sim):
     sim.drone.takeoff(5.0)
     points = [(6.0, 0.0, 5.0), (6.0, 6.0, 5.0), (0.0, 6.0, 5.0)]
     assert sim.drone.upload_mission([(*to_geodetic(HOME, x, y), z) for x, y, z in points]) == 3
-    fly_mission(sim, 60.0)
+    sim.fly_mission(60.0)
     progress = sim.drone.mission_progress()
     assert progress.reached_items == (0, 1, 2) and progress.reached_count == 3
     assert progress.reached == 2
@@ -118,7 +110,7 @@ def test_payload_items_are_skipped_and_the_speed_change_is_flown(sim):
     assert sim.drone.upload_mission(PLANS / "camera_gimbal_items.plan") == 11
     sim.drone.takeoff(10.0)
     start = sim.pair.t
-    fly_mission(sim, 90.0)
+    sim.fly_mission(90.0)
     progress = sim.drone.mission_progress()
     assert 5 in progress.reached_items and 9 in progress.reached_items
     truth = [(t, p) for t, p, _ in sim.pair.truth if t >= start]
@@ -141,7 +133,7 @@ def test_a_plan_is_flown_through_each_of_its_waypoints(sim, name):
     assert sim.drone.upload_mission(PLANS / name) == len(plan.waypoints)
     sim.drone.takeoff(5.0)
     start = sim.pair.t
-    fly_mission(sim, 240.0)
+    sim.fly_mission(240.0)
     progress = sim.drone.mission_progress()
     assert progress.finished and progress.reached_count >= 2
     for wp in plan.waypoints:

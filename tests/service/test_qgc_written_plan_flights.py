@@ -26,14 +26,6 @@ def sim():
     rig.close()
 
 
-def fly(sim: SimSdk, seconds: float) -> None:
-    sim.drone.start_mission()
-    for _ in range(round(seconds / 0.5)):
-        sim.run(0.5)
-        if sim.drone.mission_progress().finished:
-            break
-
-
 def assert_each_waypoint_passed(sim: SimSdk, name: str, start: float) -> None:
     for wp in read_plan(PLANS / name).waypoints:
         if wp.command == 16:  # NAV_WAYPOINT, frame 3: m above home
@@ -46,7 +38,7 @@ def test_the_sample_mission_is_flown_and_its_camera_item_skipped_with_a_note(sim
     assert sim.drone.upload_mission(PLANS / name) == 6
     sim.drone.takeoff(5.0)
     start = sim.pair.t
-    fly(sim, 120.0)
+    sim.fly_mission(120.0)
     assert sim.drone.mission_progress().finished  # its last item: return to launch
     assert_each_waypoint_passed(sim, name, start)
     texts = [t.text for t in sim.drone.status_texts]
@@ -59,7 +51,7 @@ def test_a_survey_ending_in_a_camera_item_reads_finished_after_its_last_waypoint
     assert sim.drone.upload_mission(PLANS / name) == 13
     sim.drone.takeoff(5.0)
     start = sim.pair.t
-    fly(sim, 400.0)
+    sim.fly_mission(400.0)
     progress = sim.drone.mission_progress()
     assert progress.finished and progress.reached == 11, progress
     assert progress.reached_items == (1, 3, 5, 6, 7, 8, 10, 11)  # the eight waypoints
@@ -83,14 +75,14 @@ def test_a_second_mission_is_not_finished_by_the_first_ones_last_item(sim):
     sim.drone.takeoff(5.0)
     first = [(6.0, 0.0, 5.0), (6.0, 6.0, 5.0)]
     sim.drone.upload_mission(first, frame="local")
-    fly(sim, 60.0)
+    sim.fly_mission(60.0)
     assert sim.drone.mission_progress().finished
     second = [(*to_geodetic(HOME, x, y), z) for x, y, z in [(0.0, 6.0, 5.0), (0.0, 0.0, 5.0)]]
     sim.drone.upload_mission(second)
     progress = sim.drone.mission_progress()
     assert progress.reached is None and not progress.finished, progress
     start = sim.pair.t
-    fly(sim, 60.0)
+    sim.fly_mission(60.0)
     assert sim.drone.mission_progress().finished
     # flown from its first item (PX4 keeps the last mission's current item through an upload
     # that marks none: the bridge marks the first)

@@ -18,9 +18,10 @@ from collections.abc import Callable
 os.environ.setdefault("MAVLINK20", "1")
 
 import pytest
+from mavlink_log import MessageLog
+from mavlink_setpoints import FRAME_BODY_NED, FRAME_LOCAL_NED, setpoint
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.mavros import MASK_POSITION, MASK_VELOCITY
 from dronewrapper_sim.px4 import telemetry
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 from dronewrapper_sim.px4.modes import Mode
@@ -29,20 +30,18 @@ PHYSICS_S = 1.0 / 250.0
 """One physics step (s)."""
 POLL_S = 0.016
 """How often the autopilot's links are polled (s)."""
-FRAME_LOCAL_NED = mavlink.MAV_FRAME_LOCAL_NED
-FRAME_BODY_NED = mavlink.MAV_FRAME_BODY_NED
 
 
-class Client:
+class Client(MessageLog):
     """A MAVLink endpoint of the vehicle's ``link``: keeps every message it is sent with the
     vehicle's time, sends a heartbeat every 0.5 s once it has heard the vehicle, and streams
     ``setpoint`` at 20 Hz while it is set."""
 
     def __init__(self, vehicle: Vehicle, link: str, mav_type: int, sysid: int = 245) -> None:
+        super().__init__()
         self.vehicle, self.link, self.mav_type = vehicle, link, mav_type
         self.out = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=191)
         self.parser = mavlink.MAVLink(None)
-        self.log: list[tuple[float, object]] = []
         self.heard = False
         self.setpoint: object | None = None
         self.setpoint_period = 0.05
@@ -77,28 +76,10 @@ class Client:
         self.setpoint = None
         return self.last_setpoint_sent
 
-    # ---- reading ----
+    # ---- reading: MessageLog ----
 
-    def since(self, t0: float, kind: str | None = None) -> list:
-        return [m for _, m in self.timed(t0, kind)]
-
-    def timed(self, t0: float, kind: str | None = None) -> list[tuple[float, object]]:
-        return [(t, m) for t, m in self.log if t >= t0 and (kind is None or m.get_type() == kind)]
-
-    def latest(self, kind: str):
-        for _, msg in reversed(self.log):
-            if msg.get_type() == kind:
-                return msg
-        return None
-
-    def wait_msg(self, kind: str, pred=lambda m: True, timeout: float = 10.0, t0: float = 0.0):
-        def found():
-            return next((m for m in self.since(t0, kind) if pred(m)), None)
-
-        return self.vehicle.run_until(found, timeout, f"{kind} matching {pred}")
-
-    def texts(self, t0: float = 0.0) -> list[str]:
-        return [m.text for m in self.since(t0, "STATUSTEXT")]
+    def wait_until(self, found, timeout: float, what: str):
+        return self.vehicle.run_until(found, timeout, what)
 
     # ---- commands ----
 
@@ -127,15 +108,7 @@ class Client:
         return self.wait_msg("HEARTBEAT", pred, timeout, self.vehicle.now if t0 is None else t0)
 
     def stream(self, vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED, **pos) -> None:
-        if pos:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, FRAME_LOCAL_NED, MASK_POSITION,
-                pos["x"], pos["y"], pos["z"], 0, 0, 0, 0, 0, 0, pos.get("yaw", 0.0), 0,
-            )  # fmt: skip
-        else:
-            self.setpoint = mavlink.MAVLink_set_position_target_local_ned_message(
-                0, 1, 1, frame, MASK_VELOCITY, 0, 0, 0, vx, vy, vz, 0, 0, 0, 0, yaw_rate
-            )
+        self.setpoint = setpoint(vx, vy, vz, yaw_rate, frame, **pos)
 
 
 class Vehicle:

@@ -19,42 +19,30 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from clocked_setpoints import ClockedSetpoints
 from clocked_tello import ClockedTello
+from targets import velocity
+from virtual_bridge import VirtualBridge
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point, Vector3
+from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
     FRAME_LOCAL_NED,
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     MASK_POSITION,
-    MASK_VELOCITY,
     CommandTOL,
     ParamGet,
     PositionTarget,
 )
-from dronewrapper.runtime.fake import FakeBus, FakeNode
+from dronewrapper.runtime.fake import FakeNode
 from dronewrapper_bridge_tello import node as tello_node
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_sim.tello.flight import TelloFlight
 from dronewrapper_sim.tello.params import TELLO
 
-T0 = 1_700_000_000.0
-"""The bus's start (monotonic and Unix s alike)."""
 AUTO_LAND_S = 8.0
 """The simulated Tello's auto-land timeout where a test waits for it (the real drone's 15 s is
 the default): a keep-alive every ``keepalive_s`` (3 s) must still beat it."""
-
-
-def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 class LossyTello(ClockedTello):
@@ -74,35 +62,16 @@ class LossyTello(ClockedTello):
         super()._reply(kept)
 
 
-class Rig:
-    """A started Tello bridge on a fake bus facing ``tello``; ``user``: the app's node with the
-    newest State/ExtendedState/pose and every State; ``target``: what the app streams."""
+class Rig(VirtualBridge):
+    """A started Tello bridge on a fake bus facing ``tello`` (tests/virtual_bridge.py)."""
+
+    CALL_TIMEOUT_S = 40.0
 
     def __init__(self, tello: Callable[[FakeNode], ClockedTello] | None = None) -> None:
-        self.bus = FakeBus(start=T0)
-        self.clock = self.bus.clock
-        self.node = FakeNode("bridge", self.bus)
-        self.user = FakeNode("apps", self.bus)
+        super().__init__()
         make = tello or (lambda node: ClockedTello(node.clock, node.stop_event))
         self.tello = make(self.node)
-        self.bridge = tello_node.Bridge(self.node, Config(video=False), link=self.tello)
-        self.state = self.user.latest(registry.STATE)
-        self.ext = self.user.latest(registry.EXTENDED_STATE)
-        self.pose = self.user.latest(registry.LOCAL_POSE)
-        self.states: list = []
-        self.user.subscribe(registry.STATE, self.states.append)
-        self.stream = ClockedSetpoints(self.user)
-        self.threads = self.bridge.start()
-
-    def close(self) -> None:
-        self.stream.close()
-        self.node.stop()
-        for thread in self.threads:
-            thread.join(10.0)
-        assert not any(thread.is_alive() for thread in self.threads)
-
-    def alive(self) -> bool:
-        return all(thread.is_alive() for thread in self.threads)
+        self.start(tello_node.Bridge(self.node, Config(video=False), link=self.tello))
 
     @property
     def truth(self):
@@ -117,21 +86,6 @@ class Rig:
         with self.tello.lock:
             self.tello.catch_up()
             return self.truth.yaw
-
-    def command(self, target: PositionTarget | None) -> None:
-        """Stream ``target`` at 20 Hz from now on, or stop sending (``None``)."""
-        self.stream.command(target)
-
-    def run(self, seconds: float) -> None:
-        """``seconds`` of virtual time, every thread (the commander's too) running."""
-        self.clock.run_for(seconds)
-
-    def wait_for(self, predicate: Callable[[], object], timeout: float, what: str) -> None:
-        """Run until ``predicate()``, at most ``timeout`` s of virtual time."""
-        self.clock.run_until(predicate, timeout, what)
-
-    def call(self, service, request):
-        return self.user.call(service, request, timeout=40.0)
 
     def connect(self) -> None:
         self.wait_for(

@@ -3,26 +3,18 @@
 from __future__ import annotations
 
 import pytest
+from targets import velocity
 
-from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     MASK_POSITION,
     MASK_VELOCITY,
-    PositionTarget,
 )
 from dronewrapper_bridge_base.guided_failsafe import Failsafe, FailsafeConfig, is_airborne
 from dronewrapper_bridge_mavlink.setpoints import Kind, hold_target
 
 POSE = ((1.0, 2.0, 5.0), 0.3)
-
-
-def velocity(vx=1.0):
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=vx)
-    )
 
 
 def flying(fs: Failsafe, now=0.0, mode="OFFBOARD"):

@@ -8,15 +8,13 @@ import math
 import pytest
 from bridge_core_rig import OFFBOARD, CoreRig, ops, velocity
 from pymavlink.dialects.v20 import common as mavlink
+from targets import position
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_LOCAL_NED,
     MASK_POSITION,
     CommandTOL,
-    PositionTarget,
 )
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
@@ -30,12 +28,6 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import actions, missions, uploads
 
 HOME_LAT, HOME_LON = 47.397742, 8.545594
-
-
-def position(x: float, y: float, z: float) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=FRAME_LOCAL_NED, type_mask=MASK_POSITION, position=Point(x=x, y=y, z=z)
-    )
 
 
 def home(rig: CoreRig, east: float = 0.0, north: float = 0.0) -> None:

@@ -336,12 +336,18 @@ def test_slot_keeps_only_the_newest():
     assert slot.take(0.01, number) is None
 
 
-def test_lossless_slot_waits_until_taken():
+def _second_put_waiting():
+    """A lossless slot holding frame 0 (not taken) and a thread putting frame 1 into it."""
     clock = VirtualClock()
     slot, stop = FrameSlot(clock=clock), threading.Event()
     slot.update(_captured(0), wait_taken=stop)
     second = clock.thread(lambda: slot.update(_captured(1), wait_taken=stop), "second")
     second.start()
+    return clock, slot, stop, second
+
+
+def test_lossless_slot_waits_until_taken():
+    clock, slot, _, second = _second_put_waiting()
     clock.run_for(5.0)
     assert not second.finished  # blocked: frame 0 not taken yet, 5 s (virtual) on
     assert slot.take(0.0, 0)[1].number == 0
@@ -350,11 +356,7 @@ def test_lossless_slot_waits_until_taken():
 
 
 def test_lossless_slot_gives_up_waiting_on_stop():
-    clock = VirtualClock()
-    slot, stop = FrameSlot(clock=clock), threading.Event()
-    slot.update(_captured(0), wait_taken=stop)
-    second = clock.thread(lambda: slot.update(_captured(1), wait_taken=stop), "second")
-    second.start()
+    clock, slot, stop, second = _second_put_waiting()
     clock.run_for(1.0)
     stop.set()
     clock.run_until(lambda: second.finished, 1.0, "the put to give up")

@@ -8,27 +8,14 @@ import io
 import math
 
 import pytest
+from follow_flight import follow_flight
 
 from dronewrapper_compose.demo import intended_distance, print_summary, status_line
-from dronewrapper_sim.evaluation.metrics import FollowSample, summarize
-
-
-def flight(n: int = 60) -> list[FollowSample]:
-    return [
-        FollowSample(
-            t=0.1 * k,
-            vehicle=(0.05 * k, 0.0, 2.0),
-            yaw=0.01 * k,
-            target=(6.0 + 0.05 * k, 0.5, 2.5),
-            state="takeoff" if k < 10 else "tracking",
-            target_visible=k >= 12,
-        )
-        for k in range(n)
-    ]
+from dronewrapper_sim.evaluation.metrics import summarize
 
 
 def test_status_line_shows_state_visibility_distance_and_bearing():
-    sample = flight()[30]
+    sample = follow_flight()[30]
     line = status_line(3.0, sample, 5.0)
     assert "state=tracking" in line and "visible=yes" in line
     assert f"distance= {sample.distance:.2f} m" in line and "goal 5.0" in line
@@ -37,7 +24,7 @@ def test_status_line_shows_state_visibility_distance_and_bearing():
 
 
 def test_summary_printout():
-    summary = summarize(flight(), intended_distance=5.0)
+    summary = summarize(follow_flight(), intended_distance=5.0)
     out = io.StringIO()
     print_summary(summary, out)
     text = out.getvalue()

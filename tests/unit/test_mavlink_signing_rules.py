@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 
 import pytest
+from mavlink_signer import encoder
 
 os.environ.setdefault("MAVLINK20", "1")
 
@@ -27,12 +28,7 @@ T0 = 600_000_000_000  # 10 µs units since 2015: about 2017, our clock before an
 
 def signer(key: bytes = KEY, timestamp: int = T0, link_id: int = 0, system: int = 1):
     """A pymavlink encoder that signs what it packs with ``key`` from ``timestamp`` on."""
-    mav = mavlink.MAVLink(None, srcSystem=system, srcComponent=1)
-    mav.signing.secret_key = key
-    mav.signing.sign_outgoing = True
-    mav.signing.timestamp = timestamp
-    mav.signing.link_id = link_id
-    return mav
+    return encoder(key, timestamp, system=system, link_id=link_id)
 
 
 def heartbeat(mav) -> bytes:

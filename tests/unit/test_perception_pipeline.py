@@ -17,16 +17,10 @@ from dronewrapper_perception.detectors import ColorDetector
 from dronewrapper_perception.hog import HogDetector
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
 from dronewrapper_perception.yolox import YoloxDetector
+from dronewrapper_sim.evaluation.boxes import iou
 from support import ASSETS, YOLOX_NANO
 
 IMAGES = ASSETS / "images"
-
-
-def iou(a, b) -> float:
-    ix = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    return inter / ((a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter)
 
 
 def test_config_defaults_and_errors(tmp_path):

@@ -7,6 +7,7 @@ import math
 
 import msgspec
 import pytest
+from targets import velocity
 
 from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
@@ -14,7 +15,6 @@ from dronewrapper.msgs.mavros import (
     FRAME_LOCAL_NED,
     MASK_MIXED,
     MASK_POSITION,
-    MASK_VELOCITY,
     PositionTarget,
 )
 from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
@@ -28,15 +28,6 @@ class Bounds(msgspec.Struct, frozen=True):
     max_horizontal_speed: float = 3.0
     max_vertical_speed: float = 2.0
     max_yaw_rate: float = math.pi
-
-
-def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED) -> PositionTarget:
-    return PositionTarget(
-        coordinate_frame=frame,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 def test_the_three_controls_are_recognised():

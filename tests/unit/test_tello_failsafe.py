@@ -3,17 +3,10 @@
 from __future__ import annotations
 
 import pytest
+from targets import velocity
 
-from dronewrapper.msgs.geometry import Vector3
-from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper_bridge_tello.failsafe import Failsafe, FailsafeConfig
 from dronewrapper_bridge_tello.sticks import Kind
-
-
-def velocity(vx=0.5):
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=vx)
-    )
 
 
 def flying() -> Failsafe:

@@ -6,14 +6,14 @@ import math
 
 import msgspec
 import pytest
+from targets import velocity
 
-from dronewrapper.msgs.geometry import Point, Vector3
+from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
     FRAME_LOCAL_NED,
     MASK_MIXED,
     MASK_POSITION,
-    MASK_VELOCITY,
     PositionTarget,
 )
 from dronewrapper_bridge_tello.sticks import (
@@ -50,15 +50,6 @@ def test_sticks_are_clamped_integers_and_zero_is_a_real_stop():
 def test_calibrated_scale():
     scale = StickScale(horizontal=80.0, vertical=120.0, yaw=40.0)
     assert sticks_from_flu(0.5, 0.25, 0.5, 1.0, scale) == (-20, 40, 60, -40)
-
-
-def velocity(vx=0.0, vy=0.0, vz=0.0, yaw_rate=0.0, frame=FRAME_BODY_NED, mask=MASK_VELOCITY):
-    return PositionTarget(
-        coordinate_frame=frame,
-        type_mask=mask,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 def test_body_velocity_passes_through():

@@ -18,6 +18,7 @@ from pathlib import Path
 import zenoh
 
 from dronewrapper.msgs.registry import IMAGE_COMPRESSED, IMAGE_RAW
+from dronewrapper.record.pump import Queued, pump
 from dronewrapper.record.recorder import Recorder
 
 QUEUE_SIZE = 512
@@ -92,7 +93,7 @@ def capture(
     dropped ``duplicate_image``).
     """
     stats = CaptureStats()
-    samples: queue.Queue[tuple[str, bytes, int]] = queue.Queue(QUEUE_SIZE)
+    samples: queue.Queue[Queued] = queue.Queue(QUEUE_SIZE)
     throttle = ImageThrottle(image_rate_hz)
     once = OneStreamPerCamera(recorder.jpeg_quality is not None)
     lock = threading.Lock()
@@ -114,26 +115,18 @@ def capture(
             with lock:
                 stats.dropped["queue_full"] += 1
 
-    subscribers = [session.declare_subscriber(k, on_sample) for k in keyexprs]
-    deadline = time.monotonic() + duration if duration > 0 else float("inf")
+    def write(key: str, payload: bytes, log_ns: int) -> None:
+        recorder.write(key, payload, log_ns)
+        stats.written += 1
+
     try:
-        while not stop.is_set() and time.monotonic() < deadline:
-            try:
-                key, payload, log_ns = samples.get(timeout=0.1)
-            except queue.Empty:
-                continue
-            recorder.write(key, payload, log_ns)
-            stats.written += 1
+        pump(session, keyexprs, on_sample, samples, write, stop, duration)
     finally:
-        for sub in subscribers:
-            sub.undeclare()
         while True:  # what was already received is written
             try:
-                key, payload, log_ns = samples.get_nowait()
+                write(*samples.get_nowait())
             except queue.Empty:
                 break
-            recorder.write(key, payload, log_ns)
-            stats.written += 1
     return stats
 
 

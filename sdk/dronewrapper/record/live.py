@@ -23,6 +23,7 @@ import zenoh
 
 from dronewrapper.errors import DroneError
 from dronewrapper.msgs import codec, registry
+from dronewrapper.record.pump import Queued, pump
 from dronewrapper.record.views import View, views
 
 log = logging.getLogger("dronewrapper.foxglove")
@@ -123,7 +124,7 @@ def serve(
     duration: float = 0.0,
 ) -> LiveStats:
     """Feed ``bridge`` from ``keyexprs`` until ``stop`` or ``duration`` s (0: no limit)."""
-    samples: queue.Queue[tuple[str, bytes, int]] = queue.Queue(QUEUE_SIZE)
+    samples: queue.Queue[Queued] = queue.Queue(QUEUE_SIZE)
     stats = bridge.stats
 
     def on_sample(sample: zenoh.Sample) -> None:
@@ -133,16 +134,5 @@ def serve(
         except queue.Full:
             stats.dropped += 1
 
-    subscribers = [session.declare_subscriber(k, on_sample) for k in keyexprs]
-    deadline = time.monotonic() + duration if duration > 0 else float("inf")
-    try:
-        while not stop.is_set() and time.monotonic() < deadline:
-            try:
-                key, payload, log_ns = samples.get(timeout=0.1)
-            except queue.Empty:
-                continue
-            bridge.publish(key, payload, log_ns)
-    finally:
-        for sub in subscribers:
-            sub.undeclare()
+    pump(session, keyexprs, on_sample, samples, bridge.publish, stop, duration)
     return stats

@@ -20,11 +20,13 @@ class ConfigError(ValueError):
     """A config file or override is malformed; the message names the file and the key."""
 
 
-def _read(path: Path) -> dict[str, Any]:
+def read_mapping(path: Path, what: str = "config") -> dict[str, Any]:
+    """The top-level mapping of a YAML or JSON file (``.json``: JSON; empty: ``{}``), or
+    ConfigError naming the file and, when it cannot be read, ``what`` it was to hold."""
     try:
         text = path.read_text()
     except OSError as exc:
-        raise ConfigError(f"{path}: cannot read config: {exc.strerror}") from exc
+        raise ConfigError(f"{path}: cannot read {what}: {exc.strerror}") from exc
     if path.suffix == ".json":
         data = json.loads(text) if text.strip() else {}
     else:
@@ -91,7 +93,7 @@ def load_config(
     raw: dict[str, Any] = {}
     source = "config"
     if path is not None:
-        raw = _read(Path(path))
+        raw = read_mapping(Path(path))
         source = str(path)
     if data:
         raw = merge(raw, data)

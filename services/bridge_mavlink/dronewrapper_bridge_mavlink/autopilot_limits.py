@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator, Sequence
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from dronewrapper.envelope import Envelope
@@ -42,10 +41,11 @@ from dronewrapper.msgs.mission import EnvelopeSet, Waypoint
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import parameters, rally_returns
 from dronewrapper_bridge_mavlink.mission_frames import MissionFrameError
+from dronewrapper_bridge_mavlink.mission_state import Limits
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -65,16 +65,6 @@ to ``RTL_ALT_M``, in m, and the others alike): the autopilot has one of them, th
 not asked to change (and, once unanswered, not asked again of that autopilot)."""
 INTEGER_PARAMS = frozenset({"RTL_ALT", "RTL_ALT_FINAL", "RTL_CLIMB_MIN"})
 """The ``AT_MOST`` parameters held as integers (the fence actions, ``EXACTLY``, are too)."""
-
-
-@dataclass
-class Limits:
-    """What the bridge last wrote: for which (autopilot, envelope), and a problem ("" none)."""
-
-    written_for: tuple[str, Envelope] | None = None
-    problem: str = ""
-    running: bool = False
-    absent: set[tuple[str, str]] = field(default_factory=set)  # (autopilot, name) unanswered
 
 
 def return_altitude(envelope: Envelope) -> float:

@@ -105,35 +105,7 @@ class Bridge(BridgeNode[BridgeCore]):
         self.reconnects = Reconnects()  # under _reconnects_lock (receive and status threads)
         self._reconnects_lock = threading.Lock()
 
-    # ---- what the core knows, for tests and tools
-
-    @property
-    def connected(self) -> bool:
-        return self.core.connected
-
-    @property
-    def failsafe(self) -> Any:
-        return self.core.failsafe
-
-    @property
-    def acks(self) -> Any:
-        return self.core.acks
-
-    @property
-    def freshness(self) -> Any:
-        return self.core.freshness
-
-    @property
-    def sources(self) -> Any:
-        return self.core.sources
-
-    @property
-    def rejected_setpoints(self) -> int:
-        return self.core.rejected_setpoints
-
-    @property
-    def messages_received(self) -> int:
-        return self.core.messages_received
+    # ---- what the core knows
 
     def current_state(self) -> State:
         """State as published now."""

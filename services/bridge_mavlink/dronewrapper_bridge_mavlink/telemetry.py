@@ -102,19 +102,18 @@ def _fraction(remaining_percent: int) -> float:
 def battery_from_sys_status(msg: Any, stamp: float) -> BatteryState:
     """SYS_STATUS's battery fields as BatteryState (percentage 0..1, V, A; NaN if unknown)."""
     voltage = float("nan") if msg.voltage_battery in (UINT16_MAX, 0) else msg.voltage_battery / 1e3
-    current = float("nan") if msg.current_battery < 0 else msg.current_battery / 100.0
-    return BatteryState(
-        header=Header(stamp=stamp),
-        voltage=voltage,
-        current=current,
-        percentage=_fraction(msg.battery_remaining),
-    )
+    return _battery(msg, voltage, stamp)
 
 
 def battery_from_battery_status(msg: Any, stamp: float) -> BatteryState:
     """BATTERY_STATUS as BatteryState (voltage = sum of the reported cells)."""
     cells = [v for v in msg.voltages if v != UINT16_MAX]
-    voltage = sum(cells) / 1e3 if cells else float("nan")
+    return _battery(msg, sum(cells) / 1e3 if cells else float("nan"), stamp)
+
+
+def _battery(msg: Any, voltage: float, stamp: float) -> BatteryState:
+    """A BatteryState of ``voltage`` (V) and the current (cA -> A) and remaining charge (%)
+    both battery messages carry under the same names (-1: unknown, NaN)."""
     current = float("nan") if msg.current_battery < 0 else msg.current_battery / 100.0
     return BatteryState(
         header=Header(stamp=stamp),

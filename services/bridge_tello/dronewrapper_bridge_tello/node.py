@@ -33,13 +33,14 @@ from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.core import Outbox, TelloCore
-from dronewrapper_bridge_tello.failsafe import Failsafe
 from dronewrapper_bridge_tello.link import TelloAddress, TelloLink
-from dronewrapper_bridge_tello.telemetry import Telemetry
 from dronewrapper_bridge_tello.video import VideoReceiver
 from dronewrapper_bridge_tello.video_demand import OFF
 
 log = logging.getLogger("bridge_tello")
+
+VIDEO_DATAGRAM = 65535
+"""The largest video datagram read (bytes); replies and state strings fit in 2048."""
 
 PUBLISHED = (
     registry.STATE,
@@ -101,31 +102,12 @@ class Bridge(BridgeNode[TelloCore]):
         self.camera = CameraWatch([self.pub_image, self.pub_jpeg] if config.video != OFF else [])
         self.receiver = VideoReceiver(chunk=config.video_chunk)
         self._runs = 0  # streamons sent: the video thread restarts its receiver at each
+        self._video_run = 0  # the run the receiver decodes (video thread)
         # the newest decoded frame and its stamp: the publisher skips what it could not keep up with
         self.newest: Latest[tuple[Any, float]] = Latest("decoded frame", node.clock)
         self.frames_published = 0
 
-    # ---- what the core knows, for tests and tools
-
-    @property
-    def connected(self) -> bool:
-        return self.core.connected
-
-    @property
-    def sdk_mode(self) -> bool:
-        return self.core.sdk_mode
-
-    @property
-    def telemetry(self) -> Telemetry:
-        return self.core.telemetry
-
-    @property
-    def failsafe(self) -> Failsafe:
-        return self.core.failsafe
-
-    @property
-    def rejected_setpoints(self) -> int:
-        return self.core.rejected_setpoints
+    # ---- what the core knows
 
     def state_message(self) -> State:
         """The State the bridge publishes now."""
@@ -154,7 +136,11 @@ class Bridge(BridgeNode[TelloCore]):
             (self._control_loop, (), "tello-control"),
         ]
         if self.config.video != OFF:
-            loops += [(self._video_loop, (), "tello-video"), (self._image_loop, (), "tello-images")]
+            video = (self.link.video, self._on_video, "video", VIDEO_DATAGRAM)
+            loops += [
+                (self._receive_loop, video, "tello-video"),
+                (self._image_loop, (), "tello-images"),
+            ]
         clock = self.node.clock
         threads = [clock.thread(functools.partial(f, *a), n) for f, a, n in loops]
         for thread in threads:
@@ -179,12 +165,15 @@ class Bridge(BridgeNode[TelloCore]):
     def _on_state(self, data: bytes) -> None:
         self.driver.feed(self.core.on_state, data)
 
-    def _receive_loop(self, sock: Any, handle: Callable[[bytes], None], what: str) -> None:
-        """Every datagram of ``sock`` to ``handle`` (errors counted under ``what``)."""
+    def _receive_loop(
+        self, sock: Any, handle: Callable[[bytes], None], what: str, size: int = 2048
+    ) -> None:
+        """Every datagram of ``sock`` (up to ``size`` bytes) to ``handle`` (errors counted
+        under ``what``)."""
         clock, stop = self.node.clock, self.node.stop_event
         while not stop.is_set():
             try:
-                data, _ = sock.recvfrom(2048)
+                data, _ = sock.recvfrom(size)
             except TimeoutError:
                 continue
             except OSError:
@@ -203,26 +192,15 @@ class Bridge(BridgeNode[TelloCore]):
         """JPEG when configured, or while a subscriber matches image_raw/compressed."""
         return self.config.compressed or self.pub_jpeg.watched()
 
-    def _video_loop(self) -> None:
-        clock, stop = self.node.clock, self.node.stop_event
-        sock = self.link.video
-        assert sock is not None
-        receiver, run = self.receiver, self._runs
-        while not stop.is_set():
-            try:
-                data = sock.recv(65535)
-            except TimeoutError:
-                continue
-            except OSError:
-                if clock.wait(stop, 0.2):
-                    return
-                continue
-            if run != self._runs:  # a streamon was sent: a clean start at its key frame
-                run = self._runs
-                receiver.restart()
-            stamp = clock.time()
-            for decoded in receiver.feed(data):
-                self.newest.update((decoded, stamp))
+    def _on_video(self, data: bytes) -> None:
+        """One video datagram to the decoder; each decoded frame becomes the newest, stamped
+        with its arrival (a streamon sent since the last one: a clean start at its key frame)."""
+        if self._video_run != self._runs:
+            self._video_run = self._runs
+            self.receiver.restart()
+        stamp = self.node.clock.time()
+        for decoded in self.receiver.feed(data):
+            self.newest.update((decoded, stamp))
 
     def _image_loop(self) -> None:
         stop = self.node.stop_event

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dronewrapper.runtime.config import ConfigError, read_mapping
 from dronewrapper_camera_victure.transform import Transform
 
 MODELS = ("plumb_bob", "rational_polynomial", "equidistant")
@@ -64,17 +65,11 @@ def load_calibration(path: str | Path) -> Intrinsics:
         CalibrationError: the file is missing, not YAML, or a field is absent or wrong (the
             message names the file and the field).
     """
-    import yaml
-
     file = Path(path)
     try:
-        data = yaml.safe_load(file.read_text())
-    except OSError as exc:
-        raise CalibrationError(f"{file}: cannot read calibration: {exc.strerror}") from exc
-    except yaml.YAMLError as exc:
-        raise CalibrationError(f"{file}: not valid YAML: {exc}") from exc
-    if not isinstance(data, dict):
-        raise CalibrationError(f"{file}: top level must be a mapping")
+        data = read_mapping(file, "calibration")
+    except ConfigError as exc:
+        raise CalibrationError(str(exc)) from exc
     try:
         width, height = int(data["image_width"]), int(data["image_height"])
         model = str(data.get("distortion_model", "plumb_bob"))

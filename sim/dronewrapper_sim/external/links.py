@@ -22,6 +22,7 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from dronewrapper_sim.external.truth import TRUTH_MESSAGES
+from dronewrapper_sim.udp import bind_udp
 
 log = logging.getLogger("sim.external")
 
@@ -92,15 +93,7 @@ class TruthLink:
         self._next_request = 0.0
         self._truth_times: list[float] = []
         if self.kind == "udp":
-            self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            try:
-                self.sock.bind((self.host, self.port))
-            except OSError as exc:
-                self.sock.close()
-                raise OSError(
-                    f"{autopilot} truth: cannot bind UDP {self.host}:{self.port}: {exc.strerror}"
-                ) from exc
-            self.sock.setblocking(False)
+            self.sock = bind_udp(self.host, self.port, f"{autopilot} truth")
 
     def fileno(self) -> int:
         return self.sock.fileno() if self.sock is not None else -1

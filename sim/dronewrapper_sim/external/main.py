@@ -7,6 +7,7 @@ from typing import Any
 
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.world.scenario import Scenario
+from dronewrapper_sim.world_process import run_world
 
 log = logging.getLogger("sim")
 
@@ -15,17 +16,8 @@ def run_external(node: NodeApi, config: Any, scenario: Scenario) -> int:
     """Run the world around ``config.autopilot`` on ``node`` until SIGINT/SIGTERM."""
     from dronewrapper_sim.external.world_runner import ExternalWorldRunner
 
-    try:
-        runner = ExternalWorldRunner(config, scenario, node)
-    except OSError as exc:
-        log.error("%s", exc)
+    runner = run_world(node, lambda: ExternalWorldRunner(config, scenario, node), log)
+    if runner is None:
         return 1
-    try:
-        log.info("ready: %s", runner.describe())
-        node.announce()
-        runner.run(node.stop_event)
-    finally:
-        node.stop()
-        runner.close()
     log.info("stopped after %d truth samples", runner.truth_published)
     return 0

@@ -8,15 +8,18 @@ import os
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.tello.config import default_address
-from dronewrapper_sim.tello.server import COMMAND_PORT, TelloServer, bind_udp
+from dronewrapper_sim.tello.server import COMMAND_PORT, TelloServer
+from dronewrapper_sim.udp import bind_udp
 from dronewrapper_sim.world.scenario import Scenario
+from dronewrapper_sim.world_process import run_world
 
 log = logging.getLogger("sim.tello")
 
 
 def run_tello(node: NodeApi, config: SimConfig, scenario: Scenario) -> int:
     """Run the simulated Tello on ``node`` until SIGINT/SIGTERM. Exit codes: 0 clean stop,
-    1 the address cannot be bound, 2 ``--netns`` without root."""
+    1 an address (the command's or the video's) cannot be bound, 2 ``--netns`` without
+    root."""
     if config.netns:
         if os.geteuid() != 0:
             log.error("--netns needs root (it creates a network namespace and a veth pair)")
@@ -43,20 +46,24 @@ def run_tello(node: NodeApi, config: SimConfig, scenario: Scenario) -> int:
         except OSError as exc:
             log.error("cannot bind udp %s:%d: %s", address, COMMAND_PORT, exc)
             return 1
-        server = TelloServer(config.tello, scenario, node, sock, seed=config.seed)
-        try:
+        if namespace is not None:
+            log.info("network namespace: %s", namespace.describe())
+
+        def make() -> TelloServer:
+            server = TelloServer(config.tello, scenario, node, sock, seed=config.seed)
             if config.tello.video:
                 from dronewrapper_sim.tello.video import VideoStreamer
 
-                server.video = VideoStreamer(server, config.sprites, make_socket)
-            if namespace is not None:
-                log.info("network namespace: %s", namespace.describe())
-            log.info("ready: %s", server.describe())
-            node.announce()
-            server.run(node.stop_event)
-        finally:
-            node.stop()
-            server.close()
+                try:
+                    server.video = VideoStreamer(server, config.sprites, make_socket)
+                except BaseException:
+                    server.close()
+                    raise
+            return server
+
+        server = run_world(node, make, log)
+        if server is None:
+            return 1
         log.info(
             "stopped: %d datagrams in, %d replies, %d states out",
             server.datagrams,

@@ -40,18 +40,6 @@ GROUND_TRUTH_RATE_HZ = 50.0
 OBJECT_POSE_RATE_HZ = 20.0
 
 
-def bind_udp(address: str, port: int) -> socket.socket:
-    """A UDP socket bound to ``address:port`` (non-blocking)."""
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    try:
-        sock.bind((address, port))
-    except OSError:
-        sock.close()
-        raise
-    sock.setblocking(False)
-    return sock
-
-
 class TelloServer:
     """One simulated Tello and its world, run in real time (see module doc).
 
