@@ -105,8 +105,11 @@ def figures(watch: SerialWatch, relay) -> dict:
     first, last = (paths[0].stamp, paths[-1].stamp) if paths else (0.0, 0.0)
     following = [x for x in watch.links if first <= x.header.stamp <= last]
     median = lambda name: round(float(np.median([getattr(x, name) for x in following])), 3)  # noqa: E731
+    span = max(last - first, 1e-9)
     return {
         "frames_commanded": len(paths),
+        "frames_commanded_hz": round(len(paths) / span, 1),
+        "setpoints_crossed_hz": round(sum(first <= t <= last for t, _ in crossed) / span, 1),
         "joined": len(joined),
         "glass_to_autopilot_ms": quantiles_ms([p.glass_to_out for p in joined]),
         "sent_to_autopilot_ms": quantiles_ms([p.sent_to_out for p in joined]),
