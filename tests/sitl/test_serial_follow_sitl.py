@@ -123,6 +123,7 @@ def figures(watch: SerialWatch, relay) -> dict:
             "lost": watch.links[-1].lost if watch.links else None,
         },
         "dropped_toward_bridge": relay.down.dropped_frames,
+        "unread_bytes_toward_bridge": relay.unwritten,  # before the bridge opened its device
         "dropped_toward_autopilot": relay.up.dropped_frames,
     }
 
@@ -157,6 +158,7 @@ def test_follow_over_a_serial_line(autopilot, baud, tmp_path):
             "baud": baud,
             "load_average": [round(x, 1) for x in os.getloadavg()],
             "follow": flight.describe(),
+            "pose_age": next((x for x in reversed(flight.log.splitlines()) if "pose age" in x), ""),
             **figures(watch, relay),
         }
     print(f"\nSERIAL_FOLLOW {json.dumps(report)}")
