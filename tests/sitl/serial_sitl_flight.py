@@ -24,6 +24,7 @@ from __future__ import annotations
 import collections
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -249,6 +250,7 @@ def main(kind: str, baud: int, firmware: Path, work: Path, signed: bool = False)
                 report["bridge_warnings"] = [
                     line[-200:] for line in bridge.output().splitlines() if "WARNING" in line
                 ][-6:]
+    report["load_average"] = [round(x, 1) for x in os.getloadavg()]  # the machine's, at the end
     print(json.dumps(report), flush=True)
     return 0 if report.get("ok") else 1
 
