@@ -29,12 +29,12 @@ the cost per drone against N goes to bench/results/fleet.png. Targets: bridge <=
 per drone at full telemetry, 80 MB per drone (sim + bridge); 30 drones each with pose age p99
 <= 50 ms, with one core busy; cost flat per drone in N.
 
-Over 400 lines: one N's whole measurement (the fleet, the probes, the SDK's fleet, the
-flight) and its report read in one place; the pose subscriber is ``bench.pose_ages`` and the
-plots are ``bench.fleet_plot``.
-
     nice -n 5 python -m bench.fleet [--seconds 10] [--max 60] [--counts 1 5 10 20]
         [--per-process N] [--busy] [--fly]
+
+Size: one N's whole measurement (the fleet, the probes, the SDK's fleet, the flight) and its
+report read in one place; the pose subscriber is bench.pose_ages and the plots are
+bench.fleet_plot.
 """
 
 from __future__ import annotations

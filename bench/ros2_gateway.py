@@ -27,6 +27,9 @@ process's CLOCK_MONOTONIC): what a ROS 2 subscriber waits beyond one of ours.
 
 Run: ``.venv/bin/python -m bench.ros2_gateway [--seconds S]``; writes
 bench/results/ros2_gateway.json.
+
+Size: the parent and the publisher child it starts (--publisher) are one script, so that both
+modes run the same publisher code and both phases read the same arrivals.
 """
 
 from __future__ import annotations

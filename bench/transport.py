@@ -16,6 +16,9 @@ processes; small messages <= 0.3 ms.
 
     python -m bench.transport [--samples-small 2000] [--samples-image 400] [--seconds 4]
                               [--breakdown-rounds 3]
+
+Size: the measuring process and the peers it starts (serve, serve_raw) are one module, so that
+every topology runs the same code on both ends.
 """
 
 from __future__ import annotations
@@ -33,8 +36,8 @@ import numpy as np
 import zenoh
 
 from bench import transport_breakdown
+from bench.breakdown_variants import SUMMARY
 from bench.common import percentiles, print_table, write_results
-from bench.transport_breakdown import SUMMARY
 from dronewrapper.msgs import CompressedImage, Header, Image, PoseStamped, codec, registry
 from dronewrapper.router import router_options, run_router
 from dronewrapper.runtime import Node, ZenohOptions

@@ -44,269 +44,32 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 
 import numpy as np
 import zenoh
 
-from bench.common import cpu_seconds, free_endpoint, print_table, write_results
-from dronewrapper.msgs import CompressedImage, Header, codec, registry
-from dronewrapper.runtime import Node
+from bench.breakdown_echo import serve_echo, serve_socket
+from bench.breakdown_variants import (
+    PAYLOAD,
+    PING_KEY,
+    PONG_KEY,
+    SOCKET,
+    VARIANTS,
+    Variant,
+    node_for,
+    publisher,
+    qos,
+    session_config,
+    small_message,
+    subscribe,
+)
+from bench.common import free_endpoint, print_table, write_results
+from bench.hand_offs import measure
+from dronewrapper.msgs import registry
 from dronewrapper.runtime.arguments import CommandParser, first_line
-from dronewrapper.runtime.options import ZenohOptions, zenoh_config
-from dronewrapper.runtime.session import encoding_for
-from dronewrapper.runtime.thread_state import KEPT
-
-PING_KEY, PONG_KEY = "bench/breakdown/ping", "bench/breakdown/pong"
-DATA = bytes(64)
-LOW_LATENCY = {"transport/unicast/lowlatency": "true", "transport/unicast/qos/enabled": "false"}
-NO_QOS = {"transport/unicast/qos/enabled": "false"}
-NO_BATCHING = {"transport/link/tx/queue/batching/enabled": "false"}
-ONE_RX = {"ZENOH_RUNTIME": "(rx: (worker_threads: 1))"}
-TWO_RX = {"ZENOH_RUNTIME": "(rx: (worker_threads: 2))"}  # the binding's default
-SUMMARY = (
-    "binding defaults",
-    "direct callbacks both",
-    "thread states kept",
-    "lowlatency transport",
-    "one rx thread",
-    "recv ping, direct echo, lowlatency, one rx thread",
-    "ours: Node defaults",
-    "ours: low_latency",
-    "socket",
-)
-"""The variants ``bench.transport`` prints (names containing one of these)."""
-
-
-@dataclass(frozen=True)
-class Variant:
-    """One way of doing the 64-byte round trip (see the module docstring)."""
-
-    name: str
-    ping: str = "indirect"
-    echo: str = "indirect"
-    put: str = "publisher"
-    config: dict[str, str] = field(default_factory=dict)
-    router: bool = False
-    priority: str = "DATA"
-    congestion: str = "BLOCK"
-    env: dict[str, str] = field(default_factory=dict)
-    encoding: bool = False
-    """Declare the plain publishers with our encoding (MessagePack and the type's schema)."""
-    layer: str = "zenoh"
-    """``zenoh``: plain zenoh-python bytes; ``ours``: a Node on each end, a 64-byte
-    CompressedImage typed, encoded and decoded (``ping``/``echo``: ``indirect`` or ``direct``
-    callbacks; ``config`` LOW_LATENCY becomes ``ZenohOptions.low_latency``); ``ours_ping``,
-    ``ours_echo``: a Node on that end only."""
-
-
-VARIANTS = (
-    Variant("binding defaults (callbacks on Python threads)"),
-    Variant("express publisher", put="express"),
-    Variant("session.put", put="session"),
-    Variant("with our encoding (schema)", encoding=True),
-    Variant("congestion DROP", congestion="DROP"),
-    Variant("priority INTERACTIVE_HIGH", priority="INTERACTIVE_HIGH"),
-    Variant("QoS off", config=NO_QOS),
-    Variant("batching off", config=NO_BATCHING),
-    Variant("lowlatency transport (QoS off)", config=LOW_LATENCY),
-    Variant("direct callbacks both ends", ping="direct", echo="direct"),
-    Variant("recv threads both ends", ping="recv", echo="recv"),
-    Variant("direct, thread states kept", ping="kept", echo="kept"),
-    Variant("direct, thread states kept, lowlatency", ping="kept", echo="kept", config=LOW_LATENCY),
-    Variant("recv ping, direct echo", ping="recv", echo="direct"),
-    Variant("recv ping, direct echo, lowlatency", ping="recv", echo="direct", config=LOW_LATENCY),
-    Variant("direct both ends, lowlatency", ping="direct", echo="direct", config=LOW_LATENCY),
-    Variant("one rx thread", env=ONE_RX),
-    Variant(
-        "direct both ends, lowlatency, one rx thread",
-        ping="direct",
-        echo="direct",
-        config=LOW_LATENCY,
-        env=ONE_RX,
-    ),
-    Variant(
-        "recv ping, direct echo, lowlatency, one rx thread",
-        ping="recv",
-        echo="direct",
-        config=LOW_LATENCY,
-        env=ONE_RX,
-    ),
-    Variant("ours: Node defaults", layer="ours"),
-    Variant("ours: ping only", layer="ours_ping"),
-    Variant("ours: echo only", layer="ours_echo"),
-    Variant("ours: direct callbacks both ends", ping="direct", echo="direct", layer="ours"),
-    Variant("ours: low_latency, two rx threads", config=LOW_LATENCY, env=TWO_RX, layer="ours"),
-    Variant("ours: low_latency (one rx thread)", config=LOW_LATENCY, layer="ours"),
-    Variant(
-        "ours: low_latency, direct callbacks",
-        ping="direct",
-        echo="direct",
-        config=LOW_LATENCY,
-        layer="ours",
-    ),
-    Variant("through a router", router=True),
-    Variant("through a router, direct callbacks", ping="direct", echo="direct", router=True),
-)
-SOCKET = "socket (rospy's design, plain Python TCP)"
-
-
-# ---- sessions ----
-
-
-def session_config(variant: Variant, mode: str, connect: list[str], listen: list[str]):
-    """The runtime's own session configuration plus the variant's knobs."""
-    conf = zenoh_config(ZenohOptions(mode=mode, connect=connect, listen=listen))
-    for key, value in variant.config.items():
-        conf.insert_json5(key, value)
-    return conf
-
-
-def qos(variant: Variant) -> dict[str, object]:
-    """The variant's publisher options."""
-    return {
-        "priority": getattr(zenoh.Priority, variant.priority),
-        "congestion_control": getattr(zenoh.CongestionControl, variant.congestion),
-        "express": variant.put == "express",
-    }
-
-
-def publisher(session: zenoh.Session, key: str, variant: Variant):
-    """A ``put(bytes)`` for ``key`` in the variant's way."""
-    options = qos(variant)
-    if variant.encoding:
-        options["encoding"] = encoding_for(CompressedImage)
-    if variant.put == "session":
-        return lambda payload: session.put(key, payload, **options)
-    return session.declare_publisher(key, **options).put
-
-
-def subscribe(session: zenoh.Session, key: str, how: str, on_payload):
-    """Subscribe ``on_payload(bytes)`` to ``key``; for ``recv`` the subscriber is returned
-    and the caller receives itself."""
-    if how == "recv":
-        return session.declare_subscriber(key, zenoh.handlers.FifoChannel(64))
-    if how == "kept":  # direct, and Zenoh's thread keeps its Python thread state
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            KEPT.keep()
-            on_payload(sample.payload.to_bytes())
-
-        return session.declare_subscriber(key, zenoh.handlers.Callback(on_sample, indirect=False))
-    handler = zenoh.handlers.Callback(
-        lambda sample: on_payload(sample.payload.to_bytes()), indirect=how == "indirect"
-    )
-    return session.declare_subscriber(key, handler)
-
-
-# ---- the echo process ----
-
-
-def node_for(variant: Variant, side: str, mode: str, connect: list[str], listen: list[str]):
-    """Our runtime's Node for one end of an ``ours`` variant."""
-    options = ZenohOptions(
-        mode=mode,
-        connect=connect,
-        listen=listen,
-        low_latency=variant.config.get("transport/unicast/lowlatency") == "true",
-    )
-    direct = getattr(variant, side) == "direct"
-    return Node(f"breakdown_{side}", options, handle_signals=False, linger=0.0,
-                direct_callbacks=direct)  # fmt: skip
-
-
-def small_message() -> CompressedImage:
-    """64 bytes of data in a typed message, stamped now."""
-    return CompressedImage(header=Header.now("small"), format="raw", data=DATA)
-
-
-PAYLOAD = codec.encode(small_message())
-"""What plain Zenoh sends: the encoded typed message (so an ``ours`` end decodes it)."""
-
-
-def serve_echo(variant: Variant, mode: str, connect: list[str], listen: list[str]) -> None:
-    """In the child: put every ping back as a pong until stdin closes."""
-    if variant.layer in ("ours", "ours_echo"):
-        with node_for(variant, "echo", mode, connect, listen) as node:
-            pub = node.publisher(registry.IMAGE_COMPRESSED, key=PONG_KEY, qos=qos(variant))
-            node.subscribe(registry.IMAGE_COMPRESSED, pub.put, key=PING_KEY)
-            print("ready", flush=True)
-            sys.stdin.read()
-        return
-    session = zenoh.open(session_config(variant, mode, connect, listen))
-    put = publisher(session, PONG_KEY, variant)
-    sub = subscribe(session, PING_KEY, variant.echo, put)
-    reader = None
-    if variant.echo == "recv":
-
-        def loop() -> None:
-            try:
-                while True:
-                    put(sub.recv().payload.to_bytes())
-            except zenoh.ZError:  # the session closed: the channel is empty and closed
-                return
-
-        reader = threading.Thread(target=loop, daemon=True)
-        reader.start()
-    print("ready", flush=True)
-    sys.stdin.read()
-    session.close()
-    if reader is not None:
-        reader.join(2.0)
-
-
-def serve_socket() -> None:
-    """In the child: a TCP echo with one reader thread, as a TCPROS connection has."""
-    server = socket.create_server(("127.0.0.1", 0))
-    print(server.getsockname()[1], flush=True)
-    conn, _ = server.accept()
-    conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-
-    def loop() -> None:
-        while True:
-            head = conn.recv(4, socket.MSG_WAITALL)
-            if len(head) < 4:
-                return
-            (size,) = struct.unpack("<I", head)
-            data = conn.recv(size, socket.MSG_WAITALL)
-            conn.sendall(struct.pack("<I", len(data)) + data)
-
-    reader = threading.Thread(target=loop, daemon=True)
-    reader.start()
-    sys.stdin.read()
-    conn.close()
-    server.close()
-
 
 # ---- the measuring process ----
-
-
-def thread_switches(pid: int) -> dict[str, int]:
-    """Voluntary + involuntary context switches so far of each thread of ``pid`` by name
-    (threads of one name summed)."""
-    counts: dict[str, int] = {}
-    for task in os.listdir(f"/proc/{pid}/task"):
-        try:
-            with open(f"/proc/{pid}/task/{task}/comm") as comm:
-                name = comm.read().strip()
-            with open(f"/proc/{pid}/task/{task}/status") as status:
-                total = sum(int(line.split()[-1]) for line in status if "ctxt_switches:" in line)
-        except (FileNotFoundError, ProcessLookupError):
-            continue  # a thread that ended meanwhile
-        counts[name] = counts.get(name, 0) + total
-    return counts
-
-
-def migrations(pid: int) -> int:
-    """Moves of ``pid``'s threads from one CPU to another so far (``se.nr_migrations``)."""
-    total = 0
-    for task in os.listdir(f"/proc/{pid}/task"):
-        try:
-            with open(f"/proc/{pid}/task/{task}/sched") as sched:
-                total += sum(int(line.split()[-1]) for line in sched if "nr_migrations" in line)
-        except (FileNotFoundError, ProcessLookupError):
-            continue  # a thread that ended meanwhile
-    return total
 
 
 class Child:
@@ -330,31 +93,6 @@ class Child:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait(5)
-
-
-def measure(send, wait, samples: int, pids: dict[str, int], warmup: int = 100):
-    """Round trips (s) of ``send()`` then ``wait()``, the context switches per round trip of
-    each thread of the processes ``pids`` (``"role/thread name"``: count) and their CPU time
-    per round trip (``"cpu_us"``, microseconds, in clock ticks' resolution)."""
-    for _ in range(warmup):
-        send()
-        wait()
-    before = {role: thread_switches(pid) for role, pid in pids.items()}
-    cpu_before = sum(cpu_seconds(pid) for pid in pids.values())
-    moves_before = sum(migrations(pid) for pid in pids.values())
-    rtts = np.empty(samples)
-    for i in range(samples):
-        t0 = time.perf_counter()
-        send()
-        wait()
-        rtts[i] = time.perf_counter() - t0
-    cpu_us = (sum(cpu_seconds(pid) for pid in pids.values()) - cpu_before) / samples * 1e6
-    moves = (sum(migrations(pid) for pid in pids.values()) - moves_before) / samples
-    per_rtt = {}
-    for role, pid in pids.items():
-        for name, count in thread_switches(pid).items():
-            per_rtt[f"{role}/{name}"] = (count - before[role].get(name, 0)) / samples
-    return rtts, per_rtt, cpu_us, moves
 
 
 def serve_ping(variant: Variant, mode: str, connect: list[str], samples: int, echo_pid: int):

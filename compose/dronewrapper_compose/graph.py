@@ -32,7 +32,7 @@ from __future__ import annotations
 import difflib
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -144,6 +144,17 @@ def declared_variables(graph: Graph) -> set[str]:
         m.group(1) for text in texts for m in _VAR.finditer(text) if m.group(2) is not None
     }
     return set(graph.vars) | defaulted
+
+
+def parse_vars(pairs: Sequence[str]) -> dict[str, str]:
+    """Graph variables from ``KEY=VALUE`` command-line pairs (GraphError for another shape)."""
+    out = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise GraphError(f"--var {pair!r} is not KEY=VALUE")
+        out[key] = value
+    return out
 
 
 def check_variables(graph: Graph, path: Path | str, values: Mapping[str, str]) -> None:

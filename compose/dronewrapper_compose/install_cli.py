@@ -24,9 +24,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from dronewrapper.runtime.arguments import CommandParser
-from dronewrapper_compose.graph import REPO, GraphError, check_variables, load_graph
+from dronewrapper_compose.graph import REPO, GraphError, check_variables, load_graph, parse_vars
 from dronewrapper_compose.graph import resolve_graph_path as resolve
-from dronewrapper_compose.launcher import Launcher, _parse_vars
+from dronewrapper_compose.launcher import Launcher
 from dronewrapper_compose.systemd_unit import UnitSpec, render_unit, serial_devices, unit_name
 
 UNIT_DIR = Path("etc/systemd/system")
@@ -46,7 +46,7 @@ def _systemctl(args: argparse.Namespace, *command: str) -> int:
 
 def build_spec(args: argparse.Namespace) -> UnitSpec:
     """The unit for the command line's graph and options (GraphError when they are wrong)."""
-    variables = _parse_vars(args.var)
+    variables = parse_vars(args.var)
     graph = resolve(args.graph).resolve()
     check_variables(load_graph(graph), graph, variables)
     if any(ep.startswith("tls/") for ep in args.listen) and not args.identity:

@@ -14,8 +14,9 @@
 
     asyncio.run(main())
 
-One core, two fronts: :class:`Drone` drives a :class:`~dronewrapper.drone.DroneWrapper` and adds
-no flight logic of its own. Blocking calls (take-off, landing, mode changes, parameters, waits)
+One core, two fronts: :class:`Drone` drives a :class:`~dronewrapper.drone.DroneWrapper` (and its
+:class:`~dronewrapper.client.DroneClient`, whose input holders the iterators read) and adds no
+flight logic of its own. Blocking calls (take-off, landing, mode changes, parameters, waits)
 run on a worker thread and are awaited, so the event loop keeps running; getters and setpoints
 return at once, as in the sync API. Cancelling an awaited take-off or landing stops it: no
 further step is taken and the setpoint stream stops (the bridge holds position); the awaiting
@@ -38,15 +39,14 @@ from typing import Any, TypeVar
 import numpy as np
 
 from dronewrapper import telemetry
+from dronewrapper.client.inputs import camera_key_name
 from dronewrapper.drone import DroneWrapper
 from dronewrapper.fleet_aio import Fleet
-from dronewrapper.inputs import camera_key_name
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, State
 from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
-from dronewrapper.runtime.latest import Latest
 
 __all__ = ["Drone", "Fleet"]
 
@@ -189,10 +189,11 @@ class Drone:
     # ------------------------------------------------------------------ async iterators
 
     async def _newest(self, topic: Topic[V], **parts: str) -> AsyncIterator[V]:
-        """The messages on ``topic`` as they arrive, the newest each time (a Latest holder
-        whose listener wakes the event loop)."""
+        """The messages on ``topic`` as they arrive from now on, the newest each time: the
+        drone client's holder of the key (the one the getters read; subscribed once per drone,
+        until :meth:`close`), whose listener wakes the event loop."""
         loop = asyncio.get_running_loop()
-        holder: Latest[V] = Latest(name=topic.key(self.sync.ns, **parts), clock=self.sync.clock)
+        holder = self.sync.client.inputs.latest(topic, **parts)
         arrived = asyncio.Event()
 
         def notify() -> None:
@@ -200,8 +201,7 @@ class Drone:
                 loop.call_soon_threadsafe(arrived.set)
 
         holder.listen(notify)
-        subscription = self.sync.subscribe(topic, holder.update, **parts)
-        seen = 0
+        seen = holder.count
         try:
             while True:
                 await arrived.wait()
@@ -212,7 +212,6 @@ class Drone:
                     yield value
         finally:
             holder.unlisten(notify)
-            subscription.undeclare()
 
     async def _stream(self, topic: Topic[V], convert: Callable[[V], T], **parts: str):
         async for msg in self._newest(topic, **parts):

@@ -20,8 +20,9 @@
     dronewrapper bench --quick [--target-ms MS]      this computer's speed, settings to use (stack)
     dronewrapper --version                           the installed version
 
-``up``, ``install``, ``uninstall``, ``sim``, ``detect``, ``station`` and ``ros2`` come with the
-on-board stack (``make setup``); the SDK alone (``pip install ./sdk``) has ``router``,
+``up``, ``install``, ``uninstall``, ``sim``, ``detect``, ``station``, ``ros2`` and ``bench`` come
+with the on-board stack (``make setup``), whose distributions add them through the
+``dronewrapper.commands`` entry points; the SDK alone (``pip install ./sdk``) has ``router``,
 ``echo``, ``alive`` and ``doctor``; ``record``, ``replay`` and ``foxglove`` come with its
 ``record`` extra (``pip install './sdk[record]'``).
 """
@@ -40,16 +41,12 @@ from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
 from dronewrapper.runtime.service import setup_logging
 
-# subcommand -> (module, function) in the on-board stack, imported only when used
-_STACK_COMMANDS = {
-    "up": ("dronewrapper_compose.launcher", "main"),
-    "install": ("dronewrapper_compose.install_cli", "install_main"),
-    "uninstall": ("dronewrapper_compose.install_cli", "uninstall_main"),
-    "sim": ("dronewrapper_sim.cli", "main"),
-    "detect": ("dronewrapper_perception.detect_cli", "main"),
-    "station": ("dronewrapper_ground_station.cli", "main"),
-    "ros2": ("dronewrapper_ros2_gateway.cli", "main"),
-}
+COMMANDS_GROUP = "dronewrapper.commands"
+"""The entry-point group through which the on-board distributions add their subcommands
+(``up = "dronewrapper_compose.up:main"``): this command names none of them."""
+
+STACK_COMMANDS = ("up", "install", "uninstall", "sim", "detect", "station", "ros2", "bench")
+"""The subcommands the on-board stack adds (for the message when it is not installed)."""
 
 # subcommand -> (module, function) of the SDK's record extra (mcap, foxglove-sdk)
 _RECORD_COMMANDS = {
@@ -278,28 +275,6 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
     return 0
 
 
-def _bench(argv: Sequence[str]) -> int:
-    """``bench --quick [...]``: the self-benchmark; ``bench [NAME...]``: the full benchmarks.
-
-    They are scripts in the repository's ``bench/`` (beside ``compose/``), run from there."""
-    import subprocess
-    from pathlib import Path
-
-    try:
-        import dronewrapper_compose
-    except ModuleNotFoundError:
-        print("dronewrapper bench: needs the on-board stack; run `make setup`", file=sys.stderr)
-        return 2
-    repo = Path(dronewrapper_compose.__file__).resolve().parents[2]
-    if not (repo / "bench" / "quick.py").is_file():
-        print(f"dronewrapper bench: no bench/ beside {repo / 'compose'}", file=sys.stderr)
-        return 2
-    quick = "--quick" in argv
-    module = "bench.quick" if quick else "bench"
-    rest = [a for a in argv if a != "--quick"] if quick else list(argv)
-    return subprocess.call([sys.executable, "-m", module, *rest], cwd=repo)
-
-
 def _keys(argv: Sequence[str]) -> int:
     try:
         from dronewrapper.security.keys_cli import main as keys_main
@@ -309,6 +284,16 @@ def _keys(argv: Sequence[str]) -> int:
         )
         return 2
     return keys_main(argv)
+
+
+def _missing(command: str, need: str, exc: ModuleNotFoundError | None) -> int:
+    """Say what ``command`` needs that is not installed; exit status 2."""
+    missing = f" ({exc.name} is missing)" if exc is not None else ""
+    print(
+        f"dronewrapper {command}: needs {need}{missing}; run `make setup` in the repository",
+        file=sys.stderr,
+    )
+    return 2
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -328,31 +313,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         "doctor": _doctor,
         "keys": _keys,
         "mavlink-forward": _mavlink_forward,
-        "bench": _bench,
     }
     if command in local:
         return local[command](rest)
-    if command in _STACK_COMMANDS or command in _RECORD_COMMANDS:
-        module_name, func = {**_STACK_COMMANDS, **_RECORD_COMMANDS}[command]
+    if command in _RECORD_COMMANDS:
+        module_name, func = _RECORD_COMMANDS[command]
         try:
-            module = importlib.import_module(module_name)
-            entry = getattr(module, func)
-            if command in _RECORD_COMMANDS:
-                import foxglove  # noqa: F401  (the record extra, checked before running)
-                import mcap  # noqa: F401
+            entry = getattr(importlib.import_module(module_name), func)
+            import foxglove  # noqa: F401  (the record extra, checked before running)
+            import mcap  # noqa: F401
         except ModuleNotFoundError as exc:
-            need = (
-                "the record extra: pip install 'dronewrapper[record]'"
-                if command in _RECORD_COMMANDS
-                else "the on-board stack"
-            )
-            print(
-                f"dronewrapper {command}: needs {need} ({exc.name} is missing); "
-                "run `make setup` in the repository",
-                file=sys.stderr,
-            )
-            return 2
+            return _missing(command, "the record extra: pip install 'dronewrapper[record]'", exc)
         return int(entry(rest) or 0)
+    from importlib.metadata import entry_points  # here: the SDK's own commands start faster
+
+    found = [ep for ep in entry_points(group=COMMANDS_GROUP) if ep.name == command]
+    if found:
+        try:
+            entry = found[0].load()
+        except ModuleNotFoundError as exc:
+            return _missing(command, "the on-board stack", exc)
+        return int(entry(rest) or 0)
+    if command in STACK_COMMANDS:
+        return _missing(command, "the on-board stack", None)
     usage = plain_text(__doc__.strip())
     print(f"dronewrapper: unknown command {command!r}\n\n{usage}", file=sys.stderr)
     return 2

@@ -8,13 +8,14 @@ reply raises :class:`~dronewrapper.errors.Timeout` when a bridge is alive (slow 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 
 from dronewrapper import setpoints
+from dronewrapper.client import DroneClient
 from dronewrapper.errors import CommandRefused, DroneError, InvalidArgument
-from dronewrapper.inputs import Inputs
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
@@ -22,55 +23,47 @@ from dronewrapper.msgs.mavros import (
     ParamGet,
     ParamSet,
     ParamValue,
-    PositionTarget,
     SetMode,
 )
 from dronewrapper.msgs.registry import Service
-from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 
 T = TypeVar("T")
 
 
+NoReply = Callable[[str, str, float], DroneError]
+"""``no_reply(what, key, timeout)``: the error for a call nobody answered, diagnosed."""
+
+
 class Commands:
-    """The service calls of a DroneWrapper (a part of it, see the module doc)."""
+    """The service calls of one drone (see the module doc); a part a DroneWrapper owns.
 
-    ns: str
-    node: NodeApi
-    inputs: Inputs
-    service_timeout: float
-    _attachment: bytes
-    _forbidden: str  # why our certificate's role may not command ("" when it may)
+    Args:
+        client: the drone client (its calls carry our commander name).
+        no_reply: the error for a call nobody answered (NotConnected or Timeout).
+        service_timeout: seconds to wait for a reply when a call gives none.
+    """
 
-    if TYPE_CHECKING:  # Motion's, next to this part in DroneWrapper
+    def __init__(self, client: DroneClient, no_reply: NoReply, service_timeout: float) -> None:
+        self.client = client
+        self.ns = client.ns
+        self.no_reply = no_reply
+        self.service_timeout = service_timeout
 
-        @property
-        def commanding(self) -> PositionTarget | None: ...
-
-        def _no_reply(self, what: str, key: str, timeout: float) -> DroneError: ...
-
-    def _ask(self, service: Service[Any, T], request: Any, timeout: float) -> T:
-        """One request/reply; raises the runtime's ServiceError / ServiceUnavailable, and
-        ServiceError (code ``forbidden``) at once, unsent, when our certificate's role may not
-        command (the router would drop the request)."""
-        if self._forbidden:
-            raise ServiceError(self._forbidden, "forbidden")
-        return self.node.call(
-            service, request, ns=self.ns, timeout=timeout, attachment=self._attachment
-        )
-
-    def _call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
+    def call(self, service: Service[Any, T], request: Any, what: str, timeout: float | None) -> T:
+        """One request/reply: CommandRefused on a refusal, ``no_reply`` when unanswered."""
         timeout = self.service_timeout if timeout is None else timeout
         try:
-            return self._ask(service, request, timeout)
+            return self.client.ask(service, request, timeout)
         except ServiceUnavailable as exc:
             waited = timeout if exc.waited is None else exc.waited
-            raise self._no_reply(what, service.key(self.ns), waited) from None
+            raise self.no_reply(what, service.key(self.ns), waited) from None
         except ServiceError as exc:
             raise CommandRefused(what, exc.message) from None
 
-    def _command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
-        reply = self._call(service, request, what, timeout)
+    def command(self, service: Service[Any, Any], request: Any, what: str, timeout=None) -> Any:
+        """:meth:`call`, and CommandRefused when the reply says it failed."""
+        reply = self.call(service, request, what, timeout)
         ok = reply.mode_sent if hasattr(reply, "mode_sent") else reply.success
         if not ok:
             raise CommandRefused(what, reply.message, getattr(reply, "result", None))
@@ -84,14 +77,14 @@ class Commands:
             CommandRefused: ``take_over`` is False and someone else holds the lease.
         """
         action = "take_over" if take_over else "take"
-        reply = self._call(registry.COMMAND_LEASE, LeaseRequest(action=action), action, timeout)
+        reply = self.call(registry.COMMAND_LEASE, LeaseRequest(action=action), action, timeout)
         if not reply.granted:
             raise CommandRefused(action, reply.message)
         return reply.previous
 
     def release_command(self, *, timeout: float | None = None) -> None:
         """Give the command lease back (any authorised operator may then take it)."""
-        self._call(registry.COMMAND_LEASE, LeaseRequest(action="release"), "release", timeout)
+        self.call(registry.COMMAND_LEASE, LeaseRequest(action="release"), "release", timeout)
 
     def arm(self, *, timeout: float | None = None) -> None:
         """Arm the motors. Raises CommandRefused with the autopilot's reason on refusal.
@@ -100,10 +93,10 @@ class Commands:
         health failures first"; the error then names the real cause.
         """
         try:
-            self._command(registry.ARMING, CommandBool(value=True), "arming", timeout)
+            self.command(registry.ARMING, CommandBool(value=True), "arming", timeout)
         except CommandRefused as exc:
-            state = self.inputs.state.value
-            if state is not None and state.mode == "OFFBOARD" and self.commanding is None:
+            state = self.client.state.value
+            if state is not None and state.mode == "OFFBOARD" and self.client.target is None:
                 raise CommandRefused(
                     "arming",
                     f"{exc.reason}; the autopilot is in OFFBOARD and no setpoint is being "
@@ -115,7 +108,7 @@ class Commands:
 
     def disarm(self, *, timeout: float | None = None) -> None:
         """Disarm the motors (the autopilot refuses in flight). Raises CommandRefused."""
-        self._command(registry.ARMING, CommandBool(value=False), "disarming", timeout)
+        self.command(registry.ARMING, CommandBool(value=False), "disarming", timeout)
 
     def set_mode(self, mode: str, *, timeout: float | None = None) -> None:
         """Ask for a flight mode by name (``OFFBOARD``, ``AUTO.LOITER``, ``GUIDED`` ...).
@@ -124,13 +117,13 @@ class Commands:
         """
         if not isinstance(mode, str) or not mode.strip():
             raise InvalidArgument(f"mode must be a mode name, got {mode!r}")
-        self._command(registry.SET_MODE, SetMode(custom_mode=mode), f"set_mode {mode}", timeout)
+        self.command(registry.SET_MODE, SetMode(custom_mode=mode), f"set_mode {mode}", timeout)
 
     def param_get(self, param: str, *, timeout: float | None = None) -> int | float:
         """Read an autopilot parameter; an int or a float."""
         if not isinstance(param, str) or not param:
             raise InvalidArgument(f"param must be a parameter name, got {param!r}")
-        reply = self._command(
+        reply = self.command(
             registry.PARAM_GET, ParamGet(param_id=param), f"param_get {param}", timeout
         )
         return reply.value.as_number()
@@ -146,7 +139,7 @@ class Commands:
             wrapped = ParamValue(integer=int(value))
         else:
             wrapped = ParamValue(real=setpoints.finite(param, value))
-        reply = self._command(
+        reply = self.command(
             registry.PARAM_SET,
             ParamSet(param_id=param, value=wrapped),
             f"param_set {param}",

@@ -1,12 +1,13 @@
-"""A DroneWrapper's connection: the node it opens when given none, and what is wrong when the
-drone cannot be used.
+"""A DroneWrapper's connection: the node it opens when given none, and what is wrong when the drone
+cannot be used.
 
 :func:`open_node` opens the wrapper's own :class:`~dronewrapper.runtime.node.Node`: a client of
 the router (a ``tls/`` one with an identity), no signal handlers and direct callbacks, since it
 lives inside someone else's program. :func:`wait_for_connection` waits, on the node's clock, for
-a bridge whose autopilot is connected and for every stream the getters read. :func:`diagnose`
-and :func:`no_reply` turn a silence into one sentence naming what is missing (no router, no
-bridge, a bridge without an autopilot, a stream that never came).
+a bridge whose autopilot is connected (the drone client's rule,
+:meth:`~dronewrapper.client.DroneClient.connected_state`) and for every stream the getters read.
+:func:`diagnose` and :func:`no_reply` turn a silence into one sentence naming what is missing
+(no router, no bridge, a bridge without an autopilot, a stream that never came).
 """
 
 from __future__ import annotations
@@ -16,13 +17,13 @@ import logging
 import os
 
 from dronewrapper import diagnosis
+from dronewrapper.client.drone_client import STATE_FRESH_S, DroneClient
+from dronewrapper.client.inputs import TELEMETRY_READ_BY_GETTERS
 from dronewrapper.diagnosis import identity_facts, seconds
 from dronewrapper.discovery import connection_problem
 from dronewrapper.errors import DroneError, NotConnected
-from dronewrapper.inputs import TELEMETRY_READ_BY_GETTERS, Inputs
 from dronewrapper.msgs.mavros import State
 from dronewrapper.router_reach import why_no_session
-from dronewrapper.runtime.commander import STATE_FRESH_S
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import ZenohOptions
 
@@ -53,13 +54,7 @@ def open_node(ns: str, connect: str, timeout: float, *, mode: str, identity: str
         raise NotConnected(why_no_session(connect, timeout, exc)) from exc
 
 
-def connected_state(inputs: Inputs) -> State | None:
-    """The newest State if it is fresh (< 3 s) and says the autopilot is connected."""
-    state = inputs.state.fresh(STATE_FRESH_S)
-    return state if state is not None and state.connected else None
-
-
-def wait_for_connection(inputs: Inputs, connect: str, identity: str, timeout: float) -> State:
+def wait_for_connection(client: DroneClient, connect: str, identity: str, timeout: float) -> State:
     """Wait until the bridge reports its autopilot connected and every stream the getters read
     has arrived; the State.
 
@@ -67,12 +62,12 @@ def wait_for_connection(inputs: Inputs, connect: str, identity: str, timeout: fl
         NotConnected: no bridge, a bridge without an autopilot, or a stream still missing after
             ``timeout`` s (the message names the missing keys).
     """
-    clock = inputs.node.clock
+    clock, inputs = client.clock, client.inputs
     deadline = clock.monotonic() + timeout
-    while (state := connected_state(inputs)) is None:
+    while (state := client.connected_state()) is None:
         remaining = deadline - clock.monotonic()
         if remaining <= 0:
-            raise NotConnected(diagnose(inputs, connect, identity, timeout))
+            raise NotConnected(diagnose(client, connect, identity, timeout))
         with contextlib.suppress(TimeoutError):
             inputs.state.wait(min(remaining, 0.5), newer_than=inputs.state.count)
     for _, name in TELEMETRY_READ_BY_GETTERS:
@@ -93,17 +88,17 @@ def wait_for_connection(inputs: Inputs, connect: str, identity: str, timeout: fl
     return state
 
 
-def require_connected(inputs: Inputs, connect: str, identity: str, what: str) -> State:
+def require_connected(client: DroneClient, connect: str, identity: str, what: str) -> State:
     """The connected State, or NotConnected naming ``what`` could not be done and why."""
-    state = connected_state(inputs)
+    state = client.connected_state()
     if state is None:
-        raise NotConnected(f"{what}: {diagnose(inputs, connect, identity, 0.0)}")
+        raise NotConnected(f"{what}: {diagnose(client, connect, identity, 0.0)}")
     return state
 
 
-def diagnose(inputs: Inputs, connect: str, identity: str, waited: float) -> str:
+def diagnose(client: DroneClient, connect: str, identity: str, waited: float) -> str:
     """Why the drone is not usable, in one sentence (see discovery.connection_problem)."""
-    node = inputs.node
+    node, inputs = client.node, client.inputs
     linked = node.linked()
     keys: set[str] = set()
     if linked:
@@ -124,11 +119,12 @@ def diagnose(inputs: Inputs, connect: str, identity: str, waited: float) -> str:
 
 
 def no_reply(
-    inputs: Inputs, connect: str, identity: str, what: str, key: str, timeout: float
+    client: DroneClient, connect: str, identity: str, what: str, key: str, timeout: float
 ) -> DroneError:
     """A call nobody answered, diagnosed (:func:`dronewrapper.diagnosis.no_reply`)."""
+    inputs = client.inputs
     try:
-        names = inputs.node.alive_services(inputs.ns, timeout=1.0)
+        names = client.node.alive_services(inputs.ns, timeout=1.0)
     except Exception:
         names = set()
     return diagnosis.no_reply(

@@ -12,14 +12,18 @@
 Frames and units (docs/design.md): local ENU fixed at the take-off point (x east, y north, z up, m);
 body FLU (forward, left, up, m/s); angles in radians, yaw counter-clockwise positive.
 
-A DroneWrapper stands on a node (the node contract, :mod:`dronewrapper.runtime.contract`): the
-one it is given, or its own (:func:`dronewrapper.connection.open_node`). Its time is the node's
-clock. This module is the facade: construction, life cycle, connection, take-off and landing.
-The rest of the API comes in parts, one module each: the getters (:mod:`dronewrapper.inputs`,
-which read the newest message already received, no network round trip, and raise
-:class:`~dronewrapper.errors.NoData` if none has arrived yet), the waits
-(:mod:`dronewrapper.waits`), the setpoints (:mod:`dronewrapper.motion`) and the bridge's
-services (:mod:`dronewrapper.commands`). Blocking calls take timeouts and raise
+A DroneWrapper is the blocking face of one :class:`~dronewrapper.client.DroneClient` (its input
+holders, its "connected" rule, its setpoint stream on its own thread, its calls, its refusals),
+standing on a node (the node contract, :mod:`dronewrapper.runtime.contract`): the one it is
+given, or its own (:func:`dronewrapper.connection.open_node`). Its time is the node's clock.
+This module is the facade: construction, life cycle and connection; every other verb is the
+same method of a part it owns, one module each, each given what it uses: the getters
+(:mod:`dronewrapper.getters`, which read the newest message already received, no network round
+trip, and raise :class:`~dronewrapper.errors.NoData` if none has arrived yet), the waits
+(:mod:`dronewrapper.waits`), the setpoints (:mod:`dronewrapper.motion`), the bridge's services
+(:mod:`dronewrapper.commands`), the envelope (:mod:`dronewrapper.envelope_guard`), the long
+actions (:mod:`dronewrapper.flights`: take-off, landing, go-to, return, mission steps) and the
+missions (:mod:`dronewrapper.missions`). Blocking calls take timeouts and raise
 :class:`~dronewrapper.errors.Timeout`, :class:`~dronewrapper.errors.CommandRefused` (with the
 autopilot's reason) or :class:`~dronewrapper.errors.NotConnected` (:mod:`dronewrapper.connection`
 says why).
@@ -29,56 +33,39 @@ from __future__ import annotations
 
 import atexit
 import collections
-import getpass
 import logging
 import os
-import socket
-import threading
 import weakref
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any, TypeVar
 
-from dronewrapper import connection, diagnosis, flying, images, setpoints
+from dronewrapper import connection, diagnosis, images
+from dronewrapper.client import DroneClient
+from dronewrapper.client.drone_client import default_commander
+from dronewrapper.client.inputs import GETTER_STREAMS
 from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
-from dronewrapper.errors import Cancelled, DroneError, InvalidArgument
-from dronewrapper.inputs import Getters, Inputs
-from dronewrapper.missions import MissionsMixin
+from dronewrapper.envelope_guard import EnvelopeGuard
+from dronewrapper.errors import DroneError
+from dronewrapper.flights import Flights
+from dronewrapper.forward import forward
+from dronewrapper.getters import Getters
+from dronewrapper.missions import Missions
 from dronewrapper.motion import Motion
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.flight import CancelRequest
-from dronewrapper.msgs.mavros import (
-    PositionTarget,
-    State,
-    StatusText,
-)
+from dronewrapper.msgs.mavros import PositionTarget, State, StatusText
 from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import Topic
-from dronewrapper.refusals import RefusalInbox
-from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.flight import FlightSequence, Landing, Takeoff
 from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.script_log import show_progress
-from dronewrapper.streamer import SetpointStreamer
 from dronewrapper.waits import Waits
+
+__all__ = ["DroneWrapper", "default_commander"]
 
 T = TypeVar("T")
 
 log = logging.getLogger("dronewrapper")
-
-
-def default_commander(identity: str = "") -> str:
-    """Our name on the command lease: ``$DRONEWRAPPER_COMMANDER``, the identity's name, or
-    ``user@host``."""
-    env = os.environ.get("DRONEWRAPPER_COMMANDER")
-    if env:
-        return env
-    if identity:
-        return Path(identity).stem if identity.endswith(".crt") else identity
-    return f"{getpass.getuser()}@{socket.gethostname()}"
-
 
 _open_wrappers: weakref.WeakSet[DroneWrapper] = weakref.WeakSet()
 
@@ -90,7 +77,7 @@ def _close_all() -> None:
         wrapper.close()
 
 
-class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
+class DroneWrapper:
     """One drone, reached through a Zenoh router. Several objects fly several drones.
 
     Args:
@@ -155,11 +142,9 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         self.land_on_exit = land_on_exit
         self.service_timeout = service_timeout
         self._closed = False
-        self._warned_grounded = False
         identity = self._identity = identity or os.environ.get("DRONEWRAPPER_IDENTITY", "")
-        self.commander = commander or default_commander(identity)
-        self._attachment = commander_attachment(self.commander)
-        self._forbidden = (
+        commander = commander or default_commander(identity)
+        forbidden = (
             diagnosis.forbidden(identity, self.connect)
             if node is None
             else diagnosis.node_forbidden(node)
@@ -173,32 +158,39 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         self.node: NodeApi = node
         self.clock = node.clock
         bound = getattr(node, "bound_name", "")
-        if bound and bound != self.commander:  # the router binds our commands to it
-            log.warning("commander %r: the certificate's name %r commands", self.commander, bound)
-        self.commander = bound or self.commander
-        self._attachment = commander_attachment(self.commander)
+        if bound and bound != commander:  # the router binds our commands to it
+            log.warning("commander %r: the certificate's name %r commands", commander, bound)
+        self.commander = bound or commander
         deadline = self.clock.monotonic() + timeout
         _open_wrappers.add(self)
         try:
-            self.inputs = Inputs(
-                node, self.ns, compressed_images=self.compressed_images, cameras=cameras
-            )
-            self._declare_mission_inputs()  # home, envelope, mission (missions.py)
-            self._refusals = RefusalInbox(self.ns, self.commander, self.clock)
-            self.inputs.subscribe(registry.REFUSAL, self._refusals.on_refusal)
-            self._setpoints = node.publisher(
-                registry.SETPOINT_RAW_LOCAL, key=registry.SETPOINT_RAW_LOCAL.key(self.ns)
-            )
-            self._streamer = SetpointStreamer(
-                self._publish_setpoint,
-                clock=self.clock,
+            self.client = DroneClient(
+                node,
+                name=self.commander,
+                ns=self.ns,
                 rate_hz=setpoint_rate_hz,
                 idle_timeout=command_timeout,
-                name=f"{self.ns}-setpoints",
+                threaded_stream=True,
+                inline_calls=True,  # a blocking call waits on this thread anyway
+                forbidden=forbidden,
+                streams=GETTER_STREAMS,
+                cameras=cameras,
+                compressed_images=self.compressed_images,
             )
-            self._matching = self._setpoints.on_matching(self._on_setpoint_matching)
-            self._aircraft = flying.WrapperAircraft(
-                self.ns, state=self.inputs.state, stop=self.stop_commanding, ask=self._ask
+            self.inputs = self.client.inputs
+            self.getters = Getters(self.inputs)
+            self.waits = Waits(self.clock, self.getters)
+            self.commands = Commands(self.client, self._no_reply, service_timeout)
+            self.guard = EnvelopeGuard(self.client, self.commands)
+            self._home = self.guard.home_holder  # read by the firmware tier's tests
+            self.motion = Motion(self.client, self.guard.check_setpoint)
+            self.missions = Missions(self.client, self.commands, self.guard)
+            self.flights = Flights(
+                self.client,
+                self.guard,
+                require_connected=self._require_connected,
+                no_reply=self._no_reply,
+                service_timeout=service_timeout,
             )
             if wait:
                 self.wait_for_connection(max(0.0, deadline - self.clock.monotonic()))
@@ -231,11 +223,11 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
     @property
     def refusals(self) -> list[Refusal]:
         """The bridge's last 20 refusals of our setpoints, newest last (``msgs.refusal``)."""
-        return list(self._refusals.recent)
+        return list(self.client.refusals.recent)
 
     def on_refusal(self, callback: Callable[[Refusal], None]) -> Callable[[], None]:
         """``callback(refusal)`` as each of ours arrives (a Zenoh thread); returns a stop."""
-        return self._refusals.listen(callback)
+        return self.client.refusals.listen(callback)
 
     @property
     def decode_errors(self) -> collections.Counter[str]:
@@ -252,16 +244,15 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
         """
         return self.inputs.subscribe(topic, callback, **parts)
 
-    def _on_setpoint_matching(self, matching: bool) -> None:
-        """The bridge's setpoint subscriber became (un)reachable: a link gap (router restart,
-        lost Wi-Fi) withholds setpoints, and a command that went stale meanwhile is not resent
-        (see runtime.setpoint_stream)."""
-        if not self._closed:
-            self._streamer.link(matching)
+    @property
+    def commanding(self) -> PositionTarget | None:
+        """The setpoint being streamed, or None."""
+        return self.client.target
 
-    def _publish_setpoint(self, target: PositionTarget) -> None:
-        sent = self.clock.time()  # the send time: the bridges' late-setpoint rule
-        self._setpoints.put(target, attachment=commander_attachment(self.commander, sent))
+    @property
+    def setpoints_sent(self) -> int:
+        """How many setpoint messages were published so far."""
+        return self.client.published
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -291,11 +282,11 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             return
         self._closed = True
         _open_wrappers.discard(self)
-        for part in ("_beat", "_beat_publisher", "_streamer", "_matching", "inputs", "_setpoints"):
-            entity = getattr(self, part, None)
-            if entity is not None:
+        for part in ("flights", "client"):
+            owned = getattr(self, part, None)
+            if owned is not None:
                 try:
-                    entity.close() if hasattr(entity, "close") else entity.undeclare()
+                    owned.close()
                 except Exception as exc:  # a session already closed by its owner
                     log.debug("close %s: %s", part, exc)
         if self._own_node:
@@ -311,7 +302,7 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
 
     def is_connected(self) -> bool:
         """True if a fresh State (< 3 s old) says the bridge's autopilot is connected."""
-        return connection.connected_state(self.inputs) is not None
+        return self.client.is_connected()
 
     def wait_for_connection(self, timeout: float = 10.0) -> State:
         """Block until the bridge reports its autopilot connected and every telemetry stream the
@@ -321,93 +312,71 @@ class DroneWrapper(Getters, Waits, Motion, Commands, MissionsMixin):
             NotConnected: no bridge, a bridge without an autopilot, or a stream still missing
                 after ``timeout`` s (the message names the missing keys).
         """
-        state = connection.wait_for_connection(self.inputs, self.connect, self._identity, timeout)
-        self._warn_of_envelope()  # held for set_cmd_*; warns if a commander's is in force
+        state = connection.wait_for_connection(self.client, self.connect, self._identity, timeout)
+        # held for set_cmd_*; warns if a commander's is in force
+        self.guard.warn_if_commanded(min(2.0, self.service_timeout))
         return state
 
     def _require_connected(self, what: str) -> State:
         """The connected State, or NotConnected saying why ``what`` cannot be done."""
-        return connection.require_connected(self.inputs, self.connect, self._identity, what)
+        return connection.require_connected(self.client, self.connect, self._identity, what)
 
     def _no_reply(self, what: str, key: str, timeout: float) -> DroneError:
-        return connection.no_reply(self.inputs, self.connect, self._identity, what, key, timeout)
+        return connection.no_reply(self.client, self.connect, self._identity, what, key, timeout)
 
-    # ------------------------------------------------------------------ take-off and landing
+    # ------------------------------------------------------------------ the parts' verbs
 
-    def takeoff(
-        self,
-        h: float = 3.0,
-        *,
-        timeout: float = 30.0,
-        tolerance: float = 0.1,
-        cancel: threading.Event | None = None,
-    ) -> None:
-        """Take off to ``h`` metres above the take-off point and return there.
+    get_state = forward("getters", Getters.get_state)
+    get_position = forward("getters", Getters.get_position)
+    get_velocity = forward("getters", Getters.get_velocity)
+    get_velocity_local = forward("getters", Getters.get_velocity_local)
+    get_yaw_rate = forward("getters", Getters.get_yaw_rate)
+    get_orientation = forward("getters", Getters.get_orientation)
+    get_roll = forward("getters", Getters.get_roll)
+    get_pitch = forward("getters", Getters.get_pitch)
+    get_yaw = forward("getters", Getters.get_yaw)
+    get_landed_state = forward("getters", Getters.get_landed_state)
+    get_battery = forward("getters", Getters.get_battery)
+    get_link = forward("getters", Getters.get_link)
+    get_global_position = forward("getters", Getters.get_global_position)
+    is_flying = forward("getters", Getters.is_flying)
+    age = forward("getters", Getters.age)
+    get_image = forward("getters", Getters.get_image)
+    decode_image = forward("getters", Getters.decode_image)
+    get_frontal_image = forward("getters", Getters.get_frontal_image)
+    get_ventral_image = forward("getters", Getters.get_ventral_image)
 
-        One request to the bridge, which flies the take-off its aircraft's way (PX4: OFFBOARD
-        on its own held setpoint, arm, climb; ArduPilot: GUIDED, arm, TAKEOFF; Tello: takeoff,
-        then up to ``h``) and answers once there; the aircraft then holds there by itself
-        until commanded. Idempotent: already flying, nothing is done (a warning says so).
+    wait_for = forward("waits", Waits.wait_for)
+    wait_for_altitude = forward("waits", Waits.wait_for_altitude)
+    wait_for_landed_state = forward("waits", Waits.wait_for_landed_state)
+    wait_for_image = forward("waits", Waits.wait_for_image)
 
-        Raises:
-            CommandRefused: a step was refused (the autopilot's reason is in the message), or
-                the autopilot disarmed or left the mode during the climb.
-            Timeout: the altitude was not reached within ``timeout`` seconds.
-            NotConnected: no bridge / autopilot.
-            Cancelled: ``cancel`` was set (from another thread): no further step, and the
-                setpoint stream stopped (the bridge holds position).
-        """
-        h = setpoints.finite("h", h)
-        if h <= 0:
-            raise InvalidArgument(f"h must be > 0 m, got {h}")
-        now = self.clock.monotonic()
-        self._require_connected("takeoff")
-        self._check_takeoff(h)  # above the envelope: refused, the limit named
-        kwargs = {"tolerance": tolerance, "call_timeout": self.service_timeout}
-        self._fly(Takeoff(self._aircraft, h, timeout, now, **kwargs), cancel)
+    set_cmd_pos = forward("motion", Motion.set_cmd_pos)
+    set_cmd_vel = forward("motion", Motion.set_cmd_vel)
+    set_cmd_mix = forward("motion", Motion.set_cmd_mix)
+    stop_commanding = forward("motion", Motion.stop_commanding)
 
-    def land(self, *, timeout: float = 60.0, cancel: threading.Event | None = None) -> None:
-        """Land where the drone is and return when it is on the ground and disarmed.
+    take_command = forward("commands", Commands.take_command)
+    release_command = forward("commands", Commands.release_command)
+    arm = forward("commands", Commands.arm)
+    disarm = forward("commands", Commands.disarm)
+    set_mode = forward("commands", Commands.set_mode)
+    param_get = forward("commands", Commands.param_get)
+    param_set = forward("commands", Commands.param_set)
 
-        Stops the setpoint stream, then one request to the bridge, which lands here (no GPS
-        needed) and answers once on the ground and disarmed.
+    envelope = forward("guard", EnvelopeGuard.envelope)
+    set_envelope = forward("guard", EnvelopeGuard.set_envelope)
+    reset_envelope = forward("guard", EnvelopeGuard.reset_envelope)
+    home = forward("guard", EnvelopeGuard.home)
 
-        Raises:
-            CommandRefused: the autopilot refused to land (its reason is in the message).
-            Timeout: not on the ground and disarmed within ``timeout`` seconds.
-            Cancelled: ``cancel`` was set (see :meth:`takeoff`).
-        """
-        now = self.clock.monotonic()
-        self._require_connected("land")
-        self._fly(Landing(self._aircraft, timeout, now, call_timeout=self.service_timeout), cancel)
+    takeoff = forward("flights", Flights.takeoff)
+    land = forward("flights", Flights.land)
+    goto = forward("flights", Flights.goto)
+    goto_local = forward("flights", Flights.goto_local)
+    return_to_launch = forward("flights", Flights.return_to_launch)
+    start_mission = forward("flights", Flights.start_mission)
+    pause_mission = forward("flights", Flights.pause_mission)
+    resume_mission = forward("flights", Flights.resume_mission)
 
-    def _fly(self, sequence: FlightSequence, cancel: threading.Event | None) -> None:
-        """Step ``sequence`` to its end, waiting on the node's clock (or until ``cancel``)."""
-        clock, cancel = self.clock, cancel or threading.Event()
-        ended = threading.Event()
-        watcher = threading.Thread(
-            target=flying.cancel_on,
-            args=(cancel, ended, self._ask_cancel),
-            name="dronewrapper-cancel",
-            daemon=True,
-        )
-        watcher.start()
-        try:
-            flying.fly(
-                sequence,
-                clock=clock.monotonic,
-                sleep=lambda seconds: clock.wait(cancel, seconds),
-                no_reply=self._no_reply,
-                cancelled=cancel.is_set,
-            )
-        except Cancelled:
-            self.stop_commanding()
-            raise
-        finally:
-            ended.set()
-            watcher.join(timeout=self.service_timeout + 1.0)
-
-    def _ask_cancel(self) -> None:
-        """Ask the bridge to end its running take-off, landing, go-to or return (it holds where
-        it is)."""
-        self._ask(registry.FLIGHT_CANCEL, CancelRequest(reason="the caller cancelled"), 2.0)
+    upload_mission = forward("missions", Missions.upload_mission)
+    mission_progress = forward("missions", Missions.mission_progress)

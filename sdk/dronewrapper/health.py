@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -80,12 +79,16 @@ class StreamHealth:
 
 def median_rate(arrivals: Sequence[float]) -> float:
     """1 / the median gap between consecutive arrivals; 0 with fewer than two (Hz)."""
+    import statistics  # here: importing the SDK loads no statistics (nor random, fractions)
+
     gaps = [b - a for a, b in itertools.pairwise(arrivals) if b > a]
     return 1.0 / statistics.median(gaps) if gaps else 0.0
 
 
 def judge_stream(key: str, expected_hz: float, log: StreamLog, end: float) -> StreamHealth:
     """Judge one stream heard until monotonic time ``end`` against its registry rate."""
+    import statistics
+
     rate = median_rate(log.arrivals)
     age = end - log.arrivals[-1] if log.arrivals else float("inf")
     skew = statistics.median(log.skews) if log.skews else None
@@ -124,6 +127,8 @@ def clock_advice(skews_s: Sequence[float]) -> tuple[str, str]:
     Positive skew = stamps in our past (a transport delay, or a sender's clock behind ours);
     negative = stamps in our future, which only a clock difference explains.
     """
+    import statistics
+
     if not skews_s:
         return WARN, "no stamped message arrived, so the clocks could not be compared"
     skew = statistics.median(skews_s)

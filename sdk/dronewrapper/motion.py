@@ -1,47 +1,49 @@
 """A DroneWrapper's setpoints: position, velocity and mixed commands, streamed until changed.
 
 Each ``set_cmd_*`` checks its arguments (finite numbers, yaw within a turn), builds the
-PositionTarget (local ENU positions in metres, body FLU velocities in m/s, yaw in rad, yaw
-rate in rad/s CCW positive), checks it against the bridge's envelope the wrapper holds (a
-target outside it raises CommandRefused naming the limit, and nothing is sent) and hands it to
-the wrapper's setpoint stream, which publishes it at once and repeats it at the stream rate
-(:mod:`dronewrapper.streamer`). What the bridge refuses later (the command lease, a late
-setpoint, an envelope the wrapper did not hold yet) arrives on the wrapper's ``refusals``.
+PositionTarget (local ENU positions in metres, body FLU velocities in m/s, yaw in rad, yaw rate
+in rad/s CCW positive), checks it against the bridge's envelope the wrapper holds (a target
+outside it raises CommandRefused naming the limit, and nothing is sent) and hands it to the
+drone client's setpoint stream, which publishes it at once and repeats it at the stream rate on
+its own thread (:mod:`dronewrapper.client.stream`). What the bridge refuses later (the command
+lease, a late setpoint, an envelope the wrapper did not hold yet) arrives on the wrapper's
+``refusals``.
 """
 
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from collections.abc import Callable
 
 from dronewrapper import setpoints, telemetry
+from dronewrapper.client import DroneClient
 from dronewrapper.errors import NoData, NotConnected
-from dronewrapper.inputs import Inputs
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_ON_GROUND,
     MASK_MIXED,
     MASK_POSITION,
     PositionTarget,
 )
-from dronewrapper.runtime.clock import Clock
-from dronewrapper.streamer import SetpointStreamer
 
 log = logging.getLogger("dronewrapper")
 
 
 class Motion:
-    """The setpoint commands of a DroneWrapper (a part of it, see the module doc)."""
+    """The setpoint commands of one drone (see the module doc); a part a DroneWrapper owns.
 
-    ns: str
-    clock: Clock
-    inputs: Inputs
-    _streamer: SetpointStreamer
-    _closed: bool
-    _warned_grounded: bool
+    Args:
+        client: the drone client (its inputs, clock and setpoint stream).
+        check: ``check(target, what)`` raises CommandRefused for a target outside the
+            envelope held (:meth:`dronewrapper.envelope_guard.EnvelopeGuard.check_setpoint`).
+    """
 
-    if TYPE_CHECKING:
-
-        def _check_setpoint(self, target: PositionTarget, what: str) -> None: ...
+    def __init__(self, client: DroneClient, check: Callable[[PositionTarget, str], None]) -> None:
+        self.client = client
+        self.ns = client.ns
+        self.clock = client.clock
+        self.inputs = client.inputs
+        self._check_setpoint = check
+        self._warned_grounded = False
 
     def set_cmd_pos(
         self,
@@ -127,7 +129,7 @@ class Motion:
 
     def _kept_altitude(self, what: str) -> float:
         """The altitude a setpoint without ``z`` keeps: the commanded one, else the current."""
-        commanded = self._streamer.target
+        commanded = self.client.target
         if commanded is not None and commanded.type_mask in (MASK_POSITION, MASK_MIXED):
             return float(commanded.required_position().z)
         pose = self.inputs.pose.value
@@ -137,7 +139,7 @@ class Motion:
 
     def _kept_yaw(self, what: str) -> float:
         """The heading a position setpoint without ``az`` keeps: the commanded, else current."""
-        commanded = self._streamer.target
+        commanded = self.client.target
         if commanded is not None and commanded.type_mask == MASK_POSITION:
             return float(commanded.yaw)
         pose = self.inputs.pose.value
@@ -165,20 +167,10 @@ class Motion:
             self._warned_grounded = False
 
     def _command_setpoint(self, target: PositionTarget) -> None:
-        if self._closed:
+        if self.client.closed:
             raise NotConnected(f"DroneWrapper {self.ns!r} is closed")
-        self._streamer.set(target)
+        self.client.set(target)
 
     def stop_commanding(self) -> None:
         """Stop the setpoint stream. The bridge hovers after its ``setpoint_timeout``."""
-        self._streamer.stop()
-
-    @property
-    def commanding(self) -> PositionTarget | None:
-        """The setpoint being streamed, or None."""
-        return self._streamer.target
-
-    @property
-    def setpoints_sent(self) -> int:
-        """How many setpoint messages were published so far."""
-        return self._streamer.published
+        self.client.stop()

@@ -1,20 +1,21 @@
 """A DroneWrapper's waits: block until a condition on the inputs holds, on the node's clock.
 
-Each wait polls its condition every ``interval`` s of the wrapper's clock (the node's: injected
-time in tests) and raises :class:`~dronewrapper.errors.Timeout` naming what it waited for and
-what it saw; ``NoData`` from a getter counts as "not yet".
+Each wait polls its condition every ``interval`` s of the drone client's clock (the node's:
+injected time in tests) and raises :class:`~dronewrapper.errors.Timeout` naming what it waited
+for and what it saw; ``NoData`` from a getter counts as "not yet".
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TypeVar
 
 import numpy as np
 
 from dronewrapper import setpoints
+from dronewrapper.client.inputs import Inputs
 from dronewrapper.errors import NoData, Timeout
-from dronewrapper.inputs import Inputs
+from dronewrapper.getters import Getters
 from dronewrapper.runtime.clock import Clock
 
 T = TypeVar("T")
@@ -28,16 +29,16 @@ def _satisfied(value: object) -> bool:
 
 
 class Waits:
-    """The blocking waits of a DroneWrapper (a part of it, see the module doc)."""
+    """The blocking waits of one drone (see the module doc); a part a DroneWrapper owns.
 
-    ns: str
-    clock: Clock
-    inputs: Inputs
-    if TYPE_CHECKING:  # the getters this part uses (Getters', next to it in DroneWrapper)
+    Args:
+        clock: the node's clock; ``getters``: the drone's getters (and their inputs).
+    """
 
-        def get_position(self) -> np.ndarray: ...
-        def get_landed_state(self) -> int: ...
-        def get_image(self, camera: str = "frontal", *, with_stamp: bool = False) -> Any: ...
+    def __init__(self, clock: Clock, getters: Getters) -> None:
+        self.clock = clock
+        self.getters = getters
+        self.inputs: Inputs = getters.inputs
 
     def wait_for(
         self,
@@ -78,7 +79,7 @@ class Waits:
         z = setpoints.finite("z", z)
         try:
             return self.wait_for(
-                lambda: p if abs((p := self.get_position())[2] - z) <= tolerance else None,
+                lambda: p if abs((p := self.getters.get_position())[2] - z) <= tolerance else None,
                 timeout,
                 f"altitude {z:.2f} m",
             )
@@ -88,7 +89,7 @@ class Waits:
     def wait_for_landed_state(self, landed_state: int, timeout: float = 30.0) -> int:
         """Block until :meth:`get_landed_state` equals ``landed_state``; returns it."""
         self.wait_for(
-            lambda: self.get_landed_state() == landed_state,
+            lambda: self.getters.get_landed_state() == landed_state,
             timeout,
             f"landed state {landed_state}",
         )
@@ -102,15 +103,15 @@ class Waits:
         """
         holder = self.inputs.camera(camera)
         if holder is None:
-            return self.get_image(camera)  # raises NoData naming the cameras= argument
+            return self.getters.get_image(camera)  # raises NoData naming the cameras= argument
         try:
             holder.wait(timeout)
         except TimeoutError:
             raise Timeout(
                 f"no image on {holder.name} within {timeout:g} s: is a camera running "
-                f"in namespace {self.ns!r}?"
+                f"in namespace {self.inputs.ns!r}?"
             ) from None
-        return self.get_image(camera)
+        return self.getters.get_image(camera)
 
     def _altitude_text(self) -> str:
         pose = self.inputs.pose.value

@@ -8,6 +8,9 @@ contract can be checked exactly on the wire. Each rule is tested at the core in 
 (tests/unit/test_bridge_core*.py); the tests here prove the wiring: threads, sockets, Zenoh
 keys, stream rates. Flights against the simulator are in tests/integration; against real
 ArduCopter SITL in tests/sitl.
+
+Size: the scripted PX4 and ArduCopter peers and the five wiring tests that drive them are read
+together.
 """
 
 from __future__ import annotations

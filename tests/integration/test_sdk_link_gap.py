@@ -35,7 +35,7 @@ def test_a_stale_command_is_not_resent_after_a_router_restart():
         bridge.subscribe(registry.SETPOINT_RAW_LOCAL, received)
         drone = DroneWrapper(connect=endpoint, cameras=(), wait=False)
         try:
-            streamer = drone._streamer.core
+            streamer = drone.client.stream.core
             wait_for(lambda: streamer._matched_once, 20, what="the setpoint route")
             drone.set_cmd_vel(vx=1.0)
             wait_for(lambda: len(received.since(0)) >= 5, 20, what="setpoints at the bridge")

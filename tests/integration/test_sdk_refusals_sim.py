@@ -60,7 +60,7 @@ def test_a_point_outside_the_envelope_held_raises_at_the_call(router):
             with pytest.raises(CommandRefused, match="horizontal speed 15") as refused:
                 drone.set_cmd_vel(vx=15.0)
             assert refused.value.limit == "max_horizontal_speed"
-            drone.wait_for(lambda: drone._home.value, 10.0, "home")  # a position needs home
+            drone.wait_for(drone.home, 10.0, "home")  # a position needs home
             with pytest.raises(CommandRefused, match="outside the envelope's fence") as refused:
                 drone.set_cmd_pos(30.0, 0.0, 3.0)
             assert refused.value.limit == "fence" and drone.commanding is None

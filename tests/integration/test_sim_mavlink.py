@@ -2,7 +2,10 @@
 MAVLink 2 bytes (pymavlink), the offboard-loss failsafe, the parameter protocol, message
 intervals, bad input and a clean exit. The full PX4 offboard sequence (modes, arming, body and
 local velocities, yaw rate, position, landing) is held in simulated time by
-tests/service/test_sim_offboard_virtual.py."""
+tests/service/test_sim_offboard_virtual.py.
+
+Size: one MAVLink client rig (its timed receive log and waits) shared by every test of the file.
+"""
 
 from __future__ import annotations
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import pytest
 from wired_bridge import Wired, wire
 
+from dronewrapper.client import DroneClient
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
-from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
@@ -33,7 +33,7 @@ def wired(kind: str, bus: FakeBus) -> Wired:
     return wire(core, module, bus)
 
 
-def stream(bus: FakeBus, commander: Commander, target: PositionTarget, seconds: float) -> None:
+def stream(bus: FakeBus, commander: DroneClient, target: PositionTarget, seconds: float) -> None:
     """The commander streams ``target`` for ``seconds`` of bus time."""
     commander.set(target, bus.clock.monotonic())
     end = bus.clock.monotonic() + seconds
@@ -46,7 +46,7 @@ def stream(bus: FakeBus, commander: Commander, target: PositionTarget, seconds: 
 def test_a_command_withdrawn_during_a_held_cut_never_flies(kind):
     bus = FakeBus(start=1_700_000_000.0)
     bridge = wired(kind, bus)
-    commander = Commander(FakeNode("app", bus), name="ada", inline_calls=True)
+    commander = DroneClient(FakeNode("app", bus), name="ada", inline_calls=True)
     flown: list[float] = []
     bus.subscribe(  # after the bridge's: sees what each sample left the core flying
         registry.SETPOINT_RAW_LOCAL.key("drone"),

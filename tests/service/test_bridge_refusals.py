@@ -8,6 +8,7 @@ from __future__ import annotations
 import pytest
 from wired_bridge import Wired, wire
 
+from dronewrapper.client import DroneClient
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import refusal as refusals
 from dronewrapper.msgs import registry
@@ -21,7 +22,6 @@ from dronewrapper.msgs.mavros import (
     PositionTarget,
 )
 from dronewrapper.runtime.caller import commander_attachment
-from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink import node as mavlink_node
 from dronewrapper_bridge_mavlink.config import Config as MavlinkConfig
@@ -52,7 +52,7 @@ def wired(kind: str, bus: FakeBus, *, lease: bool = False) -> Wired:
     return wire(core, module, bus)
 
 
-def stream(bus: FakeBus, commander: Commander, target: PositionTarget, seconds: float) -> None:
+def stream(bus: FakeBus, commander: DroneClient, target: PositionTarget, seconds: float) -> None:
     """The commander streams ``target`` at 30 Hz for ``seconds`` of bus time."""
     commander.set(target, bus.clock.monotonic())
     end = bus.clock.monotonic() + seconds
@@ -76,8 +76,8 @@ def test_a_stream_refused_for_the_lease_is_reported_to_its_sender_at_once_then_o
         registry.COMMAND_LEASE, LeaseRequest(action="take"), attachment=commander_attachment("ada")
     )
     assert reply.granted
-    ada = Commander(FakeNode("ada", bus), name="ada", inline_calls=True)
-    bob = Commander(FakeNode("bob", bus), name="bob", inline_calls=True)
+    ada = DroneClient(FakeNode("ada", bus), name="ada", inline_calls=True)
+    bob = DroneClient(FakeNode("bob", bus), name="bob", inline_calls=True)
     heard: list[tuple[float, refusals.Refusal]] = []
     bob.refusals.listen(lambda r: heard.append((bus.clock.monotonic(), r)))
     started = bus.clock.monotonic()
@@ -98,7 +98,7 @@ def test_a_stream_refused_for_the_lease_is_reported_to_its_sender_at_once_then_o
 def test_a_setpoint_refused_late_is_reported_to_its_sender_within_a_tenth_of_a_second(kind):
     bus = FakeBus(start=1_700_000_000.0)
     bridge = wired(kind, bus)
-    ada = Commander(FakeNode("ada", bus), name="ada", inline_calls=True)
+    ada = DroneClient(FakeNode("ada", bus), name="ada", inline_calls=True)
     heard: list[tuple[float, refusals.Refusal]] = []
     ada.refusals.listen(lambda r: heard.append((bus.clock.monotonic(), r)))
     stream(bus, ada, HOLD, 2.0)
@@ -118,7 +118,7 @@ def test_a_setpoint_refused_late_is_reported_to_its_sender_within_a_tenth_of_a_s
 def test_a_setpoint_outside_the_bridges_envelope_is_reported_naming_the_limit(kind):
     bus = FakeBus(start=1_700_000_000.0)
     bridge = wired(kind, bus)
-    ada = Commander(FakeNode("ada", bus), name="ada", inline_calls=True)
+    ada = DroneClient(FakeNode("ada", bus), name="ada", inline_calls=True)
     started = bus.clock.monotonic()
     stream(bus, ada, FAR, 0.5)
     assert bridge.core.rejected_setpoints >= 15

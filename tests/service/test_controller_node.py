@@ -1,10 +1,13 @@
 """The controller's life cycle on the fake bus, in injected time (bus seconds, not wall time).
 
 The controller (:class:`~dronewrapper_controller.node.Controller`) commands through a
-Commander on a FakeNode; a :class:`~bus_autopilot.BusAutopilot` holds the bridge's keys with a
+DroneClient on a FakeNode; a :class:`~bus_autopilot.BusAutopilot` holds the bridge's keys with a
 simple aircraft. Detections are scheduled at given bus times; every judgement reads bus-time
 stamps, so a loaded machine changes nothing. The real process is tested in
 test_controller_process.py.
+
+Size: the controller's whole life cycle on one rig, each stage's test beside the stages it
+follows.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from concurrent.futures import Future
 import pytest
 from bus_autopilot import BusAutopilot, drive
 
+from dronewrapper.client import DroneClient
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import (
     CONTROLLER_HOVER,
@@ -29,7 +33,6 @@ from dronewrapper.msgs.control import (
 from dronewrapper.msgs.mavros import MASK_VELOCITY, CommandTOL, PositionTarget
 from dronewrapper.msgs.std import Header
 from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
-from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config
@@ -103,11 +106,11 @@ class Rig:
         commander = (
             None
             if self.config.dry_run
-            else Commander(self.node, name="controller", inline_calls=True)
+            else DroneClient(self.node, name="controller", inline_calls=True)
         )
         self.calls = DeferredCalls()
         if commander is not None:
-            commander._pool = self.calls
+            commander.calls._pool = self.calls
         self.ctl = Controller(self.node, self.config, commander)
         self.steppers = [s for s in (self.autopilot, self.ctl, self.calls) if s is not None]
         if self.autopilot is not None:
@@ -288,7 +291,7 @@ def test_no_bridge_gives_up_after_ready_timeout_with_exit_1():
     bus = FakeBus(start=T0)
     node = FakeNode("controller", bus)
     config = load_config(Config, None, ["ready_timeout=1.5", "takeoff.on_start=false"])
-    commander = Commander(node, name="c", inline_calls=True)
+    commander = DroneClient(node, name="c", inline_calls=True)
     ctl = Controller(node, config, commander)
     drive(bus, T0 + 10, ctl, stop=lambda: ctl.finished)
     assert ctl.finished and ctl.exit_code == 1
@@ -302,7 +305,7 @@ def test_a_stop_while_waiting_for_the_bridge_exits_0_at_once():
     bus = FakeBus(start=T0)
     node = FakeNode("controller", bus)
     config = load_config(Config, None, ["ready_timeout=60"])
-    commander = Commander(node, name="c", inline_calls=True)
+    commander = DroneClient(node, name="c", inline_calls=True)
     ctl = Controller(node, config, commander)
     drive(bus, T0 + 1.0, ctl)
     node.stop()
@@ -410,7 +413,7 @@ def test_a_stale_command_is_not_resent_after_a_router_gap():
     back = rig.now()
     rig.run(0.5)
     assert rig.velocity(since=back) == [], "the stale command was resent after the gap"
-    assert rig.ctl.commander.stream.dropped_after_gap == 1
+    assert rig.ctl.commander.stream.core.dropped_after_gap == 1
     rig.feed(blob(520, 200, 15), seconds=0.2)  # a new detection: a new command goes out
     rig.run(0.2)
     assert rig.velocity(since=back)

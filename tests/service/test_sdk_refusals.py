@@ -133,13 +133,13 @@ def test_aio_refusals_are_an_async_iterator_that_keeps_each_one():
         async with Drone("drone", node=node, wait=False, commander="ada") as drone:
             stream = drone.refusal_stream()
             first = asyncio.ensure_future(stream.__anext__())
-            while not drone.sync._refusals._listeners:  # the iterator has started listening
+            while not drone.sync.client.refusals._listeners:  # the iterator has started listening
                 await asyncio.sleep(0)
             bridge.put(LEASE)
             bridge.put(Refusal(commander="ada", kind="late", limit="late_setpoint_s"))
             got = [await first, await stream.__anext__()]
             await stream.aclose()
-            assert not drone.sync._refusals._listeners
+            assert not drone.sync.client.refusals._listeners
             return got
 
     got = asyncio.run(asyncio.wait_for(main(), 60))

@@ -2,7 +2,10 @@
 with health and services, telemetry snapshots, commands reaching the bridge with the right
 requests, land waiting for the ground, the teleop dead-man, the world's objects and scenarios,
 observers read-only. tests/integration/test_station_app.py proves the same app's wiring over a
-real router, HTTP and WebSockets."""
+real router, HTTP and WebSockets.
+
+Size: one test per route of one app on one rig (station_rig), in the app's order.
+"""
 
 from __future__ import annotations
 

@@ -167,7 +167,7 @@ def test_every_command_of_the_project_is_checked():
         "sdk/dronewrapper/record/cli.py",
         "sdk/dronewrapper/security/keys_cli.py",
         "sdk/dronewrapper/runtime/service.py",
-        "compose/dronewrapper_compose/launcher.py",
+        "compose/dronewrapper_compose/up.py",
         "compose/dronewrapper_compose/demo.py",
         "services/perception/dronewrapper_perception/detect_cli.py",
         "services/bridge_mavlink/dronewrapper_bridge_mavlink/provision.py",

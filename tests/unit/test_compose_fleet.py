@@ -6,7 +6,7 @@ import itertools
 
 import pytest
 
-from dronewrapper_compose import launcher
+from dronewrapper_compose import up
 from dronewrapper_compose.fleet import FleetError, drones_of, load_warning, parse_kinds, plan_fleet
 from dronewrapper_compose.graph import GRAPH_DIR, GraphError, load_graph
 from dronewrapper_compose.launcher import Launcher
@@ -124,8 +124,8 @@ def test_a_fleet_beyond_what_the_cores_carry_is_said_with_the_measured_figure():
 
 
 def test_up_warns_when_a_fleet_asks_more_than_the_machine_carries(capsys, monkeypatch):
-    monkeypatch.setattr(launcher, "usable_cores", lambda: 2)
-    assert launcher.main(["sim_fleet", "--var", "drones=200", "--check"]) == 0
+    monkeypatch.setattr(up, "usable_cores", lambda: 2)
+    assert up.main(["sim_fleet", "--var", "drones=200", "--check"]) == 0
     assert "warning: 200 simulated drones take about 13.0 cores" in capsys.readouterr().err
-    assert launcher.main(["sim_fleet", "--var", "drones=3", "--check"]) == 0
+    assert up.main(["sim_fleet", "--var", "drones=3", "--check"]) == 0
     assert "warning" not in capsys.readouterr().err

@@ -14,7 +14,7 @@ from dronewrapper_compose.graph import (
     substitute,
 )
 from dronewrapper_compose.launcher import Launcher, build_argv
-from dronewrapper_compose.launcher import main as launcher_main
+from dronewrapper_compose.up import main as launcher_main
 
 SHIPPED = sorted(GRAPH_DIR.glob("*.yaml"))
 FIXED_NAMES = ["sim_iris", "px4_sitl", "ardupilot_sitl"]

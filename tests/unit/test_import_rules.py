@@ -13,13 +13,15 @@ Floors from the bottom:
 - the simulator, then the graphs (``dronewrapper_compose``, which names them all).
 
 A package imports only floors below it. The SDK's tools (``dronewrapper`` CLI, doctor, record,
-...) may name on-board packages below the graphs; the rest of the SDK imports a tool only
-inside a function, so that ``import dronewrapper`` never loads them. :data:`KNOWN` lists the
-imports that break a rule today, each with its file: the list may only shrink (a new break
-fails, and so does a listed one that is gone, so the list stays true).
+...) may name on-board packages below the graphs (the CLI finds the stack's subcommands through
+entry points and names none); the rest of the SDK imports a tool only inside a function, so
+that ``import dronewrapper`` never loads them. :data:`KNOWN` lists the imports that break a
+rule, each with its file: it is empty, and may only shrink (a new break fails, and so does a
+listed one that is gone, so the list stays true).
 
-Within and across floors, no import circle: :data:`KNOWN_CIRCLES`, the circles of today, may
-only shrink the same way.
+Within and across floors, no import circle: :data:`KNOWN_CIRCLES`, empty too, may only shrink
+the same way. A module that calls back into the object that imports it names that object
+through a protocol of its own (``core_view`` in the bridges), not by importing it.
 """
 
 from __future__ import annotations
@@ -52,22 +54,11 @@ TOOLS = (
 )
 """The SDK's tools: the only SDK modules that may name on-board packages."""
 
-KNOWN = {
-    ("sdk/dronewrapper/cli.py", "dronewrapper_compose"),
-}
-"""(file, imported package) pairs that break a rule today."""
+KNOWN: set[tuple[str, str]] = set()
+"""(file, imported package) pairs that break a rule (none)."""
 
-KNOWN_CIRCLES = {
-    frozenset(
-        f"dronewrapper_bridge_mavlink.{name}"
-        for name in ("autopilot_limits", "core", "missions", "operations", "parameters")
-    )
-    | {"dronewrapper_bridge_mavlink.receive", "dronewrapper_bridge_mavlink.watch"},
-    frozenset(f"dronewrapper_bridge_tello.{name}" for name in ("core", "missions", "operations")),
-    frozenset(f"dronewrapper_sim.px4.{name}" for name in ("commander", "geofence", "mission")),
-}
-"""The circles of today, each as its modules' dotted names: each is one object spread over
-sibling modules that call back into it (a bridge's core, the simulated PX4's commander)."""
+KNOWN_CIRCLES: set[frozenset[str]] = set()
+"""Circles allowed, each as its modules' dotted names (none)."""
 
 
 class Import:

@@ -42,8 +42,8 @@ SOURCES: dict[str, list[Path]] = {
 }
 """Where each process the registry names lives."""
 COMMANDS_THROUGH_THE_SDK = {"controller"}
-"""Processes that publish setpoints through the SDK (its ``Commander`` or ``DroneWrapper``)."""
-SDK_COMMANDERS = ("Commander(", "DroneWrapper(")
+"""Processes that publish setpoints through the SDK (its ``DroneClient`` or ``DroneWrapper``)."""
+SDK_COMMANDERS = ("DroneClient(", "DroneWrapper(")
 
 _CALL = re.compile(r"(?:declare_publisher|[Pp]ublisher)\(")
 _ALIAS = re.compile(r"\b([a-z_]\w*) = (?:registry\.)?([A-Z][A-Z0-9_]+)\b")

@@ -7,10 +7,10 @@ import threading
 
 import pytest
 
+from dronewrapper.client.stream import SetpointStreamer
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.setpoints import velocity_target
-from dronewrapper.streamer import SetpointStreamer
 
 
 class Recorder:

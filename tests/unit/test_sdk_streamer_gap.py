@@ -8,7 +8,7 @@ import logging
 
 import pytest
 
-from dronewrapper.runtime.setpoint_stream import SetpointStream
+from dronewrapper.client.setpoint_stream import SetpointStream
 from dronewrapper.setpoints import velocity_target
 
 

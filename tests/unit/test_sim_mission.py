@@ -9,7 +9,7 @@ import math
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
-from dronewrapper_sim.px4.geofence import Geofence, check_geofence
+from dronewrapper_sim.px4.geofence import Geofence
 from dronewrapper_sim.px4.mission import FENCE, MISSION, MissionStore
 from dronewrapper_sim.px4.modes import Mode
 
@@ -132,14 +132,14 @@ def test_a_fence_breach_in_the_air_starts_gf_action_once():
     cmd = autopilot.commander
     cmd.armed, cmd.landed = True, False
     inside = dataclasses.replace(autopilot.state, x=5.0, z=5.0)
-    check_geofence(cmd, 1.0, inside)
+    cmd.check_geofence(1.0, inside)
     assert cmd.nav_mode is Mode.LOITER
     outside = dataclasses.replace(autopilot.state, x=25.0, z=5.0)
-    check_geofence(cmd, 1.1, outside)
+    cmd.check_geofence(1.1, outside)
     assert cmd.nav_mode is Mode.RTL and cmd.user_mode is Mode.RTL
     assert any(t.text == "Geofence exceeded" for t in cmd.drain_texts())
     cmd.set_mode(Mode.LOITER, 1.2, outside)  # a pilot takes it back: no second action
-    check_geofence(cmd, 1.3, outside)
+    cmd.check_geofence(1.3, outside)
     assert cmd.nav_mode is Mode.LOITER
 
 

@@ -1,6 +1,9 @@
 """The simulated Tello's SDK 2.0 state machine, command by command, in simulated time (no
 sockets, no clock): replies and their addressees, range checks, blocking moves answered when
-finished, rc, auto-landing, emergency, battery, several clients, bad input."""
+finished, rc, auto-landing, emergency, battery, several clients, bad input.
+
+Size: one test per SDK command, in the command table's order, over one protocol rig.
+"""
 
 from __future__ import annotations
 

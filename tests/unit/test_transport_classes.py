@@ -3,7 +3,7 @@
 import pytest
 import zenoh
 
-from dronewrapper.msgs import registry
+from dronewrapper.msgs import mavros, registry, sensor
 from dronewrapper.runtime.options import is_local_endpoint
 from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
 
@@ -11,7 +11,7 @@ from dronewrapper.runtime.qos import SERVICE_QOS, qos_for
 def test_every_topic_has_a_known_class_and_images_are_the_only_streams():
     for name, topic in registry.TOPICS.items():
         assert topic.transport in registry.TRANSPORTS, name
-        carries_frames = topic.type in (registry.Image, registry.CompressedImage)
+        carries_frames = topic.type in (sensor.Image, sensor.CompressedImage)
         assert (topic.transport == registry.STREAM) == carries_frames, name
 
 
@@ -31,7 +31,7 @@ def test_commands_outrank_telemetry_which_outranks_images():
 
 def test_a_topic_with_an_unknown_class_is_refused():
     with pytest.raises(ValueError, match="transport must be one of"):
-        registry.Topic("x/{ns}", type=registry.State, transport="fast")
+        registry.Topic("x/{ns}", type=mavros.State, transport="fast")
 
 
 @pytest.mark.parametrize(

@@ -23,7 +23,10 @@ import contextlib
 import math
 import threading
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from dronewrapper.runtime.options import ZenohOptions
 
 _PREFIX = b"commander="
 _SENT = b"\nsent="
@@ -137,3 +140,13 @@ def _recording(attachment: Any, key: str) -> Iterator[None]:
         yield
     finally:
         _local.commander, _local.sent = previous
+
+
+def bound_name(options: ZenohOptions) -> str:
+    """The name a node with ``options`` binds its commands to: its certificate's common name
+    (``""`` without an identity)."""
+    if not options.identity:
+        return ""
+    from dronewrapper.security.identity import Identity
+
+    return Identity.load(options.identity, options.keys_dir or None).subject().name

@@ -3,7 +3,7 @@
 A process is ``run(node, config)``; ``node`` satisfies :class:`NodeApi`. Two classes do:
 :class:`~dronewrapper.runtime.node.Node` (a Zenoh session, the real clocks) and
 :class:`~dronewrapper.runtime.fake.FakeNode` (the fake bus in process, virtual time). A service,
-the controller's :class:`~dronewrapper.runtime.commander.Commander` and the SDK's
+the :class:`~dronewrapper.client.DroneClient` and the SDK's
 :class:`~dronewrapper.drone.DroneWrapper` are written against this contract only, and
 ``tests/node_contract.py`` checks both classes against it.
 

@@ -33,8 +33,7 @@ import threading
 import time
 from collections import Counter
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import msgspec
 import zenoh
@@ -48,6 +47,7 @@ from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import LOW_LATENCY_MAX_BYTES, ZenohOptions
+from dronewrapper.runtime.publisher import Publisher
 from dronewrapper.runtime.qos import qos_for
 from dronewrapper.runtime.session import (
     ERROR_ENCODING,
@@ -57,9 +57,12 @@ from dronewrapper.runtime.session import (
     open_session,
 )
 from dronewrapper.runtime.shm import remove_stale_segments
-from dronewrapper.runtime.shm_put import BLOCK_WAIT_S, ShmWriter
+from dronewrapper.runtime.shm_put import ShmWriter
 from dronewrapper.runtime.thread_state import KEPT
 from dronewrapper.security import acl  # a module: acl imports the runtime's caller
+
+if TYPE_CHECKING:
+    from concurrent.futures import ThreadPoolExecutor
 
 T = TypeVar("T")
 Req = TypeVar("Req")
@@ -68,81 +71,6 @@ Rep = TypeVar("Rep")
 log = logging.getLogger("dronewrapper.runtime")
 
 __all__ = ["Node", "Publisher", "alive_services", "call_service", "encoding_for", "open_session"]
-
-
-class Publisher(Generic[T]):
-    """A typed publisher on one concrete key; images go through ``shm`` (written straight into
-    shared memory, see :mod:`dronewrapper.runtime.shm_put`) when given. ``max_bytes``: the
-    largest payload it may put outside shared memory (a low-latency session's limit, see
-    :data:`~dronewrapper.runtime.options.LOW_LATENCY_MAX_BYTES`); None: any size."""
-
-    def __init__(
-        self,
-        session: zenoh.Session,
-        key: str,
-        msg_type: type[T],
-        *,
-        shm: ShmWriter | None = None,
-        max_bytes: int | None = None,
-        **qos: Any,
-    ) -> None:
-        self.key = key
-        self._max_bytes = max_bytes
-        self.type = msg_type
-        self.count = 0
-        self._shm = shm
-        blocking = qos.get("congestion_control") == zenoh.CongestionControl.BLOCK
-        self._shm_wait_s = BLOCK_WAIT_S if blocking else 0.0
-        self._pub = session.declare_publisher(key, encoding=encoding_for(msg_type), **qos)
-
-    def put(self, msg: T, *, attachment: bytes | None = None) -> None:
-        """Publish ``msg`` (must be of this publisher's type); ``attachment`` travels with it
-        (see :mod:`dronewrapper.runtime.caller`).
-
-        Raises:
-            TypeError: ``msg`` is not of this publisher's type.
-            ValueError: the encoded message is over ``max_bytes`` outside shared memory.
-        """
-        if type(msg) is not self.type:
-            raise TypeError(f"{self.key} carries {self.type.__name__}, got {type(msg).__name__}")
-        payload: zenoh.ZBytes | bytes | None = None
-        if self._shm:
-            payload = self._shm.payload(msg, wait_s=self._shm_wait_s)
-        if payload is None:
-            data = codec.encode(msg)
-            if self._max_bytes is not None and len(data) > self._max_bytes:
-                raise ValueError(
-                    f"{self.key}: a {len(data)}-byte {self.type.__name__} is over the "
-                    f"{self._max_bytes} bytes a low-latency session carries outside shared "
-                    "memory (it does not fragment); not sent"
-                )
-            payload = data
-        if attachment is None:
-            self._pub.put(payload)  # quicker in the binding than attachment=None
-        else:
-            self._pub.put(payload, attachment=attachment)
-        self.count += 1
-
-    def watched(self) -> bool:
-        """True while at least one subscriber matches this key (so the work can be skipped)."""
-        try:
-            status = self._pub.matching_status  # a MatchingStatus; zenoh's stub says bool
-            return bool(status.matching)  # type: ignore[attr-defined]
-        except zenoh.ZError:
-            return False
-
-    def on_matching(self, callback: Callable[[bool], None]) -> Any:
-        """Call ``callback(matching)`` whenever subscribers start or stop matching this key
-        (a direct callback: keep it short); returns the listener (``undeclare()`` it)."""
-
-        def on_status(status: zenoh.MatchingStatus) -> None:
-            callback(status.matching)
-
-        handler = zenoh.handlers.Callback(on_status, indirect=False)
-        return self._pub.declare_matching_listener(handler)
-
-    def undeclare(self) -> None:
-        self._pub.undeclare()
 
 
 class Node:
@@ -190,13 +118,13 @@ class Node:
         self._linger = linger
         self._declared: list[Any] = []
         self._token: Any = None
-        self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
+        self._pool: ThreadPoolExecutor | None = None  # made by the first serve()
         self._closed = False
         self._old_handlers: dict[int, Any] = {}
         self._parent_pid = os.getppid()
         self.shm_writer = ShmWriter() if self.options.shared_memory else None
         """Writes large messages (images) straight into Zenoh shared memory; None when off."""
-        self.bound_name = bound_name(self.options)
+        self.bound_name = caller.bound_name(self.options)
         """The certificate's name this node's commands are bound to ("" without identity)."""
         if handle_signals and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
@@ -281,7 +209,8 @@ class Node:
             return
         self._closed = True
         self.stop_event.set()
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
         if self._linger > 0:
             time.sleep(self._linger)
         try:
@@ -387,6 +316,11 @@ class Node:
         key = service.key(self.ns, **parts)
         dec = codec.decoder(service.request)
         reply_encoding = encoding_for(service.reply)
+        if self._pool is None:  # a node that serves nothing starts no workers
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix=f"{self.name}-srv")
+        pool = self._pool
 
         def answer(query: zenoh.Query) -> None:
             try:
@@ -422,7 +356,7 @@ class Node:
 
         def on_query(query: zenoh.Query) -> None:
             try:
-                self._pool.submit(answer, query)
+                pool.submit(answer, query)
             except RuntimeError:  # pool shut down: the node is closing
                 query.drop()
 
@@ -459,13 +393,3 @@ class Node:
             bound_to=self.bound_name,
             **parts,
         )
-
-
-def bound_name(options: ZenohOptions) -> str:
-    """The name a node with ``options`` binds its commands to: its certificate's common name
-    (``""`` without an identity)."""
-    if not options.identity:
-        return ""
-    from dronewrapper.security.identity import Identity
-
-    return Identity.load(options.identity, options.keys_dir or None).subject().name

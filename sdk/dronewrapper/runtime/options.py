@@ -11,15 +11,17 @@ router), so images between processes on one machine go peer to peer over shared 
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import zenoh
 
 from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
+
+if TYPE_CHECKING:
+    import argparse  # the command-line helpers' types; a node never parses arguments
 
 DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
 MODES = ("peer", "client", "router")

@@ -15,7 +15,6 @@ when idle; a state kept for a thread that ended stays allocated until the interp
 
 from __future__ import annotations
 
-import ctypes
 import threading
 from collections.abc import Callable
 
@@ -26,13 +25,14 @@ MAX_KEPT = 32
 class ThreadStates:
     """Keeps the Python thread state of the threads that call :meth:`keep` (up to ``limit``).
 
-    ``ensure`` is ``PyGILState_Ensure`` (injected for tests); ``ident`` names the calling
-    thread.
+    ``ensure`` is ``PyGILState_Ensure`` (injected for tests; None: CPython's, looked up at the
+    first :meth:`keep`, so that importing this module loads no ``ctypes``); ``ident`` names
+    the calling thread.
     """
 
     def __init__(
         self,
-        ensure: Callable[[], object] = ctypes.pythonapi.PyGILState_Ensure,
+        ensure: Callable[[], object] | None = None,
         ident: Callable[[], int] = threading.get_ident,
         limit: int = MAX_KEPT,
     ) -> None:
@@ -55,6 +55,10 @@ class ThreadStates:
         with self._lock:
             if ident in self._kept or len(self._kept) >= self._limit:
                 return
+            if self._ensure is None:
+                import ctypes
+
+                self._ensure = ctypes.pythonapi.PyGILState_Ensure
             self._ensure()  # one more Ensure than Release: the state outlives the callback
             self._kept.add(ident)
 

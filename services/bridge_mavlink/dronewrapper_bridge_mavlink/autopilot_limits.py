@@ -26,16 +26,16 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.mavros import ParamSet, ParamValue
 from dronewrapper_bridge_mavlink import parameters
+from dronewrapper_bridge_mavlink.mission_state import Limits
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -50,15 +50,6 @@ ONE_OF = (("RTL_ALT_M", "RTL_ALT"),)
 to ``RTL_ALT_M``, in m): the autopilot has one of them, the others are not asked to change."""
 INTEGER_PARAMS = frozenset({"RTL_ALT"})
 """The ``AT_MOST`` parameters held as integers (the fence actions, ``EXACTLY``, are too)."""
-
-
-@dataclass
-class Limits:
-    """What the bridge last wrote: for which (autopilot, envelope), and a problem ("" none)."""
-
-    written_for: tuple[str, Envelope] | None = None
-    problem: str = ""
-    running: bool = False
 
 
 def return_altitude(envelope: Envelope) -> float:

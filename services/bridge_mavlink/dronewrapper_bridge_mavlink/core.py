@@ -9,6 +9,11 @@ may be used and the telemetry handlers are in ``receive``; the service calls tha
 acknowledgements are operations (``operations``, ``flight``, ``parameters``) the core advances
 as messages and time arrive; the node only waits on them. The sim's autopilot
 (sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
+
+Size: one state object: its entry points (MAVLink in, setpoints, the tick, state publication)
+read and change the same connection, mode and failsafe state; what stands alone (receive,
+telemetry, operations, missions, parameters) is in its own module, each seeing the core through
+core_view.
 """
 
 from __future__ import annotations
@@ -17,7 +22,6 @@ import collections
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import msgspec
@@ -32,7 +36,6 @@ from dronewrapper.msgs.mavros import (
     State,
 )
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
-from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
@@ -43,13 +46,15 @@ from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.core_view import Outbox
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.keepalive import KeepAlive
 from dronewrapper_bridge_mavlink.link_budget import fit_rates, is_serial_url
 from dronewrapper_bridge_mavlink.link_gap import gap_report
+from dronewrapper_bridge_mavlink.mission_state import MissionState
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, GUIDED_MODE, is_guided
 from dronewrapper_bridge_mavlink.operations import failsafe_action
-from dronewrapper_bridge_mavlink.parameters import ParamCache
+from dronewrapper_bridge_mavlink.param_cache import ParamCache
 from dronewrapper_bridge_mavlink.setpoints import (
     SetpointError,
     hold_target,
@@ -71,23 +76,6 @@ from dronewrapper_bridge_mavlink.telemetry import (
 log = logging.getLogger("bridge_mavlink")
 
 
-@dataclass
-class Outbox:
-    """What the node must do after a core call.
-
-    Attributes:
-        sends: MAVLink messages, as (pymavlink name without ``_send``, field values).
-        samples: (registry topic, message) to publish on Zenoh.
-        peers: UDP addresses replies must go to from now on (the last one wins).
-        errors: names of dropped inputs to count (the node's ``callback_errors``).
-    """
-
-    sends: list[tuple[str, tuple]] = field(default_factory=list)
-    samples: list[tuple[Topic, Any]] = field(default_factory=list)
-    peers: list[Any] = field(default_factory=list)
-    errors: list[str] = field(default_factory=list)
-
-
 class BridgeCore(PureCore):
     """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
 
@@ -104,7 +92,7 @@ class BridgeCore(PureCore):
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
-        self.missions = missions.MissionState(config.envelope)
+        self.missions = MissionState(config.envelope)
         self.unattended = Unattended(config.unattended_config())
         self.params = ParamCache()
         serial = is_serial_url(config.connection)

@@ -42,7 +42,6 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper_bridge_base.flight_request import checked, failed, takeoff_request
 from dronewrapper_bridge_base.operation import Steps
-from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
 from dronewrapper_bridge_mavlink.setpoints import hold_target
@@ -71,7 +70,7 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
             "setpoint changes the altitude",
         )
     try:  # above the safety envelope: refused, the limit named
-        missions.refuse_takeoff(core, height)
+        core.missions.refuse_takeoff(height)
     except ServiceError as exc:
         return failed(REFUSED, exc.message, "takeoff")
     pose = core.pose()

@@ -3,7 +3,7 @@
 :class:`MissionState` is what the core knows: the envelope in force, home (local ENU m and
 geodetic), the mission the autopilot holds, the item being flown, and the one mission transfer
 allowed at a time. The core calls three hooks: :func:`refuse_setpoint` (a setpoint outside
-the envelope is refused, the limit named), :func:`refuse_takeoff` and :func:`tick` (a breach
+the envelope is refused, the limit named) and :func:`tick` (a breach
 starts the envelope's action: hold, return or land; home, envelope and mission are published).
 :data:`HANDLERS` are the receive side of the mission protocol; the service operations
 (:func:`push`, :func:`pull`, :func:`clear`, :func:`set_current`, :func:`control`,
@@ -28,14 +28,13 @@ import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import Envelope, EnvelopeError
+from dronewrapper.envelope import EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import PositionTarget, SetMode
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
     HomePosition,
     MissionResult,
-    Waypoint,
     WaypointClear,
     WaypointList,
     WaypointPull,
@@ -48,7 +47,6 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
@@ -58,37 +56,16 @@ from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
     HOLD_MODE,
-    is_guided,
 )
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
 SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
-
-
-class MissionState:
-    """What the bridge knows about missions, home and its envelope (see module docstring)."""
-
-    def __init__(self, envelope: Envelope) -> None:
-        self.envelope = envelope
-        self.set_by = ""  # who set the envelope in force ("": the configured one)
-        self.monitor = BreachMonitor()
-        self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)  # ENU m
-        self.home_known = False  # HOME_POSITION has arrived (home_local is the origin before)
-        self.limits = autopilot_limits.Limits()  # the autopilot's return and fence parameters
-        self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
-        self.waypoints: list[Waypoint] = []
-        self.rally: list[Waypoint] = []  # the rally points last uploaded (global frames)
-        self.current_seq = 0
-        self.last_reached = -1  # the item last reported on mission/reached
-        self.transfer: mt.Transfer | None = None
-        self.last_refusal_text = -math.inf
-        self._next_publish = -math.inf
 
 
 # ---------------------------------------------------------------- frames
@@ -128,26 +105,6 @@ def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> Env
             core.bridge_text(reason)
         return exc
     return None
-
-
-def refuse_takeoff(core: BridgeCore, height: float) -> None:
-    """ServiceError (refused) when a take-off to ``height`` m climbs above the envelope."""
-    try:
-        env.check_takeoff(core.missions.envelope, height)
-    except EnvelopeError as exc:
-        raise ServiceError(str(exc), "refused") from None
-
-
-def refuse_mode(core: BridgeCore, mode: str) -> None:
-    """ServiceError (refused) for the guided mode while the aircraft is outside the envelope
-    (its breach action must not be undone by a commander's mode change; once back inside,
-    the guided mode may be entered again)."""
-    if is_guided(mode) and core.missions.monitor.outside:
-        raise ServiceError(
-            f"{mode} refused: the aircraft is outside the envelope (breach action "
-            f"{core.missions.envelope.breach_action} in progress)",
-            "refused",
-        )
 
 
 def tick(core: BridgeCore) -> None:

@@ -1,6 +1,6 @@
 """Service calls that wait for the autopilot, as pure operations the core advances.
 
-Each operation is a generator over a :class:`~dronewrapper_bridge_mavlink.core.BridgeCore`:
+Each operation is a generator over a :class:`~dronewrapper_bridge_mavlink.core_view.BridgeCore`:
 it reads ``core.now`` (set by the caller of every core entry point), queues sends on the core,
 and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes it
 whenever a message or a tick arrives, so every wait is a loop that re-checks its condition.
@@ -37,7 +37,6 @@ from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
-from dronewrapper_bridge_mavlink import missions
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
@@ -49,7 +48,7 @@ from dronewrapper_bridge_mavlink.modes import (
 )
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -144,7 +143,7 @@ def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
         raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
     if core.ext.landed_state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
-    missions.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
+    core.missions.refuse_takeoff(height)  # above the envelope: refused, the limit named
     yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
     if autopilot == AUTOPILOT_ARDUPILOT:
         altitude = height if not math.isnan(height) else 2.5
@@ -228,7 +227,7 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
     primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
     if primed:
         yield from prime(core)
-    missions.refuse_mode(core, params.name)  # no guided mode while outside the envelope
+    core.missions.refuse_mode(params.name)  # no guided mode while outside the envelope
     core.failsafe.on_mode_requested(params.name, core.now)
     pending, message = yield from exchange(
         core,

@@ -15,49 +15,17 @@ reported as kept at the last value heard.
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Callable, Generator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamSet, ParamSetResult, ParamValue
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
-from dronewrapper_bridge_mavlink.operations import Steps
+from dronewrapper_bridge_mavlink.param_cache import ParamCache as ParamCache
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
-
-
-HISTORY = 16  # PARAM_VALUEs kept per parameter, so overlapping exchanges each find theirs
-
-
-class ParamCache:
-    """The autopilot's parameters as heard (PARAM_VALUE), each with its arrival number, so an
-    exchange knows which answers came after its request; the last :data:`HISTORY` values of
-    each parameter are kept, as several may arrive between two resumptions of an exchange."""
-
-    def __init__(self) -> None:
-        self._values: dict[str, deque[tuple[float, int, int]]] = {}  # id -> (raw, type, no.)
-        self.received = 0  # PARAM_VALUEs so far
-
-    def on_value(self, msg: Any) -> None:
-        """One PARAM_VALUE."""
-        param_id = msg.param_id
-        if isinstance(param_id, bytes | bytearray):
-            param_id = bytes(param_id).decode("ascii", "replace")
-        self.received += 1
-        heard = self._values.setdefault(param_id.split("\x00", 1)[0], deque(maxlen=HISTORY))
-        heard.append((float(msg.param_value), int(msg.param_type), self.received))
-
-    def get(self, param_id: str) -> tuple[float, int, int] | None:
-        """(raw float, MAV_PARAM_TYPE, arrival number) of ``param_id`` as last heard, None if
-        never heard."""
-        heard = self._values.get(param_id)
-        return heard[-1] if heard else None
-
-    def since(self, param_id: str, after: int) -> list[tuple[float, int, int]]:
-        """The values of ``param_id`` heard after arrival number ``after``, oldest first."""
-        return [entry for entry in self._values.get(param_id, ()) if entry[2] > after]
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 
 def check_param_id(param_id: str) -> str:

@@ -22,7 +22,7 @@ from dronewrapper_bridge_mavlink.freshness import boot_ms_of
 from dronewrapper_bridge_mavlink.telemetry import non_finite_field
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 

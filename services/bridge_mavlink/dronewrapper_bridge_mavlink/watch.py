@@ -16,7 +16,7 @@ from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, HOLD_MODE
 NAV_FIRST, NAV_LAST = 16, 99  # MAV_CMD_NAV_*: the items that fly somewhere
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 
 def on_alive(core: BridgeCore, keys: set[str]) -> None:

@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
-from typing import Any
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
@@ -27,7 +25,6 @@ from dronewrapper.msgs.mavros import (
     State,
     StatusText,
 )
-from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.core_driver import PureCore
@@ -35,7 +32,9 @@ from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
+from dronewrapper_bridge_tello.core_view import Outbox
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
+from dronewrapper_bridge_tello.mission_state import TelloMissions
 from dronewrapper_bridge_tello.replies import ReplyMatcher, is_ok
 from dronewrapper_bridge_tello.state import StateError, parse_state
 from dronewrapper_bridge_tello.sticks import (
@@ -55,22 +54,6 @@ SEVERITY_WARNING = 4
 SEVERITY_INFO = 6
 
 
-@dataclass
-class Outbox:
-    """What the node must do after a core call.
-
-    Attributes:
-        sends: SDK command strings for the Tello (``command``, ``rc 0 0 0 0`` ...), in order.
-        samples: (registry topic, message) to publish on Zenoh.
-        video_restart: a ``streamon`` is sent: the video receiver starts a new run (what
-            arrives from now on is the new stream, decoded from its first key frame).
-    """
-
-    sends: list[str] = field(default_factory=list)
-    samples: list[tuple[Topic, Any]] = field(default_factory=list)
-    video_restart: bool = False
-
-
 class TelloCore(PureCore):
     """The bridge's logic and state (see module docstring)."""
 
@@ -82,7 +65,7 @@ class TelloCore(PureCore):
         self.config = config
         self.scale = config.scale
         self.failsafe = Failsafe(config.failsafe_config())
-        self.missions = missions.TelloMissions(config.envelope)
+        self.missions = TelloMissions(config.envelope)
         self.telemetry = Telemetry(
             velocity_frame=config.velocity_frame,
             reference_yaw=math.radians(config.reference_yaw_deg),

@@ -25,7 +25,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import Envelope, EnvelopeError
+from dronewrapper.envelope import EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, PositionTarget
 from dronewrapper.msgs.mission import (
@@ -33,7 +33,6 @@ from dronewrapper.msgs.mission import (
     HomePosition,
     MissionControl,
     MissionResult,
-    Waypoint,
     WaypointClear,
     WaypointList,
     WaypointPush,
@@ -43,13 +42,12 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.breach import BreachMonitor
-from dronewrapper_bridge_base.operation import Operation, Steps
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import operations as ops
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core import TelloCore
+    from dronewrapper_bridge_tello.core_view import TelloCore
 
 log = logging.getLogger("bridge_tello")
 
@@ -60,21 +58,6 @@ PUBLISH_PERIOD_S = 2.0
 REFUSAL_TEXT_PERIOD_S = 2.0
 MOVE_SPEED_CM_S = 50  # go's speed, cm/s
 MOVE_TIMEOUT_S = 15.0  # s for one move's "ok" (5 m at 50 cm/s and its settling)
-
-
-class TelloMissions:
-    """The envelope, the local mission and its progress (see module docstring)."""
-
-    def __init__(self, envelope: Envelope) -> None:
-        self.envelope = envelope
-        self.set_by = ""  # who set the envelope in force ("": the configured one)
-        self.monitor = BreachMonitor()
-        self.waypoints: list[Waypoint] = []
-        self.current_seq = 0
-        self.running: Operation | None = None
-        self.paused = False
-        self.last_refusal_text = -math.inf
-        self._next_publish = -math.inf
 
 
 def go_moves(east: float, north: float, up: float, yaw_enu: float) -> list[tuple[int, int, int]]:

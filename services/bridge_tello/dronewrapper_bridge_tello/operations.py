@@ -1,6 +1,6 @@
 """Service calls that wait for the Tello, as pure operations the core advances.
 
-Each operation is a generator over a :class:`~dronewrapper_bridge_tello.core.TelloCore`: it
+Each operation is a generator over a :class:`~dronewrapper_bridge_tello.core_view.TelloCore`: it
 reads ``core.now`` (set by the caller of every core entry point), queues SDK commands on the
 core, and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes
 it whenever a reply, a state string or a tick arrives, so every wait is a loop that re-checks
@@ -46,7 +46,7 @@ from dronewrapper_bridge_tello.replies import Pending, is_ok
 from dronewrapper_bridge_tello.video_demand import STREAMON
 
 if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core import TelloCore
+    from dronewrapper_bridge_tello.core_view import TelloCore
 
 log = logging.getLogger("bridge_tello")
 

@@ -2,6 +2,6 @@
 
 Pure parts (no I/O, no clocks): :mod:`pid`, :mod:`errors`, :mod:`servo`, :mod:`loop`,
 :mod:`inputs`. The process: :mod:`node` (one loop that never blocks, commanding through
-:mod:`dronewrapper.runtime.commander`; run as ``python -m dronewrapper_controller``). Flight
+:class:`dronewrapper.client.DroneClient`; run as ``python -m dronewrapper_controller``). Flight
 evaluation lives on the test/demo side, in :mod:`dronewrapper_sim.evaluation`.
 """

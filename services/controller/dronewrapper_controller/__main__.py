@@ -1,6 +1,6 @@
 """Controller: follows a colour blob or a person with three PIDs (vx, vz, yaw rate).
 
-Subscribes {ns}/perception/detections, commands the aircraft with the runtime's ``Commander``
+Subscribes {ns}/perception/detections, commands the aircraft with the SDK's ``DroneClient``
 (setpoints on {ns}/mavros/setpoint_raw/local) and publishes {ns}/controller/status.
 """
 

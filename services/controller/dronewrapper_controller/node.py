@@ -2,10 +2,10 @@
 blocks.
 
 Subscribes ``{ns}/perception/detections``; commands the aircraft through a
-:class:`~dronewrapper.runtime.commander.Commander` on this process's node (setpoints on
+:class:`~dronewrapper.client.DroneClient` on this process's node (setpoints on
 ``{ns}/mavros/setpoint_raw/local``, re-published at 30 Hz by the loop, each carrying the source
 camera frame's stamp; take-off and landing as non-blocking sequences, see
-:mod:`dronewrapper.runtime.flight`); publishes ``{ns}/controller/status`` at
+:mod:`dronewrapper.client.flight`); publishes ``{ns}/controller/status`` at
 ``status_rate_hz``.
 
 :class:`Controller` is the life cycle as steps in injected time: wait for the bridge ->
@@ -27,13 +27,13 @@ import logging
 import math
 import os
 
+from dronewrapper.client.drone_client import DroneClient, default_commander
+from dronewrapper.client.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import CONTROLLER_IDLE, CONTROLLER_LANDING, CONTROLLER_TAKEOFF
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime import Latest
-from dronewrapper.runtime.commander import Commander
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop
@@ -91,7 +91,7 @@ class Controller:
         commander: commands the aircraft; None for ``dry_run``.
     """
 
-    def __init__(self, node: NodeApi, config: Config, commander: Commander | None) -> None:
+    def __init__(self, node: NodeApi, config: Config, commander: DroneClient | None) -> None:
         if (commander is None) != config.dry_run:
             raise ValueError("a commander is needed unless dry_run, and none with it")
         now = node.clock.monotonic()
@@ -325,15 +325,13 @@ class Controller:
 def commander_name() -> str:
     """Our name on the command lease, as the SDK names it (``$DRONEWRAPPER_COMMANDER``, the
     identity's name, or ``user@host``)."""
-    from dronewrapper.drone import default_commander
-
     return default_commander(os.environ.get("DRONEWRAPPER_IDENTITY", ""))
 
 
 def run(node: NodeApi, config: Config) -> int:
     """The controller service on the node's clock (see the module doc); the exit status."""
     clock = node.clock
-    commander = None if config.dry_run else Commander(node, name=commander_name())
+    commander = None if config.dry_run else DroneClient(node, name=commander_name())
     try:
         controller = Controller(node, config, commander)
         while True:

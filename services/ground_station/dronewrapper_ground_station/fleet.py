@@ -1,11 +1,10 @@
 """The bus side of the station: the drones online, their telemetry, video and commands.
 
 Everything goes through the station's runtime Node (a FakeNode on the fake bus in tests), one
-DroneWrapper per drone on it: its commands, and its input holders (``DroneWrapper.inputs``),
-which the station reads for every telemetry section it shows (asking the wrapper for the ones
-the SDK does not hold itself: ground truth, the controller's status, detections), so each
-telemetry key is subscribed once per drone. Video and the simulator's topics are subscribed
-here. Everything is named by its registry topic; nothing here spells a key.
+drone client per drone on it (:class:`~dronewrapper.client.DroneClient`, under the DroneWrapper
+whose verbs the commands call): the station shows its input holders (each telemetry key
+subscribed once per drone), its texts and its refusals. Video (while someone watches) and the
+simulator's topics are subscribed here. Nothing here spells a key: each is a registry topic.
 """
 
 from __future__ import annotations
@@ -19,18 +18,19 @@ from dronewrapper import DroneWrapper
 from dronewrapper.discovery import BRIDGE_PREFIX, services_by_namespace
 from dronewrapper.errors import CommandRefused, NotConnected
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Twist, Vector3
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.sensor import CompressedImage
-from dronewrapper.msgs.simulation import VehicleReset, WorldLoad, WorldQuery, WorldState
+from dronewrapper.msgs.simulation import VehicleReset
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
 from dronewrapper_ground_station import snapshot
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.requests import VelocityCommand
+from dronewrapper_ground_station.sim_objects import SimObjects
 from dronewrapper_ground_station.teleop import DeadMan
+from dronewrapper_ground_station.undeclare import undeclare
 
 T = TypeVar("T")
 
@@ -75,8 +75,9 @@ class DroneLink:
         self._node = node
         self._subs: list[Any] = []
         self.drone = DroneWrapper(ns, node=node, cameras=(), wait=False)
+        self.client = self.drone.client
         self._latest: dict[str, tuple[Latest[Any], float, Callable[[Any], dict[str, Any]]]] = {
-            name: (self.drone.inputs.latest(topic), topic.rate_hz, fields)
+            name: (self.client.inputs.latest(topic), topic.rate_hz, fields)
             for name, topic, fields in TELEMETRY
         }
         self.slots: dict[str, Latest[CompressedImage]] = {
@@ -268,67 +269,7 @@ class DroneLink:
 
     def close(self) -> None:
         self.drone.close()
-        _undeclare(self._subs)
-
-
-class SimObjects:
-    """The simulator's world objects: their true poses, and keyboard teleop of them."""
-
-    WORLD_NS = registry.DEFAULT_NAMESPACE
-    """The world's keys (``sim/...``) belong to no vehicle; the namespace is not used."""
-
-    def __init__(self, node: NodeApi) -> None:
-        self.node = node
-        self.clock = node.clock
-        self._poses: dict[str, tuple[dict[str, Any], float]] = {}
-        self._publishers: dict[str, Any] = {}
-        topic = registry.SIM_OBJECT_POSE
-        self._subs = [node.subscribe(topic, self._on_pose, key=topic.wildcard(), keyed=True)]
-
-    def _on_pose(self, key: str, msg: Any) -> None:
-        parts = registry.SIM_OBJECT_POSE.match(key)
-        if parts is not None:
-            self._poses[parts["name"]] = (snapshot.pose_fields(msg), self.clock())
-
-    def snapshot(self) -> dict[str, Any]:
-        """``{name: {x, y, z, yaw, age}}`` of the objects seen in the last 5 s."""
-        now = self.clock()
-        return {
-            name: {**fields, "age": round(now - at, 3)}
-            for name, (fields, at) in sorted(self._poses.items())
-            if now - at < 5.0
-        }
-
-    def move(self, name: str, east: float, north: float) -> None:
-        """Send one velocity command (ENU m/s) to object ``name``; the sim lets it expire."""
-        if name not in self._poses:
-            raise KeyError(f"no simulated object {name!r}")
-        pub = self._publishers.get(name)
-        if pub is None:
-            topic = registry.SIM_OBJECT_CMD_VEL
-            pub = self._publishers[name] = self.node.publisher(topic, key=topic.key(name=name))
-        pub.put(Twist(linear=Vector3(x=east, y=north, z=0.0)))
-
-    def world(self, timeout: float = 3.0) -> WorldState:
-        """The simulator's world (scenario, objects, loadable scenarios).
-
-        Raises:
-            ServiceUnavailable: no simulator answers (a real aircraft, or none running).
-        """
-        return self.node.call(registry.SIM_WORLD, WorldQuery(), ns=self.WORLD_NS, timeout=timeout)
-
-    def load(self, scenario: str, timeout: float = 10.0) -> WorldState:
-        """Load scenario ``scenario``'s world (the running one again: reset its objects).
-
-        Raises:
-            ServiceError: the simulator refused (an unknown scenario: ``bad_request``).
-            ServiceUnavailable: no simulator answers.
-        """
-        request = WorldLoad(scenario=scenario)
-        return self.node.call(registry.SIM_WORLD_LOAD, request, ns=self.WORLD_NS, timeout=timeout)
-
-    def close(self) -> None:
-        _undeclare([*self._subs, *self._publishers.values()])
+        undeclare(self._subs)
 
 
 class Fleet:
@@ -429,13 +370,3 @@ class Fleet:
         for link in self.links.values():
             link.close()
         self.objects.close()
-
-
-def _undeclare(entities: list[Any]) -> None:
-    """Undeclare each of ``entities`` (newest first), whatever became of the session."""
-    for entity in reversed(entities):
-        try:
-            entity.undeclare()
-        except Exception as exc:  # the session is already closed
-            log.debug("undeclare: %s", exc)
-    entities.clear()

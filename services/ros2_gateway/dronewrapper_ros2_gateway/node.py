@@ -16,8 +16,10 @@ and one Zenoh declaration on the ROS 2 key:
 It also reads every ROS 2 endpoint's token on its domain and logs each type disagreement with
 one of its own entities (:mod:`dronewrapper_ros2_codec.mismatch`). :func:`run` is the gateway as a
 process of its own; :mod:`dronewrapper_ros2_gateway.hosted` runs the same :class:`Gateway`
-inside a bridge. (Over 400 lines: one class holds every declaration of both directions, which
-share its ids, tokens and close; the formats, rules and checks are in the modules named.)
+inside a bridge.
+
+Size: one class holds every declaration of both directions, which share its ids, tokens and
+close; the formats, rules and checks are in the modules named.
 """
 
 from __future__ import annotations

@@ -18,12 +18,11 @@ Reproduced PX4 behaviour (measured on PX4 SITL, see sim/README.md):
   activated" and the fallback (COM_OBL_RC_ACT, and NAV_RCL_ACT when that needs RC): RTL by
   default; not latched: the vehicle is back in OFFBOARD as soon as setpoints resume;
 - after a disarm, a LAND or RTL intention reverts to the mode intended before it;
-- RTL flies to the closest of home and the rally points (PX4's RTL_TYPE 0, its default: a
-  rally point within 10 m of home is ignored, one is chosen when 2 m closer than home); the
-  ground there is at home's height (a flat world; the rally point's altitude is not flown).
+- RTL and AUTO.LAND fly as :mod:`~dronewrapper_sim.px4.rtl` says, AUTO.MISSION as
+  :mod:`~dronewrapper_sim.px4.mission`, the geofence as :mod:`~dronewrapper_sim.px4.geofence`.
 
-PX4's mode and arming rules are one state machine, each rule next to the PX4 behaviour it
-reproduces.
+Size: PX4's mode and arming rules are one state machine, each rule next to the PX4 behaviour
+it reproduces; what each auto mode flies is in the modules named above.
 """
 
 from __future__ import annotations
@@ -36,9 +35,9 @@ from enum import IntEnum
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_sim.dynamics import QuadState
-from dronewrapper_sim.px4 import geofence, mission
-from dronewrapper_sim.px4.flight_control import NAN, Limits, Target
-from dronewrapper_sim.px4.modes import Mode
+from dronewrapper_sim.px4 import geofence, mission, rtl
+from dronewrapper_sim.px4.flight_control import NAN, Target
+from dronewrapper_sim.px4.modes import NAV_NAMES, Mode
 from dronewrapper_sim.px4.offboard import OffboardSetpoint
 from dronewrapper_sim.px4.params import ParamStore
 
@@ -48,7 +47,6 @@ from dronewrapper_sim.px4.params import ParamStore
 
 ARM_DENIED = "Arming denied: Resolve system health failures first"
 FORCE_MAGIC = 21196  # COMPONENT_ARM_DISARM param2 that forces arm/disarm
-RALLY_MIN_FROM_HOME_M = 10.0  # PX4's MAX_DIST_FROM_HOME_FOR_LAND_APPROACHES
 
 
 class LandedState(IntEnum):
@@ -60,23 +58,6 @@ class LandedState(IntEnum):
     TAKEOFF = mavlink.MAV_LANDED_STATE_TAKEOFF
     LANDING = mavlink.MAV_LANDED_STATE_LANDING
 
-
-# PX4's human names of the navigation states (used in its messages)
-_NAV_NAMES = {
-    Mode.MANUAL: "Manual",
-    Mode.ALTCTL: "Altitude",
-    Mode.POSCTL: "Position",
-    Mode.ACRO: "Acro",
-    Mode.STABILIZED: "Stabilized",
-    Mode.OFFBOARD: "Offboard",
-    Mode.TAKEOFF: "Takeoff",
-    Mode.LOITER: "Hold",
-    Mode.MISSION: "Mission",
-    Mode.RTL: "Return",
-    Mode.LAND: "Land",
-    Mode.FOLLOWME: "Follow Target",
-    Mode.PRECLAND: "Precision Land",
-}
 
 # COM_OBL_RC_ACT -> mode (None: needs RC -> fall back to NAV_RCL_ACT); NAV_RCL_ACT -> mode
 _OBL_ACTIONS = {0: None, 1: None, 2: None, 3: Mode.RTL, 4: Mode.LAND, 5: Mode.LOITER}
@@ -122,10 +103,7 @@ class Commander:
         # navigator
         self._hold = (start.x, start.y, start.z, start.yaw)
         self._takeoff_z = start.z
-        self._rtl_phase = ""
-        self._rtl_z = 0.0
-        self._rtl_wait_since = 0.0
-        self._rtl_dest = self.home  # local ENU m: home or a rally point
+        self._rtl = rtl.ReturnFlight(self.home)
         self.rally_points: Callable[[], list[tuple[float, float]]] = list  # local ENU m
         self.mission: mission.MissionRunner | None = None  # set by the autopilot
         self.geofence: geofence.Geofence | None = None
@@ -156,7 +134,7 @@ class Commander:
             self._last_reject_text = now
             self._say(
                 mavlink.MAV_SEVERITY_CRITICAL,
-                f"Switching to {_NAV_NAMES[mode]} is currently not available",
+                f"Switching to {NAV_NAMES[mode]} is currently not available",
             )
 
     @property
@@ -166,7 +144,7 @@ class Commander:
             return LandedState.ON_GROUND
         if self.nav_mode is Mode.TAKEOFF:
             return LandedState.TAKEOFF
-        if self.nav_mode is Mode.LAND or (self.nav_mode is Mode.RTL and self._rtl_phase == "land"):
+        if self.nav_mode is Mode.LAND or (self.nav_mode is Mode.RTL and self._rtl.phase == "land"):
             return LandedState.LANDING
         return LandedState.IN_AIR
 
@@ -255,7 +233,7 @@ class Commander:
             if timeout > 0 and now - self.landed_at >= timeout:
                 self.disarm(now, state, force=True, reason=reason)
         self._offboard_failsafe(now, state)
-        geofence.check_geofence(self, now, state)
+        self.check_geofence(now, state)
         self._navigate(now, state)
 
     def _land_detector(self, now: float, state: QuadState) -> None:
@@ -312,43 +290,6 @@ class Commander:
         if mode is Mode.RTL:
             self._start_rtl(state)
 
-    def _rtl_destination(self, state: QuadState) -> tuple[float, float, float]:
-        """The closest of home and the rally points (module docstring), local ENU m."""
-        hx, hy, hz = self.home
-        best, best_dist = self.home, math.hypot(state.x - hx, state.y - hy)
-        for x, y in self.rally_points():
-            dist = math.hypot(state.x - x, state.y - y)
-            if math.hypot(x - hx, y - hy) > RALLY_MIN_FROM_HOME_M and dist + 2.0 < best_dist:
-                best, best_dist = (x, y, hz), dist
-        return best
-
-    def _start_rtl(self, state: QuadState) -> None:
-        self._rtl_dest = self._rtl_destination(state)
-        hx, hy, hz = self._rtl_dest
-        dist = math.hypot(state.x - hx, state.y - hy)
-        if self.landed:
-            self._rtl_phase = "done"
-        elif dist <= self.params["RTL_MIN_DIST"]:
-            self._rtl_phase = "land"
-            self._say(mavlink.MAV_SEVERITY_INFO, "RTL: land at destination")
-        else:
-            self._rtl_z = max(state.z, hz + self.params["RTL_RETURN_ALT"])
-            self._rtl_phase = "climb"
-            alt = self._rtl_z - hz
-            self._say(
-                mavlink.MAV_SEVERITY_INFO, f"RTL: start return at {alt:.0f} m above destination"
-            )
-
-    def _land_speed(self, height: float) -> float:
-        p = self.params
-        alt1, alt2 = p["MPC_LAND_ALT1"], p["MPC_LAND_ALT2"]
-        fast, slow = p["MPC_Z_V_AUTO_DN"], p["MPC_LAND_SPEED"]
-        if height >= alt1:
-            return fast
-        if height <= alt2 or alt1 <= alt2:
-            return slow
-        return slow + (fast - slow) * (height - alt2) / (alt1 - alt2)
-
     def _navigate(self, now: float, state: QuadState) -> None:
         p = self.params
         auto_yaw_rate = math.radians(p["MPC_YAWRAUTO_MAX"])
@@ -386,11 +327,13 @@ class Commander:
                 self._enter(Mode.LOITER, state, now)
                 self._hold = (x0, y0, self._takeoff_z, yaw0)
         elif mode is Mode.LAND:
-            target = self._land_target(x0, y0, yaw0, state)
+            target = rtl.land_target(p, self.home[2], x0, y0, yaw0, state.z)
         elif mode is Mode.RTL:
-            target = self._rtl_target(state, now)
+            target, text = self._rtl.target(p, state, now, self._hold)
+            if text:
+                self._say(mavlink.MAV_SEVERITY_INFO, text)
         elif mode is Mode.MISSION and self.mission is not None:
-            target = mission.mission_target(self, self.mission, now, state)
+            target = self._mission_target(self.mission, now, state)
         else:  # LOITER and anything that cannot fly: hold where the mode started
             target = Target(
                 position=(x0, y0, z0),
@@ -402,54 +345,37 @@ class Commander:
             )
         self.target = self._ground_handling(target, now, state)
 
-    def _land_target(self, x: float, y: float, yaw: float, state: QuadState) -> Target:
-        p = self.params
-        speed = self._land_speed(state.z - self.home[2])
-        return Target(
-            position=(x, y, NAN),
-            velocity=(0.0, 0.0, -speed),
-            yaw=yaw,
-            max_xy=p["MPC_XY_CRUISE"],
-            max_down=max(speed, p["MPC_Z_V_AUTO_DN"]),
-            max_yaw_rate=math.radians(p["MPC_YAWRAUTO_MAX"]),
-        )
+    def _start_rtl(self, state: QuadState) -> None:
+        text = self._rtl.start(self.params, state, self.landed, self.home, self.rally_points())
+        if text:
+            self._say(mavlink.MAV_SEVERITY_INFO, text)
 
-    def _rtl_target(self, state: QuadState, now: float) -> Target:
-        p = self.params
-        hx, hy, hz = self._rtl_dest
-        x0, y0, _, yaw0 = self._hold
-        limits: Limits = {
-            "max_xy": p["MPC_XY_CRUISE"],
-            "max_up": p["MPC_Z_V_AUTO_UP"],
-            "max_down": p["MPC_Z_V_AUTO_DN"],
-            "max_yaw_rate": math.radians(p["MPC_YAWRAUTO_MAX"]),
-        }
-        phase = self._rtl_phase
-        if phase == "climb":
-            if state.z >= self._rtl_z - 0.5:
-                self._rtl_phase = phase = "return"
-            else:
-                return Target(position=(x0, y0, self._rtl_z), yaw=yaw0, **limits)
-        if phase == "return":
-            dist = math.hypot(hx - state.x, hy - state.y)
-            if dist < p["NAV_ACC_RAD"]:
-                self._rtl_phase = phase = "descend"
-                self._rtl_wait_since = now
-            else:
-                heading = math.atan2(hy - state.y, hx - state.x) if dist > 3.0 else state.yaw
-                return Target(position=(hx, hy, self._rtl_z), yaw=heading, **limits)
-        if phase == "descend":
-            descend_z = hz + p["RTL_DESCEND_ALT"]
-            if state.z > descend_z + 0.5:
-                self._rtl_wait_since = now
-                return Target(position=(hx, hy, descend_z), yaw=state.yaw, **limits)
-            if now - self._rtl_wait_since < p["RTL_LAND_DELAY"]:
-                return Target(position=(hx, hy, descend_z), yaw=state.yaw, **limits)
-            self._rtl_phase = phase = "land"
-            self._say(mavlink.MAV_SEVERITY_INFO, "RTL: land at destination")
-        if phase == "land":
-            return self._land_target(hx, hy, self._hold[3], state)
-        return Target(idle=True)
+    def check_geofence(self, now: float, state: QuadState) -> None:
+        """A fence breach in the air starts GF_ACTION once per excursion (PX4's geofence)."""
+        if self.geofence is None or not self.armed or self.landed:
+            return
+        breach = self.geofence.check(self.params["GF_ACTION"], state.x, state.y)
+        if breach is None:
+            return
+        self._say(mavlink.MAV_SEVERITY_CRITICAL, geofence.BREACH_TEXT)
+        if breach.mode is not None and self.nav_mode is not breach.mode:
+            self.set_mode(breach.mode, now, state)
+
+    def _mission_target(
+        self, runner: mission.MissionRunner, now: float, state: QuadState
+    ) -> Target:
+        """AUTO.MISSION: the runner's leg, or at its end the mode the mission ends in."""
+        leg = runner.step(now, (state.x, state.y, state.z))
+        for text in runner.notes:
+            self._say(mavlink.MAV_SEVERITY_INFO, text)
+        runner.notes.clear()
+        if leg.position is None:
+            if leg.mode == "loiter":
+                self._say(mavlink.MAV_SEVERITY_INFO, "Mission finished, loitering")
+            end = {"loiter": Mode.LOITER, "land": Mode.LAND, "rtl": Mode.RTL}[leg.mode]
+            self.set_mode(end, now, state)
+        target, self._hold = mission.leg_target(leg, self.params, self._hold, state)
+        return target
 
     def _ground_handling(self, target: Target, now: float, state: QuadState) -> Target:
         """Motors off when disarmed; idle during spool-up and while landed unless the target

@@ -15,6 +15,7 @@ from typing import TypedDict
 
 from dronewrapper_sim.dynamics import GRAVITY, ControlInput, QuadState
 from dronewrapper_sim.frames import wrap_pi
+from dronewrapper_sim.px4.params import ParamStore
 
 NAN = float("nan")
 
@@ -77,6 +78,22 @@ class Gains:
     max_tilt_rad: float = math.radians(45.0)  # MPC_TILTMAX_AIR
     hover_thrust: float = GRAVITY  # thrust acceleration that holds altitude (m/s^2)
     max_thrust: float = 2.0 * GRAVITY  # thrust acceleration at full throttle (m/s^2)
+
+    @classmethod
+    def from_params(cls, params: ParamStore, hover: float, max_thrust: float) -> Gains:
+        """The gains PX4 parameters set, with the vehicle's hover and full thrust (m/s^2)."""
+        return cls(
+            xy_p=params["MPC_XY_P"],
+            z_p=params["MPC_Z_P"],
+            vel_xy_p=params["MPC_XY_VEL_P_ACC"],
+            vel_xy_i=params["MPC_XY_VEL_I_ACC"],
+            vel_z_p=params["MPC_Z_VEL_P_ACC"],
+            vel_z_i=params["MPC_Z_VEL_I_ACC"],
+            yaw_p=params["MPC_YAW_P"],
+            max_tilt_rad=math.radians(params["MPC_TILTMAX_AIR"]),
+            hover_thrust=hover,
+            max_thrust=max_thrust,
+        )
 
 
 def _limit_norm(x: float, y: float, limit: float) -> tuple[float, float]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -18,11 +18,15 @@ from dronewrapper.envelope import inside
 from dronewrapper_sim.px4.mission import FENCE, MissionStore
 from dronewrapper_sim.px4.modes import Mode
 
-if TYPE_CHECKING:
-    from dronewrapper_sim.dynamics import QuadState
-    from dronewrapper_sim.px4.commander import Commander
+GF_ACTIONS = {2: Mode.LOITER, 3: Mode.RTL, 5: Mode.LAND}  # PX4's GF_ACTION values flown here
+BREACH_TEXT = "Geofence exceeded"
 
-GF_ACTIONS = {2: "LOITER", 3: "RTL", 5: "LAND"}  # PX4's GF_ACTION values this vehicle flies
+
+@dataclass(frozen=True)
+class Breach:
+    """An excursion out of the fence began: the mode GF_ACTION flies (None: warn only)."""
+
+    mode: Mode | None
 
 
 class Geofence:
@@ -79,17 +83,9 @@ class Geofence:
         self.outside = violated
         return first
 
-
-def check_geofence(cmd: Commander, now: float, state: QuadState) -> None:
-    """A fence breach in the air starts GF_ACTION once per excursion (PX4's geofence)."""
-    if cmd.geofence is None or not cmd.armed or cmd.landed:
-        return
-    if not cmd.geofence.breach(state.x, state.y):
-        return
-    action = GF_ACTIONS.get(int(cmd.params["GF_ACTION"]))
-    cmd._say(mavlink.MAV_SEVERITY_CRITICAL, "Geofence exceeded")
-    if action is None:
-        return
-    mode = {"LOITER": Mode.LOITER, "RTL": Mode.RTL, "LAND": Mode.LAND}[action]
-    if cmd.nav_mode is not mode:
-        cmd.set_mode(mode, now, state)
+    def check(self, gf_action: float, x: float, y: float) -> Breach | None:
+        """The breach (x, y) starts (once per excursion; call it only in the air) with the
+        mode parameter GF_ACTION asks for, or None."""
+        if not self.breach(x, y):
+            return None
+        return Breach(GF_ACTIONS.get(int(gf_action)))

@@ -25,8 +25,10 @@ vehicle carries no camera, gimbal or gripper. SPLINE_WAYPOINT is refused, as PX4
 
 The uploaded fence's breach check is :mod:`dronewrapper_sim.px4.geofence`.
 
-Pure: time is the caller's (s), positions local ENU m. One file over 400 lines: the protocol
-and the runner share the store's lists and PX4's tables of what a mission may hold.
+Pure: time is the caller's (s), positions local ENU m.
+
+Size: the mission protocol and the runner share the store's lists and PX4's tables of what a
+mission may hold.
 """
 
 from __future__ import annotations
@@ -40,11 +42,10 @@ from pymavlink.dialects.v20 import common as mavlink
 from pymavlink.dialects.v20.common import MAVLink_message as Message
 
 from dronewrapper_sim.px4.flight_control import Limits, Target
-from dronewrapper_sim.px4.modes import Mode
 
 if TYPE_CHECKING:
     from dronewrapper_sim.dynamics import QuadState
-    from dronewrapper_sim.px4.commander import Commander
+    from dronewrapper_sim.px4.params import ParamStore
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 FENCE = mavlink.MAV_MISSION_TYPE_FENCE
@@ -389,18 +390,16 @@ class MissionRunner:
         return out
 
 
-# ---------------------------------------------------------------- the commander's side
+# ---------------------------------------------------------------- the target of a leg
 
 
-def mission_target(cmd: Commander, runner: MissionRunner, now: float, state: QuadState) -> Target:
-    """AUTO.MISSION's target for the commander now: the runner's leg, or a switch to the mode
-    the mission ends in (hold, land, return)."""
-    p = cmd.params
-    position = (state.x, state.y, state.z)
-    leg = runner.step(now, position)
-    for text in runner.notes:
-        cmd._say(mavlink.MAV_SEVERITY_INFO, text)
-    runner.notes.clear()
+Hold = tuple[float, float, float, float]  # x, y, z (local ENU m), yaw (rad)
+
+
+def leg_target(leg: Leg, p: ParamStore, hold: Hold, state: QuadState) -> tuple[Target, Hold]:
+    """AUTO.MISSION's target for ``leg`` and the hold point after it: a leg's position is
+    flown facing it (the heading kept within 3 m of it); the end of the mission holds at
+    ``hold``, or lands where the leg says (``land_at``)."""
     limits: Limits = {
         "max_xy": p["MPC_XY_CRUISE"] if leg.speed is None else leg.speed,
         "max_up": p["MPC_Z_V_AUTO_UP"],
@@ -410,14 +409,8 @@ def mission_target(cmd: Commander, runner: MissionRunner, now: float, state: Qua
     if leg.position is not None:
         x, y, z = leg.position
         far = math.hypot(x - state.x, y - state.y) > 3.0
-        yaw = math.atan2(y - state.y, x - state.x) if far else cmd._hold[3]
-        if far:
-            cmd._hold = (*cmd._hold[:3], yaw)
-        return Target(position=(x, y, z), yaw=yaw, **limits)
-    mode = {"loiter": Mode.LOITER, "land": Mode.LAND, "rtl": Mode.RTL}[leg.mode]
-    if leg.mode == "loiter":
-        cmd._say(mavlink.MAV_SEVERITY_INFO, "Mission finished, loitering")
-    cmd.set_mode(mode, now, state)
+        yaw = math.atan2(y - state.y, x - state.x) if far else hold[3]
+        return Target(position=(x, y, z), yaw=yaw, **limits), (*hold[:3], yaw)
     if leg.land_at is not None:
-        cmd._hold = (leg.land_at[0], leg.land_at[1], state.z, state.yaw)
-    return Target(position=(cmd._hold[0], cmd._hold[1], cmd._hold[2]), yaw=cmd._hold[3], **limits)
+        hold = (leg.land_at[0], leg.land_at[1], state.z, state.yaw)
+    return Target(position=hold[:3], yaw=hold[3], **limits), hold

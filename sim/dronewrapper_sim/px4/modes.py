@@ -101,3 +101,21 @@ def from_name(name: str) -> Mode | None:
     key = name.strip().upper()
     key = _MAVROS_ALIASES.get(key, key.removeprefix("AUTO."))
     return Mode.__members__.get(key)
+
+
+NAV_NAMES = {
+    Mode.MANUAL: "Manual",
+    Mode.ALTCTL: "Altitude",
+    Mode.POSCTL: "Position",
+    Mode.ACRO: "Acro",
+    Mode.STABILIZED: "Stabilized",
+    Mode.OFFBOARD: "Offboard",
+    Mode.TAKEOFF: "Takeoff",
+    Mode.LOITER: "Hold",
+    Mode.MISSION: "Mission",
+    Mode.RTL: "Return",
+    Mode.LAND: "Land",
+    Mode.FOLLOWME: "Follow Target",
+    Mode.PRECLAND: "Precision Land",
+}
+"""PX4's human names of the navigation states (as its status texts write them)."""

@@ -10,6 +10,9 @@ server owns both. Replies are the real drone's texts: ``ok``, ``error``, ``error
 ``unknown command: <text>``, or the value of a read command.
 
 The SDK's command table: a small handler per command, with the real drone's replies.
+
+Size: the SDK's command table, one small handler per command beside the state it reads and
+changes; the flight itself is tello/flight.py.
 """
 
 from __future__ import annotations

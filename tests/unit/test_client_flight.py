@@ -8,11 +8,8 @@ import logging
 import pytest
 from bus_autopilot import BusAutopilot, drive
 
-from dronewrapper.msgs.flight import NO_POSITION, REFUSED, TOO_LATE, FlightResult, TakeoffRequest
-from dronewrapper.runtime import flight
-from dronewrapper.runtime.commander import Commander
-from dronewrapper.runtime.fake import FakeBus, FakeNode
-from dronewrapper.runtime.flight import (
+from dronewrapper.client import DroneClient, flight
+from dronewrapper.client.flight import (
     FlightError,
     FlightSequence,
     Landing,
@@ -23,6 +20,8 @@ from dronewrapper.runtime.flight import (
     Takeoff,
     TooLate,
 )
+from dronewrapper.msgs.flight import NO_POSITION, REFUSED, TOO_LATE, FlightResult, TakeoffRequest
+from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 T0 = 1_700_000_000.0
 PERIOD = 0.02  # s between the loop's wakes
@@ -31,7 +30,7 @@ PERIOD = 0.02  # s between the loop's wakes
 class Loop:
     """A service loop running one sequence: steps it and streams the commander's setpoints."""
 
-    def __init__(self, commander: Commander, sequence: FlightSequence) -> None:
+    def __init__(self, commander: DroneClient, sequence: FlightSequence) -> None:
         self.commander = commander
         self.sequence = sequence
         self.error: FlightError | None = None
@@ -60,12 +59,12 @@ class Stepper:
         return now + PERIOD
 
 
-def rig(**autopilot) -> tuple[FakeBus, BusAutopilot, Commander]:
+def rig(**autopilot) -> tuple[FakeBus, BusAutopilot, DroneClient]:
     bus = FakeBus(start=T0)
     pilot = BusAutopilot(bus, **{"flying": False, **autopilot})
     pilot.tick(T0)
     node = FakeNode("svc", bus)
-    commander = Commander(node, name="svc", inline_calls=True)
+    commander = DroneClient(node, name="svc", inline_calls=True)
     pilot.tick(T0)
     return bus, pilot, commander
 

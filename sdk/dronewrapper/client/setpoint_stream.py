@@ -5,11 +5,11 @@ until it is changed or stopped; if the stream stops, the bridge holds position a
 ``setpoint_timeout`` and lands after ``commander_lost_timeout``.
 
 :class:`SetpointStream` holds those rules and nothing else (no thread, no bus): :meth:`set`
-publishes a new setpoint at once, :meth:`poll` repeats it when due, :meth:`next_due` says
-when. ``header.stamp`` keeps the stamp given with the command (the source frame's capture
-time), ``header.seq`` counts every publication. The SDK drives it from a thread
-(:class:`~dronewrapper.streamer.SetpointStreamer`), a service's loop from its own steps
-(:class:`~dronewrapper.runtime.commander.Commander`); both on their node's clock.
+publishes a new setpoint at once, :meth:`poll` repeats it when due, :meth:`next_due` says when.
+``header.stamp`` keeps the stamp given with the command (the source frame's capture time),
+``header.seq`` counts every publication. A :class:`~dronewrapper.client.DroneClient` drives it
+(:class:`~dronewrapper.client.stream.SetpointStreamer`) from its own thread in the SDK, or from a
+service's loop; both on their node's clock.
 
 Link gaps: :meth:`SetpointStream.link` hears the publisher's matching status. While the bridge's
 subscriber is unreachable (after it was reachable once: a router restart, lost Wi-Fi) nothing is

@@ -1,4 +1,5 @@
-"""The runtime's Commander on the fake bus: setpoints streamed by the loop, calls as Pending."""
+"""The DroneClient on the fake bus: setpoints streamed by the loop, calls as Pending, ready;
+one holder per key; the DroneWrapper a facade over one client."""
 
 from __future__ import annotations
 
@@ -10,7 +11,10 @@ from concurrent.futures import Future
 import pytest
 from bus_autopilot import BusAutopilot
 
+from dronewrapper.client import DroneClient, Pending
+from dronewrapper.drone import DroneWrapper
 from dronewrapper.errors import InvalidArgument
+from dronewrapper.flights import Flights
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
@@ -19,18 +23,18 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
-from dronewrapper.runtime import ServiceUnavailable
-from dronewrapper.runtime.commander import Commander, Pending
+from dronewrapper.runtime import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.caller import origin_of
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 T0 = 1_700_000_000.0
 SETPOINTS = registry.SETPOINT_RAW_LOCAL.key("drone")
 
 
-def commander(bus: FakeBus, **kwargs) -> Commander:
+def commander(bus: FakeBus, **kwargs) -> DroneClient:
     node = FakeNode("svc", bus)
     kwargs.setdefault("inline_calls", True)
-    return Commander(node, name="svc", **kwargs)
+    return DroneClient(node, name="svc", **kwargs)
 
 
 def published(bus: FakeBus) -> list:
@@ -127,7 +131,7 @@ def test_calls_on_the_worker_thread_do_not_block_the_caller():
     bridge = FakeNode("bridge", bus)
     bridge.serve(registry.ARMING, slow_arming)
     bridge.serve(registry.SET_MODE, lambda _req: SetModeResult(mode_sent=True, result=0))
-    c = Commander(node, name="svc")
+    c = DroneClient(node, name="svc")
     try:
         pending = c.call(registry.ARMING, CommandBool(value=True), T0, timeout=5.0)
         assert not pending.done(T0)  # returned while the server still works
@@ -154,3 +158,58 @@ def test_ready_once_connected_with_a_landed_state_and_a_position():
     assert c.ready() and c.connected_state().autopilot == "px4"
     bus.clock.advance_to(T0 + 3.5)  # the bridge went quiet
     assert not c.ready() and "3.5 s old" in c.not_ready_reason()
+
+
+def subscriptions(bus: FakeBus, key: str) -> int:
+    return sum(1 for s in bus._subs if s.active and str(s.keyexpr) == key)
+
+
+def test_each_key_is_one_holder_and_one_subscription_whoever_reads_it():
+    bus = FakeBus(start=T0)
+    c = commander(bus)
+    state_key = registry.STATE.key("drone")
+    assert c.inputs.latest(registry.STATE) is c.state is c.inputs.state
+    assert subscriptions(bus, state_key) == 1
+    battery_key = registry.BATTERY.key("drone")
+    assert subscriptions(bus, battery_key) == 0  # a loop's client reads only what it flies by
+    battery = c.inputs.battery  # a stream read later: subscribed on the first read, once
+    assert c.inputs.latest(registry.BATTERY) is battery and subscriptions(bus, battery_key) == 1
+    c.close()
+    assert subscriptions(bus, state_key) == 0  # every subscription ends with the client
+
+
+def test_every_setpoint_names_us_and_its_send_time():
+    bus = FakeBus(start=T0)
+    seen: list[tuple[str, float | None]] = []
+    bus.subscribe(
+        SETPOINTS, lambda key, payload, attachment=None: seen.append(origin_of(attachment))
+    )
+    c = commander(bus)
+    c.set_velocity(1.0, 0, 0, 0, bus.clock())
+    bus.clock.advance_to(T0 + 0.1)
+    c.poll(bus.clock())
+    assert seen == [("svc", T0), ("svc", pytest.approx(T0 + 0.1))]  # the repetition's own time
+
+
+def test_a_role_that_may_not_command_is_refused_unsent():
+    bus = FakeBus(start=T0)
+    autopilot = BusAutopilot(bus, flying=False)
+    c = commander(bus, forbidden="the observer role may not command")
+    pending = c.call(registry.ARMING, CommandBool(value=True), T0, timeout=1.0)
+    with pytest.raises(ServiceError, match="may not command") as refused:
+        pending.result(T0)
+    assert refused.value.code == "forbidden" and autopilot.calls == []
+
+
+def test_the_wrapper_is_a_facade_over_one_client_that_owns_its_parts():
+    bus = FakeBus(start=T0)
+    drone = DroneWrapper("drone", node=FakeNode("app", bus), wait=False, commander="ada")
+    try:
+        assert DroneWrapper.__mro__ == (DroneWrapper, object)  # parts, not mixins
+        assert drone.inputs is drone.client.inputs and drone.getters.inputs is drone.inputs
+        assert subscriptions(bus, registry.STATE.key("drone")) == 1
+        assert DroneWrapper.takeoff.__doc__ == Flights.takeoff.__doc__  # help() shows the part's
+        drone.set_cmd_vel(vx=0.5)
+        assert drone.client.target is drone.commanding and drone.setpoints_sent == 1
+    finally:
+        drone.close()

@@ -1,11 +1,13 @@
-"""The SDK's setpoint stream: ONE background thread drives the stream's core on a clock.
+"""A drone client's setpoint stream, locked, driven by its own thread or by a service's loop.
 
 The rules (rate, repetition, the idle deadman, the link-gap rule) are
-:class:`~dronewrapper.runtime.setpoint_stream.SetpointStream`'s, shared with the services'
-:class:`~dronewrapper.runtime.commander.Commander`. This module adds the thread: a new setpoint is
-published at once on the caller's thread (lowest latency); the thread then repeats it every
-period, waiting on the node's clock (so a virtual clock runs it in virtual time). So
-``set_cmd_vel(az=1); sleep(5)`` keeps spinning until changed or stopped.
+:class:`~dronewrapper.client.setpoint_stream.SetpointStream`'s. This module adds a lock, so the
+caller, the link's matching callback and the driver may touch the stream from their threads,
+and its two drivers: a thread (``threaded``, the SDK's blocking client: a new setpoint is
+published at once on the caller's thread, the thread then repeats it every period, waiting on
+the node's clock, so a virtual clock runs it in virtual time and ``set_cmd_vel(az=1); sleep(5)``
+keeps spinning until changed or stopped), or a service's loop that calls :meth:`poll` and wakes
+by :meth:`next_due` (a loop that hangs stops streaming: a deadman for free).
 """
 
 from __future__ import annotations
@@ -13,9 +15,9 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
+from dronewrapper.client.setpoint_stream import DEFAULT_EXPIRY_S, SetpointStream
 from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.runtime.clock import REAL, Clock
-from dronewrapper.runtime.setpoint_stream import DEFAULT_EXPIRY_S, SetpointStream
 
 
 class SetpointStreamer:
@@ -27,6 +29,8 @@ class SetpointStreamer:
         clock: the clock the thread reads and waits on (the node's).
         rate_hz, idle_timeout, expiry: the stream's (see SetpointStream).
         name: thread name, for debugging.
+        threaded: repeat on this object's thread (started by the first :meth:`set`); False:
+            the owner's loop calls :meth:`poll`.
     """
 
     def __init__(
@@ -38,12 +42,14 @@ class SetpointStreamer:
         idle_timeout: float | None = None,
         name: str = "setpoints",
         expiry: float = DEFAULT_EXPIRY_S,
+        threaded: bool = True,
     ) -> None:
         self.core = SetpointStream(
             publish, rate_hz=rate_hz, idle_timeout=idle_timeout, expiry=expiry
         )
         self.clock = clock
         self._name = name
+        self._threaded = threaded
         self._cond = threading.Condition()
         self._changes = 0
         self._closed = False
@@ -67,16 +73,27 @@ class SetpointStreamer:
     def link_ok(self) -> bool:
         return self.core.link_ok
 
-    def set(self, target: PositionTarget) -> None:
-        """Publish ``target`` now and keep re-publishing it until changed or stopped."""
+    def set(self, target: PositionTarget, now: float | None = None) -> None:
+        """Publish ``target`` now and keep re-publishing it until changed or stopped (``now``:
+        the clock's monotonic time, read here when None)."""
         with self._cond:
             if self._closed:
                 raise RuntimeError("the setpoint stream is closed")
-            self.core.set(target, self.clock.monotonic())
-            if self._thread is None:
+            self.core.set(target, self.clock.monotonic() if now is None else now)
+            if self._threaded and self._thread is None:
                 self._thread = self.clock.thread(self._run, self._name)
                 self._thread.start()
             self._changed()
+
+    def poll(self, now: float) -> bool:
+        """Re-publish the setpoint if one is due at ``now``; True if it did (a loop's driver)."""
+        with self._cond:
+            return self.core.poll(now)
+
+    def next_due(self) -> float:
+        """When the next re-publication is due (clock's monotonic s; inf when not streaming)."""
+        with self._cond:
+            return self.core.next_due()
 
     def link(self, matching: bool) -> None:
         """The publisher's matching status changed (see SetpointStream.link)."""

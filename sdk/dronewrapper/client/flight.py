@@ -4,11 +4,11 @@ Take-off, landing, go-to, return and a mission's start, pause and resume. The br
 each its aircraft's way and answers once it has ended (``{ns}/dronewrapper/takeoff``,
 ``land``, ``goto``, ``return``, ``mission``, :mod:`dronewrapper.msgs.flight`), so nothing here
 depends on the aircraft: no mode names, no status texts read. Written once, as generators that
-yield while they wait, and driven two ways: a service's loop (the controller, on a
-:class:`~dronewrapper.runtime.commander.Commander`) calls ``step(now)`` once per wake and keeps
-watching its inputs and its stop request meanwhile; the SDK's blocking ``DroneWrapper.takeoff``
-/ ``land`` call ``step`` until done (:mod:`dronewrapper.flying`). A landing stops the caller's
-setpoint stream first.
+yield while they wait, on a :class:`~dronewrapper.client.DroneClient`, driven two ways: a
+service's loop (the controller) calls ``step(now)`` once per wake and keeps watching its inputs
+and its stop request meanwhile; the SDK's blocking ``DroneWrapper.takeoff``, ``land``, ... call
+``step`` until done (:mod:`dronewrapper.flights`). A landing stops the caller's setpoint stream
+first.
 
 A failure ends the sequence with a :class:`FlightError` of one kind: :class:`StepRefused`
 (the autopilot's or the bridge's reason), :class:`NoReply` (the request nobody answered),
@@ -91,8 +91,8 @@ class NoPosition(NotReady):
 
 
 class Aircraft(Protocol):
-    """What the sequences need: :class:`~dronewrapper.runtime.commander.Commander` on a
-    service's loop, ``dronewrapper.flying.WrapperAircraft`` in the SDK."""
+    """What the sequences need: a :class:`~dronewrapper.client.DroneClient`, stepped by a
+    service's loop or by the SDK's blocking calls."""
 
     ns: str
 
