@@ -3,8 +3,13 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# every distribution of the repository: the SDK, one per service, the simulator and the graphs
-DISTS  := sdk $(patsubst %/pyproject.toml,%,$(wildcard services/*/pyproject.toml)) sim compose
+# every distribution of the repository: the contract, the runtime, the SDK client and its tools,
+# one per service, the simulator and the graphs
+DISTS  := contract runtime sdk tools $(patsubst %/pyproject.toml,%,$(wildcard services/*/pyproject.toml)) sim compose
+# the tests start hundreds of Python processes: their imports read bytecode compiled once here,
+# not each process's own compile of every module (none is written where PYTHONDONTWRITEBYTECODE
+# is set); compileall only rewrites what changed
+BYTECODE := $(BIN)/python -m compileall -q -j 0 -x '/(\.venv|build|\.[a-z_]+_cache)/' $(DISTS) tests
 
 .PHONY: setup onboard demo test test-unit test-fast bench lint typecheck format clean
 
@@ -26,6 +31,7 @@ demo: setup
 	$(BIN)/python -m dronewrapper_compose.demo $(ARGS)
 
 test: setup lint typecheck
+	@$(BYTECODE) >/dev/null
 	$(BIN)/python -m pytest -q $(ARGS)
 
 test-unit: setup
@@ -41,7 +47,7 @@ lint: setup  # ruff; vermin: the on-board code runs on a Jetson's Python 3.10
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/vermin -t=3.10- --no-tips --violations --eval-annotations -q \
-	  sdk/dronewrapper $(filter-out %.egg-info,$(wildcard services/*/dronewrapper_*)) sim/dronewrapper_sim compose/dronewrapper_compose
+	  contract/dronewrapper runtime/dronewrapper sdk/dronewrapper tools/dronewrapper $(filter-out %.egg-info,$(wildcard services/*/dronewrapper_*)) sim/dronewrapper_sim compose/dronewrapper_compose
 
 typecheck: setup  # mypy over every package (the files and settings: pyproject.toml)
 	$(BIN)/mypy

@@ -189,6 +189,42 @@ def first_datagram(
     return math.nan
 
 
+@dataclass(frozen=True)
+class SetpointPath:
+    """One frame's setpoint from glass to the autopilot (wall-clock s): the frame's capture
+    ``stamp``, the setpoint's ``sent`` time at the controller, and ``out``: when the frame it
+    became reached the autopilot (NaN when none matched)."""
+
+    stamp: float
+    sent: float
+    out: float
+
+    @property
+    def glass_to_out(self) -> float:
+        return self.out - self.stamp
+
+    @property
+    def sent_to_out(self) -> float:
+        """The setpoint's own path: transport, bridge and the link to the autopilot."""
+        return self.out - self.sent
+
+
+def setpoint_paths(
+    setpoints: Mapping[float, tuple[float, Sequence[float]]],
+    frames: Sequence[tuple[float, Sequence[float]]],
+    window_s: float = MATCH_WINDOW_S,
+) -> list[SetpointPath]:
+    """Each setpoint (frame stamp -> (sent, key)) joined to the first not yet used of
+    ``frames`` ((arrival at the autopilot, key), sorted by arrival) with its values, within
+    ``window_s`` of its send (:func:`first_datagram`), in stamp order."""
+    used: set[int] = set()
+    ordered = sorted(frames, key=lambda frame: frame[0])
+    return [
+        SetpointPath(stamp, sent, first_datagram(sent, key, ordered, used, window_s))
+        for stamp, (sent, key) in sorted(setpoints.items())
+    ]
+
+
 def summarise(per_frame: Iterable[Mapping[str, float]]) -> dict[str, dict[str, float]]:
     """p50/p99 (ms) and count of each stage over frames (NaNs skipped)."""
     frames = list(per_frame)

@@ -151,7 +151,7 @@ PLAN: dict[str, Run | Excluded] = {
     "docs/px4_real.md: dronewrapper up compose/px4_real_follow_person_sec": Run(
         bound={"px4_real_follow_person_secure": "--check"}
     ),
-    "docs/px4_real.md: pip install './sdk[security,images]'": Run(
+    "docs/px4_real.md: pip install ./contract ./runtime './sdk[security,i": Run(
         skip={
             "pip install": "installs into an environment; tests/integration/test_sdk_install.py "
             "installs the SDK alone"

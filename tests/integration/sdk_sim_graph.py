@@ -2,8 +2,7 @@
 
 ``sim_graph`` starts ``dronewrapper up compose/sim_iris.yaml`` (its own router on a free port)
 with free UDP ports, waits until the namespace's bridge is alive, yields the router endpoint,
-and stops the graph with SIGINT at the end. ``sim_graphs`` starts one graph per namespace on a
-running router, all at once, and waits for all of their bridges.
+and stops the graph with SIGINT at the end.
 """
 
 from __future__ import annotations
@@ -20,9 +19,7 @@ from support import Process, free_endpoint, free_port, python_module
 START_TIMEOUT_S = 60.0
 
 
-def _start(
-    log_dir: Path, ns: str, router: str, use_router: bool, variables: Sequence[str] = ()
-) -> Process:
+def _start(log_dir: Path, ns: str, router: str, variables: Sequence[str] = ()) -> Process:
     argv = python_module(
         "dronewrapper",
         "up",
@@ -36,7 +33,6 @@ def _start(
         "--var",
         f"gcs_port={free_port(socket.SOCK_DGRAM)}",
         *(arg for variable in variables for arg in ("--var", variable)),
-        *(["--use-router"] if use_router else []),
     )
     return Process(argv, log_dir / f"sim_iris-{ns}.log")
 
@@ -65,23 +61,9 @@ def sim_graph(
     """Run the simulated Iris + bridge + a router (``variables``: the graph's ``KEY=VALUE``
     variables, e.g. ``command_lease=true``); yields (router endpoint, graph process)."""
     router = free_endpoint()
-    proc = _start(log_dir, ns, router, use_router=False, variables=variables)
+    proc = _start(log_dir, ns, router, variables=variables)
     try:
         _wait_for_bridges(router, {ns: proc})
         yield router, proc
     finally:
         proc.stop(30)
-
-
-@contextlib.contextmanager
-def sim_graphs(log_dir: Path, namespaces: Sequence[str], router: str) -> Iterator[None]:
-    """Run one simulated Iris + bridge per namespace on the running ``router``, in parallel."""
-    procs: dict[str, Process] = {}
-    try:
-        for ns in namespaces:
-            procs[ns] = _start(log_dir, ns, router, use_router=True)
-        _wait_for_bridges(router, procs)
-        yield
-    finally:
-        for proc in reversed(procs.values()):
-            proc.stop(30)

@@ -15,11 +15,12 @@ from collections.abc import Iterator
 
 import cv2
 import pytest
-from sdk_sim_graph import sim_graph, sim_graphs
+from sdk_sim_graph import sim_graph
 
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
-from support import REPO
+from dronewrapper_compose.launcher import Launcher
+from support import REPO, free_endpoint
 
 pytestmark = pytest.mark.integration
 
@@ -126,10 +127,17 @@ def test_save_frames(sim, tmp_path):
     assert "captured" in out
 
 
-def test_swarm_of_three(router, tmp_path):
+def test_swarm_of_three(tmp_path):
+    """The fleet the example's docstring starts (compose/sim_fleet.yaml: three simulated Iris
+    with cameras off, a process for each sim and each bridge), brought up in this process."""
     names = ["drone1", "drone2", "drone3"]
-    with sim_graphs(tmp_path, names, router):
+    router = free_endpoint()
+    with (
+        open(tmp_path / "sim_fleet.log", "w") as log,
+        Launcher.from_file("sim_fleet", router=router, variables={"drones": "3"}, out=log) as graph,
+    ):
         out = run_example("swarm.py", router, "--connect", router, "--side", "0.5", timeout=240)
+    assert graph.exit_code == 0, (tmp_path / "sim_fleet.log").read_text()[-3000:]
     assert "swarm of 3: drone1, drone2, drone3" in out
     for ns, height in zip(names, ("1", "1.5", "2"), strict=True):
         assert f"{ns}: flew its square at {height} m and landed" in out

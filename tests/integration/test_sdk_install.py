@@ -1,4 +1,9 @@
-"""The SDK installs alone in a fresh virtual environment and pulls only its light dependencies."""
+"""The SDK installs alone in a fresh virtual environment and pulls only its light dependencies.
+
+A laptop installs the client with the contract and the runtime below it
+(``pip install ./contract ./runtime ./sdk``), none of the tools; the tools
+(``pip install ./tools``) add the ``dronewrapper`` command.
+"""
 
 from __future__ import annotations
 
@@ -14,12 +19,21 @@ from support import REPO, free_endpoint
 
 pytestmark = pytest.mark.integration
 
-LIGHT = {"dronewrapper", "eclipse-zenoh", "msgspec", "numpy"}
+LIGHT = {
+    *("dronewrapper", "dronewrapper-contract", "dronewrapper-runtime"),
+    *("eclipse-zenoh", "msgspec", "numpy"),
+}
+PARTS = ("contract", "runtime", "sdk")
+"""The distributions a laptop installs; ``tools`` comes after, for the command."""
 BASE = {"pip", "setuptools", "wheel"}
 
 PROBE = textwrap.dedent(
     """
-    import json, sys, importlib.metadata as md
+    import sys
+    before = set(sys.modules)
+    import dronewrapper
+    on_import = sorted(set(sys.modules) - before)
+    import json, importlib.metadata as md
     from dronewrapper import DroneWrapper, NotConnected, list_drones
     from drone_wrapper import DroneWrapper as PaperName
     assert PaperName is DroneWrapper
@@ -36,22 +50,26 @@ PROBE = textwrap.dedent(
         jpeg_error = str(exc)
     heavy = [m for m in ("cv2", "pymavlink", "onnxruntime", "yaml", "matplotlib")
              if m in sys.modules]
+    import importlib.util
+    tools = [m for m in ("dronewrapper.cli", "dronewrapper.doctor", "dronewrapper.record")
+             if importlib.util.find_spec(m) is not None]
     dists = sorted(d.metadata["Name"].lower() for d in md.distributions())
     import importlib.resources
     typed = importlib.resources.files("dronewrapper").joinpath("py.typed").is_file()
     print(json.dumps({"error": error, "jpeg_error": jpeg_error, "heavy_imported": heavy,
-                      "dists": dists, "typed": typed}))
+                      "dists": dists, "typed": typed, "tools": tools,
+                      "on_import": on_import}))
     """
 )
 
 
 def test_sdk_installs_alone_with_light_dependencies(tmp_path):
-    source = tmp_path / "sdk"
-    shutil.copytree(
-        REPO / "sdk",
-        source,
-        ignore=shutil.ignore_patterns("__pycache__", "build", "*.egg-info", "dist"),
-    )
+    for part in (*PARTS, "tools"):
+        shutil.copytree(
+            REPO / part,
+            tmp_path / part,
+            ignore=shutil.ignore_patterns("__pycache__", "build", "*.egg-info", "dist"),
+        )
     venv = tmp_path / "venv"
     # a bare venv, filled by this interpreter's pip (`pip --python`): the same install, without
     # bootstrapping pip into the venv or compiling numpy's sources (seconds on a busy machine)
@@ -59,7 +77,7 @@ def test_sdk_installs_alone_with_light_dependencies(tmp_path):
     python = venv / "bin" / "python"
     pip = [sys.executable, "-m", "pip", "--python", str(python), "--disable-pip-version-check"]
     install = subprocess.run(
-        [*pip, "install", "-q", "--no-compile", str(source)],
+        [*pip, "install", "-q", "--no-compile", *(str(tmp_path / part) for part in PARTS)],
         capture_output=True,
         text=True,
         timeout=240,
@@ -80,9 +98,19 @@ def test_sdk_installs_alone_with_light_dependencies(tmp_path):
         assert heavy not in report["dists"]
     assert report["heavy_imported"] == []
     assert report["typed"]  # PEP 561: an app's type checker reads the SDK's annotations
+    assert report["tools"] == []  # the client alone: no tool
+    assert report["on_import"] == ["dronewrapper"]  # `import dronewrapper` loads nothing else
+    assert not (venv / "bin" / "dronewrapper").exists()
     assert "cannot reach the Zenoh router" in report["error"]
     assert "pip install 'dronewrapper[images]'" in report["jpeg_error"]  # cv2 is optional
 
+    tools = subprocess.run(
+        [*pip, "install", "-q", "--no-compile", "--no-deps", str(tmp_path / "tools")],
+        capture_output=True,
+        text=True,
+        timeout=240,
+    )
+    assert tools.returncode == 0, tools.stdout + tools.stderr
     cli = subprocess.run(
         [str(venv / "bin" / "dronewrapper"), "up", "compose/sim_iris.yaml"],
         capture_output=True,

@@ -21,7 +21,7 @@ import subprocess
 import sys
 
 import pytest
-from netns import is_root, two_hosts
+from netns import Host, is_root, two_hosts
 
 from dronewrapper.security.keystore import KeyStore
 from support import REPO, wait_for
@@ -68,7 +68,13 @@ def _client(host, *args: str, timeout: float) -> dict:
 
 
 def _clients(host, runs: list[tuple[str, ...]], timeout: float) -> list[dict]:
-    """Run the laptop's client once per argument tuple, all at the same time, and return each
+    """Run the client on ``host`` once per argument tuple, all at the same time (see
+    :func:`_clients_on`); each one's JSON line in the order of ``runs``."""
+    return _clients_on([(host, args) for args in runs], timeout)
+
+
+def _clients_on(runs: list[tuple[Host, tuple[str, ...]]], timeout: float) -> list[dict]:
+    """Run the client once per (host, argument tuple), all at the same time, and return each
     one's JSON line in the order of ``runs``. An attacker spends its time waiting for replies
     that never come (1 s per call) and for sessions that are never opened, so running them side
     by side changes no verdict: every call still gets its full timeout."""
@@ -80,7 +86,7 @@ def _clients(host, runs: list[tuple[str, ...]], timeout: float) -> list[dict]:
             text=True,
             cwd=REPO,
         )
-        for args in runs
+        for host, args in runs
     ]
     results = []
     try:
@@ -269,11 +275,11 @@ def test_roles_hold_on_a_tls_listener_on_loopback_and_a_forwarded_port(tmp_path,
         ]
         on_drone.append(("attack", f"tcp/127.0.0.1:{TLS_PORT}", "", keys))  # plain on the TLS port
         through = [("attack", tunnel, who, keys) for who in ("olga", "rex")]
-        local_results = _clients(drone, on_drone, timeout=120)
-        tunnel_results = _clients(laptop, through, timeout=120)
+        everyone = [(drone, args) for args in on_drone] + [(laptop, args) for args in through]
+        results = _clients_on(everyone, timeout=120)  # on the drone and through the tunnel
+        local_results, tunnel_results = results[: len(on_drone)], results[len(on_drone) :]
         procs[-1].stop()  # the monitor writes what it saw
         seen = json.loads((tmp_path / "truth.json").read_text())
-        results = local_results + tunnel_results
         print_summary(results, seen)
         _judge(results, seen)
         olga, rex, old, nobody, mallory, plain = local_results

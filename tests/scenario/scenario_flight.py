@@ -14,13 +14,19 @@ import itertools
 import math
 import socket
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol
+
+import msgspec
+import zenoh
 
 from dronewrapper.rotations import wrap_pi
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper_compose.graph import Graph, load_graph
 from dronewrapper_compose.launcher import Launcher, build_argv
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_sim.evaluation.metrics import (
@@ -161,6 +167,26 @@ def _acquired(samples: list[FollowSample]) -> bool:
     )
 
 
+class Watcher(Protocol):
+    """Something that watches the graph's bus during a flight (opened with the session and the
+    graph's namespace) and is closed after it."""
+
+    def close(self) -> None: ...
+
+
+def with_settings(graph: Graph, settings: Mapping[str, Mapping[str, str]]) -> Graph:
+    """``graph`` with more ``set`` entries for some processes (process name -> key -> value),
+    as ``--set`` on their command lines: a bridge put on another link, say."""
+    unknown = set(settings) - {spec.name for spec in graph.processes}
+    if unknown:
+        raise ValueError(f"no process {sorted(unknown)} in the graph")
+    processes = [
+        msgspec.structs.replace(spec, set={**spec.set, **settings.get(spec.name, {})})
+        for spec in graph.processes
+    ]
+    return msgspec.structs.replace(graph, processes=processes)
+
+
 def fly(
     graph: str,
     scenario: str,
@@ -169,11 +195,15 @@ def fly(
     variables: dict[str, str] | None = None,
     start_timeout: float = START_TIMEOUT_S,
     router: str = "",
+    settings: Mapping[str, Mapping[str, str]] | None = None,
+    watch: Callable[[zenoh.Session, str], Watcher] | None = None,
 ) -> Flight:
     """Run ``compose/<graph>.yaml`` on ``scenario`` and record until the controller has been
     servoing (after its take-off) for ``seconds`` and, when it acquired the target late, for
     MIN_TRACKED_S after that; or until ``start_timeout`` s passed without servoing. ``router``:
-    the graph's router endpoint ("": a free loopback port)."""
+    the graph's router endpoint ("": a free loopback port); ``settings``: more ``set`` entries
+    by process (:func:`with_settings`); ``watch``: opened on the recording's session and the
+    graph's namespace once the graph is up, closed at the end."""
     router = router or f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
@@ -184,17 +214,18 @@ def fly(
     }
     log_path = tmp_path / f"{graph}-{scenario}.log"
     with open(log_path, "w") as log_file:
-        launcher = Launcher.from_file(
-            REPO / "compose" / f"{graph}.yaml", router=router, variables=values, out=log_file
-        )
+        path = REPO / "compose" / f"{graph}.yaml"
+        spec = with_settings(load_graph(path), settings or {})
+        launcher = Launcher(spec, path, router=router, variables=values, out=log_file)
         goal, aim = intended_distance(
             scenario, values.get("detector", "yolox"), controller_config(launcher)
         )
-        monitor = session = None
+        monitor = session = watcher = None
         try:
             launcher.start()
             session = open_session(ZenohOptions(mode="client", connect=[router]))
             monitor = FollowMonitor(session, launcher.ns, aim_height=aim).start()
+            watcher = watch(session, launcher.ns) if watch is not None else None
             deadline = time.monotonic() + start_timeout  # until servoing starts
             servoing = acquired = False
             while time.monotonic() < deadline:
@@ -209,6 +240,8 @@ def fly(
                     deadline = max(deadline, time.monotonic() + MIN_TRACKED_S)
                 time.sleep(0.2)
         finally:
+            if watcher is not None:
+                watcher.close()
             if monitor is not None:
                 monitor.close()
             if session is not None:

@@ -206,6 +206,54 @@ def test_ground_station_mode_switch_not_fought():
         rig.close()
 
 
+def gcs_set_mode(rig: Rig, main_sub: tuple[int, int]) -> None:
+    """DO_SET_MODE from a ground station on the autopilot's GCS link, acknowledged."""
+    gcs = mavlink.MAVLink(None, srcSystem=254, srcComponent=190)
+    switch = gcs.command_long_encode(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, *main_sub, 0, 0, 0, 0)
+    switch.pack(gcs)
+    replies = rig.link.from_ground_station(switch)
+    assert any(m.get_type() == "COMMAND_ACK" for m in replies), replies
+
+
+def test_ground_station_hands_offboard_back_then_the_app_dies_bridge_lands():
+    """Before: the bridge stayed 'overridden' and PX4's own offboard-loss failsafe flew RTL.
+    The app takes off as the SDK does (the bridge's take-off operation) and hovers streaming
+    its position; a ground station switches to AUTO.LOITER and back to OFFBOARD; then the app
+    dies. The mode switches on the GCS link over real UDP stay in
+    tests/integration/test_sim_mavlink.py."""
+    rig = Rig(ground_station=True)
+    try:
+        rig.clock.run_for(3.0)  # connected, home known
+        result = rig.user.call(registry.FLIGHT_TAKEOFF, TakeoffRequest(height=1.5), timeout=60.0)
+        assert result.success, result.message
+        rig.command(rig.hold_here())  # the app hovers, streaming
+        gcs_set_mode(rig, (4, 3))  # AUTO.LOITER
+        rig.wait_for(lambda: rig.state.value.mode == "AUTO.LOITER", 10, "GCS AUTO.LOITER")
+        rig.wait_for(lambda: any("not switching back" in t.text for t in rig.texts), 10, "report")
+        gcs_set_mode(rig, (6, 0))  # OFFBOARD
+        rig.wait_for(lambda: rig.state.value.mode == "OFFBOARD", 10, "OFFBOARD again")
+        since = len(rig.states)
+        heights: list[float] = []
+        rig.user.subscribe(registry.LOCAL_POSE, lambda m: heights.append(m.pose.position.z))
+        rig.command(None)  # the app dies
+        died = rig.clock.monotonic()
+
+        def landing() -> bool:
+            state = rig.state.value
+            return state.failsafe == "land" and state.mode == "AUTO.LAND"
+
+        rig.wait_for(landing, 25, "commander-lost land in AUTO.LAND")
+        after = rig.states[since:]
+        assert "hold" in [s.failsafe for s in after]  # held first, then landed
+        assert all(s.mode != "AUTO.RTL" for s in after), [s.mode for s in after]
+        assert 4.0 < rig.clock.monotonic() - died < 25.0
+        rig.wait_landed_disarmed(60)
+        assert max(heights) < 2.2, max(heights)  # RTL would have climbed
+        assert max(z for _, (_, _, z), _ in rig.link.truth) < 2.2  # ground truth agrees
+    finally:
+        rig.close()
+
+
 def test_refused_mode_reaches_set_mode_with_px4s_reason(rig: Rig):
     """The autopilot answers DO_SET_MODE as PX4 does (ACCEPTED from its MAVLink receiver,
     then the commander's TEMPORARILY_REJECTED with its text for a mode that needs RC): the

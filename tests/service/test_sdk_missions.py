@@ -9,11 +9,13 @@ import json
 import math
 
 import pytest
-from bus_bridge import SimSdk
+from bus_bridge import EPOCH, SimBridge, SimSdk
 
+from dronewrapper import DroneWrapper
 from dronewrapper.aio import Drone
-from dronewrapper.errors import CommandRefused, InvalidArgument
+from dronewrapper.errors import CommandRefused, InvalidArgument, NoData
 from dronewrapper.geodesy import to_geodetic
+from dronewrapper.runtime.fake import FakeBus, FakeNode
 
 HOME = (47.397742, 8.545594)
 
@@ -138,3 +140,28 @@ def test_a_mission_left_by_its_program_ends_on_the_ground_at_home(sim):
     assert not sim.pair.autopilot.armed, sim.pair.autopilot.mode.name
     assert sim.pair.core.missions.last_reached == 1  # finished first
     assert math.hypot(*sim.pair.position[:2]) < 1.0
+
+
+def test_goto_local_before_home_is_known_never_flies_a_guess():
+    """Right after connecting home may not be known yet (HOME_POSITION comes at 0.5-1 Hz):
+    the autopilot armed 6 m east of its local origin, so a guess of (0, 0, 0) flies 6 m off.
+    With HOME_POSITION held back, goto_local raises NoData and the drone stays; once home
+    arrives it flies to the point from home (ground truth)."""
+    bus = FakeBus(start=EPOCH)
+    pair = SimBridge(bus, start=(6.0, 0.0))
+    held = {"HOME_POSITION"}
+    to_bridge = pair.link._to_bridge
+    pair.link._to_bridge = lambda msgs: to_bridge([m for m in msgs if m.get_type() not in held])
+    drone = DroneWrapper("drone", node=FakeNode("app", bus), wait=False)
+    try:
+        bus.clock.run_for(3.0)
+        drone.takeoff(3.0)
+        with pytest.raises(NoData, match="home"):
+            drone.goto_local(2.0, 0.0, 3.0)
+        assert abs(pair.position[0] - 6.0) < 0.5  # it did not fly a guess
+        held.clear()
+        drone.goto_local(2.0, 0.0, 3.0)
+        assert math.dist(pair.position, (8.0, 0.0, 3.0)) <= 1.0
+    finally:
+        drone.close()
+        pair.close()

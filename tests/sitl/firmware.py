@@ -5,8 +5,11 @@ build is dronewrapper_sim.external.firmware's."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
+
+from dronewrapper_sim.external.firmware import arducopter, px4_sih
 
 PX4_ENV = "PX4_SITL_DIR"
 AP_ENV = "AP_SITL_DIR"
@@ -25,3 +28,14 @@ def px4_dir() -> Path | None:
 def ardupilot_dir() -> Path | None:
     """The ArduPilot tree ``AP_SITL_DIR`` names (None: tier off)."""
     return _dir(AP_ENV)
+
+
+def start(
+    autopilot: str, workdir: Path, serial: tuple[str, int] | None = None
+) -> contextlib.AbstractContextManager:
+    """The firmware of ``autopilot`` (``px4``: PX4 SIH, ``ardupilot``: ArduCopter) from the
+    tree its variable names, running in ``workdir`` until the context ends; ``serial`` (device,
+    baud): its MAVLink on that serial device too (see dronewrapper_sim.external.firmware)."""
+    if autopilot == "px4":
+        return px4_sih(px4_dir(), workdir, serial=serial)
+    return arducopter(ardupilot_dir(), workdir, serial=serial)

@@ -4,7 +4,13 @@ network namespace: once home is known, push a two-item mission with two rally po
 mission_type MAV_MISSION_TYPE_RALLY), and clear it with an empty list. Then upload
 them again, fly the mission (its last item 8 m from the first rally point, 22 m from home),
 return (mission/control ``return``) and report where it landed and how high it flew.
-Prints one JSON line; exits 0 when it ran to the end.
+
+On ArduCopter the envelope's ceiling is 15 m (:data:`CEILING_M`) and its user had set
+``RTL_CLIMB_MIN_M`` to 10 m (a return from the mission's 6 m would climb to 16 m): the bridge
+keeps the return heights under the ceiling (autopilot_limits.py) and refuses a rally point at
+14.5 m (a return there flies at the point's altitude: rally_returns.py). On PX4 the ceiling is
+the default 120 m (its rule adds the return altitude to a rally point's: 5 m points and
+its 30 m need more than 15 m). Prints one JSON line; exits 0 when it ran to the end.
 
     python rally_upload.py px4 'udpin:127.0.0.1:14547'
     python rally_upload.py ardupilot 'tcp:127.0.0.1:5790'
@@ -19,15 +25,32 @@ import time
 
 from real_pair import RealPair
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.geodesy import to_geodetic
-from dronewrapper.msgs.mavros import CommandBool, CommandTOL, SetMode
-from dronewrapper.msgs.mission import NAV_RALLY_POINT, MissionControl, Waypoint, WaypointPush
-from dronewrapper_bridge_mavlink import actions, missions, uploads
+from dronewrapper.msgs.mavros import (
+    CommandBool,
+    CommandTOL,
+    ParamGet,
+    ParamSet,
+    ParamValue,
+    SetMode,
+)
+from dronewrapper.msgs.mission import (
+    NAV_RALLY_POINT,
+    EnvelopeSet,
+    MissionControl,
+    Waypoint,
+    WaypointPush,
+)
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_mavlink import actions, missions, parameters, uploads
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 
 RALLY = [(30.0, 0.0, 5.0), (-20.0, 25.0, 8.0)]  # ENU m from home, m above home
 MISSION = [(10.0, 0.0, 6.0), (22.0, 0.0, 6.0)]
+CEILING_M = {"ardupilot": 15.0, "px4": 120.0}
+USER_CLIMB_MIN_M = 10.0  # ArduCopter RTL_CLIMB_MIN_M as its user left it
 
 
 def pull_rally(core, _request=None):
@@ -56,12 +79,37 @@ def fly(pair: RealPair, kind: str, items: list, rally: list, report: dict) -> No
     report["rtl"] = pair.call(actions.control, MissionControl(action="return")).message
     start = time.monotonic()
     report["rtl_landed"] = pair.run(150.0, until=lambda: not pair.armed)
-    hx, hy, hz = pair.core.missions.home_local
-    x, y = pair.position[0] - hx, pair.position[1] - hy
+    x, y = pair.position[0], pair.position[1]
     report["landed_enu_from_home"] = (round(x, 2), round(y, 2))
     report["landed_from_rally_0_m"] = round(math.hypot(x - RALLY[0][0], y - RALLY[0][1]), 2)
-    report["rtl_max_height_m"] = round(max(p[2] for t, p, _ in pair.track if t >= start) - hz, 2)
+    report["rtl_max_height_m"] = round(max(p[2] for t, p, _ in pair.track if t >= start), 2)
     report["texts"] = [t for t in pair.texts if "RTL" in t or "rally" in t.lower()][-6:]
+
+
+def param(pair: RealPair, name: str) -> float | None:
+    got = pair.call(parameters.param_get, ParamGet(param_id=name))
+    return got.value.as_number() if got.success else None
+
+
+def ardupilot_limits(pair: RealPair, report: dict, home) -> None:
+    """The user's RTL_CLIMB_MIN_M, then the 15 m envelope: the return heights the bridge
+    keeps, and a rally point at 14.5 m refused."""
+    climb = ParamSet(param_id="RTL_CLIMB_MIN_M", value=ParamValue.of(USER_CLIMB_MIN_M))
+    assert pair.call(parameters.param_set, climb).success, "RTL_CLIMB_MIN_M not set"
+    envelope = Envelope(max_altitude=CEILING_M["ardupilot"])
+    assert pair.call(missions.set_envelope, EnvelopeSet(envelope=envelope)).success
+    key = (pair.core.autopilot, envelope)
+    pair.run(20.0, until=lambda: pair.core.missions.limits.written_for == key)
+    report["limits_problem"] = pair.core.missions.limits.problem
+    names = ("RTL_ALT_M", "RTL_CLIMB_MIN_M", "RTL_ALT_FINAL_M", "RTL_ALT_TYPE")
+    report["return_params"] = {name: param(pair, name) for name in names}
+    lat, lon = to_geodetic(home, 30.0, 0.0)
+    high = Waypoint(command=NAV_RALLY_POINT, x_lat=lat, y_long=lon, z_alt=14.5)
+    try:
+        pair.call(missions.push, WaypointPush(waypoints=[], rally=[high]))
+        report["high_rally_refused"] = ""
+    except ServiceError as exc:
+        report["high_rally_refused"] = str(exc)
 
 
 def main(kind: str, connection: str) -> int:
@@ -74,6 +122,9 @@ def main(kind: str, connection: str) -> int:
         )
         assert ready, "no heartbeat and home within 90 s"
         home = pair.core.missions.home_geo
+        report["ceiling_m"] = CEILING_M[kind]
+        if kind == "ardupilot":
+            ardupilot_limits(pair, report, home)
         items = [
             Waypoint(x_lat=lat, y_long=lon, z_alt=z)
             for lat, lon, z in ((*to_geodetic(home, x, y), z) for x, y, z in MISSION)

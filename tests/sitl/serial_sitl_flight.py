@@ -1,17 +1,17 @@
 """One flight over a serial line at a real baud rate to real firmware, run by
-tests/sitl/test_serial_sitl.py inside a private network namespace (the firmware's ports and
-PX4's instance lock are fixed). Prints one JSON line of figures; exits 0 when it ran to the end.
+tests/sitl/test_serial_sitl.py inside a private network namespace (a free firmware instance, or
+``DRONEWRAPPER_SITL_INSTANCE``: PX4's instance lock is machine-wide). Prints one JSON line of
+figures; exits 0 when it ran to the end.
 
     python serial_sitl_flight.py px4 57600 PX4_BUILD_DIR WORKDIR
     python serial_sitl_flight.py ardupilot 921600 ARDUPILOT_TREE WORKDIR [signed]
 
-The line: a pseudo-terminal pair for the bridge, paced at ``baud / 10`` B/s each way behind the
-autopilot's 1 kB transmit buffer, and a second pseudo-terminal that the firmware opens as its
-own serial port (dronewrapper_sim.serial_relay with ``pty``; the autopilot's transmit buffer
-that of a Pixhawk's TELEM port, :data:`TX_BUFFER_BYTES`): PX4 runs a MAVLink instance on it
-(``mavlink start -d DEVICE -b BAUD -m onboard``, a companion computer's TELEM2 setup, its data
-rate left to PX4: baud / 20 B/s), ArduCopter its SERIAL0 (``--serial0 uart:DEVICE:BAUD``,
-``SERIAL0_BAUD`` to match). The firmware sizes its streams to the baud as on a flight
+The line: a pseudo-terminal pair for the bridge, paced at ``baud / 10`` B/s each way, and a
+second pseudo-terminal that the firmware opens as its own serial port (serial_taps.paced_relay;
+the autopilot's transmit buffer that of a Pixhawk's TELEM port). The firmware is started by
+dronewrapper_sim.external.firmware with ``serial``: PX4 runs a MAVLink instance on it in onboard
+mode (a companion computer's TELEM2 setup, its data rate left to PX4: baud / 20 B/s),
+ArduCopter its SERIAL0. The firmware sizes its streams to the baud as on a flight
 controller, the bridge fits its stream requests to the line, and the SDK flies: Listing 1
 (take off, turn, move, land), a parameter sweep, a 20-item mission upload, then a small square
 mission flown. ``signed``: a new MAVLink 2 signing key is provisioned on the autopilot over the
@@ -22,16 +22,14 @@ checks every frame with it (ArduCopter; PX4 at this version has no MAVLink signi
 from __future__ import annotations
 
 import collections
-import contextlib
 import json
 import math
-import subprocess
+import os
 import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
-from pymavlink.dialects.v20 import ardupilotmega as dialect
+from serial_taps import paced_relay
 
 from dronewrapper import CommandRefused, DroneWrapper
 from dronewrapper.geodesy import to_geodetic
@@ -39,12 +37,10 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper.security.keystore import KeyStore
 from dronewrapper_bridge_mavlink.provision import provision
-from dronewrapper_sim.serial_line import SerialLine
+from dronewrapper_sim.external.firmware import arducopter, px4_sih
 from dronewrapper_sim.serial_relay import SerialRelay
 from support import Process, free_endpoint, python_module, wait_for, zenoh_router
 
-PX4_INSTANCE = 5  # the namespace is private; the instance lock (/tmp/px4-sock-N) is not
-AP_INSTANCE = 1
 READY_TIMEOUT_S = 180.0  # GNSS fix and the estimator's checks (ArduCopter: ~40 s)
 PARAMS = {  # read all, write the first two (a new value, then the old one back)
     "px4": ["MPC_XY_VEL_MAX", "NAV_ACC_RAD", "MPC_Z_VEL_MAX_UP", "MIS_TAKEOFF_ALT",
@@ -52,71 +48,7 @@ PARAMS = {  # read all, write the first two (a new value, then the old one back)
     "ardupilot": ["WP_SPD", "WP_RADIUS_M", "WP_SPD_UP", "WP_SPD_DN", "PILOT_SPD_UP",
                   "FENCE_ENABLE"],
 }  # fmt: skip
-TX_BUFFER_BYTES = 3000
-"""The autopilot's transmit buffer toward the bridge: a Pixhawk's TELEM port (NuttX
-``CONFIG_USARTn_TXBUFSIZE`` on fmu-v5/v6x). PX4 SITL writes its bursts to the pseudo-terminal
-unchecked (no free-space query on Linux), as it would into that buffer."""
 SQUARE_M = 8.0  # the flown mission: a square of this side at 5 m, starting 8 m north of home
-
-
-class CountingLine(SerialLine):
-    """The autopilot's side of the line, counting the frames it offers by message name."""
-
-    def __init__(self, baud: int, *, now: float) -> None:
-        super().__init__(baud, buffer_bytes=TX_BUFFER_BYTES, now=now)
-        self.offered: collections.Counter[str] = collections.Counter()
-
-    def offer(self, frame: bytes, now: float) -> bool:
-        msgid = frame[7] | frame[8] << 8 | frame[9] << 16 if frame[0] == 0xFD else frame[5]
-        kind = dialect.mavlink_map.get(msgid)
-        self.offered[kind.msgname if kind else str(msgid)] += 1
-        return super().offer(frame, now)
-
-
-@contextlib.contextmanager
-def px4(build: Path, work: Path, device: str, baud: int) -> Iterator[Path]:
-    """PX4 SITL (SIH quad) with a MAVLink instance on ``device``; yields its log path."""
-    home = work / "px4"
-    (home / "rootfs").mkdir(parents=True, exist_ok=True)
-    for name in ("bin", "etc"):
-        if not (home / name).exists():
-            (home / name).symlink_to(build / name)
-    env = {"PX4_SIM_MODEL": "sihsim_quadx", "PX4_SIMULATOR": "sihsim", "HEADLESS": "1"}
-    log = work / "px4.log"
-    proc = Process(["../bin/px4", "-i", str(PX4_INSTANCE), "-d"], log, env=env, cwd=home / "rootfs")
-    try:
-        start = [str(build / "bin" / "px4-mavlink"), "--instance", str(PX4_INSTANCE), "start",
-                 "-d", device, "-b", str(baud), "-m", "onboard"]  # fmt: skip
-
-        def started() -> bool:  # the client's status can be lost while PX4 boots: its log says
-            if f"on {device} @" in log.read_text(errors="replace"):
-                return True
-            return subprocess.run(start, capture_output=True, timeout=10).returncode == 0
-
-        wait_for(started, 60, interval=1.0, what="PX4's MAVLink instance on the serial device")
-        yield log
-    finally:
-        proc.stop(10)
-        Path(f"/tmp/px4-sock-{PX4_INSTANCE}").unlink(missing_ok=True)  # PX4 leaves its socket
-
-
-@contextlib.contextmanager
-def arducopter(tree: Path, work: Path, device: str, baud: int) -> Iterator[Path]:
-    """ArduCopter SITL (quad, copter defaults, wiped parameters) with SERIAL0 on ``device``."""
-    extra = work / "serial0.parm"
-    extra.write_text(f"SERIAL0_BAUD {baud // 1000}\nSERIAL0_PROTOCOL 2\n")
-    defaults = tree / "Tools" / "autotest" / "default_params" / "copter.parm"
-    argv = [
-        str(tree / "build" / "sitl" / "bin" / "arducopter"), "--model", "quad", "--speedup", "1",
-        f"-I{AP_INSTANCE}", "-w", "--defaults", f"{defaults},{extra}",
-        "--serial0", f"uart:{device}:{baud}",
-    ]  # fmt: skip
-    log = work / "arducopter.log"
-    proc = Process(argv, log, cwd=work)
-    try:
-        yield log
-    finally:
-        proc.stop(10)
 
 
 class Watch:
@@ -288,13 +220,13 @@ def fly(kind: str, relay: SerialRelay, drone: DroneWrapper, report: dict) -> Non
 
 def main(kind: str, baud: int, firmware: Path, work: Path, signed: bool = False) -> int:
     report: dict = {"autopilot": kind, "baud": baud, "signed": signed}
-    with SerialRelay(baud, pty=True) as relay:
-        relay.down = CountingLine(baud, now=time.monotonic())  # before any byte comes
-        start = px4 if kind == "px4" else arducopter
+    with paced_relay(baud) as relay:
+        start = px4_sih if kind == "px4" else arducopter
         config = [] if kind == "px4" else [
             "--config", "services/bridge_mavlink/dronewrapper_bridge_mavlink/config/"
             "ardupilot_sitl.yaml"]  # fmt: skip
-        with start(firmware, work, relay.autopilot_path, baud), zenoh_router(free_endpoint()) as r:
+        serial = (relay.autopilot_path, baud)
+        with start(firmware, work, serial=serial), zenoh_router(free_endpoint()) as r:
             if signed:
                 store = KeyStore(work / "keys")
                 key = store.new_mavlink_key()
@@ -318,6 +250,7 @@ def main(kind: str, baud: int, firmware: Path, work: Path, signed: bool = False)
                 report["bridge_warnings"] = [
                     line[-200:] for line in bridge.output().splitlines() if "WARNING" in line
                 ][-6:]
+    report["load_average"] = [round(x, 1) for x in os.getloadavg()]  # the machine's, at the end
     print(json.dumps(report), flush=True)
     return 0 if report.get("ok") else 1
 

@@ -16,13 +16,11 @@ from __future__ import annotations
 
 import contextlib
 
+import firmware
 import pytest
 from busy_core import one_core_busy
-from firmware import ardupilot_dir, px4_dir
 from scenario_flight import fly, record_result
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
-
-from dronewrapper_sim.external.firmware import arducopter, px4_sih
 
 pytestmark = [pytest.mark.timeout(420)]
 
@@ -30,10 +28,16 @@ SCENARIOS = ("beacon_smooth", "beacon_abrupt", "person_moving", "people_crossing
 START_TIMEOUT_S = {"px4": 90.0, "ardupilot": 150.0}  # graph up -> servoing (GPS fix, take-off)
 
 
-def firmware(autopilot: str, tmp_path):
-    if autopilot == "px4":
-        return px4_sih(px4_dir(), tmp_path)
-    return arducopter(ardupilot_dir(), tmp_path)
+def judge(flight, scenario: str) -> None:
+    """The scenario tier's thresholds for ``scenario`` (test_follow_scenarios.CASES)."""
+    _graph, _detector, _seconds, max_acquire, min_centred, min_distance = CASES[scenario]
+    s = flight.summary
+    detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
+    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
+    assert s.samples > 50, detail
+    assert s.time_to_acquire <= max_acquire, detail
+    assert s.centred_share >= min_centred, detail
+    assert s.distance_share >= min_distance, detail
 
 
 @pytest.mark.parametrize(
@@ -48,7 +52,7 @@ def test_follow_on_real_firmware(autopilot, scenario, tmp_path):
     sim_graph, detector, seconds, max_acquire, min_centred, min_distance = CASES[scenario]
     app = "color" if sim_graph == "sim_follow_color" else "person"
     graph = f"{autopilot}_sitl_follow_{app}"
-    with firmware(autopilot, tmp_path) as fw:
+    with firmware.start(autopilot, tmp_path) as fw:
         variables = dict(fw.variables)
         if app == "person":
             variables["detector"] = detector
@@ -57,18 +61,12 @@ def test_follow_on_real_firmware(autopilot, scenario, tmp_path):
             variables["detect_rate_hz"] = LOADED_DETECT_RATE_HZ
         with loaded:
             flight = fly(graph, scenario, seconds, tmp_path, variables, START_TIMEOUT_S[autopilot])
-    s = flight.summary
     print(f"{fw.version}: {flight.describe()}")
     ages = [line for line in flight.log.splitlines() if "pose age" in line]
     print(ages[-1] if ages else "no pose-age report in the log")
     passed = passes(flight, max_acquire, min_centred, min_distance)
     crossings = sum(crossed(x) for x in flight.samples) if scenario in CROSSING else None
     record_result(flight, f"follow_{app}", autopilot, fw.version, passed)
-    detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
-    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
-    assert s.samples > 50, detail
-    assert s.time_to_acquire <= max_acquire, detail
-    assert s.centred_share >= min_centred, detail
-    assert s.distance_share >= min_distance, detail
+    judge(flight, scenario)
     if scenario in CROSSING:
         assert crossings > 0, "no passer-by crossed the line of sight: the test proves nothing"

@@ -107,11 +107,20 @@ def test_px4_sitl_mission_rtl_and_fence(tmp_path):
 def _judge_rally(report: dict) -> None:
     """The rally points read back (MISSION_REQUEST_LIST, mission_type rally) as uploaded, an
     empty list clears them, and a return 8 m from the first (22 m from home) lands there:
-    PX4 SIH 0.65 m from it, ArduCopter 0.01 m (2026-11-28)."""
+    PX4 SIH 0.65 m from it, ArduCopter 0.02-0.03 m (2026-11-28), never above the ceiling. On
+    ArduCopter (15 m ceiling, its user's RTL_CLIMB_MIN_M 10 m) the bridge keeps its return
+    heights under it (the return peaked at 14.02 m) and refuses a rally point at 14.5 m."""
     assert report["push"].endswith("and 2 rally point(s)"), report
     assert report["same"] and report["after_clear"] == 0, report
     assert {item[0] for item in report["rally_read_back"]} == {5100}, report
     assert report["rtl_landed"] and report["landed_from_rally_0_m"] < 1.5, report
+    assert report["rtl_max_height_m"] <= report["ceiling_m"], report
+    if report["autopilot"] == "ardupilot":
+        assert report["limits_problem"] == "", report
+        kept = report["return_params"]
+        assert kept["RTL_ALT_M"] <= 14.0 and kept["RTL_CLIMB_MIN_M"] == 0.0, report
+        assert kept["RTL_ALT_FINAL_M"] <= 14.0 and kept["RTL_ALT_TYPE"] == 0, report
+        assert "rally point 0: an ArduCopter return" in report["high_rally_refused"], report
 
 
 @pytest.mark.timeout(TIMEOUT_S + 60)

@@ -24,11 +24,18 @@ def test_px4_return_altitude_is_capped_under_the_ceiling_and_the_fence_acts_as_a
     assert low == {"RTL_RETURN_ALT": 5.0, "RTL_DESCEND_ALT": 5.0, "GF_ACTION": 5.0}
 
 
-def test_ardupilot_return_altitude_is_in_centimetres():
+def test_ardupilot_return_heights_in_metres_and_centimetres_stay_under_the_ceiling():
+    """The return altitude, the final height over the destination (a higher one climbs
+    there), no added climb, heights above home (rally_returns.py has the rule)."""
     assert al.wanted("ardupilotmega", Envelope(max_altitude=10.0, breach_action="hold")) == [
         ("RTL_ALT_M", 9.0, al.AT_MOST),
         ("RTL_ALT", 900.0, al.AT_MOST),
         ("FENCE_ACTION", 4.0, al.EXACTLY),
+        ("RTL_ALT_TYPE", 0.0, al.EXACTLY),
+        ("RTL_ALT_FINAL_M", 9.0, al.AT_MOST),
+        ("RTL_ALT_FINAL", 900.0, al.AT_MOST),
+        ("RTL_CLIMB_MIN_M", 0.0, al.AT_MOST),
+        ("RTL_CLIMB_MIN", 0.0, al.AT_MOST),
     ]
 
 
@@ -45,12 +52,16 @@ def test_return_altitude_bounds(ceiling, expected):
     assert al.return_altitude(Envelope(max_altitude=ceiling)) == expected
 
 
-def _sync_on_ardupilot(has: dict[str, tuple[float, int]]) -> tuple[str, dict[str, float]]:
-    """Run :func:`al.sync` on a connected ArduPilot core that answers for the parameters in
-    ``has`` (name -> (value, MAV_PARAM_TYPE)) and stays silent for any other (as ArduPilot does
-    for a name it does not have); its result and the values it was asked to write."""
-    rig = CoreRig(autopilot=ARDUPILOT).connect()
-    rig.run(0.5)
+def _sync_on_ardupilot(
+    has: dict[str, tuple[float, int]], rig: CoreRig | None = None
+) -> tuple[str, dict[str, float]]:
+    """Run :func:`al.sync` on a connected ArduPilot core (``rig``'s, or a new one) that
+    answers for the parameters in ``has`` (name -> (value, MAV_PARAM_TYPE)) and stays silent
+    for any other (as ArduPilot does for a name it does not have); its result and the values
+    it was asked to write."""
+    if rig is None:
+        rig = CoreRig(autopilot=ARDUPILOT).connect()
+        rig.run(0.5)
     since = rig.now
     op = rig.call(lambda core, _request: al.sync_steps(core), None)
     written: dict[str, float] = {}
@@ -73,22 +84,54 @@ def _sync_on_ardupilot(has: dict[str, tuple[float, int]]) -> tuple[str, dict[str
 
 
 REAL32, INT16, INT8 = 9, 4, 2  # MAV_PARAM_TYPE
+ARDUPILOT_4_8 = {  # ArduCopter 4.8 as a user left it: its return climbs 5 m, ends at 130 m
+    "RTL_ALT_M": (150.0, REAL32),
+    "FENCE_ACTION": (1.0, INT8),
+    "RTL_ALT_TYPE": (1.0, INT8),
+    "RTL_ALT_FINAL_M": (130.0, REAL32),
+    "RTL_CLIMB_MIN_M": (5.0, REAL32),
+}
 
 
-def test_ardupilot_4_8_gets_its_return_altitude_in_metres_as_rtl_alt_m():
-    problem, written = _sync_on_ardupilot(
-        {"RTL_ALT_M": (150.0, REAL32), "FENCE_ACTION": (1.0, INT8)}  # no RTL_ALT any more
-    )
-    assert problem == "" and written == {"RTL_ALT_M": 119.0}  # under the 120 m default ceiling
+def test_ardupilot_4_8_gets_its_return_heights_in_metres():
+    problem, written = _sync_on_ardupilot(dict(ARDUPILOT_4_8))  # no RTL_ALT etc. any more
+    assert problem == ""
+    assert written == {  # under the 120 m default ceiling
+        "RTL_ALT_M": 119.0,
+        "RTL_ALT_TYPE": 0.0,
+        "RTL_ALT_FINAL_M": 119.0,
+        "RTL_CLIMB_MIN_M": 0.0,
+    }
+
+
+def test_the_names_an_ardupilot_does_not_have_are_asked_once():
+    """4.8 has no RTL_ALT, RTL_ALT_FINAL, RTL_CLIMB_MIN: each costs the read's attempts once,
+    not at every new envelope."""
+    rig = CoreRig(autopilot=ARDUPILOT).connect()
+    rig.run(0.5)
+    _sync_on_ardupilot(dict(ARDUPILOT_4_8), rig)
+    rig.core.missions.envelope = Envelope(max_altitude=15.0)
+    since = rig.now
+    problem, written = _sync_on_ardupilot(dict(ARDUPILOT_4_8), rig)
+    assert problem == "" and written["RTL_ALT_M"] == 14.0
+    asked = {m.param_id for m in rig.sent_since(since) if m.get_type() == "PARAM_REQUEST_READ"}
+    assert asked == set(ARDUPILOT_4_8)
 
 
 def test_ardupilot_before_4_8_gets_rtl_alt_in_centimetres():
     problem, written = _sync_on_ardupilot(
-        {"RTL_ALT": (15000.0, INT16), "FENCE_ACTION": (1.0, INT8)}
+        {
+            "RTL_ALT": (15000.0, INT16),
+            "FENCE_ACTION": (1.0, INT8),
+            "RTL_ALT_TYPE": (0.0, INT8),
+            "RTL_ALT_FINAL": (0.0, INT16),
+            "RTL_CLIMB_MIN": (200.0, INT16),
+        }
     )
-    assert problem == "" and written == {"RTL_ALT": 11900.0}
+    assert problem == "" and written == {"RTL_ALT": 11900.0, "RTL_CLIMB_MIN": 0.0}
 
 
 def test_an_ardupilot_with_neither_return_altitude_says_so():
-    problem, _ = _sync_on_ardupilot({"FENCE_ACTION": (1.0, INT8)})
+    has = {k: v for k, v in ARDUPILOT_4_8.items() if k != "RTL_ALT_M"}
+    problem, _ = _sync_on_ardupilot(has)
     assert problem == "RTL_ALT_M / RTL_ALT: no such parameter answered"

@@ -178,3 +178,25 @@ def test_the_mavlink_relay_reads_setpoints_from_real_datagrams():
     heartbeat = mavlink2.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(link)
     assert parse_setpoint(heartbeat) is None
     assert parse_setpoint(b"\x00\x01") is None
+
+
+def test_each_setpoint_is_joined_to_the_first_frame_with_its_values_after_its_send():
+    from bench.budget import setpoint_paths
+
+    slow, turn = (1.0, 0.0, 0.2), (0.0, 0.0, 0.5)
+    setpoints = {  # frame stamp -> (sent, key)
+        10.000: (10.020, slow),
+        10.033: (10.050, slow),  # the same values again: the next frame, not the first
+        10.066: (10.080, turn),
+        10.100: (math.nan, turn),  # sent time unknown: never joined
+    }
+    frames = [(10.045, slow), (10.060, slow), (10.030, slow), (10.500, turn)]  # unsorted
+    paths = setpoint_paths(setpoints, frames, window_s=0.1)
+    assert [p.stamp for p in paths] == [10.000, 10.033, 10.066, 10.100]
+    assert paths[0].out == pytest.approx(10.030)
+    assert paths[0].glass_to_out == pytest.approx(0.030)
+    assert paths[0].sent_to_out == pytest.approx(0.010)
+    assert paths[1].out == pytest.approx(10.060)  # 10.045 was before its send
+    assert math.isnan(paths[2].out)  # its frame came 0.42 s after the send: outside the window
+    assert math.isnan(paths[3].out)
+    assert setpoint_paths(setpoints, frames, window_s=0.5)[2].out == pytest.approx(10.500)

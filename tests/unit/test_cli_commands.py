@@ -34,8 +34,9 @@ def test_every_stack_command_is_declared_by_a_distribution_and_resolves():
 
 
 def test_the_sdk_declares_no_stack_command():
-    project = tomllib.loads((REPO / "sdk" / "pyproject.toml").read_text())["project"]
-    assert cli.COMMANDS_GROUP not in project.get("entry-points", {})
+    for part in ("contract", "runtime", "sdk", "tools"):
+        project = tomllib.loads((REPO / part / "pyproject.toml").read_text())["project"]
+        assert cli.COMMANDS_GROUP not in project.get("entry-points", {}), part
 
 
 def test_the_installed_entry_points_are_the_declared_ones():

@@ -21,7 +21,18 @@ import pytest
 
 from support import REPO
 
-CODE_DIRS = ("sdk", "services", "sim", "compose", "bench", "examples", "tests/replay")
+CODE_DIRS = (
+    "contract",
+    "runtime",
+    "sdk",
+    "tools",
+    "services",
+    "sim",
+    "compose",
+    "bench",
+    "examples",
+    "tests/replay",
+)
 
 DRONEWRAPPER = [
     "router", "echo", "alive", "doctor", "keys", "mavlink-forward", "up", "sim", "detect",
@@ -157,16 +168,16 @@ def test_every_parser_is_a_command_parser_or_refuses_abbreviations():
 def test_every_command_of_the_project_is_checked():
     """A new command module appears in the parametrised test above."""
     built = set()
-    for folder in ("sdk", "services", "sim", "compose", "bench"):
+    for folder in ("contract", "runtime", "sdk", "tools", "services", "sim", "compose", "bench"):
         for path in (REPO / folder).rglob("*.py"):
             text = path.read_text()
             if "CommandParser(" in text and "class CommandParser" not in text:
                 built.add(path.relative_to(REPO).as_posix())
     covered = {
-        "sdk/dronewrapper/cli.py",
-        "sdk/dronewrapper/record/cli.py",
-        "sdk/dronewrapper/security/keys_cli.py",
-        "sdk/dronewrapper/runtime/service.py",
+        "tools/dronewrapper/cli.py",
+        "tools/dronewrapper/record/cli.py",
+        "tools/dronewrapper/keys_cli.py",
+        "runtime/dronewrapper/runtime/service.py",
         "compose/dronewrapper_compose/up.py",
         "compose/dronewrapper_compose/demo.py",
         "services/perception/dronewrapper_perception/detect_cli.py",

@@ -16,7 +16,7 @@ HISTORY = re.compile(
     re.IGNORECASE,
 )
 OUTSIDE = re.compile(r"\bDESIGN\.md\b")  # a document outside the repository (ours: docs/design.md)
-CODE = ["sdk", "services", "sim", "compose", "bench", "examples"]
+CODE = ["contract", "runtime", "sdk", "tools", "services", "sim", "compose", "bench", "examples"]
 # dronewrapper/drone.py is being split into smaller modules by a change of its own, which
 # removes its size note with it
 SPLIT_ELSEWHERE = {"sdk/dronewrapper/drone.py"}

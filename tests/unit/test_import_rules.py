@@ -2,9 +2,12 @@
 
 Floors from the bottom:
 
-- the contract, ``dronewrapper.msgs`` (the messages, the keys and plain data such as the
-  envelope): it imports nothing of ours but itself;
-- the rest of the SDK, ``dronewrapper`` (the runtime and the thin client a laptop installs);
+- the contract, ``dronewrapper.msgs`` (``contract/``: the messages, the keys and plain data
+  such as the envelope): it imports nothing of ours but itself;
+- the runtime, ``dronewrapper.runtime`` and ``dronewrapper.security`` (``runtime/``): it
+  imports only the contract;
+- the thin client a laptop installs, the rest of ``dronewrapper`` (``sdk/``);
+- the tools (``tools/``: the ``dronewrapper`` command, doctor, echo, record, router, keys);
 - the libraries the on-board side shares and no laptop needs: the bridges' rules
   (``dronewrapper_bridge_base``) and the ROS 2 codec (``dronewrapper_ros2_codec``);
 - the services (one package each under ``services/``): a service imports no other service;
@@ -12,12 +15,12 @@ Floors from the bottom:
   (``dronewrapper.runtime.host``), never by importing each other;
 - the simulator, then the graphs (``dronewrapper_compose``, which names them all).
 
-A package imports only floors below it. The SDK's tools (``dronewrapper`` CLI, doctor, record,
-...) may name on-board packages below the graphs (the CLI finds the stack's subcommands through
-entry points and names none); the rest of the SDK imports a tool only inside a function, so
-that ``import dronewrapper`` never loads them. :data:`KNOWN` lists the imports that break a
-rule, each with its file: it is empty, and may only shrink (a new break fails, and so does a
-listed one that is gone, so the list stays true).
+A package imports only floors below it. The four distributions of ``dronewrapper`` (contract,
+runtime, client, tools) each import only those below them; the tools may name on-board packages
+below the graphs (the CLI finds the stack's subcommands through entry points and names none),
+and nothing below the tools names a tool, so that a laptop installs the client without them.
+:data:`KNOWN` lists the imports that break a rule, each with its file: it is empty, and may
+only shrink (a new break fails, and so does a listed one that is gone, so the list stays true).
 
 Within and across floors, no import circle: :data:`KNOWN_CIRCLES`, empty too, may only shrink
 the same way. A module that calls back into the object that imports it names that object
@@ -42,16 +45,9 @@ SERVICE_PACKAGES = PACKAGES - LIBRARIES
 SDK = {"dronewrapper", "drone_wrapper"}
 CONTRACT = "dronewrapper.msgs"
 COMPOSE = "dronewrapper_compose"
-TOOLS = (
-    "sdk/dronewrapper/__main__.py",
-    "sdk/dronewrapper/cli.py",
-    "sdk/dronewrapper/doctor.py",
-    "sdk/dronewrapper/echo.py",
-    "sdk/dronewrapper/mavlink_forward.py",
-    "sdk/dronewrapper/record/",
-    "sdk/dronewrapper/router.py",
-    "sdk/dronewrapper/security/keys_cli.py",
-)
+SDK_PARTS = ("contract", "runtime", "sdk", "tools")
+"""The distributions of the ``dronewrapper`` package, each importing only those before it."""
+TOOLS = "tools/"
 """The SDK's tools: the only SDK modules that may name on-board packages."""
 
 KNOWN: set[tuple[str, str]] = set()
@@ -116,7 +112,7 @@ class Source(NamedTuple):
 @cache
 def sources() -> dict[str, Source]:
     """Each source file of a distribution (repo-relative path) -> what it is and imports."""
-    roots = [REPO / "sdk", REPO / "sim", REPO / "compose"]
+    roots = [REPO / part for part in SDK_PARTS] + [REPO / "sim", REPO / "compose"]
     roots += [p.parent for p in sorted((REPO / "services").glob("*/pyproject.toml"))]
     found = {}
     for root in roots:
@@ -147,10 +143,20 @@ def is_tool(relative: str) -> bool:
     return relative.startswith(TOOLS)
 
 
+def part_of(module: str) -> str | None:
+    """Which distribution of ``dronewrapper`` holds ``module`` (None: not ours, or not there)."""
+    parts = module.split(".")
+    for n in range(len(parts), 0, -1):
+        path = "/".join(parts[:n])
+        for part in SDK_PARTS:
+            there = (REPO / part / f"{path}.py").is_file() or (REPO / part / path).is_dir()
+            if there and (n > 1 or part == "sdk"):
+                return part
+    return None
+
+
 def names_a_tool(found: Import) -> bool:
-    parts = found.module.split(".")
-    paths = ("sdk/" + "/".join(parts[:n]) for n in range(1, len(parts) + 1))
-    return any(is_tool(path + ".py") or is_tool(path + "/") for path in paths)
+    return part_of(found.module) == "tools"
 
 
 @cache
@@ -181,7 +187,7 @@ def test_the_contract_imports_nothing_of_ours_but_itself():
     wrong = [
         (relative, i.module)
         for relative, (_, _, imports) in sources().items()
-        if relative.startswith("sdk/dronewrapper/msgs/")
+        if relative.startswith("contract/")
         for i in imports
         if is_ours(i.package) and not (i.module == CONTRACT or i.module.startswith(CONTRACT + "."))
     ]
@@ -199,22 +205,41 @@ def test_no_service_imports_another_service():
     assert wrong == []
 
 
+def test_each_distribution_of_the_sdk_imports_only_those_below_it():
+    """contract < runtime < client < tools, a lazy import included: a laptop's install of
+    the client (contract, runtime, client) never needs a tool."""
+    wrong = []
+    for relative, (_, _, imports) in sources().items():
+        part = relative.split("/")[0]
+        if part not in SDK_PARTS:
+            continue
+        below = SDK_PARTS[: SDK_PARTS.index(part) + 1]
+        for found in imports:
+            if found.package == "dronewrapper" and part_of(found.module) not in (*below, None):
+                wrong.append((relative, found.module))
+    assert wrong == []
+
+
 def test_the_thin_client_loads_no_bridge_rule_and_no_ros2_codec():
-    """Outside the tools, no SDK module names an on-board package (a lazy import included),
-    and none imports a tool but inside a function; the SDK's distribution does not depend on
-    them (``pip install ./sdk`` on a laptop)."""
+    """Outside the tools, no SDK module names an on-board package (a lazy import included);
+    the client's distribution depends only on the contract and the runtime (a laptop installs
+    ``./contract ./runtime ./sdk``)."""
     wrong = [
         (relative, i.module)
         for relative, (package, _, imports) in sources().items()
         if package in SDK and not is_tool(relative)
         for i in imports
-        if (is_ours(i.package) and i.package not in SDK) or (names_a_tool(i) and not i.lazy)
+        if (is_ours(i.package) and i.package not in SDK) or names_a_tool(i)
     ]
     assert wrong == []
-    project = tomllib.loads((REPO / "sdk" / "pyproject.toml").read_text())["project"]
-    extras = [r for extra in project["optional-dependencies"].values() for r in extra]
-    requirements = [*project["dependencies"], *extras]
-    assert not [r for r in requirements if r.startswith(("dronewrapper-", "dronewrapper_"))]
+    ours = ("dronewrapper-", "dronewrapper_")
+    allowed_parts = {"contract": set(), "runtime": {"dronewrapper-contract"}}
+    allowed_parts["sdk"] = {"dronewrapper-contract", "dronewrapper-runtime"}
+    for part, allowed_names in allowed_parts.items():
+        project = tomllib.loads((REPO / part / "pyproject.toml").read_text())["project"]
+        extras = [r for extra in project.get("optional-dependencies", {}).values() for r in extra]
+        named = {r.split("[")[0] for r in [*project["dependencies"], *extras] if r.startswith(ours)}
+        assert named <= allowed_names, (part, named)
 
 
 def test_the_simulator_does_not_import_the_graphs():
@@ -245,6 +270,14 @@ def test_the_rule_sees_an_import_from_a_higher_floor(tmp_path):
     assert "dronewrapper_ros2_gateway" not in allowed("dronewrapper_bridge_mavlink")
     assert "dronewrapper_ros2_codec" in allowed("dronewrapper_bridge_px4_zenoh")
     assert "dronewrapper_bridge_base" not in allowed("dronewrapper")
+    assert [part_of(m) for m in ("dronewrapper.msgs.registry", "dronewrapper.runtime.node")] == [
+        "contract",
+        "runtime",
+    ]
+    assert [part_of(m) for m in ("dronewrapper.DroneWrapper", "dronewrapper.cli.main")] == [
+        "sdk",
+        "tools",
+    ]
 
 
 def module_graph(found: dict[str, Source]) -> dict[str, set[str]]:

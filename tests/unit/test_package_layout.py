@@ -13,7 +13,9 @@ import tomllib
 
 REPO = Path(__file__).resolve().parents[2]
 SERVICES = sorted(p.parent for p in (REPO / "services").glob("*/pyproject.toml"))
-DISTRIBUTIONS = [REPO / "sdk", *SERVICES, REPO / "sim", REPO / "compose"]
+SDK_PARTS = [REPO / d for d in ("contract", "runtime", "sdk", "tools")]
+"""The ``dronewrapper`` package's four distributions."""
+DISTRIBUTIONS = [*SDK_PARTS, *SERVICES, REPO / "sim", REPO / "compose"]
 
 
 def packages_in_repo() -> list[tuple[str, Path]]:
@@ -80,3 +82,15 @@ def test_make_setup_installs_the_root_distribution_as_it_is():
     for install in installs:  # setup (with the test tools) and onboard (without)
         assert "-e '.[dev]'" not in install and "-e ." not in install.replace("-e ./", "")
     assert any(" '.[dev]'" in install for install in installs)
+
+
+def test_make_test_compiles_every_distributions_bytecode_before_the_suite():
+    """The suite's processes read compiled bytecode rather than each compiling every module
+    it imports (nothing writes it where PYTHONDONTWRITEBYTECODE is set)."""
+    makefile = (REPO / "Makefile").read_text()
+    bytecode = next(line for line in makefile.splitlines() if line.startswith("BYTECODE"))
+    assert "-m compileall" in bytecode and "$(DISTS)" in bytecode, bytecode
+    recipe = makefile.split("\ntest: ", 1)[1].split("\n\n", 1)[0].splitlines()[1:]
+    compiled = next(i for i, line in enumerate(recipe) if "$(BYTECODE)" in line)
+    suite = next(i for i, line in enumerate(recipe) if "-m pytest" in line)
+    assert compiled < suite, recipe

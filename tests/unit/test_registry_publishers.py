@@ -20,7 +20,9 @@ import pytest
 from dronewrapper.msgs.registry import TOPICS
 
 REPO = Path(__file__).resolve().parents[2]
-SDK = REPO / "sdk" / "dronewrapper"
+SDK = [REPO / d / "dronewrapper" for d in ("contract", "runtime", "sdk", "tools")]
+"""The four distributions of the ``dronewrapper`` package."""
+TOOLS = REPO / "tools" / "dronewrapper"
 
 SOURCES: dict[str, list[Path]] = {
     "bridge": [
@@ -29,10 +31,13 @@ SOURCES: dict[str, list[Path]] = {
     ],
     "bridge_tello": [REPO / "services/bridge_tello/dronewrapper_bridge_tello"],
     "sdk": [
-        p for p in SDK.rglob("*.py") if p.name != "mavlink_forward.py" and "record" not in p.parts
+        p
+        for root in SDK
+        for p in root.rglob("*.py")
+        if p.name != "mavlink_forward.py" and "record" not in p.parts
     ],
-    "gcs": [SDK / "mavlink_forward.py"],
-    "replay": [SDK / "record"],
+    "gcs": [TOOLS / "mavlink_forward.py"],
+    "replay": [TOOLS / "record"],
     "controller": [REPO / "services/controller/dronewrapper_controller"],
     "perception": [REPO / "services/perception/dronewrapper_perception"],
     "camera_victure": [REPO / "services/camera_victure/dronewrapper_camera_victure"],

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import pytest
 
 from dronewrapper_sim.tello.flight import Phase, TelloFlight
+from dronewrapper_sim.tello.params import TELLO, TelloEnvelope
 from dronewrapper_sim.tello.protocol import Reply, TelloProtocol, arc_through
 from dronewrapper_sim.tello.state_string import parse_state
 
@@ -24,8 +26,12 @@ DT = 0.01
 class Tello:
     """A protocol over a flight model, with a simulated clock."""
 
-    def __init__(self, battery_percent: float = 100.0, yaw: float = 0.0) -> None:
-        self.flight = TelloFlight(start=(0.0, 0.0, yaw), battery_percent=battery_percent)
+    def __init__(
+        self, battery_percent: float = 100.0, yaw: float = 0.0, envelope: TelloEnvelope = TELLO
+    ) -> None:
+        self.flight = TelloFlight(
+            start=(0.0, 0.0, yaw), envelope=envelope, battery_percent=battery_percent
+        )
         self.protocol = TelloProtocol(self.flight, baro_origin_m=100.0)
         self.now = 0.0
 
@@ -285,6 +291,52 @@ def test_rc_velocities_and_signs_in_enu():
     assert max(t.flight.env.rc_max_xy, 0) == pytest.approx(1.0)  # ~1 m/s at 100
 
 
+def test_a_flight_of_moves_turns_a_curve_a_flip_and_rc_in_one_sequence():
+    """The sequence a client flies after take-off and ``forward 50``, each answered ``ok`` when
+    finished, judged in ENU (the process's UDP, its ground truth on Zenoh and one of these
+    moves: tests/integration/test_sim_tello.py). Heading east at the start, as in
+    beacon_static."""
+    t = Tello().airborne()
+    assert t.blocking("forward 50") >= 0.5
+    p1 = t.position
+    t.blocking("up 30")
+    assert t.position[2] - p1[2] == pytest.approx(0.3, abs=0.1)
+    t.blocking("ccw 90")  # now heading north
+    assert parse_state(t.ask("attitude?"))["yaw"] == pytest.approx(-90, abs=3)  # ccw < 0
+    assert t.ask("speed 50") == "ok"
+    p2 = t.position
+    t.blocking("go 50 0 -30 60")  # forward (north) and down
+    p3 = t.position
+    assert (p3[0] - p2[0], p3[1] - p2[1], p3[2] - p2[2]) == pytest.approx((0, 0.5, -0.3), abs=0.1)
+    t.blocking("curve 60 60 0 120 0 0 60")
+    p4 = t.position
+    assert (p4[0] - p3[0], p4[1] - p3[1]) == pytest.approx((0.0, 1.2), abs=0.15)
+    t.blocking("flip b")
+    t.blocking("cw 90")  # east again
+
+    def velocity(command: str, seconds: float = 1.5) -> tuple[float, float, float]:
+        a = t.position
+        assert t.send(command) == []  # rc is never answered
+        t.run(seconds)
+        b = t.position
+        t.send("rc 0 0 0 0")
+        t.run(1.0)
+        return ((b[0] - a[0]) / seconds, (b[1] - a[1]) / seconds, (b[2] - a[2]) / seconds)
+
+    vx, vy, _ = velocity("rc 0 80 0 0")  # forward = east
+    assert vx > 0.3 and abs(vy) < 0.2
+    vx, vy, _ = velocity("rc 80 0 0 0")  # right = south
+    assert vy < -0.3 and abs(vx) < 0.2
+    _, _, vz = velocity("rc 0 0 60 0")  # up
+    assert vz > 0.2
+    yaw0 = t.flight.state.yaw
+    t.send("rc 0 0 0 60")  # clockwise: ENU yaw decreases
+    t.run(1.0)
+    t.send("rc 0 0 0 0")
+    turned = (t.flight.state.yaw - yaw0 + math.pi) % (2 * math.pi) - math.pi
+    assert math.degrees(turned) < -20
+
+
 def test_half_stick_gives_half_speed():
     t = Tello().airborne()
     t.send("rc 0 50 0 0")
@@ -304,6 +356,26 @@ def test_auto_land_after_15_s_without_a_command():
     assert t.blocking("land") < 5.0  # a land during the auto-landing: ok on the ground
     assert t.flight.phase is Phase.LANDED
     assert t.flight.state.z == pytest.approx(0.0, abs=0.01)
+
+
+def test_a_configured_auto_land_after_3_s_and_land_on_request():
+    """``--set tello.auto_land_s=3`` (the simulator builds its envelope so): a take-off and a
+    land are answered, on the ground the state says h 0; a second take-off lands by itself 3 s
+    after it finished (the auto-land timeout reaching a running process:
+    tests/integration/test_tello_bridge_sim.py)."""
+    t = Tello(envelope=replace(TELLO, auto_land_s=3.0)).airborne()
+    t.blocking("land")
+    assert parse_state_of(t)["h"] == 0
+    t.blocking("takeoff")
+    started = t.now
+    while t.flight.phase is not Phase.LANDING:
+        t.run(DT)
+        assert t.now - started < 15.0, "no auto-landing"
+    assert t.now - started == pytest.approx(3.0, abs=2 * DT)  # from the take-off's end
+    while parse_state_of(t)["h"] != 0:
+        t.run(DT)
+        assert t.now - started < 15.0, "the auto-landing never reached the ground"
+    assert t.now - started >= 2.5
 
 
 def test_rc_keeps_it_flying():

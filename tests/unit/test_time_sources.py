@@ -34,6 +34,11 @@ ALLOWED: dict[str, tuple[int, str]] = {
         "a serial line emulated between a pseudo-terminal and a socket: byte timing against "
         "real file descriptors (select), not a node",
     ),
+    "sim/dronewrapper_sim/external/firmware.py": (
+        3,
+        "starts real firmware, no node: retries PX4's MAVLink start, in real time, while the "
+        "real PX4 process boots",
+    ),
     "compose/dronewrapper_compose/launcher.py": (
         6,
         "supervises real OS processes (readiness deadlines, the run's duration)",

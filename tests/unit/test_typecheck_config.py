@@ -11,13 +11,16 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def _packages() -> set[str]:
-    """Each distribution's top-level package folder, relative to the repository."""
+    """Each distribution's top-level package folder, relative to the repository (a part of
+    ``dronewrapper`` from the contract, the runtime or the tools has no ``__init__.py``)."""
     found = set()
     for project in REPO.glob("**/pyproject.toml"):
         if project.parent == REPO or ".venv" in project.parts:
             continue
         for init in project.parent.glob("*/__init__.py"):
             found.add(init.parent.relative_to(REPO).as_posix())
+        if (project.parent / "dronewrapper").is_dir():
+            found.add((project.parent / "dronewrapper").relative_to(REPO).as_posix())
     return found
 
 

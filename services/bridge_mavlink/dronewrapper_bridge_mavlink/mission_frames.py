@@ -15,7 +15,8 @@ The envelope is ENU m in the home frame. A mission item is placed there by its f
 :func:`placed` gives an item's ENU position from home (None: no position); :func:`prepare`
 checks every item against the envelope (the first one outside named with the limit) and
 returns the items to upload. Rally points (NAV_RALLY_POINT) are placed and checked the same
-way: a return must not fly outside the envelope either.
+way: a return must not fly outside the envelope either (and how high a return to one climbs:
+:mod:`~dronewrapper_bridge_mavlink.rally_returns`).
 """
 
 from __future__ import annotations
@@ -108,28 +109,4 @@ def prepare(
     return out
 
 
-def check_rally_returns(
-    rally: Sequence[Waypoint],
-    envelope: Envelope,
-    home_geo: Sequence[float] | None,
-    return_altitude: float,
-) -> None:
-    """Refuse a rally point a PX4 return would climb above the ceiling from: PX4 returns at
-    the rally point's altitude plus its return altitude (``RTL_RETURN_ALT``, m; its RTL takes
-    the point's altitude as the destination's ground), so both together stay under
-    ``envelope.max_altitude``.
-
-    Raises:
-        MissionFrameError: naming the first rally point, the climb and the limit.
-    """
-    for seq, wp in enumerate(rally):
-        up = (placed(wp, home_geo) or (0.0, 0.0, 0.0))[2]
-        if up + return_altitude > envelope.max_altitude:
-            raise MissionFrameError(
-                f"rally point {seq}: a return there climbs to {up + return_altitude:g} m above "
-                f"home (its {up:g} m plus the return altitude of {return_altitude:g} m), above "
-                f"the envelope's {envelope.max_altitude:g} m: lower the rally point"
-            )
-
-
-__all__ = ["MissionFrameError", "check_rally_returns", "placed", "prepare", "uploadable"]
+__all__ = ["MissionFrameError", "placed", "prepare", "uploadable"]

@@ -6,7 +6,7 @@ missions`; the autopilot's return and fence parameters it keeps in step:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from dronewrapper import envelope as env
 from dronewrapper.envelope import Envelope, EnvelopeError
@@ -24,6 +24,7 @@ class Limits:
     written_for: tuple[str, Envelope] | None = None
     problem: str = ""
     running: bool = False
+    absent: set[tuple[str, str]] = field(default_factory=set)  # (autopilot, name) unanswered
 
 
 class MissionState:

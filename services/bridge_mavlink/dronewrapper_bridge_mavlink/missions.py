@@ -53,7 +53,6 @@ from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_fra
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import (
-    AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
     HOLD_MODE,
 )
@@ -191,13 +190,14 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
     state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
     if (state.home_local, state.home_geo) != before:
         publish_home(core)
-    if before[1] is None and core.config.upload_fence:  # home known: the autopilot's fence
+    if before[1] is None:  # home known: the autopilot's return heights and fence
         follow_envelope(core)
 
 
 def follow_envelope(core: BridgeCore) -> None:
-    """Give the autopilot the envelope: its fence, its return altitude and fence action."""
-    core.start(uploads.push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
+    """The envelope to the autopilot: return heights, fence action, fence (``upload_fence``)."""
+    if core.config.upload_fence:
+        core.start(uploads.push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
     core.start(autopilot_limits.sync_steps(core), core.now, core.stamp, background=True)
 
 
@@ -244,10 +244,9 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
 
 
 def push(core: BridgeCore, request: WaypointPush) -> Steps:
-    """mission/push: check every item and rally point against the envelope (and, on PX4, a
-    return's climb above each rally point: :func:`mission_frames.check_rally_returns`; local
-    items go up as global ones), upload the items, then any rally points
-    (:func:`uploads.push_rally`)."""
+    """mission/push: check every item and rally point against the envelope (and a return's
+    climb to each rally point: :func:`autopilot_limits.check_rally_returns`; local items go
+    up as global ones), upload the items, then any rally points (:func:`uploads.push_rally`)."""
     core.require_connected()
     state = core.missions
     try:
@@ -257,9 +256,8 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
             rally = mission_frames.prepare(
                 request.rally, state.envelope, state.home_geo, what="rally point"
             )
-        if rally and core.autopilot != AUTOPILOT_ARDUPILOT:  # PX4 returns above the point
-            return_alt = yield from autopilot_limits.px4_return_altitude(core)
-            mission_frames.check_rally_returns(rally, state.envelope, state.home_geo, return_alt)
+        if rally:
+            yield from autopilot_limits.check_rally_returns(core, rally, state.envelope)
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [uploads.item_of(wp) for wp in waypoints]
@@ -328,18 +326,20 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
 
 def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
     """envelope/set: replace or reset the envelope (neither: read it; see
-    :mod:`dronewrapper_bridge_base.envelope_set`); the fence follows to the autopilot when one
-    is connected and home is known."""
+    :mod:`dronewrapper_bridge_base.envelope_set`); refused when a return to a rally point
+    uploaded before would climb too high under it (:func:`autopilot_limits.check_new_envelope`);
+    the autopilot follows when connected and home is known (:func:`follow_envelope`)."""
     state = core.missions
     pose = core.pose()
     aircraft = None if pose is None else relative(core, *pose[0])[:2]
+    yield from autopilot_limits.check_new_envelope(core, request)
     changed = envelope_set.apply(
         state, request, configured=core.config.envelope, caller=core.caller, aircraft=aircraft
     )
     if changed:
         core.publish(registry.ENVELOPE, state.envelope)
         log.info("envelope set by %r: %s", state.set_by or "the configuration", state.envelope)
-        if core.connected and state.home_geo is not None and core.config.upload_fence:
+        if core.connected and state.home_geo is not None:
             follow_envelope(core)
     yield from ()
     return envelope_set.result(state)

@@ -8,6 +8,13 @@ link UDP 14540+N, SIH truth 19410+N; ArduCopter ``-I N``: SERIAL0/1/2 on TCP 576
 (compose/{px4,ardupilot}_sitl_*.yaml). ``DRONEWRAPPER_SITL_INSTANCE=N`` names the instance
 instead (for a machine where instance numbers are shared out among users: PX4's lock
 ``/tmp/px4_lock-N`` is machine-wide, even across network namespaces).
+
+``serial=(DEVICE, BAUD)`` also puts the autopilot's MAVLink on a serial device (a pseudo-terminal
+of dronewrapper_sim.serial_relay, as on a flight controller's TELEM port): PX4 starts a MAVLink
+instance there in onboard mode (``mavlink start -d DEVICE -b BAUD -m onboard``, a companion
+computer's TELEM2 setup, its data rate left to PX4: baud / 20 B/s), ArduCopter runs its SERIAL0
+there (``--serial0 uart:DEVICE:BAUD``, ``SERIAL0_BAUD`` to match). Each sizes its streams to the
+baud.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ import re
 import signal
 import socket
 import subprocess
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +37,8 @@ PX4_UDP_PORTS = (14540, 14580, 18570, 19410, 19450)  # + N: every UDP port PX4 i
 AP_TCP_BASE = 5760  # SERIAL0 of ArduCopter instance N: 5760 + 10 N; SERIAL1 + 2, SERIAL2 + 3
 INSTANCE_ENV = "DRONEWRAPPER_SITL_INSTANCE"
 PX4_LOCK = "/tmp/px4_lock-{}"  # PX4's server lock of instance N (POSIX record lock)
+PX4_SOCKET = "/tmp/px4-sock-{}"  # PX4's client socket of instance N
+PX4_MAVLINK_START_S = 60.0  # s for PX4 to boot far enough to start a MAVLink instance
 
 
 @dataclass(frozen=True)
@@ -147,6 +157,22 @@ def _stop(proc: subprocess.Popen) -> None:
         proc.wait(5)
 
 
+def start_px4_mavlink(build: Path, instance: int, device: str, baud: int, log: Path) -> None:
+    """A MAVLink instance of PX4 SITL ``instance`` on a serial ``device`` at ``baud``, in
+    onboard mode; retried while PX4 boots (its client's answer can be lost then: its log says
+    whether the instance started). RuntimeError after :data:`PX4_MAVLINK_START_S`."""
+    start = [str(build / "bin" / "px4-mavlink"), "--instance", str(instance), "start",
+             "-d", device, "-b", str(baud), "-m", "onboard"]  # fmt: skip
+    deadline = time.monotonic() + PX4_MAVLINK_START_S
+    while time.monotonic() < deadline:
+        if f"on {device} @" in log.read_text(errors="replace"):
+            return
+        if subprocess.run(start, capture_output=True, timeout=10).returncode == 0:
+            return
+        time.sleep(1.0)
+    raise RuntimeError(f"PX4 started no MAVLink instance on {device} in {PX4_MAVLINK_START_S} s")
+
+
 @contextlib.contextmanager
 def px4_sih(
     root: Path,
@@ -154,10 +180,12 @@ def px4_sih(
     *,
     instance: int | None = None,
     env: dict[str, str] | None = None,
+    serial: tuple[str, int] | None = None,
 ) -> Iterator[Firmware]:
     """PX4 SITL with its SIH quadrotor (``sihsim_quadx``) in ``workdir``: ``instance`` (None: a
     free one), ``env`` added to its environment (``PX4_PARAM_ZENOH_ENABLE=1``: its zenoh
-    module on, in a px4_sitl_zenoh build)."""
+    module on, in a px4_sitl_zenoh build), ``serial`` (device, baud): a MAVLink instance on that
+    serial device too."""
     build = px4_build_dir(root)
     instance = free_px4_instance() if instance is None else instance
     extra = env or {}
@@ -196,23 +224,36 @@ def px4_sih(
             preexec_fn=die_with_parent,
         )
         try:
+            if serial is not None:
+                start_px4_mavlink(build, instance, *serial, log_path)
             variables = {"onboard_port": str(14540 + instance), "truth_port": str(19410 + instance)}
             yield Firmware("px4", instance, variables, log_path, px4_version(build))
         finally:
             _stop(proc)
+            Path(PX4_SOCKET.format(instance)).unlink(missing_ok=True)  # PX4 leaves it behind
 
 
 @contextlib.contextmanager
-def arducopter(root: Path, workdir: Path) -> Iterator[Firmware]:
+def arducopter(
+    root: Path, workdir: Path, *, serial: tuple[str, int] | None = None
+) -> Iterator[Firmware]:
     """ArduCopter SITL (quad model, the copter defaults, wiped parameters), a free instance, in
-    ``workdir``. It waits for a client on SERIAL0 before it starts flying."""
+    ``workdir``. It waits for a client on SERIAL0 before it starts flying; with ``serial``
+    (device, baud) its SERIAL0 is that serial device instead (MAVLink 2 at that baud)."""
     binary = arducopter_binary(root)
-    defaults = root / "Tools" / "autotest" / "default_params" / "copter.parm"
+    defaults = str(root / "Tools" / "autotest" / "default_params" / "copter.parm")
     instance = free_ardupilot_instance()
     log_path = workdir / "arducopter.log"
+    serial_args = []
+    if serial is not None:
+        device, baud = serial
+        extra = workdir / "serial0.parm"
+        extra.write_text(f"SERIAL0_BAUD {baud // 1000}\nSERIAL0_PROTOCOL 2\n")
+        defaults += f",{extra}"
+        serial_args = ["--serial0", f"uart:{device}:{baud}"]
     argv = [
         str(binary), "--model", "quad", "--speedup", "1", f"-I{instance}", "-w",
-        "--defaults", str(defaults),
+        "--defaults", defaults, *serial_args,
     ]  # fmt: skip
     with open(log_path, "wb") as log:
         proc = subprocess.Popen(

@@ -24,7 +24,7 @@
 with the on-board stack (``make setup``), whose distributions add them through the
 ``dronewrapper.commands`` entry points; the SDK alone (``pip install ./sdk``) has ``router``,
 ``echo``, ``alive`` and ``doctor``; ``record``, ``replay`` and ``foxglove`` come with its
-``record`` extra (``pip install './sdk[record]'``).
+``record`` extra (``pip install './tools[record]'``).
 """
 
 from __future__ import annotations
@@ -277,10 +277,11 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
 
 def _keys(argv: Sequence[str]) -> int:
     try:
-        from dronewrapper.security.keys_cli import main as keys_main
+        from dronewrapper.keys_cli import main as keys_main
     except ModuleNotFoundError as exc:  # the SDK without the security extra
         print(
-            f"dronewrapper keys: needs {exc.name} (pip install './sdk[security]')", file=sys.stderr
+            f"dronewrapper keys: needs {exc.name} (pip install './tools[security]')",
+            file=sys.stderr,
         )
         return 2
     return keys_main(argv)
@@ -323,7 +324,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             import foxglove  # noqa: F401  (the record extra, checked before running)
             import mcap  # noqa: F401
         except ModuleNotFoundError as exc:
-            return _missing(command, "the record extra: pip install 'dronewrapper[record]'", exc)
+            return _missing(
+                command, "the record extra: pip install 'dronewrapper-tools[record]'", exc
+            )
         return int(entry(rest) or 0)
     from importlib.metadata import entry_points  # here: the SDK's own commands start faster
 

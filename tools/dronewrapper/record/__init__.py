@@ -11,6 +11,6 @@ One concept per module:
 - :mod:`.replayer`: a recording re-published on Zenoh with its original timing.
 - :mod:`.live`: the live bus served to Foxglove over its WebSocket protocol.
 
-Needs the ``record`` extra: ``pip install 'dronewrapper[record]'`` (``mcap``, ``foxglove-sdk``,
-``protobuf``).
+Needs the ``record`` extra: ``pip install 'dronewrapper-tools[record]'`` (``mcap``,
+``foxglove-sdk``, ``protobuf``).
 """
