@@ -1,5 +1,5 @@
-"""The checks every bridge applies to a flight request (take-off, landing, go-to), and the
-typed failure it answers with.
+"""The checks every bridge applies to a flight request (take-off, landing, go-to), the typed
+failure it answers with, and where a go-to flies (:func:`goto_target`).
 
 A request field is a number sent by any commander: it must be finite and inside the range the
 call allows, or the call is refused with ``ValueError`` naming the field (the node answers it
@@ -9,8 +9,20 @@ as a bad request, nothing is sent to the aircraft).
 from __future__ import annotations
 
 import math
+from typing import Protocol
 
-from dronewrapper.msgs.flight import FlightResult
+from dronewrapper import envelope as env
+from dronewrapper.envelope import Envelope, EnvelopeError
+from dronewrapper.geodesy import to_enu
+from dronewrapper.msgs.flight import NO_HOME, REFUSED, FlightResult, GotoRequest
+
+
+class HomeHolder(Protocol):
+    """What a bridge's mission state holds of home and its envelope."""
+
+    envelope: Envelope
+    home_local: tuple[float, float, float]  # home in the autopilot's local frame (ENU m)
+    home_geo: tuple[float, float, float] | None  # (latitude deg, longitude deg, altitude m)
 
 
 def checked(name: str, value: float, low: float, high: float) -> float:
@@ -37,3 +49,24 @@ def takeoff_request(
     if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
         raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
     return height, timeout, float(tolerance)
+
+
+def goto_target(
+    state: HomeHolder, request: GotoRequest
+) -> tuple[float, float, float] | FlightResult:
+    """Where a go-to flies (local ENU m): ``request``'s x, y, z from home, or its latitude and
+    longitude made relative to home; or the FlightResult refusing it (``no_home``: a
+    geodetic request while home has no latitude and longitude; ``refused``: the point is
+    outside ``state.envelope``)."""
+    if request.geodetic:
+        if state.home_geo is None or math.isnan(state.home_geo[0]):
+            return failed(NO_HOME, "home has no latitude and longitude (no GPS): go to x, y")
+        east, north = to_enu(state.home_geo, request.latitude, request.longitude)
+    else:
+        east, north = request.x, request.y
+    try:
+        env.check_position(state.envelope, east, north, request.z)
+    except EnvelopeError as exc:
+        return failed(REFUSED, f"goto refused: {exc}", "goto")
+    hx, hy, hz = state.home_local
+    return (hx + east, hy + north, hz + request.z)

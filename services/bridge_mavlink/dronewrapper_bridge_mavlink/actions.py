@@ -31,9 +31,6 @@ from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper import envelope as env
-from dronewrapper.envelope import EnvelopeError
-from dronewrapper.geodesy import to_enu
 from dronewrapper.msgs.flight import (
     NO_HOME,
     NOT_READY,
@@ -47,6 +44,7 @@ from dronewrapper.msgs.flight import (
 from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import MissionControl, MissionResult
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.flight_request import goto_target
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits
 from dronewrapper_bridge_mavlink import operations as ops
@@ -101,19 +99,9 @@ def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
         return not_flying("goto")
     if not (yield from wait_for_home(core)):
         return failed(NO_HOME, f"home is not known after {HOME_WAIT_S:g} s: no point to fly to")
-    state = core.missions
-    if request.geodetic:
-        if state.home_geo is None or math.isnan(state.home_geo[0]):
-            return failed(NO_HOME, "home has no latitude and longitude (no GPS): go to x, y")
-        east, north = to_enu(state.home_geo, request.latitude, request.longitude)
-    else:
-        east, north = request.x, request.y
-    try:
-        env.check_position(state.envelope, east, north, request.z)
-    except EnvelopeError as exc:
-        return failed(REFUSED, f"goto refused: {exc}", "goto")
-    hx, hy, hz = state.home_local
-    target = (hx + east, hy + north, hz + request.z)
+    target = goto_target(core.missions, request)
+    if isinstance(target, FlightResult):
+        return target
     autopilot = core.autopilot or AUTOPILOT_PX4
     mode = GUIDED_MODE[autopilot]
     if ops.shown_mode(core) != mode:

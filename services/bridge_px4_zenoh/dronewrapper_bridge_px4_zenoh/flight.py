@@ -25,11 +25,7 @@ import math
 from collections.abc import Generator
 from typing import TYPE_CHECKING
 
-from dronewrapper import envelope as env
-from dronewrapper.envelope import EnvelopeError
-from dronewrapper.geodesy import to_enu
 from dronewrapper.msgs.flight import (
-    NO_HOME,
     NO_POSITION,
     NOT_READY,
     REFUSED,
@@ -50,7 +46,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.flight_request import checked, failed, takeoff_request
+from dronewrapper_bridge_base.flight_request import checked, failed, goto_target, takeoff_request
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -193,19 +189,9 @@ def goto_point(core: Px4ZenohCore, request: GotoRequest) -> Steps:
         return failed(NOT_READY, NOT_CONNECTED)
     if not flying(core):
         return failed(REFUSED, "goto refused: not flying (take off first)", "goto")
-    state = core.envelope
-    if request.geodetic:
-        if state.home_geo is None:
-            return failed(NO_HOME, "home has no latitude and longitude (no GPS): go to x, y")
-        east, north = to_enu(state.home_geo, request.latitude, request.longitude)
-    else:
-        east, north = request.x, request.y
-    try:
-        env.check_position(state.envelope, east, north, request.z)
-    except EnvelopeError as exc:
-        return failed(REFUSED, f"goto refused: {exc}", "goto")
-    hx, hy, hz = state.home_local
-    target = (hx + east, hy + north, hz + request.z)
+    target = goto_target(core.envelope, request)
+    if isinstance(target, FlightResult):
+        return target
     deadline = core.now + timeout
     if ops.shown_mode(core) != ops.GUIDED:
         reply = yield from ops.set_mode(core, SetMode(custom_mode=ops.GUIDED))
