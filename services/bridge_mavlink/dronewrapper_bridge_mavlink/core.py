@@ -30,18 +30,15 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     SEVERITY_WARNING,
-    ExtendedState,
     PositionTarget,
     SetMode,
     State,
 )
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
-from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.core_driver import PureCore
-from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, is_airborne
-from dronewrapper_bridge_base.unattended import Unattended
+from dronewrapper_bridge_base.guided_core import GuidedCore
+from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
@@ -59,7 +56,6 @@ from dronewrapper_bridge_mavlink.setpoints import (
     SetpointError,
     hold_target,
     to_local_ned,
-    validate,
 )
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
@@ -76,24 +72,18 @@ from dronewrapper_bridge_mavlink.telemetry import (
 log = logging.getLogger("bridge_mavlink")
 
 
-class BridgeCore(PureCore):
+class BridgeCore(GuidedCore):
     """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
-        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
-        super().__init__(
-            now, Outbox, log, lease_ttl_s=lease_ttl_s, late_setpoint_s=config.late_setpoint_s
-        )
-        self.config = config
-        self.limits = config.limits
-        self.failsafe = Failsafe(config.failsafe_config())
+        super().__init__(config, now, Outbox, log)
+        self.config: Config = config
         self.telemetry = Telemetry()
         self.freshness = Freshness()
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
         self.missions = MissionState(config.envelope)
-        self.unattended = Unattended(config.unattended_config())
         self.params = ParamCache()
         serial = is_serial_url(config.connection)
         self.budget = fit_rates(
@@ -113,19 +103,10 @@ class BridgeCore(PureCore):
         self.autopilot = ""
         self.target_system = config.target_system
         self.target_component = config.target_component
-        self.connected = False
-        self.heartbeat_state: State | None = None
-        self.ext = ExtendedState()
-        self.battery: BatteryState | None = None
-        self.setpoints_sent = 0
         self.messages_received = 0
         self._t0 = now
         self.last_heartbeat = -math.inf
         self._next_heartbeat_out = -math.inf
-        self._last_state_key: tuple | None = None
-        self._last_state_pub = -math.inf
-        self.last_ext_pub = -math.inf
-        self._last_battery_pub = -math.inf
         self.last_global_pub = -math.inf
         self.keepalive = KeepAlive(config.setpoint_keepalive_s, 0.5 / config.stream_rate_hz)
         self.rates_round = 0
@@ -219,7 +200,7 @@ class BridgeCore(PureCore):
         self.ext = ext
         if changed:
             self.update_failsafe_vehicle()
-            self.last_ext_pub = self.now
+            self._last_ext_pub = self.now
             self.publish(registry.EXTENDED_STATE, ext)
 
     def _on_global_position_int(self, msg: Any) -> None:
@@ -269,19 +250,17 @@ class BridgeCore(PureCore):
         log.info("autopilot says [%d]: %s", text.severity, text.text)
         self.publish(registry.STATUSTEXT, text)
 
-    def update_failsafe_vehicle(self) -> None:
-        hb = self.heartbeat_state
-        if hb is None:
-            return
-        airborne = is_airborne(self.ext.landed_state, hb.armed)
-        self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+    def watch_vehicle(self) -> None:
         watch.on_vehicle(self)
-        self._act(self.failsafe.tick(self.now, self.pose()), send=False)
 
-    def on_alive(self, keys: set[str], now: float, stamp: float) -> None:
-        """A commander's beat (its process's key) arrived now."""
-        self._at(now, stamp)
+    def watch_alive(self, keys: set[str]) -> None:
         watch.on_alive(self, keys)
+
+    def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
+        return missions.refuse_setpoint(self, target, kind)
+
+    def failsafe_steps(self, request: str) -> Any:
+        return failsafe_action(self, request)
 
     def on_command_ack(self, msg: Any, now: float, stamp: float) -> None:
         """A COMMAND_ACK, bypassing admission (tests of the ack routing)."""
@@ -315,27 +294,6 @@ class BridgeCore(PureCore):
         if state is None or state.mode != mode:
             steps = ops.set_mode(self, SetMode(custom_mode=mode))
             self.start(steps, self.now, self.stamp, background=True)
-
-    def publish_state(self, *, force: bool = False) -> None:
-        """Publish State if it changed (or ``force``, or the periodic time has come)."""
-        state = self.current_state()
-        key = (
-            state.connected,
-            state.armed,
-            state.guided,
-            state.manual_input,
-            state.mode,
-            state.system_status,
-            state.autopilot,
-            state.failsafe,
-            state.commander,
-        )
-        due = self.now - self._last_state_pub >= 1.0 / self.config.state_rate_hz
-        if not (force or due or key != self._last_state_key):
-            return
-        self._last_state_key = key
-        self._last_state_pub = self.now
-        self.publish(registry.STATE, state)
 
     def mode_entered(self, mode: str) -> None:
         """The autopilot accepted a command that puts it in ``mode``: the failsafe and State
@@ -382,22 +340,7 @@ class BridgeCore(PureCore):
             log.warning(
                 "no heartbeat for %.1f s: autopilot disconnected", now - self.last_heartbeat
             )
-        self.publish_state()
-        if now - self.last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
-            self.last_ext_pub = now
-            self.publish(
-                registry.EXTENDED_STATE,
-                msgspec.structs.replace(self.ext, header=Header(stamp=self.stamp)),
-            )
-        if (
-            self.battery is not None
-            and now - self._last_battery_pub >= 1.0 / self.config.battery_rate_hz
-        ):
-            self._last_battery_pub = now
-            self.publish(
-                registry.BATTERY,
-                msgspec.structs.replace(self.battery, header=Header(stamp=self.stamp)),
-            )
+        self.publish_periodic()
         for text in self.statustexts.flush(now, stamp=self.stamp):
             self.publish_text(text)
         if now >= self.next_rates and self.connected:
@@ -417,46 +360,12 @@ class BridgeCore(PureCore):
 
     # ------------------------------------------------------------------ setpoints
 
-    def on_setpoint(
-        self,
-        target: PositionTarget,
-        commander: str,
-        now: float,
-        stamp: float,
-        sent: float | None = None,
-    ) -> None:
-        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s): refused
-        if it arrives late (:meth:`admit_setpoint`) or the lease refuses it, then
-        validated, remembered and forwarded at once."""
-        self._at(now, stamp)
-        kind = self.screen_setpoint(
-            target, commander, sent, lambda t: validate(t, self.limits), missions.refuse_setpoint
-        )
-        if kind is None:
-            return
-        self.unattended.clear()  # a commander steers: the unattended action is over
-        self.failsafe.on_setpoint(target, kind, now)
-        self._act(self.failsafe.tick(now, self.pose()), send=True)
-
     def pose(self) -> tuple[tuple[float, float, float], float] | None:
         """(position ENU m, yaw ENU rad) now, None before the first local position."""
         position = self.telemetry.position_enu
         if position is None:
             return None
         return (position, self.telemetry.yaw_enu)
-
-    def _act(self, tick: Tick, *, send: bool) -> None:
-        """Act on a failsafe tick: log and publish transitions, send, start its requests."""
-        for transition in tick.transitions:
-            log.warning("failsafe %r -> %r: %s", transition.old, transition.new, transition.reason)
-        for event in tick.events:
-            self.bridge_text(event)
-        if tick.transitions:
-            self.publish_state()
-        if send and tick.send is not None:
-            self._send_setpoint(tick.send)
-        if tick.request:
-            self.start(failsafe_action(self, tick.request), self.now, self.stamp, background=True)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
         position = self.telemetry.position_enu

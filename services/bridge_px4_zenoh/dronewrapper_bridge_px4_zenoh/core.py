@@ -37,21 +37,18 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     SEVERITY_ERROR,
     SEVERITY_WARNING,
-    ExtendedState,
     PositionTarget,
     SetMode,
     State,
     StatusText,
 )
 from dronewrapper.msgs.registry import Topic
-from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
-from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, hold_target, is_airborne
-from dronewrapper_bridge_base.setpoint_limits import SetpointError, validate
-from dronewrapper_bridge_base.unattended import Unattended
+from dronewrapper_bridge_base.guided_core import GuidedCore
+from dronewrapper_bridge_base.guided_failsafe import hold_target
+from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
@@ -87,42 +84,27 @@ class Outbox:
     errors: list[str] = field(default_factory=list)
 
 
-class Px4ZenohCore(PureCore):
+class Px4ZenohCore(GuidedCore):
     """The bridge's logic and state (see module docstring); ``now`` is where its time starts."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
-        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
-        super().__init__(
-            now, Outbox, log, lease_ttl_s=lease_ttl_s, late_setpoint_s=config.late_setpoint_s
-        )
-        self.config = config
-        self.limits = config.limits
+        super().__init__(config, now, Outbox, log)
+        self.config: Config = config
         self.versions = Versions(config.domain)
-        self.failsafe = Failsafe(config.failsafe_config())
-        self.unattended = Unattended(config.unattended_config())  # a go-to's commander (watch.py)
         self.envelope = rules.EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
         self.target_system = config.target_system  # 0 until vehicle_status names it
         self.target_component = config.target_component
-        self.connected = False
         self.status: dict[str, Any] | None = None  # the latest VehicleStatus
-        self.heartbeat_state: State | None = None  # VehicleStatus as State (the shown mode)
         self.q_enu_flu: tuple[float, float, float, float] | None = None
         self.position_enu: tuple[float, float, float] | None = None
         self.yaw_enu = 0.0
-        self.ext = ExtendedState()
-        self.battery: BatteryState | None = None
         self.acks: list[tuple[float, int, int]] = []  # (when, command, result), newest last
         self.inbox = NewestSamples()  # COALESCED topics' newest raw samples (thread-safe)
         self.samples_received = 0  # samples decoded
-        self.setpoints_sent = 0
         self.last_sample_at = -math.inf
         self._reported: set[str] = set()  # topics whose mismatch was reported
         self._entered = ("", "", -math.inf)  # (mode entered, mode left, until when)
-        self._last_state_key: tuple | None = None
-        self._last_state_pub = -math.inf
-        self._last_ext_pub = -math.inf
-        self._last_battery_pub = -math.inf
         self._last_pose_pub = -math.inf
         self._last_global_pub = -math.inf
         self._last_send = -math.inf
@@ -294,20 +276,17 @@ class Px4ZenohCore(PureCore):
         self.update_failsafe_vehicle()
         self.publish_state()
 
-    def update_failsafe_vehicle(self) -> None:
-        """The failsafe learns PX4's mode, arming and landed state."""
-        hb = self.heartbeat_state
-        if hb is None:
-            return
-        airborne = is_airborne(self.ext.landed_state, hb.armed)
-        self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+    def watch_vehicle(self) -> None:
         watch.on_vehicle(self)
-        self._act(self.failsafe.tick(self.now, self.pose()), send=False)
 
-    def on_alive(self, keys: set[str], now: float, stamp: float) -> None:
-        """A commander's beat (its process's key) arrived now."""
-        self._at(now, stamp)
+    def watch_alive(self, keys: set[str]) -> None:
         watch.on_alive(self, keys)
+
+    def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
+        return rules.refuse_setpoint(self, target, kind)
+
+    def failsafe_steps(self, request: str) -> Any:
+        return ops.failsafe_action(self, request)
 
     def mode_entered(self, mode: str) -> None:
         """PX4 accepted a command that puts it in ``mode``: known now (vehicle_status, ~2 Hz,
@@ -334,15 +313,6 @@ class Px4ZenohCore(PureCore):
             failsafe=self.failsafe.state or rules.breach_state(self),
             commander=self.commander,
         )
-
-    def publish_state(self, *, force: bool = False) -> None:
-        """Publish State if it changed (or ``force``, or the periodic time has come)."""
-        s = self.current_state()
-        key = (s.connected, s.armed, s.guided, s.manual_input, s.mode, s.failsafe, s.commander)
-        due = self.now - self._last_state_pub >= 1.0 / self.config.state_rate_hz
-        if force or due or key != self._last_state_key:
-            self._last_state_key, self._last_state_pub = key, self.now
-            self.publish(registry.STATE, s)
 
     def hold_here(self) -> None:
         """A cancel's hold: the bridge's own position hold where the aircraft is, in OFFBOARD
@@ -375,65 +345,16 @@ class Px4ZenohCore(PureCore):
         breach = rules.tick(self)
         if breach:
             self.start(ops.breach_action(self, breach), now, stamp, background=True)
-        self._periodic()
+        self.publish_periodic()
         self.advance(now, stamp)
 
-    def _periodic(self) -> None:
-        now = self.now
-        self.publish_state()
-        if now - self._last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
-            self._last_ext_pub = now
-            ext = msgspec.structs.replace(self.ext, header=Header(stamp=self.stamp))
-            self.publish(registry.EXTENDED_STATE, ext)
-        if self.battery is not None and now - self._last_battery_pub >= (
-            1.0 / self.config.battery_rate_hz
-        ):
-            self._last_battery_pub = now
-            battery = msgspec.structs.replace(self.battery, header=Header(stamp=self.stamp))
-            self.publish(registry.BATTERY, battery)
-
     # ------------------------------------------------------------------ setpoints
-
-    def on_setpoint(
-        self,
-        target: PositionTarget,
-        commander: str,
-        now: float,
-        stamp: float,
-        sent: float | None = None,
-    ) -> None:
-        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s): refused
-        if late, by the lease, by validation or the envelope (each refusal published to it),
-        else remembered and written to PX4 at once."""
-        self._at(now, stamp)
-        kind = self.screen_setpoint(
-            target, commander, sent, lambda x: validate(x, self.limits), rules.refuse_setpoint
-        )
-        if kind is None:
-            return
-        self.unattended.clear()  # a commander steers: the unattended action is over
-        self.failsafe.on_setpoint(target, kind, now)
-        self._act(self.failsafe.tick(now, self.pose()), send=True)
 
     def pose(self) -> tuple[tuple[float, float, float], float] | None:
         """(position ENU m, yaw ENU rad) now, None before the first local position."""
         if self.position_enu is None:
             return None
         return (self.position_enu, self.yaw_enu)
-
-    def _act(self, tick: Tick, *, send: bool) -> None:
-        """Act on a failsafe tick: log and publish transitions, write, start its requests."""
-        for transition in tick.transitions:
-            log.warning("failsafe %r -> %r: %s", transition.old, transition.new, transition.reason)
-        for event in tick.events:
-            self.bridge_text(event)
-        if tick.transitions:
-            self.publish_state(force=True)
-        if send and tick.send is not None:
-            self._send_setpoint(tick.send)
-        if tick.request:
-            steps = ops.failsafe_action(self, tick.request)
-            self.start(steps, self.now, self.stamp, background=True)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
         try:

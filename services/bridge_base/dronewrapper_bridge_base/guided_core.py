@@ -1,0 +1,187 @@
+"""What the two PX4-capable bridges' pure cores share (:class:`GuidedCore`): the guided-mode
+failsafe fed with the vehicle's mode and each screened setpoint, its ticks acted on, and State,
+ExtendedState and BatteryState published on change or at their configured rates.
+
+bridge_mavlink's ``BridgeCore`` (MAVLink) and bridge_px4_zenoh's ``Px4ZenohCore`` (PX4's uORB
+over Zenoh) differ in how they read the vehicle and write a setpoint; each supplies those as
+the hooks below (its watch of the commander, its envelope, its failsafe operations, its
+setpoint writer, its pose). Times are the core's (``now`` monotonic s, ``stamp`` Unix s).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from typing import Any
+
+import msgspec
+
+from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State
+from dronewrapper.msgs.sensor import BatteryState
+from dronewrapper.msgs.std import Header
+from dronewrapper_bridge_base.core_driver import PureCore
+from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, is_airborne
+from dronewrapper_bridge_base.setpoint_limits import Kind, validate
+from dronewrapper_bridge_base.unattended import Unattended
+
+
+class GuidedCore(PureCore):
+    """A PX4-capable bridge's core: the failsafe and State publication (see module docstring).
+
+    Args:
+        config: the bridge's Config (``limits``, ``state_rate_hz``, ``extended_state_rate_hz``,
+            ``battery_rate_hz``, the lease's and failsafe's settings).
+        now: where the core's time starts (monotonic s).
+        outbox: makes an empty outbox (the core's own ``Outbox`` dataclass).
+        log: the bridge's logger.
+    """
+
+    def __init__(
+        self, config: Any, now: float, outbox: Callable[[], Any], log: logging.Logger
+    ) -> None:
+        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
+        super().__init__(
+            now, outbox, log, lease_ttl_s=lease_ttl_s, late_setpoint_s=config.late_setpoint_s
+        )
+        self.config = config
+        self.limits = config.limits
+        self.failsafe = Failsafe(config.failsafe_config())
+        self.unattended = Unattended(config.unattended_config())  # a go-to's commander
+        self.connected = False
+        self.heartbeat_state: State | None = None  # the vehicle's State (the shown mode)
+        self.ext = ExtendedState()
+        self.battery: BatteryState | None = None
+        self.setpoints_sent = 0
+        self._last_state_key: tuple | None = None
+        self._last_state_pub = -math.inf
+        self._last_ext_pub = -math.inf
+        self._last_battery_pub = -math.inf
+
+    # ------------------------------------------------------------------ hooks
+
+    def watch_vehicle(self) -> None:
+        """The commander watch learns the vehicle's new mode or arming."""
+        raise NotImplementedError
+
+    def watch_alive(self, keys: set[str]) -> None:
+        """The commander watch learns whose beats arrived (their processes' keys)."""
+        raise NotImplementedError
+
+    def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
+        """Why the envelope refuses ``target`` (an ``EnvelopeError``), or None."""
+        raise NotImplementedError
+
+    def failsafe_steps(self, request: str) -> Any:
+        """The operation the failsafe's request (``land`` or ``return``) runs."""
+        raise NotImplementedError
+
+    def current_state(self) -> State:
+        """State as published now (connected, mode, armed, failsafe, commander ...)."""
+        raise NotImplementedError
+
+    def pose(self) -> tuple[tuple[float, float, float], float] | None:
+        """(position ENU m, yaw ENU rad) now, None before the first local position."""
+        raise NotImplementedError
+
+    def _send_setpoint(self, target: PositionTarget) -> None:
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ the failsafe
+
+    def update_failsafe_vehicle(self) -> None:
+        """The failsafe learns the vehicle's mode, arming and landed state."""
+        hb = self.heartbeat_state
+        if hb is None:
+            return
+        airborne = is_airborne(self.ext.landed_state, hb.armed)
+        self.failsafe.on_vehicle(mode=hb.mode, armed=hb.armed, airborne=airborne, now=self.now)
+        self.watch_vehicle()
+        self._act(self.failsafe.tick(self.now, self.pose()), send=False)
+
+    def on_alive(self, keys: set[str], now: float, stamp: float) -> None:
+        """A commander's beat (its process's key) arrived now."""
+        self._at(now, stamp)
+        self.watch_alive(keys)
+
+    def on_setpoint(
+        self,
+        target: PositionTarget,
+        commander: str,
+        now: float,
+        stamp: float,
+        sent: float | None = None,
+    ) -> None:
+        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s): refused
+        if late, by the lease, by validation or the envelope (each refusal published to it),
+        else remembered and sent to the autopilot at once."""
+        self._at(now, stamp)
+        kind = self.screen_setpoint(
+            target,
+            commander,
+            sent,
+            lambda x: validate(x, self.limits),
+            lambda _core, x, kind: self.refuse_envelope(x, kind),
+        )
+        if kind is None:
+            return
+        self.unattended.clear()  # a commander steers: the unattended action is over
+        self.failsafe.on_setpoint(target, kind, now)
+        self._act(self.failsafe.tick(now, self.pose()), send=True)
+
+    def _act(self, tick: Tick, *, send: bool) -> None:
+        """Act on a failsafe tick: log and publish transitions, send, start its requests."""
+        for transition in tick.transitions:
+            self._log.warning(
+                "failsafe %r -> %r: %s", transition.old, transition.new, transition.reason
+            )
+        for event in tick.events:
+            self.bridge_text(event)
+        if tick.transitions:
+            self.publish_state(force=True)
+        if send and tick.send is not None:
+            self._send_setpoint(tick.send)
+        if tick.request:
+            steps = self.failsafe_steps(tick.request)
+            self.start(steps, self.now, self.stamp, background=True)
+
+    def bridge_text(self, text: str) -> None:
+        """Log and publish a warning of the bridge's own."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ state publication
+
+    def publish_state(self, *, force: bool = False) -> None:
+        """Publish State if it changed (or ``force``, or the periodic time has come)."""
+        s = self.current_state()
+        key = (
+            s.connected,
+            s.armed,
+            s.guided,
+            s.manual_input,
+            s.mode,
+            s.system_status,
+            s.autopilot,
+            s.failsafe,
+            s.commander,
+        )
+        due = self.now - self._last_state_pub >= 1.0 / self.config.state_rate_hz
+        if force or due or key != self._last_state_key:
+            self._last_state_key, self._last_state_pub = key, self.now
+            self.publish(registry.STATE, s)
+
+    def publish_periodic(self) -> None:
+        """State (if due), then ExtendedState and BatteryState at their configured rates."""
+        now = self.now
+        self.publish_state()
+        if now - self._last_ext_pub >= 1.0 / self.config.extended_state_rate_hz:
+            self._last_ext_pub = now
+            ext = msgspec.structs.replace(self.ext, header=Header(stamp=self.stamp))
+            self.publish(registry.EXTENDED_STATE, ext)
+        if self.battery is not None and now - self._last_battery_pub >= (
+            1.0 / self.config.battery_rate_hz
+        ):
+            self._last_battery_pub = now
+            battery = msgspec.structs.replace(self.battery, header=Header(stamp=self.stamp))
+            self.publish(registry.BATTERY, battery)
