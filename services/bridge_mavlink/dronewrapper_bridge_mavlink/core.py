@@ -38,6 +38,7 @@ from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.guided_core import GuidedCore
+from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive, watch
@@ -257,7 +258,7 @@ class BridgeCore(GuidedCore):
         watch.on_alive(self, keys)
 
     def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
-        return missions.refuse_setpoint(self, target, kind)
+        return refuse_setpoint(self.missions, target, kind, self.now, self.bridge_text)
 
     def failsafe_steps(self, request: str) -> Any:
         return failsafe_action(self, request)

@@ -2,9 +2,10 @@
 
 :class:`MissionState` is what the core knows: the envelope in force, home (local ENU m and
 geodetic), the mission the autopilot holds, the item being flown, and the one mission transfer
-allowed at a time. The core calls three hooks: :func:`refuse_setpoint` (a setpoint outside
-the envelope is refused, the limit named) and :func:`tick` (a breach
-starts the envelope's action: hold, return or land; home, envelope and mission are published).
+allowed at a time. The core checks each setpoint against its envelope
+(:func:`dronewrapper_bridge_base.setpoint_envelope.refuse_setpoint`) and calls :func:`tick` (a
+breach starts the envelope's action: hold, return or land; home, envelope and mission are
+published).
 :data:`HANDLERS` are the receive side of the mission protocol; the service operations
 (:func:`push`, :func:`pull`, :func:`clear`, :func:`set_current`, :func:`control`,
 :func:`set_envelope`) run the pure machines of :mod:`mission_transfer` through
@@ -27,10 +28,8 @@ from typing import TYPE_CHECKING, Any
 import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper import envelope as env
-from dronewrapper.envelope import EnvelopeError
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import PositionTarget, SetMode
+from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
     HomePosition,
@@ -48,7 +47,6 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.operation import Steps
-from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
@@ -63,7 +61,6 @@ if TYPE_CHECKING:
 log = logging.getLogger("bridge_mavlink")
 
 PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
-REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
 SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
 
 
@@ -77,33 +74,6 @@ def relative(core: BridgeCore, x: float, y: float, z: float) -> tuple[float, flo
 
 
 # ---------------------------------------------------------------- hooks the core calls
-
-
-def refuse_setpoint(core: BridgeCore, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
-    """Why the envelope refuses ``target`` (valid, of control ``kind``; the limit named), or
-    None."""
-    state = core.missions
-    try:
-        if kind is Kind.POSITION:
-            p = target.required_position()
-            env.check_position(state.envelope, *relative(core, p.x, p.y, p.z))
-        else:
-            v = target.velocity
-            env.check_velocity(state.envelope, v.x, v.y, v.z)
-            if kind is Kind.MIXED:
-                z = target.required_position().z - state.home_local[2]
-                if z > state.envelope.max_altitude:
-                    raise EnvelopeError(
-                        f"altitude {z:g} m above the envelope's {state.envelope.max_altitude:g} m",
-                        "max_altitude",
-                    )
-    except EnvelopeError as exc:
-        reason = f"setpoint refused: {exc}"
-        if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
-            state.last_refusal_text = core.now
-            core.bridge_text(reason)
-        return exc
-    return None
 
 
 def tick(core: BridgeCore) -> None:

@@ -48,6 +48,7 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.guided_failsafe import hold_target
+from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
 from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
@@ -283,7 +284,7 @@ class Px4ZenohCore(GuidedCore):
         watch.on_alive(self, keys)
 
     def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
-        return rules.refuse_setpoint(self, target, kind)
+        return refuse_setpoint(self.envelope, target, kind, self.now, self.bridge_text)
 
     def failsafe_steps(self, request: str) -> Any:
         return ops.failsafe_action(self, request)

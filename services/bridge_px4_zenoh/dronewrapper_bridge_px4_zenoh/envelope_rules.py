@@ -1,7 +1,8 @@
 """Home and the safety envelope on the PX4 Zenoh core (pure), the rules of the SDK's
 :mod:`dronewrapper.envelope` as every bridge keeps them:
 
-* a setpoint outside the envelope is refused, the limit named (:func:`refuse_setpoint`);
+* a setpoint outside the envelope is refused, the limit named (bridge_base's
+  :func:`~dronewrapper_bridge_base.setpoint_envelope.refuse_setpoint`, on this state);
   a take-off above its ceiling too (:func:`refuse_takeoff`), and OFFBOARD while outside it
   (:func:`refuse_mode`: a breach action must not be undone by a commander);
 * while armed and airborne outside it, the breach is reported to whoever commands and the
@@ -22,20 +23,17 @@ from typing import Any
 from dronewrapper import envelope as env
 from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.mission import EnvelopeSet, HomePosition
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
 from dronewrapper_bridge_base.breach import BreachMonitor
 from dronewrapper_bridge_base.operation import Steps
-from dronewrapper_bridge_base.setpoint_limits import Kind
 
 Px4ZenohCore = Any
 """The core (core.py imports this module, so the type is not imported here)."""
 
 PUBLISH_PERIOD_S = 2.0
-REFUSAL_TEXT_PERIOD_S = 2.0  # at most one "setpoint refused" text this often
 
 
 class EnvelopeState:
@@ -54,31 +52,6 @@ class EnvelopeState:
         """Local ENU (m) -> ENU m from home."""
         hx, hy, hz = self.home_local
         return (x - hx, y - hy, z - hz)
-
-
-def refuse_setpoint(core: Px4ZenohCore, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
-    """Why the envelope refuses ``target`` (valid, of control ``kind``), or None."""
-    state = core.envelope
-    try:
-        if kind is Kind.POSITION:
-            p = target.required_position()
-            env.check_position(state.envelope, *state.relative(p.x, p.y, p.z))
-        else:
-            v = target.velocity
-            env.check_velocity(state.envelope, v.x, v.y, v.z)
-            if kind is Kind.MIXED:
-                z = target.required_position().z - state.home_local[2]
-                if z > state.envelope.max_altitude:
-                    raise EnvelopeError(
-                        f"altitude {z:g} m above the envelope's {state.envelope.max_altitude:g} m",
-                        "max_altitude",
-                    )
-    except EnvelopeError as exc:
-        if core.now - state.last_refusal_text >= REFUSAL_TEXT_PERIOD_S:
-            state.last_refusal_text = core.now
-            core.bridge_text(f"setpoint refused: {exc}")
-        return exc
-    return None
 
 
 def refuse_takeoff(core: Px4ZenohCore, height: float) -> None:
