@@ -1,5 +1,6 @@
 """The checks every bridge applies to a flight request (take-off, landing, go-to), the typed
-failure it answers with, and where a go-to flies (:func:`goto_target`).
+failure it answers with, where a take-off climbs to (:func:`takeoff_heights`, :func:`took_off`)
+and where a go-to flies (:func:`goto_target`).
 
 A request field is a number sent by any commander: it must be finite and inside the range the
 call allows, or the call is refused with ``ValueError`` naming the field (the node answers it
@@ -15,6 +16,7 @@ from dronewrapper import envelope as env
 from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.geodesy import to_enu
 from dronewrapper.msgs.flight import NO_HOME, REFUSED, FlightResult, GotoRequest
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED
 
 
 class HomeHolder(Protocol):
@@ -49,6 +51,25 @@ def takeoff_request(
     if not (isinstance(tolerance, int | float) and 0.0 <= tolerance < height):
         raise ValueError(f"tolerance must be in [0, height), got {tolerance!r}")
     return height, timeout, float(tolerance)
+
+
+def takeoff_heights(z0: float, landed_state: int, height: float) -> tuple[float, float]:
+    """A take-off's (start z, target z), local ENU m: from the aircraft's z ``z0`` when on the
+    ground (or its landed state is unknown), from the local origin when caught in the air
+    mid-landing; the target ``height`` m above the start."""
+    on_ground = landed_state in (LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED)
+    start_z = z0 if on_ground else 0.0
+    return start_z, start_z + height
+
+
+def took_off(z: float, start_z: float, height: float) -> FlightResult:
+    """A take-off's success: the aircraft at local z ``z`` (m, NaN: unknown), ``start_z`` the
+    take-off point's, ``height`` m asked."""
+    return FlightResult(
+        success=True,
+        message=f"took off: {z - start_z:.2f} m above the take-off point ({height:g} m asked)",
+        height=z - start_z,
+    )
 
 
 def goto_target(

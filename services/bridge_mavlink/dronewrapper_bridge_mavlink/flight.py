@@ -33,14 +33,19 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     LANDED_STATE_TAKEOFF,
-    LANDED_STATE_UNDEFINED,
     SEVERITY_WARNING,
     CommandBool,
     CommandTOL,
     SetMode,
 )
 from dronewrapper.runtime.errors import ServiceError
-from dronewrapper_bridge_base.flight_request import checked, failed, takeoff_request
+from dronewrapper_bridge_base.flight_request import (
+    checked,
+    failed,
+    takeoff_heights,
+    takeoff_request,
+    took_off,
+)
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
@@ -77,9 +82,7 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
     if pose is None:
         return failed(NO_POSITION, "no local position: no point to take off from")
     (x, y, z0), yaw = pose
-    on_ground = core.ext.landed_state in (LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED)
-    start_z = z0 if on_ground else 0.0  # caught mid-landing: the height above the origin
-    target_z = start_z + height
+    start_z, target_z = takeoff_heights(z0, core.ext.landed_state, height)
     deadline = core.now + timeout
     mode = GUIDED_MODE[autopilot]
     if autopilot == AUTOPILOT_ARDUPILOT:
@@ -109,11 +112,8 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
         if outcome.failure == TOO_LATE:
             core.hold_here()  # the take-off ends here: the climb must not go on
         return outcome
-    z = core.telemetry.position_enu[2] if core.telemetry.position_enu else math.nan
-    return FlightResult(
-        success=True,
-        message=f"took off: {z - start_z:.2f} m above the take-off point ({height:g} m asked)",
-        height=z - start_z,
+    return took_off(
+        core.telemetry.position_enu[2] if core.telemetry.position_enu else math.nan, start_z, height
     )
 
 

@@ -40,13 +40,19 @@ from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
     LANDED_STATE_TAKEOFF,
-    LANDED_STATE_UNDEFINED,
     CommandBool,
     CommandTOL,
     SetMode,
 )
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.flight_request import checked, failed, goto_target, takeoff_request
+from dronewrapper_bridge_base.flight_request import (
+    checked,
+    failed,
+    goto_target,
+    takeoff_heights,
+    takeoff_request,
+    took_off,
+)
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -93,9 +99,7 @@ def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
     if pose is None:
         return failed(NO_POSITION, "no local position: no point to take off from")
     (x, y, z0), yaw = pose
-    on_ground = core.ext.landed_state in (LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED)
-    start_z = z0 if on_ground else 0.0
-    target_z = start_z + height
+    start_z, target_z = takeoff_heights(z0, core.ext.landed_state, height)
     deadline = core.now + timeout
     reply = yield from ops.set_mode(core, SetMode(custom_mode=ops.GUIDED))
     if not reply.mode_sent:
@@ -116,12 +120,7 @@ def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
         else:
             core.failsafe.release_hold()
         return outcome
-    z = core.position_enu[2] if core.position_enu else math.nan
-    return FlightResult(
-        success=True,
-        message=f"took off: {z - start_z:.2f} m above the take-off point ({height:g} m asked)",
-        height=z - start_z,
-    )
+    return took_off(core.position_enu[2] if core.position_enu else math.nan, start_z, height)
 
 
 def wait_at(
