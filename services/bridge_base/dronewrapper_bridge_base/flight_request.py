@@ -41,6 +41,15 @@ def failed(failure: str, message: str, step: str = "", result: int | None = None
     return FlightResult(success=False, failure=failure, step=step, result=result, message=message)
 
 
+def land_point(latitude: float, longitude: float) -> tuple[float, float]:
+    """A landing request's (latitude, longitude) in degrees, each within its bounds or NaN
+    (NaN: where the aircraft is); ValueError naming the bad one."""
+    for name, value, bound in (("latitude", latitude, 90.0), ("longitude", longitude, 180.0)):
+        if not math.isnan(value) and not (math.isfinite(value) and abs(value) <= bound):
+            raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
+    return latitude, longitude
+
+
 def takeoff_request(
     height: float, timeout: float, tolerance: float, max_height: float, max_timeout: float
 ) -> tuple[float, float, float]:

@@ -33,6 +33,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
+from dronewrapper_bridge_base.flight_request import land_point
 from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
@@ -175,10 +176,7 @@ def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
 def land(core: BridgeCore, request: CommandTOL) -> Steps:
     """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
     autopilot = core.require_connected()
-    lat, lon = request.latitude, request.longitude
-    for name, value, bound in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
-        if not math.isnan(value) and not (math.isfinite(value) and abs(value) <= bound):
-            raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
+    lat, lon = land_point(request.latitude, request.longitude)
     core.failsafe.on_mode_requested(LAND_MODE[autopilot], core.now)
     result, message = yield from command(
         core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan

@@ -27,6 +27,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
+from dronewrapper_bridge_base.flight_request import land_point
 from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
@@ -143,10 +144,7 @@ def takeoff(core: Px4ZenohCore, request: CommandTOL) -> Steps:
 def land(core: Px4ZenohCore, request: CommandTOL) -> Steps:
     """LAND: VEHICLE_CMD_NAV_LAND here (NaN latitude/longitude: where it is)."""
     core.require_connected()
-    lat, lon = request.latitude, request.longitude
-    for name, v, bound in (("latitude", lat, 90.0), ("longitude", lon, 180.0)):
-        if not math.isnan(v) and not (math.isfinite(v) and abs(v) <= bound):
-            raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {v!r}")
+    lat, lon = land_point(request.latitude, request.longitude)
     core.failsafe.on_mode_requested(LAND_MODE, core.now)
     value = cmds.vehicle_command(
         cmds.NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan, **target(core)
