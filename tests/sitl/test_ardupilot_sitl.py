@@ -16,10 +16,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
-from ardupilot_sitl import arducopter_sitl, sitl_binary
+from ardupilot_sitl import sitl_binary, sitl_tree
 
 from dronewrapper import CommandRefused, DroneWrapper
 from dronewrapper.msgs import registry
+from dronewrapper_sim.external.firmware import arducopter
 from support import Process, client_node, free_endpoint, python_module, wait_for
 
 pytestmark = [pytest.mark.ardupilot_sitl, pytest.mark.timeout(600)]
@@ -71,7 +72,8 @@ def flight(tmp_path_factory) -> Iterator[Flight]:
     assert binary is not None
     work = tmp_path_factory.mktemp("arducopter")
     router = free_endpoint()
-    with arducopter_sitl(binary, work) as (port, sitl_log):
+    with arducopter(sitl_tree(binary), work) as firmware:
+        port, sitl_log = firmware.variables["sitl_port"], firmware.log
         graph = Process(
             python_module(
                 "dronewrapper", "up", "compose/ardupilot_sitl.yaml",
