@@ -272,13 +272,13 @@ def passes(flight: Flight, max_acquire: float, min_centred: float, min_distance:
 
 
 def check_flight(flight: Flight, max_acquire: float, min_centred: float, min_distance: float):
-    """Assert each bound of :func:`passes`, the flight's description and timeline in the
-    failure."""
+    """Assert each bound of :func:`passes`, the flight's description, timeline and log tail
+    in the failure."""
     s = flight.summary
     print(flight.describe())
-    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{flight.log[-3000:]}"
-    assert s.samples > 50, f"too few samples: {flight.describe()}\n{flight.log[-3000:]}"
-    detail = f"{flight.describe()}\n{flight.timeline()}"
+    detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
+    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
+    assert s.samples > 50, f"too few samples: {detail}"
     assert s.time_to_acquire <= max_acquire, detail
     assert s.centred_share >= min_centred, detail
     assert s.distance_share >= min_distance, detail

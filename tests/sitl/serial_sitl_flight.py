@@ -30,8 +30,9 @@ import time
 from pathlib import Path
 
 from serial_taps import paced_relay
+from sitl_ready import wait_ready
 
-from dronewrapper import CommandRefused, DroneWrapper
+from dronewrapper import DroneWrapper
 from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
@@ -41,7 +42,6 @@ from dronewrapper_sim.external.firmware import arducopter, px4_sih
 from dronewrapper_sim.serial_relay import SerialRelay
 from support import Process, free_endpoint, python_module, wait_for, zenoh_router
 
-READY_TIMEOUT_S = 180.0  # GNSS fix and the estimator's checks (ArduCopter: ~40 s)
 PARAMS = {  # read all, write the first two (a new value, then the old one back)
     "px4": ["MPC_XY_VEL_MAX", "NAV_ACC_RAD", "MPC_Z_VEL_MAX_UP", "MIS_TAKEOFF_ALT",
             "COM_DISARM_LAND", "MPC_LAND_SPEED"],
@@ -68,22 +68,6 @@ class Watch:
             "pose_hz": round(count / (until - since), 1),
             "pose_age_bridge_to_app_ms_p50": round(1000 * ages[count // 2], 1) if ages else None,
         }
-
-
-def wait_ready(drone: DroneWrapper, kind: str) -> float:
-    """Until the autopilot lets us arm in its guided mode; returns seconds."""
-    started = time.monotonic()
-    last = ""
-    while time.monotonic() - started < READY_TIMEOUT_S:
-        try:
-            drone.set_mode("OFFBOARD" if kind == "px4" else "GUIDED")
-            drone.arm()
-            drone.disarm()
-            return time.monotonic() - started
-        except CommandRefused as exc:
-            last = str(exc)
-        time.sleep(2.0)
-    raise AssertionError(f"{kind} not ready within {READY_TIMEOUT_S:g} s: {last}")
 
 
 def quantile_ms(delays, q: float) -> float | None:

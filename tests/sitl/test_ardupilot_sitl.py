@@ -17,15 +17,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 from ardupilot_sitl import sitl_binary, sitl_tree
+from sitl_ready import wait_ready
 
-from dronewrapper import CommandRefused, DroneWrapper
+from dronewrapper import DroneWrapper
 from dronewrapper.msgs import registry
 from dronewrapper_sim.external.firmware import arducopter
 from support import Process, client_node, free_endpoint, python_module, wait_for
 
 pytestmark = [pytest.mark.ardupilot_sitl, pytest.mark.timeout(600)]
-
-READY_TIMEOUT_S = 180.0  # ArduCopter SITL needs ~40 s for the EKF to use GPS
 
 
 @dataclass
@@ -48,22 +47,6 @@ class Flight:
     def figure(self, name: str, text: str) -> None:
         self.figures[name] = text
         print(f"ARDUPILOT_SITL {name}: {text}", flush=True)
-
-
-def wait_ready(drone: DroneWrapper) -> float:
-    """Until ArduCopter lets us arm in GUIDED (EKF using GPS): arm, disarm; returns seconds."""
-    started = time.monotonic()
-    last = ""
-    while time.monotonic() - started < READY_TIMEOUT_S:
-        try:
-            drone.set_mode("GUIDED")
-            drone.arm()
-            drone.disarm()
-            return time.monotonic() - started
-        except CommandRefused as exc:
-            last = str(exc)
-        time.sleep(2.0)
-    raise AssertionError(f"ArduCopter not ready within {READY_TIMEOUT_S:g} s: {last}")
 
 
 @pytest.fixture(scope="module")
@@ -89,7 +72,7 @@ def flight(tmp_path_factory) -> Iterator[Flight]:
                 result = Flight(drone)
                 watcher.subscribe(registry.STATE, result.on_state)
                 result.figure("autopilot", f"{drone.get_state().autopilot}")
-                result.figure("ready_after_s", f"{wait_ready(drone):.1f}")
+                result.figure("ready_after_s", f"{wait_ready(drone, 'ardupilot'):.1f}")
                 yield result
         finally:
             if watcher is not None:

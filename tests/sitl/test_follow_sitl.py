@@ -19,7 +19,7 @@ import contextlib
 import firmware
 import pytest
 from busy_core import one_core_busy
-from scenario_flight import fly, record_result
+from scenario_flight import check_flight, fly, record_result
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
 pytestmark = [pytest.mark.timeout(420)]
@@ -31,13 +31,7 @@ START_TIMEOUT_S = {"px4": 90.0, "ardupilot": 150.0}  # graph up -> servoing (GPS
 def judge(flight, scenario: str) -> None:
     """The scenario tier's thresholds for ``scenario`` (test_follow_scenarios.CASES)."""
     _graph, _detector, _seconds, max_acquire, min_centred, min_distance = CASES[scenario]
-    s = flight.summary
-    detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
-    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
-    assert s.samples > 50, detail
-    assert s.time_to_acquire <= max_acquire, detail
-    assert s.centred_share >= min_centred, detail
-    assert s.distance_share >= min_distance, detail
+    check_flight(flight, max_acquire, min_centred, min_distance)
 
 
 @pytest.mark.parametrize(

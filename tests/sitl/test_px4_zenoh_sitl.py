@@ -29,7 +29,7 @@ from pathlib import Path
 import pytest
 from busy_core import one_core_busy
 from px4_zenoh_sitl import ROUTER_PORT, LinkWatch, log_problems, px4_zenoh, router_port_free
-from scenario_flight import fly, record_result
+from scenario_flight import check_flight, fly, record_result
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
 from dronewrapper import DroneWrapper
@@ -217,17 +217,11 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
                 start_timeout=120.0,
                 router=DEFAULT_ROUTER,
             )
-    s = flight.summary
     print(f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}")
     passed = passes(flight, max_acquire, min_centred, min_distance)
     record_result(flight, f"follow_{app}", "px4_zenoh", firmware.version, passed)
     if not passed:
         print(f"PX4's log ({firmware.log}), warnings and errors:\n{log_problems(firmware.log)}")
-    detail = f"{flight.describe()}\n{flight.timeline()}\n{flight.log[-3000:]}"
-    assert flight.exit_code == 0, f"graph failures: {flight.failures}\n{detail}"
-    assert s.samples > 50, detail
-    assert s.time_to_acquire <= max_acquire, detail
-    assert s.centred_share >= min_centred, detail
-    assert s.distance_share >= min_distance, detail
+    check_flight(flight, max_acquire, min_centred, min_distance)
     if crossing:
         assert sum(crossed(x) for x in flight.samples) > 0, "no passer-by crossed: proves nothing"
