@@ -45,10 +45,11 @@ from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import MissionControl, MissionResult
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.flight_request import goto_target
+from dronewrapper_bridge_base.guided_flight import flying, returned
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits
 from dronewrapper_bridge_mavlink import operations as ops
-from dronewrapper_bridge_mavlink.flight import MAX_TIMEOUT_S, checked, failed, landed, last_text
+from dronewrapper_bridge_mavlink.flight import MAX_TIMEOUT_S, checked, failed, last_text
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_PX4,
     GUIDED_MODE,
@@ -68,11 +69,6 @@ HOME_WAIT_S = 5.0
 MISSION_MODE = {AUTOPILOT_PX4: "AUTO.MISSION", "ardupilotmega": "AUTO"}
 SETTLE_WAIT_S = 2.0  # s a return waits for the autopilot's return altitude to be kept
 MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
-
-
-def flying(core: BridgeCore) -> bool:
-    """Armed and in the air (per the landed state)."""
-    return core.failsafe.airborne and core.failsafe.armed
 
 
 def not_flying(what: str) -> FlightResult:
@@ -176,15 +172,8 @@ def return_home(core: BridgeCore, request: ReturnRequest) -> Steps:
         return failed(REFUSED, message, "return", result)
     start_watch(core, "return", request.watch)
     deadline = core.now + timeout
-    while not landed(core):
-        hb = core.heartbeat_state
-        if hb is not None and hb.armed and hb.mode not in (mode, LAND_MODE[autopilot]):
-            return failed(REFUSED, f"the autopilot left {mode} for {hb.mode}", "return")
-        if core.now >= deadline:
-            return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
-        yield deadline
-    core.unattended.clear()
-    return FlightResult(success=True, message="returned: on the ground and disarmed")
+    modes = (mode, LAND_MODE[autopilot])
+    return (yield from returned(core, modes, deadline, timeout, "the autopilot"))
 
 
 def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:

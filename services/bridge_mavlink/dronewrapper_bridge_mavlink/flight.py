@@ -31,7 +31,6 @@ from dronewrapper.msgs.flight import (
 )
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
-    LANDED_STATE_ON_GROUND,
     LANDED_STATE_TAKEOFF,
     SEVERITY_WARNING,
     CommandBool,
@@ -46,6 +45,7 @@ from dronewrapper_bridge_base.flight_request import (
     takeoff_request,
     took_off,
 )
+from dronewrapper_bridge_base.guided_flight import landed
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
@@ -168,11 +168,6 @@ def land_here(core: BridgeCore, request: LandRequest) -> Steps:
             )
         yield deadline
     return FlightResult(success=True, message="on the ground and disarmed")
-
-
-def landed(core: BridgeCore) -> bool:
-    state = core.heartbeat_state
-    return core.ext.landed_state == LANDED_STATE_ON_GROUND and state is not None and not state.armed
 
 
 def altitude_text(core: BridgeCore) -> str:

@@ -38,7 +38,6 @@ from dronewrapper.msgs.flight import (
 )
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
-    LANDED_STATE_ON_GROUND,
     LANDED_STATE_TAKEOFF,
     CommandBool,
     CommandTOL,
@@ -54,6 +53,7 @@ from dronewrapper_bridge_base.flight_request import (
     took_off,
 )
 from dronewrapper_bridge_base.guided_failsafe import hold_target
+from dronewrapper_bridge_base.guided_flight import flying, landed, returned
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
@@ -67,17 +67,6 @@ log = logging.getLogger("bridge_px4_zenoh")
 NOT_CONNECTED = "PX4 is not connected (no sample on its Zenoh keys)"
 MAX_HEIGHT_M = 1000.0
 MAX_TIMEOUT_S = 600.0
-
-
-def flying(core: Px4ZenohCore) -> bool:
-    """Armed and in the air (per the landed state)."""
-    return core.failsafe.airborne and core.failsafe.armed
-
-
-def landed(core: Px4ZenohCore) -> bool:
-    """On the ground and disarmed."""
-    state = core.heartbeat_state
-    return core.ext.landed_state == LANDED_STATE_ON_GROUND and state is not None and not state.armed
 
 
 def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
@@ -228,12 +217,5 @@ def return_home(core: Px4ZenohCore, request: ReturnRequest) -> Steps:
         return failed(REFUSED, message, "return", max(result, 0))
     core.mode_entered(ops.RETURN_MODE)
     watch.start(core, "return", request.watch)
-    while not landed(core):
-        hb = core.heartbeat_state
-        if hb is not None and hb.armed and hb.mode not in (ops.RETURN_MODE, ops.LAND_MODE):
-            return failed(REFUSED, f"PX4 left {ops.RETURN_MODE} for {hb.mode}", "return")
-        if core.now >= deadline:
-            return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
-        yield deadline
-    core.unattended.clear()
-    return FlightResult(success=True, message="returned: on the ground and disarmed")
+    modes = (ops.RETURN_MODE, ops.LAND_MODE)
+    return (yield from returned(core, modes, deadline, timeout, "PX4"))
