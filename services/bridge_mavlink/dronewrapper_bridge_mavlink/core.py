@@ -10,10 +10,10 @@ acknowledgements are operations (``operations``, ``flight``, ``parameters``) the
 as messages and time arrive; the node only waits on them. The sim's autopilot
 (sim/dronewrapper_sim/px4/autopilot.py) is built the same way.
 
-Size: one state object: its entry points (MAVLink in, setpoints, the tick, state publication)
-read and change the same connection, mode and failsafe state; what stands alone (receive,
-telemetry, operations, missions, parameters) is in its own module, each seeing the core through
-core_view.
+What both PX4-capable bridges share (the failsafe fed and acted on, setpoints screened, State
+published) is :class:`~dronewrapper_bridge_base.guided_core.GuidedCore`; what stands alone
+(receive, telemetry, operations, missions, parameters) is in its own module, each seeing the
+core through core_view.
 """
 
 from __future__ import annotations

@@ -15,13 +15,10 @@ the newest of each, so the bridge decodes at its stream rate whatever PX4's rate
 (status, landed state, command acks: a few Hz) go through :meth:`Px4ZenohCore.on_data`.
 
 The rules are bridge_base's (commander lease, late setpoints, refusals published; the
-guided-mode failsafe: stream, hold, priming, commander lost, never fighting the pilot) and the
+guided-mode failsafe: stream, hold, priming, commander lost, never fighting the pilot, fed and
+acted on by :class:`~dronewrapper_bridge_base.guided_core.GuidedCore`) and the
 SDK's (setpoint validation; the envelope, :mod:`.envelope_rules`); the service calls are
 operations (:mod:`.operations`, :mod:`.flight`).
-
-Over 400 lines because :class:`Px4ZenohCore` is one state machine whose parts (PX4's samples,
-the stream tick, setpoints, state publication) read and write the same state; its rules and
-operations already live in the modules named above.
 """
 
 from __future__ import annotations
