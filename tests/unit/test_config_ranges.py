@@ -41,6 +41,7 @@ class Cfg(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     host: Annotated[str, msgspec.Meta(min_length=1)] = "127.0.0.1"
     gains: Gains = msgspec.field(default_factory=Gains)
     bands: list[Band] = msgspec.field(default_factory=list)
+    rates: dict[str, Positive] = msgspec.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         check_ranges(self)
@@ -57,6 +58,7 @@ class Cfg(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         ("host=''", "host must be not empty, got ''"),
         ("gains.out_limit=-1", "gains.out_limit must be > 0, got -1"),  # a nested key
         ("bands=[{low: 1}, {low: 300}]", "bands[1].low must be in [0, 255], got 300"),
+        ("rates={a: 1, b: 0}", "rates.b must be > 0, got 0"),  # msgspec names no mapping key
     ],
 )
 def test_a_value_out_of_range_names_the_key_the_range_and_the_value(override, words):
@@ -114,3 +116,13 @@ def test_the_services_ranges_read_as_the_user_wrote_them():
         load_config(SimConfig, None, ["tello.auto_land_s=0.5"])
     with pytest.raises(ConfigError, match=r"scale\.max_stick must be in \[1, 100\], got 300$"):
         load_config(TelloBridgeConfig, None, ["scale.max_stick=300"])
+
+
+def test_a_graph_file_names_the_process_key(tmp_path):
+    from dronewrapper_compose.graph import GraphError, load_graph
+
+    path = tmp_path / "g.yaml"
+    path.write_text("version: 1\nprocesses:\n  - {name: a, module: m, ready: maybe}\n")
+    with pytest.raises(GraphError) as error:
+        load_graph(path)
+    assert str(error.value) == f"{path}: processes[0].ready must be one of alive, none, got 'maybe'"

@@ -30,7 +30,8 @@ Share = Annotated[float, msgspec.Meta(ge=0, le=1)]
 # msgspec's words for a failed constraint and where: "Expected `float` >= 0.0 - at `$.a.b[1]`"
 _CONSTRAINT = re.compile(r"^Expected `[^`]+` (?:[<>]=?|of|that|matching|length).* - at `\$(.*)`$")
 _ENUM = re.compile(r"^Invalid enum value .* - at `\$(.*)`$")
-_PATH_PART = re.compile(r"\.([^.\[]+)|\[(\d+)\]")
+_PATH_PART = re.compile(r"\.([^.\[]+)|\[(\d+|\.\.\.)\]")  # [...]: a key of a mapping
+_ANY_KEY = "[...]"
 
 
 def _number(value: float) -> str:
@@ -87,14 +88,17 @@ def range_text(info: Any) -> str:
 
 
 def _parts(path: str) -> list[str | int]:
-    return [name or int(index) for name, index in _PATH_PART.findall(path)]
+    return [
+        name or (_ANY_KEY if index == "..." else int(index))
+        for name, index in _PATH_PART.findall(path)
+    ]
 
 
 def dotted(parts: list[str | int]) -> str:
     """``follow_color.id_switch_confirm``, ``color_ranges[1].h_min``: a path as a user writes it."""
     text = ""
     for part in parts:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
     return text
 
 
@@ -119,6 +123,21 @@ def _value(data: Any, parts: list[str | int]) -> Any:
     return data
 
 
+def _name_keys(data: Any, parts: list[str | int], leaf: Any) -> list[str | int]:
+    """``parts`` with each ``[...]`` (msgspec does not say which key of a mapping failed) made
+    the first key whose value is outside ``leaf``'s range."""
+    if _ANY_KEY not in parts:
+        return parts
+    at = parts.index(_ANY_KEY)
+    mapping = _value(data, parts[:at])
+    for key in mapping if isinstance(mapping, dict) else ():
+        named = [*parts[:at], key, *parts[at + 1 :]]
+        value = _value(data, _name_keys(data, named, leaf))
+        if value is not msgspec.NODEFAULT and not _inside(_unwrap(leaf), value):
+            return _name_keys(data, named, leaf)
+    return parts
+
+
 def explain(schema: type, data: Any, error: msgspec.ValidationError) -> str | None:
     """A failed ``Meta`` constraint in a user's words: ``takeoff.wait_ready must be in [0, 600],
     got 700``; None when ``error`` is not one (an unknown key, a wrong type, a rule of
@@ -133,6 +152,7 @@ def explain(schema: type, data: Any, error: msgspec.ValidationError) -> str | No
     allowed = range_text(info) if info is not None else ""
     if not allowed:
         return None
+    parts = _name_keys(data, parts, info)
     value = _value(data, parts)
     got = "" if value is msgspec.NODEFAULT else f", got {value!r}"
     return f"{dotted(parts)} must be {allowed}{got}"
