@@ -18,7 +18,7 @@ from clocked_autopilot import ClockedAutopilot
 from dronewrapper import DroneWrapper
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink.config import Config
-from dronewrapper_bridge_mavlink.node import Bridge
+from dronewrapper_bridge_mavlink.node import PORTS, Bridge
 from dronewrapper_sim.px4.autopilot import AutopilotConfig
 
 EPOCH = 1.7e9
@@ -44,7 +44,7 @@ class SimBridge:
         start: tuple[float, float] = (0.0, 0.0),
         **bridge_config: Any,
     ) -> None:
-        self.node = FakeNode("bridge_mavlink", bus)
+        self.node = FakeNode("bridge_mavlink", bus, ports=PORTS)
         autopilot = AutopilotConfig(
             wind_east=wind[0],
             wind_north=wind[1],

@@ -10,7 +10,7 @@ from dronewrapper.runtime.clock import REAL, VirtualClock
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_camera_victure.config import Config
-from dronewrapper_camera_victure.node import CLOSE_WAIT_S, run
+from dronewrapper_camera_victure.node import CLOSE_WAIT_S, PORTS, run
 from support import ASSETS, REPO, client_node, wait_for
 
 VIDEO = ASSETS / "video" / "vtest.avi"
@@ -45,7 +45,10 @@ class Running:
         else:
             self.clock = clock or VirtualClock()
             bus = FakeBus(clock=self.clock)
-            self.tester, self.node = FakeNode("tester", bus), FakeNode("camera_victure", bus)
+            self.tester, self.node = (
+                FakeNode("tester", bus),
+                FakeNode("camera_victure", bus, ports=PORTS),
+            )
         camera = self.config.camera
         self.raw: list = []
         self.tester.subscribe(registry.IMAGE_RAW, self.raw.append, camera=camera)

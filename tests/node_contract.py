@@ -4,7 +4,8 @@
 ``settle(predicate, what)``, which returns once ``predicate()`` holds: at once on the fake bus
 (delivery is synchronous), by waiting on a real router. tests/unit/test_node_contract.py runs it
 on :class:`~dronewrapper.runtime.fake.FakeNode`; tests/integration/test_runtime_node_contract.py
-on :class:`~dronewrapper.runtime.node.Node` with a loopback router.
+on :class:`~dronewrapper.runtime.node.Node` with a loopback router. :func:`check_ports` takes a
+node made with :data:`PORTS` and one without: the first refuses what its ports do not declare.
 """
 
 from __future__ import annotations
@@ -21,8 +22,18 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.clock import Clock
 from dronewrapper.runtime.contract import NodeApi, PublisherApi
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
+from dronewrapper.runtime.ports import PortRefused, Ports
 
 Settle = Callable[[Callable[[], object], str], None]
+
+PORTS = Ports(
+    "contract",
+    publishes=(registry.CONTROLLER_STATUS,),
+    subscribes=(registry.CONTROLLER_STATUS,),
+    serves=(registry.ARMING,),
+    calls=(registry.ARMING,),
+)
+"""The ports :func:`check_ports`'s limited node is made with."""
 
 
 def status(seq: int) -> ControllerStatus:
@@ -119,3 +130,44 @@ def check_stop(node: NodeApi) -> None:
     node.stop()
     assert node.stopping and node.stop_event.is_set()
     assert node.sleep(10.0) is False, "a stopped node's sleep returns at once"
+
+
+def check_ports(limited: NodeApi, free: NodeApi, settle: Settle) -> None:
+    """``limited`` (made with :data:`PORTS`) does what they declare, on any namespace and
+    through wildcards, and refuses the rest naming the key, the process and what it declared;
+    ``free`` (no ports) may do anything."""
+    topic = registry.CONTROLLER_STATUS
+    keyed: list[tuple[str, ControllerStatus]] = []
+    limited.subscribe(
+        topic, lambda key, msg: keyed.append((key, msg)), key=topic.wildcard(), keyed=True
+    )
+    holder = limited.latest(topic, key=topic.key("drone7"))
+    pub = limited.publisher(topic, key=topic.key("drone7"))  # another namespace: the same port
+    settle(pub.watched, "the limited node's subscriptions matched")
+    pub.put(status(3))
+    settle(lambda: keyed and holder.value is not None, "delivered to the limited node")
+    assert keyed[0][0] == "drone7/controller/status" and holder.wait(1.0).header.seq == 3
+    limited.serve(registry.ARMING, lambda request: CommandBoolResult(success=request.value))
+    assert free.call(registry.ARMING, CommandBool(value=True), timeout=5.0).success
+
+    state = registry.STATE
+    refusals: list[tuple[str, Callable[[], object]]] = [
+        ("publish", lambda: limited.publisher(state)),
+        ("subscribe to", lambda: limited.subscribe(state, lambda msg: None)),
+        (
+            "subscribe to",
+            lambda: limited.subscribe(state, print, key=state.wildcard(), keyed=True),
+        ),
+        ("subscribe to", lambda: limited.latest(state, key=state.key("drone3"))),
+        ("serve", lambda: limited.serve(registry.TAKEOFF, lambda request: None)),
+        ("call", lambda: limited.call(registry.LAND, CommandBool(value=True), timeout=0.1)),
+    ]
+    for verb, attempt in refusals:
+        with pytest.raises(PortRefused, match=f"^contract does not {verb} ") as refused:
+            attempt()
+        message = str(refused.value)
+        assert "{ns}/" in message and "it declares " in message, message
+    with pytest.raises(PortRefused, match=r"publishes \['{ns}/controller/status'\]"):
+        limited.publisher(registry.DETECTIONS)
+    free.publisher(state)  # a node without ports: unrestricted
+    free.serve(registry.TAKEOFF, lambda request: None)

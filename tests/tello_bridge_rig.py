@@ -18,7 +18,7 @@ from dronewrapper.runtime.clock import REAL
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_tello.config import Config
-from dronewrapper_bridge_tello.node import Bridge
+from dronewrapper_bridge_tello.node import PORTS, Bridge
 from support import client_node, wait_for
 
 
@@ -42,7 +42,7 @@ def running_bridge(
         user = client_node(router, name="test", mode=mode)
     else:
         bus = FakeBus()
-        node, user = FakeNode("bridge_tello", bus), FakeNode("test", bus)
+        node, user = FakeNode("bridge_tello", bus, ports=PORTS), FakeNode("test", bus)
         node.clock = REAL  # the bridge's time is its node's: real, as the Tello answers in it
     bridge = Bridge(node, config)
     threads = bridge.start()

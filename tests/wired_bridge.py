@@ -23,7 +23,7 @@ def wire(core: Any, module: ModuleType, bus: FakeBus) -> Wired:
     """``core`` on a bridge node of ``bus`` publishing ``module.PUBLISHED`` and serving
     ``module.SERVICES`` (``module``: a bridge's ``node`` module): in the bus's time, which the
     node's clock is."""
-    node = FakeNode("bridge", bus)
+    node = FakeNode("bridge", bus, ports=module.PORTS)
     bridge = Wired(
         node, core, {t: node.publisher(t) for t in module.PUBLISHED}, logging.getLogger()
     )

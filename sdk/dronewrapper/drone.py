@@ -41,7 +41,7 @@ from typing import Any, TypeVar
 
 from dronewrapper import connection, diagnosis, images
 from dronewrapper.client import DroneClient
-from dronewrapper.client.drone_client import default_commander
+from dronewrapper.client.drone_client import CLIENT_PORTS, default_commander
 from dronewrapper.client.inputs import GETTER_STREAMS
 from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
@@ -58,6 +58,7 @@ from dronewrapper.msgs.refusal import Refusal
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.options import is_local_endpoint
+from dronewrapper.runtime.ports import Ports
 from dronewrapper.script_log import show_progress
 from dronewrapper.waits import Waits
 
@@ -75,6 +76,17 @@ def _close_all() -> None:
     """Close every wrapper still open at interpreter exit (an open Zenoh session can hang it)."""
     for wrapper in list(_open_wrappers):
         wrapper.close()
+
+
+WRAPPER_PORTS = CLIENT_PORTS | Ports(
+    "sdk",
+    publishes=(registry.COMMANDER_BEAT,),  # flights.py: the beat of an unattended flight
+    subscribes=(t for t in registry.TOPICS.values() if "bridge" in t.publishers),
+    calls=(s for s in registry.SERVICES.values() if s.server == "bridge"),
+)
+"""What a :class:`DroneWrapper` may do on its node (a bridge's topics and services, the
+setpoints and the commander's beat): the part of a service's ``PORTS`` it brings
+(:mod:`dronewrapper.runtime.ports`)."""
 
 
 class DroneWrapper:

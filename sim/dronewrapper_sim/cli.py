@@ -21,10 +21,12 @@ import logging
 import os
 from collections.abc import Sequence
 
+from dronewrapper.msgs import registry
 from dronewrapper.msgs.registry import DEFAULT_NAMESPACE
 from dronewrapper.runtime.config import ConfigError
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.options import ENV_PREFIX
+from dronewrapper.runtime.ports import Ports
 from dronewrapper.runtime.service import run_service
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.world.scenario import SCENARIO_NAMES
@@ -102,6 +104,22 @@ def configure(args: argparse.Namespace, overrides: list[str]) -> None:
         args.namespace = f"{DEFAULT_NAMESPACE}{args.instance}"
 
 
+PORTS = Ports(
+    "sim",
+    publishes=(
+        registry.IMAGE_RAW,  # camera_stream.py
+        registry.IMAGE_COMPRESSED,
+        registry.SIM_GROUND_TRUTH,  # world_topics.py
+        registry.SIM_OBJECT_POSE,
+        registry.SIM_POSE_SOURCE,  # external/world_runner.py
+    ),
+    subscribes=(registry.SIM_OBJECT_CMD_VEL,),
+    serves=(registry.SIM_WORLD, registry.SIM_WORLD_LOAD, registry.SIM_RESET),
+)
+"""What the simulator's process publishes, subscribes to and serves
+(:mod:`dronewrapper.runtime.ports`)."""
+
+
 def run(node: NodeApi, config: SimConfig) -> int:
     """Run the simulator on ``node`` until SIGINT/SIGTERM."""
     from dronewrapper_sim.runner import SimRunner
@@ -133,4 +151,6 @@ def run(node: NodeApi, config: SimConfig) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``dronewrapper sim`` and ``python -m dronewrapper_sim``."""
-    return run_service("sim", __doc__, SimConfig, run, argv, add_args=add_args, configure=configure)
+    return run_service(
+        "sim", __doc__, SimConfig, run, argv, add_args=add_args, configure=configure, ports=PORTS
+    )

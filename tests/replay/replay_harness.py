@@ -20,8 +20,10 @@ from dronewrapper.record.reader import read_bus
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config as ControllerConfig
+from dronewrapper_controller.node import PORTS as CONTROLLER_PORTS
 from dronewrapper_controller.node import Controller
 from dronewrapper_perception.config import Config as PerceptionConfig
+from dronewrapper_perception.node import PORTS as PERCEPTION_PORTS
 from dronewrapper_perception.node import PerceptionService
 
 REPO = Path(__file__).resolve().parents[2]
@@ -82,7 +84,7 @@ def replay_perception(name: str) -> list[Detections]:
     perception, _ = RECORDINGS[name]
     frames = list(read_bus(recording(name), [registry.IMAGE_RAW.key(camera=CAMERA)]))
     bus = FakeBus(start=frames[0].log_time_ns / 1e9)
-    node = FakeNode("perception", bus)
+    node = FakeNode("perception", bus, ports=PERCEPTION_PORTS)
     service = PerceptionService(node, load_config(PerceptionConfig, data=perception))
     for frame in frames:
         bus.schedule(frame.log_time_ns / 1e9, frame.key, frame.payload)
@@ -102,7 +104,7 @@ def replay_controller(name: str) -> list[dict[str, Any]]:
     recorded = list(read_bus(recording(name), [registry.DETECTIONS.key()]))
     t0 = recorded[0].log_time_ns / 1e9
     bus = FakeBus(start=t0)
-    controller = Controller(FakeNode("controller", bus), config, None)
+    controller = Controller(FakeNode("controller", bus, ports=CONTROLLER_PORTS), config, None)
     out: list[dict[str, Any]] = []
     tick = controller.loop.tick
 

@@ -23,6 +23,8 @@ from dronewrapper_ground_station.access import Access
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.fleet import Fleet
+from dronewrapper_ground_station.node import PORTS
+from dronewrapper_sim.cli import PORTS as SIM_PORTS
 
 TOKEN = "operator-token-0123456789"
 X = 1.0
@@ -36,7 +38,7 @@ class WorldObjects:
     """The simulator's side the station watches: ``target``'s pose at every wake."""
 
     def __init__(self, bus: FakeBus) -> None:
-        self.node = FakeNode("sim", bus)
+        self.node = FakeNode("sim", bus, ports=SIM_PORTS)
         self._pose = self.node.publisher(registry.SIM_OBJECT_POSE, name="target")
         self._last: float | None = None
 
@@ -64,7 +66,7 @@ class StationRig:
         self.pilot = BusAutopilot(self.bus, **{"flying": True, "x": X, **(autopilot or {})})
         self.pilot.node.announce()
         self.world = WorldObjects(self.bus)
-        self.node = FakeNode("station", self.bus)
+        self.node = FakeNode("station", self.bus, ports=PORTS)
         self.config = Config(port=0, command_timeout=5.0, **config)
         self.bus.clock.stepper = self.run_until  # blocking commands tick the aircraft
         self.fleet = Fleet(self.node, self.config)

@@ -59,7 +59,7 @@ def wired(kind: str) -> tuple[FakeBus, Wired]:
     else:
         core = TelloCore(TelloConfig(command_lease=True, video=False))
         module = tello_node
-    node = FakeNode("bridge", bus)
+    node = FakeNode("bridge", bus, ports=module.PORTS)
     publishers = {topic: node.publisher(topic) for topic in module.PUBLISHED}
     bridge = Wired(node, core, publishers, logging.getLogger(kind))
     module.serve_services(bridge)  # as the bridge's start() does

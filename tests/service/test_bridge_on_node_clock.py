@@ -24,7 +24,7 @@ from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink.config import Config
-from dronewrapper_bridge_mavlink.node import Bridge
+from dronewrapper_bridge_mavlink.node import PORTS, Bridge
 from dronewrapper_bridge_tello import node as tello_node
 from dronewrapper_bridge_tello.config import Config as TelloConfig
 
@@ -39,7 +39,7 @@ class Rig:
 
     def __init__(self, *, tello: bool = False) -> None:
         self.bus = FakeBus(start=T0)
-        self.node = FakeNode("bridge", self.bus)
+        self.node = FakeNode("bridge", self.bus, ports=tello_node.PORTS if tello else PORTS)
         self.user = FakeNode("apps", self.bus)
         if tello:
             self.tello = ClockedTello(self.node.clock, self.node.stop_event)

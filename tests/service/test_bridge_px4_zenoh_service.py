@@ -24,7 +24,7 @@ from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import topics as t
 from dronewrapper_bridge_px4_zenoh.config import Config
-from dronewrapper_bridge_px4_zenoh.node import Bridge
+from dronewrapper_bridge_px4_zenoh.node import PORTS, Bridge
 from dronewrapper_bridge_px4_zenoh.versions import Versions
 from dronewrapper_ros2_codec import attachment, cdr
 from dronewrapper_ros2_codec.names import PUBLISHER, parse_endpoint
@@ -127,7 +127,7 @@ class Px4Session(RosSession):
 class Rig:
     def __init__(self, **config: Any) -> None:
         self.bus = FakeBus(start=1_700_000_000.0)
-        self.node = FakeNode("bridge_px4_zenoh", self.bus)
+        self.node = FakeNode("bridge_px4_zenoh", self.bus, ports=PORTS)
         self.session = Px4Session()
         self.session.commands = []
         self.bridge = Bridge(self.node, Config(**config), self.session)

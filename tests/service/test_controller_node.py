@@ -36,7 +36,7 @@ from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Poi
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config
-from dronewrapper_controller.node import Controller, run
+from dronewrapper_controller.node import PORTS, Controller, run
 
 T0 = 1_700_000_000.0  # bus time = Unix time, so frame stamps are real-looking stamps
 DETECTIONS_KEY = registry.DETECTIONS.key("drone")
@@ -102,7 +102,7 @@ class Rig:
         self.autopilot = (
             None if self.config.dry_run else BusAutopilot(self.bus, flying=flying, **autopilot)
         )
-        self.node = FakeNode("controller", self.bus)
+        self.node = FakeNode("controller", self.bus, ports=PORTS)
         commander = (
             None
             if self.config.dry_run
@@ -289,7 +289,7 @@ def test_a_bridge_that_never_answers_fails_the_takeoff_within_its_timeout():
 
 def test_no_bridge_gives_up_after_ready_timeout_with_exit_1():
     bus = FakeBus(start=T0)
-    node = FakeNode("controller", bus)
+    node = FakeNode("controller", bus, ports=PORTS)
     config = load_config(Config, None, ["ready_timeout=1.5", "takeoff.on_start=false"])
     commander = DroneClient(node, name="c", inline_calls=True)
     ctl = Controller(node, config, commander)
@@ -303,7 +303,7 @@ def test_no_bridge_gives_up_after_ready_timeout_with_exit_1():
 
 def test_a_stop_while_waiting_for_the_bridge_exits_0_at_once():
     bus = FakeBus(start=T0)
-    node = FakeNode("controller", bus)
+    node = FakeNode("controller", bus, ports=PORTS)
     config = load_config(Config, None, ["ready_timeout=60"])
     commander = DroneClient(node, name="c", inline_calls=True)
     ctl = Controller(node, config, commander)
@@ -360,7 +360,7 @@ def test_a_stop_during_the_takeoff_lands_at_once():
 def test_run_returns_0_soon_after_a_stop(dry_run):
     """The service's loop (``run``) on a fake node, its thread in the bus's virtual time: a
     stop ends it within one control period."""
-    node = FakeNode("controller", FakeBus(start=T0))
+    node = FakeNode("controller", FakeBus(start=T0), ports=PORTS)
     config = load_config(Config, None, [f"dry_run={str(dry_run).lower()}", "ready_timeout=60"])
     result: list[int] = []
     node.clock.thread(lambda: result.append(run(node, config)), "controller").start()

@@ -19,7 +19,7 @@ from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_perception.color_filter import RED
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.detectors import ColorDetector
-from dronewrapper_perception.node import PerceptionService
+from dronewrapper_perception.node import PORTS, PerceptionService
 from dronewrapper_perception.pipeline import Pipeline
 
 RAW = registry.IMAGE_RAW.key("drone", camera="cam_frontal")
@@ -31,7 +31,7 @@ def fake_service(pipeline_factory=None, **settings):
     config = load_config(Config, data=settings)
     bus = FakeBus(start=0.0)
     pipeline = pipeline_factory(config) if pipeline_factory else None
-    service = PerceptionService(FakeNode("perception", bus), config, pipeline)
+    service = PerceptionService(FakeNode("perception", bus, ports=PORTS), config, pipeline)
 
     def received() -> list[Detections]:
         return [out.msg for out in bus.published[registry.DETECTIONS.key("drone")]]

@@ -12,7 +12,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import State
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_ros2_gateway.config import Config
-from dronewrapper_ros2_gateway.entities import ENTITIES
+from dronewrapper_ros2_gateway.entities import ENTITIES, PORTS
 from dronewrapper_ros2_gateway.node import Gateway, log_started
 from dronewrapper_ros2_gateway.presence import GRACE_S, PresenceWatch
 
@@ -31,7 +31,7 @@ class Said:
 
 def test_no_router_is_said_once_after_the_grace_time_and_its_arrival_once():
     bus = FakeBus(start=100.0)
-    node = FakeNode("ros2_gateway", bus)
+    node = FakeNode("ros2_gateway", bus, ports=PORTS)
     said = Said()
     watch = PresenceWatch(node, ["drone"], said)
     bus.link_gap(True)
@@ -53,7 +53,7 @@ def test_no_router_is_said_once_after_the_grace_time_and_its_arrival_once():
 
 def test_a_drone_that_sends_no_state_is_named_with_the_drones_online():
     bus = FakeBus(start=100.0)
-    node = FakeNode("ros2_gateway", bus)
+    node = FakeNode("ros2_gateway", bus, ports=PORTS)
     bus.tokens.add(registry.ALIVE.key("drone1", service="bridge_mavlink"))
     said = Said()
     watch = PresenceWatch(node, ["drone1", "drone7"], said)
@@ -75,7 +75,7 @@ def test_a_drone_that_sends_no_state_is_named_with_the_drones_online():
 
 def test_the_declarations_are_one_info_line_and_each_key_at_debug(caplog):
     bus = FakeBus(start=100.0)
-    node = FakeNode("ros2_gateway", bus)
+    node = FakeNode("ros2_gateway", bus, ports=PORTS)
     gateway = Gateway(node, Config(), RosSession())  # type: ignore[arg-type]
     with caplog.at_level(logging.DEBUG, logger="ros2_gateway"):
         gateway.start()

@@ -25,14 +25,14 @@ from dronewrapper_ros2_codec import attachment, cdr
 from dronewrapper_ros2_codec.names import SUBSCRIBER, NodeName, qos_text
 from dronewrapper_ros2_codec.typehash import type_hash
 from dronewrapper_ros2_gateway.config import Config
-from dronewrapper_ros2_gateway.entities import ENTITIES
+from dronewrapper_ros2_gateway.entities import ENTITIES, PORTS
 from dronewrapper_ros2_gateway.node import Gateway, commander_name
 
 
 class Rig:
     def __init__(self, keys: list[str] | None = None) -> None:
         self.bus = FakeBus(start=100.0)
-        self.node = FakeNode("ros2_gateway", self.bus)
+        self.node = FakeNode("ros2_gateway", self.bus, ports=PORTS)
         self.session = RosSession()
         self.gateway = Gateway(self.node, Config(keys=keys or []), self.session)  # type: ignore[arg-type]
         self.gateway.start()
@@ -239,7 +239,7 @@ def test_the_commander_name_is_the_identity_s_unless_configured(identity, config
 
 def test_each_drone_is_its_own_node_with_ids_unique_in_the_session():
     session = RosSession()
-    node = FakeNode("ros2_gateway", FakeBus())
+    node = FakeNode("ros2_gateway", FakeBus(), ports=PORTS)
     Gateway(node, Config(drones=["drone1", "drone2"], keys=["mavros/state"]), session).start()  # type: ignore[arg-type]
     ids = [tuple(t.split("/")[3:5]) for t in session.tokens]
     assert len(set(ids)) == len(ids) == 4

@@ -17,6 +17,7 @@ from dronewrapper_ground_station.access import Access
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
 from dronewrapper_ground_station.fleet import Fleet
+from dronewrapper_ground_station.node import PORTS
 
 HOME = (47.397742, 8.545594)
 FENCE = [(-30.0, -30.0), (30.0, -30.0), (30.0, 30.0), (-30.0, 30.0)]
@@ -27,7 +28,7 @@ class Station:
     def __init__(self) -> None:
         self.bus = FakeBus(start=EPOCH)
         self.pair = SimBridge(self.bus, envelope=Envelope(fence=FENCE), params=FAST_RTL)
-        self.node = FakeNode("station", self.bus)
+        self.node = FakeNode("station", self.bus, ports=PORTS)
         config = Config(port=0, command_timeout=120.0)
         self.fleet = Fleet(self.node, config)
         self.client = AsgiClient(create_app(self.fleet, config, Access("operator-token-0123")))

@@ -3,7 +3,7 @@ run on a real router in tests/integration/test_runtime_node_contract.py)."""
 
 from __future__ import annotations
 
-from node_contract import check_node
+from node_contract import PORTS, check_node, check_ports
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import ControllerStatus
@@ -18,6 +18,11 @@ def settled(predicate, what: str) -> None:
 def test_fake_node_keeps_the_node_contract():
     bus = FakeBus(start=50.0)
     check_node(FakeNode("a", bus), FakeNode("b", bus), settled)
+
+
+def test_a_fake_node_with_ports_refuses_what_they_do_not_declare():
+    bus = FakeBus(start=50.0)
+    check_ports(FakeNode("limited", bus, ports=PORTS), FakeNode("free", bus), settled)
 
 
 def test_a_link_gap_on_the_fake_bus_stops_delivery_and_is_heard_by_publishers():

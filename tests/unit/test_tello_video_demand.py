@@ -19,6 +19,7 @@ from dronewrapper_bridge_tello import flight
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
 from dronewrapper_bridge_tello.config import Config
+from dronewrapper_bridge_tello.node import PORTS
 from dronewrapper_bridge_tello.video_demand import VideoDemand, VideoPolicy
 
 IDLE = 5.0  # s: the rigs' video_idle_s
@@ -30,7 +31,7 @@ class Viewers:
 
     def __init__(self) -> None:
         self.bus = FakeBus()
-        bridge = FakeNode("bridge_tello", self.bus)
+        bridge = FakeNode("bridge_tello", self.bus, ports=PORTS)
         self.raw = bridge.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         self.jpeg = bridge.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
         self.watch = CameraWatch([self.raw, self.jpeg])

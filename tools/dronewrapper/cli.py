@@ -248,7 +248,7 @@ def _doctor(argv: Sequence[str]) -> int:
 
 
 def _mavlink_forward(argv: Sequence[str]) -> int:
-    from dronewrapper.mavlink_forward import forward, parse_udp
+    from dronewrapper.mavlink_forward import PORTS, forward, parse_udp
     from dronewrapper.runtime.node import Node
 
     parser = CommandParser(
@@ -267,7 +267,7 @@ def _mavlink_forward(argv: Sequence[str]) -> int:
     setup_logging()
     options = options_from_args(args, name="mavlink_forward")
     try:
-        with Node("mavlink_forward", options) as node:
+        with Node("mavlink_forward", options, ports=PORTS) as node:
             forward(node, qgc, node.stop_event)
     except ConnectionError as exc:
         print(f"dronewrapper mavlink-forward: {exc}", file=sys.stderr)

@@ -18,8 +18,14 @@ from dronewrapper.msgs.mavlink import MavlinkFrames
 from dronewrapper.msgs.registry import MAVLINK_FROM_AUTOPILOT, MAVLINK_TO_AUTOPILOT
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.node import Node
+from dronewrapper.runtime.ports import Ports
 
 log = logging.getLogger("mavlink-forward")
+
+PORTS = Ports(
+    "mavlink_forward", publishes=(MAVLINK_TO_AUTOPILOT,), subscribes=(MAVLINK_FROM_AUTOPILOT,)
+)
+"""What this process publishes and subscribes to (:mod:`dronewrapper.runtime.ports`)."""
 
 MAX_DATAGRAM = 2048
 

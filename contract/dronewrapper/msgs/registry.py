@@ -128,7 +128,7 @@ SETPOINT_RAW_LOCAL = Topic(
     "{ns}/mavros/setpoint_raw/local",
     type=mavros.PositionTarget,
     rate_hz=20.0,
-    publishers=("sdk", "controller"),
+    publishers=("sdk", "controller", "teleop", "ros2_gateway"),
     doc="setpoint, ENU/FLU; re-published at >= 20 Hz while commanding",
     transport=COMMAND,
 )
@@ -366,7 +366,7 @@ COMMANDER_BEAT = Topic(
     "{ns}/dronewrapper/commander/beat",
     type=flight.CommanderBeat,
     rate_hz=1.0,
-    publishers=("sdk",),
+    publishers=("sdk", "teleop"),
     doc="a commander's process is alive (while its go-to, return or mission may run unattended)",
 )
 ENVELOPE = Topic(

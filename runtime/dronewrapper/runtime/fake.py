@@ -21,7 +21,10 @@ process replay idea). A wait on that clock from the test's thread (``node.sleep`
 Payloads are encoded and decoded with the registry's types exactly as on the real bus, so a
 malformed one is counted in ``decode_errors`` the same way. Key expressions with wildcards
 match as Zenoh matches them, and a publisher's matching listener hears subscribers come and go
-(a router gap, as seen from a publisher: :meth:`FakeBus.link_gap`).
+(a router gap, as seen from a publisher: :meth:`FakeBus.link_gap`). A node given its
+process's ``ports`` refuses what they do not declare, as the real node does.
+
+Size: the bus and the node that speaks on it, one fake kept whole.
 """
 
 from __future__ import annotations
@@ -46,6 +49,8 @@ from dronewrapper.runtime.clock import VirtualClock
 from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.ports import Ports
+from dronewrapper.runtime.ports import check as check_port
 from dronewrapper.runtime.session import ROUTE_WAIT_S
 from dronewrapper.security import acl  # a module: acl imports the runtime's caller
 
@@ -252,8 +257,18 @@ class FakeNode:
     age and wait on the bus clock; services answer synchronously.
     """
 
-    def __init__(self, name: str, bus: FakeBus, *, ns: str = "drone", bound_name: str = "") -> None:
+    def __init__(
+        self,
+        name: str,
+        bus: FakeBus,
+        *,
+        ns: str = "drone",
+        bound_name: str = "",
+        ports: Ports | None = None,
+    ) -> None:
         self.name = name
+        self.ports = ports
+        """As :attr:`Node.ports`: what this node may declare and call; None: anything."""
         self.ns = ns
         self.bound_name = bound_name
         """As :attr:`Node.bound_name`: the certificate name this node's commands are bound to."""
@@ -317,6 +332,7 @@ class FakeNode:
         qos: dict[str, Any] | None = None,
         **parts: str,
     ) -> FakePublisher[T]:
+        check_port(self.ports, "publishes", topic)
         key = acl.commanding_key(topic, key or topic.key(self.ns, **parts), self.bound_name)
         return FakePublisher(self.bus, key, topic.type)
 
@@ -330,6 +346,7 @@ class FakeNode:
         direct: bool | None = None,  # the fake bus always delivers on the publishing thread
         **parts: str,
     ) -> _Subscription:
+        check_port(self.ports, "subscribes", topic)
         keyexpr = key or topic.key(self.ns, **parts)
         deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
 
@@ -347,6 +364,7 @@ class FakeNode:
         return holder
 
     def serve(self, service: Service[Req, Rep], handler: Callable[[Req], Rep], **parts: str) -> str:
+        check_port(self.ports, "serves", service)
         key = service.key(self.ns, **parts)
 
         def answer(payload: bytes, attachment: bytes | None = None, asked: str = "") -> Rep:
@@ -375,6 +393,7 @@ class FakeNode:
     ) -> Rep:
         """Ask the node serving ``service`` on the bus, synchronously; ``attachment`` as the
         real call's (e.g. :func:`~dronewrapper.runtime.caller.commander_attachment`)."""
+        check_port(self.ports, "calls", service)
         key = service.key(ns or self.ns, **parts)
         answer = self.bus._services.get(key)
         if answer is None:

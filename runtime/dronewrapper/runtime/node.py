@@ -20,7 +20,11 @@ publishes on keys bound to its certificate's name (``KEY/@by/NAME``, see
 bound keys too, and a handler's commander is the bound name.
 
 A Node satisfies the node contract (:class:`~dronewrapper.runtime.contract.NodeApi`): the bus
-and the clock (``node.clock``, the real clocks unless given another).
+and the clock (``node.clock``, the real clocks unless given another); with ``ports`` it refuses
+what its process does not declare (:mod:`dronewrapper.runtime.ports`).
+
+Size: the contract's every verb (publish, subscribe, serve, call) and the lifecycle, one class
+on one session.
 """
 
 from __future__ import annotations
@@ -47,6 +51,8 @@ from dronewrapper.runtime.delivery import SampleErrors, decoding
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.options import LOW_LATENCY_MAX_BYTES, ZenohOptions
+from dronewrapper.runtime.ports import Ports
+from dronewrapper.runtime.ports import check as check_port
 from dronewrapper.runtime.publisher import Publisher
 from dronewrapper.runtime.qos import qos_for
 from dronewrapper.runtime.session import (
@@ -91,6 +97,8 @@ class Node:
         session: an open session to share (several services in one process, see
             :mod:`dronewrapper.runtime.host`): this node declares on it and undeclares what it
             declared when it closes, and leaves the session open for the others.
+        ports: what this process may publish, subscribe to, serve and call
+            (:mod:`dronewrapper.runtime.ports`); anything else raises PortRefused. None: all.
     """
 
     def __init__(
@@ -104,7 +112,9 @@ class Node:
         clock: Clock = REAL,
         direct_callbacks: bool = False,
         session: zenoh.Session | None = None,
+        ports: Ports | None = None,
     ) -> None:
+        self.ports = ports
         self.options = options or ZenohOptions()
         self.clock = clock
         self._direct = direct_callbacks
@@ -241,6 +251,7 @@ class Node:
         Its Zenoh options come from the topic's transport class in the registry (see
         :mod:`dronewrapper.runtime.qos`); ``qos`` overrides single options.
         """
+        check_port(self.ports, "publishes", topic)
         options = {**qos_for(topic), **(qos or {})}
         shm = self.shm_writer if "data" in getattr(topic.type, "__struct_fields__", ()) else None
         max_bytes = LOW_LATENCY_MAX_BYTES if self.options.low_latency else None
@@ -275,6 +286,7 @@ class Node:
         Undecodable samples are counted in ``decode_errors`` and logged; exceptions in the
         callback are counted in ``callback_errors`` and logged; neither ends the subscription.
         """
+        check_port(self.ports, "subscribes", topic)
         keyexpr = key or topic.key(self.ns, **parts)
         deliver = decoding(topic.type, callback, self.sample_errors, keyed=keyed)
 
@@ -313,6 +325,7 @@ class Node:
         A request that does not decode, or a handler raising ValueError or ServiceError, gets an
         error reply (ErrorReply) saying what is wrong; the queryable keeps serving.
         """
+        check_port(self.ports, "serves", service)
         key = service.key(self.ns, **parts)
         dec = codec.decoder(service.request)
         reply_encoding = encoding_for(service.reply)
@@ -383,6 +396,7 @@ class Node:
             ServiceUnavailable: nobody answered within ``timeout`` seconds.
             ServiceTimeout: (a ServiceUnavailable) Zenoh ended the query at its timeout.
         """
+        check_port(self.ports, "calls", service)
         return call_service(
             self.session,
             service,

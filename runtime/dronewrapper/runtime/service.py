@@ -36,6 +36,7 @@ from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper.runtime.config_help import config_help
 from dronewrapper.runtime.node import Node
 from dronewrapper.runtime.options import add_zenoh_args, options_from_args
+from dronewrapper.runtime.ports import Ports
 
 C = TypeVar("C")
 
@@ -94,11 +95,13 @@ def run_service(
     *,
     add_args: Callable[[argparse.ArgumentParser], None] | None = None,
     configure: Callable[[argparse.Namespace, list[str]], None] | None = None,
+    ports: Ports | None = None,
 ) -> int:
     """Parse flags, load the config, run the service on a Node and exit cleanly.
 
     ``add_args`` may add service-specific flags; ``configure(args, overrides)`` may turn them
-    into config overrides (appended to ``--set``) before the config is loaded.
+    into config overrides (appended to ``--set``) before the config is loaded. ``ports``: what
+    the service declares it publishes, subscribes to, serves and calls; its node refuses the rest.
     """
     parser = service_parser(name, description, config_type=config_type)
     if add_args:
@@ -122,11 +125,10 @@ def run_service(
     member = host.current()  # hosted with other services in one process (runtime/host.py)
     try:
         if member is None:
-            node = Node(name, options)
+            node = Node(name, options, ports=ports)
         else:
-            node = Node(
-                name, options, session=member.host.session_for(options), handle_signals=False
-            )
+            session = member.host.session_for(options)
+            node = Node(name, options, session=session, handle_signals=False, ports=ports)
             member.attach(node)
         with node:
             code = run(node, config)

@@ -40,8 +40,15 @@ LOOPBACK_INTERFACES = ("lo",)
 LOCAL_PROTOCOLS = ("tcp", "udp")
 """Link protocols trusted on loopback: plain ones, which carry no certificate."""
 
-# registry process name -> security role (a process not listed runs on the drone)
-PROCESS_ROLES = {"sdk": "operator", "teleop": "operator", "tests": "operator", "gcs": "operator"}
+# registry process name -> security role (a process not listed runs on the drone); the ROS 2
+# gateway commands for the ROS 2 programs it presents the drone to: an operator's part
+PROCESS_ROLES = {
+    "sdk": "operator",
+    "teleop": "operator",
+    "tests": "operator",
+    "gcs": "operator",
+    "ros2_gateway": "operator",
+}
 
 SUBSCRIBE = ["declare_subscriber"]
 LIVELINESS_WATCH = ["liveliness_query", "declare_liveliness_subscriber"]

@@ -38,7 +38,7 @@ from typing import Any, TypeVar
 
 from dronewrapper import setpoints
 from dronewrapper.client.calls import Calls, Pending
-from dronewrapper.client.inputs import FLIGHT_STREAMS, Inputs
+from dronewrapper.client.inputs import FLIGHT_STREAMS, STREAMS, Inputs
 from dronewrapper.client.setpoint_stream import DEFAULT_EXPIRY_S
 from dronewrapper.client.stream import SetpointStreamer
 from dronewrapper.msgs import registry
@@ -49,12 +49,34 @@ from dronewrapper.refusals import RefusalInbox
 from dronewrapper.runtime.caller import commander_attachment
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.latest import Latest
+from dronewrapper.runtime.ports import Ports
 
 Req = TypeVar("Req")
 Rep = TypeVar("Rep")
 
 STATE_FRESH_S = 3.0
 """The bridge publishes State at >= 1 Hz; older than this means the bridge is gone."""
+
+CLIENT_PORTS = Ports(
+    "sdk",
+    publishes=(registry.SETPOINT_RAW_LOCAL,),
+    subscribes=(
+        *STREAMS.values(),
+        registry.STATUSTEXT,
+        registry.REFUSAL,
+        registry.IMAGE_RAW,
+        registry.IMAGE_COMPRESSED,
+    ),
+    calls=(
+        registry.FLIGHT_TAKEOFF,
+        registry.FLIGHT_LAND,
+        registry.FLIGHT_GOTO,
+        registry.FLIGHT_RETURN,
+        registry.FLIGHT_MISSION,
+    ),
+)
+"""What a :class:`DroneClient` does on its node (its inputs, setpoints and flight steps): the
+part of a service's ``PORTS`` it brings (:mod:`dronewrapper.runtime.ports`)."""
 
 
 def default_commander(identity: str = "") -> str:

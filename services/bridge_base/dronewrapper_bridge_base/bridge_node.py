@@ -29,6 +29,7 @@ from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper.msgs.registry import Service, Topic
 from dronewrapper.runtime.caller import current_commander, current_sent_at
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.ports import Ports
 from dronewrapper.runtime.rate import Ratekeeper
 from dronewrapper_bridge_base.core_driver import CoreDriver, PureCore, cancel_steps
 from dronewrapper_bridge_base.operation import Steps
@@ -151,3 +152,24 @@ class BridgeNode(Generic[C]):
         except Exception:
             self.node.callback_errors[what] += 1
             self.log.exception("%s loop error", what)
+
+
+def bridge_ports(
+    process: str,
+    published: Iterable[Topic[Any]],
+    services: Mapping[Service[Any, Any], Operation],
+    guarded: Iterable[tuple[Service[Any, Any], Operation, str]] = (),
+) -> Ports:
+    """A bridge's ports: its telemetry (``published``), the setpoints and commander beats it
+    takes, and what :meth:`BridgeNode.serve` serves for these ``services`` and ``guarded``."""
+    return Ports(
+        process,
+        publishes=published,
+        subscribes=(registry.SETPOINT_RAW_LOCAL, registry.COMMANDER_BEAT),
+        serves=(
+            registry.FLIGHT_CANCEL,
+            registry.COMMAND_LEASE,
+            *services,
+            *(service for service, _steps, _what in guarded),
+        ),
+    )

@@ -30,7 +30,8 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.host import shared_ticker
-from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation
+from dronewrapper.runtime.ports import Ports
+from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters, receive
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
@@ -80,6 +81,14 @@ def serve_services(bridge: BridgeNode[Any]) -> None:
     ``missions.SERVICES`` (the mission services, the fence upload and the envelope), which
     only the command lease's holder may call."""
     bridge.serve(SERVICES, missions.SERVICES)
+
+
+PORTS = bridge_ports("bridge_mavlink", PUBLISHED, SERVICES, missions.SERVICES) | Ports(
+    "bridge_mavlink",
+    publishes=(registry.MAVLINK_FROM_AUTOPILOT,),  # gcs_over_zenoh
+    subscribes=(registry.MAVLINK_TO_AUTOPILOT,),
+)
+"""What this bridge publishes, subscribes to and serves (:mod:`dronewrapper.runtime.ports`)."""
 
 
 class Bridge(BridgeNode[BridgeCore]):

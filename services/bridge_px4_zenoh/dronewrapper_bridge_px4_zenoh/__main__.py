@@ -9,12 +9,12 @@ failsafe contract of docs/design.md.
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_bridge_px4_zenoh.config import Config
-from dronewrapper_bridge_px4_zenoh.node import run
+from dronewrapper_bridge_px4_zenoh.node import PORTS, run
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point (``python -m dronewrapper_bridge_px4_zenoh``)."""
-    return run_service("bridge_px4_zenoh", __doc__, Config, run, argv)
+    return run_service("bridge_px4_zenoh", __doc__, Config, run, argv, ports=PORTS)
 
 
 if __name__ == "__main__":

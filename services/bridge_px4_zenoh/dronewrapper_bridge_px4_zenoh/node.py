@@ -36,7 +36,7 @@ import zenoh
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime import Node
-from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation
+from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
@@ -71,6 +71,11 @@ SERVICES: dict[Service[Any, Any], Operation] = {
     registry.LAND: ops.land,
     registry.SET_MODE: ops.set_mode,
 }
+GUARDED = ((registry.ENVELOPE_SET, rules.set_envelope, "envelope"),)
+"""(service, operation, the command-lease action that guards it)."""
+PORTS = bridge_ports("bridge_px4_zenoh", PUBLISHED, SERVICES, GUARDED)
+"""What this bridge publishes, subscribes to and serves on the registry's keys
+(:mod:`dronewrapper.runtime.ports`); PX4's own ``fmu/`` keys are declared on the session."""
 WRITTEN = (t.OFFBOARD_MODE, t.TRAJECTORY, t.COMMAND)
 NODE_NAME = "dronewrapper_bridge_px4_zenoh"
 
@@ -150,7 +155,7 @@ class Bridge(BridgeNode[Px4ZenohCore]):
         self._declared.append(
             liveliness.declare_subscriber(f"@ros2_lv/{domain}/**", self.on_token, history=True)
         )
-        self.serve(SERVICES, [(registry.ENVELOPE_SET, rules.set_envelope, "envelope")])
+        self.serve(SERVICES, GUARDED)
 
     # ---- PX4's side
 

@@ -26,8 +26,9 @@ from dronewrapper.msgs.mavros import State
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.ports import Ports
 from dronewrapper.security.wifi import open_wifi_warning
-from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation
+from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
 from dronewrapper_bridge_tello import actions, flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
@@ -76,6 +77,12 @@ def serve_services(bridge: BridgeNode[Any]) -> None:
     ``missions.SERVICES`` (the mission services and the envelope), which only the command
     lease's holder may call."""
     bridge.serve(SERVICES, missions.SERVICES)
+
+
+PORTS = bridge_ports("bridge_tello", PUBLISHED, SERVICES, missions.SERVICES) | Ports(
+    "bridge_tello", publishes=(registry.IMAGE_RAW, registry.IMAGE_COMPRESSED)
+)
+"""What this bridge publishes, subscribes to and serves (:mod:`dronewrapper.runtime.ports`)."""
 
 
 class Bridge(BridgeNode[TelloCore]):

@@ -10,7 +10,7 @@ import argparse
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_camera_victure.config import Config
-from dronewrapper_camera_victure.node import run
+from dronewrapper_camera_victure.node import PORTS, run
 
 
 def _add_args(parser: argparse.ArgumentParser) -> None:
@@ -29,7 +29,14 @@ def _configure(args: argparse.Namespace, _overrides: list[str]) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Entry point (``python -m dronewrapper_camera_victure``)."""
     return run_service(
-        "camera_victure", __doc__, Config, run, argv, add_args=_add_args, configure=_configure
+        "camera_victure",
+        __doc__,
+        Config,
+        run,
+        argv,
+        add_args=_add_args,
+        configure=_configure,
+        ports=PORTS,
     )
 
 

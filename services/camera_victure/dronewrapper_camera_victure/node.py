@@ -28,6 +28,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.sensor import CameraInfo, CameraStatus
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.ports import Ports
 from dronewrapper_camera_victure.calibration import (
     CalibrationError,
     Intrinsics,
@@ -268,6 +269,18 @@ class CameraService:
             f"reconnects={s.reconnects} open_failures={s.open_failures} truncated={s.truncated} "
             f"fps={self._fps_measured:.1f}"
         )
+
+
+PORTS = Ports(
+    "camera_victure",
+    publishes=(
+        registry.IMAGE_RAW,
+        registry.IMAGE_COMPRESSED,
+        registry.CAMERA_INFO,
+        registry.CAMERA_STATUS,
+    ),
+)
+"""What the camera publishes (:mod:`dronewrapper.runtime.ports`)."""
 
 
 def run(node: NodeApi, config: Config, factory: Factory = opencv_factory) -> int:

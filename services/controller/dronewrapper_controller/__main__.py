@@ -6,12 +6,12 @@ Subscribes {ns}/perception/detections, commands the aircraft with the SDK's ``Dr
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_controller.config import Config
-from dronewrapper_controller.node import run
+from dronewrapper_controller.node import PORTS, run
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point (``python -m dronewrapper_controller``)."""
-    return run_service("controller", __doc__, Config, run, argv)
+    return run_service("controller", __doc__, Config, run, argv, ports=PORTS)
 
 
 if __name__ == "__main__":

@@ -27,13 +27,14 @@ import logging
 import math
 import os
 
-from dronewrapper.client.drone_client import DroneClient, default_commander
+from dronewrapper.client.drone_client import CLIENT_PORTS, DroneClient, default_commander
 from dronewrapper.client.flight import FlightError, Landing, NotReady, StepRefused, Takeoff
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.control import CONTROLLER_IDLE, CONTROLLER_LANDING, CONTROLLER_TAKEOFF
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime import Latest
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.ports import Ports
 from dronewrapper_controller.config import Config
 from dronewrapper_controller.inputs import DetectionsGate
 from dronewrapper_controller.loop import ControlLoop
@@ -320,6 +321,18 @@ class Controller:
         self._status_shown = phase
         status = self.loop.status(self.node.clock.time(), state=phase, seq=self._status.count)
         self._status.put(status)
+
+
+PORTS = (
+    Ports(
+        "controller",
+        publishes=(registry.CONTROLLER_STATUS,),
+        subscribes=(registry.DETECTIONS,),
+    )
+    | CLIENT_PORTS
+)
+"""What the controller publishes, subscribes to and calls, its DroneClient's included
+(:mod:`dronewrapper.runtime.ports`)."""
 
 
 def commander_name() -> str:

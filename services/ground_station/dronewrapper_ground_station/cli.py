@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_ground_station.config import Config
-from dronewrapper_ground_station.node import run
+from dronewrapper_ground_station.node import PORTS, run
 
 
 def _add_args(parser: argparse.ArgumentParser) -> None:
@@ -28,5 +28,12 @@ def _configure(args: argparse.Namespace, overrides: list[str]) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the station (``argv`` without the program name)."""
     return run_service(
-        "station", __doc__, Config, run, argv, add_args=_add_args, configure=_configure
+        "station",
+        __doc__,
+        Config,
+        run,
+        argv,
+        add_args=_add_args,
+        configure=_configure,
+        ports=PORTS,
     )

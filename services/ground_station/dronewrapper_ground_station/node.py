@@ -10,16 +10,35 @@ from __future__ import annotations
 import logging
 import threading
 
+from dronewrapper.drone import WRAPPER_PORTS
+from dronewrapper.msgs import registry
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.ports import Ports
 from dronewrapper_ground_station.access import Access, is_loopback, new_token
 from dronewrapper_ground_station.app import create_app
 from dronewrapper_ground_station.config import Config
-from dronewrapper_ground_station.fleet import Fleet
+from dronewrapper_ground_station.fleet import TELEMETRY, Fleet
 from dronewrapper_ground_station.server import WebServer
 
 log = logging.getLogger("station")
 
 DEADMAN_PERIOD_S = 0.05
+
+PORTS = (
+    Ports(
+        "station",
+        publishes=(registry.SIM_OBJECT_CMD_VEL,),  # sim_objects.py: teleop of sim objects
+        subscribes=(
+            *(topic for _section, topic, _fields in TELEMETRY),
+            registry.IMAGE_COMPRESSED,  # fleet.py: the video a viewer watches
+            registry.SIM_OBJECT_POSE,
+        ),
+        calls=(registry.SIM_WORLD, registry.SIM_WORLD_LOAD, registry.SIM_RESET),
+    )
+    | WRAPPER_PORTS
+)
+"""What the station publishes, subscribes to and calls, its drones' DroneWrappers included
+(:mod:`dronewrapper.runtime.ports`)."""
 
 
 def _discover_forever(fleet: Fleet, period: float, stop: threading.Event) -> None:

@@ -2,12 +2,12 @@
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_perception.config import Config
-from dronewrapper_perception.node import run
+from dronewrapper_perception.node import PORTS, run
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point (``python -m dronewrapper_perception``)."""
-    return run_service("perception", __doc__, Config, run, argv)
+    return run_service("perception", __doc__, Config, run, argv, ports=PORTS)
 
 
 if __name__ == "__main__":

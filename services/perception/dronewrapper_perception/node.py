@@ -24,6 +24,7 @@ from dronewrapper.msgs import CompressedImage, Header, Image, registry
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.runtime import Latest
 from dronewrapper.runtime.contract import NodeApi
+from dronewrapper.runtime.ports import Ports
 from dronewrapper_perception.config import Config
 from dronewrapper_perception.model_file import ModelFileError
 from dronewrapper_perception.pipeline import Pipeline, annotate, encode_jpeg, to_message
@@ -59,6 +60,14 @@ class Stats:
 def frames_topic(compressed: bool) -> Topic[Any]:
     """The topic of the camera's frames: JPEG (``compressed``) or raw."""
     return registry.IMAGE_COMPRESSED if compressed else registry.IMAGE_RAW
+
+
+PORTS = Ports(
+    "perception",
+    publishes=(registry.DETECTIONS, registry.DETECTIONS_DEBUG_IMAGE),
+    subscribes=(registry.IMAGE_RAW, registry.IMAGE_COMPRESSED),  # as ``compressed`` says
+)
+"""What perception publishes and subscribes to (:mod:`dronewrapper.runtime.ports`)."""
 
 
 class PerceptionService:

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 
 from dronewrapper.runtime.service import run_service
 from dronewrapper_ros2_gateway.config import Config
+from dronewrapper_ros2_gateway.entities import PORTS
 from dronewrapper_ros2_gateway.process import run
 
 
@@ -20,4 +21,4 @@ def _same_name(args: argparse.Namespace, _overrides: list[str]) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the gateway (``argv`` without the program name)."""
-    return run_service("ros2", __doc__, Config, run, argv, configure=_same_name)
+    return run_service("ros2", __doc__, Config, run, argv, configure=_same_name, ports=PORTS)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from dronewrapper.msgs import registry
+from dronewrapper.runtime.ports import Ports
 from dronewrapper_ros2_codec.convert import ROS_SERVICES, ROS_TYPES
 from dronewrapper_ros2_codec.names import BEST_EFFORT, qos_text
 
@@ -86,6 +87,19 @@ def _entities() -> dict[str, Entity]:
 
 ENTITIES: dict[str, Entity] = _entities()
 """Every entity the gateway can present, by name (a key without its namespace)."""
+
+PORTS = Ports(
+    "ros2_gateway",
+    publishes={e.registry_entry for e in ENTITIES.values() if e.direction == IN},
+    subscribes={
+        registry.STATE,  # presence.py: which drones are online
+        *(e.registry_entry for e in ENTITIES.values() if e.direction == OUT),
+    },
+    calls={e.registry_entry for e in ENTITIES.values() if e.direction == SERVE},
+)
+"""What the gateway publishes, subscribes to and calls on the registry's keys: what its
+entities can carry (:mod:`dronewrapper.runtime.ports`); the ROS 2 side is declared on its
+session."""
 
 
 def selected(keys: list[str]) -> list[Entity]:
