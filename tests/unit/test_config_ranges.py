@@ -126,3 +126,11 @@ def test_a_graph_file_names_the_process_key(tmp_path):
     with pytest.raises(GraphError) as error:
         load_graph(path)
     assert str(error.value) == f"{path}: processes[0].ready must be one of alive, none, got 'maybe'"
+
+
+def test_help_reads_a_base_schemas_words_and_an_attributes_section_with_a_note():
+    from dronewrapper_controller.config import Config as ControllerConfig
+
+    text = config_help(ControllerConfig)
+    assert '  mode = "follow_color"\n      follow_color or follow_person. Must be one of' in text
+    assert "  status_rate_hz = 10.0\n      ControllerStatus publishing rate (Hz, >= 5)." in text
