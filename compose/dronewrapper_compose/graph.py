@@ -34,10 +34,11 @@ import os
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import msgspec
 
+from dronewrapper.runtime.config_ranges import explain
 from dronewrapper_compose import fleet
 
 REPO = Path(__file__).resolve().parents[2]
@@ -80,7 +81,7 @@ class ProcessSpec(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     set: dict[str, Any] = msgspec.field(default_factory=dict)
     args: list[str] = msgspec.field(default_factory=list)
     env: dict[str, str] = msgspec.field(default_factory=dict)
-    ready: str = "alive"
+    ready: Literal["alive", "none"] = "alive"
     ready_timeout_s: float = 30.0
     stop_timeout_s: float = 10.0
     zenoh_args: bool = True
@@ -253,7 +254,7 @@ def load_graph(path: str | Path) -> Graph:
     try:
         graph = msgspec.convert(raw, Graph)
     except msgspec.ValidationError as exc:
-        raise GraphError(f"{path}: {exc}") from exc
+        raise GraphError(f"{path}: {explain(Graph, raw, exc) or exc}") from exc
     if graph.version != 1:
         raise GraphError(
             f"{path}: unsupported version {graph.version} (expected 1) - at `$.version`"
@@ -299,8 +300,6 @@ def load_graph(path: str | Path) -> Graph:
                 f"{path}: process {proc.name!r}: each_drone must be one of "
                 f"{', '.join((*fleet.KINDS, fleet.ANY))} - {at}"
             )
-        if proc.ready not in ("alive", "none"):
-            raise GraphError(f"{path}: process {proc.name!r}: ready must be alive or none - {at}")
         if proc.beside is not None:
             _check_beside(path, proc, graph.processes[:i], at)
     return graph

@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import ipaddress
+from typing import Annotated, Literal
 
 import msgspec
 
+from dronewrapper.runtime.config_ranges import Positive, check_ranges
 from dronewrapper_sim.mavlink_io import parse_udp_spec
 from dronewrapper_sim.tello.config import TelloConfig
+
+ImageSide = Annotated[int, msgspec.Meta(ge=16)]
+"""A side of the rendered image (px)."""
 
 
 class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -62,50 +67,36 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
     """
 
     scenario: str = "beacon_static"
-    instance: int = 0
+    instance: Annotated[int, msgspec.Meta(ge=0)] = 0
     seed: int | None = None
     cameras: bool = True
-    camera_rate_hz: float | None = None
-    width: int | None = None
-    height: int | None = None
+    camera_rate_hz: Positive | None = None
+    width: ImageSide | None = None
+    height: ImageSide | None = None
     sprites: str | None = None
     udp_onboard: str = ""
     udp_gcs: str = ""
-    realtime_factor: float = 1.0
-    physics_rate_hz: float = 250.0
-    loop_rate_hz: float | None = None
-    ground_truth_rate_hz: float = 50.0
-    object_pose_rate_hz: float = 20.0
+    realtime_factor: Positive = 1.0
+    physics_rate_hz: Positive = 250.0
+    loop_rate_hz: Positive | None = None
+    ground_truth_rate_hz: Positive = 50.0
+    object_pose_rate_hz: Positive = 20.0
     compressed: bool = False
-    jpeg_quality: int = 80
+    jpeg_quality: Annotated[int, msgspec.Meta(ge=1, le=100)] = 80
     render_unwatched: bool = False
     params: dict[str, float] = {}
-    aircraft: str = "iris"
+    aircraft: Literal["iris", "tello"] = "iris"
     address: str = ""
     netns: bool = False
     tello: TelloConfig = msgspec.field(default_factory=TelloConfig)
     signing_key_file: str = ""
     autopilot: str = ""
     autopilot_link: str = ""
-    truth_rate_hz: float = 50.0
-    max_extrapolation_s: float = 0.1
+    truth_rate_hz: Annotated[float, msgspec.Meta(gt=0, le=1000)] = 50.0
+    max_extrapolation_s: Annotated[float, msgspec.Meta(ge=0, le=1)] = 0.1
 
     def __post_init__(self) -> None:
-        if self.instance < 0:
-            raise ValueError(f"instance must be >= 0, got {self.instance}")
-        for name in ("realtime_factor", "physics_rate_hz", "ground_truth_rate_hz"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-        if self.loop_rate_hz is not None and not self.loop_rate_hz > 0:
-            raise ValueError(f"loop_rate_hz must be > 0, got {self.loop_rate_hz}")
-        if not self.object_pose_rate_hz > 0:
-            raise ValueError(f"object_pose_rate_hz must be > 0, got {self.object_pose_rate_hz}")
-        if self.camera_rate_hz is not None and not self.camera_rate_hz > 0:
-            raise ValueError(f"camera_rate_hz must be > 0, got {self.camera_rate_hz}")
-        for name in ("width", "height"):
-            value = getattr(self, name)
-            if value is not None and value < 16:
-                raise ValueError(f"{name} must be >= 16 px, got {value}")
+        check_ranges(self)
         for name in ("udp_onboard", "udp_gcs"):
             spec = getattr(self, name)
             if spec:
@@ -113,8 +104,6 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
                     parse_udp_spec(spec, 0)
                 except ValueError as exc:
                     raise ValueError(f"{name}: {exc}") from None
-        if self.aircraft not in ("iris", "tello"):
-            raise ValueError(f"aircraft must be iris or tello, got {self.aircraft!r}")
         if (self.address or self.netns) and self.aircraft != "tello":
             raise ValueError("address and netns are Tello settings (aircraft: tello)")
         if self.address:
@@ -123,8 +112,6 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             except ValueError as exc:
                 raise ValueError(f"address: {exc}") from None
         self._check_autopilot()
-        if not 1 <= self.jpeg_quality <= 100:
-            raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
 
     def _check_autopilot(self) -> None:
         from dronewrapper_sim.external.links import AUTOPILOTS, parse_link
@@ -141,9 +128,3 @@ class SimConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
                 parse_link(self.autopilot_link)
             except ValueError as exc:
                 raise ValueError(f"autopilot_link: {exc}") from None
-        if not (self.truth_rate_hz > 0 and self.truth_rate_hz <= 1000):
-            raise ValueError(f"truth_rate_hz must be in (0, 1000], got {self.truth_rate_hz}")
-        if not 0 <= self.max_extrapolation_s <= 1:
-            raise ValueError(
-                f"max_extrapolation_s must be in [0, 1], got {self.max_extrapolation_s}"
-            )

@@ -1,7 +1,9 @@
 """Config files as strict schemas: YAML or JSON decoded into a msgspec Struct.
 
 Unknown keys and wrong types fail with the file and the key named, e.g.
-``controller.yaml: Object contains unknown field `kpp` - at `$.pid_vx```.
+``controller.yaml: Object contains unknown field `kpp` - at `$.pid_vx```; a value outside the
+range a schema declares (``Annotated[float, msgspec.Meta(gt=0)]``, :mod:`config_ranges`) with
+the dotted key, the range and the value: ``controller.yaml: takeoff.height must be > 0, got -1``.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import msgspec
+
+from dronewrapper.runtime.config_ranges import explain
 
 T = TypeVar("T")
 
@@ -88,7 +92,8 @@ def load_config(
     """Decode a config: defaults of ``schema``, then the file, then ``data``, then overrides.
 
     Raises:
-        ConfigError: the file cannot be read, or a key is unknown or has the wrong type.
+        ConfigError: the file cannot be read, or a key is unknown, has the wrong type or a
+            value outside its range.
     """
     raw: dict[str, Any] = {}
     source = "config"
@@ -103,4 +108,4 @@ def load_config(
     try:
         return msgspec.convert(raw, schema, strict=False)
     except msgspec.ValidationError as exc:
-        raise ConfigError(f"{source}: {exc}") from exc
+        raise ConfigError(f"{source}: {explain(schema, raw, exc) or exc}") from exc

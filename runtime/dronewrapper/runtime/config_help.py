@@ -14,10 +14,13 @@ import textwrap
 from typing import Any
 
 import msgspec
+from msgspec import inspect as mi
 
 from dronewrapper.runtime.arguments import plain_text
+from dronewrapper.runtime.config_ranges import range_text
 
 _ATTRIBUTE = re.compile(r"^(\s*)([A-Za-z_][A-Za-z0-9_]*)(?: \([^)]*\))?: (.*)$")
+_SECTION = re.compile(r"^Attributes(?: \([^)]*\))?:$")  # "Attributes (beyond ...):" too
 WIDTH = 100
 
 
@@ -25,7 +28,7 @@ def attribute_docs(doc: str | None) -> dict[str, str]:
     """``{name: text}`` from a docstring's ``Attributes:`` section (Google style)."""
     lines = inspect.cleandoc(doc or "").splitlines()
     try:
-        start = next(i for i, line in enumerate(lines) if line.strip() == "Attributes:")
+        start = next(i for i, line in enumerate(lines) if _SECTION.match(line.strip()))
     except StopIteration:
         return {}
     docs: dict[str, str] = {}
@@ -55,7 +58,11 @@ def _default(field: Any) -> Any:
 
 def config_keys(config_type: type, prefix: str = "") -> list[tuple[str, str, str]]:
     """``(dotted key, default as JSON, what it is)`` for every key of ``config_type``."""
-    docs = attribute_docs(config_type.__doc__)
+    docs: dict[str, str] = {}
+    for cls in reversed(config_type.__mro__):  # a subclass's words win over its base's
+        docs.update(attribute_docs(cls.__doc__) if "__doc__" in vars(cls) else {})
+    info = mi.type_info(config_type)
+    types = {f.name: f.type for f in info.fields} if isinstance(info, mi.StructType) else {}
     keys: list[tuple[str, str, str]] = []
     for field in msgspec.structs.fields(config_type):
         key = f"{prefix}{field.encode_name}"
@@ -64,7 +71,11 @@ def config_keys(config_type: type, prefix: str = "") -> list[tuple[str, str, str
             keys += config_keys(type(default), f"{key}.")
             continue
         shown = "required" if default is msgspec.NODEFAULT else _json(default)
-        keys.append((key, shown, plain_text(docs.get(field.name, ""))))
+        text = plain_text(docs.get(field.name, ""))
+        allowed = range_text(types.get(field.name))
+        if allowed:
+            text = f"{text} Must be {allowed}.".strip()
+        keys.append((key, shown, text))
     return keys
 
 

@@ -4,10 +4,19 @@ value with its key named). Units are in each key's comment; see the package's RE
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
 import msgspec
 
 from dronewrapper.envelope import Envelope
+from dronewrapper.runtime.config_ranges import NonNegative, Positive, check_ranges
+from dronewrapper_bridge_base.config_ranges import (
+    Attempts,
+    ComponentId,
+    LateSetpoint,
+    Seconds60,
+    StreamRate,
+)
 from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
 from dronewrapper_bridge_base.unattended import UnattendedConfig
 
@@ -27,58 +36,34 @@ class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=Tr
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """bridge_px4_zenoh configuration (see module docstring)."""
 
-    domain: int = 0  # PX4's ZENOH_DOMAIN_ID: the first chunk of its keys
-    target_system: int = 0  # PX4's MAV_SYS_ID (instance N: N + 1); 0 = vehicle_status's
-    target_component: int = 0  # PX4's component id; 0 = vehicle_status's
-    link_timeout: float = 1.0  # s without a sample from PX4 -> State.connected false
-    stream_rate_hz: float = 30.0  # own setpoint stream rate while commanded (contract: >= 20)
-    offboard_prime_s: float = 1.2  # s of streaming before asking for OFFBOARD
-    mode_confirm_timeout: float = 2.5  # s for vehicle_status to show an accepted mode
+    # PX4's ZENOH_DOMAIN_ID (a ROS 2 domain): the first chunk of its keys
+    domain: Annotated[int, msgspec.Meta(ge=0, le=232)] = 0
+    target_system: ComponentId = 0  # PX4's MAV_SYS_ID (instance N: N + 1); 0 = vehicle_status's
+    target_component: ComponentId = 0  # PX4's component id; 0 = vehicle_status's
+    link_timeout: Seconds60 = 1.0  # s without a sample from PX4 -> State.connected false
+    stream_rate_hz: StreamRate = 30.0  # own setpoint stream rate while commanded
+    offboard_prime_s: Seconds60 = 1.2  # s of streaming before asking for OFFBOARD
+    mode_confirm_timeout: Seconds60 = 2.5  # s for vehicle_status to show an accepted mode
     setpoint_timeout: float = 0.5  # s: velocity commands expire -> hold
     commander_lost_timeout: float = 5.0  # s: no setpoint while airborne -> action
     commander_lost_action: str = "land"  # hold | land | return
     unattended_action: str = "return"  # return | land: a go-to whose commander's process died
     unattended_lost_timeout: float = 5.0  # s its commander's process may be gone
-    command_attempts: int = 3  # sends of a vehicle command before giving up
-    command_ack_timeout: float = 0.5  # s to wait for each vehicle_command_ack
-    state_rate_hz: float = 2.0  # periodic State (also on change)
-    extended_state_rate_hz: float = 4.0  # periodic ExtendedState (also on change)
-    battery_rate_hz: float = 2.0
-    pose_max_hz: float = 0.0  # cap on pose and velocity samples; 0: one a tick (stream rate)
-    global_position_max_hz: float = 10.0
+    command_attempts: Attempts = 3  # sends of a vehicle command before giving up
+    command_ack_timeout: Seconds60 = 0.5  # s to wait for each vehicle_command_ack
+    state_rate_hz: Positive = 2.0  # periodic State (also on change)
+    extended_state_rate_hz: Positive = 4.0  # periodic ExtendedState (also on change)
+    battery_rate_hz: Positive = 2.0
+    pose_max_hz: NonNegative = 0.0  # cap on pose and velocity samples; 0: one a tick (stream rate)
+    global_position_max_hz: NonNegative = 10.0
     limits: Limits = msgspec.field(default_factory=Limits)
     envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly
     command_lease: bool = False  # obey one commander at a time (bridge_base.commander_lease)
-    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
-    late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
+    command_lease_ttl_s: Seconds60 = 10.0  # s: a silent holder loses the lease
+    late_setpoint_s: LateSetpoint = 0.3  # s: refuse a setpoint this much later than its peers' lag
 
     def __post_init__(self) -> None:
-        if not 0 <= self.domain <= 232:
-            raise ValueError(f"domain must be in [0, 232] (a ROS 2 domain), got {self.domain!r}")
-        for name in ("target_system", "target_component"):
-            if not 0 <= getattr(self, name) <= 255:
-                raise ValueError(f"{name} must be in [0, 255], got {getattr(self, name)!r}")
-        if self.stream_rate_hz < 20.0:
-            raise ValueError(f"stream_rate_hz must be >= 20 (contract), got {self.stream_rate_hz}")
-        for name in (
-            "link_timeout",
-            "offboard_prime_s",
-            "mode_confirm_timeout",
-            "command_ack_timeout",
-            "command_lease_ttl_s",
-        ):
-            if not 0 < getattr(self, name) <= 60:
-                raise ValueError(f"{name} must be in (0, 60] s, got {getattr(self, name)!r}")
-        if not 0 < self.late_setpoint_s <= 5:
-            raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
-        if self.command_attempts < 1:
-            raise ValueError(f"command_attempts must be >= 1, got {self.command_attempts!r}")
-        for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        for name in ("pose_max_hz", "global_position_max_hz"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"{name} must be >= 0 (0: uncapped), got {getattr(self, name)!r}")
+        check_ranges(self)
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
         self.unattended_config()
 

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import msgspec
 
 from dronewrapper.envelope import Envelope
+from dronewrapper.runtime.config_ranges import Positive, check_ranges
+from dronewrapper_bridge_base.config_ranges import Attempts, LateSetpoint
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig
 from dronewrapper_bridge_tello.sticks import StickScale
 from dronewrapper_bridge_tello.video_demand import VideoPolicy
@@ -38,62 +39,43 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     video_retry_s: float = 2.0  # s between tries of a refused or unanswered streamon/streamoff
     video_attempts: int = 3  # tries in a row before waiting for a new demand or a reconnection
     compressed: bool = False  # also publish JPEG on image_raw/compressed (else only on request)
-    jpeg_quality: int = 80
+    jpeg_quality: Annotated[int, msgspec.Meta(ge=1, le=100)] = 80
     video_chunk: int = 1460  # bytes of a full video datagram (a shorter one ends a frame)
-    velocity_frame: str = "reference"  # reference | body_frd: the frame of vgx, vgy, vgz
-    reference_yaw_deg: float = 0.0  # ENU yaw of the Tello's power-on heading (0: local +x)
+    velocity_frame: Literal["reference", "body_frd"] = "reference"  # the frame of vgx, vgy, vgz
+    # ENU yaw of the Tello's power-on heading (deg; 0: local +x)
+    reference_yaw_deg: Annotated[float, msgspec.Meta(ge=-360, le=360)] = 0.0
     velocity_unit: float = 0.1  # m/s per vg* unit (the Tello sends dm/s)
-    height_source: str = "h"  # h | tof
+    height_source: Literal["h", "tof"] = "h"  # the state string field read as the height
     tof_ground_cm: float = 10.0  # tof reading on the ground
-    rc_rate_hz: float = 20.0  # rc stream while commanded
+    rc_rate_hz: Annotated[float, msgspec.Meta(ge=20, le=50)] = 20.0  # rc stream while commanded
     setpoint_timeout: float = 0.5  # s: setpoints expire -> rc 0 0 0 0 (hover)
     commander_lost_timeout: float = 5.0  # s without setpoint while flying -> action
     commander_lost_action: str = "land"  # land | hold
     keepalive_s: float = 3.0  # s without any command while flying -> rc 0 0 0 0
     command_timeout: float = 1.0  # s to wait for the reply to a quick command
-    command_attempts: int = 3
+    command_attempts: Attempts = 3
     takeoff_timeout: float = 20.0  # s: the Tello replies ok once the take-off is over
     land_timeout: float = 20.0
     move_timeout: float = 15.0  # s: up/down after take-off
     link_timeout: float = 1.5  # s without a state string -> disconnected
     reconnect_s: float = 1.0  # s between 'command' attempts while disconnected
-    state_rate_hz: float = 2.0  # periodic State (also on change)
-    extended_state_rate_hz: float = 4.0
-    battery_rate_hz: float = 1.0
+    state_rate_hz: Positive = 2.0  # periodic State (also on change)
+    extended_state_rate_hz: Positive = 4.0
+    battery_rate_hz: Positive = 1.0
     command_lease: bool = (
         False  # obey one commander at a time (dronewrapper_bridge_base.commander_lease)
     )
-    command_lease_ttl_s: float = 10.0  # s: a silent holder loses the lease
-    late_setpoint_s: float = 0.3  # s: refuse a setpoint this much later than its peers' lag
+    command_lease_ttl_s: Positive = 10.0  # s: a silent holder loses the lease
+    late_setpoint_s: LateSetpoint = 0.3  # s: refuse a setpoint this much later than its peers' lag
     scale: StickScale = msgspec.field(default_factory=StickScale)
     envelope: Envelope = msgspec.field(default_factory=lambda: TELLO_ENVELOPE)  # envelope.py
 
     def __post_init__(self) -> None:
         if isinstance(self.video, bool):
             self.video = "on" if self.video else "off"
+        check_ranges(self)
         self.video_policy()  # raises ValueError naming a bad video key
-        if not 0 < self.late_setpoint_s <= 5:
-            raise ValueError(f"late_setpoint_s must be in (0, 5] s, got {self.late_setpoint_s!r}")
         self.failsafe_config()  # raises ValueError naming a bad timeout or action
-        if not 20.0 <= self.rc_rate_hz <= 50.0:
-            raise ValueError(f"rc_rate_hz must be in [20, 50], got {self.rc_rate_hz}")
-        if self.velocity_frame not in ("reference", "body_frd"):
-            raise ValueError(
-                f"velocity_frame must be reference or body_frd, got {self.velocity_frame!r}"
-            )
-        if not (math.isfinite(self.reference_yaw_deg) and abs(self.reference_yaw_deg) <= 360):
-            raise ValueError("reference_yaw_deg must be in [-360, 360]")
-        if self.height_source not in ("h", "tof"):
-            raise ValueError(f"height_source must be h or tof, got {self.height_source!r}")
-        if self.command_attempts < 1:
-            raise ValueError("command_attempts must be >= 1")
-        for name in ("state_rate_hz", "extended_state_rate_hz", "battery_rate_hz"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0")
-        if not self.command_lease_ttl_s > 0:
-            raise ValueError("command_lease_ttl_s must be > 0")
-        if not 1 <= self.jpeg_quality <= 100:
-            raise ValueError("jpeg_quality must be in [1, 100]")
 
     def video_policy(self) -> VideoPolicy:
         """How the video follows its demand, from this config's video keys (validated there)."""

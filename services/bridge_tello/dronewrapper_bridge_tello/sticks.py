@@ -24,6 +24,7 @@ Controls accepted (type_mask, coordinate_frame), validated like bridge_mavlink's
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
 import msgspec
 
@@ -31,6 +32,7 @@ from dronewrapper.msgs.mavros import (
     FRAME_LOCAL_NED,
     PositionTarget,
 )
+from dronewrapper.runtime.config_ranges import check_ranges
 from dronewrapper_bridge_base import setpoint_limits
 from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError
 from dronewrapper_bridge_tello.frames import Vec3, enu_to_heading_flu, wrap_pi
@@ -58,7 +60,7 @@ class StickScale(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_field
     horizontal: float = 100.0
     vertical: float = 100.0
     yaw: float = 57.0
-    max_stick: int = 100
+    max_stick: Annotated[int, msgspec.Meta(ge=1, le=100)] = 100
     max_horizontal_speed: float = 3.0
     max_vertical_speed: float = 2.0
     max_yaw_rate: float = 2.0 * math.pi
@@ -73,8 +75,7 @@ class StickScale(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_field
     position_yaw_rate: float = 1.0
 
     def __post_init__(self) -> None:
-        if not 1 <= self.max_stick <= 100:
-            raise ValueError("scale.max_stick must be in [1, 100]")
+        check_ranges(self, "scale.")
 
 
 def validate(target: PositionTarget, scale: StickScale) -> Kind:

@@ -6,21 +6,15 @@ Every field can be set in a YAML/JSON file (``--config``) or on the command line
 
 from __future__ import annotations
 
-import math
+from typing import Annotated, Literal
 
 import msgspec
 
 from dronewrapper.msgs.registry import CAMERAS
+from dronewrapper.runtime.config_ranges import FinitePositive, check_ranges
 from dronewrapper_camera_victure.sources import SOURCE_KINDS, classify_source
 
 PIXEL_FORMATS = ("", "MJPG", "YUYV")
-FLIPS = ("none", "horizontal", "vertical", "both")
-ROTATIONS = (0, 90, 180, 270)
-
-
-def _finite_positive(name: str, value: float) -> None:
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a finite number > 0, got {value}")
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -66,27 +60,27 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     source: str | int = "0"  # an int from YAML (``source: 0``) is the device index
     kind: str = "auto"
     camera: str = "cam_frontal"
-    width: int = 640
-    height: int = 480
-    fps: float = 30.0
+    width: Annotated[int, msgspec.Meta(ge=0)] = 640
+    height: Annotated[int, msgspec.Meta(ge=0)] = 480
+    fps: FinitePositive = 30.0
     pixel_format: str = ""
     strict_mode: bool = True
     loop: bool = True
     realtime: bool = True
-    flip: str = "none"
-    rotate: int = 0
+    flip: Literal["none", "horizontal", "vertical", "both"] = "none"
+    rotate: Literal[0, 90, 180, 270] = 0
     crop: list[int] = msgspec.field(default_factory=list)
     resize: list[int] = msgspec.field(default_factory=list)
     publish_raw: bool = True
     jpeg: bool = False
-    jpeg_quality: int = 80
+    jpeg_quality: Annotated[int, msgspec.Meta(ge=1, le=100)] = 80
     calibration_file: str = ""
-    open_timeout: float = 10.0
-    read_timeout: float = 2.0
-    max_read_failures: int = 10
-    retry_initial: float = 0.25
-    retry_max: float = 4.0
-    status_period: float = 1.0
+    open_timeout: FinitePositive = 10.0
+    read_timeout: FinitePositive = 2.0
+    max_read_failures: Annotated[int, msgspec.Meta(ge=1)] = 10
+    retry_initial: FinitePositive = 0.25
+    retry_max: FinitePositive = 4.0
+    status_period: FinitePositive = 1.0
 
     def __post_init__(self) -> None:
         self.source = str(self.source)
@@ -97,32 +91,23 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         classify_source(self.source, self.kind)  # raises ValueError naming a bad URL scheme
         if self.camera not in CAMERAS:
             raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, not {self.camera!r}")
-        if self.width < 0 or self.height < 0 or (self.width == 0) != (self.height == 0):
+        check_ranges(self)
+        # across keys, which a Meta cannot say
+        if (self.width == 0) != (self.height == 0):
             raise ValueError(
                 f"width, height must both be > 0 or both 0: {self.width}x{self.height}"
             )
-        _finite_positive("fps", self.fps)
         if self.pixel_format.upper() not in PIXEL_FORMATS:
             raise ValueError(f"pixel_format must be MJPG or YUYV, not {self.pixel_format!r}")
         self.pixel_format = self.pixel_format.upper()
-        if self.flip not in FLIPS:
-            raise ValueError(f"flip must be one of {', '.join(FLIPS)}, not {self.flip!r}")
-        if self.rotate not in ROTATIONS:
-            raise ValueError(f"rotate must be 0, 90, 180 or 270, not {self.rotate}")
         if self.crop and (len(self.crop) != 4 or min(self.crop[:2]) < 0 or min(self.crop[2:]) <= 0):
             raise ValueError(f"crop must be [x >= 0, y >= 0, width > 0, height > 0]: {self.crop}")
         if self.resize and (len(self.resize) != 2 or min(self.resize) <= 0):
             raise ValueError(f"resize must be [width > 0, height > 0]: {self.resize}")
         if not (self.publish_raw or self.jpeg):
             raise ValueError("publish_raw and jpeg are both false: nothing to publish")
-        if not 1 <= self.jpeg_quality <= 100:
-            raise ValueError(f"jpeg_quality must be in 1..100, got {self.jpeg_quality}")
-        for name in ("open_timeout", "read_timeout", "retry_initial", "retry_max", "status_period"):
-            _finite_positive(name, getattr(self, name))
         if self.retry_max < self.retry_initial:
             raise ValueError("retry_max must be >= retry_initial")
-        if self.max_read_failures < 1:
-            raise ValueError(f"max_read_failures must be >= 1, got {self.max_read_failures}")
 
     @property
     def location(self) -> str:

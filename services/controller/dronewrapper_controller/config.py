@@ -6,17 +6,15 @@ Per-aircraft files live in ``config/`` (``iris_sim.yaml``, ``tello.yaml``, ``px4
 
 from __future__ import annotations
 
+from typing import Annotated, Literal
+
 import msgspec
 
+from dronewrapper.runtime.config_ranges import NonNegative, Positive, Share, check_ranges
 from dronewrapper_controller.pid import PidGains
 
-MODES = ("follow_color", "follow_person")
-ON_EXIT = ("stop", "land")
-
-
-def _positive(name: str, value: float) -> None:
-    if not value > 0:
-        raise ValueError(f"{name} must be > 0, got {value}")
+Mode = Literal["follow_color", "follow_person"]
+OnExit = Literal["stop", "land"]
 
 
 class FollowColorConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -32,17 +30,13 @@ class FollowColorConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True
             drone steers on it (s; 0 = at once: one beacon, identity does not matter).
     """
 
-    target_radius: float = 10.0
+    target_radius: Positive = 10.0
     best_when_untargeted: bool = True
-    id_switch_confirm: float = 0.0
+    id_switch_confirm: NonNegative = 0.0
     vx: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=-0.5, out_limit=1.0))
 
     def __post_init__(self) -> None:
-        _positive("follow_color.target_radius", self.target_radius)
-        if not self.id_switch_confirm >= 0:
-            raise ValueError(
-                f"follow_color.id_switch_confirm must be >= 0, got {self.id_switch_confirm}"
-            )
+        check_ranges(self, "follow_color.")
 
 
 class FollowPersonConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -60,19 +54,14 @@ class FollowPersonConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=Tru
             must not swing the drone towards them.
     """
 
-    area_ratio: float = 20.0
+    area_ratio: Positive = 20.0
     best_when_untargeted: bool = False
-    id_switch_confirm: float = 0.5
-    max_forward_error: float = 10.0
+    id_switch_confirm: NonNegative = 0.5
+    max_forward_error: Positive = 10.0
     vx: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=0.05, out_limit=1.0))
 
     def __post_init__(self) -> None:
-        _positive("follow_person.area_ratio", self.area_ratio)
-        _positive("follow_person.max_forward_error", self.max_forward_error)
-        if not self.id_switch_confirm >= 0:
-            raise ValueError(
-                f"follow_person.id_switch_confirm must be >= 0, got {self.id_switch_confirm}"
-            )
+        check_ranges(self, "follow_person.")
 
 
 class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -92,34 +81,24 @@ class ServoConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
         search_yaw_rate: search turn rate (rad/s).
     """
 
-    mode: str = "follow_color"
-    ref_width: float = 320.0
-    detection_timeout: float = 0.5
-    search_delay: float = 2.0
-    occlusion_delay: float = 6.0
-    lost_hold: float = 0.3
-    edge_margin: float = 0.25
-    search_yaw_rate: float = 0.3
+    mode: Mode = "follow_color"
+    ref_width: Positive = 320.0
+    detection_timeout: Positive = 0.5
+    search_delay: NonNegative = 2.0
+    occlusion_delay: NonNegative = 6.0
+    lost_hold: NonNegative = 0.3
+    edge_margin: Share = 0.25
+    search_yaw_rate: NonNegative = 0.3
     follow_color: FollowColorConfig = msgspec.field(default_factory=FollowColorConfig)
     follow_person: FollowPersonConfig = msgspec.field(default_factory=FollowPersonConfig)
     vz: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=0.02, out_limit=0.5))
     yaw_rate: PidGains = msgspec.field(default_factory=lambda: PidGains(kp=0.005, out_limit=0.8))
 
     def __post_init__(self) -> None:
-        if self.mode not in MODES:
-            raise ValueError(f"mode must be one of {', '.join(MODES)}, got {self.mode!r}")
-        _positive("ref_width", self.ref_width)
-        _positive("detection_timeout", self.detection_timeout)
-        if not self.search_delay >= 0:
-            raise ValueError(f"search_delay must be >= 0, got {self.search_delay}")
-        if not 0 <= self.lost_hold <= self.detection_timeout:
+        check_ranges(self)
+        # across two keys, which a Meta cannot say
+        if not self.lost_hold <= self.detection_timeout:
             raise ValueError(f"lost_hold must be in [0, detection_timeout], got {self.lost_hold}")
-        if not self.occlusion_delay >= 0:
-            raise ValueError(f"occlusion_delay must be >= 0, got {self.occlusion_delay}")
-        if not 0.0 <= self.edge_margin <= 1.0:
-            raise ValueError(f"edge_margin must be in [0, 1], got {self.edge_margin}")
-        if not self.search_yaw_rate >= 0:
-            raise ValueError(f"search_yaw_rate must be >= 0, got {self.search_yaw_rate}")
 
 
 class TakeoffConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -135,15 +114,12 @@ class TakeoffConfig(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """
 
     on_start: bool = True
-    height: float = 2.0
-    timeout: float = 60.0
-    wait_ready: float = 0.0
+    height: Positive = 2.0
+    timeout: Positive = 60.0
+    wait_ready: Annotated[float, msgspec.Meta(ge=0, le=600)] = 0.0
 
     def __post_init__(self) -> None:
-        _positive("takeoff.height", self.height)
-        _positive("takeoff.timeout", self.timeout)
-        if not 0 <= self.wait_ready <= 600:
-            raise ValueError(f"takeoff.wait_ready must be in [0, 600] s, got {self.wait_ready}")
+        check_ranges(self, "takeoff.")
 
 
 class Config(ServoConfig, kw_only=True, forbid_unknown_fields=True):
@@ -163,20 +139,13 @@ class Config(ServoConfig, kw_only=True, forbid_unknown_fields=True):
     """
 
     aircraft: str = "iris_sim"
-    rate_hz: float = 20.0
-    status_rate_hz: float = 10.0
-    ready_timeout: float = 30.0
+    rate_hz: Positive = 20.0
+    status_rate_hz: Annotated[float, msgspec.Meta(ge=5)] = 10.0
+    ready_timeout: Positive = 30.0
     takeoff: TakeoffConfig = msgspec.field(default_factory=TakeoffConfig)
-    on_exit: str = "land"
-    land_timeout: float = 30.0
+    on_exit: OnExit = "land"
+    land_timeout: Positive = 30.0
     dry_run: bool = False
 
     def __post_init__(self) -> None:
-        super().__post_init__()
-        _positive("rate_hz", self.rate_hz)
-        if not self.status_rate_hz >= 5:
-            raise ValueError(f"status_rate_hz must be >= 5, got {self.status_rate_hz}")
-        _positive("ready_timeout", self.ready_timeout)
-        _positive("land_timeout", self.land_timeout)
-        if self.on_exit not in ON_EXIT:
-            raise ValueError(f"on_exit must be one of {', '.join(ON_EXIT)}, got {self.on_exit!r}")
+        super().__post_init__()  # its check_ranges covers this subclass's own keys too

@@ -21,6 +21,8 @@ import math
 
 import msgspec
 
+from dronewrapper.runtime.config_ranges import NonNegative, Positive, check_ranges
+
 
 class PidGains(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """Gains and limits of one PID (units: command unit per error unit, per second for ki...).
@@ -39,24 +41,16 @@ class PidGains(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     kp: float = 0.0
     ki: float = 0.0
     kd: float = 0.0
-    out_limit: float = 1.0
-    i_limit: float = math.inf
-    d_tau: float = 0.1
-    max_dt: float = 1.0
+    out_limit: Positive = 1.0
+    i_limit: NonNegative = math.inf
+    d_tau: NonNegative = 0.1
+    max_dt: Positive = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("kp", "ki", "kd", "out_limit", "i_limit", "d_tau", "max_dt"):
-            value = getattr(self, name)
-            if math.isnan(value):
+        check_ranges(self, "PID ")  # a range refuses NaN too
+        for name in ("kp", "ki", "kd"):  # any gain but NaN: no range a Meta can say
+            if math.isnan(getattr(self, name)):
                 raise ValueError(f"PID {name} is NaN")
-        if not self.out_limit > 0:
-            raise ValueError(f"PID out_limit must be > 0, got {self.out_limit}")
-        if not self.i_limit >= 0:
-            raise ValueError(f"PID i_limit must be >= 0, got {self.i_limit}")
-        if not self.d_tau >= 0:
-            raise ValueError(f"PID d_tau must be >= 0, got {self.d_tau}")
-        if not self.max_dt > 0:
-            raise ValueError(f"PID max_dt must be > 0, got {self.max_dt}")
 
 
 def clamp(value: float, limit: float) -> float:

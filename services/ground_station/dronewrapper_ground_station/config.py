@@ -5,14 +5,11 @@ Units: seconds, metres, metres per second, radians per second.
 
 from __future__ import annotations
 
-import math
+from typing import Annotated
 
 import msgspec
 
-
-def _positive(name: str, value: float) -> None:
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a finite number > 0, got {value}")
+from dronewrapper.runtime.config_ranges import FinitePositive, check_ranges
 
 
 class TeleopLimits(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -26,14 +23,13 @@ class TeleopLimits(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             where the drone is (s): a released stick, a hidden tab or a lost browser stop it.
     """
 
-    horizontal: float = 2.0
-    vertical: float = 1.0
-    yaw_rate: float = 1.0
-    timeout: float = 0.5
+    horizontal: FinitePositive = 2.0
+    vertical: FinitePositive = 1.0
+    yaw_rate: FinitePositive = 1.0
+    timeout: FinitePositive = 0.5
 
     def __post_init__(self) -> None:
-        for name in ("horizontal", "vertical", "yaw_rate", "timeout"):
-            _positive(f"teleop.{name}", getattr(self, name))
+        check_ranges(self, "teleop.")
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -57,34 +53,21 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             told it timed out (s).
     """
 
-    host: str = "127.0.0.1"
-    port: int = 8080
+    host: Annotated[str, msgspec.Meta(min_length=1)] = "127.0.0.1"
+    port: Annotated[int, msgspec.Meta(ge=0, le=65535)] = 8080
     namespaces: list[str] = msgspec.field(default_factory=list)
-    discover_period: float = 1.0
-    telemetry_rate_hz: float = 10.0
-    stale_after: float = 3.0
-    takeoff_max: float = 30.0
-    goto_max_distance: float = 200.0
-    object_speed: float = 1.0
+    discover_period: FinitePositive = 1.0
+    telemetry_rate_hz: FinitePositive = 10.0
+    stale_after: FinitePositive = 3.0
+    takeoff_max: FinitePositive = 30.0
+    goto_max_distance: FinitePositive = 200.0
+    object_speed: FinitePositive = 1.0
     token: str = ""
-    command_timeout: float = 60.0
+    command_timeout: FinitePositive = 60.0
     teleop: TeleopLimits = msgspec.field(default_factory=TeleopLimits)
 
     def __post_init__(self) -> None:
-        if not 0 <= self.port <= 65535:
-            raise ValueError(f"port must be in [0, 65535], got {self.port}")
-        if not self.host:
-            raise ValueError("host must be an address, e.g. 127.0.0.1")
-        for name in (
-            "discover_period",
-            "telemetry_rate_hz",
-            "stale_after",
-            "takeoff_max",
-            "goto_max_distance",
-            "object_speed",
-            "command_timeout",
-        ):
-            _positive(name, getattr(self, name))
+        check_ranges(self)
         for ns in self.namespaces:
             if not ns or "/" in ns or "*" in ns:
                 raise ValueError(f"namespaces: {ns!r} is not one key chunk")

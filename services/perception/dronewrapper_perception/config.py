@@ -6,16 +6,19 @@ Every field can be set in a YAML/JSON file (``--config``) or on the command line
 
 from __future__ import annotations
 
-import math
+import sys
+from typing import Annotated, Literal, get_args
 
 import msgspec
 
+from dronewrapper.runtime.config_ranges import Share, check_ranges
 from dronewrapper_perception.color_filter import PRESETS, ColorRange
 from dronewrapper_perception.providers import check_names
 from dronewrapper_perception.tracking import TRACKERS
 from dronewrapper_perception.yolox import class_ids_for
 
-DETECTORS = ("color", "yolox", "hog", "person")
+Detector = Literal["color", "yolox", "hog", "person"]
+DETECTORS: tuple[str, ...] = get_args(Detector)
 
 
 class ColorRangeConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -28,15 +31,16 @@ class ColorRangeConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True)
     s_max: int = 255
     v_min: int = 50
     v_max: int = 255
-    hue_unit: str = "opencv"
+    hue_unit: Literal["opencv", "degrees"] = "opencv"
+
+    def __post_init__(self) -> None:
+        check_ranges(self)
 
     def to_range(self) -> ColorRange:
         if self.hue_unit == "degrees":
             return ColorRange.from_degrees(
                 self.h_min, self.h_max, self.s_min, self.s_max, self.v_min, self.v_max
             )
-        if self.hue_unit != "opencv":
-            raise ValueError(f"hue_unit must be 'opencv' or 'degrees', not {self.hue_unit!r}")
         return ColorRange(
             int(self.h_min), int(self.h_max), self.s_min, self.s_max, self.v_min, self.v_max
         )
@@ -85,37 +89,34 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
 
     camera: str = "cam_frontal"
     compressed: bool = False
-    detector: str = "color"
+    detector: Detector = "color"
     color_preset: str = "red"
     color_ranges: list[ColorRangeConfig] = msgspec.field(default_factory=list)
-    blur_px: int = 11
+    blur_px: Annotated[int, msgspec.Meta(ge=0)] = 11
     min_area_px: float = 20.0
-    color_scale: float = 0.5
+    color_scale: Annotated[float, msgspec.Meta(gt=0, le=1)] = 0.5
     model_path: str = ""
     checksum: str = ""
-    input_size: int = 416
-    score_threshold: float = 0.3
-    nms_threshold: float = 0.45
+    input_size: Annotated[int, msgspec.Meta(ge=32, multiple_of=32)] = 416
+    score_threshold: Share = 0.3
+    nms_threshold: Share = 0.45
     classes: list[str] = msgspec.field(default_factory=lambda: ["person"])
-    threads: int = 2
+    threads: Annotated[int, msgspec.Meta(ge=1)] = 2
     thread_spinning: bool = False
     providers: list[str] | str = msgspec.field(default_factory=list)
     providers_strict: bool = False
     tracker: str = "kalman"
     max_coast_s: float = 2.0
-    paper_fifo_length: int = 5
+    paper_fifo_length: Annotated[int, msgspec.Meta(ge=1)] = 5
     paper_gate_px: float = 120.0
-    max_detections: int = 50
-    max_rate_hz: float = 0.0
+    max_detections: Annotated[int, msgspec.Meta(ge=1)] = 50
+    max_rate_hz: Annotated[float, msgspec.Meta(ge=0, le=sys.float_info.max)] = 0.0
     debug_image: bool = False
-    debug_jpeg_quality: int = 80
+    debug_jpeg_quality: Annotated[int, msgspec.Meta(ge=1, le=100)] = 80
     stats_period_s: float = 10.0
 
     def __post_init__(self) -> None:
-        if self.detector not in DETECTORS:
-            raise ValueError(
-                f"detector must be one of {', '.join(DETECTORS)}, not {self.detector!r}"
-            )
+        check_ranges(self)
         if self.tracker not in TRACKERS:
             raise ValueError(f"tracker must be one of {', '.join(TRACKERS)}, not {self.tracker!r}")
         if not self.color_ranges and self.color_preset not in PRESETS:
@@ -124,21 +125,8 @@ class Config(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             )
         for colour_range in self.color_ranges:
             colour_range.to_range()  # raises ValueError with the bad field named
-        if self.blur_px < 0 or (self.blur_px > 1 and self.blur_px % 2 == 0):
+        if self.blur_px > 1 and self.blur_px % 2 == 0:  # 0, 1 or odd: beyond a Meta's words
             raise ValueError(f"blur_px={self.blur_px} must be 0 or an odd number of px")
-        if not 0.0 < self.color_scale <= 1.0:
-            raise ValueError(f"color_scale={self.color_scale} must be in (0, 1]")
-        for name in ("score_threshold", "nms_threshold"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"{name} must be in 0..1")
-        if self.input_size < 32 or self.input_size % 32:
-            raise ValueError("input_size must be a positive multiple of 32")
-        if not (math.isfinite(self.max_rate_hz) and self.max_rate_hz >= 0.0):
-            raise ValueError(f"max_rate_hz={self.max_rate_hz} must be finite and >= 0 (0 = no cap)")
-        if self.threads < 1 or self.max_detections < 1 or self.paper_fifo_length < 1:
-            raise ValueError("threads, max_detections and paper_fifo_length must be >= 1")
-        if not 1 <= self.debug_jpeg_quality <= 100:
-            raise ValueError("debug_jpeg_quality must be in 1..100")
         class_ids_for(self.classes)  # unknown class names fail here
         try:
             check_names(self.provider_list())

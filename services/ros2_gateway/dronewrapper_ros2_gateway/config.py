@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+from typing import Annotated, Literal
+
 import msgspec
+
+from dronewrapper.runtime.config_ranges import Positive, check_ranges
 
 MAX_DOMAIN_ID = 232
 """The highest ROS_DOMAIN_ID (ROS 2's limit, and PX4's ZENOH_DOMAIN_ID's)."""
@@ -29,21 +33,20 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             subscribing to a camera only while one does (s).
     """
 
-    domain_id: int = 0
+    domain_id: Annotated[int, msgspec.Meta(ge=0, le=MAX_DOMAIN_ID)] = 0
     drones: list[str] = msgspec.field(default_factory=list)
     keys: list[str] = msgspec.field(default_factory=list)
     node_name: str = "mavros"
     ros_connect: list[str] = msgspec.field(default_factory=list)
-    ros_mode: str = "peer"
+    ros_mode: Literal["peer", "client"] = "peer"
     commander: str = ""
-    service_timeout_s: float = 15.0
-    image_check_s: float = 0.5
+    service_timeout_s: Positive = 15.0
+    image_check_s: Positive = 0.5
 
     def __post_init__(self) -> None:
         from dronewrapper_ros2_gateway.entities import ENTITIES
 
-        if not 0 <= self.domain_id <= MAX_DOMAIN_ID:
-            raise ValueError(f"domain_id must be within 0-{MAX_DOMAIN_ID}, got {self.domain_id}")
+        check_ranges(self)
         for ns in self.drones:
             if not ns or "/" in ns or "*" in ns:
                 raise ValueError(f"drones: {ns!r} is not a namespace (one key chunk)")
@@ -52,9 +55,5 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
             raise ValueError(
                 f"keys: unknown {', '.join(unknown)}; known: {', '.join(sorted(ENTITIES))}"
             )
-        if self.ros_mode not in ("peer", "client"):
-            raise ValueError(f"ros_mode must be peer or client, got {self.ros_mode!r}")
         if not self.node_name or "/" in self.node_name:
             raise ValueError(f"node_name must be a ROS node name, got {self.node_name!r}")
-        if not self.service_timeout_s > 0 or not self.image_check_s > 0:
-            raise ValueError("service_timeout_s and image_check_s must be > 0")

@@ -3,11 +3,18 @@
 from __future__ import annotations
 
 import ipaddress
+from typing import Annotated
 
 import msgspec
 
+from dronewrapper.runtime.config_ranges import check_ranges
+
 DEFAULT_NETNS_SUBNET = "192.168.10.0/24"
 """The real Tello's Wi-Fi: the drone at .1, the laptop at .2."""
+VideoSide = Annotated[int, msgspec.Meta(ge=16, le=4096, multiple_of=2)]
+"""A side of the encoded video (px; even)."""
+Rate = Annotated[float, msgspec.Meta(gt=0, le=1000)]
+"""A rate of the simulated Tello (Hz)."""
 
 
 class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
@@ -32,41 +39,22 @@ class TelloConfig(msgspec.Struct, forbid_unknown_fields=True, kw_only=True):
             instance N).
     """
 
-    battery_percent: float = 100.0
+    battery_percent: Annotated[float, msgspec.Meta(ge=1, le=100)] = 100.0
     video: bool = True
-    width: int = 960
-    height: int = 720
-    fps: float = 30.0
-    render_scale: float = 0.5
-    bitrate_kbps: int = 1500
-    keyframe_interval: int = 30
-    packet_bytes: int = 1460
-    physics_rate_hz: float = 100.0
-    state_rate_hz: float = 10.0
-    auto_land_s: float = 15.0
+    width: VideoSide = 960
+    height: VideoSide = 720
+    fps: Rate = 30.0
+    render_scale: Annotated[float, msgspec.Meta(ge=0.1, le=1)] = 0.5
+    bitrate_kbps: Annotated[int, msgspec.Meta(ge=50, le=50_000)] = 1500
+    keyframe_interval: Annotated[int, msgspec.Meta(ge=1, le=600)] = 30
+    packet_bytes: Annotated[int, msgspec.Meta(ge=188, le=65_000)] = 1460
+    physics_rate_hz: Rate = 100.0
+    state_rate_hz: Rate = 10.0
+    auto_land_s: Annotated[float, msgspec.Meta(ge=1, le=3600)] = 15.0
     netns_subnet: str = ""
 
     def __post_init__(self) -> None:
-        if not 1.0 <= self.battery_percent <= 100.0:
-            raise ValueError(f"battery_percent must be in 1..100, got {self.battery_percent}")
-        for name in ("width", "height"):
-            value = getattr(self, name)
-            if not 16 <= value <= 4096 or value % 2:
-                raise ValueError(f"{name} must be even and in 16..4096 px, got {value}")
-        for name in ("fps", "physics_rate_hz", "state_rate_hz"):
-            value = getattr(self, name)
-            if not 0 < value <= 1000:
-                raise ValueError(f"{name} must be in (0, 1000], got {value}")
-        if not 0.1 <= self.render_scale <= 1.0:
-            raise ValueError(f"render_scale must be in 0.1..1, got {self.render_scale}")
-        if not 1.0 <= self.auto_land_s <= 3600.0:
-            raise ValueError(f"auto_land_s must be in 1..3600, got {self.auto_land_s}")
-        if not 50 <= self.bitrate_kbps <= 50_000:
-            raise ValueError(f"bitrate_kbps must be in 50..50000, got {self.bitrate_kbps}")
-        if not 1 <= self.keyframe_interval <= 600:
-            raise ValueError(f"keyframe_interval must be in 1..600, got {self.keyframe_interval}")
-        if not 188 <= self.packet_bytes <= 65_000:
-            raise ValueError(f"packet_bytes must be in 188..65000, got {self.packet_bytes}")
+        check_ranges(self, "tello.")
         if self.netns_subnet:
             netns_addresses(self.netns_subnet)
 
