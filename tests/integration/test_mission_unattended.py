@@ -27,8 +27,12 @@ BOUND_S = 120.0
 commander's absence (5 s, looked at each second), the return (under 30 s), with room for a
 loaded machine."""
 
+# The app as a user runs it in a terminal, where Ctrl-C raises KeyboardInterrupt: it says so
+# itself, since a test runner started in the background (`cmd &` in a script) passes SIGINT
+# on ignored, and Python then never raises it.
 APP = f"""
-import time
+import signal, time
+signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C raises, as in a terminal
 from dronewrapper import DroneWrapper
 drone = DroneWrapper("drone", {{router!r}}, timeout=60)
 drone.takeoff(3.0)
