@@ -10,11 +10,13 @@ Raw datagrams can be sent too (``send_raw``) to duplicate or reorder them.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
 import struct
 import threading
 import time
+from collections.abc import Iterator
 
 os.environ.setdefault("MAVLINK20", "1")
 
@@ -55,7 +57,7 @@ class AutopilotPeer:
         self.received: list[tuple[float, object]] = []
         self.sent_poses = 0
         self._boot = time.monotonic()
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()
         self._stop = threading.Event()
         self._threads = [
             threading.Thread(target=self._send_loop, daemon=True),
@@ -86,9 +88,19 @@ class AutopilotPeer:
         self.sock.sendto(data, self.bridge)
 
     def send(self, msg) -> bytes:
-        data = self.pack(msg)
-        self.send_raw(data)
+        """Pack and send ``msg``, no other message of this peer packed in between."""
+        with self._lock:
+            data = self.pack(msg)
+            self.send_raw(data)
         return data
+
+    @contextlib.contextmanager
+    def exclusive(self) -> Iterator[None]:
+        """While inside, this peer's telemetry thread packs and sends nothing: a test's own
+        packs and sends reach the bridge in the order written (a message the thread packed
+        in between would carry a newer seq, and make the test's next one look reordered)."""
+        with self._lock:
+            yield
 
     def pose(self) -> mavlink.MAVLink_local_position_ned_message:
         self.sent_poses += 1

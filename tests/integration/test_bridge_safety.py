@@ -65,10 +65,11 @@ def test_duplicated_and_reordered_datagrams_are_never_republished(router):
         peer = rig.peer
         t0 = time.monotonic()
         for i in range(40):
-            peer.north = float(i)
-            data = peer.pack(peer.pose())
-            peer.send_raw(data)
-            peer.send_raw(data)  # 100 % duplication
+            with peer.exclusive():
+                peer.north = float(i)
+                data = peer.pack(peer.pose())
+                peer.send_raw(data)
+                peer.send_raw(data)  # 100 % duplication
             time.sleep(0.005)
         wait_for(
             lambda: any(p.pose.position.y == 39.0 for p in rig.poses.values(t0)),
@@ -80,16 +81,17 @@ def test_duplicated_and_reordered_datagrams_are_never_republished(router):
         assert ys == [float(i) for i in range(40)]  # each once, in order
         # reordered: the newer one arrives first, the older one is dropped
         t1 = time.monotonic()
-        peer.north = 100.0
-        older = peer.pack(peer.pose())
-        time.sleep(0.01)
-        peer.north = 101.0
-        newer = peer.pack(peer.pose())
-        peer.send_raw(newer)
-        peer.send_raw(older)
-        time.sleep(0.01)  # a later time_boot_ms: a new sample
-        peer.north = 102.0
-        peer.send(peer.pose())  # a marker: everything before it has been handled
+        with peer.exclusive():
+            peer.north = 100.0
+            older = peer.pack(peer.pose())
+            time.sleep(0.01)
+            peer.north = 101.0
+            newer = peer.pack(peer.pose())
+            peer.send_raw(newer)
+            peer.send_raw(older)
+            time.sleep(0.01)  # a later time_boot_ms: a new sample
+            peer.north = 102.0
+            peer.send(peer.pose())  # a marker: everything before it has been handled
         wait_for(
             lambda: any(p.pose.position.y == 102.0 for p in rig.poses.values(t1)),
             10,
