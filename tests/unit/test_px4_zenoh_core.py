@@ -24,6 +24,7 @@ from dronewrapper.msgs.flight import NOT_READY, TakeoffRequest
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, CommandBool, SetMode
 from dronewrapper.msgs.mission import EnvelopeSet
+from dronewrapper_bridge_base import guided_core, setpoint_limits
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules, flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
@@ -149,6 +150,22 @@ def test_an_invalid_setpoint_is_refused(rig):
     rig.setpoint(velocity(math.nan))
     assert rig.writes(t.TRAJECTORY) == []
     assert rig.published(registry.REFUSAL)[0].kind == "validation"
+
+
+def test_a_setpoint_is_validated_once_where_it_enters(rig, monkeypatch):
+    calls = []
+    real = setpoint_limits.validate
+
+    def counting(target, bounds):
+        calls.append(target)
+        return real(target, bounds)
+
+    monkeypatch.setattr(guided_core, "validate", counting)
+    monkeypatch.setattr(setpoint_limits, "validate", counting)
+    rig.flying_offboard()
+    rig.clear()
+    rig.setpoint(velocity(1.0))
+    assert len(rig.writes(t.TRAJECTORY)) == 1 and len(calls) == 1
 
 
 def test_a_setpoint_outside_the_envelope_is_refused():

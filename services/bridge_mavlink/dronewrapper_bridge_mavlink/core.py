@@ -52,12 +52,14 @@ from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.mission_state import MissionState
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, GUIDED_MODE, is_guided
 from dronewrapper_bridge_mavlink.operations import failsafe_action
-from dronewrapper_bridge_mavlink.param_cache import ParamCache
-from dronewrapper_bridge_mavlink.setpoints import (
-    SetpointError,
-    hold_target,
-    to_local_ned,
+from dronewrapper_bridge_mavlink.outgoing import (
+    CommandLong,
+    Heartbeat,
+    Send,
+    SetPositionTargetLocalNed,
 )
+from dronewrapper_bridge_mavlink.param_cache import ParamCache
+from dronewrapper_bridge_mavlink.setpoints import hold_target, to_local_ned
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import (
@@ -115,9 +117,9 @@ class BridgeCore(GuidedCore):
 
     # ------------------------------------------------------------------ plumbing
 
-    def send(self, name: str, *fields: Any) -> None:
-        """Queue MAVLink message ``name`` (e.g. ``command_long``) with its field values."""
-        self.out.sends.append((name, fields))
+    def send(self, message: Send) -> None:
+        """Queue a MAVLink message for the autopilot (the link encodes it)."""
+        self.out.sends.append(message)
 
     def target(self) -> tuple[int, int]:
         """The autopilot's (system, component) to address (system 1 before it is heard)."""
@@ -316,12 +318,13 @@ class BridgeCore(GuidedCore):
         if now >= self._next_heartbeat_out:
             self._next_heartbeat_out = now + 1.0
             self.send(
-                "heartbeat",
-                self.config.heartbeat_type,
-                mavlink.MAV_AUTOPILOT_INVALID,
-                0,
-                0,
-                mavlink.MAV_STATE_ACTIVE,
+                Heartbeat(
+                    type=self.config.heartbeat_type,
+                    autopilot=mavlink.MAV_AUTOPILOT_INVALID,
+                    base_mode=0,
+                    custom_mode=0,
+                    system_status=mavlink.MAV_STATE_ACTIVE,
+                )
             )
         tick = self.failsafe.tick(now, self.pose())
         fresh = tick.send is not None and tick.send is self.failsafe.fresh_target(now)
@@ -356,8 +359,8 @@ class BridgeCore(GuidedCore):
         rounds are re-sent 3 times, see :mod:`~dronewrapper_bridge_mavlink.streams`)."""
         command = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
         for msg_id, interval_us in requests:
-            params = (float(msg_id), interval_us, 0, 0, 0, 0, 0)
-            self.send("command_long", *self.target(), command, 0, *params)
+            params = (float(msg_id), interval_us, 0.0, 0.0, 0.0, 0.0, 0.0)
+            self.send(CommandLong(*self.target(), command, 0, params))
 
     # ------------------------------------------------------------------ setpoints
 
@@ -369,22 +372,17 @@ class BridgeCore(GuidedCore):
         return (position, self.telemetry.yaw_enu)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
+        """Send an admitted ``target`` (validated where it entered, or the bridge's own)."""
         position = self.telemetry.position_enu
-        try:
-            ned = to_local_ned(
-                target,
-                autopilot=self.autopilot or AUTOPILOT_PX4,
-                yaw_enu=self.telemetry.yaw_enu,
-                z_enu=position[2] if position is not None else 0.0,
-                limits=self.limits,
-            )
-        except SetpointError as exc:  # cannot happen for validated targets; never crash
-            log.error("setpoint conversion failed: %s", exc)
-            return
+        ned = to_local_ned(
+            target,
+            autopilot=self.autopilot or AUTOPILOT_PX4,
+            yaw_enu=self.telemetry.yaw_enu,
+            z_enu=position[2] if position is not None else 0.0,
+            limits=self.limits,
+        )
         boot_ms = int((self.now - self._t0) * 1000) & 0xFFFFFFFF  # our time_boot_ms
-        kinematics = (ned.x, ned.y, ned.z, ned.vx, ned.vy, ned.vz, 0.0, 0.0, 0.0)  # no accel
-        fields = (ned.coordinate_frame, ned.type_mask, *kinematics, ned.yaw, ned.yaw_rate)
-        self.send("set_position_target_local_ned", boot_ms, *self.target(), *fields)
+        self.send(SetPositionTargetLocalNed(boot_ms, *self.target(), ned))
         self.setpoints_sent += 1
         self.keepalive.sent(target, self.now)
 

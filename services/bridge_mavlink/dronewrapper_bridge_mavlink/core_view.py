@@ -20,6 +20,7 @@ from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.mission_state import MissionState
+from dronewrapper_bridge_mavlink.outgoing import Send
 from dronewrapper_bridge_mavlink.param_cache import ParamCache
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
@@ -31,13 +32,13 @@ class Outbox:
     """What the node must do after a core call.
 
     Attributes:
-        sends: MAVLink messages, as (pymavlink name without ``_send``, field values).
+        sends: MAVLink messages for the autopilot, typed (the link encodes them).
         samples: (registry topic, message) to publish on Zenoh.
         peers: UDP addresses replies must go to from now on (the last one wins).
         errors: names of dropped inputs to count (the node's ``callback_errors``).
     """
 
-    sends: list[tuple[str, tuple]] = field(default_factory=list)
+    sends: list[Send] = field(default_factory=list)
     samples: list[tuple[Topic, Any]] = field(default_factory=list)
     peers: list[Any] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)
@@ -84,7 +85,7 @@ class BridgeCore(PureCoreView, Protocol):
     @property
     def streams(self) -> StreamRequests: ...
 
-    def send(self, name: str, *fields: Any) -> None: ...
+    def send(self, message: Send) -> None: ...
     def target(self) -> tuple[int, int]: ...
     def require_connected(self) -> str: ...
     def on_mavlink(self, msg: Any, source: Any, now: float, stamp: float) -> None: ...

@@ -47,6 +47,7 @@ from dronewrapper_bridge_mavlink.modes import (
     RETURN_MODE,
     set_mode_params,
 )
+from dronewrapper_bridge_mavlink.outgoing import CommandLong
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core_view import BridgeCore
@@ -83,8 +84,7 @@ def exchange(
         while True:
             msg = pending.due(core.now)
             if msg is not None:
-                fields = (msg.command, msg.confirmation, *msg.params)
-                core.send("command_long", *core.target(), *fields)
+                core.send(CommandLong(*core.target(), msg.command, msg.confirmation, msg.params))
             if pending.finished(core.now):
                 break
             yield pending.wake_at(core.now)

@@ -22,6 +22,8 @@ from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamSet, ParamSe
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
+from dronewrapper_bridge_mavlink.outgoing import ParamRequestRead
+from dronewrapper_bridge_mavlink.outgoing import ParamSet as ParamSetMessage
 from dronewrapper_bridge_mavlink.param_cache import ParamCache as ParamCache
 
 if TYPE_CHECKING:
@@ -91,7 +93,7 @@ def param_read(core: BridgeCore, param_id: str) -> Generator[float, None, tuple 
         yield from param_exchange(
             core,
             param_id,
-            lambda: core.send("param_request_read", *core.target(), encoded, -1),
+            lambda: core.send(ParamRequestRead(*core.target(), encoded)),
         )
     )
 
@@ -128,7 +130,7 @@ def param_set(core: BridgeCore, request: ParamSet) -> Steps:
     got = yield from param_exchange(
         core,
         param_id,
-        lambda: core.send("param_set", *core.target(), encoded, raw, param_type),
+        lambda: core.send(ParamSetMessage(*core.target(), encoded, raw, param_type)),
         lambda echo_raw, echo_type: same_value(decode(core, echo_raw, echo_type), requested),
     )
     if got is None:

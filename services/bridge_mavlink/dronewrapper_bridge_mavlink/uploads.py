@@ -44,8 +44,8 @@ def run_transfer(core: BridgeCore, transfer: mt.Transfer) -> Generator[float, No
     state.transfer = transfer
     try:
         while True:
-            for name, fields in transfer.due(core.now):
-                core.send(name, *fields)
+            for message in transfer.due(core.now):
+                core.send(message)
             if transfer.done:
                 return
             yield transfer.wake_at()

@@ -46,7 +46,7 @@ from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
-from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
+from dronewrapper_bridge_base.setpoint_limits import Kind, kind_of
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
@@ -355,11 +355,8 @@ class Px4ZenohCore(GuidedCore):
         return (self.position_enu, self.yaw_enu)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
-        try:
-            kind = validate(target, self.limits)
-        except SetpointError as exc:  # cannot happen for validated targets; never crash
-            log.error("setpoint conversion failed: %s", exc)
-            return
+        """Write an admitted ``target`` (validated where it entered, or the bridge's own)."""
+        kind = kind_of(target)
         self.write(t.OFFBOARD_MODE, trajectory.control_mode(kind))
         self.write(t.TRAJECTORY, trajectory.trajectory_setpoint(target, kind, self.yaw_enu))
         self.setpoints_sent += 1

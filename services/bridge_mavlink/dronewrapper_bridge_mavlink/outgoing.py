@@ -1,0 +1,294 @@
+"""The MAVLink messages the bridge sends, as typed immutable values (:data:`Send`), and the one
+encoder that makes pymavlink's message of each (:func:`encode`).
+
+The core, its operations and the mission transfers queue these values in the outbox; only
+the link (``link.MavLink.send``) encodes them, so no message name travels as a string and the
+type checker sees every field. Units are MAVLink's: ``time_boot_ms`` ms since the bridge's
+start, positions local NED m, velocities m/s, yaw rad, rates rad/s; mission ``x``/``y``
+degrees * 1e7 and ``z`` m. ``target_system``/``target_component`` address the autopilot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NoReturn
+
+from pymavlink.dialects.v20 import common as mavlink
+
+
+@dataclass(frozen=True, slots=True)
+class Heartbeat:
+    """HEARTBEAT: the bridge's own (MAV_TYPE, MAV_AUTOPILOT, modes, MAV_STATE)."""
+
+    type: int
+    autopilot: int
+    base_mode: int
+    custom_mode: int
+    system_status: int
+
+
+@dataclass(frozen=True, slots=True)
+class CommandLong:
+    """COMMAND_LONG: MAV_CMD ``command`` with its seven parameters (``confirmation``: 0 on the
+    first send, counted up on each re-send)."""
+
+    target_system: int
+    target_component: int
+    command: int
+    confirmation: int
+    params: tuple[float, float, float, float, float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class LocalNedTarget:
+    """What SET_POSITION_TARGET_LOCAL_NED asks for (MAV_FRAME ``coordinate_frame``,
+    ``type_mask`` of the ignored fields; local NED m, m/s, rad, rad/s; no acceleration)."""
+
+    coordinate_frame: int
+    type_mask: int
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    yaw: float = 0.0
+    yaw_rate: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class SetPositionTargetLocalNed:
+    """SET_POSITION_TARGET_LOCAL_NED: ``target`` at ``time_boot_ms``."""
+
+    time_boot_ms: int
+    target_system: int
+    target_component: int
+    target: LocalNedTarget
+
+
+@dataclass(frozen=True, slots=True)
+class ParamRequestRead:
+    """PARAM_REQUEST_READ of ``param_id`` (ASCII, <= 16 bytes; ``param_index`` -1: by id)."""
+
+    target_system: int
+    target_component: int
+    param_id: bytes
+    param_index: int = -1
+
+
+@dataclass(frozen=True, slots=True)
+class ParamSet:
+    """PARAM_SET: ``param_value`` as it travels (PX4 integers as their bytes), MAV_PARAM_TYPE."""
+
+    target_system: int
+    target_component: int
+    param_id: bytes
+    param_value: float
+    param_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionCount:
+    """MISSION_COUNT: an upload of ``count`` items of MAV_MISSION_TYPE ``mission_type``."""
+
+    target_system: int
+    target_component: int
+    count: int
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionItemInt:
+    """MISSION_ITEM_INT: item ``seq`` (MAV_FRAME ``frame``, MAV_CMD ``command``)."""
+
+    target_system: int
+    target_component: int
+    seq: int
+    frame: int
+    command: int
+    current: int
+    autocontinue: int
+    param1: float
+    param2: float
+    param3: float
+    param4: float
+    x: int
+    y: int
+    z: float
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionRequestList:
+    """MISSION_REQUEST_LIST: a download of the autopilot's list of ``mission_type``."""
+
+    target_system: int
+    target_component: int
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionRequestInt:
+    """MISSION_REQUEST_INT: item ``seq`` of a download."""
+
+    target_system: int
+    target_component: int
+    seq: int
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionClearAll:
+    """MISSION_CLEAR_ALL of ``mission_type``."""
+
+    target_system: int
+    target_component: int
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionAck:
+    """MISSION_ACK: a download's end (``type``: MAV_MISSION_RESULT)."""
+
+    target_system: int
+    target_component: int
+    type: int
+    mission_type: int
+
+
+Send = (
+    Heartbeat
+    | CommandLong
+    | SetPositionTargetLocalNed
+    | ParamRequestRead
+    | ParamSet
+    | MissionCount
+    | MissionItemInt
+    | MissionRequestList
+    | MissionRequestInt
+    | MissionClearAll
+    | MissionAck
+)
+"""Every message the bridge's core sends to the autopilot."""
+
+
+def encode(send: Send) -> mavlink.MAVLink_message:
+    """pymavlink's message for ``send`` (packed and sent by ``MAVLink.send``)."""
+    if isinstance(send, SetPositionTargetLocalNed):  # the most frequent first
+        s = send.target
+        return mavlink.MAVLink_set_position_target_local_ned_message(
+            send.time_boot_ms,
+            send.target_system,
+            send.target_component,
+            s.coordinate_frame,
+            s.type_mask,
+            s.x,
+            s.y,
+            s.z,
+            s.vx,
+            s.vy,
+            s.vz,
+            0.0,  # afx, afy, afz: no acceleration
+            0.0,
+            0.0,
+            s.yaw,
+            s.yaw_rate,
+        )
+    if isinstance(send, Heartbeat):
+        return mavlink.MAVLink_heartbeat_message(
+            send.type, send.autopilot, send.base_mode, send.custom_mode, send.system_status, 3
+        )
+    if isinstance(send, CommandLong):
+        return mavlink.MAVLink_command_long_message(
+            send.target_system, send.target_component, send.command, send.confirmation, *send.params
+        )
+    if isinstance(send, ParamRequestRead):
+        return mavlink.MAVLink_param_request_read_message(
+            send.target_system, send.target_component, send.param_id, send.param_index
+        )
+    if isinstance(send, ParamSet):
+        return mavlink.MAVLink_param_set_message(
+            send.target_system,
+            send.target_component,
+            send.param_id,
+            send.param_value,
+            send.param_type,
+        )
+    if isinstance(send, MISSION_MESSAGES):
+        return _encode_mission(send)
+    return _unknown(send)
+
+
+MissionMessage = (
+    MissionCount
+    | MissionItemInt
+    | MissionRequestList
+    | MissionRequestInt
+    | MissionClearAll
+    | MissionAck
+)
+"""The mission protocol's messages (mission_transfer.py sends them)."""
+MISSION_MESSAGES = (
+    MissionCount,
+    MissionItemInt,
+    MissionRequestList,
+    MissionRequestInt,
+    MissionClearAll,
+    MissionAck,
+)
+
+
+def _encode_mission(send: MissionMessage) -> mavlink.MAVLink_message:
+    target = (send.target_system, send.target_component)
+    if isinstance(send, MissionCount):
+        return mavlink.MAVLink_mission_count_message(*target, send.count, send.mission_type)
+    if isinstance(send, MissionItemInt):
+        s = send
+        return mavlink.MAVLink_mission_item_int_message(
+            *target,
+            s.seq,
+            s.frame,
+            s.command,
+            s.current,
+            s.autocontinue,
+            s.param1,
+            s.param2,
+            s.param3,
+            s.param4,
+            s.x,
+            s.y,
+            s.z,
+            s.mission_type,
+        )
+    if isinstance(send, MissionRequestList):
+        return mavlink.MAVLink_mission_request_list_message(*target, send.mission_type)
+    if isinstance(send, MissionRequestInt):
+        return mavlink.MAVLink_mission_request_int_message(*target, send.seq, send.mission_type)
+    if isinstance(send, MissionClearAll):
+        return mavlink.MAVLink_mission_clear_all_message(*target, send.mission_type)
+    if isinstance(send, MissionAck):
+        return mavlink.MAVLink_mission_ack_message(*target, send.type, send.mission_type)
+    return _unknown(send)
+
+
+def _unknown(send: NoReturn) -> NoReturn:
+    """Reached only by a value outside :data:`Send` (the type checker proves none is)."""
+    raise TypeError(f"not a message the bridge sends: {send!r}")
+
+
+__all__ = [
+    "CommandLong",
+    "Heartbeat",
+    "LocalNedTarget",
+    "MissionAck",
+    "MissionClearAll",
+    "MissionCount",
+    "MissionItemInt",
+    "MissionRequestInt",
+    "MissionRequestList",
+    "ParamRequestRead",
+    "ParamSet",
+    "Send",
+    "SetPositionTargetLocalNed",
+    "encode",
+]
