@@ -58,7 +58,7 @@ from dronewrapper_bridge_mavlink.outgoing import (
     Send,
     SetPositionTargetLocalNed,
 )
-from dronewrapper_bridge_mavlink.param_cache import ParamCache
+from dronewrapper_bridge_mavlink.parameters import Parameters
 from dronewrapper_bridge_mavlink.setpoints import hold_target, to_local_ned
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
@@ -87,7 +87,9 @@ class BridgeCore(GuidedCore):
         self.statustexts = StatusTextAssembler()
         self.acks = cmds.AckRouter()
         self.missions = MissionState(config.envelope)
-        self.params = ParamCache()
+        self.parameters = Parameters(
+            self, attempts=config.param_attempts, timeout=config.param_timeout
+        )
         serial = is_serial_url(config.connection)
         self.budget = fit_rates(
             config.message_rates,

@@ -21,7 +21,7 @@ from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.mission_state import MissionState
 from dronewrapper_bridge_mavlink.outgoing import Send
-from dronewrapper_bridge_mavlink.param_cache import ParamCache
+from dronewrapper_bridge_mavlink.parameters import Parameters
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import StatusTextAssembler, Telemetry
@@ -81,7 +81,7 @@ class BridgeCore(PureCoreView, Protocol):
     @property
     def missions(self) -> MissionState: ...
     @property
-    def params(self) -> ParamCache: ...
+    def parameters(self) -> Parameters: ...
     @property
     def streams(self) -> StreamRequests: ...
 
