@@ -11,12 +11,13 @@ import typing
 import pytest
 from bridge_core_rig import USER, CoreRig, ops, velocity
 from pymavlink.dialects.v20 import common as mavlink
+from validation_count import count_validations
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import CommandTOL, ParamGet
-from dronewrapper_bridge_base import guided_core, setpoint_limits
 from dronewrapper_bridge_mavlink import outgoing, parameters
 from dronewrapper_bridge_mavlink.outgoing import Send, encode
+from dronewrapper_bridge_mavlink.setpoints import LocalNedTarget
 
 OFFBOARD = 6 << 16
 
@@ -24,7 +25,7 @@ SAMPLES: list[Send] = [
     outgoing.Heartbeat(6, 8, 0, 0, 4),
     outgoing.CommandLong(1, 1, 22, 2, (0.0, 0.0, 0.0, math.nan, 0.0, 0.0, 3.0)),
     outgoing.SetPositionTargetLocalNed(
-        1234, 1, 1, outgoing.LocalNedTarget(1, 1991, vx=1.5, vy=-0.5, vz=0.25, yaw_rate=0.3)
+        1, 1, 1234, LocalNedTarget(1, 1991, vx=1.5, vy=-0.5, vz=0.25, yaw_rate=0.3)
     ),
     outgoing.ParamRequestRead(1, 1, b"MPC_XY_VEL_MAX"),
     outgoing.ParamSet(1, 1, b"MPC_XY_VEL_MAX", 5.0, 9),
@@ -99,15 +100,7 @@ def test_everything_the_core_queues_is_a_typed_message():
 
 
 def test_a_setpoint_is_validated_once_on_its_way_to_the_autopilot(monkeypatch):
-    calls: list[object] = []
-    real = setpoint_limits.validate
-
-    def counting(target, bounds):
-        calls.append(target)
-        return real(target, bounds)
-
-    monkeypatch.setattr(guided_core, "validate", counting)
-    monkeypatch.setattr(setpoint_limits, "validate", counting)
+    calls = count_validations(monkeypatch)
     rig = CoreRig().connect(mode=OFFBOARD, armed=True, flying=True)
     before = len(rig.setpoints())
     rig.setpoint(velocity(1.0))

@@ -17,6 +17,7 @@ from px4_zenoh_rig import (
     position,
     velocity,
 )
+from validation_count import count_validations
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
@@ -24,7 +25,6 @@ from dronewrapper.msgs.flight import NOT_READY, TakeoffRequest
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, CommandBool, SetMode
 from dronewrapper.msgs.mission import EnvelopeSet
-from dronewrapper_bridge_base import guided_core, setpoint_limits
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules, flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
@@ -153,15 +153,7 @@ def test_an_invalid_setpoint_is_refused(rig):
 
 
 def test_a_setpoint_is_validated_once_where_it_enters(rig, monkeypatch):
-    calls = []
-    real = setpoint_limits.validate
-
-    def counting(target, bounds):
-        calls.append(target)
-        return real(target, bounds)
-
-    monkeypatch.setattr(guided_core, "validate", counting)
-    monkeypatch.setattr(setpoint_limits, "validate", counting)
+    calls = count_validations(monkeypatch)
     rig.flying_offboard()
     rig.clear()
     rig.setpoint(velocity(1.0))

@@ -384,7 +384,7 @@ class BridgeCore(GuidedCore):
             limits=self.limits,
         )
         boot_ms = int((self.now - self._t0) * 1000) & 0xFFFFFFFF  # our time_boot_ms
-        self.send(SetPositionTargetLocalNed(boot_ms, *self.target(), ned))
+        self.send(SetPositionTargetLocalNed(*self.target(), boot_ms, ned))
         self.setpoints_sent += 1
         self.keepalive.sent(target, self.now)
 

@@ -20,6 +20,7 @@ outbox; ``done`` and ``error`` say how it ended.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -213,23 +214,9 @@ class Upload(Transfer):
         return f" at item {self._asked - self.numbered_from} ({name}, frame {item.frame})"
 
     def _item_message(self, seq: int) -> MissionItemInt:
-        item = self.items[seq]
-        return MissionItemInt(
-            *self.target,
-            seq=seq,
-            frame=item.frame,
-            command=item.command,
-            current=item.current,
-            autocontinue=item.autocontinue,
-            param1=item.param1,
-            param2=item.param2,
-            param3=item.param3,
-            param4=item.param4,
-            x=item.x,
-            y=item.y,
-            z=item.z,
-            mission_type=self.mission_type,
-        )
+        """Item ``seq`` as MISSION_ITEM_INT (an :class:`Item` holds its content's fields)."""
+        content = dataclasses.asdict(self.items[seq])
+        return MissionItemInt(*self.target, seq=seq, mission_type=self.mission_type, **content)
 
 
 class Download(Transfer):

@@ -15,6 +15,8 @@ from typing import NoReturn
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper_bridge_mavlink.setpoints import LocalNedTarget
+
 
 @dataclass(frozen=True, slots=True)
 class Heartbeat:
@@ -28,81 +30,71 @@ class Heartbeat:
 
 
 @dataclass(frozen=True, slots=True)
-class CommandLong:
-    """COMMAND_LONG: MAV_CMD ``command`` with its seven parameters (``confirmation``: 0 on the
-    first send, counted up on each re-send)."""
+class Addressed:
+    """What every message but HEARTBEAT starts with: the autopilot's (system, component)."""
 
     target_system: int
     target_component: int
+
+
+@dataclass(frozen=True, slots=True)
+class CommandLong(Addressed):
+    """COMMAND_LONG: MAV_CMD ``command`` with its seven parameters (``confirmation``: 0 on the
+    first send, counted up on each re-send)."""
+
     command: int
     confirmation: int
     params: tuple[float, float, float, float, float, float, float]
 
 
 @dataclass(frozen=True, slots=True)
-class LocalNedTarget:
-    """What SET_POSITION_TARGET_LOCAL_NED asks for (MAV_FRAME ``coordinate_frame``,
-    ``type_mask`` of the ignored fields; local NED m, m/s, rad, rad/s; no acceleration)."""
-
-    coordinate_frame: int
-    type_mask: int
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
-    vx: float = 0.0
-    vy: float = 0.0
-    vz: float = 0.0
-    yaw: float = 0.0
-    yaw_rate: float = 0.0
-
-
-@dataclass(frozen=True, slots=True)
-class SetPositionTargetLocalNed:
-    """SET_POSITION_TARGET_LOCAL_NED: ``target`` at ``time_boot_ms``."""
+class SetPositionTargetLocalNed(Addressed):
+    """SET_POSITION_TARGET_LOCAL_NED: ``target`` (:class:`~.setpoints.LocalNedTarget`, what
+    the autopilot is asked for; no acceleration is ever sent) at ``time_boot_ms``."""
 
     time_boot_ms: int
-    target_system: int
-    target_component: int
     target: LocalNedTarget
 
 
 @dataclass(frozen=True, slots=True)
-class ParamRequestRead:
+class ParamRequestRead(Addressed):
     """PARAM_REQUEST_READ of ``param_id`` (ASCII, <= 16 bytes; ``param_index`` -1: by id)."""
 
-    target_system: int
-    target_component: int
     param_id: bytes
     param_index: int = -1
 
 
 @dataclass(frozen=True, slots=True)
-class ParamSet:
+class ParamSet(Addressed):
     """PARAM_SET: ``param_value`` as it travels (PX4 integers as their bytes), MAV_PARAM_TYPE."""
 
-    target_system: int
-    target_component: int
     param_id: bytes
     param_value: float
     param_type: int
 
 
 @dataclass(frozen=True, slots=True)
-class MissionCount:
-    """MISSION_COUNT: an upload of ``count`` items of MAV_MISSION_TYPE ``mission_type``."""
+class MissionRequestList(Addressed):
+    """MISSION_REQUEST_LIST: a download of the autopilot's list of ``mission_type`` begins
+    (the autopilot answers with MISSION_COUNT)."""
 
-    target_system: int
-    target_component: int
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionCount(Addressed):
+    """MISSION_COUNT: an upload of ``count`` items of MAV_MISSION_TYPE ``mission_type``
+    begins; the autopilot then asks for each item (MISSION_REQUEST_INT)."""
+
     count: int
     mission_type: int
 
 
 @dataclass(frozen=True, slots=True)
-class MissionItemInt:
-    """MISSION_ITEM_INT: item ``seq`` (MAV_FRAME ``frame``, MAV_CMD ``command``)."""
+class MissionItemInt(Addressed):
+    """MISSION_ITEM_INT: item ``seq`` (MAV_FRAME ``frame``, MAV_CMD ``command``; ``x``, ``y``
+    degrees times 1e7, ``z`` m)."""
 
-    target_system: int
-    target_component: int
     seq: int
     frame: int
     command: int
@@ -119,40 +111,25 @@ class MissionItemInt:
 
 
 @dataclass(frozen=True, slots=True)
-class MissionRequestList:
-    """MISSION_REQUEST_LIST: a download of the autopilot's list of ``mission_type``."""
-
-    target_system: int
-    target_component: int
-    mission_type: int
-
-
-@dataclass(frozen=True, slots=True)
-class MissionRequestInt:
-    """MISSION_REQUEST_INT: item ``seq`` of a download."""
-
-    target_system: int
-    target_component: int
-    seq: int
-    mission_type: int
-
-
-@dataclass(frozen=True, slots=True)
-class MissionClearAll:
-    """MISSION_CLEAR_ALL of ``mission_type``."""
-
-    target_system: int
-    target_component: int
-    mission_type: int
-
-
-@dataclass(frozen=True, slots=True)
-class MissionAck:
+class MissionAck(Addressed):
     """MISSION_ACK: a download's end (``type``: MAV_MISSION_RESULT)."""
 
-    target_system: int
-    target_component: int
     type: int
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionClearAll(Addressed):
+    """MISSION_CLEAR_ALL of ``mission_type``."""
+
+    mission_type: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionRequestInt(Addressed):
+    """MISSION_REQUEST_INT: item ``seq`` of a download."""
+
+    seq: int
     mission_type: int
 
 
@@ -279,7 +256,6 @@ def _unknown(send: NoReturn) -> NoReturn:
 __all__ = [
     "CommandLong",
     "Heartbeat",
-    "LocalNedTarget",
     "MissionAck",
     "MissionClearAll",
     "MissionCount",

@@ -19,7 +19,7 @@ reported as kept at the last value heard.
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamSet, ParamSetResult, ParamValue
 from dronewrapper_bridge_base.operation import Steps
@@ -28,9 +28,6 @@ from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 from dronewrapper_bridge_mavlink.outgoing import ParamRequestRead, Send
 from dronewrapper_bridge_mavlink.outgoing import ParamSet as ParamSetMessage
 from dronewrapper_bridge_mavlink.param_cache import ParamCache
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 
 class ParamPort(Protocol):
@@ -172,11 +169,18 @@ class Parameters:
         return ParamSetResult(success=same, value=echoed, message=reply)
 
 
-def param_get(core: BridgeCore, request: ParamGet) -> Steps:
+class HasParameters(Protocol):
+    """A core that owns its :class:`Parameters` (what the services' operations are given)."""
+
+    @property
+    def parameters(self) -> Parameters: ...
+
+
+def param_get(core: HasParameters, request: ParamGet) -> Steps:
     """The PARAM_GET service's operation (:meth:`Parameters.get` of the core's part)."""
     return core.parameters.get(request)
 
 
-def param_set(core: BridgeCore, request: ParamSet) -> Steps:
+def param_set(core: HasParameters, request: ParamSet) -> Steps:
     """The PARAM_SET service's operation (:meth:`Parameters.set` of the core's part)."""
     return core.parameters.set(request)

@@ -23,6 +23,7 @@ nothing again.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import msgspec
 
@@ -39,7 +40,6 @@ from dronewrapper_bridge_base.frames import enu_to_ned, heading_flu_to_enu, yaw_
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, kind_of
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
-from dronewrapper_bridge_mavlink.outgoing import LocalNedTarget
 
 
 class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
@@ -57,6 +57,22 @@ class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=Tr
 
 
 DEFAULT_LIMITS = Limits()
+
+
+@dataclass(frozen=True)
+class LocalNedTarget:
+    """The fields of SET_POSITION_TARGET_LOCAL_NED (local NED, m, m/s, rad, rad/s)."""
+
+    coordinate_frame: int
+    type_mask: int
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    yaw: float = 0.0
+    yaw_rate: float = 0.0
 
 
 def validate(target: PositionTarget, limits: Limits = DEFAULT_LIMITS) -> Kind:
