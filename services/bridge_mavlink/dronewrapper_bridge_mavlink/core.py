@@ -71,6 +71,7 @@ from dronewrapper_bridge_mavlink.telemetry import (
     is_autopilot_heartbeat,
     state_from_heartbeat,
 )
+from dronewrapper_bridge_mavlink.transfers import Transfers
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -90,6 +91,7 @@ class BridgeCore(GuidedCore):
         self.parameters = Parameters(
             self, attempts=config.param_attempts, timeout=config.param_timeout
         )
+        self.transfers = Transfers(self)
         serial = is_serial_url(config.connection)
         self.budget = fit_rates(
             config.message_rates,

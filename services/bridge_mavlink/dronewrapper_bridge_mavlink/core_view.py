@@ -25,6 +25,7 @@ from dronewrapper_bridge_mavlink.parameters import Parameters
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import StatusTextAssembler, Telemetry
+from dronewrapper_bridge_mavlink.transfers import Transfers
 
 
 @dataclass
@@ -82,6 +83,8 @@ class BridgeCore(PureCoreView, Protocol):
     def missions(self) -> MissionState: ...
     @property
     def parameters(self) -> Parameters: ...
+    @property
+    def transfers(self) -> Transfers: ...
     @property
     def streams(self) -> StreamRequests: ...
 

@@ -13,7 +13,6 @@ from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs.mission import Waypoint
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.breach import BreachMonitor
-from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink.modes import is_guided
 
 
@@ -42,7 +41,6 @@ class MissionState:
         self.rally: list[Waypoint] = []  # the rally points last uploaded (global frames)
         self.current_seq = 0
         self.last_reached = -1  # the item last reported on mission/reached
-        self.transfer: mt.Transfer | None = None
         self.last_refusal_text = -math.inf
         self._next_publish = -math.inf
 

@@ -172,9 +172,7 @@ def follow_envelope(core: BridgeCore) -> None:
 
 
 def on_transfer_message(core: BridgeCore, msg: Any) -> None:
-    transfer = core.missions.transfer
-    if transfer is not None:
-        transfer.on_message(msg, core.now)
+    core.transfers.on_message(msg)
     if msg.get_type() == "MISSION_ACK":
         log.debug("MISSION_ACK %s", mt.result_name(msg.type))
 
@@ -231,14 +229,9 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [uploads.item_of(wp) for wp in waypoints]
-    upload = mt.Upload(
-        home_slot.uploaded(core, items),
-        core.target(),
-        core.now,
-        numbered_from=home_slot.offset(core),
-        **uploads.transfer_args(),
+    upload = yield from core.transfers.upload(
+        home_slot.uploaded(core, items), numbered_from=home_slot.offset(core)
     )
-    yield from uploads.run_transfer(core, upload)
     if not upload.error:
         state.waypoints = waypoints
         state.current_seq = 0
@@ -256,8 +249,7 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
 def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
     """mission/pull: download the autopilot's mission."""
     core.require_connected()
-    download = mt.Download(core.target(), core.now, **uploads.transfer_args())
-    yield from uploads.run_transfer(core, download)
+    download = yield from core.transfers.download()
     waypoints = [uploads.waypoint_of(item) for item in home_slot.downloaded(core, download.items)]
     if not download.error:
         core.missions.waypoints = waypoints
@@ -273,8 +265,7 @@ def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
 def clear(core: BridgeCore, _request: WaypointClear) -> Steps:
     """mission/clear: MISSION_CLEAR_ALL."""
     core.require_connected()
-    transfer = mt.Clear(core.target(), core.now, **uploads.transfer_args())
-    yield from uploads.run_transfer(core, transfer)
+    transfer = yield from core.transfers.clear()
     if not transfer.error:
         core.missions.waypoints = []
         core.missions.current_seq = 0

@@ -1,6 +1,7 @@
-"""The MAVLink bridge's parameters as a part of their own (parameters.Parameters): driven on the
-few things of a core it uses (its time, the autopilot's kind and address, the outbox), with
-real PARAM_VALUE messages; no core needed."""
+"""The MAVLink bridge's parts that own their state, each driven on the few things of a core it
+uses (its time, the autopilot's kind and address, the outbox), with real MAVLink messages and
+no core: the parameters (parameters.Parameters) and the mission protocol's transfers
+(transfers.Transfers)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,17 @@ import struct
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.mavros import ParamGet, ParamSet, ParamValue
-from dronewrapper_bridge_mavlink.outgoing import ParamRequestRead, Send
+from dronewrapper_bridge_mavlink.mission_transfer import FENCE, Item
+from dronewrapper_bridge_mavlink.outgoing import (
+    MissionClearAll,
+    MissionCount,
+    MissionItemInt,
+    ParamRequestRead,
+    Send,
+)
 from dronewrapper_bridge_mavlink.outgoing import ParamSet as ParamSetMessage
 from dronewrapper_bridge_mavlink.parameters import Parameters
+from dronewrapper_bridge_mavlink.transfers import Transfers
 
 INT32 = mavlink.MAV_PARAM_TYPE_INT32
 REAL32 = mavlink.MAV_PARAM_TYPE_REAL32
@@ -88,3 +97,28 @@ def test_an_unanswered_read_gives_up_after_its_attempts():
     reply = run(part.get(ParamGet(param_id="NOPE")), port)
     assert len(port.sent) == 2 and not reply.success
     assert reply.message == "NOPE: no PARAM_VALUE (unknown?)"
+
+
+def ack(mission_type: int = 0) -> mavlink.MAVLink_mission_ack_message:
+    return mavlink.MAVLink_mission_ack_message(255, 191, mavlink.MAV_MISSION_ACCEPTED, mission_type)
+
+
+def test_transfers_run_one_at_a_time_each_made_when_its_turn_comes():
+    port = Port()
+    part = Transfers(port, timeout=1.0, attempts=3)
+    fence = part.upload([Item(frame=0, command=5003, x=1, y=2)], mission_type=FENCE)
+    clear = part.clear()
+    assert next(fence) == 1.0  # the count sent, its answer awaited
+    port.now = 2.5  # the clear waited longer than a timeout for its turn
+    assert next(clear) == 2.5 + 0.05
+    part.on_message(mavlink.MAVLink_mission_request_int_message(255, 191, 0, FENCE))
+    assert fence.send(None) == 3.5
+    part.on_message(ack(FENCE))
+    try:
+        fence.send(None)
+    except StopIteration as stop:
+        assert stop.value.done and not stop.value.error
+    port.now = 2.6
+    assert clear.send(None) == 3.6  # its turn: made now, sent once (no re-send for the wait)
+    assert [type(m) for m in port.sent] == [MissionCount, MissionItemInt, MissionClearAll]
+    assert port.sent[-1] == MissionClearAll(1, 1, 0)
