@@ -179,7 +179,7 @@ def on_transfer_message(core: BridgeCore, msg: Any) -> None:
 
 def on_mission_current(core: BridgeCore, msg: Any) -> None:
     state = core.missions
-    seq = home_slot.ours(core, int(msg.seq)) or 0
+    seq = home_slot.ours(int(msg.seq), core.autopilot) or 0
     if seq != state.current_seq:
         state.current_seq = seq
         publish_waypoints(core)
@@ -188,7 +188,7 @@ def on_mission_current(core: BridgeCore, msg: Any) -> None:
 def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
     """MISSION_ITEM_REACHED, published once per item of this mission (:func:`home_slot.reached`;
     PX4 repeats it for a while)."""
-    seq = home_slot.reached(core, int(msg.seq))
+    seq = home_slot.reached(int(msg.seq), core.autopilot, core.missions.current_seq)
     if seq is None or seq == core.missions.last_reached:
         return
     core.missions.last_reached = seq
@@ -229,15 +229,15 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [uploads.item_of(wp) for wp in waypoints]
-    upload = yield from core.transfers.upload(
-        home_slot.uploaded(core, items), numbered_from=home_slot.offset(core)
-    )
+    offset = home_slot.offset(core.autopilot)
+    held = home_slot.uploaded(items, core.autopilot, state.home_geo)  # as the autopilot holds them
+    upload = yield from core.transfers.upload(held, numbered_from=offset)
     if not upload.error:
         state.waypoints = waypoints
         state.current_seq = 0
         state.last_reached = -1
         publish_waypoints(core)
-    transferred = max(0, upload.transferred - home_slot.offset(core))
+    transferred = max(0, upload.transferred - offset)
     error = upload.error
     message = error or f"{len(items)} item(s) uploaded"
     if not error and rally is not None:
@@ -250,7 +250,8 @@ def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
     """mission/pull: download the autopilot's mission."""
     core.require_connected()
     download = yield from core.transfers.download()
-    waypoints = [uploads.waypoint_of(item) for item in home_slot.downloaded(core, download.items)]
+    items = home_slot.downloaded(download.items, core.autopilot)
+    waypoints = [uploads.waypoint_of(item) for item in items]
     if not download.error:
         core.missions.waypoints = waypoints
         publish_waypoints(core)
@@ -280,7 +281,9 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
     if count and request.wp_seq >= count:
         raise ValueError(f"wp_seq {request.wp_seq} is beyond the mission's {count} item(s)")
     result, message = yield from ops.command(
-        core, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, float(home_slot.theirs(core, request.wp_seq))
+        core,
+        mavlink.MAV_CMD_DO_SET_MISSION_CURRENT,
+        float(home_slot.theirs(request.wp_seq, core.autopilot)),
     )
     return MissionResult(success=result == ops.ACCEPTED, message=message)
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import Any
+from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -24,7 +24,8 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 
-BridgeCore = Any  # the bridge's core (core.BridgeCore), not imported: no import circle
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
