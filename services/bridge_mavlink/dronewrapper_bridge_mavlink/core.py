@@ -125,6 +125,10 @@ class BridgeCore(GuidedCore):
         """Queue a MAVLink message for the autopilot (the link encodes it)."""
         self.out.sends.append(message)
 
+    def dropped(self, what: str) -> None:
+        """Count a dropped input under ``what`` (the node's ``callback_errors``)."""
+        self.out.errors.append(what)
+
     def target(self) -> tuple[int, int]:
         """The autopilot's (system, component) to address (system 1 before it is heard)."""
         return self.target_system or 1, self.target_component
@@ -150,7 +154,7 @@ class BridgeCore(GuidedCore):
         if verdict.peer is not None:
             self.out.peers.append(verdict.peer)
         if verdict.error:
-            self.out.errors.append(verdict.error)
+            self.dropped(verdict.error)
         if not verdict.accept:
             return
         if kind == "HEARTBEAT":

@@ -44,6 +44,36 @@ class MissionState:
         self.last_refusal_text = -math.inf
         self._next_publish = -math.inf
 
+    def on_home(
+        self, local: tuple[float, float, float], geo: tuple[float, float, float]
+    ) -> tuple[bool, bool]:
+        """Home heard, in local ENU m and geodetic (deg, deg, m AMSL): whether it moved, and
+        whether it is the first home heard (the autopilot's limits then follow the envelope)."""
+        first = self.home_geo is None
+        moved = (local, geo) != (self.home_local, self.home_geo)
+        self.home_local, self.home_geo, self.home_known = local, geo, True
+        return moved, first
+
+    def on_current(self, number: int) -> bool:
+        """The item being flown is the bridge's ``number`` now; whether that changed."""
+        changed = number != self.current_seq
+        self.current_seq = number
+        return changed
+
+    def on_reached(self, number: int) -> bool:
+        """The autopilot reports the bridge's item ``number`` reached; whether it is news (each
+        item is told once: PX4 repeats the report)."""
+        if number == self.last_reached:
+            return False
+        self.last_reached = number
+        return True
+
+    def new_mission(self, waypoints: list[Waypoint]) -> None:
+        """The autopilot took ``waypoints``: flown from the first, none reached yet."""
+        self.waypoints = waypoints
+        self.current_seq = 0
+        self.last_reached = -1
+
     def refuse_takeoff(self, height: float) -> None:
         """ServiceError (refused) when a take-off to ``height`` m climbs above the envelope."""
         try:

@@ -150,17 +150,14 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
     counted: a bad home must never move the fence, the returns or the go-tos."""
     local = (float(msg.y), float(msg.x), -float(msg.z))  # NED -> ENU
     if (msg.latitude == 0 and msg.longitude == 0) or not all(map(math.isfinite, local)):
-        core.out.errors.append("home_position")
+        core.dropped("home_position")
         return
     core.telemetry.on_home_position(msg)
-    state = core.missions
-    before = (state.home_local, state.home_geo)
-    state.home_local = local
-    state.home_known = True
-    state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
-    if (state.home_local, state.home_geo) != before:
+    geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
+    moved, first = core.missions.on_home(local, geo)
+    if moved:
         publish_home(core)
-    if before[1] is None:  # home known: the autopilot's return heights and fence
+    if first:  # home known: the autopilot's return heights and fence
         follow_envelope(core)
 
 
@@ -178,22 +175,18 @@ def on_transfer_message(core: BridgeCore, msg: Any) -> None:
 
 
 def on_mission_current(core: BridgeCore, msg: Any) -> None:
-    state = core.missions
-    seq = home_slot.ours(int(msg.seq), core.autopilot) or 0
-    if seq != state.current_seq:
-        state.current_seq = seq
+    if core.missions.on_current(home_slot.ours(int(msg.seq), core.autopilot) or 0):
         publish_waypoints(core)
 
 
 def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
     """MISSION_ITEM_REACHED, published once per item of this mission (:func:`home_slot.reached`;
     PX4 repeats it for a while)."""
-    seq = home_slot.reached(int(msg.seq), core.autopilot, core.missions.current_seq)
-    if seq is None or seq == core.missions.last_reached:
-        return
-    core.missions.last_reached = seq
-    reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=seq)
-    core.publish(registry.MISSION_REACHED, reached)
+    state = core.missions
+    seq = home_slot.reached(int(msg.seq), core.autopilot, state.current_seq)
+    if seq is not None and state.on_reached(seq):
+        reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=seq)
+        core.publish(registry.MISSION_REACHED, reached)
 
 
 HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
@@ -233,9 +226,7 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     held = home_slot.uploaded(items, core.autopilot, state.home_geo)  # as the autopilot holds them
     upload = yield from core.transfers.upload(held, numbered_from=offset)
     if not upload.error:
-        state.waypoints = waypoints
-        state.current_seq = 0
-        state.last_reached = -1
+        state.new_mission(waypoints)
         publish_waypoints(core)
     transferred = max(0, upload.transferred - offset)
     error = upload.error

@@ -121,7 +121,7 @@ def on_batch(core: BridgeCore, batch: Sequence[Any], now: float, stamp: float) -
         try:
             core.on_mavlink(received.msg, received.source, now, stamp)
         except Exception:
-            core.out.errors.append("mavlink")
+            core.dropped("mavlink")
             log.exception("error handling %s", type(received.msg).__name__)
 
 
