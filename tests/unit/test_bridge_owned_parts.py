@@ -1,15 +1,21 @@
-"""The MAVLink bridge's parts that own their state, each driven on the few things of a core it
-uses (its time, the autopilot's kind and address, the outbox), with real MAVLink messages and
-no core: the parameters (parameters.Parameters) and the mission protocol's transfers
-(transfers.Transfers)."""
+"""The bridges' parts that own their state, each driven on the few things of a core it uses
+(its time, the autopilot's kind and address, the outbox), with real MAVLink messages and no
+core: the MAVLink bridge's parameters (parameters.Parameters) and mission transfers
+(transfers.Transfers), and the envelope and home both PX4-capable bridges hold
+(bridge_base's envelope_state.EnvelopeState)."""
 
 from __future__ import annotations
 
+import math
 import struct
 
+import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.mavros import ParamGet, ParamSet, ParamValue
+from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_mavlink.mission_transfer import FENCE, Item
 from dronewrapper_bridge_mavlink.outgoing import (
     MissionClearAll,
@@ -122,3 +128,37 @@ def test_transfers_run_one_at_a_time_each_made_when_its_turn_comes():
     assert clear.send(None) == 3.6  # its turn: made now, sent once (no re-send for the wait)
     assert [type(m) for m in port.sent] == [MissionCount, MissionItemInt, MissionClearAll]
     assert port.sent[-1] == MissionClearAll(1, 1, 0)
+
+
+def test_the_envelope_declares_a_breach_once_per_excursion_and_only_in_flight():
+    state = EnvelopeState(Envelope(max_distance=10.0, margin=1.0, breach_action="land"))
+    state.home_local = (5.0, 0.0, 0.0)  # the envelope is measured from home
+    assert state.watch((20.0, 0.0, 2.0), flying=False) == ""  # on the ground: nothing
+    assert (
+        state.watch((20.0, 0.0, 2.0), flying=True)
+        == "distance 15 m from home beyond the envelope's 10 m"
+    )
+    assert state.monitor.limit == "max_distance" and state.breach_state() == "breach:land"
+    assert state.watch((21.0, 0.0, 2.0), flying=True) == ""  # the same excursion
+    assert state.watch((14.0, 0.0, 2.0), flying=True) == ""  # 9 m from home: back inside
+    assert state.breach_state() == "" and state.watch((20.0, 0.0, 2.0), flying=True)
+
+
+def test_the_envelope_refuses_a_guided_mode_only_while_outside_and_a_high_takeoff():
+    state = EnvelopeState(Envelope(max_altitude=20.0))
+    state.refuse_mode("OFFBOARD", guided=True)  # inside: allowed
+    state.watch((0.0, 0.0, 30.0), flying=True)
+    state.refuse_mode("AUTO.LAND", guided=False)
+    with pytest.raises(ServiceError, match="OFFBOARD refused: the aircraft is outside"):
+        state.refuse_mode("OFFBOARD", guided=True)
+    with pytest.raises(ServiceError, match="20"):
+        state.refuse_takeoff(25.0)
+
+
+def test_home_is_published_without_a_geodetic_position_until_one_is_known():
+    state = EnvelopeState(Envelope())
+    state.home_local = (1.0, 2.0, 3.0)
+    home = state.home_message(1.7e9)
+    assert math.isnan(home.latitude) and (home.x, home.y, home.z) == (1.0, 2.0, 3.0)
+    state.home_geo = (47.4, 8.5, 400.0)
+    assert state.home_message(1.7e9).latitude == 47.4

@@ -288,7 +288,7 @@ class BridgeCore(GuidedCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state or missions.breach_state(self),
+            failsafe=self.failsafe.state or self.missions.breach_state(),
             commander=self.commander,
         )
 

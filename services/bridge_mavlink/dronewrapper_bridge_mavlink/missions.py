@@ -32,7 +32,6 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
-    HomePosition,
     MissionResult,
     WaypointClear,
     WaypointList,
@@ -46,6 +45,7 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.envelope_state import watch_breach
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
 from dronewrapper_bridge_mavlink import mission_transfer as mt
@@ -67,28 +67,17 @@ SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitu
 # ---------------------------------------------------------------- frames
 
 
-def relative(core: BridgeCore, x: float, y: float, z: float) -> tuple[float, float, float]:
-    """Local ENU (m) -> ENU m from home."""
-    hx, hy, hz = core.missions.home_local
-    return (x - hx, y - hy, z - hz)
-
-
 # ---------------------------------------------------------------- hooks the core calls
 
 
 def tick(core: BridgeCore) -> None:
     """Each stream tick: act on a breach, publish envelope, home and mission periodically."""
     state = core.missions
-    pose = core.pose()
-    if pose is not None and core.failsafe.airborne and core.failsafe.armed:
-        reason = state.monitor.update(state.envelope, relative(core, *pose[0]))
-        if reason:
-            action = state.envelope.breach_action
-            core.bridge_text(f"envelope breach: {reason}; {action}")
-            core.report_breach(state.monitor.limit, reason, action)
-            core.start(breach_action(core, action), core.now, core.stamp, background=True)
-    if core.now >= state._next_publish:
-        state._next_publish = core.now + PUBLISH_PERIOD_S
+    action = watch_breach(core, state)
+    if action:
+        core.start(breach_action(core, action), core.now, core.stamp, background=True)
+    if core.now >= state.next_publish:
+        state.next_publish = core.now + PUBLISH_PERIOD_S
         publish_all(core)
 
 
@@ -100,13 +89,7 @@ def publish_all(core: BridgeCore) -> None:
 
 
 def publish_home(core: BridgeCore) -> None:
-    state = core.missions
-    lat, lon, alt = state.home_geo or (math.nan, math.nan, math.nan)
-    x, y, z = state.home_local
-    home = HomePosition(
-        header=Header(stamp=core.stamp), latitude=lat, longitude=lon, altitude=alt, x=x, y=y, z=z
-    )
-    core.publish(registry.HOME_POSITION, home)
+    core.publish(registry.HOME_POSITION, core.missions.home_message(core.stamp))
 
 
 def publish_waypoints(core: BridgeCore) -> None:
@@ -120,12 +103,6 @@ def publish_waypoints(core: BridgeCore) -> None:
         ],
     )
     core.publish(registry.MISSION_WAYPOINTS, listing)
-
-
-def breach_state(core: BridgeCore) -> str:
-    """``breach:<action>`` while the aircraft is outside the envelope, else ""."""
-    state = core.missions
-    return f"breach:{state.envelope.breach_action}" if state.monitor.outside else ""
 
 
 def breach_action(core: BridgeCore, action: str) -> Steps:
@@ -286,7 +263,7 @@ def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
     the autopilot follows when connected and home is known (:func:`follow_envelope`)."""
     state = core.missions
     pose = core.pose()
-    aircraft = None if pose is None else relative(core, *pose[0])[:2]
+    aircraft = None if pose is None else state.relative(*pose[0])[:2]
     yield from autopilot_limits.check_new_envelope(core, request)
     changed = envelope_set.apply(
         state, request, configured=core.config.envelope, caller=core.caller, aircraft=aircraft

@@ -45,6 +45,7 @@ from dronewrapper_bridge_mavlink.modes import (
     HOLD_MODE,
     LAND_MODE,
     RETURN_MODE,
+    is_guided,
     set_mode_params,
 )
 from dronewrapper_bridge_mavlink.outgoing import CommandLong
@@ -225,7 +226,8 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
     primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
     if primed:
         yield from prime(core)
-    core.missions.refuse_mode(params.name)  # no guided mode while outside the envelope
+    guided = is_guided(params.name)  # no guided mode while outside the envelope
+    core.missions.refuse_mode(params.name, guided=guided)
     core.failsafe.on_mode_requested(params.name, core.now)
     pending, message = yield from exchange(
         core,

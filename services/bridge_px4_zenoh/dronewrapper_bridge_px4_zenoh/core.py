@@ -42,6 +42,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.guided_failsafe import hold_target
@@ -89,7 +90,7 @@ class Px4ZenohCore(GuidedCore):
         super().__init__(config, now, Outbox, log)
         self.config: Config = config
         self.versions = Versions(config.domain)
-        self.envelope = rules.EnvelopeState(config.envelope)
+        self.envelope = EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
         self.target_system = config.target_system  # 0 until vehicle_status names it
         self.target_component = config.target_component
@@ -308,7 +309,7 @@ class Px4ZenohCore(GuidedCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state or rules.breach_state(self),
+            failsafe=self.failsafe.state or self.envelope.breach_state(),
             commander=self.commander,
         )
 
