@@ -1,8 +1,8 @@
 """The bridges' parts that own their state, each driven on the few things of a core it uses
 (its time, the autopilot's kind and address, the outbox), with real MAVLink messages and no
-core: the MAVLink bridge's parameters (parameters.Parameters) and mission transfers
-(transfers.Transfers), and the envelope and home both PX4-capable bridges hold
-(bridge_base's envelope_state.EnvelopeState)."""
+core: the MAVLink bridge's parameters (parameters.Parameters), mission transfers
+(transfers.Transfers) and commands (command_exchange.Commands), and the envelope and home both
+PX4-capable bridges hold (bridge_base's envelope_state.EnvelopeState)."""
 
 from __future__ import annotations
 
@@ -13,11 +13,14 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.envelope import Envelope
-from dronewrapper.msgs.mavros import ParamGet, ParamSet, ParamValue
+from dronewrapper.msgs.mavros import ParamGet, ParamSet, ParamValue, StatusText
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.envelope_state import EnvelopeState
+from dronewrapper_bridge_mavlink.command_exchange import Commands
+from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.mission_transfer import FENCE, Item
 from dronewrapper_bridge_mavlink.outgoing import (
+    CommandLong,
     MissionClearAll,
     MissionCount,
     MissionItemInt,
@@ -33,12 +36,20 @@ REAL32 = mavlink.MAV_PARAM_TYPE_REAL32
 
 
 class Port:
-    """A core's side as a parameter exchange sees it: time, autopilot, outbox."""
+    """A core's side as its parts see it: time, autopilot, outbox, command slot, texts."""
 
     def __init__(self, autopilot: str = "px4") -> None:
         self.now = 0.0
         self.autopilot = autopilot
         self.sent: list[Send] = []
+        self.command_busy = False
+        self.recent_texts: list[tuple[float, StatusText]] = []
+
+    def take_command_slot(self) -> None:
+        self.command_busy = True
+
+    def release_command_slot(self) -> None:
+        self.command_busy = False
 
     def target(self) -> tuple[int, int]:
         return (1, 1)
@@ -162,3 +173,21 @@ def test_home_is_published_without_a_geodetic_position_until_one_is_known():
     assert math.isnan(home.latitude) and (home.x, home.y, home.z) == (1.0, 2.0, 3.0)
     state.home_geo = (47.4, 8.5, 400.0)
     assert state.home_message(1.7e9).latitude == 47.4
+
+
+def test_a_command_is_re_sent_until_acked_and_a_refusal_gives_the_autopilots_words():
+    port = Port()
+    config = Config(command_attempts=3, command_ack_timeout=0.5, reason_wait=1.0)
+    part = Commands(port, config)
+    arm = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
+
+    def answer():
+        if len(port.sent) == 2 and port.command_busy:  # the second send is answered
+            port.recent_texts.append((port.now, StatusText(severity=4, text="Arming denied")))
+            part.on_ack(arm, mavlink.MAV_RESULT_DENIED)
+
+    pending, message = run(part.exchange(arm, 1.0), port, answer)
+    confirmations = [m.confirmation for m in port.sent if isinstance(m, CommandLong)]
+    assert confirmations == [0, 1] and not port.command_busy
+    assert pending.result == mavlink.MAV_RESULT_DENIED
+    assert message == "COMPONENT_ARM_DISARM refused: DENIED (Arming denied)"

@@ -40,9 +40,9 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
 from dronewrapper_bridge_base.setpoint_limits import Kind
-from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core_view import Outbox
 from dronewrapper_bridge_mavlink.freshness import Freshness
@@ -86,7 +86,7 @@ class BridgeCore(GuidedCore):
         self.freshness = Freshness()
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
-        self.acks = cmds.AckRouter()
+        self.commands = Commands(self, config)
         self.missions = MissionState(config.envelope)
         self.parameters = Parameters(
             self, attempts=config.param_attempts, timeout=config.param_timeout

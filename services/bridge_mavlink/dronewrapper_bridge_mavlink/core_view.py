@@ -16,7 +16,7 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper_bridge_base.core_view import PureCoreView
 from dronewrapper_bridge_base.guided_failsafe import Failsafe
 from dronewrapper_bridge_base.unattended import Unattended
-from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.mission_state import MissionState
@@ -76,7 +76,7 @@ class BridgeCore(PureCoreView, Protocol):
     @property
     def recent_texts(self) -> collections.deque[tuple[float, StatusTextMsg]]: ...
     @property
-    def acks(self) -> cmds.AckRouter: ...
+    def commands(self) -> Commands: ...
     @property
     def missions(self) -> MissionState: ...
     @property

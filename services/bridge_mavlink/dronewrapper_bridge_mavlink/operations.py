@@ -25,7 +25,6 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
-    SEVERITY_WARNING,
     CommandBool,
     CommandBoolResult,
     CommandTOL,
@@ -48,7 +47,6 @@ from dronewrapper_bridge_mavlink.modes import (
     is_guided,
     set_mode_params,
 )
-from dronewrapper_bridge_mavlink.outgoing import CommandLong
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core_view import BridgeCore
@@ -64,58 +62,9 @@ ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 def exchange(
     core: BridgeCore, command: int, *params: float, expected_acks: int = 1
 ) -> Generator[float, None, tuple[cmds.PendingCommand, str]]:
-    """Send a COMMAND_LONG and wait for its final ack (the second of ``expected_acks`` = 2,
-    see commands.py): the finished command and an explanation (with the autopilot's
-    STATUSTEXT reason for a refusal). One exchange at a time, none before late duplicate acks
-    of the same command id have passed."""
-    config = core.config
-    pending = cmds.PendingCommand(
-        cmds.command_long(command, *params),
-        attempts=config.command_attempts,
-        ack_timeout=config.command_ack_timeout,
-        expected_acks=expected_acks,
-        final_ack_timeout=config.final_ack_timeout,
-    )
-    while core.command_busy or core.now < core.acks.quiet_until(command):
-        yield core.now + 0.05 if core.command_busy else core.acks.quiet_until(command)
-    core.take_command_slot()
-    started = core.now
-    core.acks.register(pending)
-    try:
-        while True:
-            msg = pending.due(core.now)
-            if msg is not None:
-                core.send(CommandLong(*core.target(), msg.command, msg.confirmation, msg.params))
-            if pending.finished(core.now):
-                break
-            yield pending.wake_at(core.now)
-    finally:
-        core.acks.release(pending, core.now)
-        core.release_command_slot()
-    name = cmds.command_name(command)
-    if pending.result == ACCEPTED:
-        return pending, f"{name} accepted"
-    if pending.result == cmds.RESULT_NO_ACK:
-        return pending, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
-    reason = yield from reason_since(core, started)
-    text = f"{name} refused: {cmds.result_name(pending.result)}"
-    return pending, f"{text} ({reason})" if reason else text
-
-
-def reason_since(core: BridgeCore, started: float) -> Generator[float, None, str]:
-    """The autopilot's warnings since ``started``, waiting up to ``reason_wait`` s for one."""
-    deadline = core.now + core.config.reason_wait
-    while True:
-        texts = [
-            text.text
-            for at, text in core.recent_texts
-            if at >= started - 0.05
-            and text.severity <= SEVERITY_WARNING
-            and text.header.frame_id != "bridge"
-        ]
-        if texts or core.now >= deadline:
-            return "; ".join(texts)
-        yield deadline
+    """A COMMAND_LONG until its final ack, by the core's :class:`~.command_exchange.Commands`:
+    the finished command and an explanation."""
+    return (yield from core.commands.exchange(command, *params, expected_acks=expected_acks))
 
 
 def command(core: BridgeCore, command: int, *params: float) -> Generator[float, None, tuple]:

@@ -11,7 +11,7 @@ degrees * 1e7 and ``z`` m. ``target_system``/``target_component`` address the au
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NoReturn
+from typing import NoReturn, Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -149,6 +149,17 @@ Send = (
 """Every message the bridge's core sends to the autopilot."""
 
 
+class AutopilotPort(Protocol):
+    """The core as a part of it that talks to the autopilot sees it: its time (``now``,
+    monotonic s, set by each entry point), the autopilot's (system, component), the outbox."""
+
+    @property
+    def now(self) -> float: ...
+
+    def target(self) -> tuple[int, int]: ...
+    def send(self, message: Send) -> None: ...
+
+
 def encode(send: Send) -> mavlink.MAVLink_message:
     """pymavlink's message for ``send`` (packed and sent by ``MAVLink.send``)."""
     if isinstance(send, SetPositionTargetLocalNed):  # the most frequent first
@@ -254,6 +265,8 @@ def _unknown(send: NoReturn) -> NoReturn:
 
 
 __all__ = [
+    "Addressed",
+    "AutopilotPort",
     "CommandLong",
     "Heartbeat",
     "MissionAck",

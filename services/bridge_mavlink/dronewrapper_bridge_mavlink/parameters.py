@@ -25,22 +25,18 @@ from dronewrapper.msgs.mavros import ParamGet, ParamGetResult, ParamSet, ParamSe
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import param_values
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
-from dronewrapper_bridge_mavlink.outgoing import ParamRequestRead, Send
+from dronewrapper_bridge_mavlink.outgoing import AutopilotPort, ParamRequestRead
 from dronewrapper_bridge_mavlink.outgoing import ParamSet as ParamSetMessage
 from dronewrapper_bridge_mavlink.param_cache import ParamCache
 
 
-class ParamPort(Protocol):
-    """What a parameter exchange uses of the core: its time (``now``, monotonic s, set by each
-    entry point), the autopilot (its kind, ``""`` before it is heard; its address), the outbox."""
+class ParamPort(AutopilotPort, Protocol):
+    """What a parameter exchange uses of the core besides its time, the autopilot's address
+    and the outbox: the autopilot's kind (``""`` before it is heard), whether it is heard."""
 
-    @property
-    def now(self) -> float: ...
     @property
     def autopilot(self) -> str: ...
 
-    def target(self) -> tuple[int, int]: ...
-    def send(self, message: Send) -> None: ...
     def require_connected(self) -> str: ...
 
 

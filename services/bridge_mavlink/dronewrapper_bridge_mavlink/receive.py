@@ -99,7 +99,7 @@ def on_command_ack(core: BridgeCore, msg: Any) -> None:
     ours = (core.config.source_system, core.config.source_component)
     if target != (0, 0) and target != ours:
         return  # the answer to a ground station's command (forwarded), not to ours
-    outcome = core.acks.on_ack(int(msg.command), int(msg.result), core.now)
+    outcome = core.commands.on_ack(int(msg.command), int(msg.result))
     log.debug(
         "COMMAND_ACK %s %s (%s)",
         cmds.command_name(msg.command),

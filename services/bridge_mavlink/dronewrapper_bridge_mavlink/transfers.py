@@ -5,16 +5,16 @@ others waiting their turn; the running one is fed the autopilot's mission messag
 Each machine of :mod:`~dronewrapper_bridge_mavlink.mission_transfer` is made when its turn
 comes, for the autopilot's address then, with the bridge's re-send ``timeout`` (s) and
 ``attempts``; its messages go to the outbox. The part sees only what it needs of the core
-(:class:`TransferPort`: the time, the autopilot's address, the outbox).
+(:class:`~.outgoing.AutopilotPort`: the time, the autopilot's address, the outbox).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
-from typing import Any, Protocol, TypeVar
+from typing import Any, TypeVar
 
 from dronewrapper_bridge_mavlink import mission_transfer as mt
-from dronewrapper_bridge_mavlink.outgoing import Send
+from dronewrapper_bridge_mavlink.outgoing import AutopilotPort
 
 T = TypeVar("T", bound=mt.Transfer)
 
@@ -22,27 +22,16 @@ WAIT_S = 0.05
 """A transfer waiting for its turn looks again this often (s)."""
 
 
-class TransferPort(Protocol):
-    """What a transfer uses of the core: its time (``now``, monotonic s, set by each entry
-    point), the autopilot's (system, component), the outbox."""
-
-    @property
-    def now(self) -> float: ...
-
-    def target(self) -> tuple[int, int]: ...
-    def send(self, message: Send) -> None: ...
-
-
 class Transfers:
     """One mission-protocol transfer at a time (module docstring).
 
     Args:
-        port: the core's side a transfer uses (:class:`TransferPort`).
+        port: the core's side a transfer uses.
         timeout: s without an answer before a message is sent again (1.5).
         attempts: sends of one message before the transfer gives up (5).
     """
 
-    def __init__(self, port: TransferPort, *, timeout: float = 1.5, attempts: int = 5) -> None:
+    def __init__(self, port: AutopilotPort, *, timeout: float = 1.5, attempts: int = 5) -> None:
         self._port = port
         self.timeout = timeout
         self.attempts = attempts
