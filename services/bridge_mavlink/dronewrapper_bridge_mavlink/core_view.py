@@ -1,7 +1,9 @@
 """The MAVLink bridge's core as its sibling modules see it (:class:`BridgeCore`, a protocol that
 :class:`dronewrapper_bridge_mavlink.core.BridgeCore` satisfies), and the :class:`Outbox` the
-core fills for the node. Operations, missions, parameters, the receive side and the watches
-name the core only through this view, so none of them imports the core that imports them.
+core fills for the node. Operations, missions, the receive side and the watches name the core
+only through this view, so none of them imports the core that imports them. The parts the
+core owns see less of it: its ``commands``, ``parameters`` and ``transfers`` each through a
+protocol of its own, its ``missions`` (the envelope, home and mission state) nothing.
 """
 
 from __future__ import annotations
@@ -86,9 +88,7 @@ class BridgeCore(PureCoreView, Protocol):
     @property
     def streams(self) -> StreamRequests: ...
 
-    def send(self, message: Send) -> None: ...
     def dropped(self, what: str) -> None: ...  # a dropped input, counted
-    def target(self) -> tuple[int, int]: ...
     def require_connected(self) -> str: ...
     def on_mavlink(self, msg: Any, source: Any, now: float, stamp: float) -> None: ...
     def pose(self) -> tuple[tuple[float, float, float], float] | None: ...

@@ -1,12 +1,13 @@
 """Service calls that wait for the autopilot, as pure operations the core advances.
 
 Each operation is a generator over a :class:`~dronewrapper_bridge_mavlink.core_view.BridgeCore`:
-it reads ``core.now`` (set by the caller of every core entry point), queues sends on the core,
-and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes it
-whenever a message or a tick arrives, so every wait is a loop that re-checks its condition.
-Its return value is the service reply; an exception it raises (``ValueError`` for a bad
-request, ``ServiceError``) is the call's error. No sockets, threads or clock here: the node
-waits on :attr:`dronewrapper_bridge_base.operation.Operation.done`.
+it reads ``core.now`` (set by the caller of every core entry point), sends through the core's
+parts (its ``commands``, ``parameters``, ``transfers``), and yields the time (monotonic s) it
+wants to be resumed at the latest; the core resumes it whenever a message or a tick arrives, so
+every wait is a loop that re-checks its condition. Its return value is the service reply; an
+exception it raises (``ValueError`` for a bad request, ``ServiceError``) is the call's error.
+No sockets, threads or clock here: the node waits on
+:attr:`dronewrapper_bridge_base.operation.Operation.done`.
 
 The rules they carry: a take-off while flying does nothing; PX4's OFFBOARD is asked for only
 after > ``offboard_prime_s`` of streaming; PX4's DO_SET_MODE is answered by its second ack (a

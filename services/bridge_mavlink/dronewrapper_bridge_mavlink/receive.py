@@ -3,7 +3,7 @@
 :func:`admission` decides whether a message may be used at all (a second autopilot with the
 same system id, a duplicated or reordered datagram, a non-finite pose are dropped) and returns
 what the core must do about it. The handlers in :data:`HANDLERS` feed the objects that own the
-telemetry (the core's ``telemetry``, ``statustexts``, ``acks``, ``parameters``) and queue the
+telemetry (the core's ``telemetry``, ``statustexts``, ``commands``, ``parameters``) and queue the
 samples to publish; what changes the core's own state (heartbeat, landed state, battery) is the
 core's. Time is the core's ``now`` (monotonic s) and ``stamp`` (wall-clock s for headers).
 """
