@@ -27,15 +27,8 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper_bridge_mavlink.outgoing import (
-    MissionAck,
-    MissionClearAll,
-    MissionCount,
-    MissionItemInt,
-    MissionRequestInt,
-    MissionRequestList,
-    Send,
-)
+from dronewrapper_bridge_mavlink import outgoing as out
+from dronewrapper_bridge_mavlink.outgoing import Send
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 FENCE = mavlink.MAV_MISSION_TYPE_FENCE
@@ -169,7 +162,7 @@ class Upload(Transfer):
         self.items = list(items)
         self.transferred = 0
         self._asked = -1  # the highest item asked for
-        self._send(MissionCount(*target, len(self.items), self.mission_type), now)
+        self._send(out.MissionCount(*target, len(self.items), self.mission_type), now)
 
     def timeout_reason(self) -> str:
         return (
@@ -213,10 +206,10 @@ class Upload(Transfer):
         name = entry.name.removeprefix("MAV_CMD_") if entry is not None else str(item.command)
         return f" at item {self._asked - self.numbered_from} ({name}, frame {item.frame})"
 
-    def _item_message(self, seq: int) -> MissionItemInt:
+    def _item_message(self, seq: int) -> out.MissionItemInt:
         """Item ``seq`` as MISSION_ITEM_INT (an :class:`Item` holds its content's fields)."""
         content = dataclasses.asdict(self.items[seq])
-        return MissionItemInt(*self.target, seq=seq, mission_type=self.mission_type, **content)
+        return out.MissionItemInt(*self.target, seq=seq, mission_type=self.mission_type, **content)
 
 
 class Download(Transfer):
@@ -226,7 +219,7 @@ class Download(Transfer):
         super().__init__(target, now, **kw)
         self.count: int | None = None
         self.items: list[Item] = []
-        self._send(MissionRequestList(*target, self.mission_type), now)
+        self._send(out.MissionRequestList(*target, self.mission_type), now)
 
     def on_message(self, msg: Any, now: float) -> None:
         if self.done or not self._ours(msg):
@@ -245,12 +238,12 @@ class Download(Transfer):
     def _next(self, now: float) -> None:
         assert self.count is not None
         if len(self.items) >= self.count:
-            ack = MissionAck(*self.target, ACCEPTED, self.mission_type)
+            ack = out.MissionAck(*self.target, ACCEPTED, self.mission_type)
             self._send(ack, now, expect_answer=False)
             self._finish()
             return
         seq = len(self.items)
-        self._send(MissionRequestInt(*self.target, seq, self.mission_type), now)
+        self._send(out.MissionRequestInt(*self.target, seq, self.mission_type), now)
 
 
 class Clear(Transfer):
@@ -258,7 +251,7 @@ class Clear(Transfer):
 
     def __init__(self, target: tuple[int, int], now: float, **kw: Any) -> None:
         super().__init__(target, now, **kw)
-        self._send(MissionClearAll(*target, self.mission_type), now)
+        self._send(out.MissionClearAll(*target, self.mission_type), now)
 
     def on_message(self, msg: Any, now: float) -> None:
         if self.done or not self._ours(msg) or msg.get_type() != "MISSION_ACK":
