@@ -6,24 +6,15 @@ arming/takeoff/land/set_mode/param services, forwards setpoints at >= 20 Hz with
 contract of docs/design.md.
 """
 
-from dronewrapper.runtime.service import run_service
+from dronewrapper_bridge_base.shortcuts import bridge_main
 from dronewrapper_bridge_mavlink.config import Config
-from dronewrapper_bridge_mavlink.flags import add_flags, as_overrides
+from dronewrapper_bridge_mavlink.flags import SHORTCUTS
 from dronewrapper_bridge_mavlink.node import PORTS, run
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point (``python -m dronewrapper_bridge_mavlink``)."""
-    return run_service(
-        "bridge_mavlink",
-        __doc__,
-        Config,
-        run,
-        argv,
-        add_args=add_flags,
-        configure=as_overrides,
-        ports=PORTS,
-    )
+    return bridge_main("bridge_mavlink", __doc__, Config, run, PORTS, SHORTCUTS, argv)
 
 
 if __name__ == "__main__":

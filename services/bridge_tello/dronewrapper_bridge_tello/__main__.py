@@ -7,24 +7,15 @@ set_mode/param, flies setpoints with ``rc`` sticks, and keeps the failsafe contr
 docs/design.md.
 """
 
-from dronewrapper.runtime.service import run_service
+from dronewrapper_bridge_base.shortcuts import bridge_main
 from dronewrapper_bridge_tello.config import Config
-from dronewrapper_bridge_tello.flags import add_flags, as_overrides
+from dronewrapper_bridge_tello.flags import SHORTCUTS
 from dronewrapper_bridge_tello.node import PORTS, run
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point (``python -m dronewrapper_bridge_tello``)."""
-    return run_service(
-        "bridge_tello",
-        __doc__,
-        Config,
-        run,
-        argv,
-        add_args=add_flags,
-        configure=as_overrides,
-        ports=PORTS,
-    )
+    return bridge_main("bridge_tello", __doc__, Config, run, PORTS, SHORTCUTS, argv)
 
 
 if __name__ == "__main__":

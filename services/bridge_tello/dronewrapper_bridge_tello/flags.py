@@ -3,23 +3,11 @@
 
 from __future__ import annotations
 
-import argparse
+from dronewrapper_bridge_base.shortcuts import Shortcut, Shortcuts
 
-
-def add_flags(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--tello", metavar="ADDRESS", help="the Tello's IP address (same as --set tello_address=A)"
-    )
-    parser.add_argument(
-        "--local",
-        metavar="ADDRESS",
-        help="address our sockets bind (same as --set local_address=A)",
-    )
-
-
-def as_overrides(args: argparse.Namespace, overrides: list[str]) -> None:
-    """Append the flags given to ``overrides`` (``key=value``, as ``--set``)."""
-    if args.tello:
-        overrides.append(f"tello_address={args.tello}")
-    if args.local:
-        overrides.append(f"local_address={args.local}")
+SHORTCUTS = Shortcuts(
+    Shortcut("--tello", "tello_address", "ADDRESS", "the Tello's IP address"),
+    Shortcut("--local", "local_address", "ADDRESS", "address our sockets bind"),
+)
+add_flags = SHORTCUTS.add_flags
+as_overrides = SHORTCUTS.as_overrides
