@@ -154,6 +154,21 @@ class BridgeNode(Generic[C]):
             self.log.exception("%s loop error", what)
 
 
+BRIDGE_PUBLISHED = (
+    registry.STATE,
+    registry.EXTENDED_STATE,
+    registry.LOCAL_POSE,
+    registry.VELOCITY_BODY,
+    registry.VELOCITY_LOCAL,
+    registry.BATTERY,
+    registry.STATUSTEXT,
+    registry.ENVELOPE,  # the envelope and home: each bridge's missions part
+    registry.HOME_POSITION,
+    registry.REFUSAL,  # what was refused, told to its commander
+)
+"""What every bridge publishes; each adds its own (:func:`bridge_ports`' ``published``)."""
+
+
 def bridge_ports(
     process: str,
     published: Iterable[Topic[Any]],

@@ -31,7 +31,12 @@ from dronewrapper.runtime import Node
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.host import shared_ticker
 from dronewrapper.runtime.ports import Ports
-from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
+from dronewrapper_bridge_base.bridge_node import (
+    BRIDGE_PUBLISHED,
+    BridgeNode,
+    Operation,
+    bridge_ports,
+)
 from dronewrapper_bridge_mavlink import actions, flight, missions, parameters, receive
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
@@ -45,20 +50,11 @@ from dronewrapper_bridge_mavlink.wire import wanted_ids
 log = logging.getLogger("bridge_mavlink")
 
 PUBLISHED = (
-    registry.STATE,
-    registry.EXTENDED_STATE,
-    registry.LOCAL_POSE,
-    registry.VELOCITY_BODY,
-    registry.VELOCITY_LOCAL,
+    *BRIDGE_PUBLISHED,
     registry.GLOBAL_POSITION,
-    registry.BATTERY,
-    registry.STATUSTEXT,
     registry.LINK_STATUS,
-    registry.ENVELOPE,  # missions.py: the envelope, home and the mission
-    registry.HOME_POSITION,
     registry.MISSION_WAYPOINTS,
     registry.MISSION_REACHED,
-    registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
 SERVICES: dict[Service[Any, Any], Operation] = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,

@@ -21,15 +21,7 @@ from pymavlink.dialects.v20.common import (
     MAV_TYPE_GCS,
 )
 
-from dronewrapper.msgs.geometry import (
-    Point,
-    Pose,
-    PoseStamped,
-    Quaternion,
-    Twist,
-    TwistStamped,
-    Vector3,
-)
+from dronewrapper.msgs.geometry import PoseStamped, TwistStamped, Vector3
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_UNDEFINED,
     VTOL_STATE_UNDEFINED,
@@ -52,16 +44,15 @@ from dronewrapper_bridge_base.frames import (
     ned_to_enu,
     quat_from_rpy,
     rotate,
-    rotate_inverse,
     rpy_from_quat,
 )
+from dronewrapper_bridge_base.odometry import FRAME_BASE_LINK, Headers, odometry
 from dronewrapper_bridge_mavlink.modes import autopilot_kind, is_guided, mode_name
 
 UINT16_MAX = 65535
 GPS_FIX_TYPE_3D = 3
 
 FRAME_MAP = "map"
-FRAME_BASE_LINK = "base_link"
 
 
 def is_autopilot_heartbeat(msg: Any) -> bool:
@@ -123,10 +114,6 @@ def _battery(msg: Any, voltage: float, stamp: float) -> BatteryState:
     )
 
 
-def _quat_msg(q: Quat) -> Quaternion:
-    return Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])
-
-
 @dataclass
 class Telemetry:
     """The latest attitude / fix, and the conversions that need them.
@@ -147,16 +134,12 @@ class Telemetry:
     gps_fix_type: int | None = None
     home_amsl: float | None = None
     amsl: float | None = None
-    seq: dict[str, int] = field(default_factory=dict)
+    headers: Headers = field(default_factory=Headers)
 
     @property
     def yaw_enu(self) -> float:
         """Current heading (rad, ENU, CCW from east)."""
         return rpy_from_quat(self.attitude)[2]
-
-    def _header(self, frame_id: str, stamp: float, what: str) -> Header:
-        self.seq[what] = self.seq.get(what, 0) + 1
-        return Header(stamp=stamp, frame_id=frame_id, seq=self.seq[what])
 
     def on_attitude(self, msg: Any) -> None:
         """ATTITUDE (roll/pitch/yaw, rates; NED/FRD)."""
@@ -177,21 +160,9 @@ class Telemetry:
         position = ned_to_enu((msg.x, msg.y, msg.z))
         velocity = ned_to_enu((msg.vx, msg.vy, msg.vz))
         self.position_enu, self.velocity_enu = position, velocity
-        rates_enu = rotate(self.attitude, self.rates_flu)
-        pose = PoseStamped(
-            header=self._header(FRAME_MAP, stamp, "pose"),
-            pose=Pose(position=Point.of(position), orientation=_quat_msg(self.attitude)),
-        )
-        local = TwistStamped(
-            header=self._header(FRAME_MAP, stamp, "vlocal"),
-            twist=Twist(linear=Vector3.of(velocity), angular=Vector3.of(rates_enu)),
-        )
-        vb = rotate_inverse(self.attitude, velocity)
-        body = TwistStamped(
-            header=self._header(FRAME_BASE_LINK, stamp, "vbody"),
-            twist=Twist(linear=Vector3.of(vb), angular=Vector3.of(self.rates_flu)),
-        )
-        return pose, local, body
+        rates = (Vector3.of(rotate(self.attitude, self.rates_flu)), Vector3.of(self.rates_flu))
+        motion = (position, self.attitude, velocity)
+        return odometry(self.headers, FRAME_MAP, stamp, motion, *rates)
 
     def on_gps_raw(self, msg: Any) -> None:
         """GPS_RAW_INT: remember the fix type (3 = 3D fix)."""
@@ -211,7 +182,7 @@ class Telemetry:
         if self.home_amsl is None:
             self.home_amsl = (msg.alt - msg.relative_alt) / 1e3
         return NavSatFix(
-            header=self._header(FRAME_BASE_LINK, stamp, "global"),
+            header=self.headers(FRAME_BASE_LINK, stamp, "global"),
             status=NavSatStatus(status=NAVSAT_STATUS_FIX),
             latitude=msg.lat / 1e7,
             longitude=msg.lon / 1e7,

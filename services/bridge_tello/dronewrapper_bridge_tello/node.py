@@ -28,7 +28,12 @@ from dronewrapper.runtime import Latest, Node, Ratekeeper
 from dronewrapper.runtime.contract import NodeApi
 from dronewrapper.runtime.ports import Ports
 from dronewrapper.security.wifi import open_wifi_warning
-from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
+from dronewrapper_bridge_base.bridge_node import (
+    BRIDGE_PUBLISHED,
+    BridgeNode,
+    Operation,
+    bridge_ports,
+)
 from dronewrapper_bridge_tello import actions, flight, missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.camera_watch import CameraWatch
@@ -44,18 +49,9 @@ VIDEO_DATAGRAM = 65535
 """The largest video datagram read (bytes); replies and state strings fit in 2048."""
 
 PUBLISHED = (
-    registry.STATE,
-    registry.EXTENDED_STATE,
-    registry.LOCAL_POSE,
-    registry.VELOCITY_BODY,
-    registry.VELOCITY_LOCAL,
-    registry.BATTERY,
-    registry.STATUSTEXT,
-    registry.ENVELOPE,  # missions.py: the envelope, home and the mission
-    registry.HOME_POSITION,
+    *BRIDGE_PUBLISHED,
     registry.MISSION_WAYPOINTS,
     registry.MISSION_REACHED,
-    registry.REFUSAL,  # bridge_base: what was refused, told to its commander
 )
 SERVICES: dict[Service[Any, Any], Operation] = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,

@@ -24,15 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from dronewrapper.msgs.geometry import (
-    Point,
-    Pose,
-    PoseStamped,
-    Quaternion,
-    Twist,
-    TwistStamped,
-    Vector3,
-)
+from dronewrapper.msgs.geometry import PoseStamped, TwistStamped, Vector3
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_LANDING,
@@ -41,11 +33,11 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
-from dronewrapper_bridge_tello.frames import Quat, Vec3, attitude_enu, rotate, rotate_inverse
+from dronewrapper_bridge_base.odometry import Headers, odometry
+from dronewrapper_bridge_tello.frames import Quat, Vec3, attitude_enu, rotate
 from dronewrapper_bridge_tello.state import TelloState
 
 FRAME_ODOM = "odom"
-FRAME_BASE_LINK = "base_link"
 VELOCITY_FRAMES = ("reference", "body_frd")
 HEIGHT_SOURCES = ("h", "tof")
 MAX_INTEGRATION_STEP = 0.5  # s: a longer gap between state strings is not integrated over
@@ -147,7 +139,7 @@ class Telemetry:
     _last_at: float | None = None
     _yaw_rate: float = 0.0
     _last_yaw: float | None = None
-    _seq: dict[str, int] = field(default_factory=dict)
+    headers: Headers = field(default_factory=Headers)
 
     def __post_init__(self) -> None:
         if self.velocity_frame not in VELOCITY_FRAMES:
@@ -199,29 +191,12 @@ class Telemetry:
         self.battery = state.battery_percent / 100.0
         self.landed.on_state(state.h_cm, state.motor_time_s, now)
 
-    def _header(self, frame_id: str, stamp: float, what: str) -> Header:
-        self._seq[what] = self._seq.get(what, 0) + 1
-        return Header(stamp=stamp, frame_id=frame_id, seq=self._seq[what])
-
     def messages(self, stamp: float) -> tuple[PoseStamped, TwistStamped, TwistStamped]:
         """(pose ENU in ``odom``, velocity_local ENU, velocity_body FLU) of the latest state."""
         position = self.position_enu or (0.0, 0.0, 0.0)
-        x, y, z, w = self.attitude
-        pose = PoseStamped(
-            header=self._header(FRAME_ODOM, stamp, "pose"),
-            pose=Pose(position=Point.of(position), orientation=Quaternion(x=x, y=y, z=z, w=w)),
-        )
         yaw_rate = Vector3(z=self._yaw_rate)  # yaw rate only (the Tello sends no body rates)
-        local = TwistStamped(
-            header=self._header(FRAME_ODOM, stamp, "vlocal"),
-            twist=Twist(linear=Vector3.of(self.velocity), angular=yaw_rate),
-        )
-        vb = rotate_inverse(self.attitude, self.velocity)
-        body = TwistStamped(
-            header=self._header(FRAME_BASE_LINK, stamp, "vbody"),
-            twist=Twist(linear=Vector3.of(vb), angular=yaw_rate),
-        )
-        return pose, local, body
+        motion = (position, self.attitude, self.velocity)
+        return odometry(self.headers, FRAME_ODOM, stamp, motion, yaw_rate, yaw_rate)
 
     def battery_message(self, stamp: float) -> BatteryState:
         """BatteryState: percentage 0..1, voltage and current unknown (NaN)."""
