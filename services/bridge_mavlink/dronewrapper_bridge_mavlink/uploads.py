@@ -35,17 +35,17 @@ FENCE_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
 FENCE_CIRCLE = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
 
 
+ALIKE = ("frame", "command", "param1", "param2", "param3", "param4")
+"""What a Waypoint and a MISSION_ITEM_INT carry alike; the flags are bools on the bus, the
+position degrees there and degrees * 1e7 in the item."""
+
+
 def item_of(waypoint: Waypoint) -> mt.Item:
     """A Waypoint as MISSION_ITEM_INT content (degrees * 1e7)."""
     return mt.Item(
-        frame=waypoint.frame,
-        command=waypoint.command,
+        **{name: getattr(waypoint, name) for name in ALIKE},
         current=int(waypoint.is_current),
         autocontinue=int(waypoint.autocontinue),
-        param1=waypoint.param1,
-        param2=waypoint.param2,
-        param3=waypoint.param3,
-        param4=waypoint.param4,
         x=round(waypoint.x_lat * 1e7),
         y=round(waypoint.y_long * 1e7),
         z=waypoint.z_alt,
@@ -53,15 +53,11 @@ def item_of(waypoint: Waypoint) -> mt.Item:
 
 
 def waypoint_of(item: mt.Item) -> Waypoint:
+    """MISSION_ITEM_INT content as a Waypoint (degrees)."""
     return Waypoint(
-        frame=item.frame,
-        command=item.command,
+        **{name: getattr(item, name) for name in ALIKE},
         is_current=bool(item.current),
         autocontinue=bool(item.autocontinue),
-        param1=item.param1,
-        param2=item.param2,
-        param3=item.param3,
-        param4=item.param4,
         x_lat=item.x / 1e7,
         y_long=item.y / 1e7,
         z_alt=item.z,

@@ -16,7 +16,28 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-REQUIRED = ("pitch", "roll", "yaw", "vgx", "vgy", "vgz", "tof", "h", "bat", "time")
+REQUIRED = {
+    "pitch": "pitch_deg",
+    "roll": "roll_deg",
+    "yaw": "yaw_deg",
+    "vgx": "vgx",
+    "vgy": "vgy",
+    "vgz": "vgz",
+    "tof": "tof_cm",
+    "h": "h_cm",
+    "bat": "battery_percent",
+    "time": "motor_time_s",
+}
+"""The fields a state string must have, each with its :class:`TelloState` attribute."""
+OPTIONAL = {
+    "baro": "baro_m",
+    "templ": "templ_c",
+    "temph": "temph_c",
+    "agx": "agx",
+    "agy": "agy",
+    "agz": "agz",
+}
+"""The fields a state string may have (NaN when absent or not a finite number)."""
 MAX_DATAGRAM = 1024
 
 
@@ -84,7 +105,7 @@ def parse_state(datagram: bytes) -> TelloState:
         raise StateError(f"state string lacks {', '.join(missing)}")
     values = {k: _number(k, fields[k]) for k in REQUIRED}
     optional = {}
-    for key in ("baro", "templ", "temph", "agx", "agy", "agz"):
+    for key in OPTIONAL:
         if key in fields:
             try:
                 optional[key] = _number(key, fields[key])
@@ -96,20 +117,6 @@ def parse_state(datagram: bytes) -> TelloState:
         if abs(values[key]) > 360.0:
             raise StateError(f"{key} {values[key]:g} is not an angle in degrees")
     return TelloState(
-        pitch_deg=values["pitch"],
-        roll_deg=values["roll"],
-        yaw_deg=values["yaw"],
-        vgx=values["vgx"],
-        vgy=values["vgy"],
-        vgz=values["vgz"],
-        tof_cm=values["tof"],
-        h_cm=values["h"],
-        battery_percent=values["bat"],
-        motor_time_s=values["time"],
-        baro_m=optional.get("baro", math.nan),
-        templ_c=optional.get("templ", math.nan),
-        temph_c=optional.get("temph", math.nan),
-        agx=optional.get("agx", math.nan),
-        agy=optional.get("agy", math.nan),
-        agz=optional.get("agz", math.nan),
+        **{name: values[key] for key, name in REQUIRED.items()},
+        **{name: optional.get(key, math.nan) for key, name in OPTIONAL.items()},
     )
