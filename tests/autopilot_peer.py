@@ -20,6 +20,7 @@ from collections.abc import Iterator
 
 os.environ.setdefault("MAVLINK20", "1")
 
+from looping_peer import LoopingPeer
 from pymavlink.dialects.v20 import common as mavlink
 
 # PX4 custom modes (main mode << 16 | sub mode << 24; see sim/dronewrapper_sim/px4/modes.py)
@@ -36,7 +37,7 @@ def int_bits(value: int) -> float:
     return struct.unpack("<f", struct.pack("<i", value))[0]
 
 
-class AutopilotPeer:
+class AutopilotPeer(LoopingPeer):
     """A scripted autopilot sending to the bridge's ``udpin`` port from its own UDP socket."""
 
     def __init__(self, bridge_port: int, *, system: int = 1, telemetry: bool = True) -> None:
@@ -58,18 +59,9 @@ class AutopilotPeer:
         self.sent_poses = 0
         self._boot = time.monotonic()
         self._lock = threading.RLock()
-        self._stop = threading.Event()
-        self._threads = [
-            threading.Thread(target=self._send_loop, daemon=True),
-            threading.Thread(target=self._recv_loop, daemon=True),
-        ]
-        for thread in self._threads:
-            thread.start()
+        self._start_loops()
 
-    def close(self) -> None:
-        self._stop.set()
-        for thread in self._threads:
-            thread.join(2)
+    def _close_link(self) -> None:
         self.sock.close()
 
     # ---- sending ----

@@ -27,6 +27,7 @@ import pytest
 os.environ.setdefault("MAVLINK20", "1")
 
 from bridge_rig import reaches_bridge
+from looping_peer import LoopingPeer
 from pymavlink import mavutil
 from targets import velocity
 
@@ -58,7 +59,7 @@ AUTO_LOITER = (4 << 16) | (3 << 24)
 ARMED = 128
 
 
-class FakePX4:
+class FakePX4(LoopingPeer):
     """A scripted PX4 (or, with ``autopilot=3``, ArduCopter) on a real UDP socket: sends
     telemetry, answers commands, logs traffic.
 
@@ -90,19 +91,10 @@ class FakePX4:
         self.commands: list[tuple[float, object]] = []
         self.gcs_heartbeats = 0
         self.params = {"COM_OF_LOSS_T": (1.0, 9), "COM_RC_IN_MODE": (1, 6)}
-        self._stop = threading.Event()
         self._lock = threading.Lock()
-        self._threads = [
-            threading.Thread(target=self._send_loop, daemon=True),
-            threading.Thread(target=self._recv_loop, daemon=True),
-        ]
-        for t in self._threads:
-            t.start()
+        self._start_loops()
 
-    def close(self) -> None:
-        self._stop.set()
-        for t in self._threads:
-            t.join(2)
+    def _close_link(self) -> None:
         self.conn.close()
 
     def send(self, name: str, *args, **kw) -> None:
