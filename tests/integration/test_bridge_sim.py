@@ -24,15 +24,12 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from bridge_user import BridgeUser
 from setpoint_stream import yaw_of
-from targets import mixed, velocity
+from targets import mixed, position, velocity
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Point
 from dronewrapper.msgs.mavros import (
-    FRAME_LOCAL_NED,
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
-    MASK_POSITION,
     CommandBool,
     CommandTOL,
     PositionTarget,
@@ -70,12 +67,7 @@ class Rig(BridgeUser):
 
     def hold_here(self) -> PositionTarget:
         p = self.pose.wait(10).pose.position
-        return PositionTarget(
-            coordinate_frame=FRAME_LOCAL_NED,
-            type_mask=MASK_POSITION,
-            position=Point(x=p.x, y=p.y, z=p.z),
-            yaw=yaw_of(self.pose.value),
-        )
+        return position(p.x, p.y, p.z, yaw_of(self.pose.value))
 
     def take_off_offboard(self, height: float = 3.0) -> None:
         """The SDK's PX4 take-off: hold stream -> OFFBOARD -> arm -> mixed climb."""

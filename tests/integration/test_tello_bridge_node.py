@@ -13,20 +13,17 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from targets import velocity
 from tello_bridge_rig import running_bridge
 from tello_peer import ScriptedTello
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
-    MASK_VELOCITY,
     CommandTOL,
     ParamGet,
     ParamSet,
     ParamValue,
-    PositionTarget,
 )
 from dronewrapper.runtime import ServiceError, call_service
 from dronewrapper.runtime.caller import commander_attachment
@@ -50,12 +47,7 @@ def test_services_setpoints_and_replies_travel_over_real_udp(tello_and_bridge):
     assert user.call(registry.TAKEOFF, CommandTOL.takeoff(), timeout=30).success
     pub = user.publisher(registry.SETPOINT_RAW_LOCAL)
     # forward 0.3, left 0.2, up 0.1 m/s, CCW 0.4 rad/s -> a -20, b 30, c 10, d -23
-    target = PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=0.3, y=0.2, z=0.1),
-        yaw_rate=0.4,
-    )
+    target = velocity(0.3, 0.2, 0.1, 0.4)
     start = time.monotonic()
     while time.monotonic() - start < 0.5:
         pub.put(target)

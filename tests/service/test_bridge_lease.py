@@ -6,19 +6,16 @@ from __future__ import annotations
 import logging
 
 import pytest
+from targets import velocity
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.errors import CommandRefused
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CancelRequest
-from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.lease import LeaseRequest
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
-    MASK_VELOCITY,
     CommandBool,
     CommandTOL,
-    PositionTarget,
 )
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
@@ -39,9 +36,7 @@ from dronewrapper_bridge_tello import node as tello_node
 from dronewrapper_bridge_tello.config import Config as TelloConfig
 from dronewrapper_bridge_tello.core import TelloCore
 
-FORWARD = PositionTarget(
-    coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=0.5)
-)
+FORWARD = velocity(0.5)
 
 
 class Wired(BridgeNode):

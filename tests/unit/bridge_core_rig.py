@@ -15,11 +15,11 @@ from typing import Any
 
 os.environ.setdefault("MAVLINK20", "1")
 
+import targets
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.geometry import Vector3
-from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper_bridge_base.bridge_node import COMMANDS
 from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_mavlink import operations as ops
@@ -48,9 +48,7 @@ def int_bits(value: int) -> float:
 
 def velocity(vx: float = 1.0) -> PositionTarget:
     """A body-velocity setpoint (forward ``vx`` m/s)."""
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=vx)
-    )
+    return targets.velocity(vx)
 
 
 class CoreRig:

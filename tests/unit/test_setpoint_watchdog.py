@@ -8,9 +8,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import pytest
+from targets import velocity
 
-from dronewrapper.msgs.geometry import Vector3
-from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
 from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig as MavlinkFailsafeConfig
 from dronewrapper_bridge_base.setpoint_watchdog import (
     HOLD,
@@ -23,9 +22,7 @@ from dronewrapper_bridge_base.setpoint_watchdog import (
 )
 from dronewrapper_bridge_tello.failsafe import FailsafeConfig as TelloFailsafeConfig
 
-TARGET = PositionTarget(
-    coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=1.0)
-)
+TARGET = velocity(1.0)
 
 
 def steered(config: WatchdogConfig | None = None, at: float = 10.0) -> SetpointWatchdog[str]:
