@@ -9,7 +9,8 @@ sockets on ``local_address`` (``0.0.0.0`` on the Tello's Wi-Fi; a loopback addre
 from __future__ import annotations
 
 import socket
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import Any
 
 MAX_DATAGRAM = 65535
 
@@ -24,6 +25,11 @@ class TelloAddress:
     local_command_port: int = 0  # 0: any free port (the Tello replies to the sender's port)
     state_port: int = 8890
     video_port: int = 11111
+
+    @classmethod
+    def of(cls, config: Any) -> TelloAddress:
+        """The addresses and ports ``config`` (the bridge's Config) names, by the same names."""
+        return cls(**{f.name: getattr(config, f.name) for f in fields(cls)})
 
 
 def _udp(address: str, port: int, *, buffer: int = 0) -> socket.socket:

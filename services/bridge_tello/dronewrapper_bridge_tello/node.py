@@ -89,17 +89,7 @@ class Bridge(BridgeNode[TelloCore]):
         publishers = {topic: node.publisher(topic) for topic in PUBLISHED}
         super().__init__(node, TelloCore(config, node.clock.monotonic()), publishers, log)
         self.config = config
-        self.link = link or TelloLink(
-            TelloAddress(
-                tello_address=config.tello_address,
-                command_port=config.command_port,
-                local_address=config.local_address,
-                local_command_port=config.local_command_port,
-                state_port=config.state_port,
-                video_port=config.video_port,
-            ),
-            video=config.video != OFF,
-        )
+        self.link = link or TelloLink(TelloAddress.of(config), video=config.video != OFF)
         self.pub_image = node.publisher(registry.IMAGE_RAW, camera="cam_frontal")
         self.pub_jpeg = node.publisher(registry.IMAGE_COMPRESSED, camera="cam_frontal")
         self.camera = CameraWatch([self.pub_image, self.pub_jpeg] if config.video != OFF else [])
