@@ -59,8 +59,7 @@ class PureCore:
             commander's usually do is refused (:mod:`~dronewrapper_bridge_base.setpoint_delay`).
     """
 
-    if TYPE_CHECKING:  # every bridge's core has them, each with its own arguments
-        on_setpoint: Callable[..., Any]
+    if TYPE_CHECKING:  # every bridge's core has one, with its own arguments
         tick: Callable[..., Any]
 
     def __init__(
@@ -125,40 +124,52 @@ class PureCore:
 
     # ---- the commander lease
 
-    def screen_setpoint(
+    def on_setpoint(
         self,
         target: Any,
         commander: str,
-        sent: float | None,
-        check: Callable[[Any], Any],
-        refuse: Callable[[Any, Any, Any], object],
-    ) -> Any:
-        """The kind of a setpoint that may fly, or None: refused when it arrives late or the
-        lease refuses it (:meth:`admit_setpoint`), when ``check(target)`` (the bridge's own
-        validation) raises SetpointError, or when ``refuse(core, target, kind)`` (the
-        envelope) says so. Every refusal but the lease's is counted in
-        ``rejected_setpoints``; a validation refusal is logged at most every 2 s. Each
-        refusal is published to ``commander`` (:meth:`refuse`); ``refuse`` returns the
-        EnvelopeError (its ``limit`` named) or a reason, falsy when the envelope admits it."""
+        now: float,
+        stamp: float,
+        sent: float | None = None,
+    ) -> None:
+        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s), flown
+        (:meth:`fly_setpoint`) unless refused: when it arrives late or the lease refuses it
+        (:meth:`admit_setpoint`), when :meth:`check_setpoint` (the bridge's own validation)
+        raises SetpointError, or when :meth:`refuse_envelope` says so. Every refusal but the
+        lease's is counted in ``rejected_setpoints``; a validation refusal is logged at most
+        every 2 s. Each refusal is published to ``commander`` (:meth:`refuse`)."""
+        self._at(now, stamp)
         if not self.admit_setpoint(commander, sent):
-            return None
+            return
         try:
-            kind = check(target)
+            kind = self.check_setpoint(target)
         except SetpointError as exc:
             self.rejected_setpoints += 1
             self.refuse(VALIDATION, commander, exc.limit, str(exc))
             if self.now - self._last_reject_log >= 2.0:
                 self._last_reject_log = self.now
                 self._log.warning("setpoint refused (%d so far): %s", self.rejected_setpoints, exc)
-            return None
-        refused = refuse(self, target, kind)
+            return
+        refused = self.refuse_envelope(target, kind)
         if refused:
             self.rejected_setpoints += 1
             limit = getattr(refused, "limit", "")
             self.refuse(ENVELOPE, commander, limit, str(refused))
-            return None
+            return
         self.setpoint_commander = commander
-        return kind
+        self.fly_setpoint(target, kind)
+
+    def check_setpoint(self, target: Any) -> Any:
+        """The control ``target`` asks for, or SetpointError saying why it may not fly."""
+        raise NotImplementedError
+
+    def refuse_envelope(self, target: Any, kind: Any) -> Any:
+        """Why the envelope refuses ``target`` (an ``EnvelopeError``: ``limit`` named), or None."""
+        raise NotImplementedError
+
+    def fly_setpoint(self, target: Any, kind: Any) -> None:
+        """Fly a setpoint every check admitted (now: :attr:`now`)."""
+        raise NotImplementedError
 
     def admit_setpoint(self, commander: str, sent: float | None = None) -> bool:
         """True if a setpoint from ``commander``, sent at ``sent`` (its clock, Unix s; None:
@@ -222,14 +233,8 @@ class PureCore:
         """Tell whoever commands (the lease's holder, else the sender of the last setpoint
         flown) that a breach of ``limit`` overrides it with the envelope's ``action``."""
         commander = self.lease.holder(self.now) or self.setpoint_commander
-        self.refuse(
-            BREACH,
-            commander,
-            limit,
-            f"envelope breach: {reason}",
-            what="command",
-            action=action,
-        )
+        message = f"envelope breach: {reason}"
+        self.refuse(BREACH, commander, limit, message, what="command", action=action)
 
     def request(self, steps: Steps, commander: str, what: str, now: float, stamp: float):
         """A service call from ``commander``: ``what`` names the command the lease guards

@@ -69,10 +69,6 @@ class GuidedCore(PureCore):
         """The commander watch learns whose beats arrived (their processes' keys)."""
         raise NotImplementedError
 
-    def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
-        """Why the envelope refuses ``target`` (an ``EnvelopeError``), or None."""
-        raise NotImplementedError
-
     def failsafe_steps(self, request: str) -> Any:
         """The operation the failsafe's request (``land`` or ``return``) runs."""
         raise NotImplementedError
@@ -105,30 +101,15 @@ class GuidedCore(PureCore):
         self._at(now, stamp)
         self.watch_alive(keys)
 
-    def on_setpoint(
-        self,
-        target: PositionTarget,
-        commander: str,
-        now: float,
-        stamp: float,
-        sent: float | None = None,
-    ) -> None:
-        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s): refused
-        if late, by the lease, by validation or the envelope (each refusal published to it),
-        else remembered and sent to the autopilot at once."""
-        self._at(now, stamp)
-        kind = self.screen_setpoint(
-            target,
-            commander,
-            sent,
-            lambda x: validate(x, self.limits),
-            lambda _core, x, kind: self.refuse_envelope(x, kind),
-        )
-        if kind is None:
-            return
-        self.unattended.clear()  # a commander steers: the unattended action is over
-        self.failsafe.on_setpoint(target, kind, now)
-        self._act(self.failsafe.tick(now, self.pose()), send=True)
+    def check_setpoint(self, target: PositionTarget) -> Kind:
+        return validate(target, self.limits)
+
+    def fly_setpoint(self, target: PositionTarget, kind: Kind) -> None:
+        """A commander steers (the unattended action is over): the setpoint is remembered and
+        sent to the autopilot at once."""
+        self.unattended.clear()
+        self.failsafe.on_setpoint(target, kind, self.now)
+        self._act(self.failsafe.tick(self.now, self.pose()), send=True)
 
     def _act(self, tick: Tick, *, send: bool) -> None:
         """Act on a failsafe tick: log and publish transitions, send, start its requests."""

@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 
+from dronewrapper.envelope import EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_LANDING,
@@ -29,6 +30,7 @@ from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.operation import Operation
+from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
@@ -217,24 +219,15 @@ class TelloCore(PureCore):
 
     # ------------------------------------------------------------------ setpoints and control
 
-    def on_setpoint(
-        self,
-        target: PositionTarget,
-        commander: str,
-        now: float,
-        stamp: float,
-        sent: float | None = None,
-    ) -> None:
-        """A PositionTarget from ``commander`` sent at ``sent`` (its clock, Unix s): refused
-        if it arrives late (:meth:`admit_setpoint`) or the lease refuses it, then
-        validated and flown by the tick."""
-        self._at(now, stamp)
-        kind = self.screen_setpoint(
-            target, commander, sent, lambda t: validate(t, self.scale), missions.refuse_setpoint
-        )
-        if kind is None:
-            return
-        self.failsafe.on_setpoint(target, kind, now)
+    def check_setpoint(self, target: PositionTarget) -> Kind:
+        return validate(target, self.scale)
+
+    def refuse_envelope(self, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
+        return missions.refuse_setpoint(self, target, kind)
+
+    def fly_setpoint(self, target: PositionTarget, kind: Kind) -> None:
+        """Remembered: the tick flies it."""
+        self.failsafe.on_setpoint(target, kind, self.now)
 
     def tick(self, now: float, stamp: float, *, camera_watched: bool = False) -> None:
         """The control tick (``rc_rate_hz``): link supervision, the failsafe, the sticks or the
