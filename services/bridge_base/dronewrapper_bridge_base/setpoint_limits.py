@@ -3,8 +3,8 @@
 Every bridge refuses the same things in the same words before anything reaches an aircraft:
 a type_mask other than the three controls of docs/design.md, a coordinate_frame that control
 does not take, a missing position, NaN/inf/bool in a used field, and values beyond the
-bridge's bounds. The bounds are any object with the fields of :class:`Bounds` (bridge_mavlink's
-``Limits``, bridge_tello's ``StickScale``), in ENU metres, m/s and rad/s.
+bridge's bounds. The bounds are any object with the fields of :class:`Bounds` (:class:`Limits`
+and bridge_mavlink's extension of it, bridge_tello's ``StickScale``), in ENU metres, m/s and rad/s.
 
 ==========  ==========================  ===========================================
 type_mask   coordinate_frame            fields checked
@@ -65,6 +65,18 @@ class Bounds(Protocol):
     def max_vertical_speed(self) -> float: ...
     @property
     def max_yaw_rate(self) -> float: ...
+
+
+class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """The :class:`Bounds` of a bridge to an autopilot, as its config's ``limits`` section:
+    beyond them a setpoint is refused (m, m/s, rad/s)."""
+
+    max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
+    min_altitude: float = -1_000.0  # ENU z, m
+    max_altitude: float = 10_000.0
+    max_horizontal_speed: float = 20.0  # m/s, norm of (vx, vy)
+    max_vertical_speed: float = 10.0  # m/s
+    max_yaw_rate: float = 2.0 * math.pi  # rad/s
 
 
 KIND_OF_MASK = {MASK_POSITION: Kind.POSITION, MASK_VELOCITY: Kind.VELOCITY, MASK_MIXED: Kind.MIXED}

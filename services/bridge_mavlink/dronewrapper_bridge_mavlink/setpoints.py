@@ -22,10 +22,7 @@ nothing again.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-
-import msgspec
 
 from dronewrapper.msgs.mavros import (
     FRAME_BODY_NED,
@@ -42,16 +39,11 @@ from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, kind_o
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
 
-class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """Bounds on accepted setpoints (m, m/s, rad/s). Beyond them a setpoint is refused. Also
-    the ``limits`` section of the bridge's config, as is."""
+class Limits(setpoint_limits.Limits, frozen=True, kw_only=True, forbid_unknown_fields=True):
+    """Bounds on accepted setpoints (:class:`dronewrapper_bridge_base.setpoint_limits.Limits`)
+    and ArduPilot's emulated mixed control. Also the ``limits`` section of the bridge's config,
+    as is."""
 
-    max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
-    min_altitude: float = -1_000.0  # ENU z, m
-    max_altitude: float = 10_000.0
-    max_horizontal_speed: float = 20.0  # m/s, norm of (vx, vy)
-    max_vertical_speed: float = 10.0  # m/s
-    max_yaw_rate: float = 2.0 * math.pi  # rad/s
     mixed_altitude_gain: float = 1.0  # 1/s, ArduPilot mixed control: vz = gain * altitude error
     mixed_max_climb: float = 1.5  # m/s, clamp of that vz
 
