@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -123,6 +124,21 @@ class Process:
                 self.proc.wait(5)
         self._log.close()
         return self.proc.returncode
+
+
+def start_daemons(*targets: Callable[[], object]) -> list[threading.Thread]:
+    """A started daemon thread for each of ``targets`` (a test peer's loops)."""
+    threads = [threading.Thread(target=target, daemon=True) for target in targets]
+    for thread in threads:
+        thread.start()
+    return threads
+
+
+def stop_daemons(stop: threading.Event, threads: list[threading.Thread]) -> None:
+    """Set ``stop`` (what the loops of ``threads`` watch) and wait up to 2 s for each."""
+    stop.set()
+    for thread in threads:
+        thread.join(2)
 
 
 def python_module(module: str, *args: str) -> list[str]:

@@ -47,7 +47,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
-from support import client_node, free_port, wait_for
+from support import client_node, free_port, start_daemons, stop_daemons, wait_for
 
 OFFBOARD = 6 << 16
 POSCTL = 3 << 16
@@ -91,17 +91,10 @@ class FakePX4:
         self.params = {"COM_OF_LOSS_T": (1.0, 9), "COM_RC_IN_MODE": (1, 6)}
         self._stop = threading.Event()
         self._lock = threading.Lock()
-        self._threads = [
-            threading.Thread(target=self._send_loop, daemon=True),
-            threading.Thread(target=self._recv_loop, daemon=True),
-        ]
-        for t in self._threads:
-            t.start()
+        self._threads = start_daemons(self._send_loop, self._recv_loop)
 
     def close(self) -> None:
-        self._stop.set()
-        for t in self._threads:
-            t.join(2)
+        stop_daemons(self._stop, self._threads)
         self.conn.close()
 
     def send(self, name: str, *args, **kw) -> None:
