@@ -29,6 +29,7 @@ with the on-board stack (``make setup``), whose distributions add them through t
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import logging
 import os
@@ -36,10 +37,14 @@ import signal
 import sys
 import threading
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
 from dronewrapper.runtime.service import setup_logging
+
+if TYPE_CHECKING:
+    import zenoh
 
 COMMANDS_GROUP = "dronewrapper.commands"
 """The entry-point group through which the on-board distributions add their subcommands
@@ -120,11 +125,22 @@ def _quiet_broken_pipe() -> None:
     os.dup2(devnull, sys.stdout.fileno())
 
 
+def _client_session(args: argparse.Namespace, command: str) -> zenoh.Session | None:
+    """A client session with the router the parsed ``args`` name, or None (what went wrong
+    printed, prefixed ``dronewrapper COMMAND``)."""
+    from dronewrapper.router_reach import open_client_session
+
+    try:
+        return open_client_session(options_from_args(args))
+    except ConnectionError as exc:
+        print(f"dronewrapper {command}: {exc}", file=sys.stderr)
+        return None
+
+
 def _echo(argv: Sequence[str]) -> int:
     import zenoh
 
     from dronewrapper.echo import echo, keyexpr_problem, path_warning
-    from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
 
     parser = CommandParser(prog="dronewrapper echo", description="print messages")
@@ -145,10 +161,8 @@ def _echo(argv: Sequence[str]) -> int:
     if warning := path_warning(args.keyexpr):
         print(f"dronewrapper echo: warning: {warning}", file=sys.stderr)
     stop = _stop_on_signals()
-    try:
-        session = open_client_session(options_from_args(args))
-    except ConnectionError as exc:
-        print(f"dronewrapper echo: {exc}", file=sys.stderr)
+    session = _client_session(args, "echo")
+    if session is None:
         return 1
     try:
         echo(session, args.keyexpr, count=args.count, duration=args.duration, stop=stop)
@@ -170,7 +184,6 @@ def _stdout_writable() -> bool:
 def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.discovery import services_by_namespace
     from dronewrapper.doctor import describe_drone, listen, topic_families
-    from dronewrapper.router_reach import open_client_session
 
     parser = CommandParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
@@ -180,10 +193,8 @@ def _alive(argv: Sequence[str]) -> int:
     )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
-    try:
-        session = open_client_session(options_from_args(args))
-    except ConnectionError as exc:
-        print(f"dronewrapper alive: {exc}", file=sys.stderr)
+    session = _client_session(args, "alive")
+    if session is None:
         return 1
     try:
         keys = sorted(str(r.ok.key_expr) for r in session.liveliness().get("*/alive/*") if r.ok)
