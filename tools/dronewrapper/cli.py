@@ -29,22 +29,16 @@ with the on-board stack (``make setup``), whose distributions add them through t
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import logging
 import os
-import signal
 import sys
-import threading
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
+from dronewrapper.command_line import client_session, stop_on_signals
 from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
 from dronewrapper.runtime.service import setup_logging
-
-if TYPE_CHECKING:
-    import zenoh
 
 COMMANDS_GROUP = "dronewrapper.commands"
 """The entry-point group through which the on-board distributions add their subcommands
@@ -59,13 +53,6 @@ _RECORD_COMMANDS = {
     "replay": ("dronewrapper.record.cli", "replay_main"),
     "foxglove": ("dronewrapper.record.cli", "foxglove_main"),
 }
-
-
-def _stop_on_signals() -> threading.Event:
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    return stop
 
 
 def _router(argv: Sequence[str]) -> int:
@@ -103,7 +90,7 @@ def _router(argv: Sequence[str]) -> int:
             from dronewrapper.zenoh_log import relay_zenoh_log
 
             relay_zenoh_log(logging.getLogger("router"))
-        run_router(options, _stop_on_signals())
+        run_router(options, stop_on_signals())
     except (ValueError, ConnectionError, FileNotFoundError) as exc:
         print(f"dronewrapper router: {exc}", file=sys.stderr)
         return 1
@@ -123,18 +110,6 @@ def _quiet_broken_pipe() -> None:
     """After the reader of stdout went away (``| head``), let the interpreter exit quietly."""
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, sys.stdout.fileno())
-
-
-def _client_session(args: argparse.Namespace, command: str) -> zenoh.Session | None:
-    """A client session with the router the parsed ``args`` name, or None (what went wrong
-    printed, prefixed ``dronewrapper COMMAND``)."""
-    from dronewrapper.router_reach import open_client_session
-
-    try:
-        return open_client_session(options_from_args(args))
-    except ConnectionError as exc:
-        print(f"dronewrapper {command}: {exc}", file=sys.stderr)
-        return None
 
 
 def _echo(argv: Sequence[str]) -> int:
@@ -160,8 +135,8 @@ def _echo(argv: Sequence[str]) -> int:
         return 2
     if warning := path_warning(args.keyexpr):
         print(f"dronewrapper echo: warning: {warning}", file=sys.stderr)
-    stop = _stop_on_signals()
-    session = _client_session(args, "echo")
+    stop = stop_on_signals()
+    session = client_session(args, "dronewrapper echo")
     if session is None:
         return 1
     try:
@@ -193,7 +168,7 @@ def _alive(argv: Sequence[str]) -> int:
     )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
-    session = _client_session(args, "alive")
+    session = client_session(args, "dronewrapper alive")
     if session is None:
         return 1
     try:
