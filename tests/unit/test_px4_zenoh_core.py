@@ -14,9 +14,9 @@ from px4_zenoh_rig import (
     NAV_RTL,
     USER,
     Px4Rig,
-    position,
     velocity,
 )
+from targets import position
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
