@@ -126,6 +126,23 @@ class Process:
         return self.proc.returncode
 
 
+def station_process(router: str, log_dir: Path) -> tuple[Process, str]:
+    """The ground station as its own process on a free loopback port, connected to ``router``
+    (its log ``station.log`` in ``log_dir``): the process and its page's URL, served once
+    :func:`station_serving` returned."""
+    port = free_port()
+    station = Process(
+        python_module("dronewrapper_ground_station", "--connect", router, "--port", str(port)),
+        log_dir / "station.log",
+    )
+    return station, f"http://127.0.0.1:{port}/"
+
+
+def station_serving(station: Process) -> None:
+    """Wait (30 s at most) until ``station`` says its page is open."""
+    wait_for(lambda: "station: open" in station.output(), 30, what="the station to serve")
+
+
 def start_daemons(*targets: Callable[[], object]) -> list[threading.Thread]:
     """A started daemon thread for each of ``targets`` (a test peer's loops)."""
     threads = [threading.Thread(target=target, daemon=True) for target in targets]
