@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 import signal
 import subprocess
 import sys
@@ -43,6 +44,7 @@ from support import client_node
 pytestmark = [pytest.mark.px4_zenoh, pytest.mark.timeout(300)]
 
 REPO = Path(__file__).resolve().parents[2]
+LINK_RECORD_ENV = "DRONEWRAPPER_PX4_LINK_RECORD"  # a file for the link's arrivals (JSON)
 READY_S = 90.0  # PX4 start -> its preflight checks pass (a loaded 2-core machine)
 
 
@@ -197,7 +199,7 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
     sim_graph, detector, seconds, max_acquire, min_centred, min_distance = CASES[scenario]
     app = "color" if sim_graph == "sim_follow_color" else "person"
     assert router_port_free(), f"port {ROUTER_PORT} is taken: run in a network namespace"
-    with px4_zenoh(tmp_path) as firmware:  # its zenoh-pico retries until the graph's router is up
+    with px4_zenoh(tmp_path, echo=True) as firmware:  # zenoh-pico retries until the router is up
         variables = {"truth_port": firmware.variables["truth_port"]}
         if app == "person":
             variables["detector"] = detector
@@ -218,6 +220,8 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
                 router=DEFAULT_ROUTER,
             )
     print(f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}")
+    if os.environ.get(LINK_RECORD_ENV):
+        link.dump(Path(os.environ[LINK_RECORD_ENV]))
     passed = passes(flight, max_acquire, min_centred, min_distance)
     record_result(flight, f"follow_{app}", "px4_zenoh", firmware.version, passed)
     if not passed:
