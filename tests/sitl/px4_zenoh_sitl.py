@@ -4,7 +4,9 @@ module, built outside the repository from PX4's documentation), started with
 whose router listens there (compose/px4_zenoh*.yaml).
 
 PX4 dials a fixed port, so the flights run in a network namespace of their own
-(``unshare -rn``, loopback up): the router port must be free, or the flight fails saying so.
+(``unshare -n`` as root, loopback up): the router port must be free, or the flight fails
+saying so. In a user namespace (``unshare -rn``) PX4 is refused its real-time priorities and
+runs as an ordinary process (:func:`realtime_share`).
 ``PX4_SITL_INSTANCE`` picks PX4's instance (its /tmp/px4-sock-N is shared across namespaces);
 unset, the first N in 1..9 with no such socket.
 """
@@ -104,6 +106,30 @@ def px4_zenoh(workdir: Path, echo: bool = False) -> Iterator[Firmware]:
                 f"\nPX4's log ({firmware.log}), warnings and errors:\n{log_problems(firmware.log)}"
             )
             raise
+
+
+SCHED_FIFO = 1  # the policy field of /proc/<pid>/task/<tid>/stat
+
+
+def realtime_share(workdir: Path) -> tuple[int, int]:
+    """(threads with SCHED_FIFO, threads) of the PX4 running in ``workdir``. PX4 SITL asks for
+    real-time priorities (its SIH, estimator, commander, the zenoh module and zenoh-pico's
+    read task at 50-99); where they are refused (a user namespace, ``unshare -rn``) it runs
+    every thread as an ordinary process at the test's niceness, and on a loaded machine its
+    own sensors time out (PX4's "No valid data from Baro"), which no bridge can mend."""
+    home = str((workdir / "px4" / "rootfs").resolve())
+    for proc in Path("/proc").iterdir():
+        with contextlib.suppress(OSError):
+            if proc.name.isdigit() and (proc / "comm").read_text().strip() == "px4":
+                if os.readlink(proc / "cwd") != home:
+                    continue
+                policies = []
+                for task in (proc / "task").iterdir():
+                    with contextlib.suppress(OSError):
+                        stat = (task / "stat").read_text()
+                        policies.append(int(stat[stat.rindex(")") + 2 :].split()[38]))
+                return sum(p == SCHED_FIFO for p in policies), len(policies)
+    return 0, 0
 
 
 def log_problems(path: Path, limit: int = 60) -> str:

@@ -29,7 +29,14 @@ from pathlib import Path
 
 import pytest
 from busy_core import one_core_busy
-from px4_zenoh_sitl import ROUTER_PORT, LinkWatch, log_problems, px4_zenoh, router_port_free
+from px4_zenoh_sitl import (
+    ROUTER_PORT,
+    LinkWatch,
+    log_problems,
+    px4_zenoh,
+    realtime_share,
+    router_port_free,
+)
 from scenario_flight import check_flight, fly, record_result
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
@@ -52,7 +59,7 @@ READY_S = 90.0  # PX4 start -> its preflight checks pass (a loaded 2-core machin
 def graph(tmp_path):
     assert router_port_free(), (
         f"port {ROUTER_PORT} is taken: PX4 dials it, so run this tier in a network namespace "
-        "of its own (unshare -rn, loopback up)"
+        "of its own (unshare -n as root, loopback up)"
     )
     log = open(tmp_path / "graph.log", "w")  # noqa: SIM115 (closed below)
     launcher = Launcher.from_file(REPO / "compose" / "px4_zenoh.yaml", out=log)
@@ -200,6 +207,7 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
     app = "color" if sim_graph == "sim_follow_color" else "person"
     assert router_port_free(), f"port {ROUTER_PORT} is taken: run in a network namespace"
     with px4_zenoh(tmp_path, echo=True) as firmware:  # zenoh-pico retries until the router is up
+        fifo, threads = realtime_share(tmp_path)
         variables = {"truth_port": firmware.variables["truth_port"]}
         if app == "person":
             variables["detector"] = detector
@@ -219,7 +227,10 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
                 start_timeout=120.0,
                 router=DEFAULT_ROUTER,
             )
-    print(f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}")
+    print(
+        f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}\n"
+        f"PX4's threads with real-time priority: {fifo} of {threads}"
+    )
     if os.environ.get(LINK_RECORD_ENV):
         link.dump(Path(os.environ[LINK_RECORD_ENV]))
     passed = passes(flight, max_acquire, min_centred, min_distance)
