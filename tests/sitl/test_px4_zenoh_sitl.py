@@ -8,7 +8,10 @@ a network namespace of its own (PX4 dials the router on 7447). The graph compose
   judged from what the app reads (height, distance flown, landed and disarmed);
 * follow-color (beacon_smooth) and follow-person (people_crossing_front) through
   compose/px4_zenoh_follow_{color,person}.yaml, judged from ground truth with the scenario
-  tier's thresholds, as tests/sitl/test_follow_sitl.py judges them through the MAVLink bridge;
+  tier's thresholds, as tests/sitl/test_follow_sitl.py judges them through the MAVLink bridge,
+  and failed when PX4 left OFFBOARD on its own (its offboard-loss failsafe cuts a flight short
+  with enough samples to pass); PX4's uORB ``offboard_control_mode`` is echoed back and timed
+  beside the router's view of the bridge's writes (``LinkWatch``);
 * the failsafe contract when the app is killed (SIGKILL) while streaming: the bridge holds
   within ``setpoint_timeout`` + a tick and asks PX4 to land after ``commander_lost_timeout``,
   and PX4 lands and disarms.
@@ -52,6 +55,7 @@ pytestmark = [pytest.mark.px4_zenoh, pytest.mark.timeout(300)]
 
 REPO = Path(__file__).resolve().parents[2]
 LINK_RECORD_ENV = "DRONEWRAPPER_PX4_LINK_RECORD"  # a file for the link's arrivals (JSON)
+LEFT_ON_ITS_OWN = "without a request from the bridge"  # the bridge's words when PX4 leaves
 READY_S = 90.0  # PX4 start -> its preflight checks pass (a loaded 2-core machine)
 
 
@@ -238,5 +242,8 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
     if not passed:
         print(f"PX4's log ({firmware.log}), warnings and errors:\n{log_problems(firmware.log)}")
     check_flight(flight, max_acquire, min_centred, min_distance)
+    # a flight PX4 cut short by its own failsafe (offboard lost: AUTO.RTL) may still have
+    # enough samples to pass the thresholds; it is not a pass through this bridge
+    assert LEFT_ON_ITS_OWN not in flight.log, f"PX4 left OFFBOARD on its own\n{flight.log[-3000:]}"
     if crossing:
         assert sum(crossed(x) for x in flight.samples) > 0, "no passer-by crossed: proves nothing"
