@@ -208,6 +208,10 @@ class LinkWatch:
         if self.px4_stamps:
             gap, _ = self.longest_pause(list(self.px4_stamps))
             parts.append(f"PX4 uORB stamps: longest pause {gap:.2f} s (PX4's clock)")
+            # a stall that lasts to the end of the record is no pause between two arrivals
+            last = self.times["PX4 uORB echo"][-1]
+            late = sum(t > last for t in self.times["bridge writes"])
+            parts.append(f"bridge writes after PX4's last echo: {late}")
         return "; ".join(parts)
 
     def dump(self, path: Path) -> None:
