@@ -132,6 +132,20 @@ def realtime_share(workdir: Path) -> tuple[int, int]:
     return 0, 0
 
 
+LEFT_ON_ITS_OWN = "without a request from the bridge"  # the bridge's words when PX4 leaves
+STOPPING = "SIGINT received"  # a graph's process told to stop: the flight is over
+
+
+def left_offboard_in_flight(graph_log: str) -> bool:
+    """True if the bridge saw PX4 leave OFFBOARD on its own (its offboard-loss failsafe)
+    before the graph began to stop: a flight cut short, which may still have enough samples
+    to pass the thresholds."""
+    lines = graph_log.splitlines()
+    left = next((i for i, line in enumerate(lines) if LEFT_ON_ITS_OWN in line), None)
+    stop = next((i for i, line in enumerate(lines) if STOPPING in line), len(lines))
+    return left is not None and left < stop
+
+
 def log_problems(path: Path, limit: int = 60) -> str:
     """The last ``limit`` WARN / ERROR lines of PX4's log (its own words: failsafes, zenoh)."""
     lines = path.read_text(errors="replace").splitlines() if path.is_file() else []

@@ -35,6 +35,7 @@ from busy_core import one_core_busy
 from px4_zenoh_sitl import (
     ROUTER_PORT,
     LinkWatch,
+    left_offboard_in_flight,
     log_problems,
     px4_zenoh,
     realtime_share,
@@ -55,7 +56,6 @@ pytestmark = [pytest.mark.px4_zenoh, pytest.mark.timeout(300)]
 
 REPO = Path(__file__).resolve().parents[2]
 LINK_RECORD_ENV = "DRONEWRAPPER_PX4_LINK_RECORD"  # a file for the link's arrivals (JSON)
-LEFT_ON_ITS_OWN = "without a request from the bridge"  # the bridge's words when PX4 leaves
 READY_S = 90.0  # PX4 start -> its preflight checks pass (a loaded 2-core machine)
 
 
@@ -242,8 +242,8 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
     if not passed:
         print(f"PX4's log ({firmware.log}), warnings and errors:\n{log_problems(firmware.log)}")
     check_flight(flight, max_acquire, min_centred, min_distance)
-    # a flight PX4 cut short by its own failsafe (offboard lost: AUTO.RTL) may still have
-    # enough samples to pass the thresholds; it is not a pass through this bridge
-    assert LEFT_ON_ITS_OWN not in flight.log, f"PX4 left OFFBOARD on its own\n{flight.log[-3000:]}"
+    assert not left_offboard_in_flight(flight.log), (
+        f"PX4 left OFFBOARD on its own during the flight\n{flight.log[-3000:]}"
+    )
     if crossing:
         assert sum(crossed(x) for x in flight.samples) > 0, "no passer-by crossed: proves nothing"
