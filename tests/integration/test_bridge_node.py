@@ -47,6 +47,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
+from dronewrapper_bridge_mavlink.outgoing import CommandLong, Send, SetPositionTargetLocalNed
 from support import client_node, free_port, wait_for
 
 OFFBOARD = 6 << 16
@@ -242,24 +243,27 @@ class TappedLink(MavLink):
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.log: list[tuple[float, str, tuple]] = []
+        self.log: list[tuple[float, Send]] = []
 
-    def send(self, name: str, *args, **kwargs) -> bool:
-        self.log.append((time.monotonic(), name, args))
-        return super().send(name, *args, **kwargs)
+    def send(self, message: Send) -> bool:
+        self.log.append((time.monotonic(), message))
+        return super().send(message)
 
     def setpoints(self, type_mask: int) -> list[float]:
         """Send times of the SET_POSITION_TARGET_LOCAL_NED with this type_mask."""
         return [
             t
-            for t, name, args in list(self.log)
-            if name == "set_position_target_local_ned" and args[4] == type_mask
+            for t, message in list(self.log)
+            if isinstance(message, SetPositionTargetLocalNed)
+            and message.target.type_mask == type_mask
         ]
 
     def command_times(self, command: int) -> list[float]:
         """Send times of the COMMAND_LONGs of this MAV_CMD (retries included)."""
         return [
-            t for t, name, args in list(self.log) if name == "command_long" and args[2] == command
+            t
+            for t, message in list(self.log)
+            if isinstance(message, CommandLong) and message.command == command
         ]
 
 

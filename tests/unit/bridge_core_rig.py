@@ -25,6 +25,7 @@ from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore
+from dronewrapper_bridge_mavlink.outgoing import encode
 
 PX4, ARDUPILOT = mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA
 OFFBOARD = 6 << 16
@@ -60,7 +61,6 @@ class CoreRig:
         self.core = BridgeCore(Config(**config), self.now)
         self.autopilot = autopilot
         self._to_bridge = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
-        self._from_bridge = mavlink.MAVLink(None, srcSystem=255, srcComponent=191)
         self._decoder = mavlink.MAVLink(None)
         self.custom_mode = AUTO_LOITER if autopilot == PX4 else ARDU_LOITER
         self.armed = False
@@ -131,9 +131,8 @@ class CoreRig:
 
     def _collect(self) -> None:
         out = self.core.take()
-        for name, fields in out.sends:
-            msg = getattr(self._from_bridge, f"{name}_encode")(*fields)
-            self.sent.append((self.now, msg))
+        for message in out.sends:
+            self.sent.append((self.now, encode(message)))
         for topic, msg in out.samples:
             self.samples.append((self.now, topic, msg))
 

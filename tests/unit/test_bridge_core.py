@@ -55,7 +55,7 @@ def test_px4s_second_ack_is_the_answer_not_a_duplicate():
         rig.ack(SET_MODE, ACCEPTED)
         rig.ack(SET_MODE, ACCEPTED)
         assert op.result().mode_sent, op.result()
-    assert rig.core.acks.duplicates == 0
+    assert rig.core.commands.acks.duplicates == 0
 
 
 def test_a_mode_acked_once_is_confirmed_by_heartbeat():

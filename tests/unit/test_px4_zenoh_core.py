@@ -17,6 +17,7 @@ from px4_zenoh_rig import (
     position,
     velocity,
 )
+from validation_count import count_validations
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
@@ -149,6 +150,14 @@ def test_an_invalid_setpoint_is_refused(rig):
     rig.setpoint(velocity(math.nan))
     assert rig.writes(t.TRAJECTORY) == []
     assert rig.published(registry.REFUSAL)[0].kind == "validation"
+
+
+def test_a_setpoint_is_validated_once_where_it_enters(rig, monkeypatch):
+    calls = count_validations(monkeypatch)
+    rig.flying_offboard()
+    rig.clear()
+    rig.setpoint(velocity(1.0))
+    assert len(rig.writes(t.TRAJECTORY)) == 1 and len(calls) == 1
 
 
 def test_a_setpoint_outside_the_envelope_is_refused():

@@ -42,11 +42,12 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
-from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
+from dronewrapper_bridge_base.setpoint_limits import Kind, kind_of
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
@@ -90,7 +91,7 @@ class Px4ZenohCore(GuidedCore):
         super().__init__(config, now, Outbox, log)
         self.config: Config = config
         self.versions = Versions(config.domain)
-        self.envelope = rules.EnvelopeState(config.envelope)
+        self.envelope = EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
         self.target_system = config.target_system  # 0 until vehicle_status names it
         self.target_component = config.target_component
@@ -314,7 +315,7 @@ class Px4ZenohCore(GuidedCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state or rules.breach_state(self),
+            failsafe=self.failsafe.state or self.envelope.breach_state(),
             commander=self.commander,
         )
 
@@ -361,11 +362,8 @@ class Px4ZenohCore(GuidedCore):
         return (self.position_enu, self.yaw_enu)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
-        try:
-            kind = validate(target, self.limits)
-        except SetpointError as exc:  # cannot happen for validated targets; never crash
-            log.error("setpoint conversion failed: %s", exc)
-            return
+        """Write an admitted ``target`` (validated where it entered, or the bridge's own)."""
+        kind = kind_of(target)
         self.write(t.OFFBOARD_MODE, trajectory.control_mode(kind))
         self.write(t.TRAJECTORY, trajectory.trajectory_setpoint(target, kind, self.yaw_enu))
         self.setpoints_sent += 1
