@@ -20,8 +20,9 @@ from collections.abc import Iterator
 
 os.environ.setdefault("MAVLINK20", "1")
 
-from looping_peer import LoopingPeer
 from pymavlink.dialects.v20 import common as mavlink
+
+from support import start_daemons, stop_daemons
 
 # PX4 custom modes (main mode << 16 | sub mode << 24; see sim/dronewrapper_sim/px4/modes.py)
 OFFBOARD = 6 << 16
@@ -37,7 +38,7 @@ def int_bits(value: int) -> float:
     return struct.unpack("<f", struct.pack("<i", value))[0]
 
 
-class AutopilotPeer(LoopingPeer):
+class AutopilotPeer:
     """A scripted autopilot sending to the bridge's ``udpin`` port from its own UDP socket."""
 
     def __init__(self, bridge_port: int, *, system: int = 1, telemetry: bool = True) -> None:
@@ -59,9 +60,11 @@ class AutopilotPeer(LoopingPeer):
         self.sent_poses = 0
         self._boot = time.monotonic()
         self._lock = threading.RLock()
-        self._start_loops()
+        self._stop = threading.Event()
+        self._threads = start_daemons(self._send_loop, self._recv_loop)
 
-    def _close_link(self) -> None:
+    def close(self) -> None:
+        stop_daemons(self._stop, self._threads)
         self.sock.close()
 
     # ---- sending ----

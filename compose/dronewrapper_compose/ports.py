@@ -51,6 +51,16 @@ def free_port(kind: str | int = "tcp", host: str = "127.0.0.1") -> int:
         return sock.getsockname()[1]
 
 
+def private_links() -> dict[str, str]:
+    """A simulated graph's autopilot links on free UDP ports (the ``onboard_port`` and
+    ``gcs_port`` variables), so that graphs side by side, or a ground station on 14550,
+    never hear each other's autopilot."""
+    return {
+        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
+        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+    }
+
+
 def choose_ports(ports: Mapping[str, str], values: Mapping[str, str]) -> dict[str, str]:
     """The port variables with ``auto`` replaced by free ports (others as given).
 

@@ -27,7 +27,6 @@ import pytest
 os.environ.setdefault("MAVLINK20", "1")
 
 from bridge_rig import reaches_bridge
-from looping_peer import LoopingPeer
 from pymavlink import mavutil
 from targets import velocity
 
@@ -49,7 +48,7 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
 from dronewrapper_bridge_mavlink.outgoing import CommandLong, Send, SetPositionTargetLocalNed
-from support import client_node, free_port, wait_for
+from support import client_node, free_port, start_daemons, stop_daemons, wait_for
 
 OFFBOARD = 6 << 16
 POSCTL = 3 << 16
@@ -59,7 +58,7 @@ AUTO_LOITER = (4 << 16) | (3 << 24)
 ARMED = 128
 
 
-class FakePX4(LoopingPeer):
+class FakePX4:
     """A scripted PX4 (or, with ``autopilot=3``, ArduCopter) on a real UDP socket: sends
     telemetry, answers commands, logs traffic.
 
@@ -91,10 +90,12 @@ class FakePX4(LoopingPeer):
         self.commands: list[tuple[float, object]] = []
         self.gcs_heartbeats = 0
         self.params = {"COM_OF_LOSS_T": (1.0, 9), "COM_RC_IN_MODE": (1, 6)}
+        self._stop = threading.Event()
         self._lock = threading.Lock()
-        self._start_loops()
+        self._threads = start_daemons(self._send_loop, self._recv_loop)
 
-    def _close_link(self) -> None:
+    def close(self) -> None:
+        stop_daemons(self._stop, self._threads)
         self.conn.close()
 
     def send(self, name: str, *args, **kw) -> None:

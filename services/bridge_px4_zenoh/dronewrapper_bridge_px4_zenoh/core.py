@@ -63,6 +63,7 @@ log = logging.getLogger("bridge_px4_zenoh")
 
 STREAM_GAP_S = 0.5  # s without a setpoint written: the stream has stopped (priming restarts)
 ENTERED_HOLD_S = 1.5  # s a status showing the mode an accepted command left is taken as stale
+# (and, whenever it arrives, one PX4 stamped before the command's ack: held on the way)
 COALESCED: tuple[t.Px4Topic, ...] = (t.ATTITUDE, t.LOCAL_POSITION, t.GLOBAL_POSITION, t.BATTERY)
 """PX4's high-rate topics, decoded at the tick from :attr:`Px4ZenohCore.inbox`, in this order
 (a pose needs the attitude)."""
@@ -103,7 +104,8 @@ class Px4ZenohCore(GuidedCore):
         self.samples_received = 0  # samples decoded
         self.last_sample_at = -math.inf
         self._reported: set[str] = set()  # topics whose mismatch was reported
-        self._entered = ("", "", -math.inf)  # (mode entered, mode left, until when)
+        self._entered = ("", "", -math.inf, 0)  # (mode entered, left, until when, ack's PX4 us)
+        self.last_ack_us = 0  # PX4's stamp of its newest vehicle_command_ack (us since boot)
         self._last_pose_pub = -math.inf
         self._last_global_pub = -math.inf
         self._last_send = -math.inf
@@ -235,6 +237,7 @@ class Px4ZenohCore(GuidedCore):
             self.ext = ext
         elif topic is t.COMMAND_ACK:
             self.acks.append((self.now, int(value["command"]), int(value["result"])))
+            self.last_ack_us = int(value["timestamp"])
             del self.acks[:-16]
 
     def _on_local_position(self, value: dict[str, Any]) -> None:
@@ -266,11 +269,12 @@ class Px4ZenohCore(GuidedCore):
         if self.status is None:
             return
         state = tm.state(self.status, connected=True, failsafe="", commander="")
-        mode, left, until = self._entered
-        if state.mode == left and self.now < until:  # sent before PX4 took the command
+        mode, left, until, acked_us = self._entered
+        older = int(self.status["timestamp"]) < acked_us  # PX4's clock: published before the ack
+        if state.mode == left and (older or self.now < until):  # sent before PX4 took it
             state = msgspec.structs.replace(state, mode=mode, guided=mode == "OFFBOARD")
         elif state.mode == mode:
-            self._entered = ("", "", -math.inf)  # confirmed
+            self._entered = ("", "", -math.inf, 0)  # confirmed
         self.heartbeat_state = state
         self.update_failsafe_vehicle()
         self.publish_state()
@@ -294,8 +298,10 @@ class Px4ZenohCore(GuidedCore):
         if hb is None or hb.mode == mode:
             return
         # a vehicle_status still showing the mode left is older than the ack: kept out for
-        # ENTERED_HOLD_S (it would have the failsafe stream OFFBOARD back on)
-        self._entered = (mode, hb.mode, self.now + ENTERED_HOLD_S)
+        # ENTERED_HOLD_S, and whenever it arrives if PX4 stamped it before the ack (a status
+        # held on the way would otherwise have the failsafe stream OFFBOARD back on, and a
+        # return refused as "left AUTO.RTL for OFFBOARD")
+        self._entered = (mode, hb.mode, self.now + ENTERED_HOLD_S, self.last_ack_us)
         self.heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=mode == "OFFBOARD")
         self.update_failsafe_vehicle()
         self.publish_state()
