@@ -22,6 +22,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from dronewrapper.msgs.lease import LeaseReply, LeaseRequest
 from dronewrapper.runtime.errors import ServiceError
@@ -173,3 +174,10 @@ class LeaseGate:
             self._last_refusal_log = now
             self._log.warning("refused %r: %s", commander, decision.reason(commander))
         return decision
+
+
+def commander_rules(config: Any) -> dict[str, Any]:
+    """The commander rules a bridge's config sets for its core (``PureCore``'s keywords): the
+    lease's ttl (s; None when ``command_lease`` is off) and the late-setpoint threshold (s)."""
+    ttl = config.command_lease_ttl_s if config.command_lease else None
+    return {"lease_ttl_s": ttl, "late_setpoint_s": config.late_setpoint_s}

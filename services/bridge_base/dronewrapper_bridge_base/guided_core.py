@@ -21,6 +21,7 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ExtendedState, PositionTarget, State
 from dronewrapper.msgs.sensor import BatteryState
 from dronewrapper.msgs.std import Header
+from dronewrapper_bridge_base.commander_lease import commander_rules
 from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.guided_failsafe import Failsafe, Tick, is_airborne
 from dronewrapper_bridge_base.setpoint_limits import Kind, validate
@@ -41,10 +42,7 @@ class GuidedCore(PureCore):
     def __init__(
         self, config: Any, now: float, outbox: Callable[[], Any], log: logging.Logger
     ) -> None:
-        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
-        super().__init__(
-            now, outbox, log, lease_ttl_s=lease_ttl_s, late_setpoint_s=config.late_setpoint_s
-        )
+        super().__init__(now, outbox, log, **commander_rules(config))
         self.config = config
         self.limits = config.limits
         self.failsafe = Failsafe(config.failsafe_config())

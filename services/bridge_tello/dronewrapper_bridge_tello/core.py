@@ -28,6 +28,7 @@ from dronewrapper.msgs.mavros import (
 )
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.commander_lease import commander_rules
 from dronewrapper_bridge_base.core_driver import PureCore
 from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_base.setpoint_limits import Kind
@@ -60,10 +61,7 @@ class TelloCore(PureCore):
     """The bridge's logic and state (see module docstring)."""
 
     def __init__(self, config: Config, now: float = 0.0) -> None:
-        lease_ttl_s = config.command_lease_ttl_s if config.command_lease else None
-        super().__init__(
-            now, Outbox, log, lease_ttl_s=lease_ttl_s, late_setpoint_s=config.late_setpoint_s
-        )
+        super().__init__(now, Outbox, log, **commander_rules(config))
         self.config = config
         self.scale = config.scale
         self.failsafe = Failsafe(config.failsafe_config())
