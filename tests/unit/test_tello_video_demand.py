@@ -5,6 +5,7 @@ node's CameraWatch sees; what the core sends is exactly what the Tello's port 88
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 
 import pytest
 from tello_core_rig import EPOCH, TelloRig
@@ -51,6 +52,14 @@ def video_rig(mode: str = "on_demand", **config) -> tuple[TelloRig, Viewers]:
 
 def video_commands(rig: TelloRig, since: float = float("-inf")) -> list[tuple[float, str]]:
     return [(at, t) for at, t in rig.sent if at >= since and t in ("streamon", "streamoff")]
+
+
+def video_after(rig: TelloRig, act: Callable[[], object], seconds: float) -> list[str]:
+    """The video commands sent while ``act()`` then ``seconds`` of running happen."""
+    since = rig.now
+    act()
+    rig.run(seconds)
+    return [t for _, t in video_commands(rig, since)]
 
 
 def test_nobody_watching_the_stream_is_switched_off_once_at_connection():
@@ -125,10 +134,7 @@ def test_a_failed_streamon_is_retried_then_given_up_until_the_demand_changes(ans
     del rig.script["streamon"]  # the Tello would accept now; a new demand tries again
     sub.undeclare()
     rig.run(IDLE + 1.0)
-    since = rig.now
-    viewers.subscribe()
-    rig.run(1.0)
-    assert [t for _, t in video_commands(rig, since)] == ["streamon"] and rig.video_on
+    assert video_after(rig, viewers.subscribe, 1.0) == ["streamon"] and rig.video_on
 
 
 def test_nothing_is_sent_for_the_video_while_the_tello_is_not_connected():
@@ -157,10 +163,7 @@ def test_a_reconnected_tello_gets_its_stream_switched_again():
     rig.run(3.0)
     assert not rig.core.connected
     rig.video_on, rig.streaming_state = False, True
-    since = rig.now
-    rig.connect()
-    rig.run(0.5)
-    assert [t for _, t in video_commands(rig, since)] == ["streamon"] and rig.video_on
+    assert video_after(rig, rig.connect, 0.5) == ["streamon"] and rig.video_on
 
 
 def test_the_video_never_goes_ahead_of_a_flight_command_nor_between_one_and_its_reply():
