@@ -1,11 +1,12 @@
 """MAVLink over UDP as PX4 SITL does it: one socket per link, replies to whoever talks to it.
 
-A link binds a local port (0 = ephemeral) and sends to a default remote (127.0.0.1:14540 for
-the onboard/API link, 127.0.0.1:14550 for the GCS link); as soon as a datagram arrives, the
-sender's address becomes the remote. Messages are MAVLink 2 (pymavlink's ``common`` dialect),
-from system ``sysid`` component 1, the messages of one wake-up in as few datagrams as fit; bytes that do not parse are counted and dropped. Each
-datagram is parsed on its own (a UDP datagram carries whole frames), so a datagram that ends in
-a partial or bogus frame header cannot swallow the start of the next one.
+A link binds a local port (0 = ephemeral) and sends to a default remote (127.0.0.1:14540 for the
+onboard/API link, 127.0.0.1:14550 for the GCS link); as soon as a datagram arrives, the sender's
+address becomes the remote. Messages are MAVLink 2 (pymavlink's ``common`` dialect), from system
+``sysid`` component 1, the messages of one wake-up in as few datagrams as fit; bytes that do not
+parse are counted and dropped. Each datagram is parsed on its own (a UDP datagram carries whole
+frames), so a datagram that ends in a partial or bogus frame header cannot swallow the start of
+the next one.
 
 With a signing key (:meth:`MavlinkUdpLink.set_signing_key`, policy in ``px4/signing.py``) the
 link signs what it sends and drops what arrives unsigned, wrongly signed or replayed

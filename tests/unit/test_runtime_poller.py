@@ -121,7 +121,7 @@ def test_a_failing_member_leaves_alone_and_the_others_go_on():
 
 
 def test_a_member_leaves_when_stopped_and_the_thread_ends_with_the_last():
-    clock, _sockets, poller, sims, bridges = fleet(2)
+    clock, _sockets, poller, sims, _bridges = fleet(2)
     first, second = threading.Event(), threading.Event()
     poller.add(sims[0], first, lambda exc: None, due=1000.02)
     poller.add(sims[1], second, lambda exc: None, due=1000.02)

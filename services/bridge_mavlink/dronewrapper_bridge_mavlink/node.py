@@ -1,17 +1,18 @@
 """The bridge process: MAVLink autopilot <-> MAVROS-equivalent Zenoh keys (see README.md).
 
 Only I/O here: the link, the ground-station forwarding, the threads. Everything the bridge
-decides (the commander lease included) is in :class:`~dronewrapper_bridge_mavlink.core.BridgeCore`
-(pure, time as an argument); the wiring every bridge shares (driver, publishers, services,
-setpoints, tick loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a
-receive loop (MAVLink in; in a host, a UDP link's socket is read by the host's one loop thread
-instead, :func:`~dronewrapper.runtime.host.shared_poller`), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
-stream, our heartbeat, periodic samples; in a host, its one thread ticking every hosted
-bridge, :func:`~dronewrapper.runtime.host.shared_ticker`), Zenoh callbacks (setpoints
-forwarded at once) and the Node's service workers, which start an operation in the core and
-wait until it is done. Time is the node's clock alone: the core starts at it, the driver and
-the loops read and wait on it, and it makes the loops' threads (on a fake bus they run in its
-virtual time).
+decides (the commander lease included) is in
+:class:`~dronewrapper_bridge_mavlink.core.BridgeCore` (pure, time as an argument); the wiring
+every bridge shares (driver, publishers, services, setpoints, tick loop) is
+:class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a receive loop (MAVLink in;
+in a host, a UDP link's socket is read by the host's one loop thread instead,
+:func:`~dronewrapper.runtime.host.shared_poller`), a stream loop at ``stream_rate_hz`` (the
+core's tick: failsafe stream, our heartbeat, periodic samples; in a host, its one thread ticking
+every hosted bridge, :func:`~dronewrapper.runtime.host.shared_ticker`), Zenoh callbacks
+(setpoints forwarded at once) and the Node's service workers, which start an operation in the
+core and wait until it is done. Time is the node's clock alone: the core starts at it, the
+driver and the loops read and wait on it, and it makes the loops' threads (on a fake bus they
+run in its virtual time).
 """
 
 from __future__ import annotations
