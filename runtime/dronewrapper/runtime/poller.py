@@ -29,6 +29,7 @@ import select
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Protocol
 
 from dronewrapper.runtime.clock import REAL, Clock
@@ -153,7 +154,7 @@ class Poller:
         now = self.clock.monotonic()
         for entry in entries:
             if entry.due <= now and not entry.stop.is_set():
-                self._call(entry, lambda e=entry: setattr(e, "due", e.item.on_due(now)))
+                self._call(entry, partial(self._wake, entry, now))
         by_fd: dict[int, _Entry] = {}
         for entry in entries:
             if not entry.stop.is_set():
@@ -171,8 +172,12 @@ class Poller:
         for fd in ready:
             entry = by_fd[fd]
             if not entry.stop.is_set():
-                self._call(entry, lambda e=entry: self._read(e))
+                self._call(entry, partial(self._read, entry))
         return True
+
+    @staticmethod
+    def _wake(entry: _Entry, now: float) -> None:
+        entry.due = entry.item.on_due(now)
 
     @staticmethod
     def _read(entry: _Entry) -> None:
