@@ -12,13 +12,31 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from typing import Protocol
 
+from dronewrapper.runtime.clock import Clock
 from dronewrapper.runtime.poller import NO_FILE, Poller
+from dronewrapper_sim.mavlink_io import MavlinkUdpLink
 
-if TYPE_CHECKING:
-    from dronewrapper_sim.mavlink_io import MavlinkUdpLink
-    from dronewrapper_sim.runner import SimRunner
+
+class SimRunner(Protocol):
+    """What the loop needs of a :class:`dronewrapper_sim.runner.SimRunner`."""
+
+    @property
+    def links(self) -> Mapping[str, MavlinkUdpLink]: ...
+
+    @property
+    def time(self) -> Clock: ...
+
+    def begin(self) -> None: ...
+
+    def next_wake(self) -> float: ...
+
+    def wake(self, now: float) -> float: ...
+
+    def receive(self, link: MavlinkUdpLink) -> None: ...
+
 
 WAIT_S = 1.0
 """How often the member's own thread looks for a stop while the loop runs it (s)."""

@@ -154,8 +154,8 @@ class Bridge(BridgeNode[BridgeCore]):
         serve_services(self)
         clock, stop = self.node.clock, self.node.stop_event
         threads = [clock.thread(self._link_status_loop, "link-status")]
-        poller = shared_poller() if self.link.is_udp else None  # a host's, for its members
-        if poller is not None:
+        poller = shared_poller()  # a host's, for its members (None outside a host)
+        if poller is not None and self.link.is_udp:
             poller.add(SharedReceive(self), stop, self.failures.append, due=math.inf)
         else:
             threads.append(clock.thread(self._receive_loop, "mavlink-rx"))
