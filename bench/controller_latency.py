@@ -16,7 +16,6 @@ Run: ``python -m bench.controller_latency [--seconds 30]``; writes results/contr
 from __future__ import annotations
 
 import math
-import socket
 import sys
 import threading
 import time
@@ -30,7 +29,7 @@ from dronewrapper.msgs.mavros import MASK_VELOCITY, PositionTarget
 from dronewrapper.msgs.vision import Detections
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.config import load_config
-from dronewrapper_compose.ports import free_port
+from dronewrapper_compose.ports import free_port, private_links
 
 REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
@@ -142,8 +141,7 @@ def through_graph(graph: str, scenario: str, detector: str, seconds: float) -> d
     router = f"tcp/127.0.0.1:{free_port()}"
     variables = {
         "scenario": scenario,
-        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
-        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        **private_links(),
         "on_exit": "stop",
     }
     if graph == "sim_follow_person":

@@ -9,7 +9,6 @@ Run: ``python -m bench.graph_cpu [--seconds 20]``; writes bench/results/graph_cp
 from __future__ import annotations
 
 import os
-import socket
 import sys
 import time
 from pathlib import Path
@@ -17,7 +16,7 @@ from pathlib import Path
 from bench import common
 from bench.common import print_table, write_results
 from dronewrapper.runtime.arguments import CommandParser, first_line
-from dronewrapper_compose.ports import free_port
+from dronewrapper_compose.ports import free_port, private_links
 
 REPO = Path(__file__).resolve().parents[1]
 GRAPHS = [
@@ -49,8 +48,7 @@ def measure(
 
     variables = {
         "scenario": scenario,
-        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
-        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        **private_links(),
         "on_exit": "stop",
         **(extra or {}),
     }

@@ -86,28 +86,27 @@ def pong() -> None:
     rospy.signal_shutdown("done")
 
 
-def context_switches(pid: int) -> int:
-    """Voluntary + involuntary context switches of every thread of ``pid`` so far."""
+def _summed(pid: int, name: str, marker: str) -> int:
+    """The sum of the last field of the lines holding ``marker`` in ``/proc/PID/task/*/name``
+    (every thread of ``pid``; one that ended meanwhile is passed over)."""
     total = 0
     for task in os.listdir(f"/proc/{pid}/task"):
         try:
-            with open(f"/proc/{pid}/task/{task}/status") as status:
-                total += sum(int(line.split()[-1]) for line in status if "ctxt_switches:" in line)
+            with open(f"/proc/{pid}/task/{task}/{name}") as lines:
+                total += sum(int(line.split()[-1]) for line in lines if marker in line)
         except (FileNotFoundError, ProcessLookupError):
             continue
     return total
+
+
+def context_switches(pid: int) -> int:
+    """Voluntary + involuntary context switches of every thread of ``pid`` so far."""
+    return _summed(pid, "status", "ctxt_switches:")
 
 
 def migrations(pid: int) -> int:
     """Moves of ``pid``'s threads from one CPU to another so far (``se.nr_migrations``)."""
-    total = 0
-    for task in os.listdir(f"/proc/{pid}/task"):
-        try:
-            with open(f"/proc/{pid}/task/{task}/sched") as sched:
-                total += sum(int(line.split()[-1]) for line in sched if "nr_migrations" in line)
-        except (FileNotFoundError, ProcessLookupError):
-            continue
-    return total
+    return _summed(pid, "sched", "nr_migrations")
 
 
 MIGRATIONS: dict[str, float] = {}

@@ -25,12 +25,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import shutil
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import zenoh
@@ -151,6 +154,33 @@ def serve_raw(options: ZenohOptions) -> None:
             pass
 
 
+def timed_pings(
+    put: Callable[[Any], object],
+    make: Callable[[], Any],
+    got: threading.Event,
+    samples: int,
+    warmup: int,
+    what: str,
+    within_s: float = math.inf,
+) -> list[float]:
+    """Round trips (s) of ``put(make())`` until ``got`` is set (``make`` is not timed),
+    ``warmup`` untimed ones first; fewer than ``samples`` once ``within_s`` real s went by."""
+    rtts = []
+    deadline = time.monotonic() + within_s
+    for i in range(warmup + samples):
+        got.clear()
+        msg = make()
+        t0 = time.perf_counter()
+        put(msg)
+        if not got.wait(2.0):
+            raise RuntimeError(f"{what} ping {i} got no pong within 2 s")
+        if i >= warmup:
+            rtts.append(time.perf_counter() - t0)
+        if time.monotonic() > deadline:
+            break
+    return rtts
+
+
 def raw_round_trips(session: zenoh.Session, kind: str, samples: int, warmup: int = 50):
     """Round trips of plain bytes of the typed message's size (the Zenoh-only floor)."""
     got = threading.Event()
@@ -162,15 +192,7 @@ def raw_round_trips(session: zenoh.Session, kind: str, samples: int, warmup: int
     sub = session.declare_subscriber(_key(kind, PONG_NS), on_pong)
     pub = session.declare_publisher(_key(kind, PING_NS), **BLOCK)
     payload = bytes(len(codec.encode(make_message(kind))))
-    rtts = []
-    for i in range(warmup + samples):
-        got.clear()
-        t0 = time.perf_counter()
-        pub.put(payload)
-        if not got.wait(2.0):
-            raise RuntimeError(f"raw {kind} ping {i} got no pong within 2 s")
-        if i >= warmup:
-            rtts.append(time.perf_counter() - t0)
+    rtts = timed_pings(pub.put, lambda: payload, got, samples, warmup, f"raw {kind}")
     sub.undeclare()
     pub.undeclare()
     return rtts
@@ -221,20 +243,7 @@ def round_trips(node: Node, kind: str, samples: int, warmup: int = 50) -> list[f
     got = threading.Event()
     node.subscribe(_topic(kind), lambda _m: got.set(), key=_key(kind, PONG_NS))
     pub = node.publisher(_topic(kind), key=_key(kind, PING_NS), qos=BLOCK)
-    rtts = []
-    deadline = time.monotonic() + 120
-    for i in range(warmup + samples):
-        got.clear()
-        msg = make_message(kind)
-        t0 = time.perf_counter()
-        pub.put(msg)
-        if not got.wait(2.0):
-            raise RuntimeError(f"{kind} ping {i} got no pong within 2 s")
-        if i >= warmup:
-            rtts.append(time.perf_counter() - t0)
-        if time.monotonic() > deadline:
-            break
-    return rtts
+    return timed_pings(pub.put, lambda: make_message(kind), got, samples, warmup, kind, 120.0)
 
 
 def throughput(node: Node, sink: Peer, kind: str, seconds: float) -> dict[str, float]:

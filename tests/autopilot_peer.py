@@ -22,6 +22,8 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from support import start_daemons, stop_daemons
+
 # PX4 custom modes (main mode << 16 | sub mode << 24; see sim/dronewrapper_sim/px4/modes.py)
 OFFBOARD = 6 << 16
 AUTO_LOITER = (4 << 16) | (3 << 24)
@@ -59,17 +61,10 @@ class AutopilotPeer:
         self._boot = time.monotonic()
         self._lock = threading.RLock()
         self._stop = threading.Event()
-        self._threads = [
-            threading.Thread(target=self._send_loop, daemon=True),
-            threading.Thread(target=self._recv_loop, daemon=True),
-        ]
-        for thread in self._threads:
-            thread.start()
+        self._threads = start_daemons(self._send_loop, self._recv_loop)
 
     def close(self) -> None:
-        self._stop.set()
-        for thread in self._threads:
-            thread.join(2)
+        stop_daemons(self._stop, self._threads)
         self.sock.close()
 
     # ---- sending ----

@@ -11,11 +11,15 @@ bus, its blocking calls moving the bus time.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 from clocked_autopilot import ClockedAutopilot
 
 from dronewrapper import DroneWrapper
+from dronewrapper.geodesy import to_enu
+from dronewrapper.plan import read_plan
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.node import PORTS, Bridge
@@ -23,6 +27,10 @@ from dronewrapper_sim.px4.autopilot import AutopilotConfig
 
 EPOCH = 1.7e9
 """The bus's start (s); the autopilot's time 0."""
+HOME = (47.397742, 8.545594)
+"""The simulator's home (latitude, longitude, degrees)."""
+ACCEPTANCE_M = 2.0
+"""The autopilot's acceptance radius of a waypoint whose own is 0 (NAV_ACC_RAD, m)."""
 
 
 class SimBridge:
@@ -110,3 +118,22 @@ class SimSdk:
     def close(self) -> None:
         self.drone.close()
         self.pair.close()
+
+
+def returning_sim(return_alt: float) -> Iterator[SimSdk]:
+    """A fixture's body: a :class:`SimSdk` whose autopilot returns at ``return_alt`` m,
+    descends to 3 m over home and lands at once; closed after the test."""
+    rig = SimSdk(
+        params={"RTL_RETURN_ALT": return_alt, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0}
+    )
+    yield rig
+    rig.close()
+
+
+def assert_each_waypoint_passed(sim: SimSdk, plan: Path, start: float) -> None:
+    """The ground truth since ``start`` came within :data:`ACCEPTANCE_M` of each
+    NAV_WAYPOINT of the QGroundControl ``plan`` (frame 3: m above home)."""
+    for wp in read_plan(plan).waypoints:
+        if wp.command == 16:
+            east, north = to_enu(HOME, wp.x_lat, wp.y_long)
+            assert sim.pair.closest_approach((east, north, wp.z_alt), start) <= ACCEPTANCE_M, wp

@@ -21,6 +21,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.runtime.clock import Clock
 from dronewrapper_bridge_mavlink.link import LinkCounts, Received
+from dronewrapper_bridge_mavlink.outgoing import Send, encode
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 
 PHYSICS_S = 1.0 / 250.0
@@ -91,12 +92,11 @@ class ClockedAutopilot:
     def write_raw(self, frame: bytes) -> None:
         raise OSError("no ground station on this link")
 
-    def send(self, name: str, *fields: Any) -> bool:
-        """The bridge's message ``name``, as bytes to the autopilot; its replies queued."""
+    def send(self, message: Send) -> bool:
+        """One of the bridge's messages, as bytes to the autopilot; its replies queued."""
         with self._lock:
             self._catch_up()
-            msg = getattr(self._bridge_out, f"{name}_encode")(*fields)
-            data = msg.pack(self._bridge_out)
+            data = encode(message).pack(self._bridge_out)
             self._bridge_out.seq = (self._bridge_out.seq + 1) % 256
             self._bytes_out += len(data)
             for parsed in self._at_autopilot.parse_buffer(data) or []:

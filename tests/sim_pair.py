@@ -27,6 +27,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore
+from dronewrapper_bridge_mavlink.outgoing import encode
 from dronewrapper_sim.px4.autopilot import Autopilot, AutopilotConfig
 
 PHYSICS_HZ = 250.0
@@ -93,9 +94,8 @@ class SimPair:
         out = self.core.take()
         for topic, msg in out.samples:
             self.samples.append((self.t, topic, msg))
-        for name, fields in out.sends:
-            msg = getattr(self._bridge_out, f"{name}_encode")(*fields)
-            buf = msg.pack(self._bridge_out)
+        for message in out.sends:
+            buf = encode(message).pack(self._bridge_out)
             self._bridge_out.seq = (self._bridge_out.seq + 1) % 256
             for decoded in self._decode_at_ap.parse_buffer(buf) or []:
                 if self.drop_to_autopilot(decoded):

@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -123,6 +124,38 @@ class Process:
                 self.proc.wait(5)
         self._log.close()
         return self.proc.returncode
+
+
+def station_process(router: str, log_dir: Path) -> tuple[Process, str]:
+    """The ground station as its own process on a free loopback port, connected to ``router``
+    (its log ``station.log`` in ``log_dir``): the process and its page's URL, served once
+    :func:`station_serving` returned."""
+    port = free_port()
+    station = Process(
+        python_module("dronewrapper_ground_station", "--connect", router, "--port", str(port)),
+        log_dir / "station.log",
+    )
+    return station, f"http://127.0.0.1:{port}/"
+
+
+def station_serving(station: Process) -> None:
+    """Wait (30 s at most) until ``station`` says its page is open."""
+    wait_for(lambda: "station: open" in station.output(), 30, what="the station to serve")
+
+
+def start_daemons(*targets: Callable[[], object]) -> list[threading.Thread]:
+    """A started daemon thread for each of ``targets`` (a test peer's loops)."""
+    threads = [threading.Thread(target=target, daemon=True) for target in targets]
+    for thread in threads:
+        thread.start()
+    return threads
+
+
+def stop_daemons(stop: threading.Event, threads: list[threading.Thread]) -> None:
+    """Set ``stop`` (what the loops of ``threads`` watch) and wait up to 2 s for each."""
+    stop.set()
+    for thread in threads:
+        thread.join(2)
 
 
 def python_module(module: str, *args: str) -> list[str]:

@@ -17,7 +17,6 @@ The processes' own logs go to ``out/demo/graph.log``.
 from __future__ import annotations
 
 import math
-import socket
 import sys
 import threading
 import time
@@ -32,7 +31,7 @@ from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.graph import REPO
 from dronewrapper_compose.launcher import Launcher, LaunchError
-from dronewrapper_compose.ports import free_port
+from dronewrapper_compose.ports import free_port, private_links
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_sim.evaluation.metrics import (
     FollowSample,
@@ -221,8 +220,7 @@ def run_demo(
     router = f"tcp/127.0.0.1:{free_port()}"
     variables = {
         "scenario": scenario,
-        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
-        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        **private_links(),
         "on_exit": "land",
         "debug_image": "true" if video else "false",
     }

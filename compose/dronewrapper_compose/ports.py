@@ -83,6 +83,16 @@ def free_fixed_port(kind: str = "udp", host: str = "127.0.0.1", tries: int = 200
     return free_port(kind, host)
 
 
+def private_links() -> dict[str, str]:
+    """A simulated graph's autopilot links on free UDP ports (the ``onboard_port`` and
+    ``gcs_port`` variables), so that graphs side by side, or a ground station on 14550,
+    never hear each other's autopilot."""
+    return {
+        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
+        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+    }
+
+
 def choose_ports(ports: Mapping[str, str], values: Mapping[str, str]) -> dict[str, str]:
     """The port variables with ``auto`` replaced by free ports (others as given).
 

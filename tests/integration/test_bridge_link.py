@@ -8,6 +8,7 @@ import time
 import pytest
 
 from dronewrapper_bridge_mavlink.link import MavLink
+from dronewrapper_bridge_mavlink.outgoing import Heartbeat
 from support import free_port
 
 
@@ -16,8 +17,8 @@ def exchange(a: MavLink, b: MavLink, timeout: float = 5.0) -> tuple[object, obje
     got: dict[str, object] = {}
     deadline = time.monotonic() + timeout
     while len(got) < 2 and time.monotonic() < deadline:
-        a.send("heartbeat", 6, 8, 0, 0, 4)
-        b.send("heartbeat", 2, 12, 29, 0, 3)
+        a.send(Heartbeat(6, 8, 0, 0, 4))
+        b.send(Heartbeat(2, 12, 29, 0, 3))
         for name, link in (("a", a), ("b", b)):
             msg = link.recv(0.05)
             if msg is not None and msg.get_type() == "HEARTBEAT":
@@ -40,7 +41,7 @@ def test_url_kinds_talk_both_ways(server, client):
     b.open()
     try:
         if server.startswith("udp"):  # a udpin link answers whoever spoke first
-            b.send("heartbeat", 2, 12, 29, 0, 3)
+            b.send(Heartbeat(2, 12, 29, 0, 3))
         from_b, from_a = exchange(a, b)
         assert from_b.get_srcSystem() == 1 and from_b.autopilot == 12
         assert from_a.get_srcSystem() == 255 and from_a.type == 6
@@ -54,7 +55,7 @@ def test_bad_url_raises_and_closed_link_is_quiet():
     with pytest.raises((OSError, ValueError)):
         link.open()
     assert not link.is_open
-    assert link.send("heartbeat", 6, 8, 0, 0, 4) is False
+    assert link.send(Heartbeat(6, 8, 0, 0, 4)) is False
     assert link.recv(0.01) is None
 
 
@@ -78,7 +79,7 @@ def test_serial_device_with_baud_over_a_pty():
         while msg is None and time.monotonic() < deadline:
             msg = link.recv(0.1)
         assert msg is not None and msg.get_type() == "HEARTBEAT" and msg.autopilot == 12
-        assert link.send("heartbeat", 6, 8, 0, 0, 4)
+        assert link.send(Heartbeat(6, 8, 0, 0, 4))
         parser = mavlink2.MAVLink(None)
         got = None
         while got is None and time.monotonic() < deadline:

@@ -14,6 +14,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.security.keystore import KeyStore
 from dronewrapper_bridge_mavlink.link import MavLink
+from dronewrapper_bridge_mavlink.outgoing import Heartbeat
 from dronewrapper_sim.mavlink_io import signing_timestamp
 from support import free_port
 
@@ -55,7 +56,7 @@ def test_keyed_link_signs_and_rejects(keyed_link):
     vehicle.sendto(_heartbeat(genuine, 1), bridge)
     assert [m.custom_mode for m in _received(link, 1)] == [1]
     # what the bridge sends back is signed with the key
-    link.send("heartbeat", 6, 8, 0, 0, 4)
+    link.send(Heartbeat(6, 8, 0, 0, 4))
     data, _ = vehicle.recvfrom(65535)
     checker = encoder(key)
     checker.signing.timestamp = 0

@@ -47,7 +47,8 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.node import Bridge, Config
-from support import client_node, free_port, wait_for
+from dronewrapper_bridge_mavlink.outgoing import CommandLong, Send, SetPositionTargetLocalNed
+from support import client_node, free_port, start_daemons, stop_daemons, wait_for
 
 OFFBOARD = 6 << 16
 POSCTL = 3 << 16
@@ -91,17 +92,10 @@ class FakePX4:
         self.params = {"COM_OF_LOSS_T": (1.0, 9), "COM_RC_IN_MODE": (1, 6)}
         self._stop = threading.Event()
         self._lock = threading.Lock()
-        self._threads = [
-            threading.Thread(target=self._send_loop, daemon=True),
-            threading.Thread(target=self._recv_loop, daemon=True),
-        ]
-        for t in self._threads:
-            t.start()
+        self._threads = start_daemons(self._send_loop, self._recv_loop)
 
     def close(self) -> None:
-        self._stop.set()
-        for t in self._threads:
-            t.join(2)
+        stop_daemons(self._stop, self._threads)
         self.conn.close()
 
     def send(self, name: str, *args, **kw) -> None:
@@ -242,24 +236,27 @@ class TappedLink(MavLink):
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.log: list[tuple[float, str, tuple]] = []
+        self.log: list[tuple[float, Send]] = []
 
-    def send(self, name: str, *args, **kwargs) -> bool:
-        self.log.append((time.monotonic(), name, args))
-        return super().send(name, *args, **kwargs)
+    def send(self, message: Send) -> bool:
+        self.log.append((time.monotonic(), message))
+        return super().send(message)
 
     def setpoints(self, type_mask: int) -> list[float]:
         """Send times of the SET_POSITION_TARGET_LOCAL_NED with this type_mask."""
         return [
             t
-            for t, name, args in list(self.log)
-            if name == "set_position_target_local_ned" and args[4] == type_mask
+            for t, message in list(self.log)
+            if isinstance(message, SetPositionTargetLocalNed)
+            and message.target.type_mask == type_mask
         ]
 
     def command_times(self, command: int) -> list[float]:
         """Send times of the COMMAND_LONGs of this MAV_CMD (retries included)."""
         return [
-            t for t, name, args in list(self.log) if name == "command_long" and args[2] == command
+            t
+            for t, message in list(self.log)
+            if isinstance(message, CommandLong) and message.command == command
         ]
 
 

@@ -11,7 +11,6 @@ last (its replay puts recorded telemetry on the bus).
 from __future__ import annotations
 
 import os
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -21,6 +20,7 @@ from doc_snippets import ASYNCIO, LISTING, PLAN, RECORDING, Run, adapt, snippets
 from key_store import issued_store
 
 from dronewrapper_compose.launcher import Launcher
+from dronewrapper_compose.ports import private_links
 from support import free_endpoint, free_port
 
 pytestmark = pytest.mark.integration
@@ -47,8 +47,7 @@ def graph(tmp_path_factory):
     store = issued_store(root / "keys", roles)
     router, tls = free_endpoint(), f"tls/127.0.0.1:{free_port()}"
     variables = {
-        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
-        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        **private_links(),
     }
     with open(root / "graph.log", "w") as log:
         launcher = Launcher.from_file(

@@ -71,13 +71,15 @@ def test_ground_station_over_udp_and_zenoh_and_its_acks_are_not_ours(router, spa
             wait_for(lambda: commands_from_qgc(rig.peer, ARM), 10, what="QGC's command")
 
             # an acknowledgement addressed to QGC (255/190) is not the bridge's (255/191)
-            before = rig.bridge.core.acks.unsolicited
+            before = rig.bridge.core.commands.acks.unsolicited
             to_qgc = mavlink.MAVLink_command_ack_message(ARM, 0, 0, 0, 255, 190)
             rig.bridge._on_command_ack(to_qgc, time.time(), time.monotonic())
-            assert rig.bridge.core.acks.unsolicited == before
+            assert rig.bridge.core.commands.acks.unsolicited == before
             ours = mavlink.MAVLink_command_ack_message(ARM, 0, 0, 0, 255, 191)
             rig.bridge._on_command_ack(ours, time.time(), time.monotonic())
-            assert rig.bridge.core.acks.unsolicited == before + 1  # ours, though nothing waited
+            assert (
+                rig.bridge.core.commands.acks.unsolicited == before + 1
+            )  # ours, though nothing waited
 
             # Zenoh: frames arrive batched; frames sent back reach the autopilot
             batches: list[MavlinkFrames] = []

@@ -23,7 +23,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper.msgs.mavros import MASK_VELOCITY
 from dronewrapper_sim.px4 import params
 from dronewrapper_sim.px4.modes import Mode
-from support import python_module, wait_for
+from support import python_module, start_daemons, stop_daemons, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -50,12 +50,7 @@ class MavClient(MessageLog):
         self.setpoint_period = 0.05
         self.last_setpoint_sent = 0.0
         self.heartbeats_sent = 0
-        self._threads = [
-            threading.Thread(target=self._read, daemon=True),
-            threading.Thread(target=self._stream, daemon=True),
-        ]
-        for thread in self._threads:
-            thread.start()
+        self._threads = start_daemons(self._read, self._stream)
 
     def _read(self) -> None:
         last_hb = 0.0
@@ -103,9 +98,7 @@ class MavClient(MessageLog):
         self.sock.sendto(data, self.peer)
 
     def close(self) -> None:
-        self._stop.set()
-        for thread in self._threads:
-            thread.join(2)
+        stop_daemons(self._stop, self._threads)
         self.sock.close()
 
     # ---- reading: MessageLog ----

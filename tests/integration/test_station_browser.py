@@ -34,6 +34,8 @@ from support import (
     free_endpoint,
     free_port,
     python_module,
+    station_process,
+    station_serving,
     wait_for,
 )
 
@@ -117,11 +119,7 @@ def _stops_and_holds(driver, truth) -> None:
 
 def test_fly_from_the_page(tmp_path: Path) -> None:
     with sim_with_beacon(tmp_path) as router:
-        port = free_port()
-        station = Process(
-            python_module("dronewrapper_ground_station", "--connect", router, "--port", str(port)),
-            tmp_path / "station.log",
-        )
+        station, page = station_process(router, tmp_path)
         try:
             with (
                 client_node(router, name="test_station") as node,
@@ -130,10 +128,8 @@ def test_fly_from_the_page(tmp_path: Path) -> None:
                 truth = node.latest(registry.SIM_GROUND_TRUTH)
                 beacon = node.latest(registry.SIM_OBJECT_POSE, name="target")
                 wait_for(lambda: truth.fresh(1.0) and beacon.fresh(1.0), 20, what="the sim")
-                wait_for(
-                    lambda: "station: open" in station.output(), 30, what="the station to serve"
-                )
-                driver.get(f"http://127.0.0.1:{port}/")
+                station_serving(station)
+                driver.get(page)
 
                 # loads, finds the drone, shows video that changes; both cameras
                 wait_for(lambda: _page(driver, "window.station.frames") >= 3, 30, what="frames")

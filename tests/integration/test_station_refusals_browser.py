@@ -16,7 +16,7 @@ from selenium.webdriver.common.by import By
 
 from dronewrapper import DroneWrapper
 from dronewrapper_ground_station.browser import chromium, console_errors
-from support import Process, free_port, python_module, wait_for
+from support import station_process, station_serving, wait_for
 
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(240)]
 
@@ -27,20 +27,14 @@ def _page(driver, script: str):
 
 def test_a_refused_teleop_is_listed_under_the_buttons(tmp_path: Path) -> None:
     with sim_graph(tmp_path, variables=["command_lease=true"]) as (router, _):
-        port = free_port()
-        station = Process(
-            python_module("dronewrapper_ground_station", "--connect", router, "--port", str(port)),
-            tmp_path / "station.log",
-        )
+        station, page = station_process(router, tmp_path)
         try:
             with (
                 DroneWrapper("drone", router, timeout=30, commander="ada") as ada,
                 chromium(tmp_path / "profile") as driver,
             ):
-                wait_for(
-                    lambda: "station: open" in station.output(), 30, what="the station to serve"
-                )
-                driver.get(f"http://127.0.0.1:{port}/")
+                station_serving(station)
+                driver.get(page)
                 wait_for(lambda: _page(driver, "window.station.ns") == "drone", 30, what="drone")
                 assert _page(driver, "window.station.role") == "operator"
                 assert driver.find_element(By.ID, "refusals").text == ""

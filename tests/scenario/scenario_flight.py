@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import socket
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -28,6 +27,7 @@ from dronewrapper.runtime.node import open_session
 from dronewrapper.runtime.options import ZenohOptions
 from dronewrapper_compose.graph import Graph, load_graph
 from dronewrapper_compose.launcher import Launcher, build_argv
+from dronewrapper_compose.ports import private_links
 from dronewrapper_controller.config import Config as ControllerConfig
 from dronewrapper_sim.evaluation.metrics import (
     TRACKING_STATES,
@@ -207,8 +207,7 @@ def fly(
     router = router or f"tcp/127.0.0.1:{free_port()}"
     values = {
         "scenario": scenario,
-        "onboard_port": str(free_port(socket.SOCK_DGRAM)),
-        "gcs_port": str(free_port(socket.SOCK_DGRAM)),
+        **private_links(),
         "on_exit": "stop",
         **(variables or {}),
     }

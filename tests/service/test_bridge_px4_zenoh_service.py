@@ -2,8 +2,9 @@
 real PX4 SIH's recorded tokens and CDR samples (tests/data/px4_zenoh/sih_ground.json), which
 answers the bridge's vehicle commands as PX4's commander does (an ack, then the new arming or
 nav state). Held here: the wiring both ways (PX4's samples to the MAVROS-equivalent keys; a
-commander's setpoint to PX4's exact key as CDR with rmw_zenoh's attachment), the bridge's own
-liveliness tokens, a service answered by PX4's ack, and a doctored token refused by name."""
+commander's setpoint to PX4's exact key as CDR with rmw_zenoh's attachment), the writes to PX4
+declared as commands (never dropped nor batched on the way), the bridge's own liveliness
+tokens, a service answered by PX4's ack, and a doctored token refused by name."""
 
 from __future__ import annotations
 
@@ -67,6 +68,7 @@ class Px4Session(RosSession):
 
     def __init__(self) -> None:
         super().__init__()
+        self.publisher_qos: dict[str, dict[str, Any]] = {}
         self.status_key = next(k for k in RECORDING["samples"] if "/vehicle_status/" in k)
         self.status = cdr.decode(
             t.VEHICLE_STATUS.type_name,
@@ -97,6 +99,7 @@ class Px4Session(RosSession):
 
     def declare_publisher(self, key: str, **qos: Any) -> Any:
         publisher = super().declare_publisher(key, **qos)
+        self.publisher_qos[key] = qos
         if "/fmu/in/vehicle_command/" in key:
             publisher.put = lambda payload, *, attachment: self.commander(payload)
         return publisher
@@ -183,6 +186,16 @@ def test_the_bridge_announces_its_publishers_in_pxs_versions(rig):
     }
     versions = Versions()
     assert all(versions.learn(e) is None for e in endpoints)
+
+
+def test_the_writes_to_px4_travel_as_commands_never_dropped_nor_batched(rig):
+    # with Zenoh's default (droppable, batched) the router stopped forwarding them to PX4
+    written = {key: qos for key, qos in rig.session.publisher_qos.items() if "/fmu/in/" in key}
+    assert len(written) == 3
+    for qos in written.values():
+        assert qos["congestion_control"] == zenoh.CongestionControl.BLOCK
+        assert qos["express"] is True
+        assert qos["priority"] == zenoh.Priority.INTERACTIVE_HIGH
 
 
 def test_arming_is_answered_by_pxs_commander(rig):

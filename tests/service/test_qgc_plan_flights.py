@@ -12,24 +12,21 @@ import math
 from pathlib import Path
 
 import pytest
-from bus_bridge import SimSdk
+from bus_bridge import HOME, assert_each_waypoint_passed, returning_sim
 
 from dronewrapper.errors import CommandRefused, InvalidArgument
-from dronewrapper.geodesy import to_enu, to_geodetic
+from dronewrapper.geodesy import to_geodetic
 from dronewrapper.msgs.mission import NAV_RALLY_POINT
 from dronewrapper.plan import read_plan
 from dronewrapper.plan_fence import rally_waypoints
 
 RALLY = 2  # MAV_MISSION_TYPE_RALLY
 PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans"
-HOME = (47.397742, 8.545594)
 
 
 @pytest.fixture
 def sim():
-    rig = SimSdk(params={"RTL_RETURN_ALT": 10.0, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0})
-    yield rig
-    rig.close()
+    yield from returning_sim(10.0)
 
 
 def test_every_item_reached_is_counted(sim):
@@ -136,8 +133,4 @@ def test_a_plan_is_flown_through_each_of_its_waypoints(sim, name):
     sim.fly_mission(240.0)
     progress = sim.drone.mission_progress()
     assert progress.finished and progress.reached_count >= 2
-    for wp in plan.waypoints:
-        if wp.command == 16:  # NAV_WAYPOINT, frame 3: m above home
-            east, north = to_enu(HOME, wp.x_lat, wp.y_long)
-            # within the autopilot's acceptance radius (NAV_ACC_RAD, 2 m)
-            assert sim.pair.closest_approach((east, north, wp.z_alt), start) <= 2.0, wp
+    assert_each_waypoint_passed(sim, PLANS / name, start)

@@ -8,54 +8,46 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from bus_bridge import SimSdk
+from bus_bridge import HOME, SimSdk, assert_each_waypoint_passed, returning_sim
 
 from dronewrapper.errors import InvalidArgument
-from dronewrapper.geodesy import to_enu, to_geodetic
-from dronewrapper.plan import read_plan
+from dronewrapper.geodesy import to_geodetic
 
 PLANS = Path(__file__).resolve().parents[1] / "data" / "qgc_plans" / "mavsdk"
-HOME = (47.397742, 8.545594)  # the simulator's home
-ACCEPTANCE_M = 2.0  # the items' acceptance radius is 0: the autopilot's NAV_ACC_RAD, 2 m
 
 
 @pytest.fixture
 def sim():
-    rig = SimSdk(params={"RTL_RETURN_ALT": 10.0, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0})
-    yield rig
-    rig.close()
+    yield from returning_sim(10.0)
 
 
-def assert_each_waypoint_passed(sim: SimSdk, name: str, start: float) -> None:
-    for wp in read_plan(PLANS / name).waypoints:
-        if wp.command == 16:  # NAV_WAYPOINT, frame 3: m above home
-            east, north = to_enu(HOME, wp.x_lat, wp.y_long)
-            assert sim.pair.closest_approach((east, north, wp.z_alt), start) <= ACCEPTANCE_M
+def flown(sim: SimSdk, plan: Path, items: int, within_s: float) -> float:
+    """``plan`` uploaded (``items`` items) and flown from 5 m up, for at most ``within_s`` s
+    of bus time; the autopilot's time at the start."""
+    assert sim.drone.upload_mission(plan) == items
+    sim.drone.takeoff(5.0)
+    start = sim.pair.t
+    sim.fly_mission(within_s)
+    return start
 
 
 def test_the_sample_mission_is_flown_and_its_camera_item_skipped_with_a_note(sim):
-    name = "qgroundcontrol_sample.plan"
-    assert sim.drone.upload_mission(PLANS / name) == 6
-    sim.drone.takeoff(5.0)
-    start = sim.pair.t
-    sim.fly_mission(120.0)
+    plan = PLANS / "qgroundcontrol_sample.plan"
+    start = flown(sim, plan, 6, 120.0)
     assert sim.drone.mission_progress().finished  # its last item: return to launch
-    assert_each_waypoint_passed(sim, name, start)
+    assert_each_waypoint_passed(sim, plan, start)
     texts = [t.text for t in sim.drone.status_texts]
     assert "Mission item 2: IMAGE_START_CAPTURE skipped (no camera, gimbal or gripper)" in texts
 
 
 def test_a_survey_ending_in_a_camera_item_reads_finished_after_its_last_waypoint(sim):
     # its last item turns the camera trigger off; no autopilot reports such an item reached
-    name = "qgroundcontrol_sample_with_survey.plan"
-    assert sim.drone.upload_mission(PLANS / name) == 13
-    sim.drone.takeoff(5.0)
-    start = sim.pair.t
-    sim.fly_mission(400.0)
+    plan = PLANS / "qgroundcontrol_sample_with_survey.plan"
+    start = flown(sim, plan, 13, 400.0)
     progress = sim.drone.mission_progress()
     assert progress.finished and progress.reached == 11, progress
     assert progress.reached_items == (1, 3, 5, 6, 7, 8, 10, 11)  # the eight waypoints
-    assert_each_waypoint_passed(sim, name, start)
+    assert_each_waypoint_passed(sim, plan, start)
 
 
 @pytest.mark.parametrize(

@@ -9,7 +9,7 @@ import json
 import math
 
 import pytest
-from bus_bridge import EPOCH, SimBridge, SimSdk
+from bus_bridge import EPOCH, HOME, SimBridge, SimSdk, returning_sim
 
 from dronewrapper import DroneWrapper
 from dronewrapper.aio import Drone
@@ -17,14 +17,10 @@ from dronewrapper.errors import CommandRefused, InvalidArgument, NoData
 from dronewrapper.geodesy import to_geodetic
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 
-HOME = (47.397742, 8.545594)
-
 
 @pytest.fixture
 def sim():
-    rig = SimSdk(params={"RTL_RETURN_ALT": 6.0, "RTL_DESCEND_ALT": 3.0, "RTL_LAND_DELAY": 0.0})
-    yield rig
-    rig.close()
+    yield from returning_sim(6.0)
 
 
 def near(rig: SimSdk, x: float, y: float, z: float) -> float:

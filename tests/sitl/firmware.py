@@ -9,10 +9,18 @@ import contextlib
 import os
 from pathlib import Path
 
+import pytest
+
 from dronewrapper_sim.external.firmware import arducopter, px4_sih
 
 PX4_ENV = "PX4_SITL_DIR"
 AP_ENV = "AP_SITL_DIR"
+AUTOPILOTS = [
+    pytest.param("px4", marks=pytest.mark.px4_sih),
+    pytest.param("ardupilot", marks=pytest.mark.ap_sitl),
+]
+"""Both firmwares as a test's ``autopilot`` parameter, each marked so that the tier's conftest
+deselects it where its tree is not given."""
 
 
 def _dir(env: str) -> Path | None:

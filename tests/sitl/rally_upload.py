@@ -55,11 +55,7 @@ USER_CLIMB_MIN_M = 10.0  # ArduCopter RTL_CLIMB_MIN_M as its user left it
 
 def pull_rally(core, _request=None):
     """The autopilot's rally list (MAV_MISSION_TYPE_RALLY download)."""
-    download = mt.Download(
-        core.target(), core.now, mission_type=mt.RALLY, **uploads.transfer_args()
-    )
-    yield from uploads.run_transfer(core, download)
-    return download
+    return (yield from core.transfers.download(mt.RALLY))
 
 
 def fly(pair: RealPair, kind: str, items: list, rally: list, report: dict) -> None:

@@ -42,8 +42,8 @@ class RealPair:
         out = self.core.take()
         for peer in out.peers:
             self.link.peer = peer
-        for name, fields in out.sends:
-            self.link.send(name, *fields)
+        for message in out.sends:
+            self.link.send(message)
         for topic, msg in out.samples:
             if topic == registry.STATUSTEXT:
                 self.texts.append(msg.text)

@@ -34,13 +34,7 @@ def judge(flight, scenario: str) -> None:
     check_flight(flight, max_acquire, min_centred, min_distance)
 
 
-@pytest.mark.parametrize(
-    "autopilot",
-    [
-        pytest.param("px4", marks=pytest.mark.px4_sih),
-        pytest.param("ardupilot", marks=pytest.mark.ap_sitl),
-    ],
-)
+@pytest.mark.parametrize("autopilot", firmware.AUTOPILOTS)
 @pytest.mark.parametrize("scenario", SCENARIOS)
 def test_follow_on_real_firmware(autopilot, scenario, tmp_path):
     sim_graph, detector, seconds, max_acquire, min_centred, min_distance = CASES[scenario]

@@ -8,7 +8,10 @@ a network namespace of its own (PX4 dials the router on 7447). The graph compose
   judged from what the app reads (height, distance flown, landed and disarmed);
 * follow-color (beacon_smooth) and follow-person (people_crossing_front) through
   compose/px4_zenoh_follow_{color,person}.yaml, judged from ground truth with the scenario
-  tier's thresholds, as tests/sitl/test_follow_sitl.py judges them through the MAVLink bridge;
+  tier's thresholds, as tests/sitl/test_follow_sitl.py judges them through the MAVLink bridge,
+  and failed when PX4 left OFFBOARD on its own (its offboard-loss failsafe cuts a flight short
+  with enough samples to pass); PX4's uORB ``offboard_control_mode`` is echoed back and timed
+  beside the router's view of the bridge's writes (``LinkWatch``);
 * the failsafe contract when the app is killed (SIGKILL) while streaming: the bridge holds
   within ``setpoint_timeout`` + a tick and asks PX4 to land after ``commander_lost_timeout``,
   and PX4 lands and disarms.
@@ -20,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 import signal
 import subprocess
 import sys
@@ -28,7 +32,15 @@ from pathlib import Path
 
 import pytest
 from busy_core import one_core_busy
-from px4_zenoh_sitl import ROUTER_PORT, LinkWatch, log_problems, px4_zenoh, router_port_free
+from px4_zenoh_sitl import (
+    ROUTER_PORT,
+    LinkWatch,
+    left_offboard_in_flight,
+    log_problems,
+    px4_zenoh,
+    realtime_share,
+    router_port_free,
+)
 from scenario_flight import check_flight, fly, record_result
 from test_follow_scenarios import CASES, CROSSING, LOADED_DETECT_RATE_HZ, crossed, passes
 
@@ -43,6 +55,7 @@ from support import client_node
 pytestmark = [pytest.mark.px4_zenoh, pytest.mark.timeout(300)]
 
 REPO = Path(__file__).resolve().parents[2]
+LINK_RECORD_ENV = "DRONEWRAPPER_PX4_LINK_RECORD"  # a file for the link's arrivals (JSON)
 READY_S = 90.0  # PX4 start -> its preflight checks pass (a loaded 2-core machine)
 
 
@@ -50,7 +63,7 @@ READY_S = 90.0  # PX4 start -> its preflight checks pass (a loaded 2-core machin
 def graph(tmp_path):
     assert router_port_free(), (
         f"port {ROUTER_PORT} is taken: PX4 dials it, so run this tier in a network namespace "
-        "of its own (unshare -rn, loopback up)"
+        "of its own (unshare -n as root, loopback up)"
     )
     log = open(tmp_path / "graph.log", "w")  # noqa: SIM115 (closed below)
     launcher = Launcher.from_file(REPO / "compose" / "px4_zenoh.yaml", out=log)
@@ -197,7 +210,8 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
     sim_graph, detector, seconds, max_acquire, min_centred, min_distance = CASES[scenario]
     app = "color" if sim_graph == "sim_follow_color" else "person"
     assert router_port_free(), f"port {ROUTER_PORT} is taken: run in a network namespace"
-    with px4_zenoh(tmp_path) as firmware:  # its zenoh-pico retries until the graph's router is up
+    with px4_zenoh(tmp_path, echo=True) as firmware:  # zenoh-pico retries until the router is up
+        fifo, threads = realtime_share(tmp_path)
         variables = {"truth_port": firmware.variables["truth_port"]}
         if app == "person":
             variables["detector"] = detector
@@ -217,11 +231,18 @@ def test_follow_flies_px4_through_its_own_zenoh(scenario, tmp_path):
                 start_timeout=120.0,
                 router=DEFAULT_ROUTER,
             )
-    print(f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}")
-    passed = passes(flight, max_acquire, min_centred, min_distance)
+    print(
+        f"\n{firmware.version} over Zenoh: {flight.describe()}\nrouter: {link.describe()}\n"
+        f"PX4's threads with real-time priority: {fifo} of {threads}"
+    )
+    if os.environ.get(LINK_RECORD_ENV):
+        link.dump(Path(os.environ[LINK_RECORD_ENV]))
+    cut_short = left_offboard_in_flight(flight.log)
+    passed = passes(flight, max_acquire, min_centred, min_distance) and not cut_short
     record_result(flight, f"follow_{app}", "px4_zenoh", firmware.version, passed)
     if not passed:
         print(f"PX4's log ({firmware.log}), warnings and errors:\n{log_problems(firmware.log)}")
     check_flight(flight, max_acquire, min_centred, min_distance)
+    assert not cut_short, f"PX4 left OFFBOARD on its own during the flight\n{flight.log[-3000:]}"
     if crossing:
         assert sum(crossed(x) for x in flight.samples) > 0, "no passer-by crossed: proves nothing"

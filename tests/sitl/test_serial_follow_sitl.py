@@ -128,13 +128,7 @@ def figures(watch: SerialWatch, relay) -> dict:
     }
 
 
-@pytest.mark.parametrize(
-    "autopilot",
-    [
-        pytest.param("px4", marks=pytest.mark.px4_sih),
-        pytest.param("ardupilot", marks=pytest.mark.ap_sitl),
-    ],
-)
+@pytest.mark.parametrize("autopilot", firmware.AUTOPILOTS)
 @pytest.mark.parametrize("baud", BAUDS)
 def test_follow_over_a_serial_line(autopilot, baud, tmp_path):
     seconds = CASES[SCENARIO][2]

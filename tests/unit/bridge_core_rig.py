@@ -25,6 +25,7 @@ from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core import BridgeCore
+from dronewrapper_bridge_mavlink.outgoing import encode
 
 PX4, ARDUPILOT = mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA
 OFFBOARD = 6 << 16
@@ -32,6 +33,10 @@ POSCTL = 3 << 16
 AUTO_LOITER = (4 << 16) | (3 << 24)
 AUTO_LAND = (4 << 16) | (6 << 24)
 ARDU_GUIDED, ARDU_LOITER = 4, 5
+SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
+ARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
+NAV_TAKEOFF = mavlink.MAV_CMD_NAV_TAKEOFF
+NAV_LAND = mavlink.MAV_CMD_NAV_LAND
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
 T0 = 1000.0  # monotonic s at the rig's start
@@ -60,7 +65,6 @@ class CoreRig:
         self.core = BridgeCore(Config(**config), self.now)
         self.autopilot = autopilot
         self._to_bridge = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
-        self._from_bridge = mavlink.MAVLink(None, srcSystem=255, srcComponent=191)
         self._decoder = mavlink.MAVLink(None)
         self.custom_mode = AUTO_LOITER if autopilot == PX4 else ARDU_LOITER
         self.armed = False
@@ -131,9 +135,8 @@ class CoreRig:
 
     def _collect(self) -> None:
         out = self.core.take()
-        for name, fields in out.sends:
-            msg = getattr(self._from_bridge, f"{name}_encode")(*fields)
-            self.sent.append((self.now, msg))
+        for message in out.sends:
+            self.sent.append((self.now, encode(message)))
         for topic, msg in out.samples:
             self.samples.append((self.now, topic, msg))
 

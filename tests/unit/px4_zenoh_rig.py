@@ -14,13 +14,9 @@ from pathlib import Path
 from typing import Any
 
 import msgspec
+import targets
 
-from dronewrapper.msgs.geometry import Point, Vector3
 from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
-    FRAME_LOCAL_NED,
-    MASK_POSITION,
-    MASK_VELOCITY,
     PositionTarget,
 )
 from dronewrapper_bridge_base.bridge_node import COMMANDS
@@ -73,19 +69,7 @@ def recorded(topic: t.Px4Topic) -> dict[str, Any]:
 
 def velocity(vx: float = 1.0) -> PositionTarget:
     """A body-velocity setpoint (forward ``vx`` m/s)."""
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED, type_mask=MASK_VELOCITY, velocity=Vector3(x=vx)
-    )
-
-
-def position(x: float, y: float, z: float, yaw: float = 0.0) -> PositionTarget:
-    """A local ENU position setpoint."""
-    return PositionTarget(
-        coordinate_frame=FRAME_LOCAL_NED,
-        type_mask=MASK_POSITION,
-        position=Point(x=x, y=y, z=z),
-        yaw=yaw,
-    )
+    return targets.velocity(vx)
 
 
 class Px4Rig:

@@ -14,8 +14,7 @@ from typing import Any
 
 from tello_peer import STATE
 
-from dronewrapper.msgs.geometry import Vector3
-from dronewrapper.msgs.mavros import FRAME_BODY_NED, MASK_VELOCITY, PositionTarget
+from dronewrapper.msgs.mavros import PositionTarget
 from dronewrapper_bridge_base.bridge_node import COMMANDS
 from dronewrapper_bridge_base.operation import Operation
 from dronewrapper_bridge_tello.config import Config
@@ -25,16 +24,6 @@ T0 = 1000.0  # monotonic s at the rig's start
 EPOCH = 1.7e9  # wall-clock s added to the monotonic time for stamps
 DT = 0.005  # s per rig step
 USER = "user"  # the commander of the rig's setpoints and requests
-
-
-def velocity(vx: float = 0.0, vy: float = 0.0, vz: float = 0.0, yaw_rate: float = 0.0):
-    """A body-velocity setpoint (FLU m/s, CCW rad/s)."""
-    return PositionTarget(
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
-        velocity=Vector3(x=vx, y=vy, z=vz),
-        yaw_rate=yaw_rate,
-    )
 
 
 class TelloRig:

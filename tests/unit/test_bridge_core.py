@@ -13,7 +13,9 @@ from bridge_core_rig import (
     ARDU_GUIDED,
     ARDU_LOITER,
     ARDUPILOT,
+    NAV_LAND,
     OFFBOARD,
+    SET_MODE,
     CoreRig,
     velocity,
 )
@@ -33,8 +35,6 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink import parameters
 
-SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
-NAV_LAND = mavlink.MAV_CMD_NAV_LAND
 AUTO_RTL = (4 << 16) | (5 << 24)
 REAL32, INT32 = mavlink.MAV_PARAM_TYPE_REAL32, mavlink.MAV_PARAM_TYPE_INT32
 
@@ -55,7 +55,7 @@ def test_px4s_second_ack_is_the_answer_not_a_duplicate():
         rig.ack(SET_MODE, ACCEPTED)
         rig.ack(SET_MODE, ACCEPTED)
         assert op.result().mode_sent, op.result()
-    assert rig.core.acks.duplicates == 0
+    assert rig.core.commands.acks.duplicates == 0
 
 
 def test_a_mode_acked_once_is_confirmed_by_heartbeat():

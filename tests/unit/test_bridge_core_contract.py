@@ -13,10 +13,14 @@ from bridge_core_rig import (
     ACCEPTED,
     ARDU_GUIDED,
     ARDUPILOT,
+    ARM,
     AUTO_LAND,
+    NAV_LAND,
+    NAV_TAKEOFF,
     OFFBOARD,
     POSCTL,
     REJECTED,
+    SET_MODE,
     CoreRig,
     int_bits,
 )
@@ -37,10 +41,6 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink import parameters
 
-SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
-ARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
-NAV_LAND = mavlink.MAV_CMD_NAV_LAND
-NAV_TAKEOFF = mavlink.MAV_CMD_NAV_TAKEOFF
 INT32 = mavlink.MAV_PARAM_TYPE_INT32
 
 

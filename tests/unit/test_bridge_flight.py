@@ -13,9 +13,13 @@ from bridge_core_rig import (
     ACCEPTED,
     ARDU_GUIDED,
     ARDUPILOT,
+    ARM,
     AUTO_LAND,
+    NAV_LAND,
+    NAV_TAKEOFF,
     OFFBOARD,
     REJECTED,
+    SET_MODE,
     CoreRig,
     velocity,
 )
@@ -35,10 +39,6 @@ from dronewrapper.msgs.flight import (
 from dronewrapper_bridge_base.core_driver import cancel_steps
 from dronewrapper_bridge_mavlink import flight
 
-SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
-ARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
-NAV_TAKEOFF = mavlink.MAV_CMD_NAV_TAKEOFF
-NAV_LAND = mavlink.MAV_CMD_NAV_LAND
 ON_GROUND, IN_AIR = mavlink.MAV_LANDED_STATE_ON_GROUND, mavlink.MAV_LANDED_STATE_IN_AIR
 DT = 0.05
 

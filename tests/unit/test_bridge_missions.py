@@ -165,13 +165,18 @@ def test_mission_push_uploads_every_item_and_publishes_the_list():
     assert len(listing.waypoints) == 4
 
 
+def refused(rig: CoreRig, waypoints: list[Waypoint], match: str) -> None:
+    """A push of ``waypoints`` is refused, its error matching ``match``."""
+    op = rig.call(missions.push, WaypointPush(waypoints=waypoints))
+    with pytest.raises(ServiceError, match=match):
+        op.result()
+
+
 def test_mission_push_refuses_an_item_outside_the_envelope():
     rig = flying()
     home(rig)
     far = [Waypoint(x_lat=HOME_LAT + 0.01, y_long=HOME_LON, z_alt=10.0)]  # 1.1 km north
-    op = rig.call(missions.push, WaypointPush(waypoints=far))
-    with pytest.raises(ServiceError, match=r"mission item 0: distance 1113\.19 m from home beyond"):
-        op.result()
+    refused(rig, far, r"mission item 0: distance 1113\.19 m from home beyond")
     assert not rig.sent_since(-math.inf, "MISSION_COUNT")
 
 
@@ -179,13 +184,9 @@ def test_mission_push_refuses_an_item_above_the_ceiling():
     rig = flying()
     home(rig)
     high = [*square(2), Waypoint(x_lat=HOME_LAT, y_long=HOME_LON, z_alt=130.0)]
-    op = rig.call(missions.push, WaypointPush(waypoints=high))
-    with pytest.raises(ServiceError, match=r"mission item 2: altitude 130 m above the envelope's"):
-        op.result()
+    refused(rig, high, r"mission item 2: altitude 130 m above the envelope's")
     takeoff = [Waypoint(command=mavlink.MAV_CMD_NAV_TAKEOFF, x_lat=0, y_long=0, z_alt=150.0)]
-    op = rig.call(missions.push, WaypointPush(waypoints=takeoff))
-    with pytest.raises(ServiceError, match=r"mission item 0: altitude 150 m above the envelope's"):
-        op.result()
+    refused(rig, takeoff, r"mission item 0: altitude 150 m above the envelope's")
     assert not rig.sent_since(-math.inf, "MISSION_COUNT")
 
 

@@ -1,6 +1,8 @@
 """Every relative link in the repository's Markdown resolves to a file inside the repository."""
 
+import os
 import re
+from functools import cache
 
 import pytest
 
@@ -12,16 +14,19 @@ LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 SKIPPED = {"node_modules", "build", "dist", "out", "__pycache__"}  # built or installed, not ours
 
 
+@cache
 def markdown_files() -> list[str]:
-    """The repository's own Markdown: every ``*.md`` outside hidden and built folders."""
-    return sorted(
-        str(path.relative_to(REPO))
-        for path in REPO.rglob("*.md")
-        if not any(
-            part.startswith(".") or part in SKIPPED or part.endswith(".egg-info")
-            for part in path.relative_to(REPO).parts[:-1]
-        )
-    )
+    """The repository's own Markdown: every ``*.md`` outside hidden and built folders (which
+    are not walked into)."""
+    found = []
+    for folder, subfolders, files in os.walk(REPO):
+        subfolders[:] = [
+            f
+            for f in subfolders
+            if not (f.startswith(".") or f in SKIPPED or f.endswith(".egg-info"))
+        ]
+        found += [os.path.join(folder, name) for name in files if name.endswith(".md")]
+    return sorted(os.path.relpath(path, REPO) for path in found)
 
 
 def relative_links(text: str) -> list[str]:

@@ -15,6 +15,13 @@ from dronewrapper_bridge_mavlink.mission_transfer import (
     Item,
     Upload,
 )
+from dronewrapper_bridge_mavlink.outgoing import (
+    MissionCount,
+    MissionItemInt,
+    MissionRequestInt,
+    Send,
+    encode,
+)
 
 TARGET = (1, 1)
 
@@ -31,23 +38,24 @@ def ack(result: int = mavlink.MAV_MISSION_ACCEPTED, mission_type: int = MISSION)
     return mavlink.MAVLink_mission_ack_message(255, 191, result, mission_type)
 
 
-def names(sends: list[tuple[str, tuple]]) -> list[str]:
-    return [name for name, _ in sends]
+def names(sends: list[Send]) -> list[str]:
+    """The MAVLink names of the messages (``mission_count`` ...), as they go on the wire."""
+    return [encode(message).get_type().lower() for message in sends]
 
 
-def item_seqs(sends: list[tuple[str, tuple]]) -> list[int]:
-    return [fields[2] for name, fields in sends if name == "mission_item_int"]
+def item_seqs(sends: list[Send]) -> list[int]:
+    return [message.seq for message in sends if isinstance(message, MissionItemInt)]
 
 
-def item_seqs_asked(sends: list[tuple[str, tuple]]) -> list[int]:
-    return [fields[2] for name, fields in sends if name == "mission_request_int"]
+def item_seqs_asked(sends: list[Send]) -> list[int]:
+    return [message.seq for message in sends if isinstance(message, MissionRequestInt)]
 
 
 def test_upload_in_order_sends_count_then_each_item_asked_and_ends_on_accept():
     up = Upload(items(3), TARGET, 0.0)
     first = up.due(0.0)
     assert names(first) == ["mission_count"]
-    assert first[0][1][:3] == (1, 1, 3)
+    assert first[0] == MissionCount(1, 1, 3, MISSION)
     for seq in range(3):
         up.on_message(request(seq), 0.1 * seq)
         assert item_seqs(up.due(0.1 * seq)) == [seq]
@@ -59,8 +67,8 @@ def test_upload_item_fields_are_those_of_mission_item_int():
     up = Upload(items(1), TARGET, 0.0)
     up.due(0.0)
     up.on_message(request(0), 0.0)
-    ((name, fields),) = up.due(0.0)
-    msg = getattr(mavlink, "MAVLink_" + name + "_message")(*fields)
+    (message,) = up.due(0.0)
+    msg = encode(message)
     assert (msg.seq, msg.frame, msg.command, msg.x, msg.z) == (0, 3, 16, 473977000, 10.0)
 
 

@@ -14,9 +14,10 @@ from px4_zenoh_rig import (
     NAV_RTL,
     USER,
     Px4Rig,
-    position,
     velocity,
 )
+from targets import position
+from validation_count import count_validations
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs import registry
@@ -149,6 +150,14 @@ def test_an_invalid_setpoint_is_refused(rig):
     rig.setpoint(velocity(math.nan))
     assert rig.writes(t.TRAJECTORY) == []
     assert rig.published(registry.REFUSAL)[0].kind == "validation"
+
+
+def test_a_setpoint_is_validated_once_where_it_enters(rig, monkeypatch):
+    calls = count_validations(monkeypatch)
+    rig.flying_offboard()
+    rig.clear()
+    rig.setpoint(velocity(1.0))
+    assert len(rig.writes(t.TRAJECTORY)) == 1 and len(calls) == 1
 
 
 def test_a_setpoint_outside_the_envelope_is_refused():
@@ -328,3 +337,17 @@ def test_a_status_older_than_an_accepted_mode_does_not_bring_offboard_back(rig):
     rig.vehicle(nav_state=NAV_RTL)
     rig.run(1.0)
     assert rig.core.heartbeat_state.mode == "AUTO.RTL" and rig.writes(t.TRAJECTORY) == []
+
+
+def test_a_status_px4_stamped_before_the_ack_is_kept_out_whenever_it_arrives(rig):
+    rig.flying_offboard()
+    rig.send(t.VEHICLE_STATUS, timestamp=10_000_000)
+    rig.setpoint(velocity(0.5))
+    op = rig.request(ops.failsafe_action(rig.core, "return"), "")
+    rig.send(t.COMMAND_ACK, command=cmds.NAV_RETURN_TO_LAUNCH, result=0, timestamp=11_000_000)
+    assert op.done and rig.core.heartbeat_state.mode == "AUTO.RTL"
+    rig.now += 2.0  # past ENTERED_HOLD_S: a status held on the way arrives late
+    rig.send(t.VEHICLE_STATUS, timestamp=10_900_000)  # still OFFBOARD, stamped before the ack
+    assert rig.core.heartbeat_state.mode == "AUTO.RTL"
+    rig.send(t.VEHICLE_STATUS, timestamp=12_000_000)  # after the ack: PX4 is in OFFBOARD again
+    assert rig.core.heartbeat_state.mode == "OFFBOARD"

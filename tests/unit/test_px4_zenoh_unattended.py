@@ -5,7 +5,8 @@ live commander, a return, and a commander steering again are left alone."""
 
 from __future__ import annotations
 
-from px4_zenoh_rig import NAV_RTL, Px4Rig, position
+from px4_zenoh_rig import NAV_RTL, Px4Rig
+from targets import position
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import TOO_LATE, GotoRequest, ReturnRequest

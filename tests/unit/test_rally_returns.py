@@ -71,6 +71,20 @@ def ardupilot_rig(ceiling: float = 15.0) -> CoreRig:
     return rig
 
 
+def acknowledged(rig: CoreRig, push) -> None:
+    """The autopilot takes the mission and rally lists of ``push``, which then succeeds."""
+    answer(rig, MISSION)
+    answer(rig, RALLY)
+    assert push.result().success
+
+
+def with_ceiling(rig: CoreRig, max_altitude: float):
+    """The bridge asked for an envelope of ``max_altitude`` (m); its pending call."""
+    op = rig.call(missions.set_envelope, EnvelopeSet(envelope=Envelope(max_altitude=max_altitude)))
+    rig.run(0.1)
+    return op
+
+
 def test_on_ardupilot_a_rally_point_above_the_return_altitude_is_refused():
     """ArduCopter returns at a rally point's own altitude when it is the higher: 14.5 m under
     a 15 m ceiling is refused (the return altitude is kept at 14 m), naming the point."""
@@ -85,25 +99,19 @@ def test_on_ardupilot_a_rally_point_above_the_return_altitude_is_refused():
     assert not rig.sent_since(-math.inf, "MISSION_COUNT")
     op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 6)], rally=[rally(30, 0, 14)]))
     rig.run(0.1)
-    answer(rig, MISSION)
-    answer(rig, RALLY)
-    assert op.result().success
+    acknowledged(rig, op)
 
 
 def test_a_new_envelope_that_puts_an_uploaded_rally_point_out_of_reach_is_refused():
     rig = ardupilot_rig(ceiling=30.0)
     op = rig.call(missions.push, WaypointPush(waypoints=[at(10, 0, 6)], rally=[rally(30, 0, 12)]))
     rig.run(0.1)
-    answer(rig, MISSION)
-    answer(rig, RALLY)
-    assert op.result().success
-    op = rig.call(missions.set_envelope, EnvelopeSet(envelope=Envelope(max_altitude=12.0)))
-    rig.run(0.1)
+    acknowledged(rig, op)
+    op = with_ceiling(rig, 12.0)
     with pytest.raises(ServiceError, match=r"envelope refused: rally point 0: an ArduCopter"):
         op.result()
     assert rig.core.missions.envelope.max_altitude == 30.0
-    op = rig.call(missions.set_envelope, EnvelopeSet(envelope=Envelope(max_altitude=13.0)))
-    rig.run(0.1)
+    op = with_ceiling(rig, 13.0)
     assert op.result().envelope.max_altitude == 13.0
 
 
@@ -120,11 +128,8 @@ def test_on_px4_a_lower_ceiling_under_an_uploaded_rally_points_return_is_refused
     rig.run(0.1)
     rig.param("RTL_RETURN_ALT", 10.0, mavlink.MAV_PARAM_TYPE_REAL32)
     rig.run(0.1)
-    answer(rig, MISSION)
-    answer(rig, RALLY)
-    assert op.result().success
-    op = rig.call(missions.set_envelope, EnvelopeSet(envelope=Envelope(max_altitude=12.0)))
-    rig.run(0.1)
+    acknowledged(rig, op)
+    op = with_ceiling(rig, 12.0)
     rig.param("RTL_RETURN_ALT", 10.0, mavlink.MAV_PARAM_TYPE_REAL32)
     rig.run(0.1)
     with pytest.raises(ServiceError, match=r"envelope refused: rally point 0: .* climbs to 15 m"):

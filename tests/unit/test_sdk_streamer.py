@@ -4,6 +4,7 @@ deadman. In virtual time: every period and stamp below is exact."""
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterator
 
 import pytest
 
@@ -33,6 +34,15 @@ def clock() -> VirtualClock:
     return VirtualClock(monotonic=1000.0)
 
 
+@pytest.fixture
+def streamed(clock) -> Iterator[tuple[Recorder, SetpointStreamer]]:
+    """A 50 Hz streamer publishing to a recorder (closed after the test)."""
+    rec = Recorder(clock)
+    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0)
+    yield rec, stream
+    stream.close()
+
+
 def test_set_publishes_at_once_then_repeats_at_rate(clock):
     rec = Recorder(clock)
     stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0, name="stream-under-test")
@@ -48,37 +58,29 @@ def test_set_publishes_at_once_then_repeats_at_rate(clock):
         stream.close()
 
 
-def test_changed_setpoint_replaces_the_old_one_and_restarts_the_period(clock):
-    rec = Recorder(clock)
-    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0)
-    try:
-        stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
-        clock.run_for(0.05)
-        stream.set(velocity_target(0, 0, 0, -1, stamp=2.0))
-        mark = len(rec.sent)
-        clock.run_for(0.1)
-        assert rec.times(mark - 1) == pytest.approx([0.05, 0.07, 0.09, 0.11, 0.13, 0.15])
-        assert all(msg.yaw_rate == -1 for _, msg, *_ in rec.sent[mark - 1 :])
-    finally:
-        stream.close()
+def test_changed_setpoint_replaces_the_old_one_and_restarts_the_period(clock, streamed):
+    rec, stream = streamed
+    stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
+    clock.run_for(0.05)
+    stream.set(velocity_target(0, 0, 0, -1, stamp=2.0))
+    mark = len(rec.sent)
+    clock.run_for(0.1)
+    assert rec.times(mark - 1) == pytest.approx([0.05, 0.07, 0.09, 0.11, 0.13, 0.15])
+    assert all(msg.yaw_rate == -1 for _, msg, *_ in rec.sent[mark - 1 :])
 
 
-def test_stop_stops_publishing_and_a_new_set_resumes(clock):
-    rec = Recorder(clock)
-    stream = SetpointStreamer(rec, clock=clock, rate_hz=50.0)
-    try:
-        stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
-        clock.run_for(0.05)
-        stream.stop()
-        assert not stream.active
-        mark = len(rec.sent)
-        clock.run_for(0.4)  # 20 periods
-        assert len(rec.sent) == mark
-        stream.set(velocity_target(0, 1, 0, 0, stamp=1.0))
-        clock.run_for(0.1)
-        assert len(rec.sent) == mark + 6
-    finally:
-        stream.close()
+def test_stop_stops_publishing_and_a_new_set_resumes(clock, streamed):
+    rec, stream = streamed
+    stream.set(velocity_target(1, 0, 0, 0, stamp=1.0))
+    clock.run_for(0.05)
+    stream.stop()
+    assert not stream.active
+    mark = len(rec.sent)
+    clock.run_for(0.4)  # 20 periods
+    assert len(rec.sent) == mark
+    stream.set(velocity_target(0, 1, 0, 0, stamp=1.0))
+    clock.run_for(0.1)
+    assert len(rec.sent) == mark + 6
 
 
 def test_idle_timeout_is_a_deadman(clock):

@@ -9,7 +9,8 @@ from __future__ import annotations
 import itertools
 
 import pytest
-from tello_core_rig import TelloRig, velocity
+from targets import velocity
+from tello_core_rig import TelloRig
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.lease import LeaseRequest

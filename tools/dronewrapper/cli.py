@@ -32,11 +32,10 @@ from __future__ import annotations
 import importlib
 import logging
 import os
-import signal
 import sys
-import threading
 from collections.abc import Sequence
 
+from dronewrapper.command_line import client_session, stop_on_signals
 from dronewrapper.runtime.arguments import CommandParser, plain_text
 from dronewrapper.runtime.options import DEFAULT_ROUTER, add_zenoh_args, options_from_args
 from dronewrapper.runtime.service import setup_logging
@@ -54,13 +53,6 @@ _RECORD_COMMANDS = {
     "replay": ("dronewrapper.record.cli", "replay_main"),
     "foxglove": ("dronewrapper.record.cli", "foxglove_main"),
 }
-
-
-def _stop_on_signals() -> threading.Event:
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    return stop
 
 
 def _router(argv: Sequence[str]) -> int:
@@ -98,7 +90,7 @@ def _router(argv: Sequence[str]) -> int:
             from dronewrapper.zenoh_log import relay_zenoh_log
 
             relay_zenoh_log(logging.getLogger("router"))
-        run_router(options, _stop_on_signals())
+        run_router(options, stop_on_signals())
     except (ValueError, ConnectionError, FileNotFoundError) as exc:
         print(f"dronewrapper router: {exc}", file=sys.stderr)
         return 1
@@ -124,7 +116,6 @@ def _echo(argv: Sequence[str]) -> int:
     import zenoh
 
     from dronewrapper.echo import echo, keyexpr_problem, path_warning
-    from dronewrapper.router_reach import open_client_session
     from dronewrapper.runtime.errors import zenoh_error_text
 
     parser = CommandParser(prog="dronewrapper echo", description="print messages")
@@ -144,11 +135,9 @@ def _echo(argv: Sequence[str]) -> int:
         return 2
     if warning := path_warning(args.keyexpr):
         print(f"dronewrapper echo: warning: {warning}", file=sys.stderr)
-    stop = _stop_on_signals()
-    try:
-        session = open_client_session(options_from_args(args))
-    except ConnectionError as exc:
-        print(f"dronewrapper echo: {exc}", file=sys.stderr)
+    stop = stop_on_signals()
+    session = client_session(args, "dronewrapper echo")
+    if session is None:
         return 1
     try:
         echo(session, args.keyexpr, count=args.count, duration=args.duration, stop=stop)
@@ -170,7 +159,6 @@ def _stdout_writable() -> bool:
 def _alive(argv: Sequence[str]) -> int:
     from dronewrapper.discovery import services_by_namespace
     from dronewrapper.doctor import describe_drone, listen, topic_families
-    from dronewrapper.router_reach import open_client_session
 
     parser = CommandParser(
         prog="dronewrapper alive", description="drones and processes online, with health"
@@ -180,10 +168,8 @@ def _alive(argv: Sequence[str]) -> int:
     )
     add_zenoh_args(parser, default_mode="client")
     args = parser.parse_args(argv)
-    try:
-        session = open_client_session(options_from_args(args))
-    except ConnectionError as exc:
-        print(f"dronewrapper alive: {exc}", file=sys.stderr)
+    session = client_session(args, "dronewrapper alive")
+    if session is None:
         return 1
     try:
         keys = sorted(str(r.ok.key_expr) for r in session.liveliness().get("*/alive/*") if r.ok)

@@ -52,6 +52,7 @@ from dronewrapper.runtime.latest import Latest
 from dronewrapper.runtime.ports import Ports
 from dronewrapper.runtime.ports import check as check_port
 from dronewrapper.runtime.session import ROUTE_WAIT_S
+from dronewrapper.runtime.stopping import Stopping
 from dronewrapper.security import acl  # a module: acl imports the runtime's caller
 
 T = TypeVar("T")
@@ -249,7 +250,7 @@ class FakePublisher(Generic[T]):
         pass
 
 
-class FakeNode:
+class FakeNode(Stopping):
     """The node contract (:class:`~dronewrapper.runtime.contract.NodeApi`) on a
     :class:`FakeBus`: no network, no threads of its own.
 
@@ -280,19 +281,6 @@ class FakeNode:
         self.decode_errors: Counter[str] = self.sample_errors.decode
         self.callback_errors: Counter[str] = self.sample_errors.callback
         self.announced = False
-
-    def __enter__(self) -> FakeNode:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    @property
-    def stopping(self) -> bool:
-        return self.stop_event.is_set()
-
-    def stop(self) -> None:
-        self.stop_event.set()
 
     def sleep(self, seconds: float) -> bool:
         """Let ``seconds`` of bus time pass (delivering what is due) unless stopped; False if

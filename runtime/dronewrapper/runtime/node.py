@@ -64,6 +64,7 @@ from dronewrapper.runtime.session import (
 )
 from dronewrapper.runtime.shm import remove_stale_segments
 from dronewrapper.runtime.shm_put import ShmWriter
+from dronewrapper.runtime.stopping import Stopping
 from dronewrapper.runtime.thread_state import KEPT
 from dronewrapper.security import acl  # a module: acl imports the runtime's caller
 
@@ -79,7 +80,7 @@ log = logging.getLogger("dronewrapper.runtime")
 __all__ = ["Node", "Publisher", "alive_services", "call_service", "encoding_for", "open_session"]
 
 
-class Node:
+class Node(Stopping):
     """One process's presence on the Zenoh network (use as a context manager).
 
     Args:
@@ -142,22 +143,7 @@ class Node:
         self._owns_session = session is None
         self.session = session or open_session(self.options, timeout=open_timeout)
 
-    # ---- lifecycle ----
-
-    def __enter__(self) -> Node:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    @property
-    def stopping(self) -> bool:
-        """True once a stop was requested (signal or :meth:`stop`)."""
-        return self.stop_event.is_set()
-
-    def stop(self) -> None:
-        """Ask the process's loops to end."""
-        self.stop_event.set()
+    # ---- lifecycle (``with``, ``stopping`` and ``stop``: Stopping's) ----
 
     def _on_signal(self, signum: int, _frame: object) -> None:
         """First SIGINT/SIGTERM: stop cleanly. A second one: exit at once (code 128 + signum).

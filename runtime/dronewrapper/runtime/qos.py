@@ -49,4 +49,10 @@ SERVICE_QOS: dict[str, Any] = {
 
 def qos_for(topic: Topic[Any]) -> dict[str, Any]:
     """The publisher options of ``topic``'s transport class (a fresh dict)."""
-    return dict(_QOS[topic.transport])
+    return class_qos(topic.transport)
+
+
+def class_qos(transport: str) -> dict[str, Any]:
+    """The publisher options of a transport class (``command``, ``telemetry``, ``stream``;
+    a fresh dict), for keys outside the registry that travel as one of them."""
+    return dict(_QOS[transport])

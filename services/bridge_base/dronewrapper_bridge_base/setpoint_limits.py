@@ -75,6 +75,13 @@ FRAMES_OF_MASK = {
 }
 
 
+def kind_of(target: PositionTarget) -> Kind:
+    """The control an admitted ``target`` asks for, read from its type_mask alone: for a
+    target :func:`validate` admitted at the bridge's edge, or one the bridge built (its own
+    hold). Nothing is checked again here; KeyError for a mask that is no control at all."""
+    return KIND_OF_MASK[target.type_mask]
+
+
 def finite_field(name: str, value: object) -> float:
     """``value`` as a float if it is a finite number (not a bool), else SetpointError."""
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):

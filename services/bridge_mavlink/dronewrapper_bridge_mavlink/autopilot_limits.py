@@ -39,7 +39,7 @@ from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.mavros import ParamSet, ParamValue
 from dronewrapper.msgs.mission import EnvelopeSet, Waypoint
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_mavlink import parameters, rally_returns
+from dronewrapper_bridge_mavlink import rally_returns
 from dronewrapper_bridge_mavlink.mission_frames import MissionFrameError
 from dronewrapper_bridge_mavlink.mission_state import Limits
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
@@ -79,10 +79,10 @@ def px4_return_altitude(
     ``RTL_RETURN_ALT``, at most :func:`return_altitude` under ``envelope`` (default: the one
     in force; the bridge lowers it to that), that bound where the autopilot does not answer."""
     bound = return_altitude(envelope or core.missions.envelope)
-    got = yield from parameters.param_read(core, "RTL_RETURN_ALT")
+    got = yield from core.parameters.read("RTL_RETURN_ALT")
     if got is None:
         return bound
-    return min(bound, float(parameters.decode(core, *got).as_number()))
+    return min(bound, float(core.parameters.decode(*got).as_number()))
 
 
 def check_rally_returns(
@@ -167,19 +167,19 @@ def sync(core: BridgeCore) -> Generator[float, None, str]:
             if (autopilot, name) in limits.absent:
                 absent.add(name)
                 continue
-            got = yield from parameters.param_read(core, name)
+            got = yield from core.parameters.read(name)
             if got is None and name in alternatives:
                 absent.add(name)  # another firmware version's name: the other one is kept
                 continue
             answered.add(name)
-            current = None if got is None else parameters.decode(core, *got)
+            current = None if got is None else core.parameters.decode(*got)
             number = None if current is None else float(current.as_number())
             write = to_write(number, value, how)
             if write is None:
                 continue
             integer = how == EXACTLY or name in INTEGER_PARAMS
             param = ParamValue.of(int(write) if integer else write)
-            reply = yield from parameters.param_set(core, ParamSet(param_id=name, value=param))
+            reply = yield from core.parameters.set(ParamSet(param_id=name, value=param))
             if reply.success:
                 written.append(f"{name}={write:g}")
             else:

@@ -51,20 +51,21 @@ def command_name(command: int) -> str:
 
 
 @dataclass(frozen=True)
-class CommandLong:
-    """One COMMAND_LONG to send (target ids are added by the sender)."""
+class Command:
+    """One MAV_CMD with its seven params, as a COMMAND_LONG carries it (the sender addresses
+    it: :class:`~dronewrapper_bridge_mavlink.outgoing.CommandLong`)."""
 
     command: int
     params: tuple[float, float, float, float, float, float, float]
     confirmation: int = 0
 
 
-def command_long(command: int, *params: float) -> CommandLong:
+def command_long(command: int, *params: float) -> Command:
     """A COMMAND_LONG with up to 7 params (missing ones are 0)."""
     if len(params) > 7:
         raise ValueError("COMMAND_LONG takes at most 7 params")
     padded = tuple(float(p) for p in params) + (0.0,) * (7 - len(params))
-    return CommandLong(command, padded)  # type: ignore[arg-type]
+    return Command(command, padded)  # type: ignore[arg-type]
 
 
 @dataclass
@@ -80,7 +81,7 @@ class PendingCommand:
         confirmed: False while (or when it ended) ACCEPTED only provisionally.
     """
 
-    cmd: CommandLong
+    cmd: Command
     attempts: int = 3
     ack_timeout: float = 1.0
     in_progress_timeout: float = 5.0
@@ -95,11 +96,11 @@ class PendingCommand:
     _next_send: float = -math.inf
     _deadline: float = math.inf
 
-    def due(self, now: float) -> CommandLong | None:
+    def due(self, now: float) -> Command | None:
         """The COMMAND_LONG to send now (first send or a retry), or None."""
         if self.done or self.sent >= self.attempts or now < self._next_send:
             return None
-        msg = CommandLong(self.cmd.command, self.cmd.params, confirmation=self.sent)
+        msg = Command(self.cmd.command, self.cmd.params, confirmation=self.sent)
         self.sent += 1
         self._next_send = now + self.ack_timeout
         self._deadline = now + self.ack_timeout

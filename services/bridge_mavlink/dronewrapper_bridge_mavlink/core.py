@@ -40,9 +40,9 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
 from dronewrapper_bridge_base.setpoint_limits import Kind
-from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
+from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.core_view import Outbox
 from dronewrapper_bridge_mavlink.freshness import Freshness
@@ -52,12 +52,14 @@ from dronewrapper_bridge_mavlink.link_gap import gap_report
 from dronewrapper_bridge_mavlink.mission_state import MissionState
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, GUIDED_MODE, is_guided
 from dronewrapper_bridge_mavlink.operations import failsafe_action
-from dronewrapper_bridge_mavlink.param_cache import ParamCache
-from dronewrapper_bridge_mavlink.setpoints import (
-    SetpointError,
-    hold_target,
-    to_local_ned,
+from dronewrapper_bridge_mavlink.outgoing import (
+    CommandLong,
+    Heartbeat,
+    Send,
+    SetPositionTargetLocalNed,
 )
+from dronewrapper_bridge_mavlink.parameters import Parameters
+from dronewrapper_bridge_mavlink.setpoints import hold_target, to_local_ned
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import (
@@ -69,6 +71,7 @@ from dronewrapper_bridge_mavlink.telemetry import (
     is_autopilot_heartbeat,
     state_from_heartbeat,
 )
+from dronewrapper_bridge_mavlink.transfers import Transfers
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -83,9 +86,12 @@ class BridgeCore(GuidedCore):
         self.freshness = Freshness()
         self.sources = AutopilotSources()
         self.statustexts = StatusTextAssembler()
-        self.acks = cmds.AckRouter()
+        self.commands = Commands(self, config)
         self.missions = MissionState(config.envelope)
-        self.params = ParamCache()
+        self.parameters = Parameters(
+            self, attempts=config.param_attempts, timeout=config.param_timeout
+        )
+        self.transfers = Transfers(self)
         serial = is_serial_url(config.connection)
         self.budget = fit_rates(
             config.message_rates,
@@ -115,9 +121,13 @@ class BridgeCore(GuidedCore):
 
     # ------------------------------------------------------------------ plumbing
 
-    def send(self, name: str, *fields: Any) -> None:
-        """Queue MAVLink message ``name`` (e.g. ``command_long``) with its field values."""
-        self.out.sends.append((name, fields))
+    def send(self, message: Send) -> None:
+        """Queue a MAVLink message for the autopilot (the link encodes it)."""
+        self.out.sends.append(message)
+
+    def dropped(self, what: str) -> None:
+        """Count a dropped input under ``what`` (the node's ``callback_errors``)."""
+        self.out.errors.append(what)
 
     def target(self) -> tuple[int, int]:
         """The autopilot's (system, component) to address (system 1 before it is heard)."""
@@ -144,7 +154,7 @@ class BridgeCore(GuidedCore):
         if verdict.peer is not None:
             self.out.peers.append(verdict.peer)
         if verdict.error:
-            self.out.errors.append(verdict.error)
+            self.dropped(verdict.error)
         if not verdict.accept:
             return
         if kind == "HEARTBEAT":
@@ -278,7 +288,7 @@ class BridgeCore(GuidedCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state or missions.breach_state(self),
+            failsafe=self.failsafe.state or self.missions.breach_state(),
             commander=self.commander,
         )
 
@@ -316,12 +326,13 @@ class BridgeCore(GuidedCore):
         if now >= self._next_heartbeat_out:
             self._next_heartbeat_out = now + 1.0
             self.send(
-                "heartbeat",
-                self.config.heartbeat_type,
-                mavlink.MAV_AUTOPILOT_INVALID,
-                0,
-                0,
-                mavlink.MAV_STATE_ACTIVE,
+                Heartbeat(
+                    type=self.config.heartbeat_type,
+                    autopilot=mavlink.MAV_AUTOPILOT_INVALID,
+                    base_mode=0,
+                    custom_mode=0,
+                    system_status=mavlink.MAV_STATE_ACTIVE,
+                )
             )
         tick = self.failsafe.tick(now, self.pose())
         fresh = tick.send is not None and tick.send is self.failsafe.fresh_target(now)
@@ -356,8 +367,8 @@ class BridgeCore(GuidedCore):
         rounds are re-sent 3 times, see :mod:`~dronewrapper_bridge_mavlink.streams`)."""
         command = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
         for msg_id, interval_us in requests:
-            params = (float(msg_id), interval_us, 0, 0, 0, 0, 0)
-            self.send("command_long", *self.target(), command, 0, *params)
+            params = (float(msg_id), interval_us, 0.0, 0.0, 0.0, 0.0, 0.0)
+            self.send(CommandLong(*self.target(), command, 0, params))
 
     # ------------------------------------------------------------------ setpoints
 
@@ -369,22 +380,17 @@ class BridgeCore(GuidedCore):
         return (position, self.telemetry.yaw_enu)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
+        """Send an admitted ``target`` (validated where it entered, or the bridge's own)."""
         position = self.telemetry.position_enu
-        try:
-            ned = to_local_ned(
-                target,
-                autopilot=self.autopilot or AUTOPILOT_PX4,
-                yaw_enu=self.telemetry.yaw_enu,
-                z_enu=position[2] if position is not None else 0.0,
-                limits=self.limits,
-            )
-        except SetpointError as exc:  # cannot happen for validated targets; never crash
-            log.error("setpoint conversion failed: %s", exc)
-            return
+        ned = to_local_ned(
+            target,
+            autopilot=self.autopilot or AUTOPILOT_PX4,
+            yaw_enu=self.telemetry.yaw_enu,
+            z_enu=position[2] if position is not None else 0.0,
+            limits=self.limits,
+        )
         boot_ms = int((self.now - self._t0) * 1000) & 0xFFFFFFFF  # our time_boot_ms
-        kinematics = (ned.x, ned.y, ned.z, ned.vx, ned.vy, ned.vz, 0.0, 0.0, 0.0)  # no accel
-        fields = (ned.coordinate_frame, ned.type_mask, *kinematics, ned.yaw, ned.yaw_rate)
-        self.send("set_position_target_local_ned", boot_ms, *self.target(), *fields)
+        self.send(SetPositionTargetLocalNed(*self.target(), boot_ms, ned))
         self.setpoints_sent += 1
         self.keepalive.sent(target, self.now)
 

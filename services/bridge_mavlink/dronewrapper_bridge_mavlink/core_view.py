@@ -1,7 +1,9 @@
 """The MAVLink bridge's core as its sibling modules see it (:class:`BridgeCore`, a protocol that
 :class:`dronewrapper_bridge_mavlink.core.BridgeCore` satisfies), and the :class:`Outbox` the
-core fills for the node. Operations, missions, parameters, the receive side and the watches
-name the core only through this view, so none of them imports the core that imports them.
+core fills for the node. Operations, missions, the receive side and the watches name the core
+only through this view, so none of them imports the core that imports them. The parts the
+core owns see less of it: its ``commands``, ``parameters`` and ``transfers`` each through a
+protocol of its own, its ``missions`` (the envelope, home and mission state) nothing.
 """
 
 from __future__ import annotations
@@ -16,14 +18,16 @@ from dronewrapper.msgs.registry import Topic
 from dronewrapper_bridge_base.core_view import PureCoreView
 from dronewrapper_bridge_base.guided_failsafe import Failsafe
 from dronewrapper_bridge_base.unattended import Unattended
-from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.mission_state import MissionState
-from dronewrapper_bridge_mavlink.param_cache import ParamCache
+from dronewrapper_bridge_mavlink.outgoing import Send
+from dronewrapper_bridge_mavlink.parameters import Parameters
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import StatusTextAssembler, Telemetry
+from dronewrapper_bridge_mavlink.transfers import Transfers
 
 
 @dataclass
@@ -31,13 +35,13 @@ class Outbox:
     """What the node must do after a core call.
 
     Attributes:
-        sends: MAVLink messages, as (pymavlink name without ``_send``, field values).
+        sends: MAVLink messages for the autopilot, typed (the link encodes them).
         samples: (registry topic, message) to publish on Zenoh.
         peers: UDP addresses replies must go to from now on (the last one wins).
         errors: names of dropped inputs to count (the node's ``callback_errors``).
     """
 
-    sends: list[tuple[str, tuple]] = field(default_factory=list)
+    sends: list[Send] = field(default_factory=list)
     samples: list[tuple[Topic, Any]] = field(default_factory=list)
     peers: list[Any] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)
@@ -49,8 +53,6 @@ class BridgeCore(PureCoreView, Protocol):
 
     @property
     def config(self) -> Config: ...
-    @property
-    def out(self) -> Outbox: ...
     @property
     def autopilot(self) -> str: ...  # "px4", "ardupilotmega" ("": not heard yet)
     @property
@@ -76,17 +78,18 @@ class BridgeCore(PureCoreView, Protocol):
     @property
     def recent_texts(self) -> collections.deque[tuple[float, StatusTextMsg]]: ...
     @property
-    def acks(self) -> cmds.AckRouter: ...
+    def commands(self) -> Commands: ...
     @property
     def missions(self) -> MissionState: ...
     @property
-    def params(self) -> ParamCache: ...
+    def parameters(self) -> Parameters: ...
+    @property
+    def transfers(self) -> Transfers: ...
     @property
     def streams(self) -> StreamRequests: ...
 
-    def send(self, name: str, *fields: Any) -> None: ...
-    def target(self) -> tuple[int, int]: ...
     def require_connected(self) -> str: ...
+    def dropped(self, what: str) -> None: ...  # a dropped input, counted
     def on_mavlink(self, msg: Any, source: Any, now: float, stamp: float) -> None: ...
     def pose(self) -> tuple[tuple[float, float, float], float] | None: ...
     def streamed_for(self, now: float) -> float: ...  # s of setpoints streamed until now

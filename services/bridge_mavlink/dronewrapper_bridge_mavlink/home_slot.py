@@ -1,4 +1,4 @@
-"""ArduPilot's mission item 0 is home (pure, over the core).
+"""ArduPilot's mission item 0 is home (pure: the autopilot's kind is all it reads).
 
 ArduPilot keeps home in mission item 0 and flies items 1 on; its MISSION_CURRENT and
 MISSION_ITEM_REACHED count from that item 0. PX4 (and our simulator) fly from item 0. The
@@ -18,29 +18,29 @@ sends the new current item (MISSION_CURRENT, 0 after an upload) before the item 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
-BridgeCore = Any  # the bridge's core (core.BridgeCore), not imported: no import circle
+
+def offset(autopilot: str) -> int:
+    """How many items ``autopilot`` holds before the bridge's first: 1 on ArduPilot, else 0."""
+    return 1 if autopilot == AUTOPILOT_ARDUPILOT else 0
 
 
-def offset(core: BridgeCore) -> int:
-    """How many items the autopilot holds before the bridge's first: 1 on ArduPilot, else 0."""
-    return 1 if core.autopilot == AUTOPILOT_ARDUPILOT else 0
-
-
-def uploaded(core: BridgeCore, items: list[mt.Item]) -> list[mt.Item]:
-    """``items`` as the autopilot takes them: the first marked current and, on ArduPilot, a
-    home item before them (at home, m AMSL; ArduPilot keeps its own home there, never flown)."""
+def uploaded(
+    items: list[mt.Item], autopilot: str, home_geo: tuple[float, float, float] | None
+) -> list[mt.Item]:
+    """``items`` as ``autopilot`` takes them: the first marked current and, on ArduPilot, a
+    home item before them (at ``home_geo``: deg, deg, m AMSL; ArduPilot keeps its own home
+    there, never flown)."""
     if items and not any(item.current for item in items):
         items = [dataclasses.replace(items[0], current=1), *items[1:]]
-    if not offset(core):
+    if not offset(autopilot):
         return items
-    lat, lon, alt = core.missions.home_geo or (0.0, 0.0, 0.0)
+    lat, lon, alt = home_geo or (0.0, 0.0, 0.0)
     home = mt.Item(
         frame=mavlink.MAV_FRAME_GLOBAL,
         command=mavlink.MAV_CMD_NAV_WAYPOINT,
@@ -51,26 +51,27 @@ def uploaded(core: BridgeCore, items: list[mt.Item]) -> list[mt.Item]:
     return [home, *items]
 
 
-def downloaded(core: BridgeCore, items: list[mt.Item]) -> list[mt.Item]:
-    """The autopilot's items without its home item."""
-    return items[offset(core) :]
+def downloaded(items: list[mt.Item], autopilot: str) -> list[mt.Item]:
+    """``autopilot``'s items without its home item."""
+    return items[offset(autopilot) :]
 
 
-def ours(core: BridgeCore, seq: int) -> int | None:
-    """The bridge's number of the autopilot's item ``seq`` (None: ArduPilot's home item)."""
-    number = seq - offset(core)
+def ours(seq: int, autopilot: str) -> int | None:
+    """The bridge's number of ``autopilot``'s item ``seq`` (None: ArduPilot's home item)."""
+    number = seq - offset(autopilot)
     return number if number >= 0 else None
 
 
-def theirs(core: BridgeCore, number: int) -> int:
-    """The autopilot's number of the bridge's item ``number``."""
-    return number + offset(core)
+def theirs(number: int, autopilot: str) -> int:
+    """``autopilot``'s number of the bridge's item ``number``."""
+    return number + offset(autopilot)
 
 
-def reached(core: BridgeCore, seq: int) -> int | None:
-    """The bridge's number of the item the autopilot reports reached; None: not this mission's
-    (ArduPilot's home item, or PX4's stale report of an item beyond the one flown)."""
-    number = ours(core, seq)
-    if number is None or (not offset(core) and number > core.missions.current_seq):
+def reached(seq: int, autopilot: str, current: int) -> int | None:
+    """The bridge's number of the item ``autopilot`` reports reached, ``current`` the bridge's
+    number of the item being flown; None: not this mission's (ArduPilot's home item, or PX4's
+    stale report of an item beyond the one flown)."""
+    number = ours(seq, autopilot)
+    if number is None or (not offset(autopilot) and number > current):
         return None
     return number

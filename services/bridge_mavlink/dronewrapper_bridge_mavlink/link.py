@@ -48,6 +48,7 @@ from pymavlink import mavutil
 from dronewrapper.runtime.clock import REAL, Clock
 from dronewrapper.security.mavlink_signing import verify_signed_frame
 from dronewrapper_bridge_mavlink.link_budget import NETWORK_SCHEMES
+from dronewrapper_bridge_mavlink.outgoing import Send, encode
 from dronewrapper_bridge_mavlink.wire import Frame, FrameCutter, SequenceGaps, cut_datagram
 
 log = logging.getLogger("bridge_mavlink.link")
@@ -345,17 +346,18 @@ class MavLink:
             conn.write(frame)
             conn.mav.total_bytes_sent += len(frame)
 
-    def send(self, name: str, *args: Any, **kwargs: Any) -> bool:
-        """Send message ``name`` (e.g. ``heartbeat``) with its fields; False if not sent."""
+    def send(self, message: Send) -> bool:
+        """Encode and send one of the bridge's messages (:mod:`.outgoing`); False if not sent."""
         conn = self._conn
         if conn is None:
             return False
+        encoded = encode(message)
         with self._send_lock:
             try:
-                getattr(conn.mav, f"{name}_send")(*args, **kwargs)
+                conn.mav.send(encoded)
             except OSError as exc:
                 self.send_errors += 1
-                log.debug("send %s failed: %s", name, exc)
+                log.debug("send %s failed: %s", type(message).__name__, exc)
                 return False
         self.sent += 1
         return True

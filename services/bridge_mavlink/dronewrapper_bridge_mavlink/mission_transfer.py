@@ -14,16 +14,21 @@ is ignored; a MISSION_ACK other than ACCEPTED ends the transfer with the autopil
 an upload that ends early says how many items the autopilot took (``transferred``).
 
 Each machine is fed :meth:`on_message` (a pymavlink message) and asked :meth:`due` for what to
-send now, as ``(name, fields)`` for ``core.send``; ``done`` and ``error`` say how it ended.
+send now, as typed messages (:data:`~dronewrapper_bridge_mavlink.outgoing.Send`) for the
+outbox; ``done`` and ``error`` say how it ended.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink
+
+from dronewrapper_bridge_mavlink import outgoing as out
+from dronewrapper_bridge_mavlink.outgoing import Send
 
 MISSION = mavlink.MAV_MISSION_TYPE_MISSION
 FENCE = mavlink.MAV_MISSION_TYPE_FENCE
@@ -92,17 +97,17 @@ class Transfer:
         self.done = False
         self.error = ""
         self.sends = 0  # messages sent, re-sends included
-        self._last: tuple[str, tuple] | None = None
+        self._last: Send | None = None
         self._tries = 0
         self._deadline = now
-        self._queue: list[tuple[str, tuple]] = []
+        self._queue: list[Send] = []
 
-    def _send(self, name: str, *fields: Any, now: float, expect_answer: bool = True) -> None:
+    def _send(self, message: Send, now: float, *, expect_answer: bool = True) -> None:
         """Queue a message; with ``expect_answer`` it is re-sent on timeout."""
-        self._queue.append((name, fields))
+        self._queue.append(message)
         self.sends += 1
         if expect_answer:
-            self._last = (name, fields)
+            self._last = message
             self._tries = 1
             self._deadline = now + self.timeout
 
@@ -114,7 +119,7 @@ class Transfer:
     def _ours(self, msg: Any) -> bool:
         return getattr(msg, "mission_type", MISSION) == self.mission_type
 
-    def due(self, now: float) -> list[tuple[str, tuple]]:
+    def due(self, now: float) -> list[Send]:
         """The messages to send now (first sends, answers, and re-sends after a timeout)."""
         if not self.done and self._last is not None and now >= self._deadline:
             if self._tries >= self.attempts:
@@ -157,7 +162,7 @@ class Upload(Transfer):
         self.items = list(items)
         self.transferred = 0
         self._asked = -1  # the highest item asked for
-        self._send("mission_count", *target, len(self.items), self.mission_type, now=now)
+        self._send(out.MissionCount(*target, len(self.items), self.mission_type), now)
 
     def timeout_reason(self) -> str:
         return (
@@ -175,7 +180,7 @@ class Upload(Transfer):
                 return
             self._asked = max(self._asked, seq)
             self.transferred = self._asked  # asking for item n: items before it are taken
-            self._send("mission_item_int", *self._item_fields(seq), now=now)
+            self._send(self._item_message(seq), now)
         elif kind == "MISSION_ACK":
             if msg.type == ACCEPTED and self._asked + 1 == len(self.items):
                 self.transferred = len(self.items)
@@ -201,24 +206,10 @@ class Upload(Transfer):
         name = entry.name.removeprefix("MAV_CMD_") if entry is not None else str(item.command)
         return f" at item {self._asked - self.numbered_from} ({name}, frame {item.frame})"
 
-    def _item_fields(self, seq: int) -> tuple:
-        item = self.items[seq]
-        return (
-            *self.target,
-            seq,
-            item.frame,
-            item.command,
-            item.current,
-            item.autocontinue,
-            item.param1,
-            item.param2,
-            item.param3,
-            item.param4,
-            item.x,
-            item.y,
-            item.z,
-            self.mission_type,
-        )
+    def _item_message(self, seq: int) -> out.MissionItemInt:
+        """Item ``seq`` as MISSION_ITEM_INT (an :class:`Item` holds its content's fields)."""
+        content = dataclasses.asdict(self.items[seq])
+        return out.MissionItemInt(*self.target, seq=seq, mission_type=self.mission_type, **content)
 
 
 class Download(Transfer):
@@ -228,7 +219,7 @@ class Download(Transfer):
         super().__init__(target, now, **kw)
         self.count: int | None = None
         self.items: list[Item] = []
-        self._send("mission_request_list", *target, self.mission_type, now=now)
+        self._send(out.MissionRequestList(*target, self.mission_type), now)
 
     def on_message(self, msg: Any, now: float) -> None:
         if self.done or not self._ours(msg):
@@ -247,18 +238,12 @@ class Download(Transfer):
     def _next(self, now: float) -> None:
         assert self.count is not None
         if len(self.items) >= self.count:
-            self._send(
-                "mission_ack",
-                *self.target,
-                ACCEPTED,
-                self.mission_type,
-                now=now,
-                expect_answer=False,
-            )
+            ack = out.MissionAck(*self.target, ACCEPTED, self.mission_type)
+            self._send(ack, now, expect_answer=False)
             self._finish()
             return
         seq = len(self.items)
-        self._send("mission_request_int", *self.target, seq, self.mission_type, now=now)
+        self._send(out.MissionRequestInt(*self.target, seq, self.mission_type), now)
 
 
 class Clear(Transfer):
@@ -266,7 +251,7 @@ class Clear(Transfer):
 
     def __init__(self, target: tuple[int, int], now: float, **kw: Any) -> None:
         super().__init__(target, now, **kw)
-        self._send("mission_clear_all", *target, self.mission_type, now=now)
+        self._send(out.MissionClearAll(*target, self.mission_type), now)
 
     def on_message(self, msg: Any, now: float) -> None:
         if self.done or not self._ours(msg) or msg.get_type() != "MISSION_ACK":

@@ -32,7 +32,6 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import (
     EnvelopeSet,
-    HomePosition,
     MissionResult,
     WaypointClear,
     WaypointList,
@@ -46,6 +45,7 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.envelope_state import watch_breach
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
 from dronewrapper_bridge_mavlink import mission_transfer as mt
@@ -67,28 +67,17 @@ SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitu
 # ---------------------------------------------------------------- frames
 
 
-def relative(core: BridgeCore, x: float, y: float, z: float) -> tuple[float, float, float]:
-    """Local ENU (m) -> ENU m from home."""
-    hx, hy, hz = core.missions.home_local
-    return (x - hx, y - hy, z - hz)
-
-
 # ---------------------------------------------------------------- hooks the core calls
 
 
 def tick(core: BridgeCore) -> None:
     """Each stream tick: act on a breach, publish envelope, home and mission periodically."""
     state = core.missions
-    pose = core.pose()
-    if pose is not None and core.failsafe.airborne and core.failsafe.armed:
-        reason = state.monitor.update(state.envelope, relative(core, *pose[0]))
-        if reason:
-            action = state.envelope.breach_action
-            core.bridge_text(f"envelope breach: {reason}; {action}")
-            core.report_breach(state.monitor.limit, reason, action)
-            core.start(breach_action(core, action), core.now, core.stamp, background=True)
-    if core.now >= state._next_publish:
-        state._next_publish = core.now + PUBLISH_PERIOD_S
+    action = watch_breach(core, state)
+    if action:
+        core.start(breach_action(core, action), core.now, core.stamp, background=True)
+    if core.now >= state.next_publish:
+        state.next_publish = core.now + PUBLISH_PERIOD_S
         publish_all(core)
 
 
@@ -100,13 +89,7 @@ def publish_all(core: BridgeCore) -> None:
 
 
 def publish_home(core: BridgeCore) -> None:
-    state = core.missions
-    lat, lon, alt = state.home_geo or (math.nan, math.nan, math.nan)
-    x, y, z = state.home_local
-    home = HomePosition(
-        header=Header(stamp=core.stamp), latitude=lat, longitude=lon, altitude=alt, x=x, y=y, z=z
-    )
-    core.publish(registry.HOME_POSITION, home)
+    core.publish(registry.HOME_POSITION, core.missions.home_message(core.stamp))
 
 
 def publish_waypoints(core: BridgeCore) -> None:
@@ -120,12 +103,6 @@ def publish_waypoints(core: BridgeCore) -> None:
         ],
     )
     core.publish(registry.MISSION_WAYPOINTS, listing)
-
-
-def breach_state(core: BridgeCore) -> str:
-    """``breach:<action>`` while the aircraft is outside the envelope, else ""."""
-    state = core.missions
-    return f"breach:{state.envelope.breach_action}" if state.monitor.outside else ""
 
 
 def breach_action(core: BridgeCore, action: str) -> Steps:
@@ -150,17 +127,14 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
     counted: a bad home must never move the fence, the returns or the go-tos."""
     local = (float(msg.y), float(msg.x), -float(msg.z))  # NED -> ENU
     if (msg.latitude == 0 and msg.longitude == 0) or not all(map(math.isfinite, local)):
-        core.out.errors.append("home_position")
+        core.dropped("home_position")
         return
     core.telemetry.on_home_position(msg)
-    state = core.missions
-    before = (state.home_local, state.home_geo)
-    state.home_local = local
-    state.home_known = True
-    state.home_geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
-    if (state.home_local, state.home_geo) != before:
+    geo = (msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1e3)
+    moved, first = core.missions.on_home(local, geo)
+    if moved:
         publish_home(core)
-    if before[1] is None:  # home known: the autopilot's return heights and fence
+    if first:  # home known: the autopilot's return heights and fence
         follow_envelope(core)
 
 
@@ -172,30 +146,24 @@ def follow_envelope(core: BridgeCore) -> None:
 
 
 def on_transfer_message(core: BridgeCore, msg: Any) -> None:
-    transfer = core.missions.transfer
-    if transfer is not None:
-        transfer.on_message(msg, core.now)
+    core.transfers.on_message(msg)
     if msg.get_type() == "MISSION_ACK":
         log.debug("MISSION_ACK %s", mt.result_name(msg.type))
 
 
 def on_mission_current(core: BridgeCore, msg: Any) -> None:
-    state = core.missions
-    seq = home_slot.ours(core, int(msg.seq)) or 0
-    if seq != state.current_seq:
-        state.current_seq = seq
+    if core.missions.on_current(home_slot.ours(int(msg.seq), core.autopilot) or 0):
         publish_waypoints(core)
 
 
 def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
     """MISSION_ITEM_REACHED, published once per item of this mission (:func:`home_slot.reached`;
     PX4 repeats it for a while)."""
-    seq = home_slot.reached(core, int(msg.seq))
-    if seq is None or seq == core.missions.last_reached:
-        return
-    core.missions.last_reached = seq
-    reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=seq)
-    core.publish(registry.MISSION_REACHED, reached)
+    state = core.missions
+    seq = home_slot.reached(int(msg.seq), core.autopilot, state.current_seq)
+    if seq is not None and state.on_reached(seq):
+        reached = WaypointReached(header=Header(stamp=core.stamp), wp_seq=seq)
+        core.publish(registry.MISSION_REACHED, reached)
 
 
 HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
@@ -231,20 +199,13 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     except mission_frames.MissionFrameError as exc:
         raise ServiceError(str(exc), "refused") from None
     items = [uploads.item_of(wp) for wp in waypoints]
-    upload = mt.Upload(
-        home_slot.uploaded(core, items),
-        core.target(),
-        core.now,
-        numbered_from=home_slot.offset(core),
-        **uploads.transfer_args(),
-    )
-    yield from uploads.run_transfer(core, upload)
+    offset = home_slot.offset(core.autopilot)
+    held = home_slot.uploaded(items, core.autopilot, state.home_geo)  # as the autopilot holds them
+    upload = yield from core.transfers.upload(held, numbered_from=offset)
     if not upload.error:
-        state.waypoints = waypoints
-        state.current_seq = 0
-        state.last_reached = -1
+        state.new_mission(waypoints)
         publish_waypoints(core)
-    transferred = max(0, upload.transferred - home_slot.offset(core))
+    transferred = max(0, upload.transferred - offset)
     error = upload.error
     message = error or f"{len(items)} item(s) uploaded"
     if not error and rally is not None:
@@ -256,9 +217,9 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
 def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
     """mission/pull: download the autopilot's mission."""
     core.require_connected()
-    download = mt.Download(core.target(), core.now, **uploads.transfer_args())
-    yield from uploads.run_transfer(core, download)
-    waypoints = [uploads.waypoint_of(item) for item in home_slot.downloaded(core, download.items)]
+    download = yield from core.transfers.download()
+    items = home_slot.downloaded(download.items, core.autopilot)
+    waypoints = [uploads.waypoint_of(item) for item in items]
     if not download.error:
         core.missions.waypoints = waypoints
         publish_waypoints(core)
@@ -273,8 +234,7 @@ def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
 def clear(core: BridgeCore, _request: WaypointClear) -> Steps:
     """mission/clear: MISSION_CLEAR_ALL."""
     core.require_connected()
-    transfer = mt.Clear(core.target(), core.now, **uploads.transfer_args())
-    yield from uploads.run_transfer(core, transfer)
+    transfer = yield from core.transfers.clear()
     if not transfer.error:
         core.missions.waypoints = []
         core.missions.current_seq = 0
@@ -289,7 +249,9 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
     if count and request.wp_seq >= count:
         raise ValueError(f"wp_seq {request.wp_seq} is beyond the mission's {count} item(s)")
     result, message = yield from ops.command(
-        core, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, float(home_slot.theirs(core, request.wp_seq))
+        core,
+        mavlink.MAV_CMD_DO_SET_MISSION_CURRENT,
+        float(home_slot.theirs(request.wp_seq, core.autopilot)),
     )
     return MissionResult(success=result == ops.ACCEPTED, message=message)
 
@@ -301,7 +263,7 @@ def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
     the autopilot follows when connected and home is known (:func:`follow_envelope`)."""
     state = core.missions
     pose = core.pose()
-    aircraft = None if pose is None else relative(core, *pose[0])[:2]
+    aircraft = None if pose is None else state.relative(*pose[0])[:2]
     yield from autopilot_limits.check_new_envelope(core, request)
     changed = envelope_set.apply(
         state, request, configured=core.config.envelope, caller=core.caller, aircraft=aircraft

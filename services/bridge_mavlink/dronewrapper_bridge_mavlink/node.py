@@ -132,8 +132,8 @@ class Bridge(BridgeNode[BridgeCore]):
     def send(self, out: Outbox) -> None:
         for peer in out.peers:
             self.link.peer = peer
-        for name, fields in out.sends:
-            self.link.send(name, *fields)
+        for message in out.sends:
+            self.link.send(message)
         for error in out.errors:
             self.node.callback_errors[error] += 1
 

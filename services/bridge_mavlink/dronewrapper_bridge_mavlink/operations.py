@@ -1,12 +1,13 @@
 """Service calls that wait for the autopilot, as pure operations the core advances.
 
 Each operation is a generator over a :class:`~dronewrapper_bridge_mavlink.core_view.BridgeCore`:
-it reads ``core.now`` (set by the caller of every core entry point), queues sends on the core,
-and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes it
-whenever a message or a tick arrives, so every wait is a loop that re-checks its condition.
-Its return value is the service reply; an exception it raises (``ValueError`` for a bad
-request, ``ServiceError``) is the call's error. No sockets, threads or clock here: the node
-waits on :attr:`dronewrapper_bridge_base.operation.Operation.done`.
+it reads ``core.now`` (set by the caller of every core entry point), sends through the core's
+parts (its ``commands``, ``parameters``, ``transfers``), and yields the time (monotonic s) it
+wants to be resumed at the latest; the core resumes it whenever a message or a tick arrives, so
+every wait is a loop that re-checks its condition. Its return value is the service reply; an
+exception it raises (``ValueError`` for a bad request, ``ServiceError``) is the call's error.
+No sockets, threads or clock here: the node waits on
+:attr:`dronewrapper_bridge_base.operation.Operation.done`.
 
 The rules they carry: a take-off while flying does nothing; PX4's OFFBOARD is asked for only
 after > ``offboard_prime_s`` of streaming; PX4's DO_SET_MODE is answered by its second ack (a
@@ -25,7 +26,6 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
-    SEVERITY_WARNING,
     CommandBool,
     CommandBoolResult,
     CommandTOL,
@@ -45,6 +45,7 @@ from dronewrapper_bridge_mavlink.modes import (
     HOLD_MODE,
     LAND_MODE,
     RETURN_MODE,
+    is_guided,
     set_mode_params,
 )
 
@@ -62,59 +63,9 @@ ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 def exchange(
     core: BridgeCore, command: int, *params: float, expected_acks: int = 1
 ) -> Generator[float, None, tuple[cmds.PendingCommand, str]]:
-    """Send a COMMAND_LONG and wait for its final ack (the second of ``expected_acks`` = 2,
-    see commands.py): the finished command and an explanation (with the autopilot's
-    STATUSTEXT reason for a refusal). One exchange at a time, none before late duplicate acks
-    of the same command id have passed."""
-    config = core.config
-    pending = cmds.PendingCommand(
-        cmds.command_long(command, *params),
-        attempts=config.command_attempts,
-        ack_timeout=config.command_ack_timeout,
-        expected_acks=expected_acks,
-        final_ack_timeout=config.final_ack_timeout,
-    )
-    while core.command_busy or core.now < core.acks.quiet_until(command):
-        yield core.now + 0.05 if core.command_busy else core.acks.quiet_until(command)
-    core.take_command_slot()
-    started = core.now
-    core.acks.register(pending)
-    try:
-        while True:
-            msg = pending.due(core.now)
-            if msg is not None:
-                fields = (msg.command, msg.confirmation, *msg.params)
-                core.send("command_long", *core.target(), *fields)
-            if pending.finished(core.now):
-                break
-            yield pending.wake_at(core.now)
-    finally:
-        core.acks.release(pending, core.now)
-        core.release_command_slot()
-    name = cmds.command_name(command)
-    if pending.result == ACCEPTED:
-        return pending, f"{name} accepted"
-    if pending.result == cmds.RESULT_NO_ACK:
-        return pending, f"{name}: no COMMAND_ACK after {pending.sent} attempt(s)"
-    reason = yield from reason_since(core, started)
-    text = f"{name} refused: {cmds.result_name(pending.result)}"
-    return pending, f"{text} ({reason})" if reason else text
-
-
-def reason_since(core: BridgeCore, started: float) -> Generator[float, None, str]:
-    """The autopilot's warnings since ``started``, waiting up to ``reason_wait`` s for one."""
-    deadline = core.now + core.config.reason_wait
-    while True:
-        texts = [
-            text.text
-            for at, text in core.recent_texts
-            if at >= started - 0.05
-            and text.severity <= SEVERITY_WARNING
-            and text.header.frame_id != "bridge"
-        ]
-        if texts or core.now >= deadline:
-            return "; ".join(texts)
-        yield deadline
+    """A COMMAND_LONG until its final ack, by the core's :class:`~.command_exchange.Commands`:
+    the finished command and an explanation."""
+    return (yield from core.commands.exchange(command, *params, expected_acks=expected_acks))
 
 
 def command(core: BridgeCore, command: int, *params: float) -> Generator[float, None, tuple]:
@@ -225,7 +176,8 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
     primed = px4 and params.name == GUIDED_MODE[AUTOPILOT_PX4]
     if primed:
         yield from prime(core)
-    core.missions.refuse_mode(params.name)  # no guided mode while outside the envelope
+    guided = is_guided(params.name)  # no guided mode while outside the envelope
+    core.missions.refuse_mode(params.name, guided=guided)
     core.failsafe.on_mode_requested(params.name, core.now)
     pending, message = yield from exchange(
         core,

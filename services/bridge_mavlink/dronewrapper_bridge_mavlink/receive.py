@@ -3,7 +3,7 @@
 :func:`admission` decides whether a message may be used at all (a second autopilot with the
 same system id, a duplicated or reordered datagram, a non-finite pose are dropped) and returns
 what the core must do about it. The handlers in :data:`HANDLERS` feed the objects that own the
-telemetry (the core's ``telemetry``, ``statustexts``, ``acks``, ``params``) and queue the
+telemetry (the core's ``telemetry``, ``statustexts``, ``commands``, ``parameters``) and queue the
 samples to publish; what changes the core's own state (heartbeat, landed state, battery) is the
 core's. Time is the core's ``now`` (monotonic s) and ``stamp`` (wall-clock s for headers).
 """
@@ -99,7 +99,7 @@ def on_command_ack(core: BridgeCore, msg: Any) -> None:
     ours = (core.config.source_system, core.config.source_component)
     if target != (0, 0) and target != ours:
         return  # the answer to a ground station's command (forwarded), not to ours
-    outcome = core.acks.on_ack(int(msg.command), int(msg.result), core.now)
+    outcome = core.commands.on_ack(int(msg.command), int(msg.result))
     log.debug(
         "COMMAND_ACK %s %s (%s)",
         cmds.command_name(msg.command),
@@ -109,7 +109,7 @@ def on_command_ack(core: BridgeCore, msg: Any) -> None:
 
 
 def on_param_value(core: BridgeCore, msg: Any) -> None:
-    core.params.on_value(msg)
+    core.parameters.on_value(msg)
 
 
 def on_batch(core: BridgeCore, batch: Sequence[Any], now: float, stamp: float) -> None:
@@ -121,7 +121,7 @@ def on_batch(core: BridgeCore, batch: Sequence[Any], now: float, stamp: float) -
         try:
             core.on_mavlink(received.msg, received.source, now, stamp)
         except Exception:
-            core.out.errors.append("mavlink")
+            core.dropped("mavlink")
             log.exception("error handling %s", type(received.msg).__name__)
 
 

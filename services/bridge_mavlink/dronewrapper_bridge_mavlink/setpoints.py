@@ -15,7 +15,9 @@ Accepted controls (type_mask, coordinate_frame):
 
 Anything else, NaN/inf in a used field or values outside :class:`Limits` is refused with a
 reason (:class:`SetpointError`), by the rules every bridge shares
-(:mod:`dronewrapper_bridge_base.setpoint_limits`).
+(:mod:`dronewrapper_bridge_base.setpoint_limits`), once, where the setpoint enters the core
+(``GuidedCore.on_setpoint``); :func:`to_local_ned` converts what was admitted there and checks
+nothing again.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper_bridge_base import setpoint_limits
 from dronewrapper_bridge_base.frames import enu_to_ned, heading_flu_to_enu, yaw_enu_to_ned
 from dronewrapper_bridge_base.guided_failsafe import hold_target
-from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError
+from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, kind_of
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT
 
 
@@ -94,12 +96,13 @@ def to_local_ned(
     z_enu: float,
     limits: Limits = DEFAULT_LIMITS,
 ) -> LocalNedTarget:
-    """The SET_POSITION_TARGET_LOCAL_NED fields for a valid ``target`` (see :func:`validate`).
+    """The SET_POSITION_TARGET_LOCAL_NED fields for an admitted ``target`` (one :func:`validate`
+    passed at the core's edge, or the bridge's own hold); it is not checked again.
 
     ``yaw_enu`` is the vehicle's current heading (rad, ENU), used to rotate body velocities;
     ``z_enu`` its current altitude (m, ENU), used for ArduPilot's emulated mixed control.
     """
-    kind = validate(target, limits)
+    kind = kind_of(target)
     if kind is Kind.POSITION:
         p = target.required_position()
         n, e, d = enu_to_ned((p.x, p.y, p.z))

@@ -1,7 +1,7 @@
-"""The bridge's mission-protocol transfers over the core, and the lists it uploads besides the
-mission: the autopilot's fence (from the envelope) and its rally points (pure, over the core).
+"""The lists the bridge uploads besides the mission: the autopilot's fence (from the envelope)
+and its rally points (pure, over the core's :class:`~dronewrapper_bridge_mavlink.transfers.
+Transfers`).
 
-:func:`run_transfer` drives one :mod:`mission_transfer` machine at a time (the others wait);
 :func:`item_of` and :func:`waypoint_of` convert between the bus's Waypoint and
 MISSION_ITEM_INT content. :func:`push_fence` uploads the envelope as MAV_MISSION_TYPE_FENCE
 (:func:`fence_items`); :func:`push_rally` uploads rally points as MAV_MISSION_TYPE_RALLY
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import Any
+from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -24,37 +24,15 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 
-BridgeCore = Any  # the bridge's core (core.BridgeCore), not imported: no import circle
+if TYPE_CHECKING:
+    from dronewrapper_bridge_mavlink.core_view import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
 FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's breach
-TRANSFER_TIMEOUT_S = 1.5
-TRANSFER_ATTEMPTS = 5
 FENCE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
 FENCE_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
 FENCE_CIRCLE = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
-
-
-def run_transfer(core: BridgeCore, transfer: mt.Transfer) -> Generator[float, None, None]:
-    """Drive ``transfer`` to its end (one transfer at a time; the others wait)."""
-    state = core.missions
-    while state.transfer is not None and not state.transfer.done:
-        yield core.now + 0.05
-    state.transfer = transfer
-    try:
-        while True:
-            for name, fields in transfer.due(core.now):
-                core.send(name, *fields)
-            if transfer.done:
-                return
-            yield transfer.wake_at()
-    finally:
-        state.transfer = None
-
-
-def transfer_args() -> dict[str, Any]:
-    return {"timeout": TRANSFER_TIMEOUT_S, "attempts": TRANSFER_ATTEMPTS}
 
 
 def item_of(waypoint: Waypoint) -> mt.Item:
@@ -128,8 +106,7 @@ def push_fence(core: BridgeCore, _request: WaypointClear) -> Steps:
     if core.missions.home_geo is None:
         raise ServiceError("home is not known yet: the fence cannot be placed", "refused")
     items = fence_items(core.missions.envelope, core.missions.home_geo)
-    upload = mt.Upload(items, core.target(), core.now, mission_type=mt.FENCE, **transfer_args())
-    yield from run_transfer(core, upload)
+    upload = yield from core.transfers.upload(items, mission_type=mt.FENCE)
     if upload.error:
         log.warning("fence upload: %s", upload.error)
     message = upload.error or f"fence of {len(items)} item(s) uploaded"
@@ -141,8 +118,7 @@ def push_rally(core: BridgeCore, rally: list[Waypoint]) -> Generator[float, None
     (MAV_MISSION_TYPE_RALLY, no home item on any autopilot; ``[]`` clears them); on success
     they are ``core.missions.rally``. Returns the error, "" on success."""
     items = [item_of(wp) for wp in rally]
-    upload = mt.Upload(items, core.target(), core.now, mission_type=mt.RALLY, **transfer_args())
-    yield from run_transfer(core, upload)
+    upload = yield from core.transfers.upload(items, mission_type=mt.RALLY)
     if upload.error:
         log.warning("rally upload: %s", upload.error)
         return f"the mission was uploaded, its rally points were not: {upload.error}"
@@ -156,7 +132,5 @@ __all__ = [
     "item_of",
     "push_fence",
     "push_rally",
-    "run_transfer",
-    "transfer_args",
     "waypoint_of",
 ]

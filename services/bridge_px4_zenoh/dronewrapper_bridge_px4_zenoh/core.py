@@ -42,11 +42,12 @@ from dronewrapper.msgs.mavros import (
 from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
-from dronewrapper_bridge_base.setpoint_limits import Kind, SetpointError, validate
+from dronewrapper_bridge_base.setpoint_limits import Kind, kind_of
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import telemetry as tm
@@ -62,6 +63,7 @@ log = logging.getLogger("bridge_px4_zenoh")
 
 STREAM_GAP_S = 0.5  # s without a setpoint written: the stream has stopped (priming restarts)
 ENTERED_HOLD_S = 1.5  # s a status showing the mode an accepted command left is taken as stale
+# (and, whenever it arrives, one PX4 stamped before the command's ack: held on the way)
 COALESCED: tuple[t.Px4Topic, ...] = (t.ATTITUDE, t.LOCAL_POSITION, t.GLOBAL_POSITION, t.BATTERY)
 """PX4's high-rate topics, decoded at the tick from :attr:`Px4ZenohCore.inbox`, in this order
 (a pose needs the attitude)."""
@@ -89,7 +91,7 @@ class Px4ZenohCore(GuidedCore):
         super().__init__(config, now, Outbox, log)
         self.config: Config = config
         self.versions = Versions(config.domain)
-        self.envelope = rules.EnvelopeState(config.envelope)
+        self.envelope = EnvelopeState(config.envelope)
         self.autopilot = tm.AUTOPILOT
         self.target_system = config.target_system  # 0 until vehicle_status names it
         self.target_component = config.target_component
@@ -102,7 +104,8 @@ class Px4ZenohCore(GuidedCore):
         self.samples_received = 0  # samples decoded
         self.last_sample_at = -math.inf
         self._reported: set[str] = set()  # topics whose mismatch was reported
-        self._entered = ("", "", -math.inf)  # (mode entered, mode left, until when)
+        self._entered = ("", "", -math.inf, 0)  # (mode entered, left, until when, ack's PX4 us)
+        self.last_ack_us = 0  # PX4's stamp of its newest vehicle_command_ack (us since boot)
         self._last_pose_pub = -math.inf
         self._last_global_pub = -math.inf
         self._last_send = -math.inf
@@ -234,6 +237,7 @@ class Px4ZenohCore(GuidedCore):
             self.ext = ext
         elif topic is t.COMMAND_ACK:
             self.acks.append((self.now, int(value["command"]), int(value["result"])))
+            self.last_ack_us = int(value["timestamp"])
             del self.acks[:-16]
 
     def _on_local_position(self, value: dict[str, Any]) -> None:
@@ -265,11 +269,12 @@ class Px4ZenohCore(GuidedCore):
         if self.status is None:
             return
         state = tm.state(self.status, connected=True, failsafe="", commander="")
-        mode, left, until = self._entered
-        if state.mode == left and self.now < until:  # sent before PX4 took the command
+        mode, left, until, acked_us = self._entered
+        older = int(self.status["timestamp"]) < acked_us  # PX4's clock: published before the ack
+        if state.mode == left and (older or self.now < until):  # sent before PX4 took it
             state = msgspec.structs.replace(state, mode=mode, guided=mode == "OFFBOARD")
         elif state.mode == mode:
-            self._entered = ("", "", -math.inf)  # confirmed
+            self._entered = ("", "", -math.inf, 0)  # confirmed
         self.heartbeat_state = state
         self.update_failsafe_vehicle()
         self.publish_state()
@@ -293,8 +298,10 @@ class Px4ZenohCore(GuidedCore):
         if hb is None or hb.mode == mode:
             return
         # a vehicle_status still showing the mode left is older than the ack: kept out for
-        # ENTERED_HOLD_S (it would have the failsafe stream OFFBOARD back on)
-        self._entered = (mode, hb.mode, self.now + ENTERED_HOLD_S)
+        # ENTERED_HOLD_S, and whenever it arrives if PX4 stamped it before the ack (a status
+        # held on the way would otherwise have the failsafe stream OFFBOARD back on, and a
+        # return refused as "left AUTO.RTL for OFFBOARD")
+        self._entered = (mode, hb.mode, self.now + ENTERED_HOLD_S, self.last_ack_us)
         self.heartbeat_state = msgspec.structs.replace(hb, mode=mode, guided=mode == "OFFBOARD")
         self.update_failsafe_vehicle()
         self.publish_state()
@@ -308,7 +315,7 @@ class Px4ZenohCore(GuidedCore):
             hb,
             header=Header(stamp=self.stamp),
             connected=self.connected,
-            failsafe=self.failsafe.state or rules.breach_state(self),
+            failsafe=self.failsafe.state or self.envelope.breach_state(),
             commander=self.commander,
         )
 
@@ -355,11 +362,8 @@ class Px4ZenohCore(GuidedCore):
         return (self.position_enu, self.yaw_enu)
 
     def _send_setpoint(self, target: PositionTarget) -> None:
-        try:
-            kind = validate(target, self.limits)
-        except SetpointError as exc:  # cannot happen for validated targets; never crash
-            log.error("setpoint conversion failed: %s", exc)
-            return
+        """Write an admitted ``target`` (validated where it entered, or the bridge's own)."""
+        kind = kind_of(target)
         self.write(t.OFFBOARD_MODE, trajectory.control_mode(kind))
         self.write(t.TRAJECTORY, trajectory.trajectory_setpoint(target, kind, self.yaw_enu))
         self.setpoints_sent += 1

@@ -1,5 +1,6 @@
-"""Home and the safety envelope on the PX4 Zenoh core (pure), the rules of the SDK's
-:mod:`dronewrapper.envelope` as every bridge keeps them:
+"""Home and the safety envelope on the PX4 Zenoh core (pure; the part holding them:
+bridge_base's :class:`~dronewrapper_bridge_base.envelope_state.EnvelopeState`), the rules of
+the SDK's :mod:`dronewrapper.envelope` as every bridge keeps them:
 
 * a setpoint outside the envelope is refused, the limit named (bridge_base's
   :func:`~dronewrapper_bridge_base.setpoint_envelope.refuse_setpoint`, on this state);
@@ -17,17 +18,12 @@ is not among its zenoh module's default topics.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-from dronewrapper import envelope as env
-from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs import registry
-from dronewrapper.msgs.mission import EnvelopeSet, HomePosition
-from dronewrapper.msgs.std import Header
-from dronewrapper.runtime import ServiceError
+from dronewrapper.msgs.mission import EnvelopeSet
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.breach import BreachMonitor
+from dronewrapper_bridge_base.envelope_state import watch_breach
 from dronewrapper_bridge_base.operation import Steps
 
 Px4ZenohCore = Any
@@ -36,47 +32,14 @@ Px4ZenohCore = Any
 PUBLISH_PERIOD_S = 2.0
 
 
-class EnvelopeState:
-    """The envelope in force, its breach monitor and home (local ENU m and geodetic)."""
-
-    def __init__(self, envelope: Envelope) -> None:
-        self.envelope = envelope
-        self.set_by = ""  # who set the envelope in force ("": the configured one)
-        self.monitor = BreachMonitor()
-        self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)
-        self.home_geo: tuple[float, float, float] | None = None  # deg, deg, m AMSL
-        self.next_publish = -math.inf
-        self.last_refusal_text = -math.inf
-
-    def relative(self, x: float, y: float, z: float) -> tuple[float, float, float]:
-        """Local ENU (m) -> ENU m from home."""
-        hx, hy, hz = self.home_local
-        return (x - hx, y - hy, z - hz)
-
-
 def refuse_takeoff(core: Px4ZenohCore, height: float) -> None:
     """ServiceError (refused) when a take-off to ``height`` m climbs above the envelope."""
-    try:
-        env.check_takeoff(core.envelope.envelope, height)
-    except EnvelopeError as exc:
-        raise ServiceError(str(exc), "refused") from None
+    core.envelope.refuse_takeoff(height)
 
 
 def refuse_mode(core: Px4ZenohCore, mode: str) -> None:
     """ServiceError (refused) for OFFBOARD while the aircraft is outside the envelope."""
-    state = core.envelope
-    if mode == "OFFBOARD" and state.monitor.outside:
-        raise ServiceError(
-            f"{mode} refused: the aircraft is outside the envelope (breach action "
-            f"{state.envelope.breach_action} in progress)",
-            "refused",
-        )
-
-
-def breach_state(core: Px4ZenohCore) -> str:
-    """``breach:<action>`` while the aircraft is outside the envelope, else ""."""
-    state = core.envelope
-    return f"breach:{state.envelope.breach_action}" if state.monitor.outside else ""
+    core.envelope.refuse_mode(mode, guided=mode == "OFFBOARD")
 
 
 def tick(core: Px4ZenohCore) -> str:
@@ -84,15 +47,7 @@ def tick(core: Px4ZenohCore) -> str:
     starts it: ``land``, ``return`` or ``hold``), else ""; publish the envelope and home
     periodically."""
     state = core.envelope
-    pose = core.pose()
-    breach = ""
-    if pose is not None and core.failsafe.airborne and core.failsafe.armed:
-        reason = state.monitor.update(state.envelope, state.relative(*pose[0]))
-        if reason:
-            action = state.envelope.breach_action
-            core.bridge_text(f"envelope breach: {reason}; {action}")
-            core.report_breach(state.monitor.limit, reason, action)
-            breach = action
+    breach = watch_breach(core, state)
     if core.now >= state.next_publish:
         state.next_publish = core.now + PUBLISH_PERIOD_S
         core.publish(registry.ENVELOPE, state.envelope)
@@ -101,13 +56,7 @@ def tick(core: Px4ZenohCore) -> str:
 
 
 def publish_home(core: Px4ZenohCore) -> None:
-    state = core.envelope
-    lat, lon, alt = state.home_geo or (math.nan, math.nan, math.nan)
-    x, y, z = state.home_local
-    home = HomePosition(
-        header=Header(stamp=core.stamp), latitude=lat, longitude=lon, altitude=alt, x=x, y=y, z=z
-    )
-    core.publish(registry.HOME_POSITION, home)
+    core.publish(registry.HOME_POSITION, core.envelope.home_message(core.stamp))
 
 
 def set_envelope(core: Px4ZenohCore, request: EnvelopeSet) -> Steps:

@@ -36,6 +36,7 @@ import zenoh
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime import Node
+from dronewrapper.runtime.qos import class_qos
 from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import flight
@@ -77,6 +78,11 @@ PORTS = bridge_ports("bridge_px4_zenoh", PUBLISHED, SERVICES, GUARDED)
 """What this bridge publishes, subscribes to and serves on the registry's keys
 (:mod:`dronewrapper.runtime.ports`); PX4's own ``fmu/`` keys are declared on the session."""
 WRITTEN = (t.OFFBOARD_MODE, t.TRAJECTORY, t.COMMAND)
+WRITE_QOS = class_qos(registry.COMMAND)
+"""How the writes to PX4 travel: as commands (blocking, express, interactive priority). With
+Zenoh's default (droppable, batched) the router was measured to stop forwarding them to PX4's
+zenoh-pico for over 1 s while they kept reaching it (PX4 left OFFBOARD: offboard signal lost,
+docs/px4_zenoh.md); a blocking put is never dropped on the way."""
 NODE_NAME = "dronewrapper_bridge_px4_zenoh"
 
 
@@ -139,7 +145,7 @@ class Bridge(BridgeNode[Px4ZenohCore]):
                 qos_text(),
             )
             self._declared.append(liveliness.declare_token(token))
-            publisher = self.session.declare_publisher(key)
+            publisher = self.session.declare_publisher(key, **WRITE_QOS)
             self._declared.append(publisher)
             self.writers[topic.name] = Writer(publisher, topic, gid_of(token), self.node.clock.time)
         for topic in t.TOPICS:  # only those it reads: PX4 publishes ~50 topics

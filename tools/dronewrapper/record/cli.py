@@ -9,22 +9,14 @@ dronewrapper foxglove [KEYEXPR...] [--port 8765] [--raw-images]
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 from collections.abc import Sequence
 from pathlib import Path
 
+from dronewrapper.command_line import client_session, stop_on_signals
 from dronewrapper.runtime.arguments import CommandParser
-from dronewrapper.runtime.options import add_zenoh_args, options_from_args
+from dronewrapper.runtime.options import add_zenoh_args
 from dronewrapper.runtime.service import setup_logging
-
-
-def _stop_on_signals() -> threading.Event:
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    return stop
 
 
 def _quality(value: str) -> int:
@@ -46,16 +38,6 @@ def _positive(value: str) -> float:
     if x == 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {value}")
     return x
-
-
-def _open(args: argparse.Namespace, prog: str):
-    from dronewrapper.router_reach import open_client_session
-
-    try:
-        return open_client_session(options_from_args(args))
-    except ConnectionError as exc:
-        print(f"{prog}: {exc}", file=sys.stderr)
-        return None
 
 
 def record_main(argv: Sequence[str]) -> int:
@@ -114,8 +96,8 @@ def record_main(argv: Sequence[str]) -> int:
     from dronewrapper.record.recorder import Recorder
 
     setup_logging()
-    stop = _stop_on_signals()
-    session = _open(args, "dronewrapper record")
+    stop = stop_on_signals()
+    session = client_session(args, "dronewrapper record")
     if session is None:
         return 1
     quality = args.jpeg_quality if args.compressed_images else None
@@ -159,8 +141,8 @@ def replay_main(argv: Sequence[str]) -> int:
     from dronewrapper.record.replayer import replay
 
     setup_logging()
-    stop = _stop_on_signals()
-    session = _open(args, "dronewrapper replay")
+    stop = stop_on_signals()
+    session = client_session(args, "dronewrapper replay")
     if session is None:
         return 1
     try:
@@ -200,8 +182,8 @@ def foxglove_main(argv: Sequence[str]) -> int:
     from dronewrapper.record.live import FoxgloveBridge, serve
 
     setup_logging()
-    stop = _stop_on_signals()
-    session = _open(args, "dronewrapper foxglove")
+    stop = stop_on_signals()
+    session = client_session(args, "dronewrapper foxglove")
     if session is None:
         return 1
     quality = None if args.raw_images else args.jpeg_quality
