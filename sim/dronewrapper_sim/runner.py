@@ -7,7 +7,9 @@ Threads:
   ``{ns}/sim/ground_truth`` and ``sim/objects/{name}/pose`` on Zenoh. It wakes for the next
   step, or at most ``loop_rate_hz`` times a second (then runs the steps owed at once, and sends
   the telemetry due before the next wake-up's midpoint: a fleet's sims and bridges wake
-  fewer times for the same streams);
+  fewer times for the same streams). Its wake-ups keep to a grid of ``1 / loop_rate_hz`` on
+  the monotonic clock; hosted with other members, the loop is no thread of its own but a
+  deadline and sockets of the host's one loop thread (:mod:`dronewrapper_sim.shared_loop`);
 - the camera thread renders ``cam_frontal`` and ``cam_ventral`` at the camera rate from a
   snapshot of the true pose and publishes ``{ns}/{camera}/image_raw`` (bgr8) and, while
   someone subscribes (or ``compressed`` is set), ``.../image_raw/compressed`` (JPEG); a camera
