@@ -113,8 +113,11 @@ def pose_figures(report: dict[str, object] | None) -> dict[str, object]:
     }
 
 
-def split_hosts(n: int, endpoint: str, loop_hz: str = "50") -> list[subprocess.Popen]:
-    """Two host processes on ``endpoint``: N sims in the first, their N bridges in the other."""
+def split_hosts(
+    n: int, endpoint: str, loop_hz: str = "50", physics_hz: str = "100"
+) -> list[subprocess.Popen]:
+    """Two host processes on ``endpoint``: N sims in the first, their N bridges in the other
+    (the sims as ``compose/sim_fleet.yaml`` makes them)."""
     from dronewrapper_compose.ports import free_port
 
     sims: list[str] = []
@@ -125,7 +128,8 @@ def split_hosts(n: int, endpoint: str, loop_hz: str = "50") -> list[subprocess.P
                "--log-level", "WARNING"]  # fmt: skip
         sims += ["-m", "dronewrapper_sim", "--scenario", "empty", "--udp-onboard", f"{port}:0",
                  "--udp-gcs", "off", "--set", "cameras=false", "--set",
-                 f"loop_rate_hz={loop_hz}", "--name", "sim", *bus, "--"]  # fmt: skip
+                 f"loop_rate_hz={loop_hz}", "--set", f"physics_rate_hz={physics_hz}",
+                 "--name", "sim", *bus, "--"]  # fmt: skip
         bridges += ["-m", "dronewrapper_bridge_mavlink", "--set",
                     f"connection=udpin:127.0.0.1:{port}", "--name", "bridge_mavlink", *bus,
                     "--"]  # fmt: skip

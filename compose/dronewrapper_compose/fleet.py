@@ -11,7 +11,8 @@ drone's namespace, with these variables of its own:
 ``ns``         its namespace, ``{prefix}{i}`` (``drone1`` ...; ``prefix`` is the graph's
                ``ns_prefix`` variable, ``drone`` by default)
 ``kind``       its kind
-``drone_port`` a UDP port free on this machine, one per drone (its autopilot link)
+``drone_port`` a UDP port free on this machine, one per drone (its autopilot link; outside
+               the ephemeral range, see ``ports.free_fixed_port``)
 ``address``    the drone's own address, from the ``addresses`` list ("" without one)
 ``local``      this machine's address for that drone, from ``local_addresses`` (else
                ``0.0.0.0``: every address, enough for one Tello)

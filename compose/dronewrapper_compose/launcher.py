@@ -55,7 +55,7 @@ from dronewrapper_compose.ports import (
     PortInUse,
     check_ports_free,
     choose_ports,
-    free_port,
+    free_fixed_port,
     router_port_in_use,
 )
 
@@ -149,7 +149,7 @@ class Launcher:
         self.drones: list[fleet.FleetDrone] = []
         if any(spec.each_drone for spec in graph.processes):
             try:
-                self.drones = fleet.plan_fleet(self.values, lambda: free_port("udp"))
+                self.drones = fleet.plan_fleet(self.values, free_fixed_port)
             except fleet.FleetError as exc:
                 raise GraphError(f"{graph_path}: {exc}") from exc
         self.groups = self.plan()

@@ -10,8 +10,10 @@ a value of ``auto`` (the simulated graphs' default) is replaced by a free port.
 from __future__ import annotations
 
 import errno
+import random
 import socket
 from collections.abc import Mapping
+from pathlib import Path
 
 PORT_KINDS = {"udp": socket.SOCK_DGRAM, "tcp": socket.SOCK_STREAM}
 AUTO = "auto"
@@ -49,6 +51,36 @@ def free_port(kind: str | int = "tcp", host: str = "127.0.0.1") -> int:
     with socket.socket(socket.AF_INET, socktype) as sock:
         sock.bind((host, 0))
         return sock.getsockname()[1]
+
+
+EPHEMERAL_RANGE_FILE = Path("/proc/sys/net/ipv4/ip_local_port_range")
+FIXED_PORTS_FROM = 10000
+"""The lowest port :func:`free_fixed_port` picks."""
+
+
+def ephemeral_range() -> tuple[int, int]:
+    """The ports this machine hands out to sockets bound to port 0 (Linux's
+    ``ip_local_port_range``; IANA's 49152-65535 where it cannot be read)."""
+    try:
+        low, high = (int(v) for v in EPHEMERAL_RANGE_FILE.read_text().split())
+    except (OSError, ValueError):
+        return 49152, 65535
+    return low, high
+
+
+def free_fixed_port(kind: str = "udp", host: str = "127.0.0.1", tries: int = 200) -> int:
+    """A port of ``kind`` free on ``host`` now and outside the ephemeral range, so that no
+    socket bound to port 0 meanwhile (a simulator's link, any other program's) can take it
+    before its owner binds it: a fleet's bridge ports, chosen before N simulators start and
+    bind their own links to port 0. Falls back to :func:`free_port` when none is found.
+    """
+    low, _high = ephemeral_range()
+    if low - 1 > FIXED_PORTS_FROM:
+        for _ in range(tries):
+            port = random.randint(FIXED_PORTS_FROM, low - 1)
+            if not port_in_use(kind, port, host):
+                return port
+    return free_port(kind, host)
 
 
 def private_links() -> dict[str, str]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from dronewrapper_sim.frames import body_up_enu, wrap_pi
 
@@ -136,19 +136,11 @@ def step(
         # sitting on the landing gear: no motion, level; yaw only turns with real lift
         lift = thrust * uz / GRAVITY
         r = r if lift > 0.5 else 0.0
-        return replace(
-            state,
-            vx=0.0,
-            vy=0.0,
-            vz=0.0,
-            ax=0.0,
-            ay=0.0,
-            az=0.0,
-            roll=0.0,
-            pitch=0.0,
+        return QuadState(  # the other fields at rest (0); dataclasses.replace is slower
+            x=state.x,
+            y=state.y,
+            z=state.z,
             yaw=wrap_pi(state.yaw + r * dt),
-            p=0.0,
-            q=0.0,
             r=r,
             thrust=thrust,
             on_ground=True,

@@ -1,11 +1,12 @@
 """MAVLink over UDP as PX4 SITL does it: one socket per link, replies to whoever talks to it.
 
-A link binds a local port (0 = ephemeral) and sends to a default remote (127.0.0.1:14540 for
-the onboard/API link, 127.0.0.1:14550 for the GCS link); as soon as a datagram arrives, the
-sender's address becomes the remote. Messages are MAVLink 2 (pymavlink's ``common`` dialect),
-from system ``sysid`` component 1; bytes that do not parse are counted and dropped. Each
-datagram is parsed on its own (a UDP datagram carries whole frames), so a datagram that ends in
-a partial or bogus frame header cannot swallow the start of the next one.
+A link binds a local port (0 = ephemeral) and sends to a default remote (127.0.0.1:14540 for the
+onboard/API link, 127.0.0.1:14550 for the GCS link); as soon as a datagram arrives, the sender's
+address becomes the remote. Messages are MAVLink 2 (pymavlink's ``common`` dialect), from system
+``sysid`` component 1, the messages of one wake-up in as few datagrams as fit; bytes that do not
+parse are counted and dropped. Each datagram is parsed on its own (a UDP datagram carries whole
+frames), so a datagram that ends in a partial or bogus frame header cannot swallow the start of
+the next one.
 
 With a signing key (:meth:`MavlinkUdpLink.set_signing_key`, policy in ``px4/signing.py``) the
 link signs what it sends and drops what arrives unsigned, wrongly signed or replayed
@@ -93,6 +94,8 @@ def parse_udp_spec(spec: str, default_local: int) -> UdpEndpoint | None:
     raise ValueError(f"UDP link {spec!r} is not [HOST:]PORT[:LOCAL] or 'off'")
 
 
+DATAGRAM_BYTES = 1400
+"""The most bytes of frames one datagram carries (within an Ethernet MTU beyond loopback)."""
 SIGNING_EPOCH_S = 1420070400  # 2015-01-01T00:00:00Z, MAVLink signing timestamps count from here
 
 
@@ -137,7 +140,8 @@ class MavlinkUdpLink:
         self.local_port: int = self.sock.getsockname()[1]
         self.mav = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=compid)
         self.received = 0
-        self.sent = 0
+        self.sent = 0  # messages
+        self.datagrams = 0  # datagrams sent (several messages each)
         self.bad = 0
         self.send_errors = 0
 
@@ -188,15 +192,27 @@ class MavlinkUdpLink:
         return out
 
     def send(self, msgs: list[mavlink.MAVLink_message]) -> None:
-        """Pack and send ``msgs`` to the current remote."""
+        """Pack ``msgs`` and send them to the current remote, as few datagrams as fit in
+        :data:`DATAGRAM_BYTES` each (a wake-up's telemetry in one: one system call here, one
+        read at the receiver; MAVLink over UDP allows several frames a datagram)."""
+        batch = bytearray()
         for msg in msgs:
             buf = msg.pack(self.mav)
             self.mav.seq = (self.mav.seq + 1) % 256
-            try:
-                self.sock.sendto(buf, self.remote)
-                self.sent += 1
-            except OSError:
-                self.send_errors += 1
+            if batch and len(batch) + len(buf) > DATAGRAM_BYTES:
+                self._send_datagram(batch)
+                batch = bytearray()
+            batch += buf
+            self.sent += 1
+        if batch:
+            self._send_datagram(batch)
+
+    def _send_datagram(self, data: bytearray) -> None:
+        try:
+            self.sock.sendto(data, self.remote)
+            self.datagrams += 1
+        except OSError:
+            self.send_errors += 1
 
     def close(self) -> None:
         self.sock.close()

@@ -7,7 +7,9 @@ Threads:
   ``{ns}/sim/ground_truth`` and ``sim/objects/{name}/pose`` on Zenoh. It wakes for the next
   step, or at most ``loop_rate_hz`` times a second (then runs the steps owed at once, and sends
   the telemetry due before the next wake-up's midpoint: a fleet's sims and bridges wake
-  fewer times for the same streams);
+  fewer times for the same streams). Its wake-ups keep to a grid of ``1 / loop_rate_hz`` on
+  the monotonic clock; hosted with other members, the loop is no thread of its own but a
+  deadline and sockets of the host's one loop thread (:mod:`dronewrapper_sim.shared_loop`);
 - the camera thread renders ``cam_frontal`` and ``cam_ventral`` at the camera rate from a
   snapshot of the true pose and publishes ``{ns}/{camera}/image_raw`` (bgr8) and, while
   someone subscribes (or ``compressed`` is set), ``.../image_raw/compressed`` (JPEG); a camera
@@ -189,64 +191,94 @@ class SimRunner:
     # ---- the loop ----
 
     def run(self, stop: threading.Event, duration_s: float | None = None) -> None:
-        """Run until ``stop`` is set (or ``duration_s`` of wall time passed)."""
-        if self.cameras is not None:
-            self.cameras.start()
-        dt = 1.0 / self.config.physics_rate_hz
-        rtf = self.config.realtime_factor
-        loop_hz = self.config.loop_rate_hz
-        gap = 1.0 / loop_hz if loop_hz else 0.0  # wall s between two wake-ups, at least
-        ahead = gap / 2 if gap > dt / rtf else 0.0  # wall s: sent early, due by the midpoint
+        """Run until ``stop`` is set (or ``duration_s`` of wall time passed): on a thread of
+        its own, or, hosted with other members (:mod:`dronewrapper.runtime.host`) and with no
+        ``duration_s``, on the host's shared loop (:mod:`dronewrapper_sim.shared_loop`)."""
+        if duration_s is None and self.node is not None:
+            from dronewrapper.runtime.host import shared_poller
+            from dronewrapper_sim.shared_loop import run_on_poller
+
+            poller = shared_poller()
+            if poller is not None:
+                run_on_poller(self, poller, stop)
+                return
+        self.begin()
         start = self.time.monotonic()
-        t0 = start
-        next_wake = start  # the wake-ups' own schedule (every ``gap``)
-        steps = 0
-        gt_period = 1.0 / self.config.ground_truth_rate_hz
-        obj_period = 1.0 / self.config.object_pose_rate_hz
-        next_gt = next_obj = start
         socks = list(self.links.values())
         while not stop.is_set():
             now = self.time.monotonic()
             if duration_s is not None and now - start >= duration_s:
                 break
-            next_tick = max(t0 + (steps + 1) * dt / rtf, next_wake)
-            wait = min(max(next_tick - now, 0.0), 0.05)
+            wait = min(max(self.next_wake() - now, 0.0), 0.05)
             if socks:
                 readable, _, _ = select.select(socks, [], [], wait)
                 for link in readable:
-                    self._receive(link)
+                    self.receive(link)
             elif wait > 0:
                 self.time.wait(stop, wait)
-            now = self.time.monotonic()
-            if now < next_tick:
-                continue
-            owed = int((now - t0) * rtf / dt) - steps
-            if owed > MAX_CATCH_UP_STEPS:  # a long stall: slip the clock, do not burst
-                slip = (owed - MAX_CATCH_UP_STEPS) * dt / rtf
-                t0 += slip
-                self.slipped_s += slip
-                owed = MAX_CATCH_UP_STEPS
-            if self._reset_asked.is_set():
-                self._reset_asked.clear()
-                self.autopilot.reset_to_start()
-                self._reset_done.set()
-            for _ in range(owed):
-                self.autopilot.step(dt)
-            steps += owed
-            next_wake = max(next_wake + gap, now) if gap else now
-            self.clock = (now, self.autopilot.time_s, self.slipped_s)
-            with self.world_lock:
-                self.world.step(owed * dt)
-            self._snapshot = self._make_snapshot()
-            for name, msgs in self.autopilot.poll(ahead * rtf).items():
-                if msgs:
-                    self.links[name].send(msgs)
-            if now + ahead >= next_gt:
-                next_gt = max(next_gt + gt_period, now)
-                self._publish_ground_truth()
-            if now + ahead >= next_obj:
-                next_obj = max(next_obj + obj_period, now)
-                self._publish_objects()
+            self.wake(self.time.monotonic())
+
+    def begin(self) -> None:
+        """Start the loop's schedule now, and the cameras."""
+        if self.cameras is not None:
+            self.cameras.start()
+        self._dt = 1.0 / self.config.physics_rate_hz
+        self._rtf = self.config.realtime_factor
+        loop_hz = self.config.loop_rate_hz
+        self._gap = 1.0 / loop_hz if loop_hz else 0.0  # wall s between two wake-ups, at least
+        # wall s: telemetry sent early, due by the next wake-up's midpoint
+        self._ahead = self._gap / 2 if self._gap > self._dt / self._rtf else 0.0
+        now = self.time.monotonic()
+        self._t0 = now
+        self._wake_at = now  # the wake-ups' own schedule (on a grid of ``gap``)
+        self._steps = 0
+        self._next_gt = self._next_obj = now
+
+    def next_wake(self) -> float:
+        """When the loop next has work (monotonic s): the next physics step, no sooner than
+        the next wake-up of its schedule."""
+        return max(self._t0 + (self._steps + 1) * self._dt / self._rtf, self._wake_at)
+
+    def wake(self, now: float) -> float:
+        """At ``now`` (monotonic s), if a step is due: run the steps owed, step the world,
+        send the telemetry due and publish what is due on Zenoh. Returns :meth:`next_wake`.
+
+        The wake-ups keep to a grid of ``1 / loop_rate_hz`` on the monotonic clock, so the
+        sims of one host (and of one machine) wake at the same instants and their datagrams
+        leave together."""
+        if now < self.next_wake():
+            return self.next_wake()
+        dt, rtf = self._dt, self._rtf
+        owed = int((now - self._t0) * rtf / dt) - self._steps
+        if owed > MAX_CATCH_UP_STEPS:  # a long stall: slip the clock, do not burst
+            slip = (owed - MAX_CATCH_UP_STEPS) * dt / rtf
+            self._t0 += slip
+            self.slipped_s += slip
+            owed = MAX_CATCH_UP_STEPS
+        if self._reset_asked.is_set():
+            self._reset_asked.clear()
+            self.autopilot.reset_to_start()
+            self._reset_done.set()
+        for _ in range(owed):
+            self.autopilot.step(dt)
+        self._steps += owed
+        gap = self._gap
+        self._wake_at = gap * (math.floor(now / gap) + 1) if gap else now
+        self.clock = (now, self.autopilot.time_s, self.slipped_s)
+        with self.world_lock:
+            self.world.step(owed * dt)
+        self._snapshot = self._make_snapshot()
+        ahead = self._ahead
+        for name, msgs in self.autopilot.poll(ahead * rtf).items():
+            if msgs:
+                self.links[name].send(msgs)
+        if now + ahead >= self._next_gt:
+            self._next_gt = max(self._next_gt + 1.0 / self.config.ground_truth_rate_hz, now)
+            self._publish_ground_truth()
+        if now + ahead >= self._next_obj:
+            self._next_obj = max(self._next_obj + 1.0 / self.config.object_pose_rate_hz, now)
+            self._publish_objects()
+        return self.next_wake()
 
     def _set_signing_key(self, key: bytes | None) -> None:
         for link in self.links.values():
@@ -275,7 +307,8 @@ class SimRunner:
                 rejected,
             )
 
-    def _receive(self, link: MavlinkUdpLink) -> None:
+    def receive(self, link: MavlinkUdpLink) -> None:
+        """Handle every message waiting on ``link`` (the autopilot answers at once)."""
         msgs = link.receive()
         if link.rejected:
             self._note_rejections(link)

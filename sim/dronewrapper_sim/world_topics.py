@@ -23,8 +23,9 @@ log = logging.getLogger("sim")
 
 
 class WorldTopics:
-    """The world on Zenoh, the same for every aircraft: the vehicle's ``{ns}/sim/ground_truth``,
-    ``sim/objects/{name}/pose`` of each object, and their teleop ``sim/objects/{name}/cmd_vel``.
+    """The world on Zenoh, the same for every aircraft: the vehicle's ``{ns}/sim/ground_truth``
+    (while someone subscribes), ``sim/objects/{name}/pose`` of each object, and their teleop
+    ``sim/objects/{name}/cmd_vel``.
 
     Args:
         node: the Zenoh node.
@@ -50,6 +51,9 @@ class WorldTopics:
         self.cmd_vel_errors = 0
         self.loads = 0
         self._gt_pub = node.publisher(registry.SIM_GROUND_TRUTH)
+        self._gt_watched = False
+        self._gt_listener = self._gt_pub.on_matching(self._on_gt_matching)
+        self._gt_watched = self._gt_watched or self._gt_pub.watched()
         self._object_pubs: dict[str, Any] = {}
         self._declare_objects()
         node.serve(registry.SIM_WORLD, lambda _request: self.state())
@@ -100,9 +104,14 @@ class WorldTopics:
         log.info("world loaded: scenario %s, %d objects", scenario.name, len(self.world.objects))
         return self.state()
 
+    def _on_gt_matching(self, matching: bool) -> None:
+        self._gt_watched = matching
+
     def publish_ground_truth(self, snapshot: PoseSnapshot) -> None:
-        """Publish the vehicle's true pose."""
-        self._gt_pub.put(pose_msg(snapshot, seq=self._gt_pub.count))
+        """Publish the vehicle's true pose while someone subscribes to it (a fleet's sims, that
+        nobody watches, spend nothing on it)."""
+        if self._gt_watched:
+            self._gt_pub.put(pose_msg(snapshot, seq=self._gt_pub.count))
 
     def publish_objects(self) -> None:
         """Publish the true pose of every world object (stamped now)."""

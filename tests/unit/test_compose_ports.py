@@ -13,6 +13,8 @@ from dronewrapper_compose.ports import (
     PortInUse,
     check_ports_free,
     choose_ports,
+    ephemeral_range,
+    free_fixed_port,
     port_in_use,
     router_port_in_use,
 )
@@ -138,3 +140,12 @@ def test_a_port_without_a_variable_is_a_graph_error(tmp_path):
     )
     with pytest.raises(GraphError, match="udp or tcp"):
         load_graph(bad)
+
+
+def test_a_fleets_drone_port_is_free_and_outside_the_ephemeral_range():
+    """No socket bound to port 0 (a simulator's link) can take a bridge's port before the
+    bridge binds it: the port is below the range the kernel hands out."""
+    low, _high = ephemeral_range()
+    ports = {free_fixed_port("udp") for _ in range(20)}
+    assert all(port < low and not port_in_use("udp", port) for port in ports)
+    assert len(ports) > 1  # picked at random, not one fixed number

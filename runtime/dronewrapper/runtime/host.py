@@ -24,6 +24,12 @@ What one process for N drones shares, and what it does not:
   rate (:func:`shared_ticker`, :mod:`~dronewrapper.runtime.ticker`) instead of waking a
   thread of its own: the MAVLink bridges' 30 Hz tick, one wake-up for all N of them. A tick
   that takes long delays its siblings' ticks of that period;
+- a shared loop: a member that waits on sockets and deadlines may add them to the host's one
+  :class:`~dronewrapper.runtime.poller.Poller` thread (:func:`shared_poller`) instead of a
+  thread of its own: the simulated Iris' physics loops and the MAVLink bridges' UDP receive,
+  so the host wakes once for all N sims' steps and once for all N bridges' datagrams. A call
+  that takes long delays its siblings' calls of that round; an exception out of one ends that
+  member alone (as below);
 - a member that raises (an exception out of its ``run``) ends alone: run_service logs it and
   closes its node, which withdraws its liveliness token and undeclares its publishers,
   subscribers and services; its bridge threads stop with its node's stop event, so its
@@ -52,6 +58,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from dronewrapper.runtime.options import ZenohOptions
+from dronewrapper.runtime.poller import Poller
 from dronewrapper.runtime.ticker import Ticker
 
 log = logging.getLogger("host")
@@ -119,6 +126,13 @@ def shared_ticker(rate_hz: float) -> Ticker | None:
     return None if member is None else member.host.ticker(rate_hz)
 
 
+def shared_poller() -> Poller | None:
+    """The host's one :class:`~dronewrapper.runtime.poller.Poller` (its members' sockets and
+    deadlines on one thread) for the calling member to add to, or None outside a host."""
+    member = current()
+    return None if member is None else member.host.poller()
+
+
 def main_of(module: str) -> Callable[[list[str]], int | None]:
     """The entry point ``python -m module`` runs: ``module.main``, else ``module.__main__.main``."""
     mod = importlib.import_module(module)
@@ -138,6 +152,7 @@ class Host:
         self._session: Any = None
         self._session_key: tuple[str, tuple[str, ...]] | None = None
         self._tickers: dict[float, Ticker] = {}
+        self._poller: Poller | None = None
 
     def ticker(self, rate_hz: float) -> Ticker:
         """The members' shared ticker at ``rate_hz`` (made on first use)."""
@@ -146,6 +161,13 @@ class Host:
             if ticker is None:
                 ticker = self._tickers[rate_hz] = Ticker(rate_hz, name=f"tick-{rate_hz:g}Hz")
             return ticker
+
+    def poller(self) -> Poller:
+        """The members' shared poller (made on first use)."""
+        with self._lock:
+            if self._poller is None:
+                self._poller = Poller(name="host-loop")
+            return self._poller
 
     def session_for(self, options: ZenohOptions) -> Any:
         """The shared session, opened with the first caller's router flags.

@@ -278,6 +278,24 @@ class MavLink:
             self._cutter.clear()
         if not conn.select(max(0.0, timeout)):
             return []
+        return self.drain()
+
+    @property
+    def is_udp(self) -> bool:
+        """A UDP link is open (one socket, which :meth:`fileno` gives, for the whole link)."""
+        return isinstance(self._conn, mavutil.mavudp)
+
+    def fileno(self) -> int:
+        """The descriptor of an open UDP link's socket (to wait on), else -1."""
+        conn = self._conn
+        return conn.port.fileno() if isinstance(conn, mavutil.mavudp) else -1
+
+    def drain(self) -> list[Received]:
+        """Every wanted message waiting now, without waiting (see :meth:`recv_batch`); raises
+        OSError on a link error."""
+        conn = self._conn
+        if conn is None:
+            return []
         self.reading.wakeups += 1
         datagrams = isinstance(conn, mavutil.mavudp)
         out: list[Received] = []

@@ -1,21 +1,24 @@
 """The bridge process: MAVLink autopilot <-> MAVROS-equivalent Zenoh keys (see README.md).
 
 Only I/O here: the link, the ground-station forwarding, the threads. Everything the bridge
-decides (the commander lease included) is in :class:`~dronewrapper_bridge_mavlink.core.BridgeCore`
-(pure, time as an argument); the wiring every bridge shares (driver, publishers, services,
-setpoints, tick loop) is :class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a
-receive loop (MAVLink in), a stream loop at ``stream_rate_hz`` (the core's tick: failsafe
-stream, our heartbeat, periodic samples; in a host, its one thread ticking every hosted
-bridge, :func:`~dronewrapper.runtime.host.shared_ticker`), Zenoh callbacks (setpoints
-forwarded at once) and the Node's service workers, which start an operation in the core and
-wait until it is done. Time is the node's clock alone: the core starts at it, the driver and
-the loops read and wait on it, and it makes the loops' threads (on a fake bus they run in its
-virtual time).
+decides (the commander lease included) is in
+:class:`~dronewrapper_bridge_mavlink.core.BridgeCore` (pure, time as an argument); the wiring
+every bridge shares (driver, publishers, services, setpoints, tick loop) is
+:class:`~dronewrapper_bridge_base.bridge_node.BridgeNode`. Threads: a receive loop (MAVLink in;
+in a host, a UDP link's socket is read by the host's one loop thread instead,
+:func:`~dronewrapper.runtime.host.shared_poller`), a stream loop at ``stream_rate_hz`` (the
+core's tick: failsafe stream, our heartbeat, periodic samples; in a host, its one thread ticking
+every hosted bridge, :func:`~dronewrapper.runtime.host.shared_ticker`), Zenoh callbacks
+(setpoints forwarded at once) and the Node's service workers, which start an operation in the
+core and wait until it is done. Time is the node's clock alone: the core starts at it, the
+driver and the loops read and wait on it, and it makes the loops' threads (on a fake bus they
+run in its virtual time).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import sys
 import threading
 from typing import Any
@@ -29,7 +32,8 @@ from dronewrapper.msgs.registry import Service
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.contract import NodeApi
-from dronewrapper.runtime.host import shared_ticker
+from dronewrapper.runtime.host import shared_poller, shared_ticker
+from dronewrapper.runtime.poller import NO_FILE
 from dronewrapper.runtime.ports import Ports
 from dronewrapper_bridge_base.bridge_node import (
     BRIDGE_PUBLISHED,
@@ -109,6 +113,8 @@ class Bridge(BridgeNode[BridgeCore]):
         self.load_alarm = LoadAlarm(config.link_warn_load)
         self.reconnects = Reconnects()  # under _reconnects_lock (receive and status threads)
         self._reconnects_lock = threading.Lock()
+        self.failures: list[BaseException] = []
+        """What failed this bridge on its host's shared loop (``run`` raises the first)."""
 
     # ---- what the core knows
 
@@ -143,10 +149,12 @@ class Bridge(BridgeNode[BridgeCore]):
         self._open_link()
         serve_services(self)
         clock, stop = self.node.clock, self.node.stop_event
-        threads = [
-            clock.thread(self._receive_loop, "mavlink-rx"),
-            clock.thread(self._link_status_loop, "link-status"),
-        ]
+        threads = [clock.thread(self._link_status_loop, "link-status")]
+        poller = shared_poller()  # a host's, for its members (None outside a host)
+        if poller is not None and self.link.is_udp:
+            poller.add(SharedReceive(self), stop, self.failures.append, due=math.inf)
+        else:
+            threads.append(clock.thread(self._receive_loop, "mavlink-rx"))
         rate_hz = self.config.stream_rate_hz
         ticker = shared_ticker(rate_hz)  # a host's, for all its bridges (the real clock)
         if ticker is not None:
@@ -253,13 +261,52 @@ class Bridge(BridgeNode[BridgeCore]):
                 self.link.close()
                 clock.wait(stop, 1.0)
                 continue
-            if not batch:
-                continue
-            try:  # the wake-up's messages in one call of the core (receive.on_batch)
-                self.driver.feed(receive.on_batch, self.core, batch)
-            except Exception:
-                self.node.callback_errors["mavlink"] += 1
-                log.exception("error executing the effects of %d message(s)", len(batch))
+            self.handle_batch(batch)
+
+    def handle_batch(self, batch: list[Any]) -> None:
+        """One wake-up's messages in one call of the core (``receive.on_batch``); an error
+        executing their effects is logged and counted (``mavlink``)."""
+        if not batch:
+            return
+        try:
+            self.driver.feed(receive.on_batch, self.core, batch)
+        except Exception:
+            self.node.callback_errors["mavlink"] += 1
+            log.exception("error executing the effects of %d message(s)", len(batch))
+
+
+class SharedReceive:
+    """A bridge's UDP link read by its host's shared loop (:mod:`dronewrapper.runtime.poller`)
+    instead of a receive thread: what a readable socket holds is drained and handled as one
+    batch, as the thread does; a link error closes the link, which is reopened a second later
+    (the loop calls :meth:`on_due` then)."""
+
+    REOPEN_S = 1.0
+
+    def __init__(self, bridge: Bridge) -> None:
+        self.bridge = bridge
+
+    def fileno(self) -> int:
+        link = self.bridge.link
+        return link.fileno() if link.is_open else NO_FILE
+
+    def on_readable(self) -> float | None:
+        bridge = self.bridge
+        try:
+            batch = bridge.link.drain()
+        except (OSError, ValueError) as exc:
+            log.warning("link error on %s: %s; reopening", bridge.config.connection, exc)
+            bridge.link.close()
+            return bridge.node.clock.monotonic() + self.REOPEN_S
+        bridge.handle_batch(batch)
+        return None
+
+    def on_due(self, now: float) -> float:
+        """Reopen a closed link; the next try a second later if it fails."""
+        bridge = self.bridge
+        if bridge.link.is_open or bridge._open_link():
+            return math.inf
+        return now + self.REOPEN_S
 
 
 def link_kind(url: str) -> str:
@@ -294,6 +341,8 @@ def run(node: Node, config: Config) -> int:
     bridge.link.close()
     if bridge.gcs is not None:
         bridge.gcs.close()
+    if bridge.failures:
+        raise bridge.failures[0]
     return 0
 
 
