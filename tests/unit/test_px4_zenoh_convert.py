@@ -18,6 +18,7 @@ from dronewrapper.msgs.mavros import (
     MASK_VELOCITY,
     PositionTarget,
 )
+from dronewrapper_bridge_base.odometry import Headers
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_px4_zenoh import commands, modes, telemetry, trajectory
 
@@ -33,21 +34,25 @@ def position(**fields):
 
 def test_pose_and_velocity_are_enu_and_the_nose_north_is_yaw_90_degrees():
     q = telemetry.attitude_enu_flu(LEVEL_NORTH)
-    pose = telemetry.local_pose(position(), q, 12.5)
+    enu, velocity = telemetry.local_position(position()), telemetry.local_velocity(position())
+    pose, velocities = telemetry.local_odometry(Headers(), enu, q, velocity, 12.5)
     assert (pose.pose.position.x, pose.pose.position.y, pose.pose.position.z) == (2.0, 1.0, 3.0)
     o = pose.pose.orientation
     assert math.isclose(2 * math.atan2(o.z, o.w), math.pi / 2, abs_tol=1e-9)
     assert pose.header.stamp == 12.5 and pose.header.frame_id == "map"
-    v = telemetry.local_velocity(position(), 12.5).twist.linear
-    assert (v.x, v.y, v.z) == (-0.25, 0.5, 1.0)
-    body = telemetry.body_velocity(telemetry.local_velocity(position(), 1.0), q).twist.linear
-    assert body.x == pytest.approx(0.5) and body.y == pytest.approx(0.25)  # forward, left
+    local, body = velocities
+    v = local.twist.linear
+    assert (v.x, v.y, v.z) == (-0.25, 0.5, 1.0) and local.header.frame_id == "map"
+    assert body.twist.linear.x == pytest.approx(0.5) and body.twist.linear.y == pytest.approx(0.25)
+    assert body.header.frame_id == "base_link"  # forward, left
 
 
 def test_invalid_estimates_publish_nothing():
     q = telemetry.attitude_enu_flu(LEVEL_NORTH)
-    assert telemetry.local_pose(position(xy_valid=False), q, 0.0) is None
-    assert telemetry.local_velocity(position(v_z_valid=False), 0.0) is None
+    assert telemetry.local_position(position(xy_valid=False)) is None
+    assert telemetry.local_velocity(position(v_z_valid=False)) is None
+    _, velocities = telemetry.local_odometry(Headers(), (0.0, 0.0, 0.0), q, None, 0.0)
+    assert velocities is None  # the pose alone while the velocity is not valid
     assert telemetry.attitude_enu_flu({"q": [math.nan, 0.0, 0.0, 0.0]}) is None
 
 

@@ -55,8 +55,8 @@ def test_recorded_telemetry_is_a_landed_disarmed_quadrotor_at_zurich():
     assert (state.armed, state.mode, state.autopilot) == (False, "AUTO.LOITER", "px4")
     q = telemetry.attitude_enu_flu(decoded(topics.ATTITUDE))
     assert math.isclose(sum(c * c for c in q), 1.0, rel_tol=1e-5)
-    pose = telemetry.local_pose(decoded(topics.LOCAL_POSITION), q, 0.0)
-    assert pose is not None and abs(pose.pose.position.z) < 1.0
+    position = telemetry.local_position(decoded(topics.LOCAL_POSITION))
+    assert position is not None and abs(position[2]) < 1.0
     land = telemetry.extended_state(decoded(topics.LAND_DETECTED), 0.0)
     assert land.landed_state == LANDED_STATE_ON_GROUND
     fix = telemetry.global_position(decoded(topics.GLOBAL_POSITION), 0.0)

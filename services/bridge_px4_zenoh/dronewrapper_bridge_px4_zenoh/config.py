@@ -3,7 +3,6 @@ value with its key named). Units are in each key's comment; see the package's RE
 
 from __future__ import annotations
 
-import math
 from typing import Annotated
 
 import msgspec
@@ -18,19 +17,8 @@ from dronewrapper_bridge_base.config_ranges import (
     StreamRate,
 )
 from dronewrapper_bridge_base.guided_failsafe import FailsafeConfig
+from dronewrapper_bridge_base.setpoint_limits import Limits
 from dronewrapper_bridge_base.unattended import UnattendedConfig
-
-
-class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=True):
-    """Bounds on accepted setpoints (m, m/s, rad/s), the bounds of
-    :func:`dronewrapper_bridge_base.setpoint_limits.validate`: beyond them a setpoint is refused."""
-
-    max_distance: float = 10_000.0  # |x|, |y| of position targets, m from the local origin
-    min_altitude: float = -1_000.0  # ENU z, m
-    max_altitude: float = 10_000.0
-    max_horizontal_speed: float = 20.0  # m/s, norm of (vx, vy)
-    max_vertical_speed: float = 10.0  # m/s
-    max_yaw_rate: float = 2.0 * math.pi  # rad/s
 
 
 class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -56,7 +44,7 @@ class Config(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     battery_rate_hz: Positive = 2.0
     pose_max_hz: NonNegative = 0.0  # cap on pose and velocity samples; 0: one a tick (stream rate)
     global_position_max_hz: NonNegative = 10.0
-    limits: Limits = msgspec.field(default_factory=Limits)
+    limits: Limits = msgspec.field(default_factory=Limits)  # bounds on accepted setpoints
     envelope: Envelope = msgspec.field(default_factory=Envelope)  # where it may fly
     command_lease: bool = False  # obey one commander at a time (bridge_base.commander_lease)
     command_lease_ttl_s: Seconds60 = 10.0  # s: a silent holder loses the lease

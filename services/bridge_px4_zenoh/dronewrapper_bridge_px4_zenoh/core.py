@@ -46,6 +46,7 @@ from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.frames import yaw_ned_to_enu
 from dronewrapper_bridge_base.guided_core import GuidedCore
 from dronewrapper_bridge_base.guided_failsafe import hold_target
+from dronewrapper_bridge_base.odometry import Headers
 from dronewrapper_bridge_base.setpoint_envelope import refuse_setpoint
 from dronewrapper_bridge_base.setpoint_limits import Kind, kind_of
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
@@ -97,6 +98,7 @@ class Px4ZenohCore(GuidedCore):
         self.target_component = config.target_component
         self.status: dict[str, Any] | None = None  # the latest VehicleStatus
         self.q_enu_flu: tuple[float, float, float, float] | None = None
+        self.headers = Headers()  # pose and velocity headers, numbered per kind
         self.position_enu: tuple[float, float, float] | None = None
         self.yaw_enu = 0.0
         self.acks: list[tuple[float, int, int]] = []  # (when, command, result), newest last
@@ -248,22 +250,22 @@ class Px4ZenohCore(GuidedCore):
         q = self.q_enu_flu
         if q is None:
             return
-        pose = tm.local_pose(value, q, self.stamp)
-        if pose is None:
+        position = tm.local_position(value)
+        if position is None:
             return
-        p = pose.pose.position
-        self.position_enu = (p.x, p.y, p.z)
+        self.position_enu = position
         if math.isfinite(value["heading"]):
             self.yaw_enu = yaw_ned_to_enu(value["heading"])
         max_hz = self.config.pose_max_hz
         if max_hz > 0 and self.now - self._last_pose_pub < 0.9 / max_hz:
             return
         self._last_pose_pub = self.now
+        velocity = tm.local_velocity(value)
+        pose, velocities = tm.local_odometry(self.headers, position, q, velocity, self.stamp)
         self.publish(registry.LOCAL_POSE, pose)
-        velocity = tm.local_velocity(value, self.stamp)
-        if velocity is not None:
-            self.publish(registry.VELOCITY_LOCAL, velocity)
-            self.publish(registry.VELOCITY_BODY, tm.body_velocity(velocity, q))
+        if velocities is not None:
+            self.publish(registry.VELOCITY_LOCAL, velocities[0])
+            self.publish(registry.VELOCITY_BODY, velocities[1])
 
     def _show_vehicle(self) -> None:
         if self.status is None:

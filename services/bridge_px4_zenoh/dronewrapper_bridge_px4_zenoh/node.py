@@ -37,7 +37,12 @@ from dronewrapper.msgs import registry
 from dronewrapper.msgs.registry import Service
 from dronewrapper.runtime import Node
 from dronewrapper.runtime.qos import class_qos
-from dronewrapper_bridge_base.bridge_node import BridgeNode, Operation, bridge_ports
+from dronewrapper_bridge_base.bridge_node import (
+    BRIDGE_PUBLISHED,
+    BridgeNode,
+    Operation,
+    bridge_ports,
+)
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import flight
 from dronewrapper_bridge_px4_zenoh import operations as ops
@@ -49,19 +54,7 @@ from dronewrapper_ros2_codec.names import PUBLISHER, NodeName, parse_endpoint, q
 
 log = logging.getLogger("bridge_px4_zenoh")
 
-PUBLISHED = (
-    registry.STATE,
-    registry.EXTENDED_STATE,
-    registry.LOCAL_POSE,
-    registry.VELOCITY_BODY,
-    registry.VELOCITY_LOCAL,
-    registry.GLOBAL_POSITION,
-    registry.BATTERY,
-    registry.STATUSTEXT,
-    registry.ENVELOPE,
-    registry.HOME_POSITION,
-    registry.REFUSAL,
-)
+PUBLISHED = (*BRIDGE_PUBLISHED, registry.GLOBAL_POSITION)
 SERVICES: dict[Service[Any, Any], Operation] = {
     registry.FLIGHT_TAKEOFF: flight.takeoff_to,
     registry.FLIGHT_LAND: flight.land_here,

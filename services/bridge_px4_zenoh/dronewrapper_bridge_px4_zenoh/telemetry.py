@@ -8,15 +8,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from dronewrapper.msgs.geometry import (
-    Point,
-    Pose,
-    PoseStamped,
-    Quaternion,
-    Twist,
-    TwistStamped,
-    Vector3,
-)
+from dronewrapper.msgs.geometry import PoseStamped, TwistStamped, Vector3
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_ON_GROUND,
@@ -32,19 +24,17 @@ from dronewrapper.msgs.sensor import (
     NavSatStatus,
 )
 from dronewrapper.msgs.std import Header
-from dronewrapper_bridge_base.frames import (
-    attitude_ned_frd_to_enu_flu,
-    ned_to_enu,
-    rotate_inverse,
-)
+from dronewrapper.rotations import Quat, Vec3
+from dronewrapper_bridge_base.frames import attitude_ned_frd_to_enu_flu, ned_to_enu
+from dronewrapper_bridge_base.odometry import Headers, odometry
 from dronewrapper_bridge_px4_zenoh.modes import GUIDED_MODES, MANUAL_INPUT_MODES, mode_name
 
 ARMED = 2  # VehicleStatus.ARMING_STATE_ARMED
 AUTOPILOT = "px4"
-MAP, BASE_LINK = "map", "base_link"
+MAP = "map"
 
 
-def attitude_enu_flu(attitude: dict[str, Any]) -> tuple[float, float, float, float] | None:
+def attitude_enu_flu(attitude: dict[str, Any]) -> Quat | None:
     """VehicleAttitude's ``q`` (w, x, y, z; body FRD in NED) as (x, y, z, w), body FLU in ENU;
     None while PX4 has no valid attitude (NaN)."""
     w, x, y, z = attitude["q"]
@@ -53,44 +43,31 @@ def attitude_enu_flu(attitude: dict[str, Any]) -> tuple[float, float, float, flo
     return attitude_ned_frd_to_enu_flu((x, y, z, w))
 
 
-def local_pose(
-    position: dict[str, Any], q_enu_flu: tuple[float, float, float, float], stamp: float
-) -> PoseStamped | None:
-    """VehicleLocalPosition (NED m) and the attitude as a pose in ``map`` (ENU), or None while
-    the horizontal or vertical position is not valid."""
+def local_position(position: dict[str, Any]) -> Vec3 | None:
+    """VehicleLocalPosition's position (NED m) in ``map`` (ENU m), or None while the horizontal
+    or vertical position is not valid."""
     if not (position["xy_valid"] and position["z_valid"]):
         return None
-    east, north, up = ned_to_enu((position["x"], position["y"], position["z"]))
-    x, y, z, w = q_enu_flu
-    return PoseStamped(
-        header=Header(stamp=stamp, frame_id=MAP),
-        pose=Pose(
-            position=Point(x=east, y=north, z=up), orientation=Quaternion(x=x, y=y, z=z, w=w)
-        ),
-    )
+    return ned_to_enu((position["x"], position["y"], position["z"]))
 
 
-def local_velocity(position: dict[str, Any], stamp: float) -> TwistStamped | None:
-    """VehicleLocalPosition's velocity (NED m/s) in ``map`` (ENU), or None while not valid."""
+def local_velocity(position: dict[str, Any]) -> Vec3 | None:
+    """VehicleLocalPosition's velocity (NED m/s) in ``map`` (ENU m/s), or None while not valid."""
     if not (position["v_xy_valid"] and position["v_z_valid"]):
         return None
-    east, north, up = ned_to_enu((position["vx"], position["vy"], position["vz"]))
-    return TwistStamped(
-        header=Header(stamp=stamp, frame_id=MAP),
-        twist=Twist(linear=Vector3(x=east, y=north, z=up)),
-    )
+    return ned_to_enu((position["vx"], position["vy"], position["vz"]))
 
 
-def body_velocity(
-    velocity: TwistStamped, q_enu_flu: tuple[float, float, float, float]
-) -> TwistStamped:
-    """A local (ENU) velocity in ``base_link`` (FLU) at the attitude ``q_enu_flu``."""
-    v = velocity.twist.linear
-    fx, fy, fz = rotate_inverse(q_enu_flu, (v.x, v.y, v.z))
-    return TwistStamped(
-        header=Header(stamp=velocity.header.stamp, frame_id=BASE_LINK),
-        twist=Twist(linear=Vector3(x=fx, y=fy, z=fz)),
-    )
+def local_odometry(
+    headers: Headers, position: Vec3, q_enu_flu: Quat, velocity: Vec3 | None, stamp: float
+) -> tuple[PoseStamped, tuple[TwistStamped, TwistStamped] | None]:
+    """The pose (``map``) at ``position`` (ENU m) and ``q_enu_flu`` and, unless ``velocity``
+    (ENU m/s) is None (not valid), the local (``map``, ENU) and body (``base_link``, FLU)
+    velocities, as every bridge publishes them (:func:`dronewrapper_bridge_base.odometry.odometry`).
+    Angular rates are zero: the bridge does not read PX4's vehicle_angular_velocity."""
+    motion = (position, q_enu_flu, velocity or (0.0, 0.0, 0.0))
+    pose, local, body = odometry(headers, MAP, stamp, motion, Vector3(), Vector3())
+    return pose, None if velocity is None else (local, body)
 
 
 def state(status: dict[str, Any], *, connected: bool, failsafe: str, commander: str) -> State:
