@@ -10,6 +10,7 @@ from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, LANDED_STATE_ON_GROUND
 from dronewrapper_bridge_base.flight_request import (
     goto_target,
     land_point,
+    takeoff_command,
     takeoff_heights,
     took_off,
 )
@@ -58,3 +59,23 @@ def test_a_landing_point_out_of_bounds_is_a_bad_request(lat, lon, named):
 def test_a_landing_point_may_be_nan_for_here():
     lat, lon = land_point(math.nan, math.nan)
     assert math.isnan(lat) and math.isnan(lon)
+
+
+@pytest.mark.parametrize(
+    ("height", "yaw", "named"),
+    [
+        (0.0, 0.0, "altitude"),
+        (1001.0, 0.0, "altitude"),
+        (math.inf, 0.0, "altitude"),
+        (2.0, math.inf, "yaw"),
+    ],
+)
+def test_a_takeoff_command_out_of_bounds_is_a_bad_request(height, yaw, named):
+    with pytest.raises(ValueError, match=named):
+        takeoff_command(height, yaw)
+
+
+def test_a_takeoff_command_yaw_is_degrees_ned_and_nan_is_the_autopilots_default():
+    assert takeoff_command(2.0, 0.0) == (2.0, 90.0)  # ENU east is NED 90 degrees
+    height, yaw_deg = takeoff_command(math.nan, math.nan)
+    assert math.isnan(height) and math.isnan(yaw_deg)

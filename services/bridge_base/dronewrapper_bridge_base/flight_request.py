@@ -17,6 +17,7 @@ from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.geodesy import to_enu
 from dronewrapper.msgs.flight import NO_HOME, REFUSED, FlightResult, GotoRequest
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, LANDED_STATE_UNDEFINED
+from dronewrapper_bridge_base.frames import yaw_enu_to_ned
 
 
 class HomeHolder(Protocol):
@@ -48,6 +49,17 @@ def land_point(latitude: float, longitude: float) -> tuple[float, float]:
         if not math.isnan(value) and not (math.isfinite(value) and abs(value) <= bound):
             raise ValueError(f"{name} must be within ±{bound:g} degrees or NaN, got {value!r}")
     return latitude, longitude
+
+
+def takeoff_command(height: float, yaw: float) -> tuple[float, float]:
+    """A TAKEOFF service request's (altitude m above the take-off point, yaw rad ENU), each
+    checked (altitude in (0, 1000] or NaN, yaw finite or NaN; ValueError naming the bad one),
+    as (altitude m, yaw in degrees NED) for the autopilot's NAV_TAKEOFF (NaN: its default)."""
+    if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
+        raise ValueError(f"altitude must be in (0, 1000] m or NaN, got {height!r}")
+    if not (math.isnan(yaw) or math.isfinite(yaw)):
+        raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
+    return height, math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
 
 
 def takeoff_request(

@@ -33,8 +33,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
-from dronewrapper_bridge_base.flight_request import land_point
-from dronewrapper_bridge_base.frames import yaw_enu_to_ned
+from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
@@ -87,16 +86,10 @@ def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
     """TAKEOFF: MAV_CMD_NAV_TAKEOFF to ``altitude`` m above the take-off point; while flying
     it does nothing (a second take-off must not send the vehicle to a new height)."""
     autopilot = core.require_connected()
-    height = request.altitude
-    if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
-        raise ValueError(f"altitude must be in (0, 1000] m or NaN, got {height!r}")
-    yaw = request.yaw
-    if not (math.isnan(yaw) or math.isfinite(yaw)):
-        raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
+    height, yaw_deg = takeoff_command(request.altitude, request.yaw)
     if core.ext.landed_state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
     core.missions.refuse_takeoff(height)  # above the envelope: refused, the limit named
-    yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
     if autopilot == AUTOPILOT_ARDUPILOT:
         altitude = height if not math.isnan(height) else 2.5
     elif math.isnan(height):

@@ -27,8 +27,7 @@ from dronewrapper.msgs.mavros import (
     SetMode,
     SetModeResult,
 )
-from dronewrapper_bridge_base.flight_request import land_point
-from dronewrapper_bridge_base.frames import yaw_enu_to_ned
+from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -109,18 +108,12 @@ def takeoff(core: Px4ZenohCore, request: CommandTOL) -> Steps:
     """TAKEOFF: VEHICLE_CMD_NAV_TAKEOFF to ``altitude`` m above PX4's local origin (NaN: PX4's
     MIS_TAKEOFF_ALT); while flying it does nothing."""
     core.require_connected()
-    height = request.altitude
-    if not math.isnan(height) and not (math.isfinite(height) and 0.0 < height <= 1000.0):
-        raise ValueError(f"altitude must be in (0, 1000] m or NaN, got {height!r}")
-    yaw = request.yaw
-    if not (math.isnan(yaw) or math.isfinite(yaw)):
-        raise ValueError(f"yaw must be finite or NaN, got {yaw!r}")
+    height, yaw_deg = takeoff_command(request.altitude, request.yaw)
     if core.ext.landed_state == LANDED_STATE_IN_AIR:
         return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
     rules.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
     home = core.envelope.home_geo
     altitude = math.nan if math.isnan(height) or home is None else home[2] + height
-    yaw_deg = math.nan if math.isnan(yaw) else math.degrees(yaw_enu_to_ned(yaw))
     for mode in ("AUTO.TAKEOFF", HOLD_MODE):
         core.failsafe.on_mode_requested(mode, core.now)
     core.failsafe.on_takeoff_requested(core.now)  # no priming, no hold into the climb
