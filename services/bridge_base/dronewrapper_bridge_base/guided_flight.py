@@ -1,19 +1,41 @@
 """What the flight operations of both PX4-capable bridges (MAVLink, PX4 over Zenoh) read and wait
 on, over their :class:`~dronewrapper_bridge_base.guided_core.GuidedCore`: whether the aircraft
-flies (:func:`flying`) or is down (:func:`landed`), and the end of a return (:func:`returned`).
+flies (:func:`flying`) or is down (:func:`landed`), the end of a return (:func:`returned`), and
+a command that puts the autopilot in a mode (:func:`mode_command`), the failsafe's own
+(:func:`failsafe_request`) among them.
+
+A command's exchange is the bridge's own: a generator of resume times (monotonic s) returning
+(result, explanation), the result a MAV_RESULT (PX4's vehicle_command_ack uses the same codes).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import logging
+from collections.abc import Generator
+from typing import TYPE_CHECKING, Protocol
 
 from dronewrapper.msgs.flight import REFUSED, TOO_LATE, FlightResult
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
 from dronewrapper_bridge_base.flight_request import failed
+from dronewrapper_bridge_base.guided_failsafe import Failsafe
 from dronewrapper_bridge_base.operation import Steps
+
+CommandSteps = Generator[float, None, tuple[int, str]]
+"""A command's exchange: resume times (monotonic s), then (result, explanation)."""
+ACCEPTED = 0  # MAV_RESULT_ACCEPTED, VehicleCommandAck's VEHICLE_CMD_RESULT_ACCEPTED
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_base.guided_core import GuidedCore
+
+
+class ModeCore(Protocol):
+    """What :func:`mode_command` reads and calls of a core (``now`` monotonic s)."""
+
+    @property
+    def now(self) -> float: ...
+    @property
+    def failsafe(self) -> Failsafe: ...
+    def mode_entered(self, mode: str) -> None: ...  # the autopilot accepted a command into it
 
 
 def flying(core: GuidedCore) -> bool:
@@ -42,3 +64,28 @@ def returned(
         yield deadline
     core.unattended.clear()
     return FlightResult(success=True, message="returned: on the ground and disarmed")
+
+
+def mode_command(core: ModeCore, mode: str, sent: CommandSteps) -> CommandSteps:
+    """Run ``sent``, a command that puts the autopilot in ``mode``: the failsafe knows first
+    that the bridge asked for ``mode`` (no pilot's change), the core as soon as it is
+    accepted (its ``mode_entered``)."""
+    core.failsafe.on_mode_requested(mode, core.now)
+    result, message = yield from sent
+    if result == ACCEPTED:
+        core.mode_entered(mode)
+    return result, message
+
+
+def failsafe_request(
+    core: ModeCore, action: str, mode: str, sent: CommandSteps, who: str, log: logging.Logger
+) -> Generator[float, None, int]:
+    """The failsafe's own request ``action`` (``land`` or ``return``): ``sent`` puts the
+    autopilot (``who``, as the log names it) in ``mode``; nobody waits for it, the outcome is
+    logged. Returns the command's result."""
+    result, message = yield from mode_command(core, mode, sent)
+    if result == ACCEPTED:
+        log.warning("failsafe %s: accepted by %s", action, who)
+    else:
+        log.error("failsafe %s refused: %s", action, message)
+    return result

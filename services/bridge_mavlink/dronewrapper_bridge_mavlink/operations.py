@@ -34,6 +34,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
+from dronewrapper_bridge_base.guided_flight import failsafe_request, mode_command
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
@@ -121,33 +122,21 @@ def land(core: BridgeCore, request: CommandTOL) -> Steps:
     """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
     autopilot = core.require_connected()
     lat, lon = land_point(request.latitude, request.longitude)
-    core.failsafe.on_mode_requested(LAND_MODE[autopilot], core.now)
-    result, message = yield from command(
-        core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan
-    )
-    if result == ACCEPTED:
-        core.mode_entered(LAND_MODE[autopilot])  # not ~1 s later from the heartbeat
+    sent = command(core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan)
+    result, message = yield from mode_command(core, LAND_MODE[autopilot], sent)
     return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
 
 
 def failsafe_action(core: BridgeCore, action: str) -> Steps:
     """The failsafe's own request (``land`` or ``return``); nobody waits for it."""
     autopilot = core.autopilot or AUTOPILOT_PX4
-    mode = LAND_MODE[autopilot] if action == "land" else RETURN_MODE[autopilot]
-    core.failsafe.on_mode_requested(mode, core.now)
     if action == "land":
         nan = math.nan
-        result, message = yield from command(
-            core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, nan, nan, nan, nan
-        )
+        mode = LAND_MODE[autopilot]
+        sent = command(core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, nan, nan, nan, nan)
     else:
-        result, message = yield from command(core, mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH)
-    if result == ACCEPTED:
-        core.mode_entered(mode)
-        log.warning("failsafe %s: accepted by the autopilot", action)
-    else:
-        log.error("failsafe %s refused: %s", action, message)
-    return result
+        mode, sent = RETURN_MODE[autopilot], command(core, mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH)
+    return (yield from failsafe_request(core, action, mode, sent, "the autopilot", log))
 
 
 # ---------------------------------------------------------------- modes

@@ -28,6 +28,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
+from dronewrapper_bridge_base.guided_flight import failsafe_request, mode_command
 from dronewrapper_bridge_base.offboard_prime import prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
@@ -138,33 +139,25 @@ def land(core: Px4ZenohCore, request: CommandTOL) -> Steps:
     """LAND: VEHICLE_CMD_NAV_LAND here (NaN latitude/longitude: where it is)."""
     core.require_connected()
     lat, lon = land_point(request.latitude, request.longitude)
-    core.failsafe.on_mode_requested(LAND_MODE, core.now)
     value = cmds.vehicle_command(
         cmds.NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan, **target(core)
     )
-    result, message = yield from command(core, value, lambda: shown_mode(core) == LAND_MODE)
-    if result == ACCEPTED:
-        core.mode_entered(LAND_MODE)
+    sent = command(core, value, lambda: shown_mode(core) == LAND_MODE)
+    result, message = yield from mode_command(core, LAND_MODE, sent)
     return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
 
 
 def failsafe_action(core: Px4ZenohCore, action: str) -> Steps:
     """The failsafe's own request (``land`` or ``return``); nobody waits for it."""
     mode = LAND_MODE if action == "land" else RETURN_MODE
-    core.failsafe.on_mode_requested(mode, core.now)
     nan = math.nan
     value = (
         cmds.vehicle_command(cmds.NAV_LAND, 0, 0, 0, nan, nan, nan, nan, **target(core))
         if action == "land"
         else cmds.vehicle_command(cmds.NAV_RETURN_TO_LAUNCH, **target(core))
     )
-    result, message = yield from command(core, value, lambda: shown_mode(core) == mode)
-    if result == ACCEPTED:
-        core.mode_entered(mode)
-        log.warning("failsafe %s: accepted by PX4", action)
-    else:
-        log.error("failsafe %s refused: %s", action, message)
-    return result
+    sent = command(core, value, lambda: shown_mode(core) == mode)
+    return (yield from failsafe_request(core, action, mode, sent, "PX4", log))
 
 
 def set_mode(core: Px4ZenohCore, request: SetMode) -> Steps:
