@@ -90,3 +90,17 @@ def test_a_live_commander_a_steering_one_and_a_return_are_left_alone():
     rig.vehicle(nav_state=NAV_RTL)
     rig.run(20.0)  # its commander is gone: the return is left to finish
     assert len(asked(rig, cmds.NAV_RETURN_TO_LAUNCH)) == 1 and asked(rig, cmds.NAV_LAND) == []
+
+
+def test_a_disarm_on_the_ground_ends_the_watch():
+    rig = Px4Rig()
+    fly_to(rig, 4.0)
+    rig.at(4.0, 0.0, 3.0)
+    rig.run(0.1)
+    assert rig.core.unattended.what == "goto"
+    rig.vehicle(armed=True, landed=True)  # on the ground, still armed: watched on
+    assert rig.core.unattended.what == "goto"
+    rig.vehicle(armed=False)
+    assert rig.core.unattended.what == ""
+    rig.run(10.0)
+    assert asked(rig, cmds.NAV_RETURN_TO_LAUNCH) == [] and asked(rig, cmds.NAV_LAND) == []

@@ -4,8 +4,9 @@ ExtendedState and BatteryState published on change or at their configured rates.
 
 bridge_mavlink's ``BridgeCore`` (MAVLink) and bridge_px4_zenoh's ``Px4ZenohCore`` (PX4's uORB
 over Zenoh) differ in how they read the vehicle and write a setpoint; each supplies those as
-the hooks below (its watch of the commander, its envelope, its failsafe operations, its
-setpoint writer, its pose). Times are the core's (``now`` monotonic s, ``stamp`` Unix s).
+the hooks below (its envelope, its failsafe operations, its setpoint writer, its pose). The
+unattended rule's watch of a go-to's commander (:mod:`~dronewrapper_bridge_base.unattended`) is
+kept here for both. Times are the core's (``now`` monotonic s, ``stamp`` Unix s).
 """
 
 from __future__ import annotations
@@ -59,14 +60,6 @@ class GuidedCore(PureCore):
 
     # ------------------------------------------------------------------ hooks
 
-    def watch_vehicle(self) -> None:
-        """The commander watch learns the vehicle's new mode or arming."""
-        raise NotImplementedError
-
-    def watch_alive(self, keys: set[str]) -> None:
-        """The commander watch learns whose beats arrived (their processes' keys)."""
-        raise NotImplementedError
-
     def failsafe_steps(self, request: str) -> Any:
         """The operation the failsafe's request (``land`` or ``return``) runs."""
         raise NotImplementedError
@@ -98,6 +91,34 @@ class GuidedCore(PureCore):
         """A commander's beat (its process's key) arrived now."""
         self._at(now, stamp)
         self.watch_alive(keys)
+
+    # ------------------------------------------------------------------ the unattended rule
+
+    def watch_vehicle(self) -> None:
+        """The commander watch learns the vehicle's new mode or arming: a disarm on the ground
+        ends it (the aircraft is down)."""
+        hb = self.heartbeat_state
+        if hb is not None and not hb.armed and not self.failsafe.airborne:
+            self.unattended.clear()
+
+    def watch_alive(self, keys: set[str]) -> None:
+        """The commander watch learns whose beats arrived (their processes' keys)."""
+        self.unattended.on_alive(keys, self.now)
+
+    def unattended_tick(self, holding: Callable[[], bool]) -> None:
+        """Take the unattended action when its time has come (once), while airborne:
+        ``holding`` says whether the aircraft holds on its own (the bridge's own hold is let
+        go, the failsafe's land or return started)."""
+        unattended = self.unattended
+        if not unattended.what or not self.failsafe.airborne:
+            return
+        action = unattended.tick(self.now, holding=holding())
+        if action:
+            self.bridge_text(unattended.reason(self.now))
+            self.failsafe.release_hold()
+            self.start(self.failsafe_steps(action), self.now, self.stamp, background=True)
+
+    # ------------------------------------------------------------------ setpoints
 
     def check_setpoint(self, target: PositionTarget) -> Kind:
         return validate(target, self.limits)

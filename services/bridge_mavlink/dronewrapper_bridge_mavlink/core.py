@@ -261,12 +261,6 @@ class BridgeCore(GuidedCore):
         log.info("autopilot says [%d]: %s", text.severity, text.text)
         self.publish(registry.STATUSTEXT, text)
 
-    def watch_vehicle(self) -> None:
-        watch.on_vehicle(self)
-
-    def watch_alive(self, keys: set[str]) -> None:
-        watch.on_alive(self, keys)
-
     def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
         return refuse_setpoint(self.missions, target, kind, self.now, self.bridge_text)
 

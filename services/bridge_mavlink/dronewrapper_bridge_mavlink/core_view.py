@@ -9,6 +9,7 @@ protocol of its own, its ``missions`` (the envelope, home and mission state) not
 from __future__ import annotations
 
 import collections
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -95,4 +96,5 @@ class BridgeCore(PureCoreView, Protocol):
     def streamed_for(self, now: float) -> float: ...  # s of setpoints streamed until now
     def mode_entered(self, mode: str) -> None: ...
     def bridge_text(self, text: str) -> None: ...
+    def unattended_tick(self, holding: Callable[[], bool]) -> None: ...
     def publish_text(self, text: StatusTextMsg) -> None: ...

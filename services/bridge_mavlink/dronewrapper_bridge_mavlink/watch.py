@@ -2,8 +2,9 @@
 commander's process disappeared ends as for a lost commander once the action has ended
 (:mod:`~dronewrapper_bridge_base.unattended`).
 
-The core calls :func:`on_alive` with the key of each commander's beat its node receives,
-:func:`tick` each stream tick and :func:`on_vehicle` after each change of mode or arming.
+The core (its :class:`~dronewrapper_bridge_base.guided_core.GuidedCore` part) hears the
+commanders' beats and each change of mode or arming; it calls :func:`tick` each stream tick,
+which says when the aircraft holds on its own (:func:`holding`).
 """
 
 from __future__ import annotations
@@ -17,17 +18,6 @@ NAV_FIRST, NAV_LAST = 16, 99  # MAV_CMD_NAV_*: the items that fly somewhere
 
 if TYPE_CHECKING:
     from dronewrapper_bridge_mavlink.core_view import BridgeCore
-
-
-def on_alive(core: BridgeCore, keys: set[str]) -> None:
-    core.unattended.on_alive(keys, core.now)
-
-
-def on_vehicle(core: BridgeCore) -> None:
-    """A disarm ends the watch (the aircraft is down)."""
-    hb = core.heartbeat_state
-    if hb is not None and not hb.armed and not core.failsafe.airborne:
-        core.unattended.clear()
 
 
 def holding(core: BridgeCore) -> bool:
@@ -46,11 +36,4 @@ def holding(core: BridgeCore) -> bool:
 
 def tick(core: BridgeCore) -> None:
     """Take the unattended action when its time has come (once)."""
-    unattended = core.unattended
-    if not unattended.what or not core.failsafe.airborne:
-        return
-    action = unattended.tick(core.now, holding=holding(core))
-    if action:
-        core.bridge_text(unattended.reason(core.now))
-        core.failsafe.release_hold()
-        core.start(ops.failsafe_action(core, action), core.now, core.stamp, background=True)
+    core.unattended_tick(lambda: holding(core))

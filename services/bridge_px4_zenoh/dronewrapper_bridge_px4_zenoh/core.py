@@ -281,12 +281,6 @@ class Px4ZenohCore(GuidedCore):
         self.update_failsafe_vehicle()
         self.publish_state()
 
-    def watch_vehicle(self) -> None:
-        watch.on_vehicle(self)
-
-    def watch_alive(self, keys: set[str]) -> None:
-        watch.on_alive(self, keys)
-
     def refuse_envelope(self, target: PositionTarget, kind: Kind) -> Any:
         return refuse_setpoint(self.envelope, target, kind, self.now, self.bridge_text)
 

@@ -3,12 +3,13 @@ commander's process disappeared ends as for a lost commander once the action has
 (:mod:`~dronewrapper_bridge_base.unattended`, the rule bridge_mavlink keeps too).
 
 A go-to or return request names its commander's process (``watch``: ``{ns}/alive/{name}``);
-:func:`start` begins the watch, the core hands each commander's beat to :func:`on_alive`,
-calls :func:`on_vehicle` after each change of PX4's mode or arming and :func:`tick` each
-stream tick. When the go-to has ended (reached, timed out or cancelled: the bridge then holds
-there in OFFBOARD) and its commander has been silent for ``unattended_lost_timeout`` s, the
-bridge asks PX4 for ``unattended_action`` (``return``: RTL, or ``land``) once. A return is
-left to finish; a setpoint (a commander steering), a new action or a disarm ends the watch.
+:func:`start` begins the watch; the core (its
+:class:`~dronewrapper_bridge_base.guided_core.GuidedCore` part) hears each commander's beat and
+each change of PX4's mode or arming, and calls :func:`tick` each stream tick. When the go-to
+has ended (reached, timed out or cancelled: the bridge then holds there in OFFBOARD) and its
+commander has been silent for ``unattended_lost_timeout`` s, the bridge asks PX4 for
+``unattended_action`` (``return``: RTL, or ``land``) once. A return is left to finish; a
+setpoint (a commander steering), a new action or a disarm ends the watch.
 """
 
 from __future__ import annotations
@@ -30,26 +31,7 @@ def start(core: Px4ZenohCore, what: str, key: str) -> None:
     log.info("%s: its commander's process %s", what, f"is {key}" if key else "is not known")
 
 
-def on_alive(core: Px4ZenohCore, keys: set[str]) -> None:
-    """The keys of the commanders' processes that beat now."""
-    core.unattended.on_alive(keys, core.now)
-
-
-def on_vehicle(core: Px4ZenohCore) -> None:
-    """A disarm ends the watch (the aircraft is down)."""
-    hb = core.heartbeat_state
-    if hb is not None and not hb.armed and not core.failsafe.airborne:
-        core.unattended.clear()
-
-
 def tick(core: Px4ZenohCore) -> None:
     """Take the unattended action when its time has come (once): PX4's return or landing,
     the bridge's hold let go."""
-    unattended = core.unattended
-    if not unattended.what or not core.failsafe.airborne:
-        return
-    action = unattended.tick(core.now, holding=ops.shown_mode(core) == ops.HOLD_MODE)
-    if action:
-        core.bridge_text(unattended.reason(core.now))
-        core.failsafe.release_hold()
-        core.start(ops.failsafe_action(core, action), core.now, core.stamp, background=True)
+    core.unattended_tick(lambda: ops.shown_mode(core) == ops.HOLD_MODE)
