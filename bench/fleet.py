@@ -14,7 +14,8 @@ and over ``--seconds`` measures:
 * setpoint -> MAVLink: one more bridge in namespace ``probe``, against a PX4 stand-in in this
   process (``bench.bridge_latency``), commanded at 30 Hz while the fleet runs, p99;
 * the SDK's fleet object (``dronewrapper.fleet.Fleet`` over all N drones, a process of its
-  own) and its CPU;
+  own) and its CPU; it receives the streams it reads (``state``, ``extended``, ``pose``,
+  ``battery``; ``--fleet-streams all``: every getter's stream, eight a drone);
 * with ``--fly``, after the window: all N take off together through that ``Fleet`` (1.5 m),
   then land together, how many made it and how long each took.
 
@@ -30,7 +31,7 @@ per drone at full telemetry, 80 MB per drone (sim + bridge); 30 drones each with
 <= 50 ms, with one core busy; cost flat per drone in N.
 
     nice -n 5 python -m bench.fleet [--seconds 10] [--max 60] [--counts 1 5 10 20]
-        [--per-process N] [--busy] [--fly]
+        [--per-process N] [--busy] [--fly] [--fleet-streams read|all]
 
 Size: one N's whole measurement (the fleet, the probes, the SDK's fleet, the flight) and its
 report read in one place; the pose subscriber is bench.pose_ages and the plots are
@@ -191,13 +192,15 @@ def setpoint_probe(endpoint: str, stop: threading.Event):
     return stream, latencies, close
 
 
-def hold_fleet(endpoint: str, count: int, seconds: float, fly: bool) -> None:
+def hold_fleet(endpoint: str, count: int, seconds: float, fly: bool, streams: str) -> None:
     """In a child: open the SDK's fleet over every drone, hold it ``seconds``, print its CPU;
-    with ``fly``, then take off all together and land all together, and print how it went."""
+    with ``fly``, then take off all together and land all together, and print how it went.
+    ``streams``: ``read`` (what this reads: the flight's streams and the battery) or ``all``."""
     from dronewrapper.fleet import Fleet
 
     names = [f"drone{i}" for i in range(1, count + 1)]  # not the setpoint probe's bridge
-    with Fleet.connect(names, connect=endpoint, timeout=120, cameras=()) as fleet:
+    chosen = None if streams == "all" else ["battery"]  # + state, extended, pose (flights)
+    with Fleet.connect(names, connect=endpoint, timeout=120, cameras=(), streams=chosen) as fleet:
         print("ready", flush=True)
         c0, t0 = time.process_time(), time.monotonic()
         time.sleep(seconds)
@@ -226,6 +229,7 @@ def measure(
     kind: str = "iris",
     per_process: int = 1,
     fly: bool = False,
+    fleet_streams: str = "read",
 ) -> dict[str, object]:
     """Start a fleet of ``count`` drones, measure it, stop it."""
 
@@ -237,7 +241,8 @@ def measure(
     argv = [sys.executable, "-m", "dronewrapper", "up", "sim_fleet", "--router", endpoint,
             "--var", f"drones={count}", "--var", f"kind={kind}",
             "--var", f"per_process={per_process}"]  # fmt: skip
-    out: dict[str, object] = {"drones": count, "kind": kind, "per_process": per_process}
+    out: dict[str, object] = {"drones": count, "kind": kind, "per_process": per_process,
+                              "fleet_streams": fleet_streams}  # fmt: skip
     started = time.monotonic()
     with open(log_path, "w") as log:
         up = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, cwd=REPO)
@@ -262,8 +267,8 @@ def measure(
         probe = close_probe
         holder = subprocess.Popen(
             [sys.executable, "-m", "bench.fleet", "--hold", endpoint, str(count),
-             str(seconds), "1" if fly else "0"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            text=True, cwd=REPO,
+             str(seconds), "1" if fly else "0", fleet_streams], stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, text=True, cwd=REPO,
         )  # fmt: skip
         if holder.stdout.readline().strip() != "ready":
             out["error"] = "the SDK's fleet did not connect"
@@ -403,11 +408,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-process", type=int, default=1, help="drones per process")
     parser.add_argument("--busy", action="store_true", help="keep one core busy meanwhile")
     parser.add_argument("--fly", action="store_true", help="all take off and land, each N")
-    parser.add_argument("--hold", nargs=4, help=argparse.SUPPRESS)
+    parser.add_argument("--fleet-streams", choices=["read", "all"], default="read",
+                        help="the SDK fleet's: those it reads, or every getter's")  # fmt: skip
+    parser.add_argument("--hold", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.hold:
-        endpoint, count, seconds, fly = args.hold
-        hold_fleet(endpoint, int(count), float(seconds), fly == "1")
+        endpoint, count, seconds, fly, streams = args.hold
+        hold_fleet(endpoint, int(count), float(seconds), fly == "1", streams)
         return 0
 
     name = "fleet" if args.kind == "iris" else f"fleet_{args.kind.replace(',', '_')}"
@@ -422,7 +429,7 @@ def main(argv: list[str] | None = None) -> int:
             n = counts.pop(0)
             print(f"... {n} drone(s)", flush=True)
             result = measure(n, args.seconds, args.settle, log_dir, args.kind,
-                             args.per_process, args.fly)  # fmt: skip
+                             args.per_process, args.fly, args.fleet_streams)  # fmt: skip
             result["busy_core"] = args.busy
             results.append(result)
             write_results(name, {"results": results, "partial": True})  # kept if interrupted

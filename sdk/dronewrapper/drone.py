@@ -42,7 +42,7 @@ from typing import Any, TypeVar
 from dronewrapper import connection, diagnosis, images
 from dronewrapper.client import DroneClient
 from dronewrapper.client.drone_client import CLIENT_PORTS, default_commander
-from dronewrapper.client.inputs import GETTER_STREAMS
+from dronewrapper.client.inputs import chosen_streams
 from dronewrapper.commands import Commands
 from dronewrapper.discovery import default_connect
 from dronewrapper.envelope_guard import EnvelopeGuard
@@ -102,6 +102,10 @@ class DroneWrapper:
         cameras: the cameras to receive from the start (``frontal``, ``ventral``); ``()``
             receives none; None (default) subscribes to a camera the first time it is read, so
             frames cross the network only for a program that uses them.
+        streams: the telemetry streams received from the start (``inputs.STREAMS`` names);
+            None (default): all. ``state``, ``extended`` and ``pose`` always (the flights read
+            them); another is subscribed on its first read, whose getter raises NoData until
+            its first sample: a fleet reading only poses and states pays for those alone.
         compressed_images: receive JPEG images (``.../image_raw/compressed``; needs OpenCV:
             ``pip install 'dronewrapper[images]'``) instead of raw ones. None (default): JPEG
             when the router is on another machine (raw 640x480 frames need ~220 Mbit/s per
@@ -137,6 +141,7 @@ class DroneWrapper:
         *,
         mode: str = "client",
         cameras: Sequence[str] | None = None,
+        streams: Sequence[str] | None = None,
         compressed_images: bool | None = None,
         land_on_exit: bool = False,
         setpoint_rate_hz: float = 30.0,
@@ -149,6 +154,7 @@ class DroneWrapper:
     ) -> None:
         self.ns = name or os.environ.get("DRONEWRAPPER_NAMESPACE") or registry.DEFAULT_NAMESPACE
         registry.STATE.key(self.ns)  # validates the namespace (one key chunk)
+        wanted_streams = chosen_streams(streams)  # InvalidArgument before any network
         self.connect = connect or default_connect()
         show_progress()  # INFO lines on stderr for a script that configured no logging
         self.land_on_exit = land_on_exit
@@ -185,7 +191,7 @@ class DroneWrapper:
                 threaded_stream=True,
                 inline_calls=True,  # a blocking call waits on this thread anyway
                 forbidden=forbidden,
-                streams=GETTER_STREAMS,
+                streams=wanted_streams,
                 cameras=cameras,
                 compressed_images=self.compressed_images,
             )

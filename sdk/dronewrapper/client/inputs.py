@@ -66,6 +66,21 @@ GETTER_STREAMS = tuple(STREAMS)
 FLIGHT_STREAMS = ("state", "extended", "pose")
 """What a flight step and the "ready" rule read: the least a service's loop subscribes."""
 
+
+def chosen_streams(names: Sequence[str] | None) -> tuple[str, ...]:
+    """The streams to subscribe at once for a script that asked for ``names`` (None: every
+    getter's): those, with the flight's (:data:`FLIGHT_STREAMS`) always. InvalidArgument names
+    an unknown one."""
+    if names is None:
+        return GETTER_STREAMS
+    if isinstance(names, str):
+        raise InvalidArgument(f"streams must be a list of names, got the string {names!r}")
+    unknown = [name for name in names if name not in STREAMS]
+    if unknown:
+        raise InvalidArgument(f"unknown streams {unknown}: known are {', '.join(STREAMS)}")
+    return tuple(dict.fromkeys((*FLIGHT_STREAMS, *names)))
+
+
 AGES = {
     "position": "pose",
     "orientation": "pose",
