@@ -55,8 +55,8 @@ def open_node(ns: str, connect: str, timeout: float, *, mode: str, identity: str
 
 
 def wait_for_connection(client: DroneClient, connect: str, identity: str, timeout: float) -> State:
-    """Wait until the bridge reports its autopilot connected and every stream the getters read
-    has arrived; the State.
+    """Wait until the bridge reports its autopilot connected and every subscribed stream the
+    getters read has arrived; the State.
 
     Raises:
         NotConnected: no bridge, a bridge without an autopilot, or a stream still missing after
@@ -70,12 +70,13 @@ def wait_for_connection(client: DroneClient, connect: str, identity: str, timeou
             raise NotConnected(diagnose(client, connect, identity, timeout))
         with contextlib.suppress(TimeoutError):
             inputs.state.wait(min(remaining, 0.5), newer_than=inputs.state.count)
-    for _, name in TELEMETRY_READ_BY_GETTERS:
+    awaited = [(what, name) for what, name in TELEMETRY_READ_BY_GETTERS if inputs.subscribed(name)]
+    for _, name in awaited:
         with contextlib.suppress(TimeoutError):
             getattr(inputs, name).wait(max(0.0, deadline - clock.monotonic()))
     missing = [
         f"{what} ({getattr(inputs, name).name})"
-        for what, name in TELEMETRY_READ_BY_GETTERS
+        for what, name in awaited
         if getattr(inputs, name).value is None
     ]
     if missing:

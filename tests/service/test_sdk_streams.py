@@ -47,6 +47,15 @@ def test_a_script_receives_the_flight_streams_and_those_it_names_only():
         rig.close()
 
 
+def test_connecting_waits_for_the_chosen_streams_and_subscribes_no_other():
+    rig = SdkRig({"x": 1.0}, streams=["battery"], wait=True, timeout=5.0)
+    try:
+        assert rig.drone.get_battery() == pytest.approx(0.8)  # waited for
+        assert subscribed(rig.drone) == {*FLIGHT_STREAMS, "battery"}
+    finally:
+        rig.close()
+
+
 @pytest.mark.parametrize(
     ("streams", "words"),
     [(["pose", "speed"], r"unknown streams \['speed'\]"), ("pose", "a list of names")],

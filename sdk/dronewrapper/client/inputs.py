@@ -180,6 +180,10 @@ class Inputs:
             setattr(self, name, holder)
         return holder
 
+    def subscribed(self, name: str) -> bool:
+        """Whether the named stream is subscribed: asked for at the start, or read since."""
+        return name in self.__dict__
+
     def __getattr__(self, name: str) -> Any:
         """A named stream not subscribed yet: subscribe it now (see :meth:`stream`)."""
         if name in STREAMS:
