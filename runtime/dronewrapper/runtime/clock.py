@@ -86,6 +86,8 @@ class _Waiter:
     predicate: Callable[[], bool]
     deadline: float
     order: int
+    wake: threading.Condition
+    """Its own condition on the clock's lock: a wake-up reaches this waiter alone."""
     released: bool = False
 
 
@@ -100,7 +102,8 @@ class VirtualClock(Clock):
     def __init__(self, monotonic: float = 1000.0, time: float | None = None) -> None:
         self._now = monotonic
         self._offset = (1.8e9 if time is None else time) - monotonic
-        self._cv = threading.Condition(threading.Lock())
+        self._lock = threading.Lock()
+        self._cv = threading.Condition(self._lock)  # the driving threads wait on it
         self._waiters: dict[threading.Thread, _Waiter] = {}
         self._workers: set[threading.Thread] = set()
         self._order = itertools.count()
@@ -122,7 +125,7 @@ class VirtualClock(Clock):
             raise AssertionError("virtual clock: workers still busy after 60 s (real)")
         with self._cv:
             self._now = max(self._now, t)
-            self._cv.notify_all()
+            self._notify_all()
 
     def sleep(self, seconds: float) -> None:
         self._wait(lambda: False, seconds)
@@ -157,16 +160,23 @@ class VirtualClock(Clock):
             return self._drive(predicate, timeout)
         with self._cv:
             deadline = math.inf if timeout is None else self._now + timeout
-            waiter = _Waiter(predicate, deadline, next(self._order))
+            wake = threading.Condition(self._lock)
+            waiter = _Waiter(predicate, deadline, next(self._order), wake)
             self._waiters[me] = waiter
             self._cv.notify_all()  # the driver may find everything waiting now
+            self._settled()  # and what this thread did may let others go on
             try:
                 while not waiter.released and not predicate():
-                    self._cv.wait(POLL_S)
+                    wake.wait(POLL_S)
             finally:
                 del self._waiters[me]
-                self._cv.notify_all()
         return predicate()
+
+    def _notify_all(self) -> None:
+        """Wake every waiter and driver to look at its condition again (under ``_cv``)."""
+        self._cv.notify_all()
+        for waiter in self._waiters.values():
+            waiter.wake.notify()
 
     # ---- the driver (the test's thread) ----
 
@@ -184,10 +194,17 @@ class VirtualClock(Clock):
         return predicate()
 
     def _settled(self) -> bool:
-        """Every worker waits, and no waiter can go on before time moves (under ``_cv``)."""
-        if any(w.released or w.predicate() for w in self._waiters.values()):
-            return False
-        return all(t in self._waiters for t in self._workers)
+        """Every worker waits, and no waiter can go on before time moves (under ``_cv``);
+        a waiter found able to go on is woken (what other threads did while it waited, e.g.
+        an event set, reaches it now rather than at its next poll)."""
+        settled = True
+        for waiter in self._waiters.values():
+            if waiter.released:
+                settled = False
+            elif waiter.predicate():
+                settled = False
+                waiter.wake.notify()
+        return settled and all(t in self._waiters for t in self._workers)
 
     def run_until(
         self, done: Callable[[], object], within: float, what: str = "", real_timeout: float = 60
@@ -243,7 +260,7 @@ class VirtualClock(Clock):
                     return "limit"
                 self._now = max(self._now, first.deadline)
                 first.released = True
-                self._cv.notify_all()
+                first.wake.notify()
 
 
 class _Worker(threading.Thread):
@@ -273,7 +290,7 @@ class _Worker(threading.Thread):
             with self._clock._cv:
                 self.finished = True
                 self._clock._workers.discard(self)
-                self._clock._cv.notify_all()
+                self._clock._notify_all()
 
     def is_alive(self) -> bool:
         return not self.finished and super().is_alive()
