@@ -1,4 +1,5 @@
-"""The safety envelope and missions on the Tello (pure, over the core).
+"""The safety envelope and missions on the Tello (pure, over the core as :class:`MissionPort`
+shows it; a setpoint's check over :class:`Refusing`).
 
 Home is the take-off point (the Tello has no GPS; the bridge's position is dead-reckoned from
 the take-off, x and y drifting by some decimetres a minute), so the envelope (ENU m in the home
@@ -22,10 +23,10 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, PositionTarget
 from dronewrapper.msgs.mission import (
@@ -39,17 +40,47 @@ from dronewrapper.msgs.mission import (
     WaypointPushResult,
     WaypointReached,
 )
+from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_base.operation import Operation, Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import operations as ops
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core_view import TelloCore
+from dronewrapper_bridge_tello.mission_state import TelloMissions
 
 log = logging.getLogger("bridge_tello")
+
+
+class Refusing(Protocol):
+    """What a setpoint's check uses of the core: its time (monotonic s), the mission state
+    (envelope, the last refusal's text) and a text to publish."""
+
+    @property
+    def now(self) -> float: ...
+    @property
+    def missions(self) -> TelloMissions: ...
+
+    def text(self, severity: int, text: str) -> None: ...
+
+
+class MissionPort(ops.OperationPort, Refusing, Protocol):
+    """What the envelope's watch, the mission services and their flights use of the core
+    besides the operations they run (:class:`~.operations.OperationPort`): the header
+    stamp (wall-clock s), the caller of a request, samples to publish, a breach's report, a
+    background operation's start."""
+
+    @property
+    def stamp(self) -> float: ...
+    @property
+    def caller(self) -> str: ...
+
+    def publish(self, topic: Topic, msg: Any) -> None: ...
+    def report_breach(self, limit: str, reason: str, action: str) -> None: ...
+    def start(
+        self, steps: Steps, now: float, stamp: float, *, background: bool = False
+    ) -> Operation: ...
+
 
 FRAME_LOCAL_ENU = 4
 MAX_MOVE_CM = 500
@@ -81,7 +112,7 @@ def go_moves(east: float, north: float, up: float, yaw_enu: float) -> list[tuple
 # ---------------------------------------------------------------- hooks the core calls
 
 
-def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
+def refuse_setpoint(core: Refusing, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
     """Why the envelope refuses ``target`` (the limit named), or None."""
     state = core.missions
     try:
@@ -103,14 +134,15 @@ def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> Enve
     return None
 
 
-def refuse_takeoff(core: TelloCore, height: float) -> None:
+def refuse_takeoff(envelope: Envelope, height: float) -> None:
+    """A take-off to ``height`` m above ``envelope``'s ceiling: ServiceError naming it."""
     try:
-        env.check_takeoff(core.missions.envelope, height)
+        env.check_takeoff(envelope, height)
     except EnvelopeError as exc:
         raise ServiceError(str(exc), "refused") from None
 
 
-def tick(core: TelloCore) -> None:
+def tick(core: MissionPort) -> None:
     """Each control tick: act on a breach; publish envelope, home and mission periodically."""
     state = core.missions
     position = core.telemetry.position_enu
@@ -131,14 +163,14 @@ def tick(core: TelloCore) -> None:
         publish_waypoints(core)
 
 
-def breach_action(core: TelloCore, action: str) -> Steps:
+def breach_action(core: MissionPort, action: str) -> Steps:
     if action == "hold":
         reply = yield from ops.exchange(core, "stop")
         return reply
     return (yield from ops.failsafe_land(core))
 
 
-def publish_waypoints(core: TelloCore) -> None:
+def publish_waypoints(core: MissionPort) -> None:
     state = core.missions
     listing = WaypointList(
         header=Header(stamp=core.stamp), current_seq=state.current_seq, waypoints=state.waypoints
@@ -149,7 +181,7 @@ def publish_waypoints(core: TelloCore) -> None:
 # ---------------------------------------------------------------- services
 
 
-def push(core: TelloCore, request: WaypointPush) -> Steps:
+def push(core: MissionPort, request: WaypointPush) -> Steps:
     """mission/push: local waypoints only, each inside the envelope; no rally points (the
     Tello's return flies home)."""
     if request.rally:
@@ -180,7 +212,7 @@ def push(core: TelloCore, request: WaypointPush) -> Steps:
     return WaypointPushResult(success=True, wp_transfered=count, message=f"{count} item(s) kept")
 
 
-def clear(core: TelloCore, _request: WaypointClear) -> Steps:
+def clear(core: MissionPort, _request: WaypointClear) -> Steps:
     state = core.missions
     if state.running is not None and not state.running.done:
         raise ServiceError("a mission is being flown: pause it first", "refused")
@@ -190,7 +222,7 @@ def clear(core: TelloCore, _request: WaypointClear) -> Steps:
     return MissionResult(success=True, message="cleared")
 
 
-def control(core: TelloCore, request: MissionControl) -> Steps:
+def control(core: MissionPort, request: MissionControl) -> Steps:
     """start (from the current item), pause (after the current move) or return (fly home at
     the current height, then land)."""
     core.require_connected()
@@ -222,7 +254,7 @@ def control(core: TelloCore, request: MissionControl) -> Steps:
     return MissionResult(success=True, message=f"{request.action}: flying")
 
 
-def fly_to(core: TelloCore, target: tuple[float, float, float]) -> Steps:
+def fly_to(core: MissionPort, target: tuple[float, float, float]) -> Steps:
     """Fly to ``target`` (ENU m from home) with go moves; False when paused or refused."""
     position = core.telemetry.position_enu or (0.0, 0.0, 0.0)
     east, north, up = (t - p for t, p in zip(target, position, strict=True))
@@ -237,7 +269,7 @@ def fly_to(core: TelloCore, target: tuple[float, float, float]) -> Steps:
     return True
 
 
-def fly_mission(core: TelloCore) -> Steps:
+def fly_mission(core: MissionPort) -> Steps:
     state = core.missions
     while state.current_seq < len(state.waypoints) and not state.paused:
         wp = state.waypoints[state.current_seq]
@@ -253,7 +285,7 @@ def fly_mission(core: TelloCore) -> Steps:
     return True
 
 
-def fly_home(core: TelloCore) -> Steps:
+def fly_home(core: MissionPort) -> Steps:
     z = (core.telemetry.position_enu or (0.0, 0.0, 1.0))[2]
     arrived = yield from fly_to(core, (0.0, 0.0, z))
     if arrived:
@@ -261,7 +293,7 @@ def fly_home(core: TelloCore) -> Steps:
     return arrived
 
 
-def set_envelope(core: TelloCore, request: EnvelopeSet) -> Steps:
+def set_envelope(core: MissionPort, request: EnvelopeSet) -> Steps:
     """envelope/set: replace or reset the envelope, or read it
     (:mod:`dronewrapper_bridge_base.envelope_set`; home is the take-off point)."""
     state = core.missions
