@@ -1,5 +1,6 @@
-"""Home and the safety envelope on the PX4 Zenoh core (pure; the part holding them:
-bridge_base's :class:`~dronewrapper_bridge_base.envelope_state.EnvelopeState`), the rules of
+"""Home and the safety envelope on the PX4 Zenoh core (pure, over the core as
+:class:`EnvelopePort` shows it; the part holding them: bridge_base's
+:class:`~dronewrapper_bridge_base.envelope_state.EnvelopeState`), the rules of
 the SDK's :mod:`dronewrapper.envelope` as every bridge keeps them:
 
 * a setpoint outside the envelope is refused, the limit named (bridge_base's
@@ -18,31 +19,55 @@ is not among its zenoh module's default topics.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mission import EnvelopeSet
+from dronewrapper.msgs.registry import Topic
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.envelope_state import watch_breach
+from dronewrapper_bridge_base.envelope_state import BreachReporter, EnvelopeState, watch_breach
 from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_px4_zenoh.config import Config
 
-Px4ZenohCore = Any
-"""The core (core.py imports this module, so the type is not imported here)."""
+
+class Enveloped(Protocol):
+    """The envelope and home the core holds (its part :class:`EnvelopeState`)."""
+
+    @property
+    def envelope(self) -> EnvelopeState: ...
+
+
+class EnvelopePort(Enveloped, BreachReporter, Protocol):
+    """What the envelope's watch, publication and ``envelope/set`` use of the core besides
+    its envelope part and a breach's report: its time (``now`` monotonic s, ``stamp``
+    wall-clock s), the configured envelope, the caller of a request, samples to publish."""
+
+    @property
+    def now(self) -> float: ...
+    @property
+    def stamp(self) -> float: ...
+    @property
+    def config(self) -> Config: ...
+    @property
+    def caller(self) -> str: ...
+
+    def publish(self, topic: Topic, msg: Any) -> None: ...
+
 
 PUBLISH_PERIOD_S = 2.0
 
 
-def refuse_takeoff(core: Px4ZenohCore, height: float) -> None:
+def refuse_takeoff(core: Enveloped, height: float) -> None:
     """ServiceError (refused) when a take-off to ``height`` m climbs above the envelope."""
     core.envelope.refuse_takeoff(height)
 
 
-def refuse_mode(core: Px4ZenohCore, mode: str) -> None:
+def refuse_mode(core: Enveloped, mode: str) -> None:
     """ServiceError (refused) for OFFBOARD while the aircraft is outside the envelope."""
     core.envelope.refuse_mode(mode, guided=mode == "OFFBOARD")
 
 
-def tick(core: Px4ZenohCore) -> str:
+def tick(core: EnvelopePort) -> str:
     """Each stream tick: on a breach, report it and return the envelope's action (the core
     starts it: ``land``, ``return`` or ``hold``), else ""; publish the envelope and home
     periodically."""
@@ -55,11 +80,11 @@ def tick(core: Px4ZenohCore) -> str:
     return breach
 
 
-def publish_home(core: Px4ZenohCore) -> None:
+def publish_home(core: EnvelopePort) -> None:
     core.publish(registry.HOME_POSITION, core.envelope.home_message(core.stamp))
 
 
-def set_envelope(core: Px4ZenohCore, request: EnvelopeSet) -> Steps:
+def set_envelope(core: EnvelopePort, request: EnvelopeSet) -> Steps:
     """envelope/set: replace or reset the envelope (neither: read it; see
     :mod:`dronewrapper_bridge_base.envelope_set`). PX4 gets no fence: the bridge's envelope
     is the only one."""
