@@ -17,6 +17,7 @@ from typing import Protocol
 
 from dronewrapper.msgs.flight import REFUSED, TOO_LATE, FlightResult
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, ExtendedState, State
+from dronewrapper_bridge_base.core_view import Clock
 from dronewrapper_bridge_base.flight_request import failed
 from dronewrapper_bridge_base.guided_failsafe import Failsafe
 from dronewrapper_bridge_base.operation import Steps
@@ -44,21 +45,17 @@ class Grounded(Protocol):
     def ext(self) -> ExtendedState: ...
 
 
-class Returning(Grounded, Protocol):
-    """What :func:`returned` reads of a core besides :class:`Grounded`: its time (monotonic
-    s) and the unattended rule (cleared once down)."""
+class Returning(Grounded, Clock, Protocol):
+    """What :func:`returned` reads of a core besides :class:`Grounded` and its time: the
+    unattended rule (cleared once down)."""
 
-    @property
-    def now(self) -> float: ...
     @property
     def unattended(self) -> Unattended: ...
 
 
-class ModeCore(Protocol):
-    """What :func:`mode_command` reads and calls of a core (``now`` monotonic s)."""
+class ModeCore(Clock, Protocol):
+    """What :func:`mode_command` reads and calls of a core besides its time."""
 
-    @property
-    def now(self) -> float: ...
     @property
     def failsafe(self) -> Failsafe: ...
     def mode_entered(self, mode: str) -> None: ...  # the autopilot accepted a command into it

@@ -58,7 +58,6 @@ from dronewrapper_bridge_mavlink.flight import (
     failed,
     last_text,
 )
-from dronewrapper_bridge_mavlink.mission_state import MissionState
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_PX4,
     GUIDED_MODE,
@@ -77,15 +76,12 @@ SETTLE_WAIT_S = 2.0  # s a return waits for the autopilot's return altitude to b
 MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
 
 
-class ActionPort(FlightPort, autopilot_limits.LimitsPort, Protocol):
+class ActionPort(autopilot_limits.LimitsPort, FlightPort, Protocol):
     """What go-to, return and mission actions use of the core besides what take-off and
     landing do (:class:`~.flight.FlightPort`) and keeping the autopilot's limits
-    (:class:`~.autopilot_limits.LimitsPort`): the mission state and the unattended rule."""
+    (:class:`~.autopilot_limits.LimitsPort`): the unattended rule."""
 
-    @property
-    def missions(self) -> MissionState: ...
-    @property
-    def unattended(self) -> Unattended: ...
+    unattended: Unattended
 
 
 def not_flying(what: str) -> FlightResult:

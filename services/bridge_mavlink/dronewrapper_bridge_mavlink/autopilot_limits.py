@@ -39,13 +39,13 @@ from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.mavros import ParamSet, ParamValue
 from dronewrapper.msgs.mission import EnvelopeSet, Waypoint
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.operation import Operation, Steps
+from dronewrapper_bridge_base.core_view import Stamped, Starting
 from dronewrapper_bridge_mavlink import rally_returns
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.mission_frames import MissionFrameError
 from dronewrapper_bridge_mavlink.mission_state import Limits, MissionState
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
-from dronewrapper_bridge_mavlink.parameters import Parameters
+from dronewrapper_bridge_mavlink.parameters import HasParameters
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -67,31 +67,18 @@ INTEGER_PARAMS = frozenset({"RTL_ALT", "RTL_ALT_FINAL", "RTL_CLIMB_MIN"})
 """The ``AT_MOST`` parameters held as integers (the fence actions, ``EXACTLY``, are too)."""
 
 
-class LimitsPort(Protocol):
-    """What keeping the autopilot's limits uses of the core (``now`` monotonic s, ``stamp``
-    wall-clock s): the autopilot as heard (kind, ``""`` before a heartbeat; connected), the
-    configured envelope, the mission state (envelope, home, rally points, :class:`Limits`),
-    the parameters part, a background operation's start and a bridge warning."""
+class LimitsPort(Stamped, Starting, HasParameters, Protocol):
+    """What keeping the autopilot's limits uses of the core besides its time, a background
+    operation's start and its parameters: the autopilot as heard (kind, ``""`` before a
+    heartbeat; connected), the configured envelope, the mission state (envelope, home, rally
+    points, :class:`Limits`) and a bridge warning."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def stamp(self) -> float: ...
-    @property
-    def autopilot(self) -> str: ...
-    @property
-    def connected(self) -> bool: ...
-    @property
-    def config(self) -> Config: ...
-    @property
-    def missions(self) -> MissionState: ...
-    @property
-    def parameters(self) -> Parameters: ...
+    autopilot: str
+    connected: bool
+    config: Config
+    missions: MissionState
 
     def bridge_text(self, text: str) -> None: ...
-    def start(
-        self, steps: Steps, now: float, stamp: float, *, background: bool = False
-    ) -> Operation: ...
 
 
 def return_altitude(envelope: Envelope) -> float:

@@ -70,8 +70,7 @@ class Texts(Protocol):
 class Located(Protocol):
     """The telemetry (local position ENU m)."""
 
-    @property
-    def telemetry(self) -> Telemetry: ...
+    telemetry: Telemetry
 
 
 class FlightPort(ops.OperationPort, Texts, Protocol):
@@ -79,8 +78,7 @@ class FlightPort(ops.OperationPort, Texts, Protocol):
     (:class:`~.operations.OperationPort`) and the texts heard: whether the autopilot is
     connected, and the bridge's own hold where the aircraft is (``hold_here``)."""
 
-    @property
-    def connected(self) -> bool: ...
+    connected: bool
 
     def hold_here(self) -> None: ...
 

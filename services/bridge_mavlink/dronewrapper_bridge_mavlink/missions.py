@@ -43,10 +43,10 @@ from dronewrapper.msgs.mission import (
     WaypointReached,
     WaypointSetCurrent,
 )
-from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.core_view import Serving
 from dronewrapper_bridge_base.envelope_state import BreachReporter, watch_breach
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
@@ -63,19 +63,15 @@ PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this oft
 SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
 
 
-class MissionPort(LimitsPort, UploadPort, ops.OperationPort, BreachReporter, Protocol):
+class MissionPort(LimitsPort, UploadPort, ops.OperationPort, Serving, BreachReporter, Protocol):
     """What the mission side uses of the core: the mission state it owns, what keeping the
     autopilot's limits (:class:`~.autopilot_limits.LimitsPort`), the uploads
     (:class:`~.uploads.UploadPort`), the operations it runs (a breach's hold or return, a
-    mission item's set-current: :class:`~.operations.OperationPort`) and a breach's report
-    use, and the caller of a request, a sample to publish, a dropped input to count."""
+    mission item's set-current: :class:`~.operations.OperationPort`), a service operation
+    (time, samples, the caller) and a breach's report use, and a dropped input's count."""
 
-    @property
-    def missions(self) -> MissionState: ...
-    @property
-    def caller(self) -> str: ...
+    missions: MissionState
 
-    def publish(self, topic: Topic, msg: Any) -> None: ...
     def dropped(self, what: str) -> None: ...
 
 

@@ -30,14 +30,18 @@ from dronewrapper.msgs.mavros import (
     CommandBoolResult,
     CommandTOL,
     CommandTOLResult,
-    ExtendedState,
     SetMode,
     SetModeResult,
     State,
 )
 from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
-from dronewrapper_bridge_base.guided_flight import ModeCore, failsafe_request, mode_command
+from dronewrapper_bridge_base.guided_flight import (
+    Grounded,
+    ModeCore,
+    failsafe_request,
+    mode_command,
+)
 from dronewrapper_bridge_base.offboard_prime import PrimingCore, prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
@@ -61,45 +65,37 @@ ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 
 
 class Heard(Protocol):
-    """The autopilot as its last HEARTBEAT showed it (None before any)."""
+    """The autopilot as heard: its kind (``""`` before a heartbeat) and the State its last
+    HEARTBEAT showed (None before any; an accepted mode command changes it at once)."""
 
-    @property
-    def heartbeat_state(self) -> State | None: ...
+    autopilot: str
+    heartbeat_state: State | None
 
 
 class Commanding(Protocol):
     """What a plain command uses of the core: its command exchange (:class:`Commands`)."""
 
-    @property
-    def commands(self) -> Commands: ...
+    commands: Commands
 
 
-class OperationPort(Heard, Commanding, PrimingCore, ModeCore, Protocol):
-    """What the operations here read and call of the core (``now`` monotonic s): the command
-    exchange, the autopilot as heard (kind, ``""`` before a heartbeat; State; landed state),
-    the envelope's refusals, the telemetry (the take-off altitude), the failsafe and its
-    priming, and the mode it accepted (``mode_entered``)."""
+class FailsafePort(Heard, Commanding, ModeCore, Protocol):
+    """What the failsafe's own request uses: the autopilot as heard, the command exchange,
+    the failsafe and the mode accepted (``mode_entered``)."""
 
-    @property
-    def config(self) -> Config: ...
-    @property
-    def autopilot(self) -> str: ...
-    @property
-    def ext(self) -> ExtendedState: ...
+
+class OperationPort(FailsafePort, Grounded, PrimingCore, Protocol):
+    """What the operations here read and call of the core (``now`` monotonic s) besides
+    :class:`FailsafePort`: the landed state, the failsafe's priming, the config, the
+    telemetry (the take-off altitude), the envelope's refusals (the mission state as its
+    :class:`EnvelopeState`) and whether the autopilot is heard (``require_connected``)."""
+
+    config: Config
+    telemetry: Telemetry
+
     @property
     def missions(self) -> EnvelopeState: ...
-    @property
-    def telemetry(self) -> Telemetry: ...
 
     def require_connected(self) -> str: ...
-
-
-class FailsafePort(Commanding, ModeCore, Protocol):
-    """What the failsafe's own request uses: the command exchange, the mode it puts the
-    autopilot in, the autopilot's kind (``""`` before a heartbeat)."""
-
-    @property
-    def autopilot(self) -> str: ...
 
 
 # ---------------------------------------------------------------- commands

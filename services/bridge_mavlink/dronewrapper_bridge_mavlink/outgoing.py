@@ -17,6 +17,7 @@ from typing import Any, NoReturn, Protocol
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.registry import Topic
+from dronewrapper_bridge_base.core_view import Clock
 from dronewrapper_bridge_mavlink.setpoints import LocalNedTarget
 
 
@@ -151,12 +152,9 @@ Send = (
 """Every message the bridge's core sends to the autopilot."""
 
 
-class AutopilotPort(Protocol):
+class AutopilotPort(Clock, Protocol):
     """The core as a part of it that talks to the autopilot sees it: its time (``now``,
     monotonic s, set by each entry point), the autopilot's (system, component), the outbox."""
-
-    @property
-    def now(self) -> float: ...
 
     def target(self) -> tuple[int, int]: ...
     def send(self, message: Send) -> None: ...

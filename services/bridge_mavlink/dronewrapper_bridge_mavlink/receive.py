@@ -20,12 +20,12 @@ from typing import Any, Protocol
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
-from dronewrapper.msgs.registry import Topic
+from dronewrapper_bridge_base.core_view import Clock, Publishing, Stamped
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
-from dronewrapper_bridge_mavlink.parameters import Parameters
+from dronewrapper_bridge_mavlink.parameters import HasParameters
 from dronewrapper_bridge_mavlink.sources import AutopilotSources
 from dronewrapper_bridge_mavlink.streams import StreamRequests
 from dronewrapper_bridge_mavlink.telemetry import StatusTextAssembler, Telemetry, non_finite_field
@@ -33,44 +33,26 @@ from dronewrapper_bridge_mavlink.telemetry import StatusTextAssembler, Telemetry
 log = logging.getLogger("bridge_mavlink")
 
 
-class AdmissionPort(Protocol):
-    """What :func:`admission` reads of the core: its time, the autopilot's system id (0
-    before it is heard), the senders seen (:class:`AutopilotSources`) and the freshness of
-    each sender's messages (:class:`Freshness`)."""
+class AdmissionPort(Clock, Protocol):
+    """What :func:`admission` reads of the core besides its time: the autopilot's system id
+    (0 before it is heard), the senders seen and the freshness of each sender's messages."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def target_system(self) -> int: ...
-    @property
-    def sources(self) -> AutopilotSources: ...
-    @property
-    def freshness(self) -> Freshness: ...
+    target_system: int
+    sources: AutopilotSources
+    freshness: Freshness
 
 
-class ReceivePort(Protocol):
-    """What the telemetry handlers use of the core: its time, the config (our own address),
-    the parts fed (telemetry, stream requests, status texts, commands, parameters) and the
-    samples to publish."""
+class ReceivePort(Stamped, Publishing, HasParameters, Protocol):
+    """What the telemetry handlers use of the core besides its time, its samples and its
+    parameters: the config (our own address), the parts fed (telemetry, stream requests,
+    status texts, commands) and a status text to publish."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def stamp(self) -> float: ...
-    @property
-    def config(self) -> Config: ...
-    @property
-    def telemetry(self) -> Telemetry: ...
-    @property
-    def streams(self) -> StreamRequests: ...
-    @property
-    def statustexts(self) -> StatusTextAssembler: ...
-    @property
-    def commands(self) -> Commands: ...
-    @property
-    def parameters(self) -> Parameters: ...
+    config: Config
+    telemetry: Telemetry
+    streams: StreamRequests
+    statustexts: StatusTextAssembler
+    commands: Commands
 
-    def publish(self, topic: Topic, msg: Any) -> None: ...
     def publish_text(self, text: StatusTextMsg) -> None: ...
 
 

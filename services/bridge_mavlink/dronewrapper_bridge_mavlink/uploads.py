@@ -39,10 +39,8 @@ class UploadPort(Protocol):
     """What an upload uses of the core: whether the autopilot is heard, its mission state
     (envelope, home, rally points) and its transfers."""
 
-    @property
-    def missions(self) -> MissionState: ...
-    @property
-    def transfers(self) -> Transfers: ...
+    missions: MissionState
+    transfers: Transfers
 
     def require_connected(self) -> str: ...
 

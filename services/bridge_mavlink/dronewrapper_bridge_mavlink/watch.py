@@ -22,15 +22,12 @@ NAV_FIRST, NAV_LAST = 16, 99  # MAV_CMD_NAV_*: the items that fly somewhere
 
 
 class WatchPort(ops.Heard, Protocol):
-    """What the watch reads and calls of the core: the autopilot as heard (kind, ``""``
-    before a heartbeat; its mode), the mission flown, the unattended rule and its tick."""
+    """What the watch reads and calls of the core besides the autopilot as heard (kind,
+    ``""`` before a heartbeat; its mode): the mission flown, the unattended rule and its
+    tick."""
 
-    @property
-    def autopilot(self) -> str: ...
-    @property
-    def missions(self) -> MissionState: ...
-    @property
-    def unattended(self) -> Unattended: ...
+    missions: MissionState
+    unattended: Unattended
 
     def unattended_tick(self, holding: Callable[[], bool]) -> None: ...
 

@@ -19,12 +19,12 @@ is not among its zenoh module's default topics.
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Protocol
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mission import EnvelopeSet
-from dronewrapper.msgs.registry import Topic
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.core_view import Serving
 from dronewrapper_bridge_base.envelope_state import BreachReporter, EnvelopeState, watch_breach
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh.config import Config
@@ -33,25 +33,15 @@ from dronewrapper_bridge_px4_zenoh.config import Config
 class Enveloped(Protocol):
     """The envelope and home the core holds (its part :class:`EnvelopeState`)."""
 
-    @property
-    def envelope(self) -> EnvelopeState: ...
+    envelope: EnvelopeState
 
 
-class EnvelopePort(Enveloped, BreachReporter, Protocol):
+class EnvelopePort(Enveloped, Serving, BreachReporter, Protocol):
     """What the envelope's watch, publication and ``envelope/set`` use of the core besides
-    its envelope part and a breach's report: its time (``now`` monotonic s, ``stamp``
-    wall-clock s), the configured envelope, the caller of a request, samples to publish."""
+    its envelope part, a service operation's (time, samples, the caller) and a breach's
+    report: the configured envelope."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def stamp(self) -> float: ...
-    @property
-    def config(self) -> Config: ...
-    @property
-    def caller(self) -> str: ...
-
-    def publish(self, topic: Topic, msg: Any) -> None: ...
+    config: Config
 
 
 PUBLISH_PERIOD_S = 2.0

@@ -54,7 +54,7 @@ from dronewrapper_bridge_base.flight_request import (
     took_off,
 )
 from dronewrapper_bridge_base.guided_failsafe import hold_target
-from dronewrapper_bridge_base.guided_flight import Returning, flying, landed, returned
+from dronewrapper_bridge_base.guided_flight import flying, landed, returned
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
@@ -67,20 +67,16 @@ MAX_HEIGHT_M = 1000.0
 MAX_TIMEOUT_S = 600.0
 
 
-class FlightPort(ops.OperationPort, watch.WatchPort, Returning, Protocol):
+class FlightPort(ops.OperationPort, watch.WatchPort, Protocol):
     """What the flight operations use of the core besides the operations they run
     (:class:`~.operations.OperationPort`), the watch (:class:`~.watch.WatchPort`) and a
     return's wait: whether PX4 is heard, its latest vehicle_status (None before any), the
     local position (ENU m) and yaw (ENU rad), the bridge's own hold where it is."""
 
-    @property
-    def connected(self) -> bool: ...
-    @property
-    def status(self) -> dict[str, Any] | None: ...
-    @property
-    def position_enu(self) -> tuple[float, float, float] | None: ...
-    @property
-    def yaw_enu(self) -> float: ...
+    connected: bool
+    status: dict[str, Any] | None
+    position_enu: tuple[float, float, float] | None
+    yaw_enu: float
 
     def hold_here(self) -> None: ...
 

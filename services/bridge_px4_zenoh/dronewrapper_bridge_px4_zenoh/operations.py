@@ -29,6 +29,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
     State,
 )
+from dronewrapper_bridge_base.core_view import CommandSlot
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
 from dronewrapper_bridge_base.guided_flight import (
     Grounded,
@@ -61,37 +62,28 @@ NAMES = {
 class Heard(Protocol):
     """PX4 as its last vehicle_status showed it (State; None before any)."""
 
-    @property
-    def heartbeat_state(self) -> State | None: ...
+    heartbeat_state: State | None
 
 
-class CommandPort(Heard, ModeCore, Protocol):
-    """What a vehicle command's exchange uses of the core (``now`` monotonic s): the config
-    (attempts, ack timeout), the one command slot, the writes to PX4, the acks heard (when,
-    command, result; newest last), PX4's address (0 until vehicle_status names it)."""
+class CommandPort(Heard, CommandSlot, ModeCore, Protocol):
+    """What a vehicle command's exchange uses of the core besides its time, PX4 as heard,
+    the one command slot, the failsafe and the mode accepted: the config (attempts, ack
+    timeout), the writes to PX4, the acks heard (when, command, result; newest last), PX4's
+    address (0 until vehicle_status names it)."""
 
-    @property
-    def config(self) -> Config: ...
-    @property
-    def command_busy(self) -> bool: ...
+    config: Config
+    target_system: int
+    target_component: int
+
     @property
     def acks(self) -> Sequence[tuple[float, int, int]]: ...
-    @property
-    def target_system(self) -> int: ...
-    @property
-    def target_component(self) -> int: ...
 
-    def take_command_slot(self) -> None: ...
-    def release_command_slot(self) -> None: ...
     def write(self, topic: t.Px4Topic, value: dict[str, Any]) -> None: ...
 
 
 class OperationPort(CommandPort, PrimingCore, Grounded, rules.Enveloped, Protocol):
     """What the operations use of the core besides a command's exchange: priming, the
     landed state, the envelope's refusals, and whether PX4 is heard."""
-
-    @property
-    def config(self) -> Config: ...
 
     def require_connected(self) -> str: ...
 

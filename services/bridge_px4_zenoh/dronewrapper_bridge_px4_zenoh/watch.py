@@ -18,18 +18,16 @@ import logging
 from collections.abc import Callable
 from typing import Protocol
 
+from dronewrapper_bridge_base.core_view import Clock
 from dronewrapper_bridge_base.unattended import Unattended
 from dronewrapper_bridge_px4_zenoh import operations as ops
 
 
-class WatchPort(ops.Heard, Protocol):
-    """What the watch uses of the core: its time (monotonic s), PX4's mode as heard, the
+class WatchPort(ops.Heard, Clock, Protocol):
+    """What the watch uses of the core besides its time and PX4's mode as heard: the
     unattended rule and its tick."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def unattended(self) -> Unattended: ...
+    unattended: Unattended
 
     def unattended_tick(self, holding: Callable[[], bool]) -> None: ...
 

@@ -39,8 +39,7 @@ class ActionPort(missions.MissionPort, Protocol):
     """What go-to, return and a mission's start use of the core besides the mission side's
     (:class:`~.missions.MissionPort`): whether the Tello is connected."""
 
-    @property
-    def connected(self) -> bool: ...
+    connected: bool
 
 
 def _ready(core: ActionPort, what: str) -> FlightResult | None:

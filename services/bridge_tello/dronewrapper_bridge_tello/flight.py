@@ -35,8 +35,7 @@ class FlightPort(ops.OperationPort, Protocol):
     """What take-off and landing use of the core besides the operations they run
     (:class:`~.operations.OperationPort`): whether the Tello is connected."""
 
-    @property
-    def connected(self) -> bool: ...
+    connected: bool
 
 
 MAX_HEIGHT_M = 30.0

@@ -40,11 +40,11 @@ from dronewrapper.msgs.mission import (
     WaypointPushResult,
     WaypointReached,
 )
-from dronewrapper.msgs.registry import Topic
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.operation import Operation, Steps
+from dronewrapper_bridge_base.core_view import Clock, Serving
+from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.mission_state import TelloMissions
@@ -52,34 +52,21 @@ from dronewrapper_bridge_tello.mission_state import TelloMissions
 log = logging.getLogger("bridge_tello")
 
 
-class Refusing(Protocol):
-    """What a setpoint's check uses of the core: its time (monotonic s), the mission state
+class Refusing(Clock, Protocol):
+    """What a setpoint's check uses of the core besides its time: the mission state
     (envelope, the last refusal's text) and a text to publish."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def missions(self) -> TelloMissions: ...
+    missions: TelloMissions
 
     def text(self, severity: int, text: str) -> None: ...
 
 
-class MissionPort(ops.OperationPort, Refusing, Protocol):
+class MissionPort(ops.OperationPort, Refusing, Serving, Protocol):
     """What the envelope's watch, the mission services and their flights use of the core
-    besides the operations they run (:class:`~.operations.OperationPort`): the header
-    stamp (wall-clock s), the caller of a request, samples to publish, a breach's report, a
-    background operation's start."""
+    besides the operations they run (:class:`~.operations.OperationPort`) and a service
+    operation's (time, samples, background operations, the caller): a breach's report."""
 
-    @property
-    def stamp(self) -> float: ...
-    @property
-    def caller(self) -> str: ...
-
-    def publish(self, topic: Topic, msg: Any) -> None: ...
     def report_breach(self, limit: str, reason: str, action: str) -> None: ...
-    def start(
-        self, steps: Steps, now: float, stamp: float, *, background: bool = False
-    ) -> Operation: ...
 
 
 FRAME_LOCAL_ENU = 4

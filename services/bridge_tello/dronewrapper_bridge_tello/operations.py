@@ -41,6 +41,7 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.core_view import Clock, CommandSlot
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello.config import Config
 from dronewrapper_bridge_tello.failsafe import Failsafe
@@ -52,21 +53,13 @@ from dronewrapper_bridge_tello.video_demand import STREAMON
 log = logging.getLogger("bridge_tello")
 
 
-class Exchanging(Protocol):
-    """What :func:`exchange` uses of the core: its time (monotonic s), the config (timeouts,
-    attempts), the one command slot, the replies' matcher and the SDK command's send."""
+class Exchanging(Clock, CommandSlot, Protocol):
+    """What :func:`exchange` uses of the core besides its time and the one command slot: the
+    config (timeouts, attempts), the replies' matcher and the SDK command's send."""
 
-    @property
-    def now(self) -> float: ...
-    @property
-    def config(self) -> Config: ...
-    @property
-    def command_busy(self) -> bool: ...
-    @property
-    def matcher(self) -> ReplyMatcher: ...
+    config: Config
+    matcher: ReplyMatcher
 
-    def take_command_slot(self) -> None: ...
-    def release_command_slot(self) -> None: ...
     def send(self, text: str) -> None: ...
 
 
@@ -75,14 +68,10 @@ class OperationPort(Exchanging, Protocol):
     strings heard (their count, the telemetry), the failsafe, the envelope (the mission
     state), the SDK mode and video replies, the State published."""
 
-    @property
-    def states_received(self) -> int: ...
-    @property
-    def failsafe(self) -> Failsafe: ...
-    @property
-    def missions(self) -> TelloMissions: ...
-    @property
-    def telemetry(self) -> Telemetry: ...
+    states_received: int
+    failsafe: Failsafe
+    missions: TelloMissions
+    telemetry: Telemetry
 
     def require_connected(self) -> None: ...
     def publish_state(self, *, force: bool = False) -> None: ...
