@@ -205,7 +205,7 @@ def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
         return FlightResult(success=True, message="mission paused: holding here")
     mode = MISSION_MODE[autopilot]
     if request.action == "start":
-        core.missions.last_reached = -1
+        core.missions.started()
         if autopilot != AUTOPILOT_PX4 and ops.shown_mode(core) == mode:
             # ArduPilot starts a mission (again, once finished) only on entering AUTO
             reply = yield from ops.set_mode(core, SetMode(custom_mode=GUIDED_MODE[autopilot]))

@@ -26,7 +26,6 @@ import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
-import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
@@ -35,7 +34,6 @@ from dronewrapper.msgs.mission import (
     EnvelopeSet,
     MissionResult,
     WaypointClear,
-    WaypointList,
     WaypointPull,
     WaypointPullResult,
     WaypointPush,
@@ -59,7 +57,6 @@ from dronewrapper_bridge_mavlink.uploads import UploadPort
 
 log = logging.getLogger("bridge_mavlink")
 
-PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
 
 
@@ -84,8 +81,7 @@ def tick(core: MissionPort) -> None:
     action = watch_breach(core, state)
     if action:
         core.start(breach_action(core, action), core.now, core.stamp, background=True)
-    if core.now >= state.next_publish:
-        state.next_publish = core.now + PUBLISH_PERIOD_S
+    if state.publish_due(core.now):
         publish_all(core)
 
 
@@ -101,16 +97,7 @@ def publish_home(core: MissionPort) -> None:
 
 
 def publish_waypoints(core: MissionPort) -> None:
-    state = core.missions
-    listing = WaypointList(
-        header=Header(stamp=core.stamp),
-        current_seq=state.current_seq,
-        waypoints=[
-            msgspec.structs.replace(wp, is_current=i == state.current_seq)
-            for i, wp in enumerate(state.waypoints)
-        ],
-    )
-    core.publish(registry.MISSION_WAYPOINTS, listing)
+    core.publish(registry.MISSION_WAYPOINTS, core.missions.listing(core.stamp))
 
 
 def breach_action(core: MissionPort, action: str) -> Steps:
@@ -229,7 +216,7 @@ def pull(core: MissionPort, _request: WaypointPull) -> Steps:
     items = home_slot.downloaded(download.items, core.autopilot)
     waypoints = [uploads.waypoint_of(item) for item in items]
     if not download.error:
-        core.missions.waypoints = waypoints
+        core.missions.downloaded(waypoints)
         publish_waypoints(core)
     return WaypointPullResult(
         success=not download.error,
@@ -244,8 +231,7 @@ def clear(core: MissionPort, _request: WaypointClear) -> Steps:
     core.require_connected()
     transfer = yield from core.transfers.clear()
     if not transfer.error:
-        core.missions.waypoints = []
-        core.missions.current_seq = 0
+        core.missions.cleared()
         publish_waypoints(core)
     return MissionResult(success=not transfer.error, message=transfer.error or "cleared")
 

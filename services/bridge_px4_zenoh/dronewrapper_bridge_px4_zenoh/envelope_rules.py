@@ -9,7 +9,8 @@ the SDK's :mod:`dronewrapper.envelope` as every bridge keeps them:
   (:func:`refuse_mode`: a breach action must not be undone by a commander);
 * while armed and airborne outside it, the breach is reported to whoever commands and the
   envelope's action runs (``land``, ``return``: PX4's own; ``hold``: AUTO.LOITER);
-* the envelope and home are published every :data:`PUBLISH_PERIOD_S` s; ``envelope/set``
+* the envelope and home are published every
+  :data:`~dronewrapper_bridge_base.envelope_state.PUBLISH_PERIOD_S` s; ``envelope/set``
   replaces or resets the envelope (:func:`set_envelope`, the lease holder's only).
 
 Home is PX4's local origin (the estimator's reference, from ``vehicle_local_position``'s
@@ -44,9 +45,6 @@ class EnvelopePort(Enveloped, Serving, BreachReporter, Protocol):
     config: Config
 
 
-PUBLISH_PERIOD_S = 2.0
-
-
 def refuse_takeoff(core: Enveloped, height: float) -> None:
     """ServiceError (refused) when a take-off to ``height`` m climbs above the envelope."""
     core.envelope.refuse_takeoff(height)
@@ -63,8 +61,7 @@ def tick(core: EnvelopePort) -> str:
     periodically."""
     state = core.envelope
     breach = watch_breach(core, state)
-    if core.now >= state.next_publish:
-        state.next_publish = core.now + PUBLISH_PERIOD_S
+    if state.publish_due(core.now):
         core.publish(registry.ENVELOPE, state.envelope)
         publish_home(core)
     return breach

@@ -35,7 +35,6 @@ from dronewrapper.msgs.mission import (
     MissionControl,
     MissionResult,
     WaypointClear,
-    WaypointList,
     WaypointPush,
     WaypointPushResult,
     WaypointReached,
@@ -72,7 +71,6 @@ class MissionPort(ops.OperationPort, Refusing, Serving, Protocol):
 FRAME_LOCAL_ENU = 4
 MAX_MOVE_CM = 500
 MIN_MOVE_CM = 20  # go refuses a move with all three axes within ±20 cm
-PUBLISH_PERIOD_S = 2.0
 REFUSAL_TEXT_PERIOD_S = 2.0
 MOVE_SPEED_CM_S = 50  # go's speed, cm/s
 MOVE_TIMEOUT_S = 15.0  # s for one move's "ok" (5 m at 50 cm/s and its settling)
@@ -143,8 +141,7 @@ def tick(core: MissionPort) -> None:
             core.report_breach(state.monitor.limit, reason, "hold" if action == "hold" else "land")
             state.paused = True
             core.start(breach_action(core, action), core.now, core.stamp, background=True)
-    if core.now >= state._next_publish:
-        state._next_publish = core.now + PUBLISH_PERIOD_S
+    if state.publish_due(core.now):
         core.publish(registry.ENVELOPE, state.envelope)
         core.publish(registry.HOME_POSITION, HomePosition(header=Header(stamp=core.stamp)))
         publish_waypoints(core)
@@ -158,11 +155,7 @@ def breach_action(core: MissionPort, action: str) -> Steps:
 
 
 def publish_waypoints(core: MissionPort) -> None:
-    state = core.missions
-    listing = WaypointList(
-        header=Header(stamp=core.stamp), current_seq=state.current_seq, waypoints=state.waypoints
-    )
-    core.publish(registry.MISSION_WAYPOINTS, listing)
+    core.publish(registry.MISSION_WAYPOINTS, core.missions.listing(core.stamp))
 
 
 # ---------------------------------------------------------------- services
@@ -189,10 +182,9 @@ def push(core: MissionPort, request: WaypointPush) -> Steps:
         except EnvelopeError as exc:
             raise ServiceError(f"mission item {seq}: {exc}", "refused") from None
     state = core.missions
-    if state.running is not None and not state.running.done:
+    if state.flying:
         raise ServiceError("a mission is being flown: pause it first", "refused")
-    state.waypoints = list(request.waypoints)
-    state.current_seq = 0
+    state.kept(request.waypoints)
     publish_waypoints(core)
     yield from ()
     count = len(state.waypoints)
@@ -201,9 +193,9 @@ def push(core: MissionPort, request: WaypointPush) -> Steps:
 
 def clear(core: MissionPort, _request: WaypointClear) -> Steps:
     state = core.missions
-    if state.running is not None and not state.running.done:
+    if state.flying:
         raise ServiceError("a mission is being flown: pause it first", "refused")
-    state.waypoints, state.current_seq = [], 0
+    state.kept([])
     publish_waypoints(core)
     yield from ()
     return MissionResult(success=True, message="cleared")
@@ -216,7 +208,7 @@ def control(core: MissionPort, request: MissionControl) -> Steps:
     state = core.missions
     if core.telemetry.landed.state != LANDED_STATE_IN_AIR:
         raise ServiceError("the Tello is not flying: take off first", "refused")
-    flying = state.running is not None and not state.running.done
+    flying = state.flying
     if request.action == "pause":
         if not flying:
             raise ServiceError("pause refused: no mission is being flown", "refused")
