@@ -17,8 +17,7 @@ PRIME_MARGIN_S = 2.0
 
 
 class _PrimeConfig(Protocol):
-    @property
-    def offboard_prime_s(self) -> float: ...
+    offboard_prime_s: float  # s of streaming before OFFBOARD is asked for
 
 
 class PrimingCore(Clock, Protocol):

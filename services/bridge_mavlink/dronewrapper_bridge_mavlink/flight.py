@@ -54,11 +54,6 @@ from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
 from dronewrapper_bridge_mavlink.setpoints import hold_target
 from dronewrapper_bridge_mavlink.telemetry import Telemetry
 
-log = logging.getLogger("bridge_mavlink")
-
-MAX_HEIGHT_M = 1000.0
-MAX_TIMEOUT_S = 600.0
-
 
 class Texts(Protocol):
     """The texts heard (each with its arrival, monotonic s), the bridge's own among them."""
@@ -71,6 +66,12 @@ class Located(Protocol):
     """The telemetry (local position ENU m)."""
 
     telemetry: Telemetry
+
+
+log = logging.getLogger("bridge_mavlink")
+
+MAX_HEIGHT_M = 1000.0
+MAX_TIMEOUT_S = 600.0
 
 
 class FlightPort(ops.OperationPort, Texts, Protocol):
