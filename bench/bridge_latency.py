@@ -170,10 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=15.0, help="length of each phase")
     args = parser.parse_args(argv)
 
-    router = common.LoopbackRouter()
-    if not router.start():
-        print("router did not start", file=sys.stderr)
-        return 1
+    router = common.started_router()
     endpoint = router.endpoint
     port = free_port(socket.SOCK_DGRAM)
     bridge = subprocess.Popen(

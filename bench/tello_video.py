@@ -82,10 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=60.0, help="length of the video run")
     args = parser.parse_args(argv)
 
-    router = common.LoopbackRouter()
-    if not router.start():
-        print("router did not start", file=sys.stderr)
-        return 1
+    router = common.started_router()
     endpoint = router.endpoint
     address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
     video = StampedVideo()
