@@ -15,7 +15,7 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.envelope import Envelope
-from dronewrapper.msgs.mavros import ParamGet, ParamSet, ParamValue, StatusText
+from dronewrapper.msgs.mavros import ParamGet, ParamSet, StatusText
 from dronewrapper.msgs.mission import Waypoint
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.envelope_state import PUBLISH_PERIOD_S, EnvelopeState
@@ -108,7 +108,7 @@ def test_a_write_re_sends_until_its_echo_and_reports_it():
         if echoed is not None:
             part.on_value(value("WP_SPD", echoed, REAL32))
 
-    reply = run(part.set(ParamSet(param_id="WP_SPD", value=ParamValue.of(7.5))), port, answer)
+    reply = run(part.set(ParamSet.of("WP_SPD", 7.5)), port, answer)
     assert port.sent == [ParamSetMessage(1, 1, b"WP_SPD", 7.5, REAL32)] * 2
     assert reply.success and reply.value.as_number() == 7.5
 
