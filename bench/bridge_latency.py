@@ -28,14 +28,7 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from bench.common import (
-    LoopbackRouter,
-    cpu_seconds,
-    percentiles,
-    print_table,
-    stop_process,
-    write_results,
-)
+from bench import common
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Vector3
 from dronewrapper.msgs.mavros import FRAME_LOCAL_NED, MASK_VELOCITY, PositionTarget
@@ -177,10 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=15.0, help="length of each phase")
     args = parser.parse_args(argv)
 
-    router = LoopbackRouter()
-    if not router.start():
-        print("router did not start", file=sys.stderr)
-        return 1
+    router = common.started_router()
     endpoint = router.endpoint
     port = free_port(socket.SOCK_DGRAM)
     bridge = subprocess.Popen(
@@ -218,15 +208,15 @@ def main(argv: list[str] | None = None) -> int:
         time.sleep(3.0)
 
         # phase 1: telemetry only (idle)
-        c0, w0 = cpu_seconds(bridge.pid), time.monotonic()
+        c0, w0 = common.cpu_seconds(bridge.pid), time.monotonic()
         sent0 = px4.sent
         time.sleep(args.seconds)
-        idle_cpu = (cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
+        idle_cpu = (common.cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
         in_rate = (px4.sent - sent0) / (time.monotonic() - w0)
 
         # phase 2: commanded at 30 Hz (setpoint latency), telemetry latency throughout
         published: dict[int, float] = {}
-        c0, w0 = cpu_seconds(bridge.pid), time.monotonic()
+        c0, w0 = common.cpu_seconds(bridge.pid), time.monotonic()
         marker = 0
         while time.monotonic() - w0 < args.seconds:
             marker += 1
@@ -238,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
             published[marker] = time.monotonic()
             pub.put(target)
             time.sleep(1.0 / 30.0)
-        busy_cpu = (cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
+        busy_cpu = (common.cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
         time.sleep(0.5)
         px4.stop.set()
 
@@ -248,8 +238,8 @@ def main(argv: list[str] | None = None) -> int:
             if m in px4.setpoint_arrivals and m < 10000
         ]
         tel_lat = [pose_arrivals[m] - t for m, t in px4.lpn_sent.items() if m in pose_arrivals]
-        sp = percentiles(sp_lat)
-        tel = percentiles(tel_lat)
+        sp = common.percentiles(sp_lat)
+        tel = common.percentiles(tel_lat)
         results = {
             "setpoint_latency": {**sp, "published": len(published), "target_p99_ms": 5.0},
             "telemetry_latency": {**tel, "sent": len(px4.lpn_sent)},
@@ -260,7 +250,7 @@ def main(argv: list[str] | None = None) -> int:
                 "mavlink_messages_per_s_in": round(in_rate, 1),
             },
         }
-        print_table(
+        common.print_table(
             "bridge_mavlink latency (ms)",
             ["path", "n", "p50", "p90", "p99", "max"],
             [
@@ -270,16 +260,16 @@ def main(argv: list[str] | None = None) -> int:
                  tel.get("p90_ms", 0.0), tel.get("p99_ms", 0.0), tel.get("max_ms", 0.0)],
             ],
         )  # fmt: skip
-        print_table(
+        common.print_table(
             f"bridge_mavlink CPU (one core = 1.0; PX4 mix {in_rate:.0f} msg/s in)",
             ["phase", "cpu share", "target"],
             [["telemetry only", idle_cpu, 0.15], ["commanded 30 Hz", busy_cpu, 0.15]],
         )
-        write_results("bridge", results)
+        common.write_results("bridge", results)
     finally:
         px4.stop.set()
         node.close()
-        stop_process(bridge)
+        common.stop_process(bridge)
         router.stop(5)
     return 0 if results else 1
 

@@ -21,11 +21,11 @@ import time
 from pathlib import Path
 
 from bench.common import (
-    LoopbackRouter,
     call_times_ms,
     cpu_seconds,
     percentiles,
     print_table,
+    started_router,
     write_results,
 )
 from dronewrapper.images import bgr_to_image, bgr_to_jpeg
@@ -93,9 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--duration", type=float, default=10.0, help="seconds per run")
     args = parser.parse_args(argv)
-    router = LoopbackRouter()
-    if not router.start():
-        raise RuntimeError("router did not start")
+    router = started_router()
     endpoint = router.endpoint
     runs, costs = [], []
     try:

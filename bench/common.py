@@ -149,6 +149,14 @@ class LoopbackRouter:
         self._thread.join(timeout_s)
 
 
+def started_router() -> LoopbackRouter:
+    """A :class:`LoopbackRouter` that listens; the bench ends (status 1) when it does not."""
+    router = LoopbackRouter()
+    if not router.start():
+        raise SystemExit("router did not start")
+    return router
+
+
 @contextlib.contextmanager
 def probed_graph(launcher: Any, router: str, make_probe: Callable[[Any, str], P]) -> Iterator[P]:
     """Start ``launcher``'s graph and ``make_probe(session, ns)`` on a client session to

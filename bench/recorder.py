@@ -25,7 +25,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bench.common import LoopbackRouter, percentiles, print_table, write_results
+from bench.common import percentiles, print_table, started_router, write_results
 from dronewrapper.msgs import Detections, Header, Image, PoseStamped, codec, registry
 from dronewrapper.record.reader import read_bus, summarize
 from dronewrapper.record.recorder import Recorder
@@ -129,9 +129,7 @@ def main() -> int:
     parser = CommandParser(description=first_line(__doc__))
     parser.add_argument("--seconds", type=float, default=10.0)
     args = parser.parse_args()
-    router = LoopbackRouter()
-    if not router.start():
-        raise RuntimeError("router did not start")
+    router = started_router()
     endpoint = router.endpoint
     try:
         rec = [bench_recorder(endpoint, args.seconds, c) for c in (False, True)]

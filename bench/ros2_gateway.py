@@ -45,10 +45,10 @@ from pathlib import Path
 import numpy as np
 
 from bench.common import (
-    LoopbackRouter,
     cpu_seconds,
     percentiles,
     print_table,
+    started_router,
     stop_process,
     write_results,
 )
@@ -336,10 +336,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.publisher:
         return publisher_main(*args.publisher, hosted=args.hosted)
 
-    router = LoopbackRouter()
-    if not router.start():
-        print("router did not start", file=sys.stderr)
-        return 1
+    router = started_router()
     endpoint = router.endpoint
     gateway = subprocess.Popen(
         [sys.executable, "-m", "dronewrapper_ros2_gateway", "--connect", endpoint,

@@ -19,7 +19,7 @@ import sys
 import tempfile
 import time
 
-from bench.common import LoopbackRouter, percentiles, print_table, stop_process, write_results
+from bench.common import percentiles, print_table, started_router, stop_process, write_results
 from dronewrapper.msgs import registry
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper.runtime.node import Node
@@ -93,10 +93,7 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--settle", type=float, default=10.0)
     args = parser.parse_args()
-    router = LoopbackRouter()
-    if not router.start():
-        print("the router did not start", file=sys.stderr)
-        return 1
+    router = started_router()
     results = []
     with tempfile.TemporaryDirectory() as keys:
         store = KeyStore(keys)

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import LoopbackRouter, cpu_seconds, print_table, stop_process, write_results
+from bench.common import cpu_seconds, print_table, started_router, stop_process, write_results
 from bench.tello_standin import TelloStandIn
 from dronewrapper.runtime.arguments import CommandParser, first_line
 from dronewrapper_sim.tello.video import H264Encoder, packetise
@@ -225,10 +225,7 @@ def main(argv: list[str] | None = None) -> int:
         return video[index % LOOP_FRAMES]
 
     tellos = [TelloStandIn(f"{net}.{i}", replay) for i in range(1, args.tellos + 1)]
-    router = LoopbackRouter()
-    if not router.start():
-        print("router did not start", file=sys.stderr)
-        return 1
+    router = started_router()
     results: dict[str, object] = {"tellos": args.tellos, "seconds": args.seconds}
     try:
         for label, one_process, mode in ARRANGEMENTS:

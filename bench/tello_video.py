@@ -29,14 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.common import (
-    LoopbackRouter,
-    cpu_seconds,
-    percentiles,
-    print_table,
-    stop_process,
-    write_results,
-)
+from bench import common
 from bench.tello_standin import TelloStandIn
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import ParamGet
@@ -89,10 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=60.0, help="length of the video run")
     args = parser.parse_args(argv)
 
-    router = LoopbackRouter()
-    if not router.start():
-        print("router did not start", file=sys.stderr)
-        return 1
+    router = common.started_router()
     endpoint = router.endpoint
     address = f"127.{random.randint(10, 250)}.{random.randint(0, 255)}.{random.randint(2, 250)}"
     video = StampedVideo()
@@ -122,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         end = time.monotonic() + args.seconds
         time.sleep(2.0)
-        c0, w0 = cpu_seconds(bridge.pid), time.monotonic()
+        c0, w0 = common.cpu_seconds(bridge.pid), time.monotonic()
 
         # command round trips while the video runs
         rtts = []
@@ -133,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
                 rtts.append(time.monotonic() - t0)
             time.sleep(0.1)
         time.sleep(max(0.0, end - time.monotonic()))
-        cpu = (cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
+        cpu = (common.cpu_seconds(bridge.pid) - c0) / (time.monotonic() - w0)
 
         latencies = [
             (video.sent_at[i], at - video.sent_at[i]) for i, at in arrivals if i in video.sent_at
@@ -141,8 +131,8 @@ def main(argv: list[str] | None = None) -> int:
         latencies.sort()
         values = [lat for _, lat in latencies]
         fifth = max(1, len(values) // 5)
-        first, last = percentiles(values[:fifth]), percentiles(values[-fifth:])
-        overall = percentiles(values)
+        first, last = common.percentiles(values[:fifth]), common.percentiles(values[-fifth:])
+        overall = common.percentiles(values)
         results = {
             "seconds": args.seconds,
             "video_latency": overall,
@@ -150,10 +140,10 @@ def main(argv: list[str] | None = None) -> int:
             "video_latency_last_fifth": last,
             "frames_sent": tello.frames,
             "frames_published_received": len(arrivals),
-            "command_round_trip": percentiles(rtts),
+            "command_round_trip": common.percentiles(rtts),
             "bridge_cpu_share_one_core_with_video": round(cpu, 4),
         }
-        print_table(
+        common.print_table(
             "bridge_tello video 960x720 30 fps (ms)",
             ["figure", "p50", "p90", "p99", "max", "target"],
             [
@@ -163,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
                  ("p50_ms", "p90_ms", "p99_ms", "max_ms")), ""],
                 ["  last fifth", *(last.get(k, "-") for k in
                  ("p50_ms", "p90_ms", "p99_ms", "max_ms")), "no growth"],
-                ["command round trip (battery?)", *(percentiles(rtts).get(k, "-") for k in
+                ["command round trip (battery?)", *(common.percentiles(rtts).get(k, "-") for k in
                  ("p50_ms", "p90_ms", "p99_ms", "max_ms")), ""],
             ],
         )  # fmt: skip
@@ -171,12 +161,12 @@ def main(argv: list[str] | None = None) -> int:
             f"\nframes sent {tello.frames}, received {len(arrivals)}; "
             f"bridge CPU {cpu:.1%} of one core with video"
         )
-        write_results("tello_video", results)
+        common.write_results("tello_video", results)
     finally:
         tello.close()
         video.encoder.close()
         node.close()
-        stop_process(bridge, signal.SIGTERM)
+        common.stop_process(bridge, signal.SIGTERM)
         router.stop(5)
     return 0
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import socket
 import struct
 import threading
 import time
@@ -22,7 +21,7 @@ os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from support import start_daemons, stop_daemons
+from support import loopback_udp, start_daemons, stop_daemons
 
 # PX4 custom modes (main mode << 16 | sub mode << 24; see sim/dronewrapper_sim/px4/modes.py)
 OFFBOARD = 6 << 16
@@ -43,9 +42,7 @@ class AutopilotPeer:
 
     def __init__(self, bridge_port: int, *, system: int = 1, telemetry: bool = True) -> None:
         self.bridge = ("127.0.0.1", bridge_port)
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.1)
+        self.sock = loopback_udp(0.1)
         self.address = self.sock.getsockname()
         self.mav = mavlink.MAVLink(None, srcSystem=system, srcComponent=1)
         self.mav.robust_parsing = True

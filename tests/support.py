@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -15,6 +16,7 @@ from typing import TypeVar
 
 import zenoh
 
+from dronewrapper import NotConnected, list_drones
 from dronewrapper.router import router_options
 from dronewrapper.runtime import Node, ZenohOptions
 from dronewrapper.runtime.children import die_with_parent
@@ -27,6 +29,14 @@ REPO = Path(__file__).resolve().parents[1]
 ASSETS = REPO / "assets"
 YOLOX_NANO = ASSETS / "models" / "yolox_nano.onnx"
 SPRITES = ASSETS / "sprites"
+
+
+def loopback_udp(timeout: float) -> socket.socket:
+    """A UDP socket bound to a free loopback port; a read gives up after ``timeout`` s."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.bind(("127.0.0.1", 0))
+    sock.settimeout(timeout)
+    return sock
 
 
 def free_endpoint() -> str:
@@ -124,6 +134,25 @@ class Process:
                 self.proc.wait(5)
         self._log.close()
         return self.proc.returncode
+
+
+def wait_for_bridges(router: str, graphs: dict[str, Process], timeout_s: float = 60.0) -> None:
+    """Wait until the bridge of each namespace in ``graphs`` is online on ``router``; fails at
+    once when a graph process exits, and after ``timeout_s`` with the silent graphs' logs."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        for ns, proc in graphs.items():
+            assert proc.alive(), f"graph {ns} exited early:\n{proc.output()[-4000:]}"
+        try:
+            online = list_drones(router, timeout=1.0)
+        except NotConnected:
+            online = []  # the graph's router is not up yet
+        missing = [ns for ns in graphs if ns not in online]
+        if not missing:
+            return
+        logs = "\n".join(graphs[ns].output()[-2000:] for ns in missing)
+        assert time.monotonic() < deadline, f"no bridge in {', '.join(missing)}:\n{logs}"
+        time.sleep(0.3)
 
 
 def station_process(router: str, log_dir: Path) -> tuple[Process, str]:

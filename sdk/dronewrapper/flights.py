@@ -19,7 +19,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from dronewrapper import setpoints
+from dronewrapper import errors, setpoints
 from dronewrapper.beat import Beat
 from dronewrapper.client import DroneClient
 from dronewrapper.client.flight import (
@@ -37,15 +37,6 @@ from dronewrapper.client.flight import (
 )
 from dronewrapper.commands import NoReply as NoReplyError
 from dronewrapper.envelope_guard import EnvelopeGuard
-from dronewrapper.errors import (
-    Cancelled,
-    CommandRefused,
-    DroneError,
-    InvalidArgument,
-    NoData,
-    NotConnected,
-    Timeout,
-)
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.flight import CancelRequest, GotoRequest
 from dronewrapper.msgs.mavros import State
@@ -114,7 +105,7 @@ class Flights:
         """
         h = setpoints.finite("h", h)
         if h <= 0:
-            raise InvalidArgument(f"h must be > 0 m, got {h}")
+            raise errors.InvalidArgument(f"h must be > 0 m, got {h}")
         now = self.clock.monotonic()
         self.require_connected("takeoff")
         self.guard.check_takeoff(h, self._quick())  # above the envelope: refused, limit named
@@ -152,7 +143,7 @@ class Flights:
         lat, lon = setpoints.finite("lat", lat), setpoints.finite("lon", lon)
         alt = setpoints.finite("alt", alt)
         if abs(lat) > 90 or abs(lon) > 180:
-            raise InvalidArgument(f"goto: ({lat}, {lon}) is not a latitude and longitude")
+            raise errors.InvalidArgument(f"goto: ({lat}, {lon}) is not a latitude and longitude")
         request = GotoRequest(
             latitude=lat,
             longitude=lon,
@@ -287,7 +278,7 @@ class Flights:
                 no_reply=self.no_reply,
                 cancelled=cancel.is_set,
             )
-        except Cancelled:
+        except errors.Cancelled:
             self.client.stop()
             raise
         finally:
@@ -310,18 +301,18 @@ class Flights:
             log.debug("close the beat: %s", exc)
 
 
-def drone_error(exc: FlightError, no_reply: NoReplyError) -> DroneError:
+def drone_error(exc: FlightError, no_reply: NoReplyError) -> errors.DroneError:
     """The SDK's exception for a failed step; ``no_reply(what, key, timeout)`` tells a missing
     bridge (NotConnected) from a silent one (Timeout)."""
     if isinstance(exc, StepRefused):
-        return CommandRefused(exc.command, exc.reason, exc.result)
+        return errors.CommandRefused(exc.command, exc.reason, exc.result)
     if isinstance(exc, NoReply):
         return no_reply(exc.command, exc.key, exc.timeout)
     if isinstance(exc, TooLate):
-        return Timeout(str(exc))
+        return errors.Timeout(str(exc))
     if isinstance(exc, NoPosition):
-        return NoData(str(exc))
-    return NotConnected(str(exc))
+        return errors.NoData(str(exc))
+    return errors.NotConnected(str(exc))
 
 
 def cancel_on(cancel: threading.Event, ended: threading.Event, ask: Callable[[], Any]) -> None:
@@ -361,10 +352,10 @@ def fly(
         while not sequence.step(clock()):
             sleep(interval)
             if cancelled():
-                raise Cancelled(f"{what} cancelled")
+                raise errors.Cancelled(f"{what} cancelled")
     except FlightError as exc:
         if cancelled():  # the bridge ended it on our cancel
-            raise Cancelled(f"{what} cancelled") from None
+            raise errors.Cancelled(f"{what} cancelled") from None
         raise drone_error(exc, no_reply) from None
     if cancelled():  # set while the bridge flew it: the bridge's manoeuvre had ended first
-        raise Cancelled(f"{what} cancelled (the bridge's {what} had ended first)")
+        raise errors.Cancelled(f"{what} cancelled (the bridge's {what} had ended first)")

@@ -73,9 +73,7 @@ class Motion:
         z = self._kept_altitude("set_cmd_pos") if z is None else z
         az = self._kept_yaw("set_cmd_pos") if az is None else az
         target = setpoints.position_target(x, y, z, az, stamp=stamp)
-        self._check_setpoint(target, "set_cmd_pos")
-        self._warn_if_grounded("set_cmd_pos")
-        self._command_setpoint(target)
+        self._command(target, "set_cmd_pos")
 
     def set_cmd_vel(
         self,
@@ -98,9 +96,7 @@ class Motion:
         """
         stamp = setpoints.check_stamp(stamp, self.clock.time())
         target = setpoints.velocity_target(vx, vy, vz, az, stamp=stamp)
-        self._check_setpoint(target, "set_cmd_vel")
-        self._warn_if_grounded("set_cmd_vel")
-        self._command_setpoint(target)
+        self._command(target, "set_cmd_vel")
 
     def set_cmd_mix(
         self,
@@ -123,9 +119,7 @@ class Motion:
         stamp = setpoints.check_stamp(stamp, self.clock.time())
         z = self._kept_altitude("set_cmd_mix") if z is None else z
         target = setpoints.mixed_target(vx, vy, z, az, stamp=stamp)
-        self._check_setpoint(target, "set_cmd_mix")
-        self._warn_if_grounded("set_cmd_mix")
-        self._command_setpoint(target)
+        self._command(target, "set_cmd_mix")
 
     def _kept_altitude(self, what: str) -> float:
         """The altitude a setpoint without ``z`` keeps: the commanded one, else the current."""
@@ -166,7 +160,11 @@ class Motion:
         elif not grounded:
             self._warned_grounded = False
 
-    def _command_setpoint(self, target: PositionTarget) -> None:
+    def _command(self, target: PositionTarget, what: str) -> None:
+        """Stream ``target`` once it is inside the envelope held (CommandRefused if not),
+        warning when the drone is disarmed on the ground."""
+        self._check_setpoint(target, what)
+        self._warn_if_grounded(what)
         if self.client.closed:
             raise NotConnected(f"DroneWrapper {self.ns!r} is closed")
         self.client.set(target)

@@ -23,15 +23,8 @@ import math
 import numbers
 
 from dronewrapper.errors import InvalidArgument
+from dronewrapper.msgs import mavros
 from dronewrapper.msgs.geometry import Point, Vector3
-from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
-    FRAME_LOCAL_NED,
-    MASK_MIXED,
-    MASK_POSITION,
-    MASK_VELOCITY,
-    PositionTarget,
-)
 from dronewrapper.msgs.std import Header
 
 
@@ -78,12 +71,14 @@ def check_stamp(stamp: object, now: float) -> float:
     return value
 
 
-def position_target(x: float, y: float, z: float, yaw: float, *, stamp: float) -> PositionTarget:
+def position_target(
+    x: float, y: float, z: float, yaw: float, *, stamp: float
+) -> mavros.PositionTarget:
     """Position control: go to (x, y, z) in local ENU metres facing ``yaw`` (rad, ENU)."""
-    return PositionTarget(
+    return mavros.PositionTarget(
         header=Header(stamp=stamp, frame_id="map"),
-        coordinate_frame=FRAME_LOCAL_NED,
-        type_mask=MASK_POSITION,
+        coordinate_frame=mavros.FRAME_LOCAL_NED,
+        type_mask=mavros.MASK_POSITION,
         position=Point(x=finite("x", x), y=finite("y", y), z=finite("z", z)),
         yaw=radians("yaw", yaw),
     )
@@ -91,12 +86,12 @@ def position_target(x: float, y: float, z: float, yaw: float, *, stamp: float) -
 
 def velocity_target(
     vx: float, vy: float, vz: float, yaw_rate: float, *, stamp: float
-) -> PositionTarget:
+) -> mavros.PositionTarget:
     """Velocity control: body FLU velocity (m/s) and yaw rate (rad/s, counter-clockwise +)."""
-    return PositionTarget(
+    return mavros.PositionTarget(
         header=Header(stamp=stamp, frame_id="base_link"),
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_VELOCITY,
+        coordinate_frame=mavros.FRAME_BODY_NED,
+        type_mask=mavros.MASK_VELOCITY,
         velocity=Vector3(x=finite("vx", vx), y=finite("vy", vy), z=finite("vz", vz)),
         yaw_rate=radians("az", yaw_rate, "rad/s"),
     )
@@ -104,12 +99,12 @@ def velocity_target(
 
 def mixed_target(
     vx: float, vy: float, z: float, yaw_rate: float, *, stamp: float
-) -> PositionTarget:
+) -> mavros.PositionTarget:
     """Mixed control: body FLU vx, vy (m/s), local ENU altitude z (m), yaw rate (rad/s)."""
-    return PositionTarget(
+    return mavros.PositionTarget(
         header=Header(stamp=stamp, frame_id="base_link"),
-        coordinate_frame=FRAME_BODY_NED,
-        type_mask=MASK_MIXED,
+        coordinate_frame=mavros.FRAME_BODY_NED,
+        type_mask=mavros.MASK_MIXED,
         position=Point(z=finite("z", z)),
         velocity=Vector3(x=finite("vx", vx), y=finite("vy", vy)),
         yaw_rate=radians("az", yaw_rate, "rad/s"),

@@ -27,13 +27,7 @@ from dronewrapper.msgs import codec, registry
 from dronewrapper.msgs.mavros import ParamGet
 from dronewrapper.msgs.sensor import Image
 from dronewrapper.msgs.std import ErrorReply, Header
-from dronewrapper.msgs.vision import (
-    BoundingBox2D,
-    Detection2D,
-    Detections,
-    Point2D,
-    Pose2D,
-)
+from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections
 from support import client_node, free_port, python_module, wait_for, zenoh_router
 
 pytestmark = [pytest.mark.fuzz, pytest.mark.integration]
@@ -178,7 +172,7 @@ def target_in_view(stamp: float) -> Detections:
     """A red blob in the middle of the frame: the controller would steer on it."""
     blob = Detection2D(
         id="1",
-        bbox=BoundingBox2D(center=Pose2D(position=Point2D(x=160.0, y=120.0)), size_x=30, size_y=30),
+        bbox=BoundingBox2D.at(160.0, 120.0, 30, 30),
         circle_radius=15.0,
     )
     return Detections(

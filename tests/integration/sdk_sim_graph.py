@@ -9,12 +9,10 @@ from __future__ import annotations
 
 import contextlib
 import socket
-import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-from dronewrapper import NotConnected, list_drones
-from support import Process, free_endpoint, free_port, python_module
+from support import Process, free_endpoint, free_port, python_module, wait_for_bridges
 
 START_TIMEOUT_S = 60.0
 
@@ -37,23 +35,6 @@ def _start(log_dir: Path, ns: str, router: str, variables: Sequence[str] = ()) -
     return Process(argv, log_dir / f"sim_iris-{ns}.log")
 
 
-def _wait_for_bridges(router: str, procs: dict[str, Process]) -> None:
-    deadline = time.monotonic() + START_TIMEOUT_S
-    while True:
-        for ns, proc in procs.items():
-            assert proc.alive(), f"graph {ns} exited early:\n{proc.output()[-4000:]}"
-        try:
-            online = list_drones(router, timeout=1.0)
-        except NotConnected:
-            online = []  # the launcher's router is not up yet
-        missing = [ns for ns in procs if ns not in online]
-        if not missing:
-            return
-        logs = "\n".join(procs[ns].output()[-2000:] for ns in missing)
-        assert time.monotonic() < deadline, f"no bridge in {', '.join(missing)}:\n{logs}"
-        time.sleep(0.3)
-
-
 @contextlib.contextmanager
 def sim_graph(
     log_dir: Path, ns: str = "drone", variables: Sequence[str] = ()
@@ -63,7 +44,7 @@ def sim_graph(
     router = free_endpoint()
     proc = _start(log_dir, ns, router, variables=variables)
     try:
-        _wait_for_bridges(router, {ns: proc})
+        wait_for_bridges(router, {ns: proc}, START_TIMEOUT_S)
         yield router, proc
     finally:
         proc.stop(30)

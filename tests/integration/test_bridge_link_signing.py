@@ -16,7 +16,7 @@ from dronewrapper.security.keystore import KeyStore
 from dronewrapper_bridge_mavlink.link import MavLink
 from dronewrapper_bridge_mavlink.outgoing import Heartbeat
 from dronewrapper_sim.mavlink_io import signing_timestamp
-from support import free_port
+from support import free_port, loopback_udp
 
 
 def _heartbeat(mav: mavlink.MAVLink, custom_mode: int) -> bytes:
@@ -33,9 +33,7 @@ def keyed_link(tmp_path):
     port = free_port(socket.SOCK_DGRAM)
     link = MavLink(f"udpin:127.0.0.1:{port}", signing_key_file=str(store.mavlink_key))
     link.open()
-    vehicle = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    vehicle.bind(("127.0.0.1", 0))
-    vehicle.settimeout(2.0)
+    vehicle = loopback_udp(2.0)
     yield link, key, vehicle, ("127.0.0.1", port)
     vehicle.close()
     link.close()

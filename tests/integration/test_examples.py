@@ -15,7 +15,6 @@ from collections.abc import Iterator
 
 import cv2
 import pytest
-from sdk_sim_graph import sim_graph
 
 from dronewrapper import DroneWrapper
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
@@ -48,14 +47,8 @@ def _env() -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
-def sim(tmp_path_factory) -> Iterator[str]:
-    with sim_graph(tmp_path_factory.mktemp("examples")) as (endpoint, _):
-        yield endpoint
-
-
-@pytest.fixture(scope="module")
-def watcher(sim) -> Iterator[DroneWrapper]:
-    with DroneWrapper("drone", sim, timeout=30, cameras=()) as drone:
+def watcher(sim_iris) -> Iterator[DroneWrapper]:
+    with DroneWrapper("drone", sim_iris, timeout=30, cameras=()) as drone:
         yield drone
 
 
@@ -87,11 +80,11 @@ class Recorder(threading.Thread):
         self.join(2)
 
 
-def test_paper_listing(sim, watcher):
+def test_paper_listing(sim_iris, watcher):
     source = (EXAMPLES / "paper_listing.py").read_text()
     assert "drone = DroneWrapper()" in source and "drone.set_cmd_vel(az=1)" in source
     with Recorder(watcher) as rec:
-        run_example("paper_listing.py", sim)
+        run_example("paper_listing.py", sim_iris)
     assert max(z for *_, z in rec.samples) == pytest.approx(2.5, abs=0.3)
     spinning = rec.seconds_where(lambda rate: rate > 0.8)
     assert spinning > 3.5, f"spun at ~1 rad/s for {spinning:.1f} s of the listing's 5 s"
@@ -99,26 +92,25 @@ def test_paper_listing(sim, watcher):
     assert not watcher.get_state().armed
 
 
-def test_square(sim, watcher):
-    out = run_example("square.py", sim, "--side", "1", "--height", "1")
+def test_square(sim_iris, watcher):
+    out = run_example("square.py", sim_iris, "--side", "1", "--height", "1")
     assert out.count("corner reached") == 4
     assert "landed" in out
     assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
 
 
-def test_mission(sim, watcher):
-    out = run_example("mission.py", sim, "--side", "6", "--height", "3", timeout=240)
+def test_mission(sim_iris, watcher):
+    out = run_example("mission.py", sim_iris, "--side", "6", "--height", "3", timeout=240)
     assert "uploaded 4 waypoints" in out and "mission: reached 4 of 4" in out
     assert watcher.get_landed_state() == LANDED_STATE_ON_GROUND
     x, y, _ = watcher.get_position()
     assert (x**2 + y**2) ** 0.5 < 1.0  # back home
 
 
-def test_save_frames(sim, tmp_path):
+def test_save_frames(sim_iris, tmp_path):
     out_dir = tmp_path / "frames"
-    out = run_example(
-        "save_frames.py", sim, "--count", "3", "--rate", "10", "--ventral", "--out", str(out_dir)
-    )
+    argv = ["--count", "3", "--rate", "10", "--ventral", "--out", str(out_dir)]
+    out = run_example("save_frames.py", sim_iris, *argv)
     files = sorted(p.name for p in out_dir.iterdir())
     assert files == [f"{cam}_{i:04d}.png" for cam in ("frontal", "ventral") for i in range(3)]
     for path in out_dir.iterdir():

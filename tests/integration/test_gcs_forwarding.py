@@ -4,7 +4,6 @@ acknowledgements never taken for the bridge's own."""
 
 from __future__ import annotations
 
-import socket
 import time
 
 import pytest
@@ -13,7 +12,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavlink import MavlinkFrames
-from support import python_module, wait_for
+from support import loopback_udp, python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -24,9 +23,7 @@ class FakeQgc:
     """A UDP ground station: listens on its port, answers to whoever sent it frames."""
 
     def __init__(self) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.2)
+        self.sock = loopback_udp(0.2)
         self.port = self.sock.getsockname()[1]
         self.mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
         self.mav.robust_parsing = True

@@ -12,7 +12,6 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from sdk_sim_graph import sim_graph
 
 from dronewrapper import CommandRefused, DroneWrapper, InvalidArgument, NoData, list_drones
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, LANDED_STATE_ON_GROUND
@@ -21,19 +20,13 @@ pytestmark = pytest.mark.integration
 
 
 @pytest.fixture(scope="module")
-def router(tmp_path_factory) -> Iterator[str]:
-    with sim_graph(tmp_path_factory.mktemp("sdk_sim")) as (endpoint, _):
-        yield endpoint
-
-
-@pytest.fixture(scope="module")
-def drone(router) -> Iterator[DroneWrapper]:
-    with DroneWrapper("drone", router, timeout=30, land_on_exit=True) as wrapper:
+def drone(sim_iris) -> Iterator[DroneWrapper]:
+    with DroneWrapper("drone", sim_iris, timeout=30, land_on_exit=True) as wrapper:
         yield wrapper
 
 
-def test_getters_on_the_ground(drone, router):
-    assert list_drones(router) == ["drone"]
+def test_getters_on_the_ground(drone, sim_iris):
+    assert list_drones(sim_iris) == ["drone"]
     state = drone.get_state()
     assert state.connected and state.autopilot == "px4" and not state.armed
     drone.wait_for_landed_state(LANDED_STATE_ON_GROUND, timeout=10)
@@ -122,9 +115,9 @@ def test_flight(drone):
     assert drone.commanding is None
 
 
-def test_compressed_images_and_no_camera(router):
+def test_compressed_images_and_no_camera(sim_iris):
     with DroneWrapper(
-        "drone", router, timeout=30, cameras=("frontal",), compressed_images=True
+        "drone", sim_iris, timeout=30, cameras=("frontal",), compressed_images=True
     ) as drone:
         image = drone.wait_for_image("frontal", timeout=15)
         assert image.dtype == np.uint8 and image.ndim == 3 and image.shape[2] == 3

@@ -4,7 +4,6 @@ first SETUP_SIGNING unsigned and no other, and refuses a key change while armed.
 
 from __future__ import annotations
 
-import socket
 import time
 
 import pytest
@@ -13,7 +12,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.security.keystore import KeyStore
 from dronewrapper_sim.mavlink_io import signing_timestamp
-from support import python_module, wait_for
+from support import loopback_udp, python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -25,9 +24,7 @@ class Station:
     """A ground station on a free UDP port: signs with ``key`` (None: unsigned), reads acks."""
 
     def __init__(self) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.05)
+        self.sock = loopback_udp(0.05)
         self.port = self.sock.getsockname()[1]
         self.parser = mavlink.MAVLink(None)
         self.parser.robust_parsing = True

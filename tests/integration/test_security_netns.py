@@ -135,17 +135,28 @@ def start_drone(spawn, drone, tmp_path, *, router_listen, bridge_set, sim_args) 
     return [*procs, monitor]
 
 
+def start_secured_drone(spawn, drone, tmp_path, store: KeyStore, listen: str) -> list:
+    """:func:`start_drone` with every protection on: the router's TLS listener at ``listen``
+    (the drone's certificate from ``store``), the command lease, and signed MAVLink."""
+    mavkey = str(store.mavlink_key)
+    return start_drone(
+        spawn,
+        drone,
+        tmp_path,
+        router_listen=["--listen", listen, "--identity", "drone1", "--keys", str(store.root)],
+        bridge_set=["command_lease=true", f"signing_key_file={mavkey}"],
+        sim_args=["--signing-key", mavkey],
+    )
+
+
 def test_only_authorised_commanders_fly(tmp_path, spawn):
     if not is_root():
         pytest.fail("needs root: it creates network namespaces (CI runs as root)")
     with two_hosts() as (drone, laptop):
         store, other = _keys(tmp_path, drone.address)
-        keys, mavkey = str(store.root), str(store.mavlink_key)
+        keys = str(store.root)
         tls = f"tls/{drone.address}:{TLS_PORT}"
-        procs = start_drone(spawn, drone, tmp_path, router_listen=["--listen", tls,
-                            "--identity", "drone1", "--keys", keys],
-                            bridge_set=["command_lease=true", f"signing_key_file={mavkey}"],
-                            sim_args=["--signing-key", mavkey])  # fmt: skip
+        procs = start_secured_drone(spawn, drone, tmp_path, store, tls)
         truth = tmp_path / "truth.json"
 
         attackers = [
@@ -257,12 +268,9 @@ def test_roles_hold_on_a_tls_listener_on_loopback_and_a_forwarded_port(tmp_path,
         pytest.fail("needs root: it creates network namespaces (CI runs as root)")
     with two_hosts("f") as (drone, laptop):
         store, other = _keys(tmp_path, drone.address)
-        keys, mavkey = str(store.root), str(store.mavlink_key)
+        keys = str(store.root)
         local_tls = f"tls/127.0.0.1:{TLS_PORT}"
-        procs = start_drone(spawn, drone, tmp_path, router_listen=["--listen", local_tls,
-                            "--identity", "drone1", "--keys", keys],
-                            bridge_set=["command_lease=true", f"signing_key_file={mavkey}"],
-                            sim_args=["--signing-key", mavkey])  # fmt: skip
+        procs = start_secured_drone(spawn, drone, tmp_path, store, local_tls)
         forward = spawn(drone.argv(sys.executable, FORWARD, f"{drone.address}:{FORWARDED_PORT}",
                                    f"127.0.0.1:{TLS_PORT}"), "forward")  # fmt: skip
         wait_for(lambda: "forwarding" in forward.output() or not forward.alive(), 30,

@@ -8,12 +8,15 @@ prints its figures (pose rate, load, the frames' time on the line, drops) for do
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import select
 import socket
 import subprocess
 import time
+from collections.abc import Iterator, Sequence
+from typing import Any
 
 import pytest
 from pymavlink.dialects.v20 import common as mavlink
@@ -52,6 +55,19 @@ def start_bridge(spawn, router: str, device: str, baud: int, *extra: str):
     )  # fmt: skip
 
 
+@contextlib.contextmanager
+def serial_drone(
+    spawn, router: str, baud: int, *, bridge: Sequence[str] = (), sim: Sequence[str] = ()
+) -> Iterator[tuple[SerialRelay, Any]]:
+    """The simulator's autopilot behind a serial line paced at ``baud``, and the bridge on the
+    line's device (``bridge``, ``sim``: more arguments); yields the relay and the bridge."""
+    port = free_port(socket.SOCK_DGRAM)
+    with SerialRelay(baud, udp_listen=("127.0.0.1", port)) as relay:
+        process = start_bridge(spawn, router, relay.path, baud, *bridge)
+        start_sim(spawn, router, port, *sim)
+        yield relay, process
+
+
 class Arrivals:
     """Arrival times of a topic's samples."""
 
@@ -68,10 +84,7 @@ class Arrivals:
 
 @pytest.mark.parametrize("baud", [57600, 921600])
 def test_listing_1_flies_over_a_serial_line(baud, router, spawn):
-    port = free_port(socket.SOCK_DGRAM)
-    with SerialRelay(baud, udp_listen=("127.0.0.1", port)) as relay:
-        start_bridge(spawn, router, relay.path, baud)
-        start_sim(spawn, router, port)
+    with serial_drone(spawn, router, baud) as (relay, _):
         user = client_node(router, name="watcher")
         links: list = []
         poses = Arrivals()
@@ -126,10 +139,13 @@ def test_signed_mavlink_over_a_serial_line(router, spawn, tmp_path):
     store = KeyStore(tmp_path / "keys")
     store.new_mavlink_key()
     key = str(store.mavlink_key)
-    port = free_port(socket.SOCK_DGRAM)
-    with SerialRelay(57600, udp_listen=("127.0.0.1", port)) as relay:
-        start_bridge(spawn, router, relay.path, 57600, "--set", f"signing_key_file={key}")
-        start_sim(spawn, router, port, "--signing-key", key)
+    with serial_drone(
+        spawn,
+        router,
+        57600,
+        bridge=("--set", f"signing_key_file={key}"),
+        sim=("--signing-key", key),
+    ):
         user = client_node(router, name="watcher")
         links: list = []
         user.subscribe(registry.LINK_STATUS, links.append)
@@ -150,10 +166,7 @@ def test_signed_mavlink_over_a_serial_line(router, spawn, tmp_path):
 def test_a_line_cut_for_4_s_comes_back_as_one_reconnect(router, spawn):
     """The cable out for 4 s (the relay carries nothing): the bridge loses the heartbeat, finds
     it again by itself when the bytes flow, and counts one reconnect."""
-    port = free_port(socket.SOCK_DGRAM)
-    with SerialRelay(921600, udp_listen=("127.0.0.1", port)) as relay:
-        start_bridge(spawn, router, relay.path, 921600)
-        start_sim(spawn, router, port)
+    with serial_drone(spawn, router, 921600) as (relay, _):
         user = client_node(router, name="watcher")
         links: list = []
         states: list = []
@@ -179,10 +192,7 @@ def test_a_nearly_full_line_is_told_in_the_log_and_by_doctor(router, spawn):
     warns that the line is nearly full, and ``dronewrapper doctor`` shows how full it is (a
     ``warn`` from 80 %; the load it sees depends on how fast the simulator runs on this
     machine, so its verdict is checked against the figure it prints)."""
-    port = free_port(socket.SOCK_DGRAM)
-    with SerialRelay(57600, udp_listen=("127.0.0.1", port)) as relay:
-        bridge = start_bridge(spawn, router, relay.path, 57600, "--set", "link_share=1.0")
-        start_sim(spawn, router, port)
+    with serial_drone(spawn, router, 57600, bridge=("--set", "link_share=1.0")) as (_, bridge):
         user = client_node(router, name="watcher")
         links: list = []
         user.subscribe(registry.LINK_STATUS, links.append)
@@ -212,10 +222,7 @@ def test_a_nearly_full_line_is_told_in_the_log_and_by_doctor(router, spawn):
 def test_a_mission_and_parameters_over_a_serial_line(baud, router, spawn):
     """A 20-waypoint mission uploaded (each item asked for and acked over the line), read
     back as the bridge publishes it, and a parameter read and written; figures printed."""
-    port = free_port(socket.SOCK_DGRAM)
-    with SerialRelay(baud, udp_listen=("127.0.0.1", port)) as relay:
-        start_bridge(spawn, router, relay.path, baud)
-        start_sim(spawn, router, port)
+    with serial_drone(spawn, router, baud) as (relay, _):
         user = client_node(router, name="watcher")
         homes: list = []
         links: list = []

@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from dronewrapper.msgs import registry
 from dronewrapper.rotations import quat_from_rpy
-from support import client_node, python_module, wait_for
+from support import client_node, free_port, loopback_udp, python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -33,19 +33,14 @@ def truth_bytes(mav, t_s: float, north: float, up: float) -> bytes:
 
 
 def test_ground_truth_comes_from_the_external_autopilot(spawn, router):
-    probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    probe.bind(("127.0.0.1", 0))
-    truth_port = probe.getsockname()[1]
-    probe.close()  # a free port for the world to bind
+    truth_port = free_port(socket.SOCK_DGRAM)  # for the world to bind
     argv = python_module(
         "dronewrapper_sim", "--scenario", "beacon_static", "--connect", router,
         "--autopilot", "px4-sih", "--autopilot-link", f"udp:127.0.0.1:{truth_port}",
         "--width", "160", "--height", "120", "--camera-rate", "10",
     )  # fmt: skip
     spawn(argv, "sim")
-    px4 = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    px4.bind(("127.0.0.1", 0))
-    px4.settimeout(0.02)
+    px4 = loopback_udp(0.02)
     mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
     with client_node(router) as node:
         truth, status, requests = [], [], []

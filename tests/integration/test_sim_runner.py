@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import socket
 import threading
 
 import pytest
@@ -14,20 +13,13 @@ from pymavlink.dialects.v20 import common as mavlink
 from dronewrapper_sim.config import SimConfig
 from dronewrapper_sim.runner import SimRunner
 from dronewrapper_sim.world.scenario import load_scenario
-from support import wait_for
+from support import loopback_udp, wait_for
 
 pytestmark = pytest.mark.integration
 
 
-def udp_socket() -> socket.socket:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(0.2)
-    return sock
-
-
 def test_runner_real_time_factor_and_reply_to_last_sender():
-    first, second = udp_socket(), udp_socket()
+    first, second = loopback_udp(0.2), loopback_udp(0.2)
     config = SimConfig(
         scenario="empty",
         cameras=False,
@@ -118,7 +110,7 @@ def test_a_garbage_datagram_cannot_swallow_the_next_one():
     length, incompat flags with the signing bit) must not eat the start of the next datagram."""
     from dronewrapper_sim.mavlink_io import MavlinkUdpLink, UdpEndpoint
 
-    peer = udp_socket()
+    peer = loopback_udp(0.2)
     link = MavlinkUdpLink("onboard", UdpEndpoint("127.0.0.1", peer.getsockname()[1], 0), sysid=1)
     try:
         target = ("127.0.0.1", link.local_port)

@@ -4,7 +4,6 @@ JPEG on request), and the instance rule (namespace drone{N}, system id 1+N)."""
 from __future__ import annotations
 
 import itertools
-import socket
 import time
 
 import cv2
@@ -14,7 +13,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.geometry import Twist, Vector3
-from support import client_node, python_module, wait_for
+from support import client_node, loopback_udp, python_module, wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -23,9 +22,7 @@ NS = f"drone{INSTANCE}"
 
 
 def test_sim_publishes_truth_objects_and_cameras(spawn, router):
-    udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    udp.bind(("127.0.0.1", 0))
-    udp.settimeout(10.0)  # the first datagram may follow the liveliness token late
+    udp = loopback_udp(10.0)  # the first datagram may follow the liveliness token late
     argv = python_module(
         "dronewrapper_sim", "--scenario", "beacon_static", "--instance", str(INSTANCE),
         "--connect", router, "--udp-onboard", f"{udp.getsockname()[1]}:0", "--udp-gcs", "off",

@@ -10,30 +10,23 @@ saved to ``out/station_e2e.png``.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import shutil
-import socket
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from sdk_sim_graph import sim_graph
 from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.by import By
 from selenium.webdriver.common.keys import Keys
 
-from dronewrapper import NotConnected, list_drones
 from dronewrapper.msgs import registry
 from dronewrapper.telemetry import euler_from_quaternion
 from dronewrapper_ground_station.browser import chromium, console_errors
 from support import (
     REPO,
-    Process,
     client_node,
-    free_endpoint,
-    free_port,
-    python_module,
     station_process,
     station_serving,
     wait_for,
@@ -42,34 +35,6 @@ from support import (
 pytestmark = [pytest.mark.integration, pytest.mark.timeout(240)]
 
 ARTIFACT = REPO / "out" / "station_e2e.png"
-
-
-@contextlib.contextmanager
-def sim_with_beacon(log_dir: Path) -> Iterator[str]:
-    """compose/sim_iris.yaml with the static beacon, on its own router; yields the router."""
-    router = free_endpoint()
-    udp = [free_port(socket.SOCK_DGRAM) for _ in range(2)]
-    graph = Process(
-        python_module(
-            "dronewrapper", "up", "compose/sim_iris.yaml", "--router", router,
-            "--scenario", "beacon_static",
-            "--var", f"onboard_port={udp[0]}", "--var", f"gcs_port={udp[1]}",
-        ),
-        log_dir / "sim_iris.log",
-    )  # fmt: skip
-
-    def bridge_up() -> bool:
-        assert graph.alive(), graph.output()[-3000:]
-        try:
-            return "drone" in list_drones(router, timeout=1.0)
-        except NotConnected:
-            return False
-
-    try:
-        wait_for(bridge_up, 60, interval=0.3, what="the simulated Iris")
-        yield router
-    finally:
-        graph.stop(30)
 
 
 def _truth(latest):
@@ -118,7 +83,7 @@ def _stops_and_holds(driver, truth) -> None:
 
 
 def test_fly_from_the_page(tmp_path: Path) -> None:
-    with sim_with_beacon(tmp_path) as router:
+    with sim_graph(tmp_path, variables=["scenario=beacon_static"]) as (router, _):
         station, page = station_process(router, tmp_path)
         try:
             with (

@@ -23,7 +23,6 @@ from dronewrapper.msgs.mavros import (
     CommandTOL,
     ParamGet,
     ParamSet,
-    ParamValue,
 )
 from dronewrapper.runtime import ServiceError, call_service
 from dronewrapper.runtime.caller import commander_attachment
@@ -57,7 +56,7 @@ def test_services_setpoints_and_replies_travel_over_real_udp(tello_and_bridge):
     assert (-20, 30, 10, -23) in {s for _, s in tello.rcs(start)}
     wait_for(lambda: bridge.core.failsafe.state == "hold", 5, what="failsafe hold")
     tello.script["speed 50"] = "out of range"
-    reply = user.call(registry.PARAM_SET, ParamSet(param_id="SPEED", value=ParamValue.of(50)))
+    reply = user.call(registry.PARAM_SET, ParamSet.of("SPEED", 50))
     assert not reply.success and "out of range" in reply.message
     reply = user.call(registry.PARAM_GET, ParamGet(param_id="BATTERY"))
     assert reply.success and reply.value.real == 80.0

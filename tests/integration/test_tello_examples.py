@@ -17,10 +17,17 @@ import threading
 
 import pytest
 
-from dronewrapper import NotConnected, list_drones
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
-from support import REPO, Process, client_node, free_endpoint, python_module, wait_for
+from support import (
+    REPO,
+    Process,
+    client_node,
+    free_endpoint,
+    python_module,
+    wait_for,
+    wait_for_bridges,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -43,15 +50,7 @@ def test_paper_listing_flies_the_simulated_tello(tmp_path):
         tmp_path / "sim_tello.log",
     )  # fmt: skip
     try:
-
-        def online() -> bool:
-            assert graph.alive(), graph.output()[-3000:]
-            try:
-                return "drone" in list_drones(router, timeout=1.0)
-            except NotConnected:
-                return False
-
-        wait_for(online, 60, interval=0.3, what="the sim_tello graph's bridge")
+        wait_for_bridges(router, {"drone": graph})
         with client_node(router, name="watcher") as watcher:
             truth = watcher.latest(registry.SIM_GROUND_TRUTH)
             ext = watcher.latest(registry.EXTENDED_STATE)

@@ -32,7 +32,7 @@ from dronewrapper.msgs.control import (
 )
 from dronewrapper.msgs.mavros import MASK_VELOCITY, CommandTOL, PositionTarget
 from dronewrapper.msgs.std import Header
-from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
+from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections
 from dronewrapper.runtime.config import load_config
 from dronewrapper.runtime.fake import FakeBus, FakeNode
 from dronewrapper_controller.config import Config
@@ -43,9 +43,7 @@ DETECTIONS_KEY = registry.DETECTIONS.key("drone")
 
 
 def blob(x: float, y: float, radius: float) -> Detection2D:
-    box = BoundingBox2D(
-        center=Pose2D(position=Point2D(x=x, y=y)), size_x=2 * radius, size_y=2 * radius
-    )
+    box = BoundingBox2D.at(x, y, 2 * radius, 2 * radius)
     return Detection2D(bbox=box, circle_radius=radius, id="")
 
 

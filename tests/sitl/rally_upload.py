@@ -32,7 +32,6 @@ from dronewrapper.msgs.mavros import (
     CommandTOL,
     ParamGet,
     ParamSet,
-    ParamValue,
     SetMode,
 )
 from dronewrapper.msgs.mission import (
@@ -90,7 +89,7 @@ def param(pair: RealPair, name: str) -> float | None:
 def ardupilot_limits(pair: RealPair, report: dict, home) -> None:
     """The user's RTL_CLIMB_MIN_M, then the 15 m envelope: the return heights the bridge
     keeps, and a rally point at 14.5 m refused."""
-    climb = ParamSet(param_id="RTL_CLIMB_MIN_M", value=ParamValue.of(USER_CLIMB_MIN_M))
+    climb = ParamSet.of("RTL_CLIMB_MIN_M", USER_CLIMB_MIN_M)
     assert pair.call(parameters.param_set, climb).success, "RTL_CLIMB_MIN_M not set"
     envelope = Envelope(max_altitude=CEILING_M["ardupilot"])
     assert pair.call(missions.set_envelope, EnvelopeSet(envelope=envelope)).success

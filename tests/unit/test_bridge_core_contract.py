@@ -26,17 +26,7 @@ from bridge_core_rig import (
 )
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs import registry
-from dronewrapper.msgs.mavros import (
-    MASK_POSITION,
-    MASK_VELOCITY,
-    CommandBool,
-    CommandTOL,
-    ParamGet,
-    ParamSet,
-    ParamValue,
-    SetMode,
-)
+from dronewrapper.msgs import mavros, registry
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink import parameters
@@ -57,14 +47,14 @@ def flying_in_offboard(**config) -> CoreRig:
 
 def test_takeoff_while_flying_does_nothing():
     rig = CoreRig().connect(mode=AUTO_LAND, armed=True, flying=True)
-    op = rig.call(ops.takeoff, CommandTOL.takeoff(10.0))
+    op = rig.call(ops.takeoff, mavros.CommandTOL.takeoff(10.0))
     assert op.done and op.result().success and op.result().message == "already flying"
     assert rig.commands(NAV_TAKEOFF) == []
 
 
 def test_takeoff_on_the_ground_sends_nav_takeoff_and_enters_auto_takeoff():
     rig = CoreRig().connect()
-    op = rig.call(ops.takeoff, CommandTOL.takeoff(3.0))
+    op = rig.call(ops.takeoff, mavros.CommandTOL.takeoff(3.0))
     (sent,) = rig.commands(NAV_TAKEOFF)
     assert not op.done
     rig.ack(NAV_TAKEOFF, ACCEPTED)
@@ -78,14 +68,14 @@ def test_takeoff_on_the_ground_sends_nav_takeoff_and_enters_auto_takeoff():
 def test_takeoff_altitude_out_of_range_is_a_bad_request(altitude):
     rig = CoreRig().connect()
     with pytest.raises(ValueError, match="altitude"):
-        rig.call(ops.takeoff, CommandTOL.takeoff(altitude)).result()
+        rig.call(ops.takeoff, mavros.CommandTOL.takeoff(altitude)).result()
     assert rig.commands(NAV_TAKEOFF) == []
 
 
 def test_nothing_is_commanded_before_the_autopilot_is_heard():
     rig = CoreRig()
     with pytest.raises(ServiceError, match="not connected"):
-        rig.call(ops.arming, CommandBool(value=True)).result()
+        rig.call(ops.arming, mavros.CommandBool(value=True)).result()
     assert rig.sent_since(-math.inf, "COMMAND_LONG") == []
 
 
@@ -94,24 +84,24 @@ def test_nothing_is_commanded_before_the_autopilot_is_heard():
 
 def test_px4_integer_parameters_are_their_bytes():
     rig = CoreRig().connect()
-    op = rig.call(parameters.param_get, ParamGet(param_id="COM_RC_IN_MODE"))
+    op = rig.call(parameters.param_get, mavros.ParamGet(param_id="COM_RC_IN_MODE"))
     (request,) = rig.sent_since(-math.inf, "PARAM_REQUEST_READ")
     assert request.param_id == "COM_RC_IN_MODE"
     rig.param("COM_RC_IN_MODE", int_bits(4), INT32)
-    assert op.result().value == ParamValue(integer=4, real=0.0, kind="integer")
+    assert op.result().value == mavros.ParamValue(integer=4, real=0.0, kind="integer")
 
 
 def test_ardupilot_integer_parameters_are_float_values():
     rig = CoreRig(autopilot=ARDUPILOT).connect()
-    op = rig.call(parameters.param_get, ParamGet(param_id="FS_THR_ENABLE"))
+    op = rig.call(parameters.param_get, mavros.ParamGet(param_id="FS_THR_ENABLE"))
     rig.param("FS_THR_ENABLE", 4.0, INT32)
-    assert op.result().value == ParamValue(integer=4, real=0.0, kind="integer")
+    assert op.result().value == mavros.ParamValue(integer=4, real=0.0, kind="integer")
 
 
 def test_px4_integer_parameter_set_is_written_as_bytes_and_checked_on_the_echo():
     rig = CoreRig().connect()
     rig.param("COM_RC_IN_MODE", int_bits(1), INT32)  # known type: no read first
-    request = ParamSet(param_id="COM_RC_IN_MODE", value=ParamValue(integer=2))
+    request = mavros.ParamSet(param_id="COM_RC_IN_MODE", value=mavros.ParamValue(integer=2))
     op = rig.call(parameters.param_set, request)
     (written,) = rig.sent_since(-math.inf, "PARAM_SET")
     assert written.param_value == int_bits(2) and written.param_type == INT32
@@ -122,7 +112,7 @@ def test_px4_integer_parameter_set_is_written_as_bytes_and_checked_on_the_echo()
 
 def test_a_parameter_of_unknown_type_is_read_then_written_and_checked_on_the_echo():
     rig = CoreRig().connect()
-    request = ParamSet(param_id="MPC_XY_VEL_MAX", value=ParamValue(real=5.0))
+    request = mavros.ParamSet(param_id="MPC_XY_VEL_MAX", value=mavros.ParamValue(real=5.0))
     op = rig.call(parameters.param_set, request)
     assert rig.sent_since(-math.inf, "PARAM_SET") == []  # its type first
     rig.param("MPC_XY_VEL_MAX", 12.0, mavlink.MAV_PARAM_TYPE_REAL32)
@@ -134,7 +124,7 @@ def test_a_parameter_of_unknown_type_is_read_then_written_and_checked_on_the_ech
 
 def test_unanswered_parameter_read_gives_up_after_its_attempts():
     rig = CoreRig(param_attempts=2, param_timeout=0.5).connect()
-    op = rig.call(parameters.param_get, ParamGet(param_id="NOPE"))
+    op = rig.call(parameters.param_get, mavros.ParamGet(param_id="NOPE"))
     rig.run(1.2)
     assert op.done and not op.result().success
     assert len(rig.sent_since(-math.inf, "PARAM_REQUEST_READ")) == 2
@@ -145,7 +135,7 @@ def test_unanswered_parameter_read_gives_up_after_its_attempts():
 
 def test_refused_mode_reaches_the_caller_with_the_autopilots_reason():
     rig = CoreRig().connect()
-    op = rig.call(ops.set_mode, SetMode(custom_mode="POSCTL"))
+    op = rig.call(ops.set_mode, mavros.SetMode(custom_mode="POSCTL"))
     rig.ack(SET_MODE, ACCEPTED)  # PX4's receiver: only "received"
     rig.text("Switching to Position is currently not available")
     rig.ack(SET_MODE, REJECTED)  # the commander's real answer
@@ -159,7 +149,7 @@ def test_refused_mode_reaches_the_caller_with_the_autopilots_reason():
 def test_set_mode_answers_only_after_px4s_second_ack_so_nothing_arms_before_it():
     rig = CoreRig().connect()
     rig.run(1.5, stream=True)  # an app streams: no priming needed
-    op = rig.call(ops.set_mode, SetMode(custom_mode="OFFBOARD"))
+    op = rig.call(ops.set_mode, mavros.SetMode(custom_mode="OFFBOARD"))
     assert rig.commands(SET_MODE), "DO_SET_MODE sent at once after the app's stream"
     rig.ack(SET_MODE, ACCEPTED)
     rig.run(0.5, stream=True)
@@ -171,7 +161,7 @@ def test_set_mode_answers_only_after_px4s_second_ack_so_nothing_arms_before_it()
 
 def test_a_mode_acked_once_must_show_in_heartbeat_or_it_failed():
     rig = CoreRig().connect()
-    op = rig.call(ops.set_mode, SetMode(custom_mode="AUTO.LAND"))
+    op = rig.call(ops.set_mode, mavros.SetMode(custom_mode="AUTO.LAND"))
     rig.ack(SET_MODE, ACCEPTED)
     rig.run(1.0)  # no second ack: final_ack_timeout passes
     assert not op.done
@@ -182,7 +172,7 @@ def test_a_mode_acked_once_must_show_in_heartbeat_or_it_failed():
 
 def test_offboard_is_asked_for_only_after_the_bridge_has_streamed_long_enough():
     rig = CoreRig(offboard_prime_s=1.2).connect(armed=False)
-    op = rig.call(ops.set_mode, SetMode(custom_mode="OFFBOARD"))
+    op = rig.call(ops.set_mode, mavros.SetMode(custom_mode="OFFBOARD"))
     assert rig.commands(SET_MODE) == []
     rig.run(2.0)
     asked_at, sent = next((t, m) for t, m in rig.sent if m.get_type() == "COMMAND_LONG"
@@ -196,12 +186,12 @@ def test_offboard_without_a_pose_or_a_stream_is_refused():
     rig = CoreRig()
     rig.heartbeat()
     with pytest.raises(ServiceError, match="no local position"):
-        rig.call(ops.set_mode, SetMode(custom_mode="OFFBOARD")).result()
+        rig.call(ops.set_mode, mavros.SetMode(custom_mode="OFFBOARD")).result()
 
 
 def test_arming_refusal_carries_the_reason():
     rig = CoreRig().connect()
-    op = rig.call(ops.arming, CommandBool(value=True))
+    op = rig.call(ops.arming, mavros.CommandBool(value=True))
     rig.text("Arming denied: Resolve system health failures")
     rig.ack(ARM, mavlink.MAV_RESULT_TEMPORARILY_REJECTED)
     assert "Arming denied: Resolve system health failures" in op.result().message
@@ -209,7 +199,7 @@ def test_arming_refusal_carries_the_reason():
 
 def test_an_unacknowledged_command_is_retried_with_its_confirmation_counter():
     rig = CoreRig(command_attempts=3, command_ack_timeout=0.5).connect()
-    op = rig.call(ops.arming, CommandBool(value=True))
+    op = rig.call(ops.arming, mavros.CommandBool(value=True))
     rig.run(2.0)
     assert [m.confirmation for m in rig.commands(ARM)] == [0, 1, 2]
     assert op.done and "no COMMAND_ACK after 3 attempt(s)" in op.result().message
@@ -224,7 +214,7 @@ def test_setpoint_expiry_holds_the_pose():
     rig.run(1.0)
     assert rig.core.failsafe.state == "hold"
     assert rig.state().failsafe == "hold"
-    holds = rig.setpoints(since=stopped + 0.6, mask=MASK_POSITION)
+    holds = rig.setpoints(since=stopped + 0.6, mask=mavros.MASK_POSITION)
     assert len(holds) >= 10
     assert all(h.x == pytest.approx(0.0) and h.z == pytest.approx(-5.0) for h in holds)
 
@@ -233,7 +223,7 @@ def test_a_stale_setpoint_never_reaches_the_autopilot():
     rig = flying_in_offboard(setpoint_timeout=0.5)
     stopped = rig.now
     rig.run(2.0)
-    late = [m for m in rig.setpoints(since=stopped + 0.55) if m.type_mask == MASK_VELOCITY]
+    late = [m for m in rig.setpoints(since=stopped + 0.55) if m.type_mask == mavros.MASK_VELOCITY]
     assert late == []
 
 
@@ -285,7 +275,7 @@ def test_the_hold_streams_on_while_the_failsafe_land_is_unanswered_or_refused(an
     period = 1.0 / rig.core.config.stream_rate_hz
     gaps = [b - a for a, b in zip([asked, *times], [*times, rig.now], strict=False)]
     assert max(gaps) <= 1.5 * period, "the hold stopped while the landing was not under way"
-    assert {m.type_mask for m in rig.setpoints(since=asked)} == {MASK_POSITION}
+    assert {m.type_mask for m in rig.setpoints(since=asked)} == {mavros.MASK_POSITION}
 
 
 def test_commander_lost_action_return():
@@ -323,7 +313,7 @@ def test_guided_mode_re_entered_with_a_live_commander_applies_the_contract_again
 
 def test_land_is_known_from_its_ack_no_spurious_hold():
     rig = flying_in_offboard()
-    op = rig.call(ops.land, CommandTOL.land())
+    op = rig.call(ops.land, mavros.CommandTOL.land())
     rig.ack(NAV_LAND, ACCEPTED)
     landing = rig.now
     assert op.result().success and rig.core.current_state().mode == "AUTO.LAND"
@@ -332,13 +322,13 @@ def test_land_is_known_from_its_ack_no_spurious_hold():
     rig.run(1.0)
     assert rig.core.failsafe.state == ""
     assert {s.failsafe for s in rig.published(registry.STATE, since=landing)} == {""}
-    assert rig.setpoints(since=landing, mask=MASK_POSITION) == []  # no hold
+    assert rig.setpoints(since=landing, mask=mavros.MASK_POSITION) == []  # no hold
 
 
 def test_ardupilot_takeoff_in_guided_is_not_overridden_by_a_hold():
     rig = CoreRig(autopilot=ARDUPILOT).connect(mode=ARDU_GUIDED, armed=True)
     since = rig.now
-    op = rig.call(ops.takeoff, CommandTOL.takeoff(5.0))
+    op = rig.call(ops.takeoff, mavros.CommandTOL.takeoff(5.0))
     (sent,) = rig.commands(NAV_TAKEOFF)
     assert sent.param7 == 5.0  # ArduCopter: relative height
     rig.ack(NAV_TAKEOFF, ACCEPTED)

@@ -2,7 +2,9 @@
 (its time, the autopilot's kind and address, the outbox), with real MAVLink messages and no
 core: the MAVLink bridge's parameters (parameters.Parameters), mission transfers
 (transfers.Transfers) and commands (command_exchange.Commands), and the envelope and home both
-PX4-capable bridges hold (bridge_base's envelope_state.EnvelopeState)."""
+PX4-capable bridges hold (bridge_base's envelope_state.EnvelopeState), and the mission state
+each bridge keeps (mission_state.MissionState, the Tello's TelloMissions) making its own
+changes."""
 
 from __future__ import annotations
 
@@ -13,11 +15,13 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.envelope import Envelope
-from dronewrapper.msgs.mavros import ParamGet, ParamSet, ParamValue, StatusText
+from dronewrapper.msgs.mavros import ParamGet, ParamSet, StatusText
+from dronewrapper.msgs.mission import Waypoint
 from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.envelope_state import EnvelopeState
+from dronewrapper_bridge_base.envelope_state import PUBLISH_PERIOD_S, EnvelopeState
 from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.mission_state import MissionState
 from dronewrapper_bridge_mavlink.mission_transfer import FENCE, Item
 from dronewrapper_bridge_mavlink.outgoing import (
     CommandLong,
@@ -30,6 +34,7 @@ from dronewrapper_bridge_mavlink.outgoing import (
 from dronewrapper_bridge_mavlink.outgoing import ParamSet as ParamSetMessage
 from dronewrapper_bridge_mavlink.parameters import Parameters
 from dronewrapper_bridge_mavlink.transfers import Transfers
+from dronewrapper_bridge_tello.mission_state import TelloMissions
 
 INT32 = mavlink.MAV_PARAM_TYPE_INT32
 REAL32 = mavlink.MAV_PARAM_TYPE_REAL32
@@ -103,7 +108,7 @@ def test_a_write_re_sends_until_its_echo_and_reports_it():
         if echoed is not None:
             part.on_value(value("WP_SPD", echoed, REAL32))
 
-    reply = run(part.set(ParamSet(param_id="WP_SPD", value=ParamValue.of(7.5))), port, answer)
+    reply = run(part.set(ParamSet.of("WP_SPD", 7.5)), port, answer)
     assert port.sent == [ParamSetMessage(1, 1, b"WP_SPD", 7.5, REAL32)] * 2
     assert reply.success and reply.value.as_number() == 7.5
 
@@ -191,3 +196,38 @@ def test_a_command_is_re_sent_until_acked_and_a_refusal_gives_the_autopilots_wor
     assert confirmations == [0, 1] and not port.command_busy
     assert pending.result == mavlink.MAV_RESULT_DENIED
     assert message == "COMPONENT_ARM_DISARM refused: DENIED (Arming denied)"
+
+
+@pytest.mark.parametrize(
+    "make", [lambda: EnvelopeState(Envelope()), lambda: TelloMissions(Envelope())]
+)
+def test_envelope_and_home_are_published_again_once_a_period(make):
+    state = make()
+    assert state.publish_due(10.0)  # the first tick publishes
+    assert not state.publish_due(10.0 + PUBLISH_PERIOD_S - 0.01)
+    assert state.publish_due(10.0 + PUBLISH_PERIOD_S)
+    assert not state.publish_due(10.0 + PUBLISH_PERIOD_S)
+
+
+def test_the_mission_state_makes_its_own_changes():
+    state = MissionState(Envelope())
+    items = [Waypoint(x_lat=47.0 + i, y_long=8.0, z_alt=10.0) for i in range(3)]
+    state.new_mission(items)
+    assert state.on_current(1) and state.on_reached(0)
+    listing = state.listing(1.7e9)
+    assert listing.current_seq == 1 and listing.header.stamp == 1.7e9
+    assert [wp.is_current for wp in listing.waypoints] == [False, True, False]
+    state.downloaded(items[:2])  # a download keeps the item being flown
+    assert state.waypoints == items[:2] and state.current_seq == 1
+    state.started()
+    assert state.last_reached == -1 and state.on_reached(0)
+    state.cleared()
+    assert state.waypoints == [] and state.current_seq == 0
+
+
+def test_the_tello_mission_is_kept_flown_from_its_first_item():
+    state = TelloMissions(Envelope())
+    state.current_seq = 2
+    state.kept([Waypoint(frame=4, x_lat=1.0, y_long=2.0, z_alt=3.0)])
+    assert state.current_seq == 0 and len(state.listing(1.0).waypoints) == 1
+    assert not state.flying

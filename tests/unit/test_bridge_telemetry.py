@@ -7,15 +7,7 @@ import math
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR
-from dronewrapper_bridge_mavlink.telemetry import (
-    StatusTextAssembler,
-    Telemetry,
-    battery_from_battery_status,
-    battery_from_sys_status,
-    extended_state,
-    is_autopilot_heartbeat,
-    state_from_heartbeat,
-)
+from dronewrapper_bridge_mavlink import telemetry
 
 _tx = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
 
@@ -28,27 +20,27 @@ def wire(name: str, *args, **kwargs):
 
 def test_px4_heartbeat_to_state():
     hb = wire("heartbeat", 2, 12, 29 | 128, 6 << 16, 4)
-    state = state_from_heartbeat(hb, 10.0)
+    state = telemetry.state_from_heartbeat(hb, 10.0)
     assert (state.mode, state.armed, state.guided, state.autopilot) == (
         "OFFBOARD", True, True, "px4",
     )  # fmt: skip
     assert state.connected and state.system_status == 4
-    land = state_from_heartbeat(wire("heartbeat", 2, 12, 29, (4 << 16) | (6 << 24), 3), 0)
+    land = telemetry.state_from_heartbeat(wire("heartbeat", 2, 12, 29, (4 << 16) | (6 << 24), 3), 0)
     assert land.mode == "AUTO.LAND" and not land.armed and not land.guided
 
 
 def test_ardupilot_heartbeat_to_state():
-    state = state_from_heartbeat(wire("heartbeat", 2, 3, 89 | 128, 4, 4), 0.0)
+    state = telemetry.state_from_heartbeat(wire("heartbeat", 2, 3, 89 | 128, 4, 4), 0.0)
     assert (state.mode, state.guided, state.autopilot) == ("GUIDED", True, "ardupilotmega")
 
 
 def test_gcs_heartbeats_are_not_the_autopilot():
-    assert not is_autopilot_heartbeat(wire("heartbeat", 6, 8, 0, 0, 4))
-    assert is_autopilot_heartbeat(wire("heartbeat", 2, 12, 0, 0, 3))
+    assert not telemetry.is_autopilot_heartbeat(wire("heartbeat", 6, 8, 0, 0, 4))
+    assert telemetry.is_autopilot_heartbeat(wire("heartbeat", 2, 12, 0, 0, 3))
 
 
 def test_local_position_and_attitude_to_enu_flu():
-    tel = Telemetry()
+    tel = telemetry.Telemetry()
     # facing east (NED yaw +90 deg), level, flying north at 1 m/s, 3 m up
     tel.on_attitude(wire("attitude", 0, 0.0, 0.0, math.pi / 2, 0.0, 0.0, 0.2))
     pose, local, body = tel.on_local_position(
@@ -69,7 +61,7 @@ def test_local_position_and_attitude_to_enu_flu():
 
 
 def test_attitude_quaternion_matches_attitude():
-    a, b = Telemetry(), Telemetry()
+    a, b = telemetry.Telemetry(), telemetry.Telemetry()
     a.on_attitude(wire("attitude", 0, 0.1, -0.2, 0.7, 0, 0, 0))
     # q for rpy (0.1, -0.2, 0.7) in MAVLink (w, x, y, z) order
     from dronewrapper_bridge_base.frames import quat_from_rpy
@@ -82,7 +74,7 @@ def test_attitude_quaternion_matches_attitude():
 
 
 def test_global_position_needs_a_fix_and_gives_takeoff_amsl():
-    tel = Telemetry()
+    tel = telemetry.Telemetry()
     assert tel.on_global_position(wire("global_position_int", 0, 0, 0, 0, 0, 0, 0, 0, 0), 1) is None
     tel.on_gps_raw(wire("gps_raw_int", 0, 1, 0, 0, 0, 0, 0, 0, 0, 0))  # no fix
     msg = wire("global_position_int", 0, 473977420, 85455940, 490000, 2000, 0, 0, 0, 0)
@@ -95,26 +87,26 @@ def test_global_position_needs_a_fix_and_gives_takeoff_amsl():
 
 
 def test_extended_state():
-    ext = extended_state(wire("extended_sys_state", 0, LANDED_STATE_IN_AIR), 3.0)
+    ext = telemetry.extended_state(wire("extended_sys_state", 0, LANDED_STATE_IN_AIR), 3.0)
     assert ext.landed_state == LANDED_STATE_IN_AIR and ext.header.stamp == 3.0
 
 
 def test_battery_is_a_fraction():
     sys_status = wire("sys_status", 0, 0, 0, 500, 12100, 1530, 76, 0, 0, 0, 0, 0, 0)
-    bat = battery_from_sys_status(sys_status, 0.0)
+    bat = telemetry.battery_from_sys_status(sys_status, 0.0)
     assert math.isclose(bat.percentage, 0.76) and math.isclose(bat.voltage, 12.1)
     assert math.isclose(bat.current, 15.3)
-    unknown = battery_from_sys_status(wire("sys_status", 0, 0, 0, 0, 65535, -1, -1, 0, 0, 0, 0, 0,
-                                           0), 0.0)  # fmt: skip
+    no_battery = wire("sys_status", 0, 0, 0, 0, 65535, -1, -1, 0, 0, 0, 0, 0, 0)
+    unknown = telemetry.battery_from_sys_status(no_battery, 0.0)
     assert math.isnan(unknown.percentage) and math.isnan(unknown.voltage)
     cells = [4000, 4000, 4100] + [65535] * 7
     bs = wire("battery_status", 0, 0, 0, 0, cells, -1, 0, 0, 55)
-    bat2 = battery_from_battery_status(bs, 0.0)
+    bat2 = telemetry.battery_from_battery_status(bs, 0.0)
     assert math.isclose(bat2.percentage, 0.55) and math.isclose(bat2.voltage, 12.1)
 
 
 def test_statustext_chunks_joined_and_tab_stripped():
-    asm = StatusTextAssembler()
+    asm = telemetry.StatusTextAssembler()
     text = "Arming denied: Resolve system health failures first, then retry\t"
     first, rest = text[:50].encode(), text[50:].encode()
     assert asm.add(wire("statustext", 2, first, id=7, chunk_seq=0), 1.0, 0.0) == []
@@ -126,7 +118,7 @@ def test_statustext_chunks_joined_and_tab_stripped():
 
 
 def test_statustext_lost_last_chunk_flushed_after_wait():
-    asm = StatusTextAssembler(max_wait=0.5)
+    asm = telemetry.StatusTextAssembler(max_wait=0.5)
     asm.add(wire("statustext", 4, b"x" * 50, id=3, chunk_seq=0), 1.0, 0.0)
     assert asm.flush(0.2) == []
     flushed = asm.flush(0.6, stamp=9.0)

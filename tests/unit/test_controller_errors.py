@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Point2D, Pose2D
+from dronewrapper.msgs.vision import BoundingBox2D, Detection2D
 from dronewrapper_controller.errors import (
     blob_radius,
     centre_errors,
@@ -16,7 +16,7 @@ from dronewrapper_controller.errors import (
 
 
 def det(cx: float, cy: float, w: float, h: float, radius: float = 0.0) -> Detection2D:
-    box = BoundingBox2D(center=Pose2D(position=Point2D(x=cx, y=cy)), size_x=w, size_y=h)
+    box = BoundingBox2D.at(cx, cy, w, h)
     return Detection2D(bbox=box, circle_radius=radius)
 
 

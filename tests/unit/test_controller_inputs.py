@@ -15,8 +15,6 @@ from dronewrapper.msgs.vision import (
     Detections,
     ObjectHypothesis,
     ObjectHypothesisWithPose,
-    Point2D,
-    Pose2D,
 )
 from dronewrapper_controller.inputs import DetectionsGate, detections_problem
 
@@ -24,7 +22,7 @@ from dronewrapper_controller.inputs import DetectionsGate, detections_problem
 def frame(stamp: float = 1000.0, x: float = 320.0, size: float = 40.0, score: float = 0.9):
     det = Detection2D(
         id="1",
-        bbox=BoundingBox2D(center=Pose2D(position=Point2D(x=x, y=240.0)), size_x=size, size_y=size),
+        bbox=BoundingBox2D.at(x, 240.0, size, size),
         results=[
             ObjectHypothesisWithPose(hypothesis=ObjectHypothesis(class_id="red", score=score))
         ],

@@ -13,7 +13,7 @@ from dronewrapper.msgs.control import (
     CONTROLLER_TRACKING,
 )
 from dronewrapper.msgs.std import Header
-from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
+from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections
 from dronewrapper.runtime.config import ConfigError, load_config
 from dronewrapper_controller.config import Config, ServoConfig
 from dronewrapper_controller.loop import ControlLoop
@@ -26,7 +26,7 @@ CONFIG_DIR = (
 def frame(stamp, *xs):
     dets = [
         Detection2D(
-            bbox=BoundingBox2D(center=Pose2D(position=Point2D(x=x, y=120)), size_x=20, size_y=20),
+            bbox=BoundingBox2D.at(x, 120, 20, 20),
             circle_radius=8,
         )
         for x in xs

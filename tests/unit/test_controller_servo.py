@@ -7,7 +7,7 @@ import pytest
 
 from dronewrapper.msgs.control import CONTROLLER_HOVER, CONTROLLER_SEARCH, CONTROLLER_TRACKING
 from dronewrapper.msgs.std import Header
-from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections, Point2D, Pose2D
+from dronewrapper.msgs.vision import BoundingBox2D, Detection2D, Detections
 from dronewrapper_controller.config import FollowColorConfig, FollowPersonConfig, ServoConfig
 from dronewrapper_controller.pid import PidGains
 from dronewrapper_controller.servo import Servo, pick_target
@@ -16,7 +16,7 @@ W, H = 320, 240
 
 
 def box(cx, cy, w, h, *, radius=0.0, id_=""):
-    bbox = BoundingBox2D(center=Pose2D(position=Point2D(x=cx, y=cy)), size_x=w, size_y=h)
+    bbox = BoundingBox2D.at(cx, cy, w, h)
     return Detection2D(bbox=bbox, circle_radius=radius, id=id_)
 
 

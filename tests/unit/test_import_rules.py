@@ -24,7 +24,8 @@ only shrink (a new break fails, and so does a listed one that is gone, so the li
 
 Within and across floors, no import circle: :data:`KNOWN_CIRCLES`, empty too, may only shrink
 the same way. A module that calls back into the object that imports it names that object
-through a protocol of its own (``core_view`` in the bridges), not by importing it.
+through a protocol of its own (in the bridges, the port each sibling of the core states, made
+of ``dronewrapper_bridge_base.core_view``'s pieces), not by importing it.
 """
 
 from __future__ import annotations

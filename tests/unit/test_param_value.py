@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dronewrapper.msgs import codec
-from dronewrapper.msgs.mavros import PARAM_INTEGER, PARAM_REAL, ParamValue
+from dronewrapper.msgs.mavros import PARAM_INTEGER, PARAM_REAL, ParamSet, ParamValue
 
 
 def test_kind_says_which_field_holds_the_value():
@@ -24,3 +24,8 @@ def test_of_sets_the_kind_and_the_kind_survives_the_wire():
     assert ParamValue.of(2.5) == ParamValue(real=2.5, kind=PARAM_REAL)
     decoded = codec.decoder(ParamValue).decode(codec.encode(ParamValue.of(0)))
     assert decoded.as_number() == 0 and isinstance(decoded.as_number(), int)
+
+
+def test_a_write_request_of_a_number_wraps_it_by_its_kind():
+    assert ParamSet.of("SPEED", 50) == ParamSet(param_id="SPEED", value=ParamValue.of(50))
+    assert ParamSet.of("WP_SPD", 7.5).value == ParamValue(real=7.5, kind=PARAM_REAL)

@@ -22,9 +22,7 @@ from dronewrapper.msgs import (
     ObjectHypothesis,
     ObjectHypothesisWithPose,
     Point,
-    Point2D,
     Pose,
-    Pose2D,
     PoseStamped,
     codec,
     registry,
@@ -53,7 +51,7 @@ def _image(i: int, w: int = 32, h: int = 24) -> Image:
 def _detections(stamp: float) -> Detections:
     det = Detection2D(
         results=[ObjectHypothesisWithPose(hypothesis=ObjectHypothesis(class_id="red", score=0.9))],
-        bbox=BoundingBox2D(center=Pose2D(position=Point2D(x=100, y=80)), size_x=40, size_y=20),
+        bbox=BoundingBox2D.at(100, 80, 40, 20),
         id="3",
     )
     return Detections(header=Header(stamp=stamp), detections=[det], target_id="3")

@@ -14,8 +14,6 @@ from dronewrapper.msgs.vision import (
     Detections,
     ObjectHypothesis,
     ObjectHypothesisWithPose,
-    Point2D,
-    Pose2D,
 )
 from dronewrapper_ground_station import snapshot
 
@@ -50,7 +48,7 @@ def test_detections_become_fractions_of_the_image_with_the_target() -> None:
     def det(ident: str, cx: float, cy: float) -> Detection2D:
         return Detection2D(
             id=ident,
-            bbox=BoundingBox2D(center=Pose2D(position=Point2D(x=cx, y=cy)), size_x=64, size_y=48),
+            bbox=BoundingBox2D.at(cx, cy, 64, 48),
             results=[
                 ObjectHypothesisWithPose(hypothesis=ObjectHypothesis(class_id="person", score=0.9))
             ],

@@ -12,18 +12,8 @@ import pytest
 from targets import velocity
 from tello_core_rig import TelloRig
 
-from dronewrapper.msgs import registry
+from dronewrapper.msgs import mavros, registry
 from dronewrapper.msgs.lease import LeaseRequest
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
-    LANDED_STATE_ON_GROUND,
-    CommandBool,
-    CommandTOL,
-    ParamGet,
-    ParamSet,
-    ParamValue,
-    SetMode,
-)
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_tello import operations as ops
 
@@ -33,8 +23,8 @@ STOP = (0, 0, 0, 0)
 def flying_rig(**config) -> TelloRig:
     rig = TelloRig(**config)
     rig.connect()
-    assert rig.call(ops.takeoff, CommandTOL.takeoff()).success
-    assert rig.core.telemetry.landed.state == LANDED_STATE_IN_AIR
+    assert rig.call(ops.takeoff, mavros.CommandTOL.takeoff()).success
+    assert rig.core.telemetry.landed.state == mavros.LANDED_STATE_IN_AIR
     return rig
 
 
@@ -116,7 +106,7 @@ def test_no_sticks_on_the_ground_even_for_a_streaming_commander():
     rig.stream(velocity(0.5, vz=0.3), 2.0)  # fresh setpoints all along
     rig.run(1.0)  # then stale: no stop either
     assert rig.core.failsafe.target is not None and rig.rcs() == []
-    assert rig.core.telemetry.landed.state == LANDED_STATE_ON_GROUND
+    assert rig.core.telemetry.landed.state == mavros.LANDED_STATE_ON_GROUND
 
 
 def test_keepalive_while_flying_and_nothing_on_the_ground():
@@ -124,7 +114,7 @@ def test_keepalive_while_flying_and_nothing_on_the_ground():
     rig.connect()
     rig.run(8.0)
     assert rig.rcs() == []  # on the ground: no sticks, no keep-alive
-    assert rig.call(ops.takeoff, CommandTOL.takeoff()).success
+    assert rig.call(ops.takeoff, mavros.CommandTOL.takeoff()).success
     flying_since = rig.now
     rig.run(10.0)  # nobody steers: the bridge keeps the Tello alive, never lands it
     stops = [t for t, s in rig.rcs(flying_since) if s == STOP]
@@ -137,7 +127,7 @@ def test_no_sticks_while_taking_off_or_landing():
     rig = TelloRig()
     rig.connect()
     rig.delays["takeoff"] = 2.0
-    op = rig.start(ops.takeoff, CommandTOL.takeoff())
+    op = rig.start(ops.takeoff, mavros.CommandTOL.takeoff())
     rig.stream(velocity(0.5), 1.5)  # a commander streams during the take-off
     assert not op.done and rig.rcs() == []
     rig.run(1.0)
@@ -147,7 +137,7 @@ def test_no_sticks_while_taking_off_or_landing():
 def test_takeoff_while_flying_does_nothing():
     rig = flying_rig()
     since = rig.now
-    reply = rig.call(ops.takeoff, CommandTOL.takeoff(altitude=5.0))
+    reply = rig.call(ops.takeoff, mavros.CommandTOL.takeoff(altitude=5.0))
     assert reply.success and reply.message == "already flying"
     assert rig.commands(since) == []
 
@@ -156,7 +146,7 @@ def test_takeoff_refusal_carries_the_tellos_text():
     rig = TelloRig()
     rig.connect()
     rig.script["takeoff"] = "error No valid imu"
-    reply = rig.call(ops.takeoff, CommandTOL.takeoff())
+    reply = rig.call(ops.takeoff, mavros.CommandTOL.takeoff())
     assert not reply.success and reply.result == 2 and "error No valid imu" in reply.message
     assert not rig.core.telemetry.landed.flying
     assert rig.commands().count("takeoff") == 1  # sent once, never retried
@@ -167,14 +157,14 @@ def test_takeoff_whose_ok_was_lost_is_confirmed_by_the_height():
     rig.connect()
     rig.script["takeoff"] = None  # it takes off, but the ok is lost
     rig.flying, rig.height_cm = True, 100
-    reply = rig.call(ops.takeoff, CommandTOL.takeoff())
+    reply = rig.call(ops.takeoff, mavros.CommandTOL.takeoff())
     assert reply.success and "reply lost" in reply.message
 
 
 def test_takeoff_to_an_altitude_moves_up_after_the_ok():
     rig = TelloRig()
     rig.connect()
-    reply = rig.call(ops.takeoff, CommandTOL.takeoff(altitude=2.0))
+    reply = rig.call(ops.takeoff, mavros.CommandTOL.takeoff(altitude=2.0))
     assert reply.success and rig.commands()[-2:] == ["takeoff", "up 100"]
 
 
@@ -183,12 +173,12 @@ def test_a_command_without_reply_is_retried_then_reported():
     rig.connect()
     rig.script["speed?"] = None
     since = rig.now
-    reply = rig.call(ops.param_get, ParamGet(param_id="SPEED"))
+    reply = rig.call(ops.param_get, mavros.ParamGet(param_id="SPEED"))
     assert not reply.success and "no reply" in reply.message
     asked = [t for t, c in rig.sent if c == "speed?" and t >= since]
     assert len(asked) == 3  # command_attempts
     assert all(b - a >= 0.3 - 1e-9 for a, b in itertools.pairwise(asked))
-    reply = rig.call(ops.param_get, ParamGet(param_id="BATTERY"))
+    reply = rig.call(ops.param_get, mavros.ParamGet(param_id="BATTERY"))
     assert reply.success and reply.value.real == 80.0
 
 
@@ -198,12 +188,12 @@ def test_replies_are_matched_to_their_command():
     rig = TelloRig(command_timeout=0.3)
     rig.connect()
     rig.script["speed 50"] = None  # both sends' oks come late, by hand
-    first = rig.start(ops.param_set, ParamSet(param_id="SPEED", value=ParamValue.of(50)))
+    first = rig.start(ops.param_set, mavros.ParamSet.of("SPEED", 50))
     rig.run(0.35)
     assert rig.commands().count("speed 50") == 2
     rig.reply_now("ok")  # the first send's ok, after the retry
     rig.delays["battery?"] = 0.3  # the next command's answer comes after the stray ok
-    second = rig.start(ops.param_get, ParamGet(param_id="BATTERY"))
+    second = rig.start(ops.param_get, mavros.ParamGet(param_id="BATTERY"))
     rig.run(0.1)
     rig.reply_now("ok")  # the second send's ok: still speed 50's, not battery?'s
     rig.run(1.0, until=lambda: second.done)
@@ -211,7 +201,7 @@ def test_replies_are_matched_to_their_command():
     reply = second.result()
     assert reply.success and reply.value.real == 80.0 and reply.message == "80"
     rig.script["speed 60"] = None
-    op = rig.start(ops.param_set, ParamSet(param_id="SPEED", value=ParamValue.of(60)))
+    op = rig.start(ops.param_set, mavros.ParamSet.of("SPEED", 60))
     rig.reply_now("87")  # a value cannot answer "speed 60": that slot's reply was lost
     assert not op.done and rig.core.matcher.lost == 1
     rig.run(0.35)
@@ -224,8 +214,8 @@ def test_one_command_in_flight_at_a_time():
     rig = TelloRig()
     rig.connect()
     rig.delays["speed?"] = 0.5
-    first = rig.start(ops.param_get, ParamGet(param_id="SPEED"))
-    second = rig.start(ops.param_get, ParamGet(param_id="BATTERY"))
+    first = rig.start(ops.param_get, mavros.ParamGet(param_id="SPEED"))
+    second = rig.start(ops.param_get, mavros.ParamGet(param_id="BATTERY"))
     assert rig.commands()[-1] == "speed?"  # battery? waits for speed?'s reply
     rig.run(2.0, until=lambda: second.done)
     assert first.result().value.real == 100.0 and second.result().value.real == 80.0
@@ -235,27 +225,27 @@ def test_one_command_in_flight_at_a_time():
 def test_modes_map_to_tello_commands():
     rig = flying_rig()
     with pytest.raises(ValueError, match="valid: OFFBOARD"):
-        rig.call(ops.set_mode, SetMode(custom_mode="STABILIZED"))
-    assert rig.call(ops.set_mode, SetMode(custom_mode="AUTO.LOITER")).mode_sent
-    assert rig.call(ops.set_mode, SetMode(custom_mode="OFFBOARD")).mode_sent
+        rig.call(ops.set_mode, mavros.SetMode(custom_mode="STABILIZED"))
+    assert rig.call(ops.set_mode, mavros.SetMode(custom_mode="AUTO.LOITER")).mode_sent
+    assert rig.call(ops.set_mode, mavros.SetMode(custom_mode="OFFBOARD")).mode_sent
     assert rig.commands()[-2:] == ["stop", "command"]
-    assert rig.call(ops.set_mode, SetMode(custom_mode="AUTO.LAND")).mode_sent
+    assert rig.call(ops.set_mode, mavros.SetMode(custom_mode="AUTO.LAND")).mode_sent
     assert rig.commands()[-1] == "land" and not rig.flying
 
 
 def test_arming_and_parameters_are_mapped_honestly():
     rig = flying_rig()
-    reply = rig.call(ops.arming, CommandBool(value=False))
+    reply = rig.call(ops.arming, mavros.CommandBool(value=False))
     assert not reply.success and "cannot disarm" in reply.message
     rig.script["speed 50"] = "out of range"
-    reply = rig.call(ops.param_set, ParamSet(param_id="SPEED", value=ParamValue.of(50)))
+    reply = rig.call(ops.param_set, mavros.ParamSet.of("SPEED", 50))
     assert not reply.success and "out of range" in reply.message
     with pytest.raises(ValueError, match=r"\[10, 100\]"):
-        rig.call(ops.param_set, ParamSet(param_id="SPEED", value=ParamValue.of(500)))
-    reply = rig.call(ops.param_set, ParamSet(param_id="BATTERY", value=ParamValue.of(5)))
+        rig.call(ops.param_set, mavros.ParamSet.of("SPEED", 500))
+    reply = rig.call(ops.param_set, mavros.ParamSet.of("BATTERY", 5))
     assert not reply.success and "read-only" in reply.message
     with pytest.raises(ValueError, match="known: SPEED"):
-        rig.call(ops.param_get, ParamGet(param_id="NOPE"))
+        rig.call(ops.param_get, mavros.ParamGet(param_id="NOPE"))
 
 
 def test_link_lost_then_reconnected_with_command():
@@ -268,7 +258,7 @@ def test_link_lost_then_reconnected_with_command():
     assert not rig.core.connected and not rig.core.sdk_mode
     assert rig.commands(since).count("command") >= 2  # asked every reconnect_s
     with pytest.raises(ServiceError, match="not connected"):
-        rig.call(ops.land, CommandTOL.land())
+        rig.call(ops.land, mavros.CommandTOL.land())
     since = rig.now
     rig.streaming_state = True
     del rig.script["command"]
@@ -279,8 +269,8 @@ def test_link_lost_then_reconnected_with_command():
 def test_land_on_the_ground_sends_nothing():
     rig = TelloRig()
     rig.connect()
-    assert rig.core.telemetry.landed.state == LANDED_STATE_ON_GROUND
-    reply = rig.call(ops.land, CommandTOL.land())
+    assert rig.core.telemetry.landed.state == mavros.LANDED_STATE_ON_GROUND
+    reply = rig.call(ops.land, mavros.CommandTOL.land())
     assert reply.success and reply.message == "already on the ground"
     assert rig.commands() == ["command"]
 
@@ -294,10 +284,10 @@ def test_the_command_lease_refuses_a_non_holder_until_it_takes_over():
     rig.run(0.3)
     assert {sticks for _, sticks in rig.rcs(since)} <= {STOP}  # bob's sticks never flown
     for steps, request in (
-        (ops.arming, CommandBool(value=True)),
-        (ops.takeoff, CommandTOL.takeoff(2.0)),
-        (ops.land, CommandTOL.land()),
-        (ops.set_mode, SetMode(custom_mode="AUTO.LAND")),
+        (ops.arming, mavros.CommandBool(value=True)),
+        (ops.takeoff, mavros.CommandTOL.takeoff(2.0)),
+        (ops.land, mavros.CommandTOL.land()),
+        (ops.set_mode, mavros.SetMode(custom_mode="AUTO.LAND")),
     ):
         with pytest.raises(ServiceError, match="holds the command lease") as error:
             rig.call(steps, request, commander="bob")

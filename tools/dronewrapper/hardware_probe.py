@@ -22,17 +22,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from dronewrapper.hardware import (
-    CameraFacts,
-    HeardLine,
-    SerialFacts,
-    check_cameras,
-    check_clock,
-    check_disk,
-    check_serial,
-    check_units,
-    scan_heartbeats,
-)
+from dronewrapper import hardware
 from dronewrapper.health import FAIL
 
 SERIAL_PATTERNS = ("ttyUSB*", "ttyACM*", "ttyTHS*", "serial/by-id/*")
@@ -45,7 +35,7 @@ def serial_candidates(dev: Path = Path("/dev")) -> list[str]:
     return sorted(str(p) for pattern in SERIAL_PATTERNS for p in dev.glob(pattern))
 
 
-def listen_serial(path: str, baud: int, seconds: float) -> HeardLine:
+def listen_serial(path: str, baud: int, seconds: float) -> hardware.HeardLine:
     """Open ``path`` raw at ``baud`` (8N1) and scan what arrives in ``seconds`` (OSError: it
     cannot be opened)."""
     speed = getattr(termios, f"B{baud}", None)
@@ -71,17 +61,17 @@ def listen_serial(path: str, baud: int, seconds: float) -> HeardLine:
                     data += os.read(fd, 4096)
     finally:
         os.close(fd)
-    return scan_heartbeats(bytes(data), seconds)
+    return hardware.scan_heartbeats(bytes(data), seconds)
 
 
 def serial_facts(
     path: str, baud: int, seconds: float, dev: Path = Path("/dev"), listen: bool = True
-) -> SerialFacts:
+) -> hardware.SerialFacts:
     """The device ``path``, whether this user may open it, and what arrives at ``baud``."""
     user = getpass.getuser()
     candidates = serial_candidates(dev)
     if not os.path.exists(path):
-        return SerialFacts(path, False, user=user, candidates=candidates, baud=baud)
+        return hardware.SerialFacts(path, False, user=user, candidates=candidates, baud=baud)
     group = _group_name(os.stat(path).st_gid)
     groups_now = sorted({_group_name(g) for g in os.getgroups()})
     listed = sorted(g.gr_name for g in grp.getgrall() if user in g.gr_mem)
@@ -92,7 +82,7 @@ def serial_facts(
             heard = listen_serial(path, baud, seconds)
         except OSError:
             can_open = False
-    return SerialFacts(
+    return hardware.SerialFacts(
         path, True, can_open, group, user, groups_now, listed, candidates, baud, heard
     )
 
@@ -104,7 +94,9 @@ def _group_name(gid: int) -> str:
         return str(gid)
 
 
-def camera_facts(dev: Path = Path("/dev"), run: Callable[..., str] | None = None) -> CameraFacts:
+def camera_facts(
+    dev: Path = Path("/dev"), run: Callable[..., str] | None = None
+) -> hardware.CameraFacts:
     """The ``video*`` devices under ``dev``, with their formats from ``v4l2-ctl``."""
     devices = sorted(str(p) for p in dev.glob("video*"))
     formats: dict[str, list[str] | None] = {}
@@ -115,7 +107,7 @@ def camera_facts(dev: Path = Path("/dev"), run: Callable[..., str] | None = None
             continue
         text = (run or _output)([tool, "-d", device, "--list-formats"])
         formats[device] = list(dict.fromkeys(_FORMAT.findall(text)))
-    return CameraFacts(devices, formats)
+    return hardware.CameraFacts(devices, formats)
 
 
 def _output(argv: list[str]) -> str:
@@ -164,14 +156,14 @@ def run_hardware(
             seen = ", ".join(candidates) or "none"
             findings.append((FAIL, f"serial: which device? pass --serial (here: {seen})"))
     if path is not None:
-        findings += check_serial(serial_facts(path, baud, listen_s, dev))
-    findings += check_cameras(camera_facts(dev))
-    findings.append(check_clock(time.time(), clock_synchronized()))
+        findings += hardware.check_serial(serial_facts(path, baud, listen_s, dev))
+    findings += hardware.check_cameras(camera_facts(dev))
+    findings.append(hardware.check_clock(time.time(), clock_synchronized()))
     folder = Path(recordings)
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent
-    findings.append(check_disk(recordings, shutil.disk_usage(folder).free))
-    findings += check_units(unit_states(unit_dir))
+    findings.append(hardware.check_disk(recordings, shutil.disk_usage(folder).free))
+    findings += hardware.check_units(unit_states(unit_dir))
     for verdict, text in findings:
         report(verdict, text)
     return 1 if any(verdict == FAIL for verdict, _ in findings) else 0

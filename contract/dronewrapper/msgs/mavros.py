@@ -315,6 +315,11 @@ class ParamSet(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, frozen=
         if not math.isfinite(self.value.real):
             raise ValueError(f"ParamSet.value.real must be finite, got {self.value.real!r}")
 
+    @classmethod
+    def of(cls, param_id: str, value: int | float) -> ParamSet:
+        """The request that writes ``value`` (wrapped by :meth:`ParamValue.of`) to ``param_id``."""
+        return cls(param_id=param_id, value=ParamValue.of(value))
+
 
 class ParamSetResult(msgspec.Struct, kw_only=True, frozen=True):
     """Parameter write reply: ``value`` is what the autopilot reports after the write."""

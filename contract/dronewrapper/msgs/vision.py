@@ -32,6 +32,11 @@ class BoundingBox2D(msgspec.Struct, kw_only=True, frozen=True):
     size_x: float = 0.0
     size_y: float = 0.0
 
+    @classmethod
+    def at(cls, cx: float, cy: float, width: float, height: float) -> BoundingBox2D:
+        """The axis-aligned box of ``width`` x ``height`` px centred at (``cx``, ``cy``) px."""
+        return cls(center=Pose2D(position=Point2D(x=cx, y=cy)), size_x=width, size_y=height)
+
 
 class ObjectHypothesis(msgspec.Struct, kw_only=True, frozen=True):
     """vision_msgs/ObjectHypothesis: class name (``person``, ``red`` ...) and score 0..1."""

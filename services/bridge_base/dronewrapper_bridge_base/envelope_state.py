@@ -49,7 +49,26 @@ class BreachReporter(Protocol):
     def report_breach(self, limit: str, reason: str, action: str) -> None: ...
 
 
-class EnvelopeState:
+PUBLISH_PERIOD_S = 2.0
+"""The envelope and home (and a bridge's mission) are published this often besides on change
+(s)."""
+
+
+class Republished:
+    """When a part's state is published again besides on change: every
+    :data:`PUBLISH_PERIOD_S`, from its first tick on (``now`` monotonic s)."""
+
+    next_publish = -math.inf
+
+    def publish_due(self, now: float) -> bool:
+        """Whether to publish again at ``now``; if so, the next time is set."""
+        if now < self.next_publish:
+            return False
+        self.next_publish = now + PUBLISH_PERIOD_S
+        return True
+
+
+class EnvelopeState(Republished):
     """The envelope in force (``set_by``: who set it, "" the configured one), its breach
     monitor and home (see module docstring)."""
 
@@ -59,7 +78,6 @@ class EnvelopeState:
         self.monitor = BreachMonitor()
         self.home_local: tuple[float, float, float] = (0.0, 0.0, 0.0)
         self.home_geo: tuple[float, float, float] | None = None
-        self.next_publish = -math.inf  # when envelope and home are published again (s)
         self.last_refusal_text = -math.inf  # when a setpoint's refusal was last said (s)
 
     def relative(self, x: float, y: float, z: float) -> tuple[float, float, float]:

@@ -1,5 +1,6 @@
 """What the flight operations of both PX4-capable bridges (MAVLink, PX4 over Zenoh) read and wait
-on, over their :class:`~dronewrapper_bridge_base.guided_core.GuidedCore`: whether the aircraft
+on, over their :class:`~dronewrapper_bridge_base.guided_core.GuidedCore` (each through the small
+protocol it reads): whether the aircraft
 flies (:func:`flying`) or is down (:func:`landed`), the end of a return (:func:`returned`), and
 a command that puts the autopilot in a mode (:func:`mode_command`), the failsafe's own
 (:func:`failsafe_request`) among them.
@@ -12,45 +13,67 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 from dronewrapper.msgs.flight import REFUSED, TOO_LATE, FlightResult
-from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND
+from dronewrapper.msgs.mavros import LANDED_STATE_ON_GROUND, ExtendedState, State
+from dronewrapper_bridge_base.core_view import Clock
 from dronewrapper_bridge_base.flight_request import failed
 from dronewrapper_bridge_base.guided_failsafe import Failsafe
 from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_base.unattended import Unattended
 
 CommandSteps = Generator[float, None, tuple[int, str]]
 """A command's exchange: resume times (monotonic s), then (result, explanation)."""
 ACCEPTED = 0  # MAV_RESULT_ACCEPTED, VehicleCommandAck's VEHICLE_CMD_RESULT_ACCEPTED
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_base.guided_core import GuidedCore
 
-
-class ModeCore(Protocol):
-    """What :func:`mode_command` reads and calls of a core (``now`` monotonic s)."""
+class Airborne(Protocol):
+    """What :func:`flying` reads of a core: its failsafe (armed, airborne)."""
 
     @property
-    def now(self) -> float: ...
+    def failsafe(self) -> Failsafe: ...
+
+
+class Grounded(Protocol):
+    """What :func:`landed` reads of a core: the last State heard (None before any) and the
+    landed state."""
+
+    @property
+    def heartbeat_state(self) -> State | None: ...
+    @property
+    def ext(self) -> ExtendedState: ...
+
+
+class Returning(Grounded, Clock, Protocol):
+    """What :func:`returned` reads of a core besides :class:`Grounded` and its time: the
+    unattended rule (cleared once down)."""
+
+    @property
+    def unattended(self) -> Unattended: ...
+
+
+class ModeCore(Clock, Protocol):
+    """What :func:`mode_command` reads and calls of a core besides its time."""
+
     @property
     def failsafe(self) -> Failsafe: ...
     def mode_entered(self, mode: str) -> None: ...  # the autopilot accepted a command into it
 
 
-def flying(core: GuidedCore) -> bool:
+def flying(core: Airborne) -> bool:
     """Armed and in the air (per the landed state)."""
     return core.failsafe.airborne and core.failsafe.armed
 
 
-def landed(core: GuidedCore) -> bool:
+def landed(core: Grounded) -> bool:
     """On the ground and disarmed."""
     state = core.heartbeat_state
     return core.ext.landed_state == LANDED_STATE_ON_GROUND and state is not None and not state.armed
 
 
 def returned(
-    core: GuidedCore, modes: tuple[str, str], deadline: float, timeout: float, who: str
+    core: Returning, modes: tuple[str, str], deadline: float, timeout: float, who: str
 ) -> Steps:
     """Wait until a return started in ``modes[0]`` (``modes[1]``: the landing it ends in) is on
     the ground and disarmed, by ``deadline`` (monotonic s; ``timeout`` s as asked); refused when

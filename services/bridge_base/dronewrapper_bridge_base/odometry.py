@@ -10,15 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from dronewrapper.msgs.geometry import (
-    Point,
-    Pose,
-    PoseStamped,
-    Quaternion,
-    Twist,
-    TwistStamped,
-    Vector3,
-)
+from dronewrapper.msgs import geometry
 from dronewrapper.msgs.std import Header
 from dronewrapper.rotations import Quat, Vec3, rotate_inverse
 
@@ -41,24 +33,29 @@ def odometry(
     frame_id: str,
     stamp: float,
     motion: tuple[Vec3, Quat, Vec3],
-    rates_enu: Vector3,
-    rates_flu: Vector3,
-) -> tuple[PoseStamped, TwistStamped, TwistStamped]:
+    rates_enu: geometry.Vector3,
+    rates_flu: geometry.Vector3,
+) -> tuple[geometry.PoseStamped, geometry.TwistStamped, geometry.TwistStamped]:
     """(pose ENU, velocity_local ENU, velocity_body FLU) stamped ``stamp`` (Unix s), for
     ``motion`` = (position m, attitude, velocity m/s) and the angular rates (rad/s) in the
     local frame (``rates_enu``) and the body's (``rates_flu``)."""
     position, attitude, velocity = motion
     x, y, z, w = attitude
-    pose = PoseStamped(
+    pose = geometry.PoseStamped(
         header=headers(frame_id, stamp, "pose"),
-        pose=Pose(position=Point.of(position), orientation=Quaternion(x=x, y=y, z=z, w=w)),
+        pose=geometry.Pose(
+            position=geometry.Point.of(position),
+            orientation=geometry.Quaternion(x=x, y=y, z=z, w=w),
+        ),
     )
-    local = TwistStamped(
+    local = geometry.TwistStamped(
         header=headers(frame_id, stamp, "vlocal"),
-        twist=Twist(linear=Vector3.of(velocity), angular=rates_enu),
+        twist=geometry.Twist(linear=geometry.Vector3.of(velocity), angular=rates_enu),
     )
-    body = TwistStamped(
+    body = geometry.TwistStamped(
         header=headers(FRAME_BASE_LINK, stamp, "vbody"),
-        twist=Twist(linear=Vector3.of(rotate_inverse(attitude, velocity)), angular=rates_flu),
+        twist=geometry.Twist(
+            linear=geometry.Vector3.of(rotate_inverse(attitude, velocity)), angular=rates_flu
+        ),
     )
     return pose, local, body

@@ -9,6 +9,7 @@ from collections.abc import Generator
 from typing import Protocol
 
 from dronewrapper.runtime.errors import ServiceError
+from dronewrapper_bridge_base.core_view import Clock
 from dronewrapper_bridge_base.guided_failsafe import Failsafe
 
 PRIME_MARGIN_S = 2.0
@@ -16,15 +17,12 @@ PRIME_MARGIN_S = 2.0
 
 
 class _PrimeConfig(Protocol):
-    @property
-    def offboard_prime_s(self) -> float: ...
+    offboard_prime_s: float  # s of streaming before OFFBOARD is asked for
 
 
-class PrimingCore(Protocol):
-    """What priming reads of a bridge's core."""
+class PrimingCore(Clock, Protocol):
+    """What priming reads of a bridge's core besides its time."""
 
-    @property
-    def now(self) -> float: ...
     @property
     def config(self) -> _PrimeConfig: ...
     @property

@@ -23,14 +23,7 @@ from typing import Protocol
 
 import msgspec
 
-from dronewrapper.msgs.mavros import (
-    FRAME_BODY_NED,
-    FRAME_LOCAL_NED,
-    MASK_MIXED,
-    MASK_POSITION,
-    MASK_VELOCITY,
-    PositionTarget,
-)
+from dronewrapper.msgs import mavros
 
 
 class SetpointError(ValueError):
@@ -79,15 +72,19 @@ class Limits(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fields=Tr
     max_yaw_rate: float = 2.0 * math.pi  # rad/s
 
 
-KIND_OF_MASK = {MASK_POSITION: Kind.POSITION, MASK_VELOCITY: Kind.VELOCITY, MASK_MIXED: Kind.MIXED}
+KIND_OF_MASK = {
+    mavros.MASK_POSITION: Kind.POSITION,
+    mavros.MASK_VELOCITY: Kind.VELOCITY,
+    mavros.MASK_MIXED: Kind.MIXED,
+}
 FRAMES_OF_MASK = {
-    MASK_POSITION: (FRAME_LOCAL_NED,),
-    MASK_VELOCITY: (FRAME_BODY_NED, FRAME_LOCAL_NED),
-    MASK_MIXED: (FRAME_BODY_NED, FRAME_LOCAL_NED),
+    mavros.MASK_POSITION: (mavros.FRAME_LOCAL_NED,),
+    mavros.MASK_VELOCITY: (mavros.FRAME_BODY_NED, mavros.FRAME_LOCAL_NED),
+    mavros.MASK_MIXED: (mavros.FRAME_BODY_NED, mavros.FRAME_LOCAL_NED),
 }
 
 
-def kind_of(target: PositionTarget) -> Kind:
+def kind_of(target: mavros.PositionTarget) -> Kind:
     """The control an admitted ``target`` asks for, read from its type_mask alone: for a
     target :func:`validate` admitted at the bridge's edge, or one the bridge built (its own
     hold). Nothing is checked again here; KeyError for a mask that is no control at all."""
@@ -101,13 +98,14 @@ def finite_field(name: str, value: object) -> float:
     return float(value)
 
 
-def validate(target: PositionTarget, bounds: Bounds) -> Kind:
+def validate(target: mavros.PositionTarget, bounds: Bounds) -> Kind:
     """The control ``target`` asks for, or SetpointError saying what is wrong with it."""
     mask, frame = target.type_mask, target.coordinate_frame
     if mask not in KIND_OF_MASK:
         raise SetpointError(
-            f"type_mask {mask} is not supported; use {MASK_POSITION} (position + yaw), "
-            f"{MASK_VELOCITY} (velocity + yaw rate) or {MASK_MIXED} (vx, vy, altitude z, yaw rate)",
+            f"type_mask {mask} is not supported; use {mavros.MASK_POSITION} (position + yaw), "
+            f"{mavros.MASK_VELOCITY} (velocity + yaw rate) or {mavros.MASK_MIXED} "
+            "(vx, vy, altitude z, yaw rate)",
             "type_mask",
         )
     if frame not in FRAMES_OF_MASK[mask]:

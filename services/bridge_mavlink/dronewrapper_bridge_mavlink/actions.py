@@ -19,7 +19,8 @@ autopilot's modes nor reads its status texts:
 A go-to, return or mission started with a ``watch`` key is watched (the core's
 :class:`~dronewrapper_bridge_base.unattended.Unattended`): if that commander's process stops
 beating, the bridge ends the action as for a lost commander. Positions ENU m from home
-(the home frame, see :mod:`~dronewrapper_bridge_mavlink.missions`), time the core's.
+(the home frame, see :mod:`~dronewrapper_bridge_mavlink.missions`), time the core's. The core
+is seen as :class:`ActionPort` shows it.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Generator
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -47,9 +48,16 @@ from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.flight_request import goto_target
 from dronewrapper_bridge_base.guided_flight import flying, returned
 from dronewrapper_bridge_base.operation import Steps
+from dronewrapper_bridge_base.unattended import Unattended
 from dronewrapper_bridge_mavlink import autopilot_limits
 from dronewrapper_bridge_mavlink import operations as ops
-from dronewrapper_bridge_mavlink.flight import MAX_TIMEOUT_S, checked, failed, last_text
+from dronewrapper_bridge_mavlink.flight import (
+    MAX_TIMEOUT_S,
+    FlightPort,
+    checked,
+    failed,
+    last_text,
+)
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_PX4,
     GUIDED_MODE,
@@ -58,9 +66,6 @@ from dronewrapper_bridge_mavlink.modes import (
     RETURN_MODE,
 )
 from dronewrapper_bridge_mavlink.setpoints import hold_target
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -71,11 +76,19 @@ SETTLE_WAIT_S = 2.0  # s a return waits for the autopilot's return altitude to b
 MISSION_CHECK_WAIT_S = 5.0  # s a start may wait for the autopilot to accept a new mission
 
 
+class ActionPort(autopilot_limits.LimitsPort, FlightPort, Protocol):
+    """What go-to, return and mission actions use of the core besides what take-off and
+    landing do (:class:`~.flight.FlightPort`) and keeping the autopilot's limits
+    (:class:`~.autopilot_limits.LimitsPort`): the unattended rule."""
+
+    unattended: Unattended
+
+
 def not_flying(what: str) -> FlightResult:
     return failed(REFUSED, f"{what} refused: not flying (take off first)", what)
 
 
-def wait_for_home(core: BridgeCore) -> Generator[float, None, bool]:
+def wait_for_home(core: ActionPort) -> Generator[float, None, bool]:
     """Wait up to :data:`HOME_WAIT_S` for home; whether it is known."""
     deadline = core.now + HOME_WAIT_S
     while not core.missions.home_known:
@@ -85,7 +98,7 @@ def wait_for_home(core: BridgeCore) -> Generator[float, None, bool]:
     return True
 
 
-def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
+def goto_point(core: ActionPort, request: GotoRequest) -> Steps:
     """Fly to the point and hold there (see module docstring)."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     tolerance = checked("tolerance", request.tolerance, 0.0, 100.0)
@@ -113,7 +126,7 @@ def goto_point(core: BridgeCore, request: GotoRequest) -> Steps:
 
 
 def fly_to(
-    core: BridgeCore,
+    core: ActionPort,
     target: tuple[float, float, float],
     mode: str,
     tolerance: float,
@@ -140,7 +153,7 @@ def fly_to(
         yield deadline
 
 
-def start_return(core: BridgeCore) -> Generator[float, None, tuple[int, str]]:
+def start_return(core: ActionPort) -> Generator[float, None, tuple[int, str]]:
     """Ask for the autopilot's return, its altitude first kept under the ceiling:
     (MAV_RESULT, explanation)."""
     kept = yield from autopilot_limits.settled(core, SETTLE_WAIT_S)
@@ -158,7 +171,7 @@ def start_return(core: BridgeCore) -> Generator[float, None, tuple[int, str]]:
     return result, message
 
 
-def return_home(core: BridgeCore, request: ReturnRequest) -> Steps:
+def return_home(core: ActionPort, request: ReturnRequest) -> Steps:
     """The autopilot's return, its altitude under the ceiling; done on the ground, disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
@@ -176,7 +189,7 @@ def return_home(core: BridgeCore, request: ReturnRequest) -> Steps:
     return (yield from returned(core, modes, deadline, timeout, "the autopilot"))
 
 
-def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:
+def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
     """Start, pause or resume the uploaded mission (see module docstring)."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
@@ -192,7 +205,7 @@ def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:
         return FlightResult(success=True, message="mission paused: holding here")
     mode = MISSION_MODE[autopilot]
     if request.action == "start":
-        core.missions.last_reached = -1
+        core.missions.started()
         if autopilot != AUTOPILOT_PX4 and ops.shown_mode(core) == mode:
             # ArduPilot starts a mission (again, once finished) only on entering AUTO
             reply = yield from ops.set_mode(core, SetMode(custom_mode=GUIDED_MODE[autopilot]))
@@ -215,13 +228,13 @@ def mission_action(core: BridgeCore, request: MissionRequest) -> Steps:
     return FlightResult(success=True, message=f"flying the mission from item {seq} of {total}")
 
 
-def start_watch(core: BridgeCore, what: str, key: str) -> None:
+def start_watch(core: ActionPort, what: str, key: str) -> None:
     """The ``what`` started now is watched for its commander's process (``key``)."""
     core.unattended.start(what, key, core.now)
     log.info("%s: its commander's process %s", what, f"is {key}" if key else "is not known")
 
 
-def mission_refusal(core: BridgeCore, action: str) -> str:
+def mission_refusal(core: ActionPort, action: str) -> str:
     """Why a mission ``action`` (start, resume, pause, return) cannot be done now, or ""."""
     autopilot = core.autopilot or AUTOPILOT_PX4
     if action in ("start", "resume") and not core.missions.waypoints:
@@ -233,7 +246,7 @@ def mission_refusal(core: BridgeCore, action: str) -> str:
     return ""
 
 
-def control(core: BridgeCore, request: MissionControl) -> Steps:
+def control(core: ActionPort, request: MissionControl) -> Steps:
     """mission/control (a ground station's buttons): ``start``, ``pause`` or ``return``,
     answered once the autopilot has taken it (a return does not wait for the landing); the
     same refusals as :func:`mission_action` and :func:`return_home`."""

@@ -33,19 +33,19 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator, Sequence
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from dronewrapper.envelope import Envelope
 from dronewrapper.msgs.mavros import ParamSet, ParamValue
 from dronewrapper.msgs.mission import EnvelopeSet, Waypoint
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.core_view import Stamped, Starting
 from dronewrapper_bridge_mavlink import rally_returns
+from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.mission_frames import MissionFrameError
-from dronewrapper_bridge_mavlink.mission_state import Limits
+from dronewrapper_bridge_mavlink.mission_state import Limits, MissionState
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core_view import BridgeCore
+from dronewrapper_bridge_mavlink.parameters import HasParameters
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -67,13 +67,27 @@ INTEGER_PARAMS = frozenset({"RTL_ALT", "RTL_ALT_FINAL", "RTL_CLIMB_MIN"})
 """The ``AT_MOST`` parameters held as integers (the fence actions, ``EXACTLY``, are too)."""
 
 
+class LimitsPort(Stamped, Starting, HasParameters, Protocol):
+    """What keeping the autopilot's limits uses of the core besides its time, a background
+    operation's start and its parameters: the autopilot as heard (kind, ``""`` before a
+    heartbeat; connected), the configured envelope, the mission state (envelope, home, rally
+    points, :class:`Limits`) and a bridge warning."""
+
+    autopilot: str
+    connected: bool
+    config: Config
+    missions: MissionState
+
+    def bridge_text(self, text: str) -> None: ...
+
+
 def return_altitude(envelope: Envelope) -> float:
     """The highest return altitude (m above home) under ``envelope``'s ceiling."""
     return max(MIN_RETURN_ALT_M, envelope.max_altitude - RETURN_ALT_BELOW_CEILING_M)
 
 
 def px4_return_altitude(
-    core: BridgeCore, envelope: Envelope | None = None
+    core: LimitsPort, envelope: Envelope | None = None
 ) -> Generator[float, None, float]:
     """The return altitude a PX4 return climbs to above its destination (m): its
     ``RTL_RETURN_ALT``, at most :func:`return_altitude` under ``envelope`` (default: the one
@@ -86,7 +100,7 @@ def px4_return_altitude(
 
 
 def check_rally_returns(
-    core: BridgeCore, rally: Sequence[Waypoint], envelope: Envelope
+    core: LimitsPort, rally: Sequence[Waypoint], envelope: Envelope
 ) -> Generator[float, None, None]:
     """Refuse a rally point a return to it would climb too high from under ``envelope``
     (:func:`rally_returns.check`: PX4 with its ``RTL_RETURN_ALT``, ArduCopter with the return
@@ -104,7 +118,7 @@ def check_rally_returns(
     rally_returns.check(rally, envelope, home, ardupilot=ardupilot, return_alt=return_alt)
 
 
-def check_new_envelope(core: BridgeCore, request: EnvelopeSet) -> Generator[float, None, None]:
+def check_new_envelope(core: LimitsPort, request: EnvelopeSet) -> Generator[float, None, None]:
     """envelope/set's check: the rally points uploaded before stay within reach of a return
     under the envelope asked for (:func:`check_rally_returns`).
 
@@ -149,7 +163,7 @@ def to_write(current: float | None, value: float, how: str) -> float | None:
     return None if current is not None and current <= value else value
 
 
-def sync(core: BridgeCore) -> Generator[float, None, str]:
+def sync(core: LimitsPort) -> Generator[float, None, str]:
     """Keep :func:`wanted` unless already done for this autopilot and envelope (a value the
     autopilot holds lower than asked is kept); the problem ("" when all were taken)."""
     limits: Limits = core.missions.limits
@@ -202,7 +216,7 @@ def sync(core: BridgeCore) -> Generator[float, None, str]:
     return limits.problem
 
 
-def settled(core: BridgeCore, seconds: float) -> Generator[float, None, bool]:
+def settled(core: LimitsPort, seconds: float) -> Generator[float, None, bool]:
     """Wait up to ``seconds`` for the limits to be kept for this autopilot and envelope (a
     :func:`sync` started in the background when none runs); whether they are."""
     limits: Limits = core.missions.limits
@@ -217,7 +231,7 @@ def settled(core: BridgeCore, seconds: float) -> Generator[float, None, bool]:
     return limits.written_for == key
 
 
-def sync_steps(core: BridgeCore) -> Generator[float, None, str]:
+def sync_steps(core: LimitsPort) -> Generator[float, None, str]:
     """:func:`sync` as a background operation (the core starts it on connect and on a new
     envelope)."""
     return (yield from sync(core))
@@ -226,6 +240,7 @@ def sync_steps(core: BridgeCore) -> Generator[float, None, str]:
 __all__ = [
     "ONE_OF",
     "Limits",
+    "LimitsPort",
     "check_new_envelope",
     "check_rally_returns",
     "return_altitude",

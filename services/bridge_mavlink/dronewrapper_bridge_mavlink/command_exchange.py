@@ -18,6 +18,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs.mavros import SEVERITY_WARNING
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
+from dronewrapper_bridge_base.core_view import CommandSlot
 from dronewrapper_bridge_mavlink import commands as cmds
 from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.outgoing import AutopilotPort, CommandLong
@@ -26,17 +27,12 @@ ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 BUSY_POLL_S = 0.05  # a command waiting for the slot looks again this often
 
 
-class CommandPort(AutopilotPort, Protocol):
-    """What a command exchange uses of the core besides its time, the autopilot's address and
-    the outbox: the command slot and the texts heard (each with its arrival, monotonic s)."""
+class CommandPort(AutopilotPort, CommandSlot, Protocol):
+    """What a command exchange uses of the core besides its time, the autopilot's address,
+    the outbox and the command slot: the texts heard (each with its arrival, monotonic s)."""
 
-    @property
-    def command_busy(self) -> bool: ...
     @property
     def recent_texts(self) -> Sequence[tuple[float, StatusTextMsg]]: ...
-
-    def take_command_slot(self) -> None: ...
-    def release_command_slot(self) -> None: ...
 
 
 class Commands:

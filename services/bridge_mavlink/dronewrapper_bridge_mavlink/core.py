@@ -13,7 +13,8 @@ as messages and time arrive; the node only waits on them. The sim's autopilot
 What both PX4-capable bridges share (the failsafe fed and acted on, setpoints screened, State
 published) is :class:`~dronewrapper_bridge_base.guided_core.GuidedCore`; what stands alone
 (receive, telemetry, operations, missions, parameters) is in its own module, each seeing the
-core through core_view.
+core only through the small protocol it states (``receive.ReceivePort``,
+``operations.OperationPort``, ``missions.MissionPort`` ...), or taking the parts it uses.
 """
 
 from __future__ import annotations
@@ -44,7 +45,6 @@ from dronewrapper_bridge_mavlink import missions, receive, watch
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.command_exchange import Commands
 from dronewrapper_bridge_mavlink.config import Config
-from dronewrapper_bridge_mavlink.core_view import Outbox
 from dronewrapper_bridge_mavlink.freshness import Freshness
 from dronewrapper_bridge_mavlink.keepalive import KeepAlive
 from dronewrapper_bridge_mavlink.link_budget import fit_rates, is_serial_url
@@ -55,6 +55,7 @@ from dronewrapper_bridge_mavlink.operations import failsafe_action
 from dronewrapper_bridge_mavlink.outgoing import (
     CommandLong,
     Heartbeat,
+    Outbox,
     Send,
     SetPositionTargetLocalNed,
 )
@@ -161,7 +162,7 @@ class BridgeCore(GuidedCore):
             self._on_heartbeat(msg)
         elif not self.target_system or msg.get_srcSystem() == self.target_system:
             own = self._OWN_HANDLERS.get(kind)
-            handler = receive.HANDLERS.get(kind)
+            handler = self._HANDLERS.get(kind)
             if own is not None:
                 own(self, msg)
             elif handler is not None:
@@ -237,11 +238,15 @@ class BridgeCore(GuidedCore):
         "SYS_STATUS": _on_sys_status,
         "BATTERY_STATUS": _on_battery_status,
     }
+    _HANDLERS: ClassVar[dict[str, Callable[[BridgeCore, Any], None]]] = {
+        **receive.HANDLERS,  # telemetry, acks, parameters
+        **missions.HANDLERS,  # the mission protocol, home
+    }
 
     @classmethod
     def read_messages(cls) -> frozenset[str]:
         """The MAVLink messages the core reads; the link decodes only these."""
-        return frozenset({"HEARTBEAT", *cls._OWN_HANDLERS, *receive.HANDLERS})
+        return frozenset({"HEARTBEAT", *cls._OWN_HANDLERS, *cls._HANDLERS})
 
     def bridge_text(self, text: str) -> None:
         """Log and publish a warning of the bridge's own (STATUSTEXT, frame_id ``bridge``)."""

@@ -10,15 +10,16 @@
 
 Each returns a :class:`~dronewrapper.msgs.flight.FlightResult` (a failure says which step and
 why); a bad request is a ``ValueError``. Heights in metres above the take-off point (local ENU
-z, origin where the autopilot started), time the core's (monotonic s).
+z, origin where the autopilot started), time the core's (monotonic s). The core is seen as
+:class:`FlightPort` shows it.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Generator
-from typing import TYPE_CHECKING, Any
+from collections.abc import Generator, Sequence
+from typing import Any, Protocol
 
 from dronewrapper.msgs.flight import (
     NO_POSITION,
@@ -37,6 +38,7 @@ from dronewrapper.msgs.mavros import (
     CommandTOL,
     SetMode,
 )
+from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper_bridge_base.flight_request import (
     checked,
@@ -50,9 +52,21 @@ from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
 from dronewrapper_bridge_mavlink.setpoints import hold_target
+from dronewrapper_bridge_mavlink.telemetry import Telemetry
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core import BridgeCore
+
+class Texts(Protocol):
+    """The texts heard (each with its arrival, monotonic s), the bridge's own among them."""
+
+    @property
+    def recent_texts(self) -> Sequence[tuple[float, StatusTextMsg]]: ...
+
+
+class Located(Protocol):
+    """The telemetry (local position ENU m)."""
+
+    telemetry: Telemetry
+
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -60,7 +74,17 @@ MAX_HEIGHT_M = 1000.0
 MAX_TIMEOUT_S = 600.0
 
 
-def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
+class FlightPort(ops.OperationPort, Texts, Protocol):
+    """What take-off and landing use of the core besides the operations they run
+    (:class:`~.operations.OperationPort`) and the texts heard: whether the autopilot is
+    connected, and the bridge's own hold where the aircraft is (``hold_here``)."""
+
+    connected: bool
+
+    def hold_here(self) -> None: ...
+
+
+def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
     height, timeout, tolerance = takeoff_request(
         request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
@@ -118,7 +142,7 @@ def takeoff_to(core: BridgeCore, request: TakeoffRequest) -> Steps:
 
 
 def climb(
-    core: BridgeCore, mode: str, target_z: float, tolerance: float, deadline: float, timeout: float
+    core: FlightPort, mode: str, target_z: float, tolerance: float, deadline: float, timeout: float
 ) -> Generator[float, None, FlightResult | None]:
     """Wait until the local z is within ``tolerance`` of ``target_z`` (m): None, or the
     failure (disarmed, left ``mode``, ``deadline`` passed)."""
@@ -146,7 +170,7 @@ def climb(
         yield deadline
 
 
-def land_here(core: BridgeCore, request: LandRequest) -> Steps:
+def land_here(core: FlightPort, request: LandRequest) -> Steps:
     """Land where the aircraft is; done once on the ground and disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
@@ -170,12 +194,12 @@ def land_here(core: BridgeCore, request: LandRequest) -> Steps:
     return FlightResult(success=True, message="on the ground and disarmed")
 
 
-def altitude_text(core: BridgeCore) -> str:
+def altitude_text(core: Located) -> str:
     position = core.telemetry.position_enu
     return "no position" if position is None else f"z={position[2]:.2f} m"
 
 
-def last_text(core: BridgeCore) -> str:
+def last_text(core: Texts) -> str:
     """`` (the autopilot's latest warning)`` or ``""``."""
     for _, text in reversed(core.recent_texts):
         if text.severity <= SEVERITY_WARNING and text.header.frame_id != "bridge":

@@ -9,8 +9,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import msgspec
+
 from dronewrapper.envelope import Envelope
-from dronewrapper.msgs.mission import Waypoint
+from dronewrapper.msgs.mission import Waypoint, WaypointList
+from dronewrapper.msgs.std import Header
 from dronewrapper_bridge_base.envelope_state import EnvelopeState
 
 
@@ -65,3 +68,27 @@ class MissionState(EnvelopeState):
         self.waypoints = waypoints
         self.current_seq = 0
         self.last_reached = -1
+
+    def downloaded(self, waypoints: list[Waypoint]) -> None:
+        """The autopilot's mission as downloaded from it (the item flown as it said)."""
+        self.waypoints = waypoints
+
+    def cleared(self) -> None:
+        """The autopilot holds no mission now."""
+        self.waypoints = []
+        self.current_seq = 0
+
+    def started(self) -> None:
+        """The mission is started afresh: no item reached yet."""
+        self.last_reached = -1
+
+    def listing(self, stamp: float) -> WaypointList:
+        """The mission as published (``stamp`` Unix s), the item being flown marked."""
+        return WaypointList(
+            header=Header(stamp=stamp),
+            current_seq=self.current_seq,
+            waypoints=[
+                msgspec.structs.replace(wp, is_current=i == self.current_seq)
+                for i, wp in enumerate(self.waypoints)
+            ],
+        )

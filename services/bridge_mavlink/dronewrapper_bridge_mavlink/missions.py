@@ -1,4 +1,5 @@
-"""Missions, home and the safety envelope in bridge_mavlink (pure, over the core).
+"""Missions, home and the safety envelope in bridge_mavlink (pure, over the core as
+:class:`MissionPort` shows it).
 
 :class:`MissionState` is what the core knows: the envelope in force, home (local ENU m and
 geodetic), the mission the autopilot holds, the item being flown, and the one mission transfer
@@ -23,9 +24,8 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
-import msgspec
 from pymavlink.dialects.v20 import common as mavlink
 
 from dronewrapper.msgs import registry
@@ -34,7 +34,6 @@ from dronewrapper.msgs.mission import (
     EnvelopeSet,
     MissionResult,
     WaypointClear,
-    WaypointList,
     WaypointPull,
     WaypointPullResult,
     WaypointPush,
@@ -45,67 +44,63 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
-from dronewrapper_bridge_base.envelope_state import watch_breach
+from dronewrapper_bridge_base.core_view import Serving
+from dronewrapper_bridge_base.envelope_state import BreachReporter, watch_breach
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import autopilot_limits, home_slot, mission_frames, uploads
 from dronewrapper_bridge_mavlink import mission_transfer as mt
 from dronewrapper_bridge_mavlink import operations as ops
-from dronewrapper_bridge_mavlink.modes import (
-    AUTOPILOT_PX4,
-    HOLD_MODE,
-)
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core_view import BridgeCore
+from dronewrapper_bridge_mavlink.autopilot_limits import LimitsPort
+from dronewrapper_bridge_mavlink.mission_state import MissionState
+from dronewrapper_bridge_mavlink.modes import AUTOPILOT_PX4, HOLD_MODE
+from dronewrapper_bridge_mavlink.uploads import UploadPort
 
 log = logging.getLogger("bridge_mavlink")
 
-PUBLISH_PERIOD_S = 2.0  # envelope, home and mission are also published this often
 SETTLE_WAIT_S = 1.0  # s a breach return waits for the autopilot's return altitude (once)
 
 
-# ---------------------------------------------------------------- frames
+class MissionPort(LimitsPort, UploadPort, ops.OperationPort, Serving, BreachReporter, Protocol):
+    """What the mission side uses of the core: the mission state it owns, what keeping the
+    autopilot's limits (:class:`~.autopilot_limits.LimitsPort`), the uploads
+    (:class:`~.uploads.UploadPort`), the operations it runs (a breach's hold or return, a
+    mission item's set-current: :class:`~.operations.OperationPort`), a service operation
+    (time, samples, the caller) and a breach's report use, and a dropped input's count."""
+
+    missions: MissionState
+
+    def dropped(self, what: str) -> None: ...
 
 
 # ---------------------------------------------------------------- hooks the core calls
 
 
-def tick(core: BridgeCore) -> None:
+def tick(core: MissionPort) -> None:
     """Each stream tick: act on a breach, publish envelope, home and mission periodically."""
     state = core.missions
     action = watch_breach(core, state)
     if action:
         core.start(breach_action(core, action), core.now, core.stamp, background=True)
-    if core.now >= state.next_publish:
-        state.next_publish = core.now + PUBLISH_PERIOD_S
+    if state.publish_due(core.now):
         publish_all(core)
 
 
-def publish_all(core: BridgeCore) -> None:
+def publish_all(core: MissionPort) -> None:
     state = core.missions
     core.publish(registry.ENVELOPE, state.envelope)
     publish_home(core)
     publish_waypoints(core)
 
 
-def publish_home(core: BridgeCore) -> None:
+def publish_home(core: MissionPort) -> None:
     core.publish(registry.HOME_POSITION, core.missions.home_message(core.stamp))
 
 
-def publish_waypoints(core: BridgeCore) -> None:
-    state = core.missions
-    listing = WaypointList(
-        header=Header(stamp=core.stamp),
-        current_seq=state.current_seq,
-        waypoints=[
-            msgspec.structs.replace(wp, is_current=i == state.current_seq)
-            for i, wp in enumerate(state.waypoints)
-        ],
-    )
-    core.publish(registry.MISSION_WAYPOINTS, listing)
+def publish_waypoints(core: MissionPort) -> None:
+    core.publish(registry.MISSION_WAYPOINTS, core.missions.listing(core.stamp))
 
 
-def breach_action(core: BridgeCore, action: str) -> Steps:
+def breach_action(core: MissionPort, action: str) -> Steps:
     """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
     requests; a return's altitude first kept under the ceiling, waiting up to
     :data:`SETTLE_WAIT_S` when it was not yet), or ``hold`` (the autopilot's hold mode)."""
@@ -121,7 +116,7 @@ def breach_action(core: BridgeCore, action: str) -> Steps:
 # ---------------------------------------------------------------- receive side
 
 
-def on_home_position(core: BridgeCore, msg: Any) -> None:
+def on_home_position(core: MissionPort, msg: Any) -> None:
     """HOME_POSITION: home in both frames. One without a fix (latitude and longitude 0, as
     GLOBAL_POSITION_INT says "no fix") or with a non-finite local position is dropped and
     counted: a bad home must never move the fence, the returns or the go-tos."""
@@ -138,25 +133,25 @@ def on_home_position(core: BridgeCore, msg: Any) -> None:
         follow_envelope(core)
 
 
-def follow_envelope(core: BridgeCore) -> None:
+def follow_envelope(core: MissionPort) -> None:
     """The envelope to the autopilot: return heights, fence action, fence (``upload_fence``)."""
     if core.config.upload_fence:
         core.start(uploads.push_fence(core, WaypointClear()), core.now, core.stamp, background=True)
     core.start(autopilot_limits.sync_steps(core), core.now, core.stamp, background=True)
 
 
-def on_transfer_message(core: BridgeCore, msg: Any) -> None:
+def on_transfer_message(core: MissionPort, msg: Any) -> None:
     core.transfers.on_message(msg)
     if msg.get_type() == "MISSION_ACK":
         log.debug("MISSION_ACK %s", mt.result_name(msg.type))
 
 
-def on_mission_current(core: BridgeCore, msg: Any) -> None:
+def on_mission_current(core: MissionPort, msg: Any) -> None:
     if core.missions.on_current(home_slot.ours(int(msg.seq), core.autopilot) or 0):
         publish_waypoints(core)
 
 
-def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
+def on_mission_item_reached(core: MissionPort, msg: Any) -> None:
     """MISSION_ITEM_REACHED, published once per item of this mission (:func:`home_slot.reached`;
     PX4 repeats it for a while)."""
     state = core.missions
@@ -166,7 +161,7 @@ def on_mission_item_reached(core: BridgeCore, msg: Any) -> None:
         core.publish(registry.MISSION_REACHED, reached)
 
 
-HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
+HANDLERS: dict[str, Callable[[MissionPort, Any], None]] = {
     "HOME_POSITION": on_home_position,
     "MISSION_REQUEST_INT": on_transfer_message,
     "MISSION_REQUEST": on_transfer_message,
@@ -181,7 +176,7 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
 # ---------------------------------------------------------------- operations
 
 
-def push(core: BridgeCore, request: WaypointPush) -> Steps:
+def push(core: MissionPort, request: WaypointPush) -> Steps:
     """mission/push: check every item and rally point against the envelope (and a return's
     climb to each rally point: :func:`autopilot_limits.check_rally_returns`; local items go
     up as global ones), upload the items, then any rally points (:func:`uploads.push_rally`)."""
@@ -209,19 +204,19 @@ def push(core: BridgeCore, request: WaypointPush) -> Steps:
     error = upload.error
     message = error or f"{len(items)} item(s) uploaded"
     if not error and rally is not None:
-        error = yield from uploads.push_rally(core, rally)
+        error = yield from uploads.push_rally(core.transfers, state, rally)
         message = error or f"{message} and {len(rally)} rally point(s)"
     return WaypointPushResult(success=not error, wp_transfered=transferred, message=message)
 
 
-def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
+def pull(core: MissionPort, _request: WaypointPull) -> Steps:
     """mission/pull: download the autopilot's mission."""
     core.require_connected()
     download = yield from core.transfers.download()
     items = home_slot.downloaded(download.items, core.autopilot)
     waypoints = [uploads.waypoint_of(item) for item in items]
     if not download.error:
-        core.missions.waypoints = waypoints
+        core.missions.downloaded(waypoints)
         publish_waypoints(core)
     return WaypointPullResult(
         success=not download.error,
@@ -231,18 +226,17 @@ def pull(core: BridgeCore, _request: WaypointPull) -> Steps:
     )
 
 
-def clear(core: BridgeCore, _request: WaypointClear) -> Steps:
+def clear(core: MissionPort, _request: WaypointClear) -> Steps:
     """mission/clear: MISSION_CLEAR_ALL."""
     core.require_connected()
     transfer = yield from core.transfers.clear()
     if not transfer.error:
-        core.missions.waypoints = []
-        core.missions.current_seq = 0
+        core.missions.cleared()
         publish_waypoints(core)
     return MissionResult(success=not transfer.error, message=transfer.error or "cleared")
 
 
-def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
+def set_current(core: MissionPort, request: WaypointSetCurrent) -> Steps:
     """mission/set_current: MAV_CMD_DO_SET_MISSION_CURRENT."""
     core.require_connected()
     count = len(core.missions.waypoints)
@@ -256,7 +250,7 @@ def set_current(core: BridgeCore, request: WaypointSetCurrent) -> Steps:
     return MissionResult(success=result == ops.ACCEPTED, message=message)
 
 
-def set_envelope(core: BridgeCore, request: EnvelopeSet) -> Steps:
+def set_envelope(core: MissionPort, request: EnvelopeSet) -> Steps:
     """envelope/set: replace or reset the envelope (neither: read it; see
     :mod:`dronewrapper_bridge_base.envelope_set`); refused when a return to a rally point
     uploaded before would climb too high under it (:func:`autopilot_limits.check_new_envelope`);

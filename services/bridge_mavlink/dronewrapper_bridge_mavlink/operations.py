@@ -1,9 +1,9 @@
 """Service calls that wait for the autopilot, as pure operations the core advances.
 
-Each operation is a generator over a :class:`~dronewrapper_bridge_mavlink.core_view.BridgeCore`:
-it reads ``core.now`` (set by the caller of every core entry point), sends through the core's
-parts (its ``commands``, ``parameters``, ``transfers``), and yields the time (monotonic s) it
-wants to be resumed at the latest; the core resumes it whenever a message or a tick arrives, so
+Each operation is a generator over the core as :class:`OperationPort` shows it (the parts an
+operation uses, nothing else): it reads ``core.now`` (set by the caller of every core entry
+point), sends through the core's ``commands``, and yields the time (monotonic s) it wants to be
+resumed at the latest; the core resumes it whenever a message or a tick arrives, so
 every wait is a loop that re-checks its condition. Its return value is the service reply; an
 exception it raises (``ValueError`` for a bad request, ``ServiceError``) is the call's error.
 No sockets, threads or clock here: the node waits on
@@ -20,7 +20,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Generator
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -32,12 +32,21 @@ from dronewrapper.msgs.mavros import (
     CommandTOLResult,
     SetMode,
     SetModeResult,
+    State,
 )
+from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
-from dronewrapper_bridge_base.guided_flight import failsafe_request, mode_command
-from dronewrapper_bridge_base.offboard_prime import prime
+from dronewrapper_bridge_base.guided_flight import (
+    Grounded,
+    ModeCore,
+    failsafe_request,
+    mode_command,
+)
+from dronewrapper_bridge_base.offboard_prime import PrimingCore, prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import commands as cmds
+from dronewrapper_bridge_mavlink.command_exchange import Commands
+from dronewrapper_bridge_mavlink.config import Config
 from dronewrapper_bridge_mavlink.modes import (
     AUTOPILOT_ARDUPILOT,
     AUTOPILOT_PX4,
@@ -48,33 +57,65 @@ from dronewrapper_bridge_mavlink.modes import (
     is_guided,
     set_mode_params,
 )
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core_view import BridgeCore
+from dronewrapper_bridge_mavlink.telemetry import Telemetry
 
 log = logging.getLogger("bridge_mavlink")
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 
 
+class Heard(Protocol):
+    """The autopilot as heard: its kind (``""`` before a heartbeat) and the State its last
+    HEARTBEAT showed (None before any; an accepted mode command changes it at once)."""
+
+    autopilot: str
+    heartbeat_state: State | None
+
+
+class Commanding(Protocol):
+    """What a plain command uses of the core: its command exchange (:class:`Commands`)."""
+
+    commands: Commands
+
+
+class FailsafePort(Heard, Commanding, ModeCore, Protocol):
+    """What the failsafe's own request uses: the autopilot as heard, the command exchange,
+    the failsafe and the mode accepted (``mode_entered``)."""
+
+
+class OperationPort(FailsafePort, Grounded, PrimingCore, Protocol):
+    """What the operations here read and call of the core (``now`` monotonic s) besides
+    :class:`FailsafePort`: the landed state, the failsafe's priming, the config, the
+    telemetry (the take-off altitude), the envelope's refusals (the mission state as its
+    :class:`EnvelopeState`) and whether the autopilot is heard (``require_connected``)."""
+
+    config: Config
+    telemetry: Telemetry
+
+    @property
+    def missions(self) -> EnvelopeState: ...
+
+    def require_connected(self) -> str: ...
+
+
 # ---------------------------------------------------------------- commands
 
 
 def exchange(
-    core: BridgeCore, command: int, *params: float, expected_acks: int = 1
+    core: Commanding, command: int, *params: float, expected_acks: int = 1
 ) -> Generator[float, None, tuple[cmds.PendingCommand, str]]:
     """A COMMAND_LONG until its final ack, by the core's :class:`~.command_exchange.Commands`:
     the finished command and an explanation."""
     return (yield from core.commands.exchange(command, *params, expected_acks=expected_acks))
 
 
-def command(core: BridgeCore, command: int, *params: float) -> Generator[float, None, tuple]:
+def command(core: Commanding, command: int, *params: float) -> Generator[float, None, tuple]:
     """:func:`exchange` for a command acked once: (MAV_RESULT, explanation)."""
     pending, message = yield from exchange(core, command, *params)
     return pending.result, message
 
 
-def arming(core: BridgeCore, request: CommandBool) -> Steps:
+def arming(core: OperationPort, request: CommandBool) -> Steps:
     """ARMING: MAV_CMD_COMPONENT_ARM_DISARM; the reply carries the real ack."""
     core.require_connected()
     result, message = yield from command(
@@ -83,7 +124,7 @@ def arming(core: BridgeCore, request: CommandBool) -> Steps:
     return CommandBoolResult(success=result == ACCEPTED, result=result, message=message)
 
 
-def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
+def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
     """TAKEOFF: MAV_CMD_NAV_TAKEOFF to ``altitude`` m above the take-off point; while flying
     it does nothing (a second take-off must not send the vehicle to a new height)."""
     autopilot = core.require_connected()
@@ -118,7 +159,7 @@ def takeoff(core: BridgeCore, request: CommandTOL) -> Steps:
     return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
 
 
-def land(core: BridgeCore, request: CommandTOL) -> Steps:
+def land(core: OperationPort, request: CommandTOL) -> Steps:
     """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
     autopilot = core.require_connected()
     lat, lon = land_point(request.latitude, request.longitude)
@@ -127,7 +168,7 @@ def land(core: BridgeCore, request: CommandTOL) -> Steps:
     return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
 
 
-def failsafe_action(core: BridgeCore, action: str) -> Steps:
+def failsafe_action(core: FailsafePort, action: str) -> Steps:
     """The failsafe's own request (``land`` or ``return``); nobody waits for it."""
     autopilot = core.autopilot or AUTOPILOT_PX4
     if action == "land":
@@ -142,7 +183,7 @@ def failsafe_action(core: BridgeCore, action: str) -> Steps:
 # ---------------------------------------------------------------- modes
 
 
-def set_mode(core: BridgeCore, request: SetMode) -> Steps:
+def set_mode(core: OperationPort, request: SetMode) -> Steps:
     """SET_MODE by name; replies once the autopilot has really entered or refused it.
 
     PX4: OFFBOARD is preceded by > offboard_prime_s of streaming (priming); DO_SET_MODE is
@@ -191,6 +232,6 @@ def set_mode(core: BridgeCore, request: SetMode) -> Steps:
     return SetModeResult(mode_sent=result == ACCEPTED, result=result, message=message)
 
 
-def shown_mode(core: BridgeCore) -> str:
+def shown_mode(core: Heard) -> str:
     """The mode the last HEARTBEAT showed (or an accepted command set), "" before any."""
     return core.heartbeat_state.mode if core.heartbeat_state else ""

@@ -1,7 +1,8 @@
 """The MAVLink messages the bridge sends, as typed immutable values (:data:`Send`), and the one
 encoder that makes pymavlink's message of each (:func:`encode`).
 
-The core, its operations and the mission transfers queue these values in the outbox; only
+The core, its operations and the mission transfers queue these values in the
+:class:`Outbox`; only
 the link (``link.MavLink.send``) encodes them, so no message name travels as a string and the
 type checker sees every field. Units are MAVLink's: ``time_boot_ms`` ms since the bridge's
 start, positions local NED m, velocities m/s, yaw rad, rates rad/s; mission ``x``/``y``
@@ -10,11 +11,13 @@ degrees * 1e7 and ``z`` m. ``target_system``/``target_component`` address the au
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import NoReturn, Protocol
+from dataclasses import dataclass, field
+from typing import Any, NoReturn, Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
+from dronewrapper.msgs.registry import Topic
+from dronewrapper_bridge_base.core_view import Clock
 from dronewrapper_bridge_mavlink.setpoints import LocalNedTarget
 
 
@@ -149,15 +152,29 @@ Send = (
 """Every message the bridge's core sends to the autopilot."""
 
 
-class AutopilotPort(Protocol):
+class AutopilotPort(Clock, Protocol):
     """The core as a part of it that talks to the autopilot sees it: its time (``now``,
     monotonic s, set by each entry point), the autopilot's (system, component), the outbox."""
 
-    @property
-    def now(self) -> float: ...
-
     def target(self) -> tuple[int, int]: ...
     def send(self, message: Send) -> None: ...
+
+
+@dataclass
+class Outbox:
+    """What the node must do after a core call.
+
+    Attributes:
+        sends: MAVLink messages for the autopilot, typed (the link encodes them).
+        samples: (registry topic, message) to publish on Zenoh.
+        peers: UDP addresses replies must go to from now on (the last one wins).
+        errors: names of dropped inputs to count (the node's ``callback_errors``).
+    """
+
+    sends: list[Send] = field(default_factory=list)
+    samples: list[tuple[Topic, Any]] = field(default_factory=list)
+    peers: list[Any] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
 
 
 def encode(send: Send) -> mavlink.MAVLink_message:

@@ -34,8 +34,7 @@ class ParamPort(AutopilotPort, Protocol):
     """What a parameter exchange uses of the core besides its time, the autopilot's address
     and the outbox: the autopilot's kind (``""`` before it is heard), whether it is heard."""
 
-    @property
-    def autopilot(self) -> str: ...
+    autopilot: str
 
     def require_connected(self) -> str: ...
 
@@ -168,8 +167,7 @@ class Parameters:
 class HasParameters(Protocol):
     """A core that owns its :class:`Parameters` (what the services' operations are given)."""
 
-    @property
-    def parameters(self) -> Parameters: ...
+    parameters: Parameters
 
 
 def param_get(core: HasParameters, request: ParamGet) -> Steps:

@@ -5,7 +5,10 @@ same system id, a duplicated or reordered datagram, a non-finite pose are droppe
 what the core must do about it. The handlers in :data:`HANDLERS` feed the objects that own the
 telemetry (the core's ``telemetry``, ``statustexts``, ``commands``, ``parameters``) and queue the
 samples to publish; what changes the core's own state (heartbeat, landed state, battery) is the
-core's. Time is the core's ``now`` (monotonic s) and ``stamp`` (wall-clock s for headers).
+core's, and the mission protocol's messages are the mission side's (``missions.HANDLERS``; the
+core dispatches to both). Each function sees the core only through the small protocol it
+needs (:class:`AdmissionPort`, :class:`ReceivePort`, :class:`BatchPort`). Time is the core's
+``now`` (monotonic s) and ``stamp`` (wall-clock s for headers).
 """
 
 from __future__ import annotations
@@ -13,18 +16,51 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from dronewrapper.msgs import registry
+from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
+from dronewrapper_bridge_base.core_view import Clock, Publishing, Stamped
 from dronewrapper_bridge_mavlink import commands as cmds
-from dronewrapper_bridge_mavlink import missions
-from dronewrapper_bridge_mavlink.freshness import boot_ms_of
-from dronewrapper_bridge_mavlink.telemetry import non_finite_field
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core_view import BridgeCore
+from dronewrapper_bridge_mavlink.command_exchange import Commands
+from dronewrapper_bridge_mavlink.config import Config
+from dronewrapper_bridge_mavlink.freshness import Freshness, boot_ms_of
+from dronewrapper_bridge_mavlink.parameters import HasParameters
+from dronewrapper_bridge_mavlink.sources import AutopilotSources
+from dronewrapper_bridge_mavlink.streams import StreamRequests
+from dronewrapper_bridge_mavlink.telemetry import StatusTextAssembler, Telemetry, non_finite_field
 
 log = logging.getLogger("bridge_mavlink")
+
+
+class AdmissionPort(Clock, Protocol):
+    """What :func:`admission` reads of the core besides its time: the autopilot's system id
+    (0 before it is heard), the senders seen and the freshness of each sender's messages."""
+
+    target_system: int
+    sources: AutopilotSources
+    freshness: Freshness
+
+
+class ReceivePort(Stamped, Publishing, HasParameters, Protocol):
+    """What the telemetry handlers use of the core besides its time, its samples and its
+    parameters: the config (our own address), the parts fed (telemetry, stream requests,
+    status texts, commands) and a status text to publish."""
+
+    config: Config
+    telemetry: Telemetry
+    streams: StreamRequests
+    statustexts: StatusTextAssembler
+    commands: Commands
+
+    def publish_text(self, text: StatusTextMsg) -> None: ...
+
+
+class BatchPort(Protocol):
+    """What :func:`on_batch` calls of the core: one message's handling, a dropped one's count."""
+
+    def on_mavlink(self, msg: Any, source: Any, now: float, stamp: float) -> None: ...
+    def dropped(self, what: str) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -38,7 +74,7 @@ class Admission:
     error: str = ""
 
 
-def admission(core: BridgeCore, msg: Any, kind: str, source: Any) -> Admission:
+def admission(core: AdmissionPort, msg: Any, kind: str, source: Any) -> Admission:
     """Drop a message from a second autopilot with the same system id, a duplicated datagram,
     one older than what was already used (seq / time_boot_ms), or one with a non-finite
     field."""
@@ -69,32 +105,32 @@ def admission(core: BridgeCore, msg: Any, kind: str, source: Any) -> Admission:
     return Admission(True, verdict.flag, peer)
 
 
-def on_attitude(core: BridgeCore, msg: Any) -> None:
+def on_attitude(core: ReceivePort, msg: Any) -> None:
     core.telemetry.on_attitude(msg)
 
 
-def on_attitude_quaternion(core: BridgeCore, msg: Any) -> None:
+def on_attitude_quaternion(core: ReceivePort, msg: Any) -> None:
     core.telemetry.on_attitude_quaternion(msg)
     core.streams.on_quaternion(core.now)
 
 
-def on_local_position_ned(core: BridgeCore, msg: Any) -> None:
+def on_local_position_ned(core: ReceivePort, msg: Any) -> None:
     pose, local, body = core.telemetry.on_local_position(msg, core.stamp)
     core.publish(registry.LOCAL_POSE, pose)
     core.publish(registry.VELOCITY_LOCAL, local)
     core.publish(registry.VELOCITY_BODY, body)
 
 
-def on_gps_raw_int(core: BridgeCore, msg: Any) -> None:
+def on_gps_raw_int(core: ReceivePort, msg: Any) -> None:
     core.telemetry.on_gps_raw(msg)
 
 
-def on_statustext(core: BridgeCore, msg: Any) -> None:
+def on_statustext(core: ReceivePort, msg: Any) -> None:
     for text in core.statustexts.add(msg, core.stamp, core.now):
         core.publish_text(text)
 
 
-def on_command_ack(core: BridgeCore, msg: Any) -> None:
+def on_command_ack(core: ReceivePort, msg: Any) -> None:
     target = (getattr(msg, "target_system", 0), getattr(msg, "target_component", 0))
     ours = (core.config.source_system, core.config.source_component)
     if target != (0, 0) and target != ours:
@@ -108,11 +144,11 @@ def on_command_ack(core: BridgeCore, msg: Any) -> None:
     )
 
 
-def on_param_value(core: BridgeCore, msg: Any) -> None:
+def on_param_value(core: ReceivePort, msg: Any) -> None:
     core.parameters.on_value(msg)
 
 
-def on_batch(core: BridgeCore, batch: Sequence[Any], now: float, stamp: float) -> None:
+def on_batch(core: BatchPort, batch: Sequence[Any], now: float, stamp: float) -> None:
     """Every message one wake-up of the receive thread read (each with ``msg`` and its
     ``source``), in order, at one time (they arrived together): one call of the core for all
     of them. A message whose handling raises is logged and counted (``mavlink``); the others
@@ -125,7 +161,7 @@ def on_batch(core: BridgeCore, batch: Sequence[Any], now: float, stamp: float) -
             log.exception("error handling %s", type(received.msg).__name__)
 
 
-HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
+HANDLERS: dict[str, Callable[[ReceivePort, Any], None]] = {
     "ATTITUDE": on_attitude,
     "ATTITUDE_QUATERNION": on_attitude_quaternion,
     "LOCAL_POSITION_NED": on_local_position_ned,
@@ -134,4 +170,3 @@ HANDLERS: dict[str, Callable[[BridgeCore, Any], None]] = {
     "COMMAND_ACK": on_command_ack,
     "PARAM_VALUE": on_param_value,
 }
-HANDLERS.update(missions.HANDLERS)  # the mission protocol, home (missions.py)

@@ -1,6 +1,7 @@
 """The lists the bridge uploads besides the mission: the autopilot's fence (from the envelope)
-and its rally points (pure, over the core's :class:`~dronewrapper_bridge_mavlink.transfers.
-Transfers`).
+and its rally points (pure, over two parts the core owns: its
+:class:`~dronewrapper_bridge_mavlink.transfers.Transfers` and its
+:class:`~dronewrapper_bridge_mavlink.mission_state.MissionState`).
 
 :func:`item_of` and :func:`waypoint_of` convert between the bus's Waypoint and
 MISSION_ITEM_INT content. :func:`push_fence` uploads the envelope as MAV_MISSION_TYPE_FENCE
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -23,9 +24,8 @@ from dronewrapper.msgs.mission import MissionResult, Waypoint, WaypointClear
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import mission_transfer as mt
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_mavlink.core_view import BridgeCore
+from dronewrapper_bridge_mavlink.mission_state import MissionState
+from dronewrapper_bridge_mavlink.transfers import Transfers
 
 log = logging.getLogger("bridge_mavlink")
 
@@ -33,6 +33,16 @@ FENCE_BACKUP_M = 5.0  # m the autopilot's fence circle lies beyond the bridge's 
 FENCE_INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
 FENCE_EXCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION
 FENCE_CIRCLE = mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION
+
+
+class UploadPort(Protocol):
+    """What an upload uses of the core: whether the autopilot is heard, its mission state
+    (envelope, home, rally points) and its transfers."""
+
+    missions: MissionState
+    transfers: Transfers
+
+    def require_connected(self) -> str: ...
 
 
 ALIKE = ("frame", "command", "param1", "param2", "param3", "param4")
@@ -95,13 +105,14 @@ def fence_items(envelope: Envelope, home: tuple[float, float, float]) -> list[mt
     return items
 
 
-def push_fence(core: BridgeCore, _request: WaypointClear) -> Steps:
+def push_fence(core: UploadPort, _request: WaypointClear) -> Steps:
     """geofence/push: upload the envelope's fence to the autopilot (MAV_MISSION_TYPE_FENCE),
     so it holds even if this bridge stops."""
     core.require_connected()
-    if core.missions.home_geo is None:
+    state = core.missions
+    if state.home_geo is None:
         raise ServiceError("home is not known yet: the fence cannot be placed", "refused")
-    items = fence_items(core.missions.envelope, core.missions.home_geo)
+    items = fence_items(state.envelope, state.home_geo)
     upload = yield from core.transfers.upload(items, mission_type=mt.FENCE)
     if upload.error:
         log.warning("fence upload: %s", upload.error)
@@ -109,21 +120,24 @@ def push_fence(core: BridgeCore, _request: WaypointClear) -> Steps:
     return MissionResult(success=not upload.error, message=message)
 
 
-def push_rally(core: BridgeCore, rally: list[Waypoint]) -> Generator[float, None, str]:
-    """Upload ``rally`` (checked, in a global frame) as the autopilot's rally points
-    (MAV_MISSION_TYPE_RALLY, no home item on any autopilot; ``[]`` clears them); on success
-    they are ``core.missions.rally``. Returns the error, "" on success."""
+def push_rally(
+    transfers: Transfers, state: MissionState, rally: list[Waypoint]
+) -> Generator[float, None, str]:
+    """Upload ``rally`` (checked, in a global frame) by ``transfers`` as the autopilot's rally
+    points (MAV_MISSION_TYPE_RALLY, no home item on any autopilot; ``[]`` clears them); on
+    success they are ``state.rally``. Returns the error, "" on success."""
     items = [item_of(wp) for wp in rally]
-    upload = yield from core.transfers.upload(items, mission_type=mt.RALLY)
+    upload = yield from transfers.upload(items, mission_type=mt.RALLY)
     if upload.error:
         log.warning("rally upload: %s", upload.error)
         return f"the mission was uploaded, its rally points were not: {upload.error}"
-    core.missions.rally = rally
+    state.rally = rally
     return ""
 
 
 __all__ = [
     "FENCE_BACKUP_M",
+    "UploadPort",
     "fence_items",
     "item_of",
     "push_fence",

@@ -15,7 +15,8 @@ A go-to or return whose request names its commander's process (``watch``) is wat
 returns or lands as for a lost commander.
 
 Heights and points in metres (local ENU), time the core's (monotonic s). The request checks
-and result shapes are those of bridge_mavlink's ``flight`` and ``actions``.
+and result shapes are those of bridge_mavlink's ``flight`` and ``actions``. The core is seen as
+:class:`FlightPort` shows it.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Generator
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 from dronewrapper.msgs.flight import (
     NO_POSITION,
@@ -60,16 +61,27 @@ from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import operations as ops
 from dronewrapper_bridge_px4_zenoh import watch
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_px4_zenoh.core import Px4ZenohCore
-
 log = logging.getLogger("bridge_px4_zenoh")
 NOT_CONNECTED = "PX4 is not connected (no sample on its Zenoh keys)"
 MAX_HEIGHT_M = 1000.0
 MAX_TIMEOUT_S = 600.0
 
 
-def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
+class FlightPort(ops.OperationPort, watch.WatchPort, Protocol):
+    """What the flight operations use of the core besides the operations they run
+    (:class:`~.operations.OperationPort`), the watch (:class:`~.watch.WatchPort`) and a
+    return's wait: whether PX4 is heard, its latest vehicle_status (None before any), the
+    local position (ENU m) and yaw (ENU rad), the bridge's own hold where it is."""
+
+    connected: bool
+    status: dict[str, Any] | None
+    position_enu: tuple[float, float, float] | None
+    yaw_enu: float
+
+    def hold_here(self) -> None: ...
+
+
+def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
     height, timeout, tolerance = takeoff_request(
         request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
@@ -113,7 +125,7 @@ def takeoff_to(core: Px4ZenohCore, request: TakeoffRequest) -> Steps:
 
 
 def wait_at(
-    core: Px4ZenohCore,
+    core: FlightPort,
     target: tuple[float, float, float],
     tolerance: float,
     deadline: float,
@@ -146,7 +158,7 @@ def wait_at(
         yield deadline
 
 
-def land_here(core: Px4ZenohCore, request: LandRequest) -> Steps:
+def land_here(core: FlightPort, request: LandRequest) -> Steps:
     """Land where the aircraft is; done once on the ground and disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
@@ -161,7 +173,7 @@ def land_here(core: Px4ZenohCore, request: LandRequest) -> Steps:
     return (yield from wait_landed(core, deadline, timeout))
 
 
-def wait_landed(core: Px4ZenohCore, deadline: float, timeout: float) -> Steps:
+def wait_landed(core: FlightPort, deadline: float, timeout: float) -> Steps:
     while not landed(core):
         if core.now >= deadline:
             return failed(TOO_LATE, f"not on the ground and disarmed after {timeout:g} s")
@@ -169,7 +181,7 @@ def wait_landed(core: Px4ZenohCore, deadline: float, timeout: float) -> Steps:
     return FlightResult(success=True, message="on the ground and disarmed")
 
 
-def goto_point(core: Px4ZenohCore, request: GotoRequest) -> Steps:
+def goto_point(core: FlightPort, request: GotoRequest) -> Steps:
     """Fly to the point and hold there (see module docstring)."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     tolerance = checked("tolerance", request.tolerance, 0.0, 100.0)
@@ -199,7 +211,7 @@ def goto_point(core: Px4ZenohCore, request: GotoRequest) -> Steps:
     return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
 
 
-def return_home(core: Px4ZenohCore, request: ReturnRequest) -> Steps:
+def return_home(core: FlightPort, request: ReturnRequest) -> Steps:
     """PX4's return (RTL); done on the ground, disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:

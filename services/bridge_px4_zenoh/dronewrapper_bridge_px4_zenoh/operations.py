@@ -8,15 +8,16 @@ time): with PX4's MAVLink link busy beside it, PX4's zenoh module was measured t
 ack for some commands it carried out. A mode is asked for with
 ``VEHICLE_CMD_SET_NAV_STATE``; an accepted one must show in vehicle_status within
 ``mode_confirm_timeout``. OFFBOARD is asked for only after > ``offboard_prime_s`` of
-streaming (PX4 refuses it without a setpoint stream).
+streaming (PX4 refuses it without a setpoint stream). The core is seen as :class:`CommandPort`
+(a command's exchange) and :class:`OperationPort` (the operations) show it.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Generator
-from typing import Any
+from collections.abc import Callable, Generator, Sequence
+from typing import Any, Protocol
 
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
@@ -26,18 +27,23 @@ from dronewrapper.msgs.mavros import (
     CommandTOLResult,
     SetMode,
     SetModeResult,
+    State,
 )
+from dronewrapper_bridge_base.core_view import CommandSlot
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
-from dronewrapper_bridge_base.guided_flight import failsafe_request, mode_command
-from dronewrapper_bridge_base.offboard_prime import prime
+from dronewrapper_bridge_base.guided_flight import (
+    Grounded,
+    ModeCore,
+    failsafe_request,
+    mode_command,
+)
+from dronewrapper_bridge_base.offboard_prime import PrimingCore, prime
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
 from dronewrapper_bridge_px4_zenoh import topics as t
+from dronewrapper_bridge_px4_zenoh.config import Config
 from dronewrapper_bridge_px4_zenoh.modes import mode_name, nav_state_of
-
-Px4ZenohCore = Any
-"""The core (core.py imports this module, so the type is not imported here)."""
 
 log = logging.getLogger("bridge_px4_zenoh")
 
@@ -53,8 +59,37 @@ NAMES = {
 }
 
 
+class Heard(Protocol):
+    """PX4 as its last vehicle_status showed it (State; None before any)."""
+
+    heartbeat_state: State | None
+
+
+class CommandPort(Heard, CommandSlot, ModeCore, Protocol):
+    """What a vehicle command's exchange uses of the core besides its time, PX4 as heard,
+    the one command slot, the failsafe and the mode accepted: the config (attempts, ack
+    timeout), the writes to PX4, the acks heard (when, command, result; newest last), PX4's
+    address (0 until vehicle_status names it)."""
+
+    config: Config
+    target_system: int
+    target_component: int
+
+    @property
+    def acks(self) -> Sequence[tuple[float, int, int]]: ...
+
+    def write(self, topic: t.Px4Topic, value: dict[str, Any]) -> None: ...
+
+
+class OperationPort(CommandPort, PrimingCore, Grounded, rules.Enveloped, Protocol):
+    """What the operations use of the core besides a command's exchange: priming, the
+    landed state, the envelope's refusals, and whether PX4 is heard."""
+
+    def require_connected(self) -> str: ...
+
+
 def command(
-    core: Px4ZenohCore, value: dict, shown: Callable[[], bool] | None = None
+    core: CommandPort, value: dict, shown: Callable[[], bool] | None = None
 ) -> Generator[float, None, tuple[int, str]]:
     """Write a VehicleCommand and wait for its ack: (result, explanation); ``NO_ACK`` when
     none came after every attempt. ``shown``: True once vehicle_status shows the command's
@@ -86,7 +121,7 @@ def command(
         core.release_command_slot()
 
 
-def target(core: Px4ZenohCore) -> dict[str, int]:
+def target(core: CommandPort) -> dict[str, int]:
     """The system and component a vehicle command is for: PX4's own (its vehicle_status's,
     unless configured); 1, 1 before it is known."""
     return {
@@ -95,7 +130,7 @@ def target(core: Px4ZenohCore) -> dict[str, int]:
     }
 
 
-def arming(core: Px4ZenohCore, request: CommandBool) -> Steps:
+def arming(core: OperationPort, request: CommandBool) -> Steps:
     """ARMING: VEHICLE_CMD_COMPONENT_ARM_DISARM; the reply carries PX4's ack."""
     core.require_connected()
     value = bool(request.value)
@@ -105,7 +140,7 @@ def arming(core: Px4ZenohCore, request: CommandBool) -> Steps:
     return CommandBoolResult(success=result == ACCEPTED, result=max(result, 0), message=message)
 
 
-def takeoff(core: Px4ZenohCore, request: CommandTOL) -> Steps:
+def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
     """TAKEOFF: VEHICLE_CMD_NAV_TAKEOFF to ``altitude`` m above PX4's local origin (NaN: PX4's
     MIS_TAKEOFF_ALT); while flying it does nothing."""
     core.require_connected()
@@ -135,7 +170,7 @@ def takeoff(core: Px4ZenohCore, request: CommandTOL) -> Steps:
     return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
 
 
-def land(core: Px4ZenohCore, request: CommandTOL) -> Steps:
+def land(core: OperationPort, request: CommandTOL) -> Steps:
     """LAND: VEHICLE_CMD_NAV_LAND here (NaN latitude/longitude: where it is)."""
     core.require_connected()
     lat, lon = land_point(request.latitude, request.longitude)
@@ -147,7 +182,7 @@ def land(core: Px4ZenohCore, request: CommandTOL) -> Steps:
     return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
 
 
-def failsafe_action(core: Px4ZenohCore, action: str) -> Steps:
+def failsafe_action(core: CommandPort, action: str) -> Steps:
     """The failsafe's own request (``land`` or ``return``); nobody waits for it."""
     mode = LAND_MODE if action == "land" else RETURN_MODE
     nan = math.nan
@@ -160,7 +195,7 @@ def failsafe_action(core: Px4ZenohCore, action: str) -> Steps:
     return (yield from failsafe_request(core, action, mode, sent, "PX4", log))
 
 
-def set_mode(core: Px4ZenohCore, request: SetMode) -> Steps:
+def set_mode(core: OperationPort, request: SetMode) -> Steps:
     """SET_MODE by MAVROS name (OFFBOARD, AUTO.LOITER ...); replies once PX4 shows the mode
     in vehicle_status, or refused it. OFFBOARD is preceded by priming."""
     core.require_connected()
@@ -192,17 +227,17 @@ def set_mode(core: Px4ZenohCore, request: SetMode) -> Steps:
     return SetModeResult(mode_sent=result == ACCEPTED, result=max(result, 0), message=message)
 
 
-def armed(core: Px4ZenohCore) -> bool:
+def armed(core: Heard) -> bool:
     """Whether PX4's last vehicle_status showed it armed."""
     return core.heartbeat_state is not None and core.heartbeat_state.armed
 
 
-def shown_mode(core: Px4ZenohCore) -> str:
+def shown_mode(core: Heard) -> str:
     """The mode PX4's last vehicle_status showed, "" before any."""
     return core.heartbeat_state.mode if core.heartbeat_state else ""
 
 
-def breach_action(core: Px4ZenohCore, action: str) -> Steps:
+def breach_action(core: OperationPort, action: str) -> Steps:
     """The envelope's action after a breach: ``land`` or ``return`` (the failsafe's own
     requests), or ``hold`` (AUTO.LOITER)."""
     if action in ("land", "return"):

@@ -15,23 +15,33 @@ setpoint (a commander steering), a new action or a disarm ends the watch.
 from __future__ import annotations
 
 import logging
-from typing import Any
+from collections.abc import Callable
+from typing import Protocol
 
+from dronewrapper_bridge_base.core_view import Clock
+from dronewrapper_bridge_base.unattended import Unattended
 from dronewrapper_bridge_px4_zenoh import operations as ops
 
-Px4ZenohCore = Any
-"""The core (core.py imports this module, so the type is not imported here)."""
+
+class WatchPort(ops.Heard, Clock, Protocol):
+    """What the watch uses of the core besides its time and PX4's mode as heard: the
+    unattended rule and its tick."""
+
+    unattended: Unattended
+
+    def unattended_tick(self, holding: Callable[[], bool]) -> None: ...
+
 
 log = logging.getLogger("bridge_px4_zenoh")
 
 
-def start(core: Px4ZenohCore, what: str, key: str) -> None:
+def start(core: WatchPort, what: str, key: str) -> None:
     """The ``what`` ("goto", "return") started now is watched for its commander's ``key``."""
     core.unattended.start(what, key, core.now)
     log.info("%s: its commander's process %s", what, f"is {key}" if key else "is not known")
 
 
-def tick(core: Px4ZenohCore) -> None:
+def tick(core: WatchPort) -> None:
     """Take the unattended action when its time has come (once): PX4's return or landing,
     the bridge's hold let go."""
     core.unattended_tick(lambda: ops.shown_mode(core) == ops.HOLD_MODE)

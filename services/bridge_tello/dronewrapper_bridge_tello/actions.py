@@ -13,7 +13,7 @@ are refused on the ground; while the bridge flies them no commander steers, so n
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from dronewrapper import envelope as env
 from dronewrapper.envelope import EnvelopeError
@@ -34,11 +34,15 @@ from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello.flight import MAX_TIMEOUT_S, checked, failed
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core import TelloCore
+
+class ActionPort(missions.MissionPort, Protocol):
+    """What go-to, return and a mission's start use of the core besides the mission side's
+    (:class:`~.missions.MissionPort`): whether the Tello is connected."""
+
+    connected: bool
 
 
-def _ready(core: TelloCore, what: str) -> FlightResult | None:
+def _ready(core: ActionPort, what: str) -> FlightResult | None:
     if not core.connected:
         return failed(NOT_READY, "the Tello is not connected (no state string)")
     if core.telemetry.landed.state != LANDED_STATE_IN_AIR:
@@ -47,7 +51,7 @@ def _ready(core: TelloCore, what: str) -> FlightResult | None:
     return None
 
 
-def goto_point(core: TelloCore, request: GotoRequest) -> Steps:
+def goto_point(core: ActionPort, request: GotoRequest) -> Steps:
     """Fly to (x, y, z) m from the take-off point with ``go`` moves."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     checked("tolerance", request.tolerance, 0.0, 100.0)
@@ -73,7 +77,7 @@ def goto_point(core: TelloCore, request: GotoRequest) -> Steps:
     return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
 
 
-def return_home(core: TelloCore, request: ReturnRequest) -> Steps:
+def return_home(core: ActionPort, request: ReturnRequest) -> Steps:
     """Fly home at the current height and land; done on the ground."""
     checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     refusal = _ready(core, "return")
@@ -86,7 +90,7 @@ def return_home(core: TelloCore, request: ReturnRequest) -> Steps:
     return FlightResult(success=True, message="returned: on the ground")
 
 
-def mission_action(core: TelloCore, request: MissionRequest) -> Steps:
+def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
     """Start or resume the mission's moves (in the background), or pause after the current
     move; the control's refusals as a failure."""
     checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)

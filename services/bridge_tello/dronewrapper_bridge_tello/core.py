@@ -35,9 +35,9 @@ from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 from dronewrapper_bridge_tello.config import Config
-from dronewrapper_bridge_tello.core_view import Outbox
 from dronewrapper_bridge_tello.failsafe import LAND, Failsafe, Tick
 from dronewrapper_bridge_tello.mission_state import TelloMissions
+from dronewrapper_bridge_tello.outbox import Outbox
 from dronewrapper_bridge_tello.replies import ReplyMatcher, is_ok
 from dronewrapper_bridge_tello.state import StateError, parse_state
 from dronewrapper_bridge_tello.sticks import (
@@ -108,6 +108,10 @@ class TelloCore(PureCore):
     def streaming(self) -> bool:
         """True once the Tello has accepted ``streamon`` (and no ``streamoff`` since)."""
         return self.video.streaming is True
+
+    def restart_video(self) -> None:
+        """A ``streamon`` is sent: the video receiver starts a new run (the outbox says it)."""
+        self.out.video_restart = True
 
     def video_answered(self, command: str, reply: str | None) -> None:
         """The Tello's reply (None: none came) to ``streamon``/``streamoff``."""

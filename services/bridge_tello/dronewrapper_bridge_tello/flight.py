@@ -13,7 +13,7 @@ core's (monotonic s): a step that ends after the request's ``timeout`` makes it 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from dronewrapper.msgs.flight import (
     NOT_READY,
@@ -30,18 +30,23 @@ from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_tello import missions
 from dronewrapper_bridge_tello import operations as ops
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core import TelloCore
+
+class FlightPort(ops.OperationPort, Protocol):
+    """What take-off and landing use of the core besides the operations they run
+    (:class:`~.operations.OperationPort`): whether the Tello is connected."""
+
+    connected: bool
+
 
 MAX_HEIGHT_M = 30.0
 MAX_TIMEOUT_S = 600.0
 
 
-def height_now(core: TelloCore) -> float:
+def height_now(core: FlightPort) -> float:
     return (core.telemetry.position_enu or (math.nan,) * 3)[2]
 
 
-def takeoff_to(core: TelloCore, request: TakeoffRequest) -> Steps:
+def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
     height = checked("height", request.height, 0.0, MAX_HEIGHT_M)
     deadline = core.now + checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
@@ -54,7 +59,7 @@ def takeoff_to(core: TelloCore, request: TakeoffRequest) -> Steps:
             "setpoint changes the altitude",
         )
     try:  # above the safety envelope: refused, the limit named
-        missions.refuse_takeoff(core, height)
+        missions.refuse_takeoff(core.missions.envelope, height)
     except ServiceError as exc:
         return failed(REFUSED, exc.message, "takeoff")
     reply = yield from ops.takeoff(core, CommandTOL.takeoff())
@@ -69,7 +74,7 @@ def takeoff_to(core: TelloCore, request: TakeoffRequest) -> Steps:
     return FlightResult(success=True, message=f"took off: {message}", height=z)
 
 
-def land_here(core: TelloCore, request: LandRequest) -> Steps:
+def land_here(core: FlightPort, request: LandRequest) -> Steps:
     """``land`` here; done once the Tello says it is on the ground."""
     checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:

@@ -1,4 +1,5 @@
-"""The safety envelope and missions on the Tello (pure, over the core).
+"""The safety envelope and missions on the Tello (pure, over the core as :class:`MissionPort`
+shows it; a setpoint's check over :class:`Refusing`).
 
 Home is the take-off point (the Tello has no GPS; the bridge's position is dead-reckoned from
 the take-off, x and y drifting by some decimetres a minute), so the envelope (ENU m in the home
@@ -22,10 +23,10 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from dronewrapper import envelope as env
-from dronewrapper.envelope import EnvelopeError
+from dronewrapper.envelope import Envelope, EnvelopeError
 from dronewrapper.msgs import registry
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, PositionTarget
 from dronewrapper.msgs.mission import (
@@ -34,7 +35,6 @@ from dronewrapper.msgs.mission import (
     MissionControl,
     MissionResult,
     WaypointClear,
-    WaypointList,
     WaypointPush,
     WaypointPushResult,
     WaypointReached,
@@ -42,19 +42,35 @@ from dronewrapper.msgs.mission import (
 from dronewrapper.msgs.std import Header
 from dronewrapper.runtime import ServiceError
 from dronewrapper_bridge_base import envelope_set
+from dronewrapper_bridge_base.core_view import Clock, Serving
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_base.setpoint_limits import Kind
 from dronewrapper_bridge_tello import operations as ops
-
-if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core_view import TelloCore
+from dronewrapper_bridge_tello.mission_state import TelloMissions
 
 log = logging.getLogger("bridge_tello")
+
+
+class Refusing(Clock, Protocol):
+    """What a setpoint's check uses of the core besides its time: the mission state
+    (envelope, the last refusal's text) and a text to publish."""
+
+    missions: TelloMissions
+
+    def text(self, severity: int, text: str) -> None: ...
+
+
+class MissionPort(ops.OperationPort, Refusing, Serving, Protocol):
+    """What the envelope's watch, the mission services and their flights use of the core
+    besides the operations they run (:class:`~.operations.OperationPort`) and a service
+    operation's (time, samples, background operations, the caller): a breach's report."""
+
+    def report_breach(self, limit: str, reason: str, action: str) -> None: ...
+
 
 FRAME_LOCAL_ENU = 4
 MAX_MOVE_CM = 500
 MIN_MOVE_CM = 20  # go refuses a move with all three axes within ±20 cm
-PUBLISH_PERIOD_S = 2.0
 REFUSAL_TEXT_PERIOD_S = 2.0
 MOVE_SPEED_CM_S = 50  # go's speed, cm/s
 MOVE_TIMEOUT_S = 15.0  # s for one move's "ok" (5 m at 50 cm/s and its settling)
@@ -81,7 +97,7 @@ def go_moves(east: float, north: float, up: float, yaw_enu: float) -> list[tuple
 # ---------------------------------------------------------------- hooks the core calls
 
 
-def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
+def refuse_setpoint(core: Refusing, target: PositionTarget, kind: Kind) -> EnvelopeError | None:
     """Why the envelope refuses ``target`` (the limit named), or None."""
     state = core.missions
     try:
@@ -103,14 +119,15 @@ def refuse_setpoint(core: TelloCore, target: PositionTarget, kind: Kind) -> Enve
     return None
 
 
-def refuse_takeoff(core: TelloCore, height: float) -> None:
+def refuse_takeoff(envelope: Envelope, height: float) -> None:
+    """A take-off to ``height`` m above ``envelope``'s ceiling: ServiceError naming it."""
     try:
-        env.check_takeoff(core.missions.envelope, height)
+        env.check_takeoff(envelope, height)
     except EnvelopeError as exc:
         raise ServiceError(str(exc), "refused") from None
 
 
-def tick(core: TelloCore) -> None:
+def tick(core: MissionPort) -> None:
     """Each control tick: act on a breach; publish envelope, home and mission periodically."""
     state = core.missions
     position = core.telemetry.position_enu
@@ -124,32 +141,27 @@ def tick(core: TelloCore) -> None:
             core.report_breach(state.monitor.limit, reason, "hold" if action == "hold" else "land")
             state.paused = True
             core.start(breach_action(core, action), core.now, core.stamp, background=True)
-    if core.now >= state._next_publish:
-        state._next_publish = core.now + PUBLISH_PERIOD_S
+    if state.publish_due(core.now):
         core.publish(registry.ENVELOPE, state.envelope)
         core.publish(registry.HOME_POSITION, HomePosition(header=Header(stamp=core.stamp)))
         publish_waypoints(core)
 
 
-def breach_action(core: TelloCore, action: str) -> Steps:
+def breach_action(core: MissionPort, action: str) -> Steps:
     if action == "hold":
         reply = yield from ops.exchange(core, "stop")
         return reply
     return (yield from ops.failsafe_land(core))
 
 
-def publish_waypoints(core: TelloCore) -> None:
-    state = core.missions
-    listing = WaypointList(
-        header=Header(stamp=core.stamp), current_seq=state.current_seq, waypoints=state.waypoints
-    )
-    core.publish(registry.MISSION_WAYPOINTS, listing)
+def publish_waypoints(core: MissionPort) -> None:
+    core.publish(registry.MISSION_WAYPOINTS, core.missions.listing(core.stamp))
 
 
 # ---------------------------------------------------------------- services
 
 
-def push(core: TelloCore, request: WaypointPush) -> Steps:
+def push(core: MissionPort, request: WaypointPush) -> Steps:
     """mission/push: local waypoints only, each inside the envelope; no rally points (the
     Tello's return flies home)."""
     if request.rally:
@@ -170,34 +182,33 @@ def push(core: TelloCore, request: WaypointPush) -> Steps:
         except EnvelopeError as exc:
             raise ServiceError(f"mission item {seq}: {exc}", "refused") from None
     state = core.missions
-    if state.running is not None and not state.running.done:
+    if state.flying:
         raise ServiceError("a mission is being flown: pause it first", "refused")
-    state.waypoints = list(request.waypoints)
-    state.current_seq = 0
+    state.kept(request.waypoints)
     publish_waypoints(core)
     yield from ()
     count = len(state.waypoints)
     return WaypointPushResult(success=True, wp_transfered=count, message=f"{count} item(s) kept")
 
 
-def clear(core: TelloCore, _request: WaypointClear) -> Steps:
+def clear(core: MissionPort, _request: WaypointClear) -> Steps:
     state = core.missions
-    if state.running is not None and not state.running.done:
+    if state.flying:
         raise ServiceError("a mission is being flown: pause it first", "refused")
-    state.waypoints, state.current_seq = [], 0
+    state.kept([])
     publish_waypoints(core)
     yield from ()
     return MissionResult(success=True, message="cleared")
 
 
-def control(core: TelloCore, request: MissionControl) -> Steps:
+def control(core: MissionPort, request: MissionControl) -> Steps:
     """start (from the current item), pause (after the current move) or return (fly home at
     the current height, then land)."""
     core.require_connected()
     state = core.missions
     if core.telemetry.landed.state != LANDED_STATE_IN_AIR:
         raise ServiceError("the Tello is not flying: take off first", "refused")
-    flying = state.running is not None and not state.running.done
+    flying = state.flying
     if request.action == "pause":
         if not flying:
             raise ServiceError("pause refused: no mission is being flown", "refused")
@@ -222,7 +233,7 @@ def control(core: TelloCore, request: MissionControl) -> Steps:
     return MissionResult(success=True, message=f"{request.action}: flying")
 
 
-def fly_to(core: TelloCore, target: tuple[float, float, float]) -> Steps:
+def fly_to(core: MissionPort, target: tuple[float, float, float]) -> Steps:
     """Fly to ``target`` (ENU m from home) with go moves; False when paused or refused."""
     position = core.telemetry.position_enu or (0.0, 0.0, 0.0)
     east, north, up = (t - p for t, p in zip(target, position, strict=True))
@@ -237,7 +248,7 @@ def fly_to(core: TelloCore, target: tuple[float, float, float]) -> Steps:
     return True
 
 
-def fly_mission(core: TelloCore) -> Steps:
+def fly_mission(core: MissionPort) -> Steps:
     state = core.missions
     while state.current_seq < len(state.waypoints) and not state.paused:
         wp = state.waypoints[state.current_seq]
@@ -253,7 +264,7 @@ def fly_mission(core: TelloCore) -> Steps:
     return True
 
 
-def fly_home(core: TelloCore) -> Steps:
+def fly_home(core: MissionPort) -> Steps:
     z = (core.telemetry.position_enu or (0.0, 0.0, 1.0))[2]
     arrived = yield from fly_to(core, (0.0, 0.0, z))
     if arrived:
@@ -261,7 +272,7 @@ def fly_home(core: TelloCore) -> Steps:
     return arrived
 
 
-def set_envelope(core: TelloCore, request: EnvelopeSet) -> Steps:
+def set_envelope(core: MissionPort, request: EnvelopeSet) -> Steps:
     """envelope/set: replace or reset the envelope, or read it
     (:mod:`dronewrapper_bridge_base.envelope_set`; home is the take-off point)."""
     state = core.missions

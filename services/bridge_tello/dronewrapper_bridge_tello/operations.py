@@ -1,6 +1,6 @@
 """Service calls that wait for the Tello, as pure operations the core advances.
 
-Each operation is a generator over a :class:`~dronewrapper_bridge_tello.core_view.TelloCore`: it
+Each operation is a generator over the core as :class:`OperationPort` shows it: it
 reads ``core.now`` (set by the caller of every core entry point), queues SDK commands on the
 core, and yields the time (monotonic s) it wants to be resumed at the latest; the core resumes
 it whenever a reply, a state string or a tick arrives, so every wait is a loop that re-checks
@@ -22,7 +22,7 @@ import logging
 import math
 import re
 from collections.abc import Generator
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from dronewrapper.envelope import EnvelopeError, check_takeoff
 from dronewrapper.msgs.mavros import (
@@ -41,14 +41,43 @@ from dronewrapper.msgs.mavros import (
     SetModeResult,
 )
 from dronewrapper.runtime import ServiceError
+from dronewrapper_bridge_base.core_view import Clock, CommandSlot
 from dronewrapper_bridge_base.operation import Steps
-from dronewrapper_bridge_tello.replies import Pending, is_ok
+from dronewrapper_bridge_tello.config import Config
+from dronewrapper_bridge_tello.failsafe import Failsafe
+from dronewrapper_bridge_tello.mission_state import TelloMissions
+from dronewrapper_bridge_tello.replies import Pending, ReplyMatcher, is_ok
+from dronewrapper_bridge_tello.telemetry import Telemetry
 from dronewrapper_bridge_tello.video_demand import STREAMON
 
-if TYPE_CHECKING:
-    from dronewrapper_bridge_tello.core_view import TelloCore
-
 log = logging.getLogger("bridge_tello")
+
+
+class Exchanging(Clock, CommandSlot, Protocol):
+    """What :func:`exchange` uses of the core besides its time and the one command slot: the
+    config (timeouts, attempts), the replies' matcher and the SDK command's send."""
+
+    config: Config
+    matcher: ReplyMatcher
+
+    def send(self, text: str) -> None: ...
+
+
+class OperationPort(Exchanging, Protocol):
+    """What the operations here use of the core besides :class:`Exchanging`: the state
+    strings heard (their count, the telemetry), the failsafe, the envelope (the mission
+    state), the SDK mode and video replies, the State published."""
+
+    states_received: int
+    failsafe: Failsafe
+    missions: TelloMissions
+    telemetry: Telemetry
+
+    def require_connected(self) -> None: ...
+    def publish_state(self, *, force: bool = False) -> None: ...
+    def in_sdk_mode(self) -> None: ...
+    def restart_video(self) -> None: ...
+    def video_answered(self, command: str, reply: str | None) -> None: ...
 
 
 MAV_RESULT_ACCEPTED = 0
@@ -81,7 +110,7 @@ _NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
 
 
 def exchange(
-    core: TelloCore, text: str, *, timeout: float = 0.0, attempts: int = 0
+    core: Exchanging, text: str, *, timeout: float = 0.0, attempts: int = 0
 ) -> Generator[float, None, str | None]:
     """Send ``text`` and wait for its reply, re-sending it after ``timeout`` s (default
     ``command_timeout``) up to ``attempts`` times (default ``command_attempts``); the reply,
@@ -127,7 +156,7 @@ def result_of(reply: str | None, what: str) -> tuple[int, str]:
     return MAV_RESULT_DENIED, f"{what} refused by the Tello: {reply}"
 
 
-def connect(core: TelloCore) -> Steps:
+def connect(core: OperationPort) -> Steps:
     """``command`` until ``ok`` (SDK mode; the bridge's own). The video follows on the next
     tick (video_demand.py)."""
     reply = yield from exchange(core, "command", attempts=1)
@@ -138,18 +167,18 @@ def connect(core: TelloCore) -> Steps:
     return True
 
 
-def switch_video(core: TelloCore, command: str) -> Steps:
+def switch_video(core: OperationPort, command: str) -> Steps:
     """``streamon`` or ``streamoff``, tried once (video_demand.py spaces and bounds the tries,
     so the command slot is free for flight commands in between). Before a ``streamon`` the
     video receiver is told to start afresh, so the new stream's first datagram finds it empty."""
     if command == STREAMON:
-        core.out.video_restart = True
+        core.restart_video()
     reply = yield from exchange(core, command, attempts=1)
     core.video_answered(command, reply)
     return reply
 
 
-def arming(core: TelloCore, request: CommandBool) -> Steps:
+def arming(core: OperationPort, request: CommandBool) -> Steps:
     """A Tello has no arming. arm: enter SDK mode (``command``); the motors start with
     take-off. disarm: accepted on the ground (motors are off), refused in flight."""
     core.require_connected()
@@ -171,7 +200,7 @@ def arming(core: TelloCore, request: CommandBool) -> Steps:
     return CommandBoolResult(success=result == 0, result=result, message=message)
 
 
-def takeoff(core: TelloCore, request: CommandTOL) -> Steps:
+def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
     """``takeoff`` (waits for the Tello's ok, which comes once it hovers, ~1 m), then
     ``up``/``down`` to ``altitude`` m above the take-off point when one is given. While
     flying it does nothing (a second take-off must not move the drone)."""
@@ -202,7 +231,9 @@ def takeoff(core: TelloCore, request: CommandTOL) -> Steps:
     return CommandTOLResult(success=move_result == 0, result=move_result, message=message)
 
 
-def move_to_height(core: TelloCore, height: float) -> Generator[float, None, tuple[int, str, str]]:
+def move_to_height(
+    core: OperationPort, height: float
+) -> Generator[float, None, tuple[int, str, str]]:
     """After the Tello's own take-off (which ends near 1 m), ``up``/``down`` to ``height`` m
     above the take-off point: (result, what was done, the move sent or ""). The SDK's moves
     are 20-500 cm, so an error of 8 cm or less is left (a 20 cm move would overshoot by more
@@ -222,7 +253,7 @@ def move_to_height(core: TelloCore, height: float) -> Generator[float, None, tup
     return result, done, move
 
 
-def settled_height(core: TelloCore, timeout: float = 3.0) -> Generator[float, None, float]:
+def settled_height(core: OperationPort, timeout: float = 3.0) -> Generator[float, None, float]:
     """The height (m) once the climb has stopped: the take-off ``ok`` may come while the
     Tello still rises the last centimetres. Settled = two state strings in a row with
     |vz| < 0.1 m/s; gives up after ``timeout`` s."""
@@ -236,7 +267,7 @@ def settled_height(core: TelloCore, timeout: float = 3.0) -> Generator[float, No
     return (core.telemetry.position_enu or (0.0, 0.0, 0.0))[2]
 
 
-def landing(core: TelloCore) -> Generator[float, None, str | None]:
+def landing(core: OperationPort) -> Generator[float, None, str | None]:
     """``land``, once, waiting for the Tello's ok (given on the ground); the reply or None."""
     core.telemetry.landed.on_land_sent()
     core.failsafe.on_takeoff_or_land()
@@ -247,7 +278,7 @@ def landing(core: TelloCore) -> Generator[float, None, str | None]:
     return reply
 
 
-def land(core: TelloCore, request: CommandTOL) -> Steps:
+def land(core: OperationPort, request: CommandTOL) -> Steps:
     """``land`` here (waits for the Tello's ok, given once on the ground)."""
     core.require_connected()
     for name, value, bound in (
@@ -262,7 +293,7 @@ def land(core: TelloCore, request: CommandTOL) -> Steps:
     return CommandTOLResult(success=result == 0, result=result, message=message)
 
 
-def failsafe_land(core: TelloCore) -> Steps:
+def failsafe_land(core: OperationPort) -> Steps:
     """The failsafe's landing (commander lost); nobody waits for it."""
     reply = yield from landing(core)
     if reply is not None and is_ok(reply):
@@ -275,14 +306,14 @@ def failsafe_land(core: TelloCore) -> Steps:
 # ---------------------------------------------------------------- modes and parameters
 
 
-def hover(core: TelloCore) -> Steps:
+def hover(core: OperationPort) -> Steps:
     """``stop``: hover where it is (a cancelled take-off or landing); the reply's text."""
     core.failsafe.on_takeoff_or_land()
     reply = yield from exchange(core, "stop")
     return result_of(reply, "stop")[1]
 
 
-def set_mode(core: TelloCore, request: SetMode) -> Steps:
+def set_mode(core: OperationPort, request: SetMode) -> Steps:
     """Modes mapped onto Tello commands: OFFBOARD/GUIDED/SDK -> ``command``;
     AUTO.LOITER/HOLD/LOITER/POSCTL/BRAKE -> ``stop`` (hover); AUTO.LAND/LAND -> ``land``;
     EMERGENCY -> ``emergency`` (motors off at once: it falls)."""
@@ -327,7 +358,7 @@ def number_in(text: str) -> float | None:
     return float(match.group()) if match else None
 
 
-def param_get(core: TelloCore, request: ParamGet) -> Steps:
+def param_get(core: OperationPort, request: ParamGet) -> Steps:
     """Read commands (``speed?``, ``battery?`` ...) as parameters (numbers only)."""
     core.require_connected()
     param_id = param_id_of(request.param_id)
@@ -340,7 +371,7 @@ def param_get(core: TelloCore, request: ParamGet) -> Steps:
     return ParamGetResult(success=True, value=ParamValue.of(value), message=reply)
 
 
-def param_set(core: TelloCore, request: ParamSet) -> Steps:
+def param_set(core: OperationPort, request: ParamSet) -> Steps:
     """Only SPEED (cm/s, ``speed x``, 10..100) can be written."""
     core.require_connected()
     param_id = param_id_of(request.param_id)

@@ -35,14 +35,7 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from dronewrapper.errors import (
-    CommandRefused,
-    DroneError,
-    InvalidArgument,
-    NoData,
-    NotConnected,
-    Timeout,
-)
+from dronewrapper import errors
 from dronewrapper.runtime.errors import ServiceError, ServiceUnavailable
 from dronewrapper_ground_station import requests
 from dronewrapper_ground_station.access import OPERATOR, Access
@@ -183,13 +176,13 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
         started = link.clock.monotonic()
         try:
             await run_in_threadpool(action)
-        except CommandRefused as exc:
+        except errors.CommandRefused as exc:
             return _error(409, str(exc), reason=exc.reason)
-        except Timeout as exc:
+        except errors.Timeout as exc:
             return _error(504, str(exc))
-        except NotConnected as exc:
+        except errors.NotConnected as exc:
             return _error(503, str(exc))
-        except (NoData, InvalidArgument, RuntimeError) as exc:
+        except (errors.NoData, errors.InvalidArgument, RuntimeError) as exc:
             return _error(409, str(exc))
         seconds = link.clock.monotonic() - started
         log.info("%s %s done in %.1f s", ns, name, seconds)
@@ -300,7 +293,7 @@ def create_app(fleet: Fleet, config: Config, access: Access) -> Starlette:
                 text = await _receive_text(ws)
                 try:
                     error = _on_message(json.loads(text), role, owner)
-                except (ValueError, KeyError, DroneError) as exc:
+                except (ValueError, KeyError, errors.DroneError) as exc:
                     error = str(exc)
                 if error:
                     await ws.send_text(json.dumps({"type": "error", "error": error}))

@@ -38,16 +38,15 @@ def section(fields: dict[str, Any] | None, age: float, limit: float) -> dict[str
     return {**fields, "age": round(age, 3), "stale": age > limit}
 
 
+def _named(msg: Any, *names: str) -> dict[str, Any]:
+    """The fields ``names`` of ``msg``, as they are."""
+    return {name: getattr(msg, name) for name in names}
+
+
 def state_fields(msg: State) -> dict[str, Any]:
-    return {
-        "connected": msg.connected,
-        "armed": msg.armed,
-        "guided": msg.guided,
-        "mode": msg.mode,
-        "autopilot": msg.autopilot,
-        "failsafe": msg.failsafe,
-        "system_status": msg.system_status,
-    }
+    return _named(
+        msg, "connected", "armed", "guided", "mode", "autopilot", "failsafe", "system_status"
+    )
 
 
 def extended_fields(msg: ExtendedState) -> dict[str, Any]:
@@ -68,7 +67,7 @@ def twist_fields(msg: TwistStamped) -> dict[str, Any]:
 
 
 def battery_fields(msg: BatteryState) -> dict[str, Any]:
-    return {"percentage": msg.percentage, "voltage": msg.voltage}
+    return _named(msg, "percentage", "voltage")
 
 
 def gps_fields(msg: NavSatFix) -> dict[str, Any]:
@@ -118,19 +117,11 @@ def envelope_fields(msg: Envelope) -> dict[str, Any]:
 
 
 def controller_fields(msg: ControllerStatus) -> dict[str, Any]:
-    return {
-        "mode": msg.mode,
-        "state": msg.state,
-        "target_visible": msg.target_visible,
-        "target_id": msg.target_id,
-        "detection_age": msg.detection_age,
-        "error_x": msg.error_x,
-        "error_z": msg.error_z,
-        "error_yaw": msg.error_yaw,
-        "cmd_vx": msg.cmd_vx,
-        "cmd_vz": msg.cmd_vz,
-        "cmd_yaw_rate": msg.cmd_yaw_rate,
-    }
+    return _named(
+        msg,
+        *("mode", "state", "target_visible", "target_id", "detection_age"),
+        *("error_x", "error_z", "error_yaw", "cmd_vx", "cmd_vz", "cmd_yaw_rate"),
+    )
 
 
 def detection_fields(msg: Detections) -> dict[str, Any]:

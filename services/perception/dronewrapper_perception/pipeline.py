@@ -19,8 +19,6 @@ from dronewrapper.msgs import (
     Header,
     ObjectHypothesis,
     ObjectHypothesisWithPose,
-    Point2D,
-    Pose2D,
 )
 from dronewrapper_perception.appearance import appearance_histogram
 from dronewrapper_perception.config import Config
@@ -119,9 +117,7 @@ def to_message(
                         hypothesis=ObjectHypothesis(class_id=det.class_name, score=det.score)
                     )
                 ],
-                bbox=BoundingBox2D(
-                    center=Pose2D(position=Point2D(x=cx, y=cy)), size_x=width, size_y=height
-                ),
+                bbox=BoundingBox2D.at(cx, cy, width, height),
                 id=track_id,
                 circle_radius=det.circle_radius if isinstance(det, BlobDetection) else 0.0,
             )

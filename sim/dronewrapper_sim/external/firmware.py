@@ -30,6 +30,7 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 from dronewrapper.runtime.children import die_with_parent
 
@@ -148,6 +149,22 @@ def ardupilot_version(root: Path) -> str:
     return found.group(1) if found else "ArduCopter ?"
 
 
+def _start_logged(
+    argv: list[str], cwd: Path, log: IO[bytes], env: dict[str, str] | None = None
+) -> subprocess.Popen:
+    """``argv`` started in ``cwd`` (``env``: its whole environment; None: ours), reading
+    nothing, writing all it says to ``log``; it dies with this process."""
+    return subprocess.Popen(
+        argv,
+        cwd=cwd,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        preexec_fn=die_with_parent,
+    )
+
+
 def _stop(proc: subprocess.Popen) -> None:
     proc.send_signal(signal.SIGTERM)
     try:
@@ -203,7 +220,7 @@ def px4_sih(
     }
     log_path = workdir / "px4.log"
     with open(log_path, "wb") as log:
-        proc = subprocess.Popen(
+        proc = _start_logged(
             # its working directory named (-w), with the build's etc/ as its data: without
             # them PX4 works in the build's rootfs/N, and its missions and parameters outlive
             # the run (a new mission flown from the last one's current item)
@@ -216,12 +233,9 @@ def px4_sih(
                 str(home / "rootfs"),
                 str(build / "etc"),
             ],
-            cwd=home / "rootfs",
-            env=env,
-            stdin=subprocess.DEVNULL,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            preexec_fn=die_with_parent,
+            home / "rootfs",
+            log,
+            env,
         )
         try:
             if serial is not None:
@@ -256,14 +270,7 @@ def arducopter(
         "--defaults", defaults, *serial_args,
     ]  # fmt: skip
     with open(log_path, "wb") as log:
-        proc = subprocess.Popen(
-            argv,
-            cwd=workdir,
-            stdin=subprocess.DEVNULL,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            preexec_fn=die_with_parent,
-        )
+        proc = _start_logged(argv, workdir, log)
         try:
             port = AP_TCP_BASE + 10 * instance
             variables = {"sitl_port": str(port), "truth_port": str(port + 2)}

@@ -10,6 +10,8 @@ live server's (:mod:`.views`); ``ns`` is the vehicle namespace.
 
 from __future__ import annotations
 
+from typing import Any, Literal
+
 import foxglove.layouts as fl
 
 from dronewrapper.msgs import registry
@@ -50,37 +52,23 @@ def layout(ns: str = registry.DEFAULT_NAMESPACE, camera: str = "cam_frontal") ->
                    ("error_yaw", "yaw error px")])  # fmt: skip
     commands = plot([("cmd_vx", "vx m/s"), ("cmd_vz", "vz m/s"), ("cmd_yaw_rate", "yaw rate")])
     state = fl.RawMessagesPanel(config=fl.RawMessagesConfig(topic_path=f"{status}.state"))
+    fix_map = fl.MapPanel(config=fl.MapConfig(follow_topic=fix))
     return fl.Layout(
-        content=fl.SplitContainer(
-            direction="row",
-            items=[
-                fl.SplitItem(
-                    proportion=1,
-                    content=fl.SplitContainer(
-                        direction="column",
-                        items=[
-                            fl.SplitItem(proportion=2, content=camera_panel),
-                            fl.SplitItem(
-                                proportion=1,
-                                content=fl.MapPanel(config=fl.MapConfig(follow_topic=fix)),
-                            ),
-                        ],
-                    ),
-                ),
-                fl.SplitItem(proportion=1, content=scene),
-                fl.SplitItem(
-                    proportion=1,
-                    content=fl.SplitContainer(
-                        direction="column",
-                        items=[
-                            fl.SplitItem(proportion=2, content=errors),
-                            fl.SplitItem(proportion=2, content=commands),
-                            fl.SplitItem(proportion=1, content=state),
-                        ],
-                    ),
-                ),
-            ],
+        content=_split(
+            "row",
+            (1, _split("column", (2, camera_panel), (1, fix_map))),
+            (1, scene),
+            (1, _split("column", (2, errors), (2, commands), (1, state))),
         )
+    )
+
+
+def _split(direction: Literal["row", "column"], *parts: tuple[int, Any]) -> fl.SplitContainer:
+    """Panels side by side (``row``) or stacked (``column``), each given as (its proportion,
+    the panel)."""
+    return fl.SplitContainer(
+        direction=direction,
+        items=[fl.SplitItem(proportion=share, content=panel) for share, panel in parts],
     )
 
 
