@@ -38,20 +38,15 @@ test-unit: setup
 	$(BIN)/python -m pytest -q tests/unit $(ARGS)
 
 # the unit and service tiers: no sockets, no processes, injected time. Their tests share nothing,
-# so they run on every core (-n auto: one worker per core, each collecting the tiers). The
-# bytecode of the code under test is compiled first, once, on every core, not by each worker;
-# so is, in a fresh tree, the assertion rewriting of the tiers' ~210 test modules (6 s of CPU):
-# two collections of half of them each, in parallel. Both are kept in __pycache__ for the next
-# run even where PYTHONDONTWRITEBYTECODE is set; neither tier uses hypothesis' or anyio's plugin.
-FAST_PYTEST := env PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -p no:hypothesispytest -p no:anyio
-FAST_HALF    = ls tests/unit/test_*.py tests/service/test_*.py | awk 'NR % 2 == $(1)' \
-	| xargs $(FAST_PYTEST) -q --collect-only >/dev/null 2>&1 || true
-
+# so they run on every core (-n auto: one worker per core, each collecting the tiers). The code
+# under test is compiled first, once, on every core (in a fresh tree each worker compiled all of
+# it itself). The assertion rewriting of the tiers' ~210 test modules (6 s of CPU per worker in a
+# fresh tree) is kept in __pycache__ for the next run even where PYTHONDONTWRITEBYTECODE is set;
+# neither tier uses hypothesis' or anyio's plugin.
 test-fast: setup
 	@$(BYTECODE) >/dev/null
-	@if ! ls tests/unit/__pycache__/test_*-pytest-*.pyc >/dev/null 2>&1; then \
-	  ($(call FAST_HALF,0)) & $(call FAST_HALF,1); wait; fi
-	$(FAST_PYTEST) -q -n auto tests/unit tests/service $(ARGS)
+	PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q -n auto -p no:hypothesispytest -p no:anyio \
+	  tests/unit tests/service $(ARGS)
 
 bench: setup
 	$(BIN)/python -m bench $(ARGS)
