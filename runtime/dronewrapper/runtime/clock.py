@@ -204,7 +204,7 @@ class VirtualClock(Clock):
             elif waiter.predicate():
                 settled = False
                 waiter.wake.notify()
-        return settled and all(t in self._waiters for t in self._workers)
+        return settled and self._workers <= self._waiters.keys()
 
     def run_until(
         self, done: Callable[[], object], within: float, what: str = "", real_timeout: float = 60
