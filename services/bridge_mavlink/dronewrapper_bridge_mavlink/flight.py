@@ -21,15 +21,7 @@ import math
 from collections.abc import Generator, Sequence
 from typing import Any, Protocol
 
-from dronewrapper.msgs.flight import (
-    NO_POSITION,
-    NOT_READY,
-    REFUSED,
-    TOO_LATE,
-    FlightResult,
-    LandRequest,
-    TakeoffRequest,
-)
+from dronewrapper.msgs import flight
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_TAKEOFF,
@@ -84,16 +76,16 @@ class FlightPort(ops.OperationPort, Texts, Protocol):
     def hold_here(self) -> None: ...
 
 
-def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
+def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
     height, timeout, tolerance = takeoff_request(
         request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
     )
     if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
     autopilot = core.autopilot or AUTOPILOT_PX4
     if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
-        return FlightResult(
+        return flight.FlightResult(
             success=True,
             message=f"already flying ({altitude_text(core)}): nothing done; a position "
             "setpoint changes the altitude",
@@ -101,10 +93,10 @@ def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
     try:  # above the safety envelope: refused, the limit named
         core.missions.refuse_takeoff(height)
     except ServiceError as exc:
-        return failed(REFUSED, exc.message, "takeoff")
+        return failed(flight.REFUSED, exc.message, "takeoff")
     pose = core.pose()
     if pose is None:
-        return failed(NO_POSITION, "no local position: no point to take off from")
+        return failed(flight.NO_POSITION, "no local position: no point to take off from")
     (x, y, z0), yaw = pose
     start_z, target_z = takeoff_heights(z0, core.ext.landed_state, height)
     deadline = core.now + timeout
@@ -124,16 +116,16 @@ def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
         reply = yield from operation(core, step_request)
         if not (reply.mode_sent if isinstance(step_request, SetMode) else reply.success):
             core.failsafe.release_hold()
-            return failed(REFUSED, reply.message, step, reply.result)
+            return failed(flight.REFUSED, reply.message, step, reply.result)
         if autopilot != AUTOPILOT_ARDUPILOT:  # in OFFBOARD: hold the ground, then the height
             z = start_z if step != "arming" else target_z
             core.failsafe.hold_at(hold_target((x, y, z), yaw))
     log.info("takeoff: %s, armed, climbing to %.2f m", mode, target_z)
     outcome = yield from climb(core, mode, target_z, tolerance, deadline, timeout)
     if outcome is not None:
-        if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == REFUSED:
+        if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == flight.REFUSED:
             core.failsafe.release_hold()
-        if outcome.failure == TOO_LATE:
+        if outcome.failure == flight.TOO_LATE:
             core.hold_here()  # the take-off ends here: the climb must not go on
         return outcome
     return took_off(
@@ -143,7 +135,7 @@ def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
 
 def climb(
     core: FlightPort, mode: str, target_z: float, tolerance: float, deadline: float, timeout: float
-) -> Generator[float, None, FlightResult | None]:
+) -> Generator[float, None, flight.FlightResult | None]:
     """Wait until the local z is within ``tolerance`` of ``target_z`` (m): None, or the
     failure (disarmed, left ``mode``, ``deadline`` passed)."""
     seen_armed = seen_mode = False
@@ -153,16 +145,16 @@ def climb(
             seen_armed |= state.armed
             seen_mode |= state.mode == mode
             if seen_armed and not state.armed:
-                return failed(REFUSED, f"the autopilot disarmed{last_text(core)}", "takeoff")
+                return failed(flight.REFUSED, f"the autopilot disarmed{last_text(core)}", "takeoff")
             if seen_mode and state.mode != mode:
                 text = f"the autopilot left {mode} for {state.mode}{last_text(core)}"
-                return failed(REFUSED, text, "takeoff")
+                return failed(flight.REFUSED, text, "takeoff")
         position = core.telemetry.position_enu
         if position is not None and position[2] >= target_z - tolerance:
             return None
         if core.now >= deadline:
             return failed(
-                TOO_LATE,
+                flight.TOO_LATE,
                 f"altitude {target_z:.2f} m not reached within {timeout:g} s (now "
                 f"{altitude_text(core)}, "
                 f"mode {state.mode if state else '?'}, armed {state.armed if state else '?'})",
@@ -170,28 +162,28 @@ def climb(
         yield deadline
 
 
-def land_here(core: FlightPort, request: LandRequest) -> Steps:
+def land_here(core: FlightPort, request: flight.LandRequest) -> Steps:
     """Land where the aircraft is; done once on the ground and disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
     if landed(core):
-        return FlightResult(success=True, message="already on the ground and disarmed")
+        return flight.FlightResult(success=True, message="already on the ground and disarmed")
     deadline = core.now + timeout
     reply = yield from ops.land(core, CommandTOL.land())
     if not reply.success:
-        return failed(REFUSED, reply.message, "land", reply.result)
+        return failed(flight.REFUSED, reply.message, "land", reply.result)
     log.info("land: landing from %s", altitude_text(core))
     while not landed(core):
         if core.now >= deadline:
             state = core.heartbeat_state
             return failed(
-                TOO_LATE,
+                flight.TOO_LATE,
                 f"not on the ground and disarmed in time (now {altitude_text(core)}, "
                 f"landed_state {core.ext.landed_state}, armed {state.armed if state else '?'})",
             )
         yield deadline
-    return FlightResult(success=True, message="on the ground and disarmed")
+    return flight.FlightResult(success=True, message="on the ground and disarmed")
 
 
 def altitude_text(core: Located) -> str:
