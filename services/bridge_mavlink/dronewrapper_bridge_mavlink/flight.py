@@ -16,6 +16,7 @@ z, origin where the autopilot started), time the core's (monotonic s). The core 
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from collections.abc import Generator, Sequence
@@ -31,15 +32,9 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
-from dronewrapper.runtime.errors import ServiceError
-from dronewrapper_bridge_base.flight_request import (
-    checked,
-    failed,
-    takeoff_heights,
-    takeoff_request,
-    took_off,
-)
+from dronewrapper_bridge_base.flight_request import checked, failed, took_off
 from dronewrapper_bridge_base.guided_flight import landed
+from dronewrapper_bridge_base.guided_takeoff import MAX_TIMEOUT_S, takeoff_start
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
@@ -62,9 +57,6 @@ class Located(Protocol):
 
 log = logging.getLogger("bridge_mavlink")
 
-MAX_HEIGHT_M = 1000.0
-MAX_TIMEOUT_S = 600.0
-
 
 class FlightPort(ops.OperationPort, Texts, Protocol):
     """What take-off and landing use of the core besides the operations they run
@@ -78,34 +70,17 @@ class FlightPort(ops.OperationPort, Texts, Protocol):
 
 def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
-    height, timeout, tolerance = takeoff_request(
-        request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
-    )
-    if not core.connected:
-        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
+    answer = functools.partial(takeoff_answer, core)
+    plan = takeoff_start(core, request, answer, core.missions.refuse_takeoff)
+    if isinstance(plan, flight.FlightResult):
+        return plan
     autopilot = core.autopilot or AUTOPILOT_PX4
-    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
-        return flight.FlightResult(
-            success=True,
-            message=f"already flying ({altitude_text(core)}): nothing done; a position "
-            "setpoint changes the altitude",
-        )
-    try:  # above the safety envelope: refused, the limit named
-        core.missions.refuse_takeoff(height)
-    except ServiceError as exc:
-        return failed(flight.REFUSED, exc.message, "takeoff")
-    pose = core.pose()
-    if pose is None:
-        return failed(flight.NO_POSITION, "no local position: no point to take off from")
-    (x, y, z0), yaw = pose
-    start_z, target_z = takeoff_heights(z0, core.ext.landed_state, height)
-    deadline = core.now + timeout
     mode = GUIDED_MODE[autopilot]
     if autopilot == AUTOPILOT_ARDUPILOT:
         steps: list[tuple[str, Any, Any]] = [
             (f"set_mode {mode}", ops.set_mode, SetMode(custom_mode=mode)),
             ("arming", ops.arming, CommandBool(value=True)),
-            ("takeoff", ops.takeoff, CommandTOL.takeoff(height, yaw)),
+            ("takeoff", ops.takeoff, CommandTOL.takeoff(plan.height, plan.yaw)),
         ]
     else:
         steps = [
@@ -118,19 +93,34 @@ def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
             core.failsafe.release_hold()
             return failed(flight.REFUSED, reply.message, step, reply.result)
         if autopilot != AUTOPILOT_ARDUPILOT:  # in OFFBOARD: hold the ground, then the height
-            z = start_z if step != "arming" else target_z
-            core.failsafe.hold_at(hold_target((x, y, z), yaw))
-    log.info("takeoff: %s, armed, climbing to %.2f m", mode, target_z)
-    outcome = yield from climb(core, mode, target_z, tolerance, deadline, timeout)
+            z = plan.start_z if step != "arming" else plan.target_z
+            core.failsafe.hold_at(hold_target((plan.x, plan.y, z), plan.yaw))
+    log.info("takeoff: %s, armed, climbing to %.2f m", mode, plan.target_z)
+    outcome = yield from climb(
+        core, mode, plan.target_z, plan.tolerance, plan.deadline, plan.timeout
+    )
     if outcome is not None:
         if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == flight.REFUSED:
             core.failsafe.release_hold()
         if outcome.failure == flight.TOO_LATE:
             core.hold_here()  # the take-off ends here: the climb must not go on
         return outcome
-    return took_off(
-        core.telemetry.position_enu[2] if core.telemetry.position_enu else math.nan, start_z, height
-    )
+    position = core.telemetry.position_enu
+    return took_off(position[2] if position else math.nan, plan.start_z, plan.height)
+
+
+def takeoff_answer(core: FlightPort) -> flight.FlightResult | None:
+    """A take-off's answer before anything is sent: refused while the autopilot is not
+    connected, done while it flies; None when the take-off goes on."""
+    if not core.connected:
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
+    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
+        return flight.FlightResult(
+            success=True,
+            message=f"already flying ({altitude_text(core)}): nothing done; a position "
+            "setpoint changes the altitude",
+        )
+    return None
 
 
 def climb(

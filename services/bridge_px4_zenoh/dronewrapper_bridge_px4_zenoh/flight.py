@@ -21,6 +21,7 @@ and result shapes are those of bridge_mavlink's ``flight`` and ``actions``. The 
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from collections.abc import Generator
@@ -34,17 +35,10 @@ from dronewrapper.msgs.mavros import (
     CommandTOL,
     SetMode,
 )
-from dronewrapper.runtime import ServiceError
-from dronewrapper_bridge_base.flight_request import (
-    checked,
-    failed,
-    goto_target,
-    takeoff_heights,
-    takeoff_request,
-    took_off,
-)
+from dronewrapper_bridge_base.flight_request import checked, failed, goto_target, took_off
 from dronewrapper_bridge_base.guided_failsafe import hold_target
 from dronewrapper_bridge_base.guided_flight import flying, landed, returned
+from dronewrapper_bridge_base.guided_takeoff import MAX_TIMEOUT_S, takeoff_start
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_px4_zenoh import commands as cmds
 from dronewrapper_bridge_px4_zenoh import envelope_rules as rules
@@ -53,8 +47,6 @@ from dronewrapper_bridge_px4_zenoh import watch
 
 log = logging.getLogger("bridge_px4_zenoh")
 NOT_CONNECTED = "PX4 is not connected (no sample on its Zenoh keys)"
-MAX_HEIGHT_M = 1000.0
-MAX_TIMEOUT_S = 600.0
 
 
 class FlightPort(ops.OperationPort, watch.WatchPort, Protocol):
@@ -73,37 +65,23 @@ class FlightPort(ops.OperationPort, watch.WatchPort, Protocol):
 
 def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
-    height, timeout, tolerance = takeoff_request(
-        request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
-    )
-    if not core.connected:
-        return failed(flight.NOT_READY, NOT_CONNECTED)
-    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
-        return flight.FlightResult(success=True, message="already flying: nothing done")
-    if core.status is not None and not core.status["pre_flight_checks_pass"]:
-        return failed(flight.NOT_READY, "PX4's preflight checks do not pass yet (vehicle_status)")
-    try:
-        rules.refuse_takeoff(core, height)
-    except ServiceError as exc:
-        return failed(flight.REFUSED, exc.message, "takeoff")
-    pose = core.pose()
-    if pose is None:
-        return failed(flight.NO_POSITION, "no local position: no point to take off from")
-    (x, y, z0), yaw = pose
-    start_z, target_z = takeoff_heights(z0, core.ext.landed_state, height)
-    deadline = core.now + timeout
+    refuse = functools.partial(rules.refuse_takeoff, core)
+    plan = takeoff_start(core, request, functools.partial(takeoff_answer, core), refuse)
+    if isinstance(plan, flight.FlightResult):
+        return plan
     reply = yield from ops.set_mode(core, SetMode(custom_mode=ops.GUIDED))
     if not reply.mode_sent:
         return failed(flight.REFUSED, reply.message, f"set_mode {ops.GUIDED}", reply.result)
-    core.failsafe.hold_at(hold_target((x, y, start_z), yaw))
+    core.failsafe.hold_at(hold_target((plan.x, plan.y, plan.start_z), plan.yaw))
     armed = yield from ops.arming(core, CommandBool(value=True))
     if not armed.success:
         core.failsafe.release_hold()
         return failed(flight.REFUSED, armed.message, "arming", armed.result)
-    core.failsafe.hold_at(hold_target((x, y, target_z), yaw))
-    log.info("takeoff: OFFBOARD, armed, climbing to %.2f m", target_z)
+    target = (plan.x, plan.y, plan.target_z)
+    core.failsafe.hold_at(hold_target(target, plan.yaw))
+    log.info("takeoff: OFFBOARD, armed, climbing to %.2f m", plan.target_z)
     outcome = yield from wait_at(
-        core, (x, y, target_z), tolerance, deadline, "takeoff", z_only=True
+        core, target, plan.tolerance, plan.deadline, "takeoff", z_only=True
     )
     if outcome is not None:
         if outcome.failure == flight.TOO_LATE:
@@ -111,7 +89,21 @@ def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
         else:
             core.failsafe.release_hold()
         return outcome
-    return took_off(core.position_enu[2] if core.position_enu else math.nan, start_z, height)
+    position = core.position_enu
+    return took_off(position[2] if position else math.nan, plan.start_z, plan.height)
+
+
+def takeoff_answer(core: FlightPort) -> flight.FlightResult | None:
+    """A take-off's answer before anything is sent: refused while PX4 is not connected or its
+    preflight checks do not pass (vehicle_status), done while it flies; None when the take-off
+    goes on."""
+    if not core.connected:
+        return failed(flight.NOT_READY, NOT_CONNECTED)
+    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
+        return flight.FlightResult(success=True, message="already flying: nothing done")
+    if core.status is not None and not core.status["pre_flight_checks_pass"]:
+        return failed(flight.NOT_READY, "PX4's preflight checks do not pass yet (vehicle_status)")
+    return None
 
 
 def wait_at(
