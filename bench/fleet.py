@@ -9,13 +9,19 @@ and over ``--seconds`` measures:
 * each drone's pose age at one subscriber (``bench.pose_ages``: a process of its own, a client
   of the router, doing nothing else): its wall clock at arrival minus the pose's
   ``header.stamp``, p50/p99 per drone, and the slowest drone's pose rate;
+* the SDK's fleet object (``dronewrapper.fleet.Fleet`` over all N drones, a process of its
+  own, connected meanwhile) and its CPU; it receives the streams it reads (``state``,
+  ``extended``, ``pose``, ``battery``; ``--fleet-streams all``: every getter's stream, eight
+  a drone);
+
+then, over another ``--seconds``, the probes (the poses' ages and rates again, meanwhile):
+
 * the command round trip of the arming service (a disarm on the ground: answered, changes
   nothing), each drone in turn and each at most every 0.5 s, p50/p99 over all the calls;
 * setpoint -> MAVLink: one more bridge in namespace ``probe``, against a PX4 stand-in in this
-  process (``bench.bridge_latency``), commanded at 30 Hz while the fleet runs, p99;
-* the SDK's fleet object (``dronewrapper.fleet.Fleet`` over all N drones, a process of its
-  own) and its CPU; it receives the streams it reads (``state``, ``extended``, ``pose``,
-  ``battery``; ``--fleet-streams all``: every getter's stream, eight a drone);
+  process (``bench.bridge_latency``: PX4's whole telemetry mix, about 500 datagrams a second),
+  commanded at 30 Hz, p99. The probes are instruments, not the fleet: their window is apart
+  so that what they cost the machine is not counted against the fleet's poses;
 * with ``--fly``, after the window: all N take off together through that ``Fleet`` (1.5 m),
   then land together, how many made it and how long each took.
 
@@ -263,8 +269,6 @@ def measure(
         if ages.stdout.readline().strip() != "ready":
             out["error"] = "the pose subscriber did not start"
             return out
-        stream, setpoint_latencies, close_probe = setpoint_probe(endpoint, stop)
-        probe = close_probe
         holder = subprocess.Popen(
             [sys.executable, "-m", "bench.fleet", "--hold", endpoint, str(count),
              str(seconds), "1" if fly else "0", fleet_streams], stdin=subprocess.PIPE,
@@ -276,19 +280,25 @@ def measure(
         time.sleep(settle)
         pids = {**children_of(up.pid), up.pid: "router"}
         before = {pid: cpu_seconds(pid) for pid in pids}
-        threading.Thread(target=stream, daemon=True).start()
-        command(ages, "start")
+        command(ages, "start")  # the fleet and its Fleet alone
         t0 = time.monotonic()
-        rtts, failures = arming_round_trips(session, names, t0 + seconds)
+        time.sleep(seconds)
         elapsed = time.monotonic() - t0
         window = command(ages, "stop")
-        stop.set()
         usage: dict[str, list[float]] = defaultdict(list)
         memory: dict[str, list[float]] = defaultdict(list)
         for pid, role in pids.items():
             usage[role].append(100 * (cpu_seconds(pid) - before[pid]) / elapsed)
             memory[role].append(rss_mb(pid))
         sdk = json.loads(holder.stdout.readline())
+        stream, setpoint_latencies, probe = setpoint_probe(endpoint, stop)  # the probes' window
+        threading.Thread(target=stream, daemon=True).start()
+        command(ages, "start")
+        rtts, failures = arming_round_trips(session, names, time.monotonic() + seconds)
+        probed = command(ages, "stop")
+        stop.set()
+        probe()
+        probe = None
         if fly:  # all take off and land together; the poses' ages meanwhile
             command(ages, "start")
             holder.stdin.write("fly\n")
@@ -314,6 +324,13 @@ def measure(
             pose_rate_hz_min=min((window["rate_hz"].get(ns, 0.0) for ns in names), default=0),
             arming_rtt={**percentiles(rtts), "failures": failures},
             setpoint_to_mavlink=percentiles(setpoint_latencies()),
+            probed_pose_age_worst_p99_ms=max(
+                (p.get("p99_ms", float("inf")) for p in probed["per_drone"].values()),
+                default=float("inf"),
+            ),
+            probed_pose_rate_hz_min=min(
+                (probed["rate_hz"].get(ns, 0.0) for ns in names), default=0.0
+            ),
             loadavg=os.getloadavg()[0],
         )
         return out
@@ -352,7 +369,7 @@ def report(results: list[dict[str, object]], title: str) -> None:
     rows = []
     for r in results:
         if "error" in r:
-            rows.append([r["drones"], r["error"], *[""] * 11])
+            rows.append([r["drones"], r["error"], *[""] * 12])
             continue
         n, cpu, each = r["drones"], r["cpu_percent"], r["cpu_percent_per_process"]
         flight = r["sdk_fleet"].get("flight") or {}
@@ -365,20 +382,24 @@ def report(results: list[dict[str, object]], title: str) -> None:
             per_drone(r, "cpu_percent"), cpu["router"], r["sdk_fleet"]["cpu_percent"],
             per_drone(r, "rss_mb"), r["pose_age_p50_ms"], r["pose_age_worst_p99_ms"],
             r.get("pose_rate_hz_min", float("nan")),
+            f"{r.get('probed_pose_age_worst_p99_ms', float('nan')):.0f} ms, "
+            f"{r.get('probed_pose_rate_hz_min', float('nan')):.0f} Hz",
             f"{r['arming_rtt'].get('p50_ms', 0):.1f}/{r['arming_rtt'].get('p99_ms', 0):.1f}",
             flown,
         ])  # fmt: skip
     print_table(
         title,
         ["N", "start s", "sim %/each", "bridge %/each", "drone %", "router %", "SDK fleet %",
-         "MB/drone", "pose age p50", "worst p99", "min Hz", "arming p50/p99", "up/down"],
+         "MB/drone", "pose age p50", "worst p99", "min Hz", "probed: p99, min Hz",
+         "arming p50/p99", "up/down"],
         rows,
     )  # fmt: skip
     print(
         "  (drone % / MB = sim + bridge per drone, without the router; router = the launcher\n"
         "   process holding it; SDK fleet = one Fleet over all N drones, a process of its own;\n"
         "   pose age = arrival at one subscriber - header.stamp, worst drone's p99; min Hz =\n"
-        "   the slowest drone's pose rate there; up/down = drones that\n"
+        "   the slowest drone's pose rate there; probed = the same while the probes run\n"
+        "   (arming calls, the setpoint probe); up/down = drones that\n"
         "   took off / landed through the Fleet, with --fly, and the pose age p99 meanwhile)"
     )
 
