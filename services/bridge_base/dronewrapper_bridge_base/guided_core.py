@@ -49,6 +49,7 @@ class GuidedCore(PureCore):
         self.failsafe = Failsafe(config.failsafe_config())
         self.unattended = Unattended(config.unattended_config())  # a go-to's commander
         self.connected = False
+        self.autopilot = ""  # the autopilot kind as State names it ("" until known)
         self.heartbeat_state: State | None = None  # the vehicle's State (the shown mode)
         self.ext = ExtendedState()
         self.battery: BatteryState | None = None
@@ -64,8 +65,8 @@ class GuidedCore(PureCore):
         """The operation the failsafe's request (``land`` or ``return``) runs."""
         raise NotImplementedError
 
-    def current_state(self) -> State:
-        """State as published now (connected, mode, armed, failsafe, commander ...)."""
+    def breach_state(self) -> str:
+        """The envelope's breach as State's failsafe shows it (``breach:<action>``), else ""."""
         raise NotImplementedError
 
     def pose(self) -> tuple[tuple[float, float, float], float] | None:
@@ -151,6 +152,18 @@ class GuidedCore(PureCore):
         raise NotImplementedError
 
     # ------------------------------------------------------------------ state publication
+
+    def current_state(self) -> State:
+        """State as published now: the vehicle's last (before any, only the autopilot kind)
+        with the bridge's own connection, failsafe (its own, else the breach) and commander."""
+        hb = self.heartbeat_state or State(autopilot=self.autopilot)
+        return msgspec.structs.replace(
+            hb,
+            header=Header(stamp=self.stamp),
+            connected=self.connected,
+            failsafe=self.failsafe.state or self.breach_state(),
+            commander=self.commander,
+        )
 
     def publish_state(self, *, force: bool = False) -> None:
         """Publish State if it changed (or ``force``, or the periodic time has come)."""

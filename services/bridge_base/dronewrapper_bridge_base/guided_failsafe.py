@@ -40,7 +40,8 @@ What the bridge streams to the autopilot each tick, and when it acts on its own:
   (which needs the stream to stay in the mode and to arm); in ArduPilot's GUIDED a position
   target would override a take-off, so the hold starts once the vehicle is airborne.
 
-Every state change is returned as a :class:`Transition` so the node publishes and logs it.
+Every state change is returned as a :class:`~.setpoint_watchdog.Transition` so the node
+publishes and logs it.
 """
 
 from __future__ import annotations
@@ -58,29 +59,14 @@ from dronewrapper.msgs.mavros import (
     MASK_POSITION,
     PositionTarget,
 )
+from dronewrapper_bridge_base import setpoint_watchdog as watchdog
 from dronewrapper_bridge_base.setpoint_limits import Kind
-from dronewrapper_bridge_base.setpoint_watchdog import (
-    ACTIONS,
-    HOLD,
-    LAND,
-    NONE,
-    RETURN,
-    SetpointWatchdog,
-    Transition,
-    WatchdogConfig,
-)
 
 __all__ = [
-    "ACTIONS",
     "GUIDED_MODES",
-    "HOLD",
-    "LAND",
-    "NONE",
-    "RETURN",
     "Failsafe",
     "FailsafeConfig",
     "Tick",
-    "Transition",
     "hold_target",
     "holds_on_the_ground",
     "is_airborne",
@@ -115,7 +101,7 @@ def hold_target(position_enu: tuple[float, float, float], yaw_enu: float) -> Pos
 
 
 @dataclass(frozen=True)
-class FailsafeConfig(WatchdogConfig):
+class FailsafeConfig(watchdog.WatchdogConfig):
     """The watchdog's timeouts (s) and lost action (``hold``, ``land``, ``return``), and how long a
     mode change the bridge asked for counts as expected (s)."""
 
@@ -135,7 +121,7 @@ class Tick:
 
     send: PositionTarget | None = None
     request: str | None = None
-    transitions: list[Transition] = field(default_factory=list)
+    transitions: list[watchdog.Transition] = field(default_factory=list)
     events: list[str] = field(default_factory=list)
 
 
@@ -146,7 +132,7 @@ def is_airborne(landed_state: int, armed: bool) -> bool:
     return landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF, LANDED_STATE_LANDING)
 
 
-class Failsafe(SetpointWatchdog[Kind]):
+class Failsafe(watchdog.SetpointWatchdog[Kind]):
     """The bridge's setpoint stream and failsafe state (see module docstring)."""
 
     config: FailsafeConfig
@@ -182,8 +168,8 @@ class Failsafe(SetpointWatchdog[Kind]):
         self._requested[mode] = now
         if is_guided(mode):
             self.pilot_override = False
-            if self.state in (LAND, RETURN):
-                self.set_state(NONE, f"{mode} requested")
+            if self.state in (watchdog.LAND, watchdog.RETURN):
+                self.set_state(watchdog.NONE, f"{mode} requested")
 
     def hold_at(self, target: PositionTarget) -> None:
         """Stream ``target`` (a position hold) on the bridge's own account while the autopilot
@@ -237,11 +223,11 @@ class Failsafe(SetpointWatchdog[Kind]):
                     f"autopilot left {old_mode} for {mode} without a request from the bridge: "
                     "not switching back"
                 )
-            if left_guided and self.state == HOLD:
-                self.set_state(NONE, f"the autopilot is in {mode}")
+            if left_guided and self.state == watchdog.HOLD:
+                self.set_state(watchdog.NONE, f"the autopilot is in {mode}")
         self.mode, self.airborne = mode, airborne
-        if self.armed and not armed and self.state != NONE:
-            self.set_state(NONE, "disarmed")
+        if self.armed and not armed and self.state != watchdog.NONE:
+            self.set_state(watchdog.NONE, "disarmed")
         if not is_guided(mode) or (self.armed and not armed):
             self._own = None
         self.armed = armed
@@ -270,14 +256,14 @@ class Failsafe(SetpointWatchdog[Kind]):
             out.send = fresh
         elif self.priming(now) or (
             in_control
-            and self.state in (NONE, HOLD)
+            and self.state in (watchdog.NONE, watchdog.HOLD)
             and (self.airborne or holds_on_the_ground(self.mode))
         ):
             self._hold_here(pose)
             out.send = self._hold
             if in_control and self.armed:
                 self.hold()
-        elif in_control and self.state in (LAND, RETURN):
+        elif in_control and self.state in (watchdog.LAND, watchdog.RETURN):
             self._hold_here(pose)  # until the autopilot has switched mode
             out.send = self._hold
         elif self._own is not None and is_guided(self.mode) and not self.engaged:

@@ -32,16 +32,7 @@ from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.flight import (
-    NO_HOME,
-    NOT_READY,
-    REFUSED,
-    TOO_LATE,
-    FlightResult,
-    GotoRequest,
-    MissionRequest,
-    ReturnRequest,
-)
+from dronewrapper.msgs import flight
 from dronewrapper.msgs.mavros import SetMode
 from dronewrapper.msgs.mission import MissionControl, MissionResult
 from dronewrapper.runtime import ServiceError
@@ -84,8 +75,8 @@ class ActionPort(autopilot_limits.LimitsPort, FlightPort, Protocol):
     unattended: Unattended
 
 
-def not_flying(what: str) -> FlightResult:
-    return failed(REFUSED, f"{what} refused: not flying (take off first)", what)
+def not_flying(what: str) -> flight.FlightResult:
+    return failed(flight.REFUSED, f"{what} refused: not flying (take off first)", what)
 
 
 def wait_for_home(core: ActionPort) -> Generator[float, None, bool]:
@@ -98,25 +89,27 @@ def wait_for_home(core: ActionPort) -> Generator[float, None, bool]:
     return True
 
 
-def goto_point(core: ActionPort, request: GotoRequest) -> Steps:
+def goto_point(core: ActionPort, request: flight.GotoRequest) -> Steps:
     """Fly to the point and hold there (see module docstring)."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     tolerance = checked("tolerance", request.tolerance, 0.0, 100.0)
     if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
     if not flying(core):
         return not_flying("goto")
     if not (yield from wait_for_home(core)):
-        return failed(NO_HOME, f"home is not known after {HOME_WAIT_S:g} s: no point to fly to")
+        return failed(
+            flight.NO_HOME, f"home is not known after {HOME_WAIT_S:g} s: no point to fly to"
+        )
     target = goto_target(core.missions, request)
-    if isinstance(target, FlightResult):
+    if isinstance(target, flight.FlightResult):
         return target
     autopilot = core.autopilot or AUTOPILOT_PX4
     mode = GUIDED_MODE[autopilot]
     if ops.shown_mode(core) != mode:
         reply = yield from ops.set_mode(core, SetMode(custom_mode=mode))
         if not reply.mode_sent:
-            return failed(REFUSED, reply.message, f"set_mode {mode}", reply.result)
+            return failed(flight.REFUSED, reply.message, f"set_mode {mode}", reply.result)
     core.failsafe.hold_at(hold_target(target, core.telemetry.yaw_enu))
     start_watch(core, "goto", request.watch)
     try:
@@ -138,17 +131,18 @@ def fly_to(
         position = core.telemetry.position_enu
         distance = math.dist(position, target) if position is not None else math.inf
         if distance <= tolerance:
-            return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
+            return flight.FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
         hb = core.heartbeat_state
         if hb is not None and not hb.armed:
-            return failed(REFUSED, f"the autopilot disarmed{last_text(core)}", "goto")
+            return failed(flight.REFUSED, f"the autopilot disarmed{last_text(core)}", "goto")
         if hb is not None and hb.mode != mode:
             text = f"the autopilot left {mode} for {hb.mode}{last_text(core)}"
-            return failed(REFUSED, text, "goto")
+            return failed(flight.REFUSED, text, "goto")
         if core.now >= deadline:
             core.hold_here()  # the go-to ends here: no flying on toward the point
             return failed(
-                TOO_LATE, f"not within {tolerance:g} m after {timeout:g} s: {distance:.1f} m away"
+                flight.TOO_LATE,
+                f"not within {tolerance:g} m after {timeout:g} s: {distance:.1f} m away",
             )
         yield deadline
 
@@ -171,38 +165,38 @@ def start_return(core: ActionPort) -> Generator[float, None, tuple[int, str]]:
     return result, message
 
 
-def return_home(core: ActionPort, request: ReturnRequest) -> Steps:
+def return_home(core: ActionPort, request: flight.ReturnRequest) -> Steps:
     """The autopilot's return, its altitude under the ceiling; done on the ground, disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
     if not flying(core):
         return not_flying("return")
     autopilot = core.autopilot or AUTOPILOT_PX4
     mode = RETURN_MODE[autopilot]
     result, message = yield from start_return(core)
     if result != ops.ACCEPTED:
-        return failed(REFUSED, message, "return", result)
+        return failed(flight.REFUSED, message, "return", result)
     start_watch(core, "return", request.watch)
     deadline = core.now + timeout
     modes = (mode, LAND_MODE[autopilot])
     return (yield from returned(core, modes, deadline, timeout, "the autopilot"))
 
 
-def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
+def mission_action(core: ActionPort, request: flight.MissionRequest) -> Steps:
     """Start, pause or resume the uploaded mission (see module docstring)."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
     refusal = mission_refusal(core, request.action)
     if refusal:
-        return failed(REFUSED, refusal, request.action)
+        return failed(flight.REFUSED, refusal, request.action)
     autopilot = core.autopilot or AUTOPILOT_PX4
     if request.action == "pause":
         reply = yield from ops.set_mode(core, SetMode(custom_mode=HOLD_MODE[autopilot]))
         if not reply.mode_sent:
-            return failed(REFUSED, reply.message, "pause", reply.result)
-        return FlightResult(success=True, message="mission paused: holding here")
+            return failed(flight.REFUSED, reply.message, "pause", reply.result)
+        return flight.FlightResult(success=True, message="mission paused: holding here")
     mode = MISSION_MODE[autopilot]
     if request.action == "start":
         core.missions.started()
@@ -210,7 +204,7 @@ def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
             # ArduPilot starts a mission (again, once finished) only on entering AUTO
             reply = yield from ops.set_mode(core, SetMode(custom_mode=GUIDED_MODE[autopilot]))
             if not reply.mode_sent:
-                return failed(REFUSED, reply.message, request.action, reply.result)
+                return failed(flight.REFUSED, reply.message, request.action, reply.result)
     deadline = core.now + min(timeout, MISSION_CHECK_WAIT_S)
     core.failsafe.release_hold()
     while True:
@@ -219,13 +213,15 @@ def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
         if reply.mode_sent:
             break
         if not busy or core.now >= deadline:
-            return failed(REFUSED, reply.message, request.action, reply.result)
+            return failed(flight.REFUSED, reply.message, request.action, reply.result)
         retry = core.now + 0.5  # PX4 refuses the mission mode until it has checked the upload
         while core.now < retry:
             yield retry
     start_watch(core, "mission", request.watch)
     seq, total = core.missions.current_seq, len(core.missions.waypoints)
-    return FlightResult(success=True, message=f"flying the mission from item {seq} of {total}")
+    return flight.FlightResult(
+        success=True, message=f"flying the mission from item {seq} of {total}"
+    )
 
 
 def start_watch(core: ActionPort, what: str, key: str) -> None:
@@ -257,5 +253,5 @@ def control(core: ActionPort, request: MissionControl) -> Steps:
     if request.action == "return":
         result, message = yield from start_return(core)
         return MissionResult(success=result == ops.ACCEPTED, message=message)
-    reply = yield from mission_action(core, MissionRequest(action=request.action))
+    reply = yield from mission_action(core, flight.MissionRequest(action=request.action))
     return MissionResult(success=reply.success, message=reply.message)

@@ -33,7 +33,6 @@ from dronewrapper.msgs.mavros import (
     SEVERITY_WARNING,
     PositionTarget,
     SetMode,
-    State,
 )
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
 from dronewrapper.msgs.std import Header
@@ -108,7 +107,6 @@ class BridgeCore(GuidedCore):
         self.recent_texts: collections.deque[tuple[float, StatusTextMsg]] = collections.deque(
             maxlen=32
         )
-        self.autopilot = ""
         self.target_system = config.target_system
         self.target_component = config.target_component
         self.messages_received = 0
@@ -280,16 +278,8 @@ class BridgeCore(GuidedCore):
 
     # ------------------------------------------------------------------ state publication
 
-    def current_state(self) -> State:
-        """State as published now (connected, mode, armed, failsafe, commander ...)."""
-        hb = self.heartbeat_state or State()
-        return msgspec.structs.replace(
-            hb,
-            header=Header(stamp=self.stamp),
-            connected=self.connected,
-            failsafe=self.failsafe.state or self.missions.breach_state(),
-            commander=self.commander,
-        )
+    def breach_state(self) -> str:
+        return self.missions.breach_state()
 
     def hold_here(self) -> None:
         """A cancel's hold: the bridge's own position hold where the aircraft is, in the

@@ -16,20 +16,13 @@ z, origin where the autopilot started), time the core's (monotonic s). The core 
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from collections.abc import Generator, Sequence
 from typing import Any, Protocol
 
-from dronewrapper.msgs.flight import (
-    NO_POSITION,
-    NOT_READY,
-    REFUSED,
-    TOO_LATE,
-    FlightResult,
-    LandRequest,
-    TakeoffRequest,
-)
+from dronewrapper.msgs import flight
 from dronewrapper.msgs.mavros import (
     LANDED_STATE_IN_AIR,
     LANDED_STATE_TAKEOFF,
@@ -39,15 +32,9 @@ from dronewrapper.msgs.mavros import (
     SetMode,
 )
 from dronewrapper.msgs.mavros import StatusText as StatusTextMsg
-from dronewrapper.runtime.errors import ServiceError
-from dronewrapper_bridge_base.flight_request import (
-    checked,
-    failed,
-    takeoff_heights,
-    takeoff_request,
-    took_off,
-)
+from dronewrapper_bridge_base.flight_request import checked, failed, took_off
 from dronewrapper_bridge_base.guided_flight import landed
+from dronewrapper_bridge_base.guided_takeoff import MAX_TIMEOUT_S, takeoff_start
 from dronewrapper_bridge_base.operation import Steps
 from dronewrapper_bridge_mavlink import operations as ops
 from dronewrapper_bridge_mavlink.modes import AUTOPILOT_ARDUPILOT, AUTOPILOT_PX4, GUIDED_MODE
@@ -70,9 +57,6 @@ class Located(Protocol):
 
 log = logging.getLogger("bridge_mavlink")
 
-MAX_HEIGHT_M = 1000.0
-MAX_TIMEOUT_S = 600.0
-
 
 class FlightPort(ops.OperationPort, Texts, Protocol):
     """What take-off and landing use of the core besides the operations they run
@@ -84,36 +68,19 @@ class FlightPort(ops.OperationPort, Texts, Protocol):
     def hold_here(self) -> None: ...
 
 
-def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
+def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
-    height, timeout, tolerance = takeoff_request(
-        request.height, request.timeout, request.tolerance, MAX_HEIGHT_M, MAX_TIMEOUT_S
-    )
-    if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+    answer = functools.partial(takeoff_answer, core)
+    plan = takeoff_start(core, request, answer, core.missions.refuse_takeoff)
+    if isinstance(plan, flight.FlightResult):
+        return plan
     autopilot = core.autopilot or AUTOPILOT_PX4
-    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
-        return FlightResult(
-            success=True,
-            message=f"already flying ({altitude_text(core)}): nothing done; a position "
-            "setpoint changes the altitude",
-        )
-    try:  # above the safety envelope: refused, the limit named
-        core.missions.refuse_takeoff(height)
-    except ServiceError as exc:
-        return failed(REFUSED, exc.message, "takeoff")
-    pose = core.pose()
-    if pose is None:
-        return failed(NO_POSITION, "no local position: no point to take off from")
-    (x, y, z0), yaw = pose
-    start_z, target_z = takeoff_heights(z0, core.ext.landed_state, height)
-    deadline = core.now + timeout
     mode = GUIDED_MODE[autopilot]
     if autopilot == AUTOPILOT_ARDUPILOT:
         steps: list[tuple[str, Any, Any]] = [
             (f"set_mode {mode}", ops.set_mode, SetMode(custom_mode=mode)),
             ("arming", ops.arming, CommandBool(value=True)),
-            ("takeoff", ops.takeoff, CommandTOL.takeoff(height, yaw)),
+            ("takeoff", ops.takeoff, CommandTOL.takeoff(plan.height, plan.yaw)),
         ]
     else:
         steps = [
@@ -124,26 +91,41 @@ def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
         reply = yield from operation(core, step_request)
         if not (reply.mode_sent if isinstance(step_request, SetMode) else reply.success):
             core.failsafe.release_hold()
-            return failed(REFUSED, reply.message, step, reply.result)
+            return failed(flight.REFUSED, reply.message, step, reply.result)
         if autopilot != AUTOPILOT_ARDUPILOT:  # in OFFBOARD: hold the ground, then the height
-            z = start_z if step != "arming" else target_z
-            core.failsafe.hold_at(hold_target((x, y, z), yaw))
-    log.info("takeoff: %s, armed, climbing to %.2f m", mode, target_z)
-    outcome = yield from climb(core, mode, target_z, tolerance, deadline, timeout)
+            z = plan.start_z if step != "arming" else plan.target_z
+            core.failsafe.hold_at(hold_target((plan.x, plan.y, z), plan.yaw))
+    log.info("takeoff: %s, armed, climbing to %.2f m", mode, plan.target_z)
+    outcome = yield from climb(
+        core, mode, plan.target_z, plan.tolerance, plan.deadline, plan.timeout
+    )
     if outcome is not None:
-        if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == REFUSED:
+        if autopilot != AUTOPILOT_ARDUPILOT and outcome.failure == flight.REFUSED:
             core.failsafe.release_hold()
-        if outcome.failure == TOO_LATE:
+        if outcome.failure == flight.TOO_LATE:
             core.hold_here()  # the take-off ends here: the climb must not go on
         return outcome
-    return took_off(
-        core.telemetry.position_enu[2] if core.telemetry.position_enu else math.nan, start_z, height
-    )
+    position = core.telemetry.position_enu
+    return took_off(position[2] if position else math.nan, plan.start_z, plan.height)
+
+
+def takeoff_answer(core: FlightPort) -> flight.FlightResult | None:
+    """A take-off's answer before anything is sent: refused while the autopilot is not
+    connected, done while it flies; None when the take-off goes on."""
+    if not core.connected:
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
+    if core.ext.landed_state in (LANDED_STATE_IN_AIR, LANDED_STATE_TAKEOFF):
+        return flight.FlightResult(
+            success=True,
+            message=f"already flying ({altitude_text(core)}): nothing done; a position "
+            "setpoint changes the altitude",
+        )
+    return None
 
 
 def climb(
     core: FlightPort, mode: str, target_z: float, tolerance: float, deadline: float, timeout: float
-) -> Generator[float, None, FlightResult | None]:
+) -> Generator[float, None, flight.FlightResult | None]:
     """Wait until the local z is within ``tolerance`` of ``target_z`` (m): None, or the
     failure (disarmed, left ``mode``, ``deadline`` passed)."""
     seen_armed = seen_mode = False
@@ -153,16 +135,16 @@ def climb(
             seen_armed |= state.armed
             seen_mode |= state.mode == mode
             if seen_armed and not state.armed:
-                return failed(REFUSED, f"the autopilot disarmed{last_text(core)}", "takeoff")
+                return failed(flight.REFUSED, f"the autopilot disarmed{last_text(core)}", "takeoff")
             if seen_mode and state.mode != mode:
                 text = f"the autopilot left {mode} for {state.mode}{last_text(core)}"
-                return failed(REFUSED, text, "takeoff")
+                return failed(flight.REFUSED, text, "takeoff")
         position = core.telemetry.position_enu
         if position is not None and position[2] >= target_z - tolerance:
             return None
         if core.now >= deadline:
             return failed(
-                TOO_LATE,
+                flight.TOO_LATE,
                 f"altitude {target_z:.2f} m not reached within {timeout:g} s (now "
                 f"{altitude_text(core)}, "
                 f"mode {state.mode if state else '?'}, armed {state.armed if state else '?'})",
@@ -170,28 +152,28 @@ def climb(
         yield deadline
 
 
-def land_here(core: FlightPort, request: LandRequest) -> Steps:
+def land_here(core: FlightPort, request: flight.LandRequest) -> Steps:
     """Land where the aircraft is; done once on the ground and disarmed."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
-        return failed(NOT_READY, "the autopilot is not connected (no heartbeat)")
+        return failed(flight.NOT_READY, "the autopilot is not connected (no heartbeat)")
     if landed(core):
-        return FlightResult(success=True, message="already on the ground and disarmed")
+        return flight.FlightResult(success=True, message="already on the ground and disarmed")
     deadline = core.now + timeout
     reply = yield from ops.land(core, CommandTOL.land())
     if not reply.success:
-        return failed(REFUSED, reply.message, "land", reply.result)
+        return failed(flight.REFUSED, reply.message, "land", reply.result)
     log.info("land: landing from %s", altitude_text(core))
     while not landed(core):
         if core.now >= deadline:
             state = core.heartbeat_state
             return failed(
-                TOO_LATE,
+                flight.TOO_LATE,
                 f"not on the ground and disarmed in time (now {altitude_text(core)}, "
                 f"landed_state {core.ext.landed_state}, armed {state.armed if state else '?'})",
             )
         yield deadline
-    return FlightResult(success=True, message="on the ground and disarmed")
+    return flight.FlightResult(success=True, message="on the ground and disarmed")
 
 
 def altitude_text(core: Located) -> str:

@@ -24,16 +24,7 @@ from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
-    CommandBool,
-    CommandBoolResult,
-    CommandTOL,
-    CommandTOLResult,
-    SetMode,
-    SetModeResult,
-    State,
-)
+from dronewrapper.msgs import mavros
 from dronewrapper_bridge_base.envelope_state import EnvelopeState
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
 from dronewrapper_bridge_base.guided_flight import (
@@ -69,7 +60,7 @@ class Heard(Protocol):
     HEARTBEAT showed (None before any; an accepted mode command changes it at once)."""
 
     autopilot: str
-    heartbeat_state: State | None
+    heartbeat_state: mavros.State | None
 
 
 class Commanding(Protocol):
@@ -115,22 +106,22 @@ def command(core: Commanding, command: int, *params: float) -> Generator[float, 
     return pending.result, message
 
 
-def arming(core: OperationPort, request: CommandBool) -> Steps:
+def arming(core: OperationPort, request: mavros.CommandBool) -> Steps:
     """ARMING: MAV_CMD_COMPONENT_ARM_DISARM; the reply carries the real ack."""
     core.require_connected()
     result, message = yield from command(
         core, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1.0 if request.value else 0.0
     )
-    return CommandBoolResult(success=result == ACCEPTED, result=result, message=message)
+    return mavros.CommandBoolResult(success=result == ACCEPTED, result=result, message=message)
 
 
-def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
+def takeoff(core: OperationPort, request: mavros.CommandTOL) -> Steps:
     """TAKEOFF: MAV_CMD_NAV_TAKEOFF to ``altitude`` m above the take-off point; while flying
     it does nothing (a second take-off must not send the vehicle to a new height)."""
     autopilot = core.require_connected()
     height, yaw_deg = takeoff_command(request.altitude, request.yaw)
-    if core.ext.landed_state == LANDED_STATE_IN_AIR:
-        return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
+    if core.ext.landed_state == mavros.LANDED_STATE_IN_AIR:
+        return mavros.CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
     core.missions.refuse_takeoff(height)  # above the envelope: refused, the limit named
     if autopilot == AUTOPILOT_ARDUPILOT:
         altitude = height if not math.isnan(height) else 2.5
@@ -156,16 +147,16 @@ def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
         core.mode_entered("AUTO.TAKEOFF")  # ArduCopter climbs in GUIDED itself
     if not math.isnan(height) and math.isnan(altitude):
         message += " (no home altitude known: the autopilot's default take-off altitude)"
-    return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
+    return mavros.CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
 
 
-def land(core: OperationPort, request: CommandTOL) -> Steps:
+def land(core: OperationPort, request: mavros.CommandTOL) -> Steps:
     """LAND: MAV_CMD_NAV_LAND here (NaN lat/lon: current position, no GPS needed)."""
     autopilot = core.require_connected()
     lat, lon = land_point(request.latitude, request.longitude)
     sent = command(core, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, math.nan, lat, lon, math.nan)
     result, message = yield from mode_command(core, LAND_MODE[autopilot], sent)
-    return CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
+    return mavros.CommandTOLResult(success=result == ACCEPTED, result=result, message=message)
 
 
 def failsafe_action(core: FailsafePort, action: str) -> Steps:
@@ -183,7 +174,7 @@ def failsafe_action(core: FailsafePort, action: str) -> Steps:
 # ---------------------------------------------------------------- modes
 
 
-def set_mode(core: OperationPort, request: SetMode) -> Steps:
+def set_mode(core: OperationPort, request: mavros.SetMode) -> Steps:
     """SET_MODE by name; replies once the autopilot has really entered or refused it.
 
     PX4: OFFBOARD is preceded by > offboard_prime_s of streaming (priming); DO_SET_MODE is
@@ -229,7 +220,7 @@ def set_mode(core: OperationPort, request: SetMode) -> Steps:
         core.mode_entered(params.name)
     # the stream goes on only if the bridge holds OFFBOARD now
     core.failsafe.end_priming(core.now, engage=primed and result == ACCEPTED)
-    return SetModeResult(mode_sent=result == ACCEPTED, result=result, message=message)
+    return mavros.SetModeResult(mode_sent=result == ACCEPTED, result=result, message=message)
 
 
 def shown_mode(core: Heard) -> str:

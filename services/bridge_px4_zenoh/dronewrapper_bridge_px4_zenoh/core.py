@@ -36,7 +36,6 @@ from dronewrapper.msgs.mavros import (
     SEVERITY_WARNING,
     PositionTarget,
     SetMode,
-    State,
     StatusText,
 )
 from dronewrapper.msgs.registry import Topic
@@ -304,16 +303,8 @@ class Px4ZenohCore(GuidedCore):
 
     # ------------------------------------------------------------------ state publication
 
-    def current_state(self) -> State:
-        """State as published now (connected, mode, armed, failsafe, commander ...)."""
-        hb = self.heartbeat_state or State(autopilot=self.autopilot)
-        return msgspec.structs.replace(
-            hb,
-            header=Header(stamp=self.stamp),
-            connected=self.connected,
-            failsafe=self.failsafe.state or self.envelope.breach_state(),
-            commander=self.commander,
-        )
+    def breach_state(self) -> str:
+        return self.envelope.breach_state()
 
     def hold_here(self) -> None:
         """A cancel's hold: the bridge's own position hold where the aircraft is, in OFFBOARD

@@ -19,16 +19,7 @@ import math
 from collections.abc import Callable, Generator, Sequence
 from typing import Any, Protocol
 
-from dronewrapper.msgs.mavros import (
-    LANDED_STATE_IN_AIR,
-    CommandBool,
-    CommandBoolResult,
-    CommandTOL,
-    CommandTOLResult,
-    SetMode,
-    SetModeResult,
-    State,
-)
+from dronewrapper.msgs import mavros
 from dronewrapper_bridge_base.core_view import CommandSlot
 from dronewrapper_bridge_base.flight_request import land_point, takeoff_command
 from dronewrapper_bridge_base.guided_flight import (
@@ -62,7 +53,7 @@ NAMES = {
 class Heard(Protocol):
     """PX4 as its last vehicle_status showed it (State; None before any)."""
 
-    heartbeat_state: State | None
+    heartbeat_state: mavros.State | None
 
 
 class CommandPort(Heard, CommandSlot, ModeCore, Protocol):
@@ -130,23 +121,25 @@ def target(core: CommandPort) -> dict[str, int]:
     }
 
 
-def arming(core: OperationPort, request: CommandBool) -> Steps:
+def arming(core: OperationPort, request: mavros.CommandBool) -> Steps:
     """ARMING: VEHICLE_CMD_COMPONENT_ARM_DISARM; the reply carries PX4's ack."""
     core.require_connected()
     value = bool(request.value)
     result, message = yield from command(
         core, cmds.arm(value, **target(core)), lambda: armed(core) == value
     )
-    return CommandBoolResult(success=result == ACCEPTED, result=max(result, 0), message=message)
+    return mavros.CommandBoolResult(
+        success=result == ACCEPTED, result=max(result, 0), message=message
+    )
 
 
-def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
+def takeoff(core: OperationPort, request: mavros.CommandTOL) -> Steps:
     """TAKEOFF: VEHICLE_CMD_NAV_TAKEOFF to ``altitude`` m above PX4's local origin (NaN: PX4's
     MIS_TAKEOFF_ALT); while flying it does nothing."""
     core.require_connected()
     height, yaw_deg = takeoff_command(request.altitude, request.yaw)
-    if core.ext.landed_state == LANDED_STATE_IN_AIR:
-        return CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
+    if core.ext.landed_state == mavros.LANDED_STATE_IN_AIR:
+        return mavros.CommandTOLResult(success=True, result=ACCEPTED, message="already flying")
     rules.refuse_takeoff(core, height)  # above the envelope: refused, the limit named
     home = core.envelope.home_geo
     altitude = math.nan if math.isnan(height) or home is None else home[2] + height
@@ -167,10 +160,12 @@ def takeoff(core: OperationPort, request: CommandTOL) -> Steps:
     result, message = yield from command(core, value, lambda: shown_mode(core) == "AUTO.TAKEOFF")
     if result == ACCEPTED:
         core.mode_entered("AUTO.TAKEOFF")
-    return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
+    return mavros.CommandTOLResult(
+        success=result == ACCEPTED, result=max(result, 0), message=message
+    )
 
 
-def land(core: OperationPort, request: CommandTOL) -> Steps:
+def land(core: OperationPort, request: mavros.CommandTOL) -> Steps:
     """LAND: VEHICLE_CMD_NAV_LAND here (NaN latitude/longitude: where it is)."""
     core.require_connected()
     lat, lon = land_point(request.latitude, request.longitude)
@@ -179,7 +174,9 @@ def land(core: OperationPort, request: CommandTOL) -> Steps:
     )
     sent = command(core, value, lambda: shown_mode(core) == LAND_MODE)
     result, message = yield from mode_command(core, LAND_MODE, sent)
-    return CommandTOLResult(success=result == ACCEPTED, result=max(result, 0), message=message)
+    return mavros.CommandTOLResult(
+        success=result == ACCEPTED, result=max(result, 0), message=message
+    )
 
 
 def failsafe_action(core: CommandPort, action: str) -> Steps:
@@ -195,7 +192,7 @@ def failsafe_action(core: CommandPort, action: str) -> Steps:
     return (yield from failsafe_request(core, action, mode, sent, "PX4", log))
 
 
-def set_mode(core: OperationPort, request: SetMode) -> Steps:
+def set_mode(core: OperationPort, request: mavros.SetMode) -> Steps:
     """SET_MODE by MAVROS name (OFFBOARD, AUTO.LOITER ...); replies once PX4 shows the mode
     in vehicle_status, or refused it. OFFBOARD is preceded by priming."""
     core.require_connected()
@@ -224,7 +221,9 @@ def set_mode(core: OperationPort, request: SetMode) -> Steps:
                 f"{core.config.mode_confirm_timeout:g} s"
             )
     core.failsafe.end_priming(core.now, engage=primed and result == ACCEPTED)
-    return SetModeResult(mode_sent=result == ACCEPTED, result=max(result, 0), message=message)
+    return mavros.SetModeResult(
+        mode_sent=result == ACCEPTED, result=max(result, 0), message=message
+    )
 
 
 def armed(core: Heard) -> bool:
@@ -242,5 +241,5 @@ def breach_action(core: OperationPort, action: str) -> Steps:
     requests), or ``hold`` (AUTO.LOITER)."""
     if action in ("land", "return"):
         return (yield from failsafe_action(core, action))
-    reply = yield from set_mode(core, SetMode(custom_mode=HOLD_MODE))
+    reply = yield from set_mode(core, mavros.SetMode(custom_mode=HOLD_MODE))
     return reply.result

@@ -17,16 +17,7 @@ from typing import Protocol
 
 from dronewrapper import envelope as env
 from dronewrapper.envelope import EnvelopeError
-from dronewrapper.msgs.flight import (
-    NO_HOME,
-    NOT_READY,
-    REFUSED,
-    TOO_LATE,
-    FlightResult,
-    GotoRequest,
-    MissionRequest,
-    ReturnRequest,
-)
+from dronewrapper.msgs import flight
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR
 from dronewrapper.msgs.mission import MissionControl
 from dronewrapper.runtime.errors import ServiceError
@@ -42,16 +33,16 @@ class ActionPort(missions.MissionPort, Protocol):
     connected: bool
 
 
-def _ready(core: ActionPort, what: str) -> FlightResult | None:
+def _ready(core: ActionPort, what: str) -> flight.FlightResult | None:
     if not core.connected:
-        return failed(NOT_READY, "the Tello is not connected (no state string)")
+        return failed(flight.NOT_READY, "the Tello is not connected (no state string)")
     if core.telemetry.landed.state != LANDED_STATE_IN_AIR:
-        return failed(REFUSED, f"{what} refused: not flying (take off first)", what)
+        return failed(flight.REFUSED, f"{what} refused: not flying (take off first)", what)
     core.failsafe.on_takeoff_or_land()  # the bridge flies it: no commander steers, none lost
     return None
 
 
-def goto_point(core: ActionPort, request: GotoRequest) -> Steps:
+def goto_point(core: ActionPort, request: flight.GotoRequest) -> Steps:
     """Fly to (x, y, z) m from the take-off point with ``go`` moves."""
     timeout = checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     checked("tolerance", request.tolerance, 0.0, 100.0)
@@ -59,25 +50,25 @@ def goto_point(core: ActionPort, request: GotoRequest) -> Steps:
     if refusal is not None:
         return refusal
     if request.geodetic:
-        return failed(NO_HOME, "the Tello has no GPS: home has no latitude and longitude")
+        return failed(flight.NO_HOME, "the Tello has no GPS: home has no latitude and longitude")
     target = (request.x, request.y, request.z)
     try:
         env.check_position(core.missions.envelope, *target)
     except EnvelopeError as exc:
-        return failed(REFUSED, f"goto refused: {exc}", "goto")
+        return failed(flight.REFUSED, f"goto refused: {exc}", "goto")
     deadline = core.now + timeout
     core.missions.paused = False
     arrived = yield from missions.fly_to(core, target)
     position = core.telemetry.position_enu
     distance = math.dist(position, target) if position is not None else math.nan
     if not arrived:
-        return failed(REFUSED, "a go move was refused or the go-to was paused", "goto")
+        return failed(flight.REFUSED, "a go move was refused or the go-to was paused", "goto")
     if core.now > deadline:
-        return failed(TOO_LATE, f"there only after {timeout:g} s ({distance:.2f} m away)")
-    return FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
+        return failed(flight.TOO_LATE, f"there only after {timeout:g} s ({distance:.2f} m away)")
+    return flight.FlightResult(success=True, message=f"at the point: {distance:.2f} m away")
 
 
-def return_home(core: ActionPort, request: ReturnRequest) -> Steps:
+def return_home(core: ActionPort, request: flight.ReturnRequest) -> Steps:
     """Fly home at the current height and land; done on the ground."""
     checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     refusal = _ready(core, "return")
@@ -86,11 +77,11 @@ def return_home(core: ActionPort, request: ReturnRequest) -> Steps:
     core.missions.paused = False
     arrived = yield from missions.fly_home(core)
     if not arrived:
-        return failed(REFUSED, "a go move home was refused", "return")
-    return FlightResult(success=True, message="returned: on the ground")
+        return failed(flight.REFUSED, "a go move home was refused", "return")
+    return flight.FlightResult(success=True, message="returned: on the ground")
 
 
-def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
+def mission_action(core: ActionPort, request: flight.MissionRequest) -> Steps:
     """Start or resume the mission's moves (in the background), or pause after the current
     move; the control's refusals as a failure."""
     checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
@@ -101,5 +92,5 @@ def mission_action(core: ActionPort, request: MissionRequest) -> Steps:
     try:
         reply = yield from missions.control(core, MissionControl(action=action))
     except ServiceError as exc:
-        return failed(REFUSED, exc.message, request.action)
-    return FlightResult(success=reply.success, message=reply.message)
+        return failed(flight.REFUSED, exc.message, request.action)
+    return flight.FlightResult(success=reply.success, message=reply.message)

@@ -15,14 +15,7 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
-from dronewrapper.msgs.flight import (
-    NOT_READY,
-    REFUSED,
-    TOO_LATE,
-    FlightResult,
-    LandRequest,
-    TakeoffRequest,
-)
+from dronewrapper.msgs import flight
 from dronewrapper.msgs.mavros import LANDED_STATE_IN_AIR, LANDED_STATE_ON_GROUND, CommandTOL
 from dronewrapper.runtime.errors import ServiceError
 from dronewrapper_bridge_base.flight_request import checked, failed
@@ -46,14 +39,14 @@ def height_now(core: FlightPort) -> float:
     return (core.telemetry.position_enu or (math.nan,) * 3)[2]
 
 
-def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
+def takeoff_to(core: FlightPort, request: flight.TakeoffRequest) -> Steps:
     """Take off to ``request.height`` m above the take-off point (see module docstring)."""
     height = checked("height", request.height, 0.0, MAX_HEIGHT_M)
     deadline = core.now + checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
-        return failed(NOT_READY, "the Tello is not connected (no state string)")
+        return failed(flight.NOT_READY, "the Tello is not connected (no state string)")
     if core.telemetry.landed.state == LANDED_STATE_IN_AIR:
-        return FlightResult(
+        return flight.FlightResult(
             success=True,
             message=f"already flying (z={height_now(core):.2f} m): nothing done; a position "
             "setpoint changes the altitude",
@@ -61,27 +54,27 @@ def takeoff_to(core: FlightPort, request: TakeoffRequest) -> Steps:
     try:  # above the safety envelope: refused, the limit named
         missions.refuse_takeoff(core.missions.envelope, height)
     except ServiceError as exc:
-        return failed(REFUSED, exc.message, "takeoff")
+        return failed(flight.REFUSED, exc.message, "takeoff")
     reply = yield from ops.takeoff(core, CommandTOL.takeoff())
     if not reply.success:
-        return failed(REFUSED, reply.message, "takeoff", reply.result)
+        return failed(flight.REFUSED, reply.message, "takeoff", reply.result)
     result, message, move = yield from ops.move_to_height(core, height)
     if result != ops.MAV_RESULT_ACCEPTED:
-        return failed(REFUSED, message, move, result)
+        return failed(flight.REFUSED, message, move, result)
     z = yield from ops.settled_height(core)
     if core.now > deadline:
-        return failed(TOO_LATE, f"{message}, at {z:.2f} m only after {request.timeout:g} s")
-    return FlightResult(success=True, message=f"took off: {message}", height=z)
+        return failed(flight.TOO_LATE, f"{message}, at {z:.2f} m only after {request.timeout:g} s")
+    return flight.FlightResult(success=True, message=f"took off: {message}", height=z)
 
 
-def land_here(core: FlightPort, request: LandRequest) -> Steps:
+def land_here(core: FlightPort, request: flight.LandRequest) -> Steps:
     """``land`` here; done once the Tello says it is on the ground."""
     checked("timeout", request.timeout, 0.0, MAX_TIMEOUT_S)
     if not core.connected:
-        return failed(NOT_READY, "the Tello is not connected (no state string)")
+        return failed(flight.NOT_READY, "the Tello is not connected (no state string)")
     if core.telemetry.landed.state == LANDED_STATE_ON_GROUND:
-        return FlightResult(success=True, message="already on the ground")
+        return flight.FlightResult(success=True, message="already on the ground")
     reply = yield from ops.land(core, CommandTOL.land())
     if not reply.success:
-        return failed(REFUSED, reply.message, "land", reply.result)
-    return FlightResult(success=True, message="on the ground, motors off")
+        return failed(flight.REFUSED, reply.message, "land", reply.result)
+    return flight.FlightResult(success=True, message="on the ground, motors off")
