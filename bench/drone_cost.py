@@ -36,8 +36,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from bench.busy import busy_core
 from bench.common import CLK_TCK, free_endpoint, print_table, stop_process, write_results
-from bench.fleet import busy_core
 from dronewrapper.runtime.arguments import CommandParser, first_line
 
 REPO = Path(__file__).resolve().parents[1]
@@ -114,7 +114,7 @@ def pose_figures(report: dict[str, object] | None) -> dict[str, object]:
 
 
 def split_hosts(
-    n: int, endpoint: str, loop_hz: str = "50", physics_hz: str = "100"
+    n: int, endpoint: str, loop_hz: str = "30", physics_hz: str = "100"
 ) -> list[subprocess.Popen]:
     """Two host processes on ``endpoint``: N sims in the first, their N bridges in the other
     (the sims as ``compose/sim_fleet.yaml`` makes them)."""

@@ -47,7 +47,6 @@ bench.fleet_plot.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
 import subprocess
@@ -55,9 +54,9 @@ import sys
 import threading
 import time
 from collections import defaultdict
-from collections.abc import Iterator
 from pathlib import Path
 
+from bench.busy import busy_core
 from bench.common import RESULTS, percentiles, print_table, stop_process, write_results
 from bench.fleet_plot import per_drone, plot
 from dronewrapper.msgs import registry
@@ -402,38 +401,6 @@ def report(results: list[dict[str, object]], title: str) -> None:
         "   (arming calls, the setpoint probe); up/down = drones that\n"
         "   took off / landed through the Fleet, with --fly, and the pose age p99 meanwhile)"
     )
-
-
-def autogroup_nice(pid: int | str = "self") -> str | None:
-    """The nice value of process ``pid``'s autogroup (Linux with ``sched_autogroup``; None
-    elsewhere): the kernel shares the CPU between sessions by their autogroups' weights, then
-    between the threads of each."""
-    try:
-        return Path(f"/proc/{pid}/autogroup").read_text().split()[-1]
-    except (OSError, IndexError):
-        return None
-
-
-@contextlib.contextmanager
-def busy_core(busy: bool) -> Iterator[None]:
-    """An unrelated program keeping one core busy (a Python busy loop) while the block runs.
-
-    It runs in a session of its own, as a program started from another terminal does; where
-    the kernel groups sessions (autogroups), its group gets this bench's group's weight, so
-    that it and the fleet share the cores as two programs of one user do."""
-    if not busy:
-        yield
-        return
-    process = subprocess.Popen([sys.executable, "-c", "while True: pass"], start_new_session=True)
-    nice = autogroup_nice()
-    if nice is not None and autogroup_nice(process.pid) != nice:
-        with contextlib.suppress(OSError):
-            Path(f"/proc/{process.pid}/autogroup").write_text(nice)
-    try:
-        yield
-    finally:
-        process.kill()
-        process.wait(10)
 
 
 def main(argv: list[str] | None = None) -> int:
